@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: Apache-2.0
+// Calibration and body-definition files (architecture.md, "Contracts").
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "panoptes/camera_model.h"
+
+namespace panoptes {
+
+struct CameraCalibration {
+  std::string id;
+  CameraIntrinsics intrinsics;
+  std::optional<RigidTransform> T_world_cam;  // absent: intrinsics only
+
+  // Requires T_world_cam.
+  CameraModel model() const;
+};
+
+struct SystemCalibration {
+  std::vector<CameraCalibration> cameras;
+  const CameraCalibration* find(std::string_view camera_id) const;
+};
+
+// Throws ConfigError naming the file and key on any problem.
+SystemCalibration load_calibration(const std::filesystem::path& path);
+void save_calibration(const SystemCalibration& calibration, const std::filesystem::path& path);
+std::string calibration_to_yaml(const SystemCalibration& calibration);
+
+struct BodyDefinition {
+  std::string name;
+  std::vector<Eigen::Vector3d> markers;  // metres, body frame
+};
+
+std::vector<BodyDefinition> load_bodies(const std::filesystem::path& path);
+void save_bodies(const std::vector<BodyDefinition>& bodies, const std::filesystem::path& path);
+
+}  // namespace panoptes

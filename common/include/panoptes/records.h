@@ -1,0 +1,99 @@
+// SPDX-License-Identifier: Apache-2.0
+// In-memory records shared by the nodes, and their JSON Lines forms (architecture.md, "Contracts").
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "panoptes/time.h"
+
+namespace panoptes {
+
+struct Blob {
+  double x = 0, y = 0;   // sub-pixel centroid, pixels
+  double area = 0;       // pixels above threshold
+  double sum = 0;        // intensity sum over the blob
+  int peak = 0;          // brightest pixel value
+  double m20 = 0, m11 = 0, m02 = 0;  // central second moments (pixels^2), intensity weighted
+};
+
+struct FeatureFrame {
+  std::string camera_id;
+  std::int64_t frame = 0;
+  TimeNs stamp_ns = 0;       // mid-exposure, common time base
+  TimeNs arrival_ns = 0;     // when the image reached the node (0 if unknown)
+  TimeNs processing_ns = 0;  // detection time
+  std::vector<Blob> blobs;
+};
+
+enum class TrackStatus { kTentative, kConfirmed, kCoasting };
+std::string_view to_string(TrackStatus status);
+
+struct TrackRecord {
+  TimeNs stamp_ns = 0;
+  std::int64_t id = 0;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  std::array<double, 6> position_covariance{};  // xx xy xz yy yz zz
+  TrackStatus status = TrackStatus::kConfirmed;
+  int cameras = 0;  // cameras that updated the track recently
+};
+
+struct PoseRecord {
+  TimeNs stamp_ns = 0;
+  std::string body;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Vector4d q = Eigen::Vector4d(0, 0, 0, 1);  // x, y, z, w
+};
+
+// One JSON object per line. Parsing errors come back as a message, never an exception.
+std::string to_json_line(const FeatureFrame& frame);
+std::string to_json_line(const TrackRecord& track);
+std::string to_json_line(const PoseRecord& pose);
+
+struct ParseError {
+  std::string message;
+};
+template <class T>
+struct Parsed {
+  std::optional<T> value;
+  std::string error;  // empty when value is set
+};
+Parsed<FeatureFrame> parse_feature_frame(std::string_view line);
+Parsed<TrackRecord> parse_track(std::string_view line);
+Parsed<PoseRecord> parse_pose(std::string_view line);
+
+// Reads a whole JSONL file. Malformed lines are skipped and counted; `errors` (if given) receives
+// "<file>:<line>: <reason>" for each. Throws std::runtime_error if the file cannot be opened.
+std::vector<FeatureFrame> read_feature_frames(const std::filesystem::path& path,
+                                              std::vector<std::string>* errors = nullptr);
+std::vector<TrackRecord> read_tracks(const std::filesystem::path& path,
+                                     std::vector<std::string>* errors = nullptr);
+std::vector<PoseRecord> read_poses(const std::filesystem::path& path,
+                                   std::vector<std::string>* errors = nullptr);
+
+// Appends lines to a file; throws std::runtime_error naming the file if it cannot be opened.
+class JsonlWriter {
+ public:
+  explicit JsonlWriter(const std::filesystem::path& path);
+  void write_line(const std::string& line);
+  template <class Record>
+  void write(const Record& record) {
+    write_line(to_json_line(record));
+  }
+  void flush();
+
+ private:
+  std::filesystem::path path_;
+  std::ofstream out_;
+};
+
+}  // namespace panoptes

@@ -1,0 +1,101 @@
+// SPDX-License-Identifier: Apache-2.0
+// Deterministic simulator of IR cameras observing moving markers and rigid bodies.
+// Scene files: see docs/simulator.md and deploy/scenes/. Scene time is nanoseconds since the
+// scene start on the true clock; callers add an epoch to get absolute stamps.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "panoptes/calibration.h"
+#include "panoptes/image.h"
+#include "panoptes/records.h"
+#include "panoptes/time.h"
+
+namespace panoptes {
+
+struct SimCameraConfig {
+  CameraCalibration calibration;  // always has T_world_cam
+  double rate_hz = 100.0;
+  TimeNs phase_ns = 0;            // scene time of frame 0's mid-exposure
+  TimeNs clock_offset_ns = 0;     // camera clock minus true clock
+  TimeNs exposure_ns = 1'000'000;
+  double pixel_noise_dn = 1.0;    // Gaussian sensor noise, DN (of `bits`)
+  double centroid_noise_px = 0.0; // jitter of each rendered spot centre, px
+  double background_dn = 8.0;
+  double blob_peak_dn = 220.0;    // peak of a spot of minimum size
+  double blob_min_sigma_px = 1.0; // spots never render smaller than this
+  double dropout_probability = 0.0;  // each marker missing from a frame at random
+  int bits = 8;                   // 8, 10, 12 or 16
+};
+
+struct MarkerTruth {
+  std::string name;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  bool valid = true;  // false where the source (e.g. a TRC gap) has no data
+};
+
+struct BodyTruth {
+  std::string name;
+  RigidTransform T_world_body;
+};
+
+class Scene {
+ public:
+  // Throws ConfigError naming the file and key.
+  static Scene load(const std::filesystem::path& path);
+  static Scene from_yaml_string(const std::string& yaml, const std::filesystem::path& base_dir = ".",
+                                const std::string& name_for_errors = "<string>");
+  Scene(Scene&&) noexcept;
+  Scene& operator=(Scene&&) noexcept;
+  ~Scene();
+
+  std::uint64_t seed() const;
+  TimeNs duration_ns() const;
+  const std::vector<SimCameraConfig>& cameras() const;
+  const SimCameraConfig* find_camera(std::string_view id) const;
+  SystemCalibration calibration() const;
+
+  // Every point marker, including those of bodies (named "<body>/<index>"), in a fixed order.
+  const std::vector<std::string>& marker_names() const;
+  std::vector<MarkerTruth> markers_at(TimeNs scene_time_ns) const;
+  std::vector<BodyTruth> bodies_at(TimeNs scene_time_ns) const;
+  std::vector<BodyDefinition> body_definitions() const;
+  double marker_radius(std::size_t marker_index) const;
+
+ private:
+  Scene();
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+class CameraSimulator {
+ public:
+  // Throws std::invalid_argument if the scene has no such camera. The scene must outlive this.
+  CameraSimulator(const Scene& scene, std::string_view camera_id);
+
+  const SimCameraConfig& config() const { return *config_; }
+  // True scene time of frame k's mid-exposure.
+  TimeNs frame_time_ns(std::int64_t k) const;
+  // Stamp frame k carries on the camera's own clock (scene time + clock offset).
+  TimeNs frame_stamp_ns(std::int64_t k) const;
+  // Renders frame k: Gaussian spots integrated over each pixel, background, sensor noise.
+  // Deterministic for (scene seed, camera, k).
+  Image render(std::int64_t k) const;
+  // Frame k as ideal features (no rendering): projected centres plus centroid noise, markers
+  // outside the image or dropped omitted. stamp_ns = frame_stamp_ns(k) (relative to the epoch).
+  FeatureFrame features(std::int64_t k) const;
+
+ private:
+  const Scene* scene_;
+  const SimCameraConfig* config_;
+  std::size_t camera_index_ = 0;
+};
+
+}  // namespace panoptes
