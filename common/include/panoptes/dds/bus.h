@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: Apache-2.0
+// The one place that knows Fast DDS: a participant loaded from an XML profile, topics with their
+// canonical names and QoS (docs/protocol.md), typed writers and readers. Entities are created and
+// checked in constructors and torn down with delete_contained_entities().
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+namespace panoptes::dds {
+
+class DdsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct BusOptions {
+  // XML profile file. Empty: $PANOPTES_DDS_PROFILE, else deploy/dds/loopback.xml found next to the
+  // executable (build tree or install prefix). Without a profile the bus refuses to start, so Fast
+  // DDS's default multicast discovery never runs by accident.
+  std::filesystem::path profile_file;
+  std::string participant_profile = "panoptes_participant";
+  int domain_id = -1;  // -1: $PANOPTES_DOMAIN, else the profile's domain, else 0
+  std::string participant_name = "panoptes";
+};
+
+// Resolves the profile file as BusOptions describes; throws DdsError naming what was tried.
+std::filesystem::path resolve_profile_file(const std::filesystem::path& requested);
+
+enum class Qos {
+  kDefault,   // the topic's own QoS (docs/protocol.md)
+  kReliable,  // reliable with a deep history, e.g. recording features for calibration
+};
+
+class BusCore;
+
+template <class T>
+class Writer {
+ public:
+  ~Writer();
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+  bool write(const T& sample);
+  int matched_readers() const;
+  // Waits until at least `count` readers matched; false on timeout.
+  bool wait_for_readers(int count, std::chrono::milliseconds timeout) const;
+
+  struct Impl;
+  explicit Writer(std::unique_ptr<Impl> impl);
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+template <class T>
+class Reader {
+ public:
+  using Callback = std::function<void(T&&)>;
+  ~Reader();
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+  int matched_writers() const;
+  std::uint64_t received() const;
+
+  struct Impl;
+  explicit Reader(std::unique_ptr<Impl> impl);
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+class Bus {
+ public:
+  explicit Bus(const BusOptions& options = {});
+  ~Bus();
+  Bus(const Bus&) = delete;
+  Bus& operator=(const Bus&) = delete;
+
+  // T is one of the generated panoptes::msg types that has a topic (docs/protocol.md).
+  template <class T>
+  std::unique_ptr<Writer<T>> make_writer(Qos qos = Qos::kDefault);
+  // `on_sample` runs on a DDS listener thread: keep it short (enqueue and return).
+  template <class T>
+  std::unique_ptr<Reader<T>> make_reader(typename Reader<T>::Callback on_sample, Qos qos = Qos::kDefault);
+
+  const std::filesystem::path& profile_file() const;
+
+ private:
+  std::shared_ptr<BusCore> core_;
+};
+
+}  // namespace panoptes::dds

@@ -1,0 +1,355 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/dds/bus.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <map>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
+#include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include "panoptes_msgs/panoptes.h"
+#include "panoptes_msgs/panoptesPubSubTypes.h"
+
+namespace fdds = eprosima::fastdds::dds;
+using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
+
+namespace panoptes::dds {
+namespace {
+
+enum class Durability { kVolatile, kTransientLocal };
+
+// Per-topic name and QoS: the single source of truth documented in docs/protocol.md.
+struct TopicSpec {
+  const char* name;
+  bool reliable;
+  Durability durability;
+  int depth;  // keep-last depth per instance
+};
+
+template <class T>
+struct TopicTraits;
+
+#define PANOPTES_TOPIC(Type, topic_name, reliable, durability, depth)       \
+  template <>                                                              \
+  struct TopicTraits<msg::Type> {                                          \
+    using PubSubType = msg::Type##PubSubType;                              \
+    static TopicSpec spec() { return {topic_name, reliable, durability, depth}; } \
+  };
+
+PANOPTES_TOPIC(CameraInfo, "rt/panoptes/camera_info", true, Durability::kTransientLocal, 1)
+PANOPTES_TOPIC(FeatureFrame, "rt/panoptes/features", false, Durability::kVolatile, 8)
+PANOPTES_TOPIC(CameraStatus, "rt/panoptes/camera_status", false, Durability::kVolatile, 1)
+PANOPTES_TOPIC(CameraCommand, "rt/panoptes/camera_command", true, Durability::kVolatile, 32)
+PANOPTES_TOPIC(CameraPreview, "rt/panoptes/camera_preview", false, Durability::kVolatile, 1)
+PANOPTES_TOPIC(Predictions, "rt/panoptes/predictions", false, Durability::kVolatile, 1)
+PANOPTES_TOPIC(TimeSync, "rt/panoptes/time_sync", true, Durability::kVolatile, 64)
+PANOPTES_TOPIC(TrackFrame, "rt/panoptes/tracks", false, Durability::kVolatile, 1)
+PANOPTES_TOPIC(BodyPose, "rt/panoptes/bodies", false, Durability::kVolatile, 1)
+PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::kTransientLocal, 1)
+#undef PANOPTES_TOPIC
+
+constexpr int kReliableDepth = 2000;
+
+template <class Qos>
+void apply_spec(Qos& qos, const TopicSpec& spec, panoptes::dds::Qos override_qos) {
+  const bool reliable = spec.reliable || override_qos == panoptes::dds::Qos::kReliable;
+  qos.reliability().kind = reliable ? fdds::RELIABLE_RELIABILITY_QOS : fdds::BEST_EFFORT_RELIABILITY_QOS;
+  qos.durability().kind = spec.durability == Durability::kTransientLocal ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS
+                                                                         : fdds::VOLATILE_DURABILITY_QOS;
+  qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
+  qos.history().depth = override_qos == panoptes::dds::Qos::kReliable ? kReliableDepth : spec.depth;
+}
+
+std::filesystem::path executable_dir() {
+  std::vector<char> buffer(4096);
+  const ssize_t n = readlink("/proc/self/exe", buffer.data(), buffer.size() - 1);
+  if (n <= 0) return {};
+  return std::filesystem::path(std::string(buffer.data(), static_cast<std::size_t>(n))).parent_path();
+}
+
+}  // namespace
+
+std::filesystem::path resolve_profile_file(const std::filesystem::path& requested) {
+  if (!requested.empty()) {
+    if (!std::filesystem::is_regular_file(requested)) {
+      throw DdsError("DDS profile " + requested.string() + ": no such file");
+    }
+    return requested;
+  }
+  if (const char* env = std::getenv("PANOPTES_DDS_PROFILE"); env != nullptr && *env != '\0') {
+    if (!std::filesystem::is_regular_file(env)) {
+      throw DdsError(std::string("PANOPTES_DDS_PROFILE=") + env + ": no such file");
+    }
+    return env;
+  }
+  const std::filesystem::path exe = executable_dir();
+  const std::vector<std::filesystem::path> candidates = {
+      exe / "../../deploy/dds/loopback.xml",          // build/bin in a source checkout
+      exe / "../share/panoptes/dds/loopback.xml",     // installed prefix
+  };
+  for (const auto& candidate : candidates) {
+    if (std::filesystem::is_regular_file(candidate)) return std::filesystem::weakly_canonical(candidate);
+  }
+  std::string tried;
+  for (const auto& candidate : candidates) tried += " " + candidate.lexically_normal().string();
+  throw DdsError("no DDS profile given (--dds-profile or PANOPTES_DDS_PROFILE) and none found at:" + tried);
+}
+
+ReturnCode ReturnCodeOk() { return ReturnCode::RETCODE_OK; }
+
+class BusCore {
+ public:
+  explicit BusCore(const BusOptions& options) : profile_file_(resolve_profile_file(options.profile_file)) {
+    auto* factory = fdds::DomainParticipantFactory::get_instance();
+    if (factory->load_XML_profiles_file(profile_file_.string()) != ReturnCodeOk()) {
+      throw DdsError("DDS profile " + profile_file_.string() + ": cannot be parsed");
+    }
+    fdds::DomainParticipantQos qos;
+    if (factory->get_participant_qos_from_profile(options.participant_profile, qos) != ReturnCodeOk()) {
+      throw DdsError("DDS profile " + profile_file_.string() + ": no participant profile named '" +
+                     options.participant_profile + "'");
+    }
+    qos.name(options.participant_name);
+    int domain = options.domain_id;
+    if (domain < 0) {
+      const char* env = std::getenv("PANOPTES_DOMAIN");
+      domain = env != nullptr ? std::atoi(env) : 0;
+    }
+    participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos);
+    if (participant_ == nullptr) throw DdsError("cannot create DDS participant (domain " + std::to_string(domain) + ")");
+    publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+    subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+    if (publisher_ == nullptr || subscriber_ == nullptr) {
+      teardown();
+      throw DdsError("cannot create DDS publisher/subscriber");
+    }
+  }
+  ~BusCore() { teardown(); }
+  BusCore(const BusCore&) = delete;
+  BusCore& operator=(const BusCore&) = delete;
+
+  template <class T>
+  fdds::Topic* topic() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const TopicSpec spec = TopicTraits<T>::spec();
+    if (auto it = topics_.find(spec.name); it != topics_.end()) return it->second;
+    fdds::TypeSupport type(new typename TopicTraits<T>::PubSubType());
+    if (type.register_type(participant_) != ReturnCodeOk()) {
+      throw DdsError(std::string("cannot register DDS type for ") + spec.name);
+    }
+    fdds::Topic* topic = participant_->create_topic(spec.name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+    if (topic == nullptr) throw DdsError(std::string("cannot create DDS topic ") + spec.name);
+    topics_.emplace(spec.name, topic);
+    return topic;
+  }
+
+  fdds::Publisher* publisher() const { return publisher_; }
+  fdds::Subscriber* subscriber() const { return subscriber_; }
+  const std::filesystem::path& profile_file() const { return profile_file_; }
+
+ private:
+  void teardown() {
+    if (participant_ == nullptr) return;
+    participant_->delete_contained_entities();
+    fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+    participant_ = nullptr;
+  }
+
+  std::filesystem::path profile_file_;
+  fdds::DomainParticipant* participant_ = nullptr;
+  fdds::Publisher* publisher_ = nullptr;
+  fdds::Subscriber* subscriber_ = nullptr;
+  std::mutex mutex_;
+  std::map<std::string, fdds::Topic*> topics_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Writer
+
+class WriterListener : public fdds::DataWriterListener {
+ public:
+  void on_publication_matched(fdds::DataWriter*, const fdds::PublicationMatchedStatus& status) override {
+    matched.store(status.current_count);
+  }
+  std::atomic<int> matched{0};
+};
+
+template <class T>
+struct Writer<T>::Impl {
+  std::shared_ptr<BusCore> core;
+  fdds::DataWriter* writer = nullptr;
+  WriterListener listener;
+};
+
+template <class T>
+Writer<T>::Writer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+template <class T>
+Writer<T>::~Writer() {
+  if (impl_ && impl_->writer != nullptr) {
+    impl_->writer->set_listener(nullptr);
+    impl_->core->publisher()->delete_datawriter(impl_->writer);
+  }
+}
+
+template <class T>
+bool Writer<T>::write(const T& sample) {
+  return impl_->writer->write(const_cast<T*>(&sample));
+}
+
+template <class T>
+int Writer<T>::matched_readers() const {
+  return impl_->listener.matched.load();
+}
+
+template <class T>
+bool Writer<T>::wait_for_readers(int count, std::chrono::milliseconds timeout) const {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (matched_readers() < count) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reader
+
+template <class T>
+class ReaderListener : public fdds::DataReaderListener {
+ public:
+  explicit ReaderListener(typename Reader<T>::Callback callback) : callback_(std::move(callback)) {}
+
+  void on_data_available(fdds::DataReader* reader) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!active_) return;
+    T sample;
+    fdds::SampleInfo info;
+    while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      received.fetch_add(1);
+      callback_(std::move(sample));
+      sample = T();
+    }
+  }
+  void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& status) override {
+    matched.store(status.current_count);
+  }
+  // After this returns no callback is running or will run.
+  void deactivate() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    active_ = false;
+  }
+
+  std::atomic<int> matched{0};
+  std::atomic<std::uint64_t> received{0};
+
+ private:
+  typename Reader<T>::Callback callback_;
+  std::mutex mutex_;
+  bool active_ = true;
+};
+
+template <class T>
+struct Reader<T>::Impl {
+  std::shared_ptr<BusCore> core;
+  fdds::DataReader* reader = nullptr;
+  std::unique_ptr<ReaderListener<T>> listener;
+};
+
+template <class T>
+Reader<T>::Reader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+template <class T>
+Reader<T>::~Reader() {
+  if (!impl_) return;
+  impl_->listener->deactivate();
+  if (impl_->reader != nullptr) {
+    impl_->reader->set_listener(nullptr);
+    impl_->core->subscriber()->delete_datareader(impl_->reader);
+  }
+}
+
+template <class T>
+int Reader<T>::matched_writers() const {
+  return impl_->listener->matched.load();
+}
+
+template <class T>
+std::uint64_t Reader<T>::received() const {
+  return impl_->listener->received.load();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bus
+
+Bus::Bus(const BusOptions& options) : core_(std::make_shared<BusCore>(options)) {}
+Bus::~Bus() = default;
+
+const std::filesystem::path& Bus::profile_file() const { return core_->profile_file(); }
+
+template <class T>
+std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos) {
+  auto impl = std::make_unique<typename Writer<T>::Impl>();
+  impl->core = core_;
+  fdds::Topic* topic = core_->topic<T>();
+  fdds::DataWriterQos writer_qos = fdds::DATAWRITER_QOS_DEFAULT;
+  apply_spec(writer_qos, TopicTraits<T>::spec(), qos);
+  impl->writer = core_->publisher()->create_datawriter(topic, writer_qos, &impl->listener);
+  if (impl->writer == nullptr) {
+    throw DdsError(std::string("cannot create DDS writer on ") + TopicTraits<T>::spec().name);
+  }
+  return std::make_unique<Writer<T>>(std::move(impl));
+}
+
+template <class T>
+std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_sample, Qos qos) {
+  auto impl = std::make_unique<typename Reader<T>::Impl>();
+  impl->core = core_;
+  impl->listener = std::make_unique<ReaderListener<T>>(std::move(on_sample));
+  fdds::Topic* topic = core_->topic<T>();
+  fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
+  apply_spec(reader_qos, TopicTraits<T>::spec(), qos);
+  impl->reader = core_->subscriber()->create_datareader(topic, reader_qos, impl->listener.get());
+  if (impl->reader == nullptr) {
+    throw DdsError(std::string("cannot create DDS reader on ") + TopicTraits<T>::spec().name);
+  }
+  return std::make_unique<Reader<T>>(std::move(impl));
+}
+
+#define PANOPTES_INSTANTIATE(Type)                                                             \
+  template class Writer<msg::Type>;                                                            \
+  template class Reader<msg::Type>;                                                            \
+  template std::unique_ptr<Writer<msg::Type>> Bus::make_writer<msg::Type>(Qos);                \
+  template std::unique_ptr<Reader<msg::Type>> Bus::make_reader<msg::Type>(Reader<msg::Type>::Callback, Qos);
+
+PANOPTES_INSTANTIATE(CameraInfo)
+PANOPTES_INSTANTIATE(FeatureFrame)
+PANOPTES_INSTANTIATE(CameraStatus)
+PANOPTES_INSTANTIATE(CameraCommand)
+PANOPTES_INSTANTIATE(CameraPreview)
+PANOPTES_INSTANTIATE(Predictions)
+PANOPTES_INSTANTIATE(TimeSync)
+PANOPTES_INSTANTIATE(TrackFrame)
+PANOPTES_INSTANTIATE(BodyPose)
+PANOPTES_INSTANTIATE(SystemCalibration)
+#undef PANOPTES_INSTANTIATE
+
+}  // namespace panoptes::dds

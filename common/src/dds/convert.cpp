@@ -1,0 +1,119 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/dds/convert.h"
+
+#include <algorithm>
+
+namespace panoptes::dds {
+
+msg::FeatureFrame to_message(const FeatureFrame& frame) {
+  msg::FeatureFrame message;
+  message.camera_id(frame.camera_id);
+  message.frame(frame.frame);
+  message.stamp_ns(frame.stamp_ns);
+  message.arrival_ns(frame.arrival_ns);
+  message.processing_ns(frame.processing_ns);
+  auto& blobs = message.blobs();
+  blobs.reserve(frame.blobs.size());
+  for (const Blob& blob : frame.blobs) {
+    msg::Blob b;
+    b.x(static_cast<float>(blob.x));
+    b.y(static_cast<float>(blob.y));
+    b.area(static_cast<float>(blob.area));
+    b.sum(static_cast<float>(blob.sum));
+    b.peak(static_cast<uint16_t>(std::clamp(blob.peak, 0, 65535)));
+    b.m20(static_cast<float>(blob.m20));
+    b.m11(static_cast<float>(blob.m11));
+    b.m02(static_cast<float>(blob.m02));
+    blobs.push_back(b);
+  }
+  return message;
+}
+
+FeatureFrame from_message(const msg::FeatureFrame& message) {
+  FeatureFrame frame;
+  frame.camera_id = message.camera_id();
+  frame.frame = message.frame();
+  frame.stamp_ns = message.stamp_ns();
+  frame.arrival_ns = message.arrival_ns();
+  frame.processing_ns = message.processing_ns();
+  frame.blobs.reserve(message.blobs().size());
+  for (const msg::Blob& b : message.blobs()) {
+    Blob blob;
+    blob.x = b.x();
+    blob.y = b.y();
+    blob.area = b.area();
+    blob.sum = b.sum();
+    blob.peak = b.peak();
+    blob.m20 = b.m20();
+    blob.m11 = b.m11();
+    blob.m02 = b.m02();
+    frame.blobs.push_back(blob);
+  }
+  return frame;
+}
+
+msg::Track to_message(const TrackRecord& track) {
+  msg::Track message;
+  message.id(track.id);
+  message.position({track.p.x(), track.p.y(), track.p.z()});
+  message.velocity({track.v.x(), track.v.y(), track.v.z()});
+  message.covariance(track.position_covariance);
+  message.status(static_cast<uint8_t>(track.status));
+  message.cameras(static_cast<uint16_t>(std::clamp(track.cameras, 0, 65535)));
+  return message;
+}
+
+TrackRecord from_message(const msg::Track& message, TimeNs stamp_ns) {
+  TrackRecord track;
+  track.stamp_ns = stamp_ns;
+  track.id = message.id();
+  track.p = Eigen::Vector3d(message.position()[0], message.position()[1], message.position()[2]);
+  track.v = Eigen::Vector3d(message.velocity()[0], message.velocity()[1], message.velocity()[2]);
+  track.position_covariance = message.covariance();
+  track.status = message.status() <= 2 ? static_cast<TrackStatus>(message.status()) : TrackStatus::kConfirmed;
+  track.cameras = message.cameras();
+  return track;
+}
+
+msg::CameraInfo to_camera_info(const std::string& camera_id, const CameraIntrinsics& intrinsics,
+                               const std::optional<RigidTransform>& T_world_cam) {
+  msg::CameraInfo info;
+  info.camera_id(camera_id);
+  info.width(static_cast<uint32_t>(intrinsics.width));
+  info.height(static_cast<uint32_t>(intrinsics.height));
+  info.K({intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy});
+  info.distortion(intrinsics.distortion);
+  info.has_pose(T_world_cam.has_value());
+  if (T_world_cam) {
+    msg::Pose3 pose;
+    pose.position({T_world_cam->t.x(), T_world_cam->t.y(), T_world_cam->t.z()});
+    pose.orientation({T_world_cam->q.x(), T_world_cam->q.y(), T_world_cam->q.z(), T_world_cam->q.w()});
+    info.T_world_cam(pose);
+  }
+  return info;
+}
+
+std::optional<CameraCalibration> calibration_from(const msg::CameraInfo& info) {
+  if (info.K()[0] <= 0.0 || info.K()[1] <= 0.0 || info.width() == 0 || info.height() == 0) return std::nullopt;
+  CameraCalibration calibration;
+  calibration.id = info.camera_id();
+  calibration.intrinsics.width = static_cast<int>(info.width());
+  calibration.intrinsics.height = static_cast<int>(info.height());
+  calibration.intrinsics.fx = info.K()[0];
+  calibration.intrinsics.fy = info.K()[1];
+  calibration.intrinsics.cx = info.K()[2];
+  calibration.intrinsics.cy = info.K()[3];
+  calibration.intrinsics.distortion = info.distortion();
+  if (info.has_pose()) {
+    const auto& pose = info.T_world_cam();
+    RigidTransform T;
+    T.t = Eigen::Vector3d(pose.position()[0], pose.position()[1], pose.position()[2]);
+    T.q = Eigen::Quaterniond(pose.orientation()[3], pose.orientation()[0], pose.orientation()[1],
+                             pose.orientation()[2])
+              .normalized();
+    calibration.T_world_cam = T;
+  }
+  return calibration;
+}
+
+}  // namespace panoptes::dds

@@ -1,0 +1,38 @@
+// SPDX-License-Identifier: Apache-2.0
+// Time-ordered inbox for live mode (seed 003 §2.2.4.2): frames from all cameras wait until their
+// stamp is older than the latency window, then leave in stamp order. Bounded; drops counted.
+#pragma once
+
+#include <cstdint>
+#include <mutex>
+#include <vector>
+
+#include "panoptes/records.h"
+
+namespace panoptes::estimator {
+
+class FrameInbox {
+ public:
+  FrameInbox(std::size_t capacity, TimeNs latency_window_ns);
+
+  // Called from DDS listener threads. Returns false if the inbox was full (the oldest frame is
+  // dropped to make room, and counted).
+  bool push(FeatureFrame frame);
+  // Frames with stamp <= now - window, oldest first.
+  std::vector<FeatureFrame> pop_due(TimeNs now_ns);
+  // Everything, oldest first (shutdown).
+  std::vector<FeatureFrame> drain();
+
+  TimeNs latency_window_ns() const { return window_ns_; }
+  std::uint64_t drops() const;
+  std::size_t size() const;
+
+ private:
+  const std::size_t capacity_;
+  const TimeNs window_ns_;
+  mutable std::mutex mutex_;
+  std::vector<FeatureFrame> heap_;  // min-heap on stamp_ns
+  std::uint64_t drops_ = 0;
+};
+
+}  // namespace panoptes::estimator

@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: Apache-2.0
+// Point-track EKF maths (seed 003 Appendix A.3): state apart from maths; this file is the only
+// place that changes a point track's covariance.
+#pragma once
+
+#include <optional>
+
+#include <Eigen/Core>
+
+#include "panoptes/camera_model.h"
+#include "panoptes/time.h"
+
+namespace panoptes::estimator {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+struct PointState {
+  Vector6d x = Vector6d::Zero();  // p (m), v (m/s), world frame
+  Matrix6d P = Matrix6d::Identity();
+  TimeNs stamp_ns = 0;
+
+  Eigen::Vector3d position() const { return x.head<3>(); }
+  Eigen::Vector3d velocity() const { return x.tail<3>(); }
+};
+
+// A(Δt), seed 003 eq. A.27 (the position/velocity block).
+Matrix6d transition_matrix(double dt_s);
+// Q(Δt) for white acceleration noise of spectral density `sigma2` (m²/s³), eq. A.28 / A.48.
+Matrix6d process_noise(double dt_s, double sigma2);
+
+// Predicts `state` to `stamp_ns` (which may be earlier: Δt < 0 is used only for look-ups, see
+// predicted()). Eq. A.31–A.32.
+void predict(PointState& state, TimeNs stamp_ns, double sigma2);
+PointState predicted(const PointState& state, TimeNs stamp_ns, double sigma2);
+
+// The projection of a track into one camera with what gating and the update need.
+struct PointProjection {
+  Eigen::Vector2d pixel;
+  Eigen::Matrix<double, 2, 6> H;  // d(pixel)/d(x)
+  Eigen::Matrix2d S;              // innovation covariance H P Hᵀ + R
+  Eigen::Matrix2d S_inverse;
+};
+
+// nullopt if the point is behind the camera.
+std::optional<PointProjection> project_point(const PointState& state, const CameraModel& camera,
+                                             double measurement_sigma_px);
+
+// Squared Mahalanobis distance of a measurement under the projection's innovation covariance.
+double mahalanobis2(const PointProjection& projection, const Eigen::Vector2d& measurement);
+
+// EKF update with one 2D measurement, Joseph-form covariance (keeps P symmetric positive definite).
+void update(PointState& state, const PointProjection& projection, const Eigen::Vector2d& measurement,
+            double measurement_sigma_px);
+
+}  // namespace panoptes::estimator

@@ -1,0 +1,79 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/estimator/point_ekf.h"
+
+#include <Eigen/LU>
+
+namespace panoptes::estimator {
+
+Matrix6d transition_matrix(double dt_s) {
+  Matrix6d A = Matrix6d::Identity();
+  A.block<3, 3>(0, 3) = dt_s * Eigen::Matrix3d::Identity();
+  return A;
+}
+
+Matrix6d process_noise(double dt_s, double sigma2) {
+  // Seed 003 eq. A.48 per axis: σ² [[Δt³/3, Δt²/2], [Δt²/2, Δt]]. For Δt < 0 (a look-up into the
+  // past) the magnitude is used so that uncertainty still grows away from the last update.
+  const double dt = dt_s < 0 ? -dt_s : dt_s;
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  Matrix6d Q;
+  Q.block<3, 3>(0, 0) = (dt * dt * dt / 3.0) * sigma2 * I;
+  Q.block<3, 3>(0, 3) = (dt * dt / 2.0) * sigma2 * I;
+  Q.block<3, 3>(3, 0) = (dt * dt / 2.0) * sigma2 * I;
+  Q.block<3, 3>(3, 3) = dt * sigma2 * I;
+  if (dt_s < 0) {
+    // Cross terms change sign when extrapolating backwards.
+    Q.block<3, 3>(0, 3) *= -1.0;
+    Q.block<3, 3>(3, 0) *= -1.0;
+  }
+  return Q;
+}
+
+void predict(PointState& state, TimeNs stamp_ns, double sigma2) {
+  const double dt = ns_to_seconds(stamp_ns - state.stamp_ns);
+  if (dt != 0.0) {
+    const Matrix6d A = transition_matrix(dt);
+    state.x = A * state.x;  // eq. A.31
+    state.P = A * state.P * A.transpose() + process_noise(dt, sigma2);  // eq. A.32
+    state.P = 0.5 * (state.P + state.P.transpose());
+  }
+  state.stamp_ns = stamp_ns;
+}
+
+PointState predicted(const PointState& state, TimeNs stamp_ns, double sigma2) {
+  PointState copy = state;
+  predict(copy, stamp_ns, sigma2);
+  return copy;
+}
+
+std::optional<PointProjection> project_point(const PointState& state, const CameraModel& camera,
+                                             double measurement_sigma_px) {
+  Eigen::Matrix<double, 2, 3> J;
+  const auto pixel = camera.project(state.position(), &J);
+  if (!pixel) return std::nullopt;
+  PointProjection projection;
+  projection.pixel = *pixel;
+  projection.H.setZero();
+  projection.H.leftCols<3>() = J;
+  const Eigen::Matrix2d R = measurement_sigma_px * measurement_sigma_px * Eigen::Matrix2d::Identity();
+  projection.S = projection.H * state.P * projection.H.transpose() + R;
+  projection.S_inverse = projection.S.inverse();
+  return projection;
+}
+
+double mahalanobis2(const PointProjection& projection, const Eigen::Vector2d& measurement) {
+  const Eigen::Vector2d r = measurement - projection.pixel;
+  return r.dot(projection.S_inverse * r);
+}
+
+void update(PointState& state, const PointProjection& projection, const Eigen::Vector2d& measurement,
+            double measurement_sigma_px) {
+  const Eigen::Matrix2d R = measurement_sigma_px * measurement_sigma_px * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix<double, 6, 2> K = state.P * projection.H.transpose() * projection.S_inverse;
+  state.x += K * (measurement - projection.pixel);
+  const Matrix6d I_KH = Matrix6d::Identity() - K * projection.H;
+  state.P = I_KH * state.P * I_KH.transpose() + K * R * K.transpose();
+  state.P = 0.5 * (state.P + state.P.transpose());
+}
+
+}  // namespace panoptes::estimator
