@@ -28,6 +28,14 @@ int main(int argc, char** argv) {
   app.add_option("--match-distance", match_distance_m, "metres within which a track observes a marker")
       ->check(CLI::PositiveNumber);
   app.add_option("--summary-json", summary_json, "write the evaluation as JSON to this file");
+  double require_rmse_mm = 0;
+  double require_tracked = 0;
+  bool require_no_switches = false;
+  app.add_option("--require-rmse-mm", require_rmse_mm, "exit 1 unless every marker's RMSE is below this (mm)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--require-tracked", require_tracked, "exit 1 unless every marker is tracked this fraction of the time")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_flag("--require-no-id-switches", require_no_switches, "exit 1 if any marker changed track id");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {
@@ -52,6 +60,14 @@ int main(int argc, char** argv) {
       std::ofstream out(summary_json);
       if (!out) throw std::runtime_error(summary_json + ": cannot open for writing");
       out << evaluation.to_json() << "\n";
+    }
+    bool pass = evaluation.instants > 0;
+    if (require_rmse_mm > 0 && evaluation.worst_marker_rmse_m * 1e3 >= require_rmse_mm) pass = false;
+    if (require_tracked > 0 && evaluation.min_tracked_fraction < require_tracked) pass = false;
+    if (require_no_switches && evaluation.id_switch_count > 0) pass = false;
+    if (!pass) {
+      std::fprintf(stderr, "panoptes_eval: requirements not met\n");
+      return panoptes::kExitFailure;
     }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_eval: %s\n", error.what());

@@ -23,16 +23,16 @@ namespace panoptes {
 struct SimCameraConfig {
   CameraCalibration calibration;  // always has T_world_cam
   double rate_hz = 100.0;
-  TimeNs phase_ns = 0;            // scene time of frame 0's mid-exposure
-  TimeNs clock_offset_ns = 0;     // camera clock minus true clock
+  TimeNs phase_ns = 0;         // scene time of frame 0's mid-exposure
+  TimeNs clock_offset_ns = 0;  // camera clock minus true clock
   TimeNs exposure_ns = 1'000'000;
-  double pixel_noise_dn = 1.0;    // Gaussian sensor noise, DN (of `bits`)
-  double centroid_noise_px = 0.0; // jitter of each rendered spot centre, px
+  double pixel_noise_dn = 1.0;     // Gaussian sensor noise, DN (of `bits`)
+  double centroid_noise_px = 0.0;  // jitter of each rendered spot centre, px
   double background_dn = 8.0;
-  double blob_peak_dn = 220.0;    // peak of a spot of minimum size
-  double blob_min_sigma_px = 1.0; // spots never render smaller than this
+  double blob_peak_dn = 220.0;       // peak of a spot of minimum size
+  double blob_min_sigma_px = 1.0;    // spots never render smaller than this
   double dropout_probability = 0.0;  // each marker missing from a frame at random
-  int bits = 8;                   // 8, 10, 12 or 16
+  int bits = 8;                      // 8, 10, 12 or 16
 };
 
 struct MarkerTruth {
@@ -52,7 +52,7 @@ struct TrcData {
   double data_rate_hz = 0.0;
   std::string units;  // as written in the file ("mm", "cm", "m")
   std::vector<std::string> marker_names;
-  std::vector<double> times_s;  // the Time column, one entry per frame, strictly increasing
+  std::vector<double> times_s;             // the Time column, one entry per frame, strictly increasing
   std::vector<Eigen::Vector3d> positions;  // frame-major: [frame * marker_count() + marker]
   std::vector<std::uint8_t> valid;         // same layout; 0 where the file leaves a value empty
 

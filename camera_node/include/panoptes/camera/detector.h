@@ -24,9 +24,9 @@ struct DetectorConfig {
   // Absolute threshold T_a in DN of the image's bit depth; 0 selects a default that scales with
   // the bit depth (64 for 8-bit, i.e. 25% of full scale).
   int threshold = 0;
-  int min_area = 2;       // pixels
-  int max_area = 5000;    // pixels
-  int min_peak = 0;       // DN; 0 disables
+  int min_area = 2;           // pixels
+  int max_area = 5000;        // pixels
+  int min_peak = 0;           // DN; 0 disables
   double max_elongation = 0;  // ratio of ellipse axes; 0 disables
   CentroidWeighting weighting = CentroidWeighting::kIntensitySquared;
 
@@ -55,6 +55,23 @@ class Detector {
   };
   std::vector<Run> runs_;
   std::vector<int> row_start_;
+  // Per-component moment sums, relative to the component's first pixel to keep the central
+  // moments free of cancellation on large images.
+  struct Moments {
+    int origin_x, origin_y;
+    double weight, weight_x, weight_y, weight_xx, weight_xy, weight_yy;
+    double sum;
+    int area;
+    int peak;
+  };
+  std::vector<Moments> moments_;
+
+  template <class Pixel>
+  void find_runs(const Image& image, int threshold);
+  void label_components();
+  template <class Pixel, CentroidWeighting kWeighting>
+  void accumulate_moments(const Image& image, int threshold);
+  void emit_blobs(std::vector<Blob>& blobs) const;
 };
 
 }  // namespace panoptes::camera

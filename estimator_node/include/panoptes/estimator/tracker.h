@@ -17,8 +17,8 @@
 namespace panoptes::estimator {
 
 struct TrackerOptions {
-  double process_noise = 20.0;        // σ² of white acceleration, m²/s³ (seed 003 A.48)
-  double measurement_noise_px = 0.25; // σ of a centroid, px (seed 003 A.30)
+  double process_noise = 50.0;        // σ² of white acceleration, m²/s³ (seed 003 A.48)
+  double measurement_noise_px = 0.5;  // σ of a centroid, px (seed 003 A.30)
   double gate_chi2 = 18.42;           // χ²₂ at p = 0.9999: the verify region (seed 003 §2.2.3.2)
   TimeNs init_window_ns = 30'000'000; // unmatched blobs of other cameras this recent may pair
   double init_reprojection_px = 3.0;  // a candidate must reproject this well in every camera used

@@ -1,0 +1,169 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "image_source.h"
+
+#include <glob.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cstring>
+#include <fstream>
+#include <optional>
+#include <stdexcept>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+namespace panoptes::camera {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool has_image_extension(const fs::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".pgm" || extension == ".pnm" || extension == ".png";
+}
+
+bool has_glob_magic(const std::string& pattern) {
+  return pattern.find_first_of("*?[") != std::string::npos;
+}
+
+std::vector<fs::path> list_files(const std::string& pattern) {
+  const std::string spec = "images:" + pattern;
+  std::vector<fs::path> files;
+  std::error_code error;
+  if (fs::is_directory(pattern, error)) {
+    for (const auto& entry : fs::directory_iterator(pattern, error)) {
+      if (entry.is_regular_file(error) && has_image_extension(entry.path())) files.push_back(entry.path());
+    }
+    if (error) throw std::runtime_error(spec + ": cannot list directory: " + error.message());
+  } else {
+    if (!has_glob_magic(pattern) && !fs::exists(pattern, error)) {
+      throw std::runtime_error(spec + ": no such directory");
+    }
+    glob_t matches{};
+    const int status = ::glob(pattern.c_str(), 0, nullptr, &matches);
+    if (status == 0) {
+      for (std::size_t i = 0; i < matches.gl_pathc; ++i) {
+        const fs::path path = matches.gl_pathv[i];
+        if (fs::is_regular_file(path, error)) files.push_back(path);
+      }
+    }
+    ::globfree(&matches);
+    if (status != 0 && status != GLOB_NOMATCH) throw std::runtime_error(spec + ": glob failed");
+  }
+  if (files.empty()) throw std::runtime_error(spec + ": no PGM/PNG files match");
+  // Name order is the frame order (the offline contract); directory order is arbitrary.
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// Reads a PNM header's maxval: the only place a 12-bit PGM says it is 12-bit. OpenCV keeps the
+// raw values but reports only "16 bits".
+std::optional<int> pnm_maxval(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::string magic(2, '\0');
+  if (!in.read(magic.data(), 2) || magic[0] != 'P' || !std::strchr("2356", magic[1])) return std::nullopt;
+  long long fields[3] = {0, 0, 0};
+  for (long long& field : fields) {
+    int c = in.get();
+    while (in && (std::isspace(c) || c == '#')) {
+      if (c == '#') {
+        while (in && c != '\n') c = in.get();
+      }
+      c = in.get();
+    }
+    if (!in || !std::isdigit(c)) return std::nullopt;
+    while (in && std::isdigit(c)) {
+      field = field * 10 + (c - '0');
+      if (field > 1'000'000'000) return std::nullopt;
+      c = in.get();
+    }
+  }
+  return static_cast<int>(fields[2]);
+}
+
+int bits_for_maxval(int maxval) {
+  int bits = 1;
+  while (bits < 16 && (1 << bits) - 1 < maxval) ++bits;
+  return bits;
+}
+
+class ImageFileSource final : public FrameSource {
+ public:
+  ImageFileSource(std::vector<fs::path> files, const SourceOptions& options)
+      : files_(std::move(files)), max_frames_(options.max_frames) {
+    first_ = load_grey_image(files_.front());
+    info_.camera_id = options.camera_id.empty() ? "images" : options.camera_id;
+    info_.backend = "images";
+    info_.model = "image files";
+    info_.width = first_->width;
+    info_.height = first_->height;
+  }
+
+  const SourceInfo& info() const override { return info_; }
+
+  std::optional<CapturedFrame> next() override {
+    if (stopped_ || next_index_ >= files_.size()) return std::nullopt;
+    if (max_frames_ >= 0 && static_cast<std::int64_t>(next_index_) >= max_frames_) return std::nullopt;
+    CapturedFrame frame;
+    if (first_) {
+      frame.image = std::move(*first_);
+      first_.reset();
+    } else {
+      frame.image = load_grey_image(files_[next_index_]);
+    }
+    frame.sequence = static_cast<std::int64_t>(next_index_);
+    frame.stamp_ns = 0;  // files carry no capture time
+    frame.arrival_ns = wall_now_ns();
+    ++next_index_;
+    return frame;
+  }
+
+  void stop() override { stopped_ = true; }
+
+ private:
+  std::vector<fs::path> files_;
+  std::int64_t max_frames_;
+  std::optional<Image> first_;  // loaded up front for info(); handed out by the first next()
+  std::size_t next_index_ = 0;
+  SourceInfo info_;
+  std::atomic<bool> stopped_{false};
+};
+
+}  // namespace
+
+Image load_grey_image(const fs::path& path) {
+  // IMREAD_ANYDEPTH without IMREAD_COLOR has the codec itself convert colour files to grey while
+  // keeping 16-bit samples intact.
+  const cv::Mat mat = cv::imread(path.string(), cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
+  if (mat.empty()) throw std::runtime_error(path.string() + ": cannot read image");
+  if (mat.channels() != 1 || (mat.depth() != CV_8U && mat.depth() != CV_16U)) {
+    throw std::runtime_error(path.string() + ": unsupported pixel format (need 8- or 16-bit grey)");
+  }
+  int bits = mat.depth() == CV_8U ? 8 : 16;
+  if (bits == 16) {
+    if (const auto maxval = pnm_maxval(path); maxval && *maxval > 255) bits = bits_for_maxval(*maxval);
+  }
+  Image image(mat.cols, mat.rows, bits);
+  const std::size_t row_bytes = image.stride();
+  for (int y = 0; y < mat.rows; ++y) std::memcpy(image.row8(y), mat.ptr(y), row_bytes);
+  return image;
+}
+
+std::unique_ptr<FrameSource> open_image_source(const std::string& pattern, const SourceOptions& options) {
+  std::vector<fs::path> files = list_files(pattern);
+  try {
+    return std::make_unique<ImageFileSource>(std::move(files), options);
+  } catch (const std::runtime_error& error) {
+    throw std::runtime_error("images:" + pattern + ": " + error.what());
+  }
+}
+
+}  // namespace panoptes::camera

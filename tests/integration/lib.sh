@@ -1,0 +1,42 @@
+# SPDX-License-Identifier: Apache-2.0
+# Shared helpers for the integration tests: bounded waits, assertions, cleanup on every exit.
+set -uo pipefail
+build_dir="$1"
+source_dir="$2"
+bin="$build_dir/bin"
+work="$(mktemp -d /tmp/panoptes-test-XXXXXX)"
+export PANOPTES_DDS_PROFILE="$source_dir/deploy/dds/loopback.xml"
+pids=()
+failures=0
+
+cleanup() {
+  for pid in "${pids[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
+  sleep 0.5
+  for pid in "${pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
+  fastdds shm clean >/dev/null 2>&1 || true
+  if [ "$failures" -eq 0 ]; then rm -rf "$work"; else echo "kept $work for inspection"; fi
+}
+trap cleanup EXIT
+
+pass() { echo "PASS: $*"; }
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# expect_exit CODE DESCRIPTION -- command...   (stderr captured in $work/last.err)
+expect_exit() {
+  local code="$1" what="$2"
+  shift 3
+  "$@" >"$work/last.out" 2>"$work/last.err"
+  local rc=$?
+  if [ "$rc" -eq "$code" ]; then pass "$what (exit $rc)"; else fail "$what: exit $rc, expected $code"; cat "$work/last.err"; fi
+}
+
+# expect_stderr_contains TEXT DESCRIPTION
+expect_stderr_contains() {
+  if grep -qF -- "$1" "$work/last.err"; then pass "$2"; else fail "$2: stderr lacks '$1'"; cat "$work/last.err"; fi
+}
+
+finish() {
+  if [ "$failures" -eq 0 ]; then echo "all checks passed"; exit 0; fi
+  echo "$failures check(s) failed"
+  exit 1
+}

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Real processes over Fast DDS with the loopback profile: 4 camera_node + estimator_node + the demo
+# as a subscribing application. Asserts on the tracks received over DDS and that nothing listened
+# on or joined anything but loopback.
+source "$(dirname "$0")/lib.sh"
+
+"$bin/panoptes_demo" --duration 8 --check --summary-json "$work/summary.json" --log-dir "$work/logs" >"$work/demo.out" 2>&1 &
+demo=$!
+pids+=("$demo")
+# While it runs, record every socket of our processes and every multicast membership.
+sleep 6
+for exe in camera_node estimator_node panoptes_demo; do
+  for pid in $(pgrep -x "$exe"); do ss -H -uanp 2>/dev/null | grep "pid=$pid," ; done
+done >"$work/sockets.txt"
+cp /proc/net/igmp "$work/igmp.txt" 2>/dev/null || true
+timeout 60 tail --pid="$demo" -f /dev/null
+wait "$demo"
+rc=$?
+cat "$work/demo.out"
+[ "$rc" -eq 0 ] && pass "demo over DDS met its accuracy targets" || { fail "demo exit $rc"; tail -20 "$work"/logs/*.log; }
+grep -q '"targets_met": true' "$work/summary.json" && pass "summary JSON written" || fail "summary JSON missing or failing"
+
+if [ -s "$work/sockets.txt" ]; then
+  nonlocal=$(awk '{print $4}' "$work/sockets.txt" | grep -v -E '^(127\.[0-9.]+|\[::ffff:127\.[0-9.]+\]):[0-9]+$' || true)
+  [ -z "$nonlocal" ] && pass "every DDS socket is bound to loopback ($(wc -l <"$work/sockets.txt") sockets)" || fail "sockets not on loopback: $nonlocal"
+else
+  fail "no sockets seen (could not inspect the processes)"
+fi
+if grep -q "239.255" "$work/igmp.txt" 2>/dev/null || grep -qi "EFFF0001\|0100FFEF" "$work/igmp.txt" 2>/dev/null; then
+  fail "a process joined the DDS multicast group"
+else
+  pass "no DDS multicast group joined"
+fi
+finish

@@ -1,0 +1,213 @@
+// SPDX-License-Identifier: Apache-2.0
+#include <algorithm>
+#include <map>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "panoptes/estimator/inbox.h"
+#include "panoptes/estimator/tracker.h"
+#include "test_cameras.h"
+
+namespace panoptes::estimator {
+namespace {
+
+// Three markers on circles of different radii, speeds ~1 m/s.
+Eigen::Vector3d marker_position(int m, double t) {
+  const double radius = 0.3 + 0.15 * m;
+  const double omega = 1.0 / radius * (m % 2 == 0 ? 1.0 : -1.0);
+  return {radius * std::cos(omega * t + m), radius * std::sin(omega * t + m), 0.8 + 0.3 * m + 0.1 * std::sin(2 * t)};
+}
+
+struct SyntheticRun {
+  std::vector<CameraCalibration> cameras = make_ring_calibration(4, 3.0, 2.0, true);
+  std::vector<FeatureFrame> frames;
+};
+
+// Four cameras at 100 Hz, phases 0/2.5/5/7.5 ms, 0.1 px noise; `visible(m, t)` hides markers.
+template <class Visible>
+SyntheticRun make_run(double duration_s, Visible visible, std::uint64_t seed = 1) {
+  SyntheticRun run;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.1);
+  std::vector<CameraModel> models;
+  for (const auto& c : run.cameras) models.push_back(c.model());
+  const TimeNs epoch = 1'700'000'000'000'000'000LL;
+  for (int k = 0; k < static_cast<int>(duration_s * 100); ++k) {
+    for (std::size_t c = 0; c < models.size(); ++c) {
+      const TimeNs t = k * 10'000'000LL + static_cast<TimeNs>(c) * 2'500'000LL;
+      FeatureFrame frame;
+      frame.camera_id = run.cameras[c].id;
+      frame.frame = k;
+      frame.stamp_ns = epoch + t;
+      for (int m = 0; m < 3; ++m) {
+        if (!visible(m, ns_to_seconds(t))) continue;
+        const auto pixel = models[c].project(marker_position(m, ns_to_seconds(t)));
+        if (!pixel || !models[c].in_image(*pixel)) continue;
+        Blob blob;
+        blob.x = pixel->x() + noise(rng);
+        blob.y = pixel->y() + noise(rng);
+        blob.area = 12;
+        frame.blobs.push_back(blob);
+      }
+      std::shuffle(frame.blobs.begin(), frame.blobs.end(), rng);
+      run.frames.push_back(frame);
+    }
+  }
+  return run;
+}
+
+TimeNs scene_time(TimeNs stamp) { return stamp - 1'700'000'000'000'000'000LL; }
+
+// For each marker, the ids of the tracks nearest to it (within 5 mm) over the run, and the worst error.
+struct Followed {
+  std::map<int, std::set<std::int64_t>> ids;
+  std::map<int, double> worst_error;
+  std::map<int, double> sum2;
+  std::map<int, int> matched;
+  int instants = 0;
+  int extra_tracks = 0;
+};
+
+template <class Visible>
+Followed follow(Tracker& tracker, const SyntheticRun& run, double judge_after_s, Visible visible) {
+  Followed f;
+  for (const auto& frame : run.frames) {
+    EXPECT_EQ(tracker.process(frame), FrameOutcome::kProcessed);
+    const double t = ns_to_seconds(scene_time(frame.stamp_ns));
+    if (t < judge_after_s) continue;
+    ++f.instants;
+    const auto tracks = tracker.current_tracks();
+    int matched_now = 0;
+    for (int m = 0; m < 3; ++m) {
+      for (const auto& track : tracks) {
+        const double error = (track.p - marker_position(m, t)).norm();
+        if (error < 0.005) {
+          f.ids[m].insert(track.id);
+          f.worst_error[m] = std::max(f.worst_error[m], error);
+          f.sum2[m] += error * error;
+          ++f.matched[m];
+          ++matched_now;
+        }
+      }
+    }
+    int expected = 0;
+    for (int m = 0; m < 3; ++m) expected += visible(m, t) ? 1 : 0;
+    f.extra_tracks = std::max(f.extra_tracks, static_cast<int>(tracks.size()) - 3);
+  }
+  return f;
+}
+
+TEST(Tracker, InitiatesAndTracksThreeMarkersWithStableIds) {
+  auto always = [](int, double) { return true; };
+  const auto run = make_run(3.0, always);
+  Tracker tracker;
+  SystemCalibration calibration{run.cameras};
+  tracker.set_calibration(calibration);
+  const auto f = follow(tracker, run, 0.3, always);
+  for (int m = 0; m < 3; ++m) {
+    EXPECT_EQ(f.ids.at(m).size(), 1u) << "marker " << m << " changed identity";
+    EXPECT_EQ(f.matched.at(m), f.instants) << "marker " << m << " not tracked at every instant";
+    const double rmse = std::sqrt(f.sum2.at(m) / f.matched.at(m));
+    std::printf("marker %d: RMSE %.3f mm, worst %.3f mm\n", m, rmse * 1e3, f.worst_error.at(m) * 1e3);
+    EXPECT_LT(rmse, 0.8e-3) << "marker " << m;
+    EXPECT_LT(f.worst_error.at(m), 3.0e-3) << "marker " << m;
+  }
+  EXPECT_EQ(f.extra_tracks, 0);
+  EXPECT_EQ(tracker.stats().tracks_confirmed, 3u);
+}
+
+TEST(Tracker, KeepsIdentityThroughShortOcclusionAndDeletesAfterTimeout) {
+  // Marker 1 vanishes from 1.0 s to 1.15 s (coasting), marker 2 for good at 2.0 s.
+  auto visible = [](int m, double t) {
+    if (m == 1 && t > 1.0 && t < 1.15) return false;
+    if (m == 2 && t > 2.0) return false;
+    return true;
+  };
+  const auto run = make_run(3.0, visible, 2);
+  Tracker tracker;
+  tracker.set_calibration(SystemCalibration{run.cameras});
+  std::int64_t id_before = 0;
+  std::int64_t id_after = 0;
+  bool saw_coasting = false;
+  for (const auto& frame : run.frames) {
+    tracker.process(frame);
+    const double t = ns_to_seconds(scene_time(frame.stamp_ns));
+    for (const auto& track : tracker.current_tracks()) {
+      const double error = (track.p - marker_position(1, t)).norm();
+      if (t > 0.9 && t < 1.0 && error < 0.005) id_before = track.id;
+      if (t > 1.3 && t < 1.4 && error < 0.005) id_after = track.id;
+      if (t > 1.06 && t < 1.14 && track.status == TrackStatus::kCoasting) saw_coasting = true;
+    }
+  }
+  EXPECT_NE(id_before, 0);
+  EXPECT_EQ(id_before, id_after) << "marker 1 was given a new identity after a 150 ms occlusion";
+  EXPECT_TRUE(saw_coasting);
+  // Marker 2's track is gone 0.3 s after it disappeared; two remain.
+  EXPECT_EQ(tracker.current_tracks().size(), 2u);
+  EXPECT_GE(tracker.stats().tracks_deleted, 1u);
+}
+
+TEST(Tracker, CountsFramesFromUncalibratedCamerasAndLateFrames) {
+  auto always = [](int, double) { return true; };
+  const auto run = make_run(0.2, always);
+  Tracker tracker;
+  tracker.set_calibration(SystemCalibration{run.cameras});
+  FeatureFrame stranger = run.frames[0];
+  stranger.camera_id = "not-calibrated";
+  EXPECT_EQ(tracker.process(stranger), FrameOutcome::kUnknownCamera);
+  tracker.process(run.frames[10]);
+  EXPECT_EQ(tracker.process(run.frames[5]), FrameOutcome::kLate);
+  EXPECT_EQ(tracker.stats().frames_unknown_camera, 1u);
+  EXPECT_EQ(tracker.stats().frames_late, 1u);
+}
+
+TEST(Tracker, NoGhostTrackIsPublished) {
+  // Two cameras' rays can meet near a wrong blob and triangulate a ghost; confirmation by a third
+  // camera must keep every published track on a real marker.
+  auto always = [](int, double) { return true; };
+  auto run = make_run(2.0, always, 3);
+  Tracker tracker;
+  tracker.set_calibration(SystemCalibration{run.cameras});
+  std::size_t ghosts = 0;
+  for (const auto& frame : run.frames) {
+    tracker.process(frame);
+    const double t = ns_to_seconds(scene_time(frame.stamp_ns));
+    for (const auto& track : tracker.current_tracks()) {
+      double nearest = 1e9;
+      for (int m = 0; m < 3; ++m) nearest = std::min(nearest, (track.p - marker_position(m, t)).norm());
+      if (nearest > 0.01) ++ghosts;
+    }
+  }
+  EXPECT_EQ(ghosts, 0u);
+}
+
+TEST(FrameInbox, ReleasesFramesInStampOrderAfterTheWindow) {
+  FrameInbox inbox(3, 10);
+  for (TimeNs stamp : {105, 100, 120}) {
+    FeatureFrame frame;
+    frame.stamp_ns = stamp;
+    EXPECT_TRUE(inbox.push(frame));
+  }
+  auto due = inbox.pop_due(116);  // window 10: stamps <= 106 leave
+  ASSERT_EQ(due.size(), 2u);
+  EXPECT_EQ(due[0].stamp_ns, 100);
+  EXPECT_EQ(due[1].stamp_ns, 105);
+  FeatureFrame a, b, c;
+  a.stamp_ns = 130;
+  b.stamp_ns = 140;
+  c.stamp_ns = 150;
+  EXPECT_TRUE(inbox.push(a));
+  EXPECT_TRUE(inbox.push(b));
+  EXPECT_FALSE(inbox.push(c));  // full: the oldest (120) is dropped
+  EXPECT_EQ(inbox.drops(), 1u);
+  const auto rest = inbox.drain();
+  ASSERT_EQ(rest.size(), 3u);
+  EXPECT_EQ(rest[0].stamp_ns, 130);
+}
+
+}  // namespace
+}  // namespace panoptes::estimator

@@ -1,0 +1,202 @@
+// SPDX-License-Identifier: Apache-2.0
+// TRC motion-capture files: parsing, unit and axis conversion, interpolation, gaps and looping.
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "panoptes/config.h"
+#include "panoptes/simulator.h"
+
+namespace panoptes {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kWalk = fs::path(PANOPTES_SOURCE_DIR) / ".." / "shared" / "data" / "walk_41markers_100hz.trc";
+
+const std::string kCamera = R"(
+cameras:
+  - id: cam0
+    width: 640
+    height: 480
+    K: [600, 600, 319.5, 239.5]
+    look_at: {eye: [0, -6, 1], target: [0, 0, 1]}
+)";
+
+// Three markers, four frames at 50 Hz, in centimetres; B is missing in frame 3, and C's x is
+// blank in frame 2.
+const std::string kGappyTrc =
+    "PathFileType\t4\t(X/Y/Z)\tgappy.trc\n"
+    "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames\n"
+    "50.0\t50.0\t4\t3\tcm\t50.0\t1\t4\n"
+    "Frame#\tTime\tA\t\t\tB\t\t\tC\t\t\n"
+    "\t\tX1\tY1\tZ1\tX2\tY2\tZ2\tX3\tY3\tZ3\n"
+    "\n"
+    "1\t0.00\t0\t100\t0\t10\t20\t30\t1\t2\t3\r\n"
+    "2\t0.02\t10\t100\t0\t11\t21\t31\t\t2\t3\r\n"
+    "3\t0.04\t20\t100\t0\t\t\t\t1\t2\t3\r\n"
+    "4\t0.06\t30\t100\t0\t13\t23\t33\t1\t2\t3\r\n";
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ =
+        fs::temp_directory_path() /
+        ("panoptes_trc_test_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  fs::path write(const std::string& name, const std::string& text) const {
+    std::ofstream(path_ / name, std::ios::binary) << text;
+    return path_ / name;
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+TEST(Trc, LoadsTheWalkFileInMetres) {
+  const TrcData data = load_trc(kWalk);
+  EXPECT_EQ(data.marker_count(), 41u);
+  EXPECT_EQ(data.frame_count(), 238u);
+  EXPECT_EQ(data.data_rate_hz, 100.0);
+  EXPECT_EQ(data.units, "mm");
+  EXPECT_EQ(data.marker_names.front(), "R.Shoulder");
+  EXPECT_EQ(data.marker_names.back(), "L.Toe");
+  EXPECT_DOUBLE_EQ(data.times_s[1], 0.01);
+  EXPECT_DOUBLE_EQ(data.times_s.back(), 2.37);
+  // Row "1  0.00000  -652.630  1529.542  -94.520 ...".
+  EXPECT_TRUE(data.position(0, 0).isApprox(Eigen::Vector3d(-0.652630, 1.529542, -0.094520), 1e-12));
+  EXPECT_TRUE(data.is_valid(0, 0));
+  for (std::uint8_t valid : data.valid) EXPECT_EQ(valid, 1);  // this recording has no gaps
+}
+
+TEST(Trc, SceneConvertsYUpToZUpAndInterpolates) {
+  const TempDir dir;
+  const fs::path scene_path =
+      dir.write("scene.yaml", kCamera + "trc:\n  file: " + fs::absolute(kWalk).string() +
+                                  "\n  offset: [1, 2, 3]\n  markers: [L.Toe, R.Shoulder]\n");
+  const Scene scene = Scene::load(scene_path);
+  EXPECT_EQ(scene.marker_names(), (std::vector<std::string>{"trc/L.Toe", "trc/R.Shoulder"}));
+  EXPECT_DOUBLE_EQ(scene.marker_radius(1), 0.007);
+  // File (x, y, z) in mm, y up -> world (x, -z, y) in m, plus the offset.
+  const Eigen::Vector3d frame0(-0.652630 + 1, 0.094520 + 2, 1.529542 + 3);
+  const Eigen::Vector3d frame1(-0.641082 + 1, 0.094682 + 2, 1.531254 + 3);
+  const auto at0 = scene.markers_at(0);
+  ASSERT_TRUE(at0[1].valid);
+  EXPECT_EQ(at0[1].name, "trc/R.Shoulder");
+  EXPECT_LT((at0[1].p - frame0).norm(), 1e-12);
+  EXPECT_LT((scene.markers_at(10 * kNsPerMillisecond)[1].p - frame1).norm(), 1e-12);
+  const auto between = scene.markers_at(7'500'000);
+  EXPECT_LT((between[1].p - (0.25 * frame0 + 0.75 * frame1)).norm(), 1e-12);
+}
+
+TEST(Trc, RelativePathsResolveAgainstTheSceneFile) {
+  const TempDir dir;
+  dir.write("gappy.trc", kGappyTrc);
+  fs::create_directories(dir.path() / "scenes");
+  const fs::path scene_path =
+      dir.write("scenes/scene.yaml", kCamera + "trc: {file: ../gappy.trc, up_axis: z}\n");
+  const Scene scene = Scene::load(scene_path);
+  ASSERT_EQ(scene.marker_names().size(), 3u);
+  // Centimetres, z up: no axis change.
+  EXPECT_LT((scene.markers_at(0)[1].p - Eigen::Vector3d(0.10, 0.20, 0.30)).norm(), 1e-12);
+}
+
+TEST(Trc, GapsMakeMarkersInvalidWhereTheyHaveNoData) {
+  const TempDir dir;
+  const fs::path trc_path = dir.write("gappy.trc", kGappyTrc);
+  const TrcData data = load_trc(trc_path);
+  ASSERT_EQ(data.frame_count(), 4u);
+  EXPECT_EQ(data.units, "cm");
+  EXPECT_FALSE(data.is_valid(2, 1));  // B, frame 3
+  EXPECT_FALSE(data.is_valid(1, 2));  // C, frame 2: one coordinate blank
+  EXPECT_TRUE(data.is_valid(3, 1));
+  EXPECT_TRUE(data.position(3, 1).isApprox(Eigen::Vector3d(0.13, 0.23, 0.33)));
+
+  const fs::path scene_path =
+      dir.write("scene.yaml", kCamera + "trc: {file: gappy.trc, loop: none, prefix: ''}\n");
+  const Scene scene = Scene::load(scene_path);
+  EXPECT_EQ(scene.marker_names(), (std::vector<std::string>{"A", "B", "C"}));
+  const auto at = [&](double ms) { return scene.markers_at(static_cast<TimeNs>(ms * 1e6)); };
+  EXPECT_TRUE(at(10)[1].valid);  // between frames 1 and 2: both present
+  EXPECT_NEAR(at(10)[1].p.x(), 0.105, 1e-12);
+  EXPECT_FALSE(at(30)[1].valid);  // between frames 2 and 3: B missing in frame 3
+  EXPECT_FALSE(at(40)[1].valid);
+  EXPECT_FALSE(at(50)[1].valid);
+  EXPECT_TRUE(at(60)[1].valid);
+  EXPECT_FALSE(at(20)[2].valid);
+  EXPECT_TRUE(at(40)[2].valid);
+  EXPECT_TRUE(at(50)[0].valid);
+  // A is at (0, 100, 0) cm in the file; up_axis defaults to y, so that is 1 m above the floor.
+  EXPECT_NEAR(at(0)[0].p.z(), 1.0, 1e-12);
+  // loop: none -> nothing outside the recording.
+  EXPECT_FALSE(at(61)[0].valid);
+  EXPECT_FALSE(at(-1)[0].valid);
+
+  // A missing marker is never rendered or reported.
+  const CameraSimulator camera(scene, "cam0");
+  EXPECT_EQ(camera.features(0).blobs.size(), 3u);
+  EXPECT_FALSE(scene.markers_at(camera.frame_time_ns(2))[2].valid);
+  EXPECT_EQ(camera.features(2).blobs.size(), 2u);  // 20 ms at 100 Hz: C has a blank coordinate
+}
+
+TEST(Trc, LoopModesPlayPastTheEnd) {
+  const TempDir dir;
+  dir.write("gappy.trc", kGappyTrc);
+  const auto load = [&](const std::string& loop) {
+    return Scene::load(
+        dir.write("scene_" + loop + ".yaml", kCamera + "trc: {file: gappy.trc, loop: " + loop + "}\n"));
+  };
+  const auto x_of_a = [](const Scene& scene, double ms) {
+    const MarkerTruth a = scene.markers_at(static_cast<TimeNs>(ms * 1e6))[0];
+    EXPECT_TRUE(a.valid) << ms << " ms";
+    return a.p.x();
+  };
+  // A moves +0.1 m per 20 ms frame over 0..60 ms.
+  const Scene pingpong = load("pingpong");
+  EXPECT_NEAR(x_of_a(pingpong, 70), 0.25, 1e-12);   // on its way back
+  EXPECT_NEAR(x_of_a(pingpong, 120), 0.0, 1e-12);   // back at the start
+  EXPECT_NEAR(x_of_a(pingpong, 130), 0.05, 1e-12);  // and forwards again
+  EXPECT_NEAR(x_of_a(load("true"), 70), 0.25, 1e-12);
+  const Scene wrap = load("wrap");
+  EXPECT_NEAR(x_of_a(wrap, 70), 0.3, 1e-12);  // holds the last frame for one frame interval
+  EXPECT_NEAR(x_of_a(wrap, 80), 0.0, 1e-12);  // then starts over
+  EXPECT_NEAR(x_of_a(wrap, 90), 0.05, 1e-12);
+}
+
+TEST(Trc, MalformedFilesNameTheFileAndLine) {
+  const TempDir dir;
+  std::string bad = kGappyTrc;
+  bad.replace(bad.find("13\t23"), 2, "1x");
+  const fs::path path = dir.write("bad.trc", bad);
+  try {
+    load_trc(path);
+    ADD_FAILURE();
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(error.file(), path.string());
+    EXPECT_EQ(error.key(), "line 10");
+    EXPECT_NE(std::string(error.what()).find("1x"), std::string::npos);
+  }
+  std::string inches = kGappyTrc;
+  inches.replace(inches.find("\tcm\t"), 4, "\tin\t");
+  EXPECT_THROW(load_trc(dir.write("inches.trc", inches)), ConfigError);
+  EXPECT_THROW(load_trc(dir.path() / "missing.trc"), ConfigError);
+
+  const fs::path scene_path = dir.write("scene.yaml", kCamera + "trc: {file: bad.trc}\n");
+  EXPECT_THROW(Scene::load(scene_path), ConfigError);
+  try {
+    Scene::load(dir.write("subset.yaml", kCamera + "trc: {file: " + fs::absolute(kWalk).string() +
+                                             ", markers: [R.Shoulder, Nose]}\n"));
+    ADD_FAILURE();
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(error.key(), "trc.markers[1]");
+  }
+}
+
+}  // namespace
+}  // namespace panoptes
