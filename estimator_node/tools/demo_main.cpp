@@ -107,6 +107,7 @@ class Child {
 int main(int argc, char** argv) {
   const fs::path bin_dir = executable_dir();
   std::string scene_file = (bin_dir / "../../deploy/scenes/demo.yaml").lexically_normal().string();
+  if (!fs::exists(scene_file)) scene_file = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/demo.yaml";
   double duration_s = 20.0;
   std::string summary_json;
   std::string dds_profile;

@@ -103,6 +103,7 @@ std::filesystem::path resolve_profile_file(const std::filesystem::path& requeste
   const std::vector<std::filesystem::path> candidates = {
       exe / "../../deploy/dds/loopback.xml",          // build/bin in a source checkout
       exe / "../share/panoptes/dds/loopback.xml",     // installed prefix
+      std::filesystem::path(PANOPTES_SOURCE_DIR) / "deploy/dds/loopback.xml",  // a build tree elsewhere
   };
   for (const auto& candidate : candidates) {
     if (std::filesystem::is_regular_file(candidate)) return std::filesystem::weakly_canonical(candidate);
