@@ -12,8 +12,8 @@
 #include <thread>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <yaml-cpp/yaml.h>
+#include <CLI/CLI.hpp>
 
 #include "panoptes/bounded_queue.h"
 #include "panoptes/camera/detector.h"
@@ -46,7 +46,9 @@ struct Options {
 };
 
 std::string g_name = "camera_node";  // set once from the camera id, for log lines
-void log(const std::string& message) { std::fprintf(stderr, "%s: %s\n", g_name.c_str(), message.c_str()); }
+void log(const std::string& message) {
+  std::fprintf(stderr, "%s: %s\n", g_name.c_str(), message.c_str());
+}
 
 // Detection-time percentiles over the last status period.
 class Percentiles {
@@ -94,11 +96,13 @@ int run_offline(const Options& options, cam::FrameSource& source, cam::Detector&
     if (!options.quiet && frames % 100 == 0) std::fprintf(stderr, "\r%s: %zu frames", g_name.c_str(), frames);
   }
   if (!options.quiet && frames >= 100) std::fprintf(stderr, "\n");
-  log("wrote " + std::to_string(frames) + " frames with " + std::to_string(blobs) + " blobs to " + options.out_features);
+  log("wrote " + std::to_string(frames) + " frames with " + std::to_string(blobs) + " blobs to " +
+      options.out_features);
   return panoptes::kExitOk;
 }
 
-int run_live(const Options& options, cam::FrameSource& source, cam::Detector& detector, const std::string& camera_id) {
+int run_live(const Options& options, cam::FrameSource& source, cam::Detector& detector,
+             const std::string& camera_id) {
   namespace msg = panoptes::msg;
   panoptes::dds::BusOptions bus_options;
   bus_options.profile_file = options.dds_profile;
@@ -111,7 +115,8 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   const auto& info = source.info();
   msg::CameraInfo camera_info;
   if (info.calibration) {
-    camera_info = panoptes::dds::to_camera_info(camera_id, info.calibration->intrinsics, info.calibration->T_world_cam);
+    camera_info =
+        panoptes::dds::to_camera_info(camera_id, info.calibration->intrinsics, info.calibration->T_world_cam);
   } else {
     camera_info.camera_id(camera_id);
     camera_info.width(static_cast<uint32_t>(info.width));
@@ -183,7 +188,8 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   source.stop();
   queue.close();
   capture.join();
-  log("stopped after " + std::to_string(frames) + " frames (" + std::to_string(queue.drops()) + " dropped in the queue)");
+  log("stopped after " + std::to_string(frames) + " frames (" + std::to_string(queue.drops()) +
+      " dropped in the queue)");
   return panoptes::kExitOk;
 }
 
@@ -192,24 +198,31 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
 int main(int argc, char** argv) {
   Options options;
   CLI::App app{"camera_node: detects IR blobs in camera frames and publishes 2D features (Panoptes)"};
-  app.add_option("--source", options.source, "sim:<scene.yaml>#<camera id> | images:<dir or glob>")->required();
+  app.add_option("--source", options.source, "sim:<scene.yaml>#<camera id> | images:<dir or glob>")
+      ->required();
   app.add_option("--camera-id", options.camera_id, "camera id to publish under (default: the source's)");
-  app.add_option("--config", options.config_file, "YAML with a `detector:` section (threshold, min_area, ...)");
+  app.add_option("--config", options.config_file,
+                 "YAML with a `detector:` section (threshold, min_area, ...)");
   app.add_flag("--no-dds", options.no_dds, "offline: no DDS; requires --out-features");
   app.add_option("--out-features", options.out_features, "write every FeatureFrame to this JSONL file");
-  app.add_option("--dds-profile", options.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  app.add_option("--dds-profile", options.dds_profile,
+                 "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
   app.add_option("--sim-epoch-ns", options.sim_epoch_ns,
                  "sim: wall-clock ns of scene time 0 (default: now, rounded up to a whole second)");
   app.add_option("--duration", options.duration_s, "stop after this many seconds (0 = until the source ends)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--max-frames", options.max_frames, "stop after this many frames")->check(CLI::PositiveNumber);
-  app.add_flag("--unpaced", options.unpaced, "sim: produce frames as fast as possible instead of in real time");
-  app.add_option("--queue-capacity", options.queue_capacity, "frames waiting for detection before the oldest is dropped")
+  app.add_option("--max-frames", options.max_frames, "stop after this many frames")
+      ->check(CLI::PositiveNumber);
+  app.add_flag("--unpaced", options.unpaced,
+               "sim: produce frames as fast as possible instead of in real time");
+  app.add_option("--queue-capacity", options.queue_capacity,
+                 "frames waiting for detection before the oldest is dropped")
       ->check(CLI::Range(1, 1024));
   app.add_flag("--quiet", options.quiet, "less output");
   try {
     app.parse(argc, argv);
-    if (options.no_dds && options.out_features.empty()) throw CLI::ValidationError("--no-dds needs --out-features");
+    if (options.no_dds && options.out_features.empty())
+      throw CLI::ValidationError("--no-dds needs --out-features");
   } catch (const CLI::CallForHelp&) {
     std::cout << app.help();
     return panoptes::kExitOk;

@@ -38,7 +38,7 @@ void write_pgm(const Image& image, const fs::path& path) {
     std::vector<char> row(image.stride());
     for (int y = 0; y < image.height; ++y) {
       const std::uint16_t* pixels = image.row16(y);
-      for (int x = 0; x < image.width; ++x) {
+      for (std::size_t x = 0; x < static_cast<std::size_t>(image.width); ++x) {
         row[2 * x] = static_cast<char>(pixels[x] >> 8);
         row[2 * x + 1] = static_cast<char>(pixels[x] & 0xFF);
       }
@@ -80,6 +80,20 @@ nlohmann::json truth_line(const Scene& scene, TimeNs scene_time_ns, TimeNs epoch
   }
   line["bodies"] = std::move(bodies);
   return line;
+}
+
+// CLI11's own PositiveNumber prints the whole double range in its message.
+CLI::Validator positive_number() {
+  return CLI::Validator(
+      [](std::string& text) {
+        try {
+          std::size_t used = 0;
+          if (std::stod(text, &used) > 0.0 && used == text.size()) return std::string();
+        } catch (const std::exception&) {
+        }
+        return "expected a positive number, got '" + text + "'";
+      },
+      "POSITIVE");
 }
 
 struct Options {
@@ -168,9 +182,7 @@ int run_render(const Options& options) {
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{
       "Panoptes simulator: calibration, features, images and ground truth of a scene (docs/simulator.md)"};
   app.require_subcommand(1);
@@ -188,13 +200,13 @@ int main(int argc, char** argv) {
   features->add_option("--epoch-ns", options.epoch_ns, "Absolute stamp of scene time 0 (ns)")
       ->capture_default_str();
   features->add_option("--duration", options.duration_s, "Seconds of scene time (default: the scene's)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
 
   CLI::App* render =
       app.add_subcommand("render", "Render one camera's frames as PGM images plus their features");
   render->add_option("--scene", options.scene, "Scene file (YAML)")->required();
   render->add_option("--camera", options.camera, "Camera id")->required();
-  render->add_option("--frames", options.frames, "Number of frames")->required()->check(CLI::PositiveNumber);
+  render->add_option("--frames", options.frames, "Number of frames")->required()->check(positive_number());
   render->add_option("--first", options.first, "First frame index")->capture_default_str();
   render->add_option("--out-dir", options.out_dir, "Output directory (created if missing)")->required();
   render->add_option("--epoch-ns", options.epoch_ns, "Absolute stamp of scene time 0 (ns)")
@@ -216,6 +228,17 @@ int main(int argc, char** argv) {
     std::cerr << "panoptes_sim: " << error.what() << "\n";
     return 2;
   } catch (const std::exception& error) {
+    std::cerr << "panoptes_sim: " << error.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
     std::cerr << "panoptes_sim: " << error.what() << "\n";
     return 1;
   }

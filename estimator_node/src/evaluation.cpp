@@ -14,7 +14,8 @@
 
 namespace panoptes::estimator {
 
-Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks, const EvaluationOptions& options) {
+Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
+                    const EvaluationOptions& options) {
   std::vector<const TrackRecord*> sorted;
   sorted.reserve(tracks.size());
   for (const auto& t : tracks) sorted.push_back(&t);
@@ -65,7 +66,8 @@ Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks, 
       ++total_matched;
       marker.max_error_m = std::max(marker.max_error_m, d);
       const std::int64_t id = sorted[k]->id;
-      if (last_id[m] != 0 && last_id[m] != id) marker.id_switches.push_back({sorted[k]->stamp_ns, last_id[m], id});
+      if (last_id[m] != 0 && last_id[m] != id)
+        marker.id_switches.push_back({sorted[k]->stamp_ns, last_id[m], id});
       last_id[m] = id;
     }
     for (std::size_t m = 0; m < truth.size(); ++m) {
@@ -126,18 +128,21 @@ std::string Evaluation::to_json() const {
 std::string Evaluation::summary() const {
   std::ostringstream out;
   char line[256];
-  std::snprintf(line, sizeof line, "%-24s %10s %10s %9s %10s\n", "marker", "RMSE mm", "max mm", "tracked", "ID switch");
+  std::snprintf(line, sizeof line, "%-24s %10s %10s %9s %10s\n", "marker", "RMSE mm", "max mm", "tracked",
+                "ID switch");
   out << line;
   for (const auto& marker : markers) {
-    std::snprintf(line, sizeof line, "%-24s %10.3f %10.3f %8.1f%% %10zu\n", marker.name.c_str(), marker.rmse_m * 1e3,
-                  marker.max_error_m * 1e3, 100.0 * marker.tracked_fraction(), marker.id_switches.size());
+    std::snprintf(line, sizeof line, "%-24s %10.3f %10.3f %8.1f%% %10zu\n", marker.name.c_str(),
+                  marker.rmse_m * 1e3, marker.max_error_m * 1e3, 100.0 * marker.tracked_fraction(),
+                  marker.id_switches.size());
     out << line;
   }
-  std::snprintf(line, sizeof line,
-                "all: RMSE %.3f mm, worst marker %.3f mm, min tracked %.1f%%, ID switches %zu, false tracks %zu, "
-                "instants %zu\n",
-                rmse_m * 1e3, worst_marker_rmse_m * 1e3, 100.0 * min_tracked_fraction, id_switch_count,
-                false_tracks.size(), instants);
+  std::snprintf(
+      line, sizeof line,
+      "all: RMSE %.3f mm, worst marker %.3f mm, min tracked %.1f%%, ID switches %zu, false tracks %zu, "
+      "instants %zu\n",
+      rmse_m * 1e3, worst_marker_rmse_m * 1e3, 100.0 * min_tracked_fraction, id_switch_count,
+      false_tracks.size(), instants);
   out << line;
   return out.str();
 }

@@ -5,7 +5,9 @@
 
 namespace panoptes::estimator {
 namespace {
-bool later(const FeatureFrame& a, const FeatureFrame& b) { return a.stamp_ns > b.stamp_ns; }
+bool later(const FeatureFrame& a, const FeatureFrame& b) {
+  return a.stamp_ns > b.stamp_ns;
+}
 }  // namespace
 
 FrameInbox::FrameInbox(std::size_t capacity, TimeNs latency_window_ns)
@@ -41,7 +43,8 @@ std::vector<FeatureFrame> FrameInbox::drain() {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<FeatureFrame> all = std::move(heap_);
   heap_.clear();
-  std::sort(all.begin(), all.end(), [](const FeatureFrame& a, const FeatureFrame& b) { return a.stamp_ns < b.stamp_ns; });
+  std::sort(all.begin(), all.end(),
+            [](const FeatureFrame& a, const FeatureFrame& b) { return a.stamp_ns < b.stamp_ns; });
   return all;
 }
 

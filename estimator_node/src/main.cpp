@@ -50,7 +50,9 @@ struct Options {
   est::TrackerOptions tracker;
 };
 
-void log(const std::string& message) { std::fprintf(stderr, "estimator_node: %s\n", message.c_str()); }
+void log(const std::string& message) {
+  std::fprintf(stderr, "estimator_node: %s\n", message.c_str());
+}
 
 // Warns once per camera about frames the tracker cannot use.
 class UnknownCameraWarnings {
@@ -104,8 +106,8 @@ int run_offline(const Options& options, est::Tracker& tracker) {
       }
     }
     if (!options.quiet && (i + 1) % progress_every == 0) {
-      std::fprintf(stderr, "\restimator_node: %3zu%% (%zu/%zu frames, %zu live tracks)", (i + 1) * 100 / frames.size(),
-                   i + 1, frames.size(), tracker.live_track_count());
+      std::fprintf(stderr, "\restimator_node: %3zu%% (%zu/%zu frames, %zu live tracks)",
+                   (i + 1) * 100 / frames.size(), i + 1, frames.size(), tracker.live_track_count());
     }
   }
   if (!options.quiet && !frames.empty()) std::fprintf(stderr, "\n");
@@ -153,7 +155,8 @@ int run_live(const Options& options, est::Tracker& tracker) {
   UnknownCameraWarnings warnings;
   std::set<std::string> from_file;
   if (!options.calibration_file.empty()) {
-    for (const auto& camera : panoptes::load_calibration(options.calibration_file).cameras) from_file.insert(camera.id);
+    for (const auto& camera : panoptes::load_calibration(options.calibration_file).cameras)
+      from_file.insert(camera.id);
   }
 
   const TimeNs start = panoptes::wall_now_ns();
@@ -196,7 +199,8 @@ int run_live(const Options& options, est::Tracker& tracker) {
     if (now >= next_status) {
       next_status += panoptes::seconds_to_ns(options.status_period_s);
       if (!options.quiet) {
-        std::string line = "t=" + std::to_string(static_cast<int>(panoptes::ns_to_seconds(now - start))) + "s fps:";
+        std::string line =
+            "t=" + std::to_string(static_cast<int>(panoptes::ns_to_seconds(now - start))) + "s fps:";
         std::lock_guard<std::mutex> lock(frames_mutex);
         for (const auto& [camera, count] : frames_per_camera) {
           char buffer[64];
@@ -218,8 +222,8 @@ int run_live(const Options& options, est::Tracker& tracker) {
   const auto& s = tracker.stats();
   log("stopped: " + std::to_string(s.frames) + " frames, " + std::to_string(s.frames_late) + " late, " +
       std::to_string(s.frames_unknown_camera) + " from uncalibrated cameras, inbox drops " +
-      std::to_string(inbox.drops()) + ", tracks created " + std::to_string(s.tracks_created) + ", confirmed " +
-      std::to_string(s.tracks_confirmed));
+      std::to_string(inbox.drops()) + ", tracks created " + std::to_string(s.tracks_created) +
+      ", confirmed " + std::to_string(s.tracks_confirmed));
   return panoptes::kExitOk;
 }
 
@@ -229,21 +233,25 @@ int main(int argc, char** argv) {
   Options options;
   CLI::App app{"estimator_node: fuses asynchronous camera features into 3D tracks (Panoptes)"};
   app.add_option("--calibration", options.calibration_file, "calibration YAML (cameras with T_world_cam)");
-  app.add_option("--bodies", options.bodies_file, "rigid-body definitions YAML (validated; body tracking is not built yet)");
+  app.add_option("--bodies", options.bodies_file,
+                 "rigid-body definitions YAML (validated; body tracking is not built yet)");
   app.add_option("--in-features", options.in_features, "offline: FeatureFrame JSONL files (one per camera)")
       ->expected(1, -1);
   app.add_flag("--no-dds", options.no_dds, "offline: do not use DDS; requires --in-features");
   app.add_option("--out-tracks", options.out_tracks, "write every published TrackFrame as Track JSONL");
   app.add_option("--out-poses", options.out_poses, "write body poses as Pose JSONL (needs --bodies)");
-  app.add_option("--dds-profile", options.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
-  app.add_option("--latency-window-ms", options.latency_window_ms, "live: how long frames wait to be ordered by stamp")
+  app.add_option("--dds-profile", options.dds_profile,
+                 "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  app.add_option("--latency-window-ms", options.latency_window_ms,
+                 "live: how long frames wait to be ordered by stamp")
       ->check(CLI::Range(0.0, 10000.0));
   app.add_option("--duration", options.duration_s, "live: stop after this many seconds (0 = until Ctrl-C)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--status-period", options.status_period_s, "live: seconds between progress lines")
       ->check(CLI::PositiveNumber);
   app.add_flag("--quiet", options.quiet, "no progress output");
-  app.add_option("--process-noise", options.tracker.process_noise, "σ² of white acceleration, m²/s³ (seed 003 A.48)")
+  app.add_option("--process-noise", options.tracker.process_noise,
+                 "σ² of white acceleration, m²/s³ (seed 003 A.48)")
       ->check(CLI::PositiveNumber);
   app.add_option("--measurement-noise-px", options.tracker.measurement_noise_px, "σ of a centroid, px")
       ->check(CLI::PositiveNumber);
@@ -252,14 +260,17 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(2, 64));
   try {
     app.parse(argc, argv);
-    if (options.no_dds && options.in_features.empty()) throw CLI::ValidationError("--no-dds needs --in-features");
+    if (options.no_dds && options.in_features.empty())
+      throw CLI::ValidationError("--no-dds needs --in-features");
     if (!options.in_features.empty() && !options.no_dds) {
-      throw CLI::ValidationError("--in-features runs offline: add --no-dds (replaying onto DDS is camera_node's job)");
+      throw CLI::ValidationError(
+          "--in-features runs offline: add --no-dds (replaying onto DDS is camera_node's job)");
     }
     if (options.no_dds && options.calibration_file.empty()) {
       throw CLI::ValidationError("offline mode needs --calibration");
     }
-    if (!options.out_poses.empty() && options.bodies_file.empty()) throw CLI::ValidationError("--out-poses needs --bodies");
+    if (!options.out_poses.empty() && options.bodies_file.empty())
+      throw CLI::ValidationError("--out-poses needs --bodies");
   } catch (const CLI::CallForHelp&) {
     std::cout << app.help();
     return panoptes::kExitOk;
@@ -275,7 +286,8 @@ int main(int argc, char** argv) {
       const auto calibration = panoptes::load_calibration(options.calibration_file);
       tracker.set_calibration(calibration);
       for (const auto& camera : calibration.cameras) {
-        if (!camera.T_world_cam) log("camera '" + camera.id + "' in " + options.calibration_file + " has no T_world_cam: ignored");
+        if (!camera.T_world_cam)
+          log("camera '" + camera.id + "' in " + options.calibration_file + " has no T_world_cam: ignored");
       }
     }
     if (!options.bodies_file.empty()) {

@@ -33,7 +33,7 @@ void predict(PointState& state, TimeNs stamp_ns, double sigma2) {
   const double dt = ns_to_seconds(stamp_ns - state.stamp_ns);
   if (dt != 0.0) {
     const Matrix6d A = transition_matrix(dt);
-    state.x = A * state.x;  // eq. A.31
+    state.x = A * state.x;                                              // eq. A.31
     state.P = A * state.P * A.transpose() + process_noise(dt, sigma2);  // eq. A.32
     state.P = 0.5 * (state.P + state.P.transpose());
   }

@@ -32,7 +32,9 @@ void Tracker::set_camera(const CameraCalibration& camera) {
   cameras_.insert_or_assign(camera.id, camera.model());
 }
 
-bool Tracker::has_camera(const std::string& camera_id) const { return cameras_.count(camera_id) != 0; }
+bool Tracker::has_camera(const std::string& camera_id) const {
+  return cameras_.count(camera_id) != 0;
+}
 
 FrameOutcome Tracker::process(const FeatureFrame& frame) {
   ++stats_.frames;
@@ -58,7 +60,8 @@ FrameOutcome Tracker::process(const FeatureFrame& frame) {
   return FrameOutcome::kProcessed;
 }
 
-void Tracker::associate_and_update(const FeatureFrame& frame, const CameraModel& camera, std::vector<bool>& used) {
+void Tracker::associate_and_update(const FeatureFrame& frame, const CameraModel& camera,
+                                   std::vector<bool>& used) {
   struct Candidate {
     double d2;
     std::size_t track;
@@ -79,8 +82,9 @@ void Tracker::associate_and_update(const FeatureFrame& frame, const CameraModel&
       if (d2 < options_.gate_chi2) candidates.push_back({d2, i, j});
     }
   }
-  std::sort(candidates.begin(), candidates.end(),
-            [](const Candidate& a, const Candidate& b) { return std::tie(a.d2, a.track, a.blob) < std::tie(b.d2, b.track, b.blob); });
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return std::tie(a.d2, a.track, a.blob) < std::tie(b.d2, b.track, b.blob);
+  });
   std::vector<bool> track_taken(tracks_.size(), false);
   for (const auto& candidate : candidates) {
     if (track_taken[candidate.track] || used[candidate.blob]) continue;
@@ -96,12 +100,14 @@ void Tracker::associate_and_update(const FeatureFrame& frame, const CameraModel&
 
 void Tracker::initiate(const FeatureFrame& frame, const CameraModel& camera, const std::vector<bool>& used) {
   const double threshold = options_.init_reprojection_px;
-  const int required_cameras = std::max(2, std::min<int>(options_.confirm_cameras, static_cast<int>(cameras_.size())));
+  const int required_cameras =
+      std::max(2, std::min<int>(options_.confirm_cameras, static_cast<int>(cameras_.size())));
 
   // Drop pending blobs that are too old to pair with this frame; this camera's older blobs are
   // superseded by the current frame.
   std::erase_if(pending_, [&](const PendingBlob& pending) {
-    return pending.camera_id == frame.camera_id || frame.stamp_ns - pending.stamp_ns > options_.init_window_ns;
+    return pending.camera_id == frame.camera_id ||
+           frame.stamp_ns - pending.stamp_ns > options_.init_window_ns;
   });
 
   std::vector<PendingBlob> still_unmatched;
@@ -167,8 +173,10 @@ void Tracker::initiate(const FeatureFrame& frame, const CameraModel& camera, con
     track.state.x.head<3>() = best.point;
     track.state.x.tail<3>().setZero();
     track.state.P.setZero();
-    track.state.P.diagonal().head<3>().setConstant(options_.init_position_sigma_m * options_.init_position_sigma_m);
-    track.state.P.diagonal().tail<3>().setConstant(options_.init_velocity_sigma_mps * options_.init_velocity_sigma_mps);
+    track.state.P.diagonal().head<3>().setConstant(options_.init_position_sigma_m *
+                                                   options_.init_position_sigma_m);
+    track.state.P.diagonal().tail<3>().setConstant(options_.init_velocity_sigma_mps *
+                                                   options_.init_velocity_sigma_mps);
     track.state.stamp_ns = frame.stamp_ns;
     track.created_ns = frame.stamp_ns;
     track.last_update_ns = frame.stamp_ns;
@@ -184,7 +192,8 @@ void Tracker::initiate(const FeatureFrame& frame, const CameraModel& camera, con
     ++stats_.tracks_created;
     // Consume the partner blobs (highest index first so the others stay valid).
     std::sort(best.pending_indices.rbegin(), best.pending_indices.rend());
-    for (std::size_t k : best.pending_indices) pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(k));
+    for (std::size_t k : best.pending_indices)
+      pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(k));
     tracks_.push_back(std::move(track));
   }
   for (auto& blob : still_unmatched) pending_.push_back(std::move(blob));
@@ -194,7 +203,8 @@ void Tracker::note_update(Track& track, const std::string& camera_id, TimeNs sta
   track.last_update_ns = stamp_ns;
   ++track.updates;
   track.camera_last_update[camera_id] = stamp_ns;
-  const int required_cameras = std::max(2, std::min<int>(options_.confirm_cameras, static_cast<int>(cameras_.size())));
+  const int required_cameras =
+      std::max(2, std::min<int>(options_.confirm_cameras, static_cast<int>(cameras_.size())));
   if (!track.confirmed && static_cast<int>(track.camera_last_update.size()) >= required_cameras) {
     track.confirmed = true;
     ++stats_.tracks_confirmed;
@@ -212,7 +222,8 @@ void Tracker::prune(TimeNs now_ns) {
   // Duplicates of one marker: keep the track with the longer history.
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
     for (std::size_t j = i + 1; j < tracks_.size(); ++j) {
-      if ((tracks_[i].state.position() - tracks_[j].state.position()).norm() >= options_.merge_distance_m) continue;
+      if ((tracks_[i].state.position() - tracks_[j].state.position()).norm() >= options_.merge_distance_m)
+        continue;
       const bool keep_i = std::make_tuple(tracks_[i].confirmed, tracks_[i].updates) >=
                           std::make_tuple(tracks_[j].confirmed, tracks_[j].updates);
       tracks_.erase(tracks_.begin() + static_cast<std::ptrdiff_t>(keep_i ? j : i));
@@ -250,7 +261,8 @@ std::vector<TrackRecord> Tracker::tracks_at(TimeNs stamp_ns) const {
   for (const auto& track : tracks_) {
     if (track.confirmed) records.push_back(to_record(track, stamp_ns));
   }
-  std::sort(records.begin(), records.end(), [](const TrackRecord& a, const TrackRecord& b) { return a.id < b.id; });
+  std::sort(records.begin(), records.end(),
+            [](const TrackRecord& a, const TrackRecord& b) { return a.id < b.id; });
   return records;
 }
 

@@ -9,7 +9,8 @@
 
 namespace panoptes::estimator {
 
-double reprojection_error(const CameraModel& camera, const Eigen::Vector3d& point, const Eigen::Vector2d& pixel) {
+double reprojection_error(const CameraModel& camera, const Eigen::Vector3d& point,
+                          const Eigen::Vector2d& pixel) {
   const auto projected = camera.project(point);
   if (!projected) return std::numeric_limits<double>::infinity();
   return (*projected - pixel).norm();

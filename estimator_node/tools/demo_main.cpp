@@ -10,15 +10,15 @@
 #include <fcntl.h>
 
 #include <chrono>
-#include <cstring>
-#include <optional>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -52,7 +52,8 @@ class Child {
   Child(const std::string& name, std::vector<std::string> argv, const fs::path& log_file) : name_(name) {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
     posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
     posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
     std::vector<char*> args;
@@ -115,11 +116,16 @@ int main(int argc, char** argv) {
   bool check = false;
   CLI::App app{"panoptes_demo: simulated multi-camera tracking over DDS, with accuracy against ground truth"};
   app.add_option("--scene", scene_file, "simulator scene")->capture_default_str();
-  app.add_option("--duration", duration_s, "seconds of tracking")->capture_default_str()->check(CLI::Range(2.0, 3600.0));
+  app.add_option("--duration", duration_s, "seconds of tracking")
+      ->capture_default_str()
+      ->check(CLI::Range(2.0, 3600.0));
   app.add_option("--summary-json", summary_json, "write the accuracy summary as JSON to this file");
   app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
-  app.add_option("--log-dir", log_dir, "keep process logs and recorded tracks here (default: a temporary folder)");
-  app.add_flag("--check", check, "exit 1 unless every marker meets the demo's targets (RMSE < 2 mm, >= 95% tracked, 0 ID switches)");
+  app.add_option("--log-dir", log_dir,
+                 "keep process logs and recorded tracks here (default: a temporary folder)");
+  app.add_flag(
+      "--check", check,
+      "exit 1 unless every marker meets the demo's targets (RMSE < 2 mm, >= 95% tracked, 0 ID switches)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {
@@ -138,8 +144,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
     return panoptes::kExitBadInput;
   }
-  const fs::path run_dir = log_dir.empty() ? fs::temp_directory_path() / ("panoptes-demo-" + std::to_string(getpid()))
-                                           : fs::path(log_dir);
+  const fs::path run_dir = log_dir.empty()
+                               ? fs::temp_directory_path() / ("panoptes-demo-" + std::to_string(getpid()))
+                               : fs::path(log_dir);
   fs::create_directories(run_dir);
   const fs::path calibration_file = run_dir / "calibration.yaml";
   panoptes::save_calibration(scene->calibration(), calibration_file);
@@ -149,8 +156,8 @@ int main(int argc, char** argv) {
   const TimeNs epoch = (panoptes::wall_now_ns() / panoptes::kNsPerSecond + 3) * panoptes::kNsPerSecond;
   const TimeNs end = epoch + panoptes::seconds_to_ns(duration_s);
 
-  std::printf("Panoptes demo: %zu simulated cameras, %zu markers, %.0f s (scene %s)\n", scene->cameras().size(),
-              scene->marker_names().size(), duration_s, scene_file.c_str());
+  std::printf("Panoptes demo: %zu simulated cameras, %zu markers, %.0f s (scene %s)\n",
+              scene->cameras().size(), scene->marker_names().size(), duration_s, scene_file.c_str());
   std::printf("logs and recordings in %s\n", run_dir.c_str());
 
   std::vector<std::string> common_dds;
@@ -161,14 +168,20 @@ int main(int argc, char** argv) {
                                                calibration_file.string(), "--out-tracks",
                                                (run_dir / "tracks.jsonl").string()};
     estimator_args.insert(estimator_args.end(), common_dds.begin(), common_dds.end());
-    children.push_back(std::make_unique<Child>("estimator_node", estimator_args, run_dir / "estimator_node.log"));
+    children.push_back(
+        std::make_unique<Child>("estimator_node", estimator_args, run_dir / "estimator_node.log"));
     for (const auto& camera : scene->cameras()) {
       const std::string& id = camera.calibration.id;
-      std::vector<std::string> camera_args = {(bin_dir / "camera_node").string(), "--source",
-                                              "sim:" + scene_file + "#" + id, "--sim-epoch-ns", std::to_string(epoch),
-                                              "--duration", std::to_string(duration_s + 4.0)};
+      std::vector<std::string> camera_args = {(bin_dir / "camera_node").string(),
+                                              "--source",
+                                              "sim:" + scene_file + "#" + id,
+                                              "--sim-epoch-ns",
+                                              std::to_string(epoch),
+                                              "--duration",
+                                              std::to_string(duration_s + 4.0)};
       camera_args.insert(camera_args.end(), common_dds.begin(), common_dds.end());
-      children.push_back(std::make_unique<Child>("camera_node[" + id + "]", camera_args, run_dir / (id + ".log")));
+      children.push_back(
+          std::make_unique<Child>("camera_node[" + id + "]", camera_args, run_dir / (id + ".log")));
     }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
@@ -188,13 +201,15 @@ int main(int argc, char** argv) {
     panoptes::dds::Bus bus(bus_options);
     auto track_reader = bus.make_reader<panoptes::msg::TrackFrame>([&](panoptes::msg::TrackFrame&& frame) {
       std::lock_guard<std::mutex> lock(mutex);
-      for (const auto& track : frame.tracks()) tracks.push_back(panoptes::dds::from_message(track, frame.stamp_ns()));
+      for (const auto& track : frame.tracks())
+        tracks.push_back(panoptes::dds::from_message(track, frame.stamp_ns()));
       live_tracks = frame.tracks().size();
     });
-    auto status_reader = bus.make_reader<panoptes::msg::CameraStatus>([&](panoptes::msg::CameraStatus&& status) {
-      std::lock_guard<std::mutex> lock(mutex);
-      camera_fps[status.camera_id()] = status.fps();
-    });
+    auto status_reader =
+        bus.make_reader<panoptes::msg::CameraStatus>([&](panoptes::msg::CameraStatus&& status) {
+          std::lock_guard<std::mutex> lock(mutex);
+          camera_fps[status.camera_id()] = status.fps();
+        });
 
     while (!panoptes::stop_requested() && panoptes::wall_now_ns() < end + panoptes::kNsPerSecond / 2) {
       std::this_thread::sleep_for(std::chrono::seconds(1));

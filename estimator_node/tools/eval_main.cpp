@@ -23,8 +23,11 @@ int main(int argc, char** argv) {
   CLI::App app{"panoptes_eval: accuracy of tracks against simulator ground truth"};
   app.add_option("--scene", scene_file, "simulator scene YAML that produced the features")->required();
   app.add_option("--tracks", tracks_file, "Track JSONL written by estimator_node --out-tracks")->required();
-  app.add_option("--epoch-ns", epoch_ns, "absolute stamp of scene time 0 (panoptes_sim's default)")->capture_default_str();
-  app.add_option("--warmup", warmup_s, "seconds at the start that are not judged")->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--epoch-ns", epoch_ns, "absolute stamp of scene time 0 (panoptes_sim's default)")
+      ->capture_default_str();
+  app.add_option("--warmup", warmup_s, "seconds at the start that are not judged")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--match-distance", match_distance_m, "metres within which a track observes a marker")
       ->check(CLI::PositiveNumber);
   app.add_option("--summary-json", summary_json, "write the evaluation as JSON to this file");
@@ -33,7 +36,8 @@ int main(int argc, char** argv) {
   bool require_no_switches = false;
   app.add_option("--require-rmse-mm", require_rmse_mm, "exit 1 unless every marker's RMSE is below this (mm)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--require-tracked", require_tracked, "exit 1 unless every marker is tracked this fraction of the time")
+  app.add_option("--require-tracked", require_tracked,
+                 "exit 1 unless every marker is tracked this fraction of the time")
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--require-no-id-switches", require_no_switches, "exit 1 if any marker changed track id");
   try {
@@ -49,7 +53,9 @@ int main(int argc, char** argv) {
     const auto scene = panoptes::Scene::load(scene_file);
     std::vector<std::string> errors;
     const auto tracks = panoptes::read_tracks(tracks_file, &errors);
-    if (!errors.empty()) std::fprintf(stderr, "panoptes_eval: skipped %zu malformed lines, first: %s\n", errors.size(), errors[0].c_str());
+    if (!errors.empty())
+      std::fprintf(stderr, "panoptes_eval: skipped %zu malformed lines, first: %s\n", errors.size(),
+                   errors[0].c_str());
     panoptes::estimator::EvaluationOptions options;
     options.epoch_ns = epoch_ns;
     options.warmup_ns = panoptes::seconds_to_ns(warmup_s);

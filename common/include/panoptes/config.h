@@ -38,7 +38,7 @@ class YamlReader {
   YamlReader& operator=(const YamlReader&) = delete;
 
   bool has(const std::string& key) const;
-  YamlReader child(const std::string& key) const;  // throws if missing
+  YamlReader child(const std::string& key) const;                  // throws if missing
   std::vector<YamlReader> sequence(const std::string& key) const;  // throws if missing or not a list
   std::vector<YamlReader> sequence_or_empty(const std::string& key) const;
 

@@ -11,7 +11,7 @@ namespace panoptes {
 struct Image {
   int width = 0;
   int height = 0;
-  int bits = 8;  // significant bits per pixel: 8 for Mono8; 10/12/16 stored in 16-bit words
+  int bits = 8;                    // significant bits per pixel: 8 for Mono8; 10/12/16 stored in 16-bit words
   std::vector<std::uint8_t> data;  // width*height*bytes_per_pixel()
 
   Image() = default;

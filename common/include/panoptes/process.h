@@ -14,7 +14,7 @@ void request_stop();
 
 // Exit codes shared by every program.
 inline constexpr int kExitOk = 0;
-inline constexpr int kExitFailure = 1;     // a run-time failure
-inline constexpr int kExitBadInput = 2;    // bad arguments, config, calibration or input file
+inline constexpr int kExitFailure = 1;   // a run-time failure
+inline constexpr int kExitBadInput = 2;  // bad arguments, config, calibration or input file
 
 }  // namespace panoptes

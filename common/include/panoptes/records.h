@@ -18,10 +18,10 @@
 namespace panoptes {
 
 struct Blob {
-  double x = 0, y = 0;   // sub-pixel centroid, pixels
-  double area = 0;       // pixels above threshold
-  double sum = 0;        // intensity sum over the blob
-  int peak = 0;          // brightest pixel value
+  double x = 0, y = 0;               // sub-pixel centroid, pixels
+  double area = 0;                   // pixels above threshold
+  double sum = 0;                    // intensity sum over the blob
+  int peak = 0;                      // brightest pixel value
   double m20 = 0, m11 = 0, m02 = 0;  // central second moments (pixels^2), intensity weighted
 };
 

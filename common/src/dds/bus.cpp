@@ -46,10 +46,10 @@ struct TopicSpec {
 template <class T>
 struct TopicTraits;
 
-#define PANOPTES_TOPIC(Type, topic_name, reliable, durability, depth)       \
-  template <>                                                              \
-  struct TopicTraits<msg::Type> {                                          \
-    using PubSubType = msg::Type##PubSubType;                              \
+#define PANOPTES_TOPIC(Type, topic_name, reliable, durability, depth)             \
+  template <>                                                                     \
+  struct TopicTraits<msg::Type> {                                                 \
+    using PubSubType = msg::Type##PubSubType;                                     \
     static TopicSpec spec() { return {topic_name, reliable, durability, depth}; } \
   };
 
@@ -71,8 +71,9 @@ template <class Qos>
 void apply_spec(Qos& qos, const TopicSpec& spec, panoptes::dds::Qos override_qos) {
   const bool reliable = spec.reliable || override_qos == panoptes::dds::Qos::kReliable;
   qos.reliability().kind = reliable ? fdds::RELIABLE_RELIABILITY_QOS : fdds::BEST_EFFORT_RELIABILITY_QOS;
-  qos.durability().kind = spec.durability == Durability::kTransientLocal ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS
-                                                                         : fdds::VOLATILE_DURABILITY_QOS;
+  qos.durability().kind = spec.durability == Durability::kTransientLocal
+                              ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS
+                              : fdds::VOLATILE_DURABILITY_QOS;
   qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   qos.history().depth = override_qos == panoptes::dds::Qos::kReliable ? kReliableDepth : spec.depth;
 }
@@ -101,8 +102,8 @@ std::filesystem::path resolve_profile_file(const std::filesystem::path& requeste
   }
   const std::filesystem::path exe = executable_dir();
   const std::vector<std::filesystem::path> candidates = {
-      exe / "../../deploy/dds/loopback.xml",          // build/bin in a source checkout
-      exe / "../share/panoptes/dds/loopback.xml",     // installed prefix
+      exe / "../../deploy/dds/loopback.xml",       // build/bin in a source checkout
+      exe / "../share/panoptes/dds/loopback.xml",  // installed prefix
       std::filesystem::path(PANOPTES_SOURCE_DIR) / "deploy/dds/loopback.xml",  // a build tree elsewhere
   };
   for (const auto& candidate : candidates) {
@@ -113,7 +114,9 @@ std::filesystem::path resolve_profile_file(const std::filesystem::path& requeste
   throw DdsError("no DDS profile given (--dds-profile or PANOPTES_DDS_PROFILE) and none found at:" + tried);
 }
 
-ReturnCode ReturnCodeOk() { return ReturnCode::RETCODE_OK; }
+ReturnCode ReturnCodeOk() {
+  return ReturnCode::RETCODE_OK;
+}
 
 class BusCore {
  public:
@@ -134,7 +137,8 @@ class BusCore {
       domain = env != nullptr ? std::atoi(env) : 0;
     }
     participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos);
-    if (participant_ == nullptr) throw DdsError("cannot create DDS participant (domain " + std::to_string(domain) + ")");
+    if (participant_ == nullptr)
+      throw DdsError("cannot create DDS participant (domain " + std::to_string(domain) + ")");
     publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
     if (publisher_ == nullptr || subscriber_ == nullptr) {
@@ -304,7 +308,9 @@ std::uint64_t Reader<T>::received() const {
 Bus::Bus(const BusOptions& options) : core_(std::make_shared<BusCore>(options)) {}
 Bus::~Bus() = default;
 
-const std::filesystem::path& Bus::profile_file() const { return core_->profile_file(); }
+const std::filesystem::path& Bus::profile_file() const {
+  return core_->profile_file();
+}
 
 template <class T>
 std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos) {
@@ -335,10 +341,10 @@ std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_samp
   return std::make_unique<Reader<T>>(std::move(impl));
 }
 
-#define PANOPTES_INSTANTIATE(Type)                                                             \
-  template class Writer<msg::Type>;                                                            \
-  template class Reader<msg::Type>;                                                            \
-  template std::unique_ptr<Writer<msg::Type>> Bus::make_writer<msg::Type>(Qos);                \
+#define PANOPTES_INSTANTIATE(Type)                                              \
+  template class Writer<msg::Type>;                                             \
+  template class Reader<msg::Type>;                                             \
+  template std::unique_ptr<Writer<msg::Type>> Bus::make_writer<msg::Type>(Qos); \
   template std::unique_ptr<Reader<msg::Type>> Bus::make_reader<msg::Type>(Reader<msg::Type>::Callback, Qos);
 
 PANOPTES_INSTANTIATE(CameraInfo)

@@ -94,7 +94,8 @@ msg::CameraInfo to_camera_info(const std::string& camera_id, const CameraIntrins
 }
 
 std::optional<CameraCalibration> calibration_from(const msg::CameraInfo& info) {
-  if (info.K()[0] <= 0.0 || info.K()[1] <= 0.0 || info.width() == 0 || info.height() == 0) return std::nullopt;
+  if (info.K()[0] <= 0.0 || info.K()[1] <= 0.0 || info.width() == 0 || info.height() == 0)
+    return std::nullopt;
   CameraCalibration calibration;
   calibration.id = info.camera_id();
   calibration.intrinsics.width = static_cast<int>(info.width());

@@ -119,7 +119,8 @@ template <class Pixel>
 void quantize_row(const float* values, Pixel* out, int width, float max_value) {
   for (int x = 0; x < width; ++x) {
     const float value = std::clamp(values[x], 0.0f, max_value);
-    out[x] = static_cast<Pixel>(value + 0.5f);
+    // Clamped to >= 0, so adding 0.5 and truncating rounds correctly, and faster than lround.
+    out[x] = static_cast<Pixel>(value + 0.5f);  // NOLINT(bugprone-incorrect-roundings)
   }
 }
 

@@ -40,9 +40,11 @@ inline std::vector<CameraCalibration> make_ring_calibration(int count, double ra
   return cameras;
 }
 
-inline std::vector<CameraModel> make_ring_cameras(int count, double radius, double height, bool distorted = false) {
+inline std::vector<CameraModel> make_ring_cameras(int count, double radius, double height,
+                                                  bool distorted = false) {
   std::vector<CameraModel> models;
-  for (const auto& camera : make_ring_calibration(count, radius, height, distorted)) models.push_back(camera.model());
+  for (const auto& camera : make_ring_calibration(count, radius, height, distorted))
+    models.push_back(camera.model());
   return models;
 }
 

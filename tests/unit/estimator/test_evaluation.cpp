@@ -34,7 +34,7 @@ TEST(Evaluation, MeasuresErrorCoverageAndIdSwitches) {
     const TimeNs stamp = options.epoch_ns + k * 10'000'000LL;
     TrackRecord a;
     a.stamp_ns = stamp;
-    a.id = k < 50 ? 1 : 7;  // one identity switch at k = 50
+    a.id = k < 50 ? 1 : 7;               // one identity switch at k = 50
     a.p = Eigen::Vector3d(0.001, 0, 1);  // 1 mm off
     tracks.push_back(a);
     if (k % 2 == 0) {  // b tracked half of the time, exactly

@@ -16,8 +16,9 @@ TEST(PointEkf, ProcessNoiseComposesExactly) {
   // Q(a + b) = A(b) Q(a) A(b)ᵀ + Q(b): predicting in two steps equals one step (seed 003 A.48).
   const double sigma2 = 3.7;
   const double a = 0.013, b = 0.0071;
-  const Matrix6d two_steps = transition_matrix(b) * process_noise(a, sigma2) * transition_matrix(b).transpose() +
-                             process_noise(b, sigma2);
+  const Matrix6d two_steps =
+      transition_matrix(b) * process_noise(a, sigma2) * transition_matrix(b).transpose() +
+      process_noise(b, sigma2);
   EXPECT_LT((two_steps - process_noise(a + b, sigma2)).norm(), 1e-15);
 }
 
@@ -114,7 +115,8 @@ TEST(Triangulation, RejectsSingleObservationAndParallelRays) {
   const Eigen::Vector3d point(0, 0, 1);
   EXPECT_FALSE(triangulate({{&cameras[0], *cameras[0].project(point)}}));
   // The same ray twice is parallel.
-  EXPECT_FALSE(triangulate({{&cameras[0], *cameras[0].project(point)}, {&cameras[0], *cameras[0].project(point)}}));
+  EXPECT_FALSE(
+      triangulate({{&cameras[0], *cameras[0].project(point)}, {&cameras[0], *cameras[0].project(point)}}));
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include <algorithm>
-#include <map>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <random>
 #include <set>
 
@@ -19,7 +19,8 @@ namespace {
 Eigen::Vector3d marker_position(int m, double t) {
   const double radius = 0.3 + 0.15 * m;
   const double omega = 1.0 / radius * (m % 2 == 0 ? 1.0 : -1.0);
-  return {radius * std::cos(omega * t + m), radius * std::sin(omega * t + m), 0.8 + 0.3 * m + 0.1 * std::sin(2 * t)};
+  return {radius * std::cos(omega * t + m), radius * std::sin(omega * t + m),
+          0.8 + 0.3 * m + 0.1 * std::sin(2 * t)};
 }
 
 struct SyntheticRun {
@@ -60,7 +61,9 @@ SyntheticRun make_run(double duration_s, Visible visible, std::uint64_t seed = 1
   return run;
 }
 
-TimeNs scene_time(TimeNs stamp) { return stamp - 1'700'000'000'000'000'000LL; }
+TimeNs scene_time(TimeNs stamp) {
+  return stamp - 1'700'000'000'000'000'000LL;
+}
 
 // For each marker, the ids of the tracks nearest to it (within 5 mm) over the run, and the worst error.
 struct Followed {

@@ -227,7 +227,8 @@ TEST(CameraSimulator, PixelNoiseHasTheConfiguredSpreadAndSpotsSaturate) {
   EXPECT_NEAR(mean, 40.0, 0.05);
   // Rounding to whole DN adds 1/12 DN^2.
   EXPECT_NEAR(std::sqrt(sum2 / count - mean * mean), std::sqrt(9.0 + 1.0 / 12.0), 0.05);
-  const Blob& centre = camera.features(2).blobs.front();
+  const FeatureFrame frame = camera.features(2);
+  const Blob& centre = frame.blobs.front();
   EXPECT_EQ(centre.peak, 255);
   EXPECT_EQ(pixel(image, 320, 240), 255);
 }

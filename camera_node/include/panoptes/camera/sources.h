@@ -42,10 +42,10 @@ class FrameSource {
 };
 
 struct SourceOptions {
-  std::string camera_id;          // overrides the id the source would choose
-  TimeNs sim_epoch_ns = 0;        // sim: wall time of scene time 0 (0 = now, rounded up to 1 s)
-  bool paced = true;              // sim: wait for each frame's wall time; false = as fast as possible
-  std::int64_t max_frames = -1;   // stop after this many frames (-1 = the source's own end)
+  std::string camera_id;         // overrides the id the source would choose
+  TimeNs sim_epoch_ns = 0;       // sim: wall time of scene time 0 (0 = now, rounded up to 1 s)
+  bool paced = true;             // sim: wait for each frame's wall time; false = as fast as possible
+  std::int64_t max_frames = -1;  // stop after this many frames (-1 = the source's own end)
 };
 
 // Parses "images:<dir or glob>" or "sim:<scene.yaml>#<camera id>". Throws std::runtime_error

@@ -16,10 +16,10 @@ class Scene;
 namespace panoptes::estimator {
 
 struct EvaluationOptions {
-  TimeNs epoch_ns = 0;                 // absolute stamp of scene time 0
-  TimeNs warmup_ns = kNsPerSecond;     // ignore the first second (acquisition)
-  double match_distance_m = 0.02;      // a track within this of a marker observes it
-  int false_track_min_samples = 10;    // tracks with fewer samples are not judged
+  TimeNs epoch_ns = 0;               // absolute stamp of scene time 0
+  TimeNs warmup_ns = kNsPerSecond;   // ignore the first second (acquisition)
+  double match_distance_m = 0.02;    // a track within this of a marker observes it
+  int false_track_min_samples = 10;  // tracks with fewer samples are not judged
 };
 
 struct IdSwitch {
@@ -48,11 +48,12 @@ struct Evaluation {
   double min_tracked_fraction = 0;
   std::size_t id_switch_count = 0;
 
-  std::string to_json() const;   // pretty-printed JSON object
-  std::string summary() const;   // human-readable table
+  std::string to_json() const;  // pretty-printed JSON object
+  std::string summary() const;  // human-readable table
 };
 
 // `tracks` may come in any order; records sharing a stamp form one evaluation instant.
-Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks, const EvaluationOptions& options);
+Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
+                    const EvaluationOptions& options);
 
 }  // namespace panoptes::estimator

@@ -17,20 +17,20 @@
 namespace panoptes::estimator {
 
 struct TrackerOptions {
-  double process_noise = 50.0;        // σ² of white acceleration, m²/s³ (seed 003 A.48)
-  double measurement_noise_px = 0.5;  // σ of a centroid, px (seed 003 A.30)
-  double gate_chi2 = 18.42;           // χ²₂ at p = 0.9999: the verify region (seed 003 §2.2.3.2)
-  TimeNs init_window_ns = 30'000'000; // unmatched blobs of other cameras this recent may pair
-  double init_reprojection_px = 3.0;  // a candidate must reproject this well in every camera used
+  double process_noise = 50.0;         // σ² of white acceleration, m²/s³ (seed 003 A.48)
+  double measurement_noise_px = 0.5;   // σ of a centroid, px (seed 003 A.30)
+  double gate_chi2 = 18.42;            // χ²₂ at p = 0.9999: the verify region (seed 003 §2.2.3.2)
+  TimeNs init_window_ns = 30'000'000;  // unmatched blobs of other cameras this recent may pair
+  double init_reprojection_px = 3.0;   // a candidate must reproject this well in every camera used
   double init_position_sigma_m = 0.01;
   double init_velocity_sigma_mps = 2.0;
-  int confirm_cameras = 3;            // distinct cameras that must update a track to confirm it
-  TimeNs coast_after_ns = 50'000'000; // no update for this long: coasting
+  int confirm_cameras = 3;             // distinct cameras that must update a track to confirm it
+  TimeNs coast_after_ns = 50'000'000;  // no update for this long: coasting
   TimeNs delete_after_ns = 300'000'000;
   TimeNs tentative_delete_after_ns = 100'000'000;
-  double merge_distance_m = 0.005;    // two tracks closer than this are one marker
+  double merge_distance_m = 0.005;               // two tracks closer than this are one marker
   TimeNs recent_camera_window_ns = 500'000'000;  // for TrackRecord::cameras
-  double min_depth_m = 0.05;          // candidates closer to a camera are rejected
+  double min_depth_m = 0.05;                     // candidates closer to a camera are rejected
 
   void print(std::ostream& out) const;
 };

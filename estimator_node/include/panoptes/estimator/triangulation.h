@@ -29,6 +29,7 @@ std::optional<Triangulated> triangulate(const std::vector<Observation>& observat
                                         int refine_iterations = 5);
 
 // Reprojection error (px) of a point in a camera; +inf if behind it.
-double reprojection_error(const CameraModel& camera, const Eigen::Vector3d& point, const Eigen::Vector2d& pixel);
+double reprojection_error(const CameraModel& camera, const Eigen::Vector3d& point,
+                          const Eigen::Vector2d& pixel);
 
 }  // namespace panoptes::estimator
