@@ -7,6 +7,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "panoptes/simulator.h"
@@ -23,12 +24,16 @@ TimeNs next_whole_second(TimeNs wall_ns) {
 
 class SimSource final : public FrameSource {
  public:
+  // simulator_ points into scene_: the object must stay where it was built.
+  SimSource(const SimSource&) = delete;
+  SimSource& operator=(const SimSource&) = delete;
   SimSource(Scene scene, const std::string& camera_id, const SourceOptions& options)
       : scene_(std::move(scene)),
         simulator_(scene_, camera_id),
         epoch_ns_(options.sim_epoch_ns != 0 ? options.sim_epoch_ns : next_whole_second(wall_now_ns())),
         paced_(options.paced),
         max_frames_(options.max_frames) {
+    static_assert(!std::is_copy_constructible_v<SimSource> && !std::is_move_constructible_v<SimSource>);
     const SimCameraConfig& config = simulator_.config();
     info_.camera_id = options.camera_id.empty() ? camera_id : options.camera_id;
     info_.backend = "sim";

@@ -96,6 +96,8 @@ class Child {
     return WIFEXITED(exit_status_) ? WEXITSTATUS(exit_status_) : -1;
   }
   const std::string& name() const { return name_; }
+  // Exit code once the process has ended (-1 if it was killed by a signal).
+  int exit_code() const { return WIFEXITED(exit_status_) ? WEXITSTATUS(exit_status_) : -1; }
 
  private:
   std::string name_;
@@ -143,6 +145,14 @@ int main(int argc, char** argv) {
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
     return panoptes::kExitBadInput;
+  }
+  const double scene_s = panoptes::ns_to_seconds(scene->duration_ns());
+  if (duration_s > scene_s) {
+    std::printf(
+        "note: the scene lasts %.1f s; the demo runs for that long (raise `duration:` in the scene for "
+        "more)\n",
+        scene_s);
+    duration_s = scene_s;
   }
   const fs::path run_dir = log_dir.empty()
                                ? fs::temp_directory_path() / ("panoptes-demo-" + std::to_string(getpid()))
@@ -229,14 +239,20 @@ int main(int argc, char** argv) {
       }
       std::printf("%s\n", line.c_str());
       std::fflush(stdout);
+      // A camera whose scene has ended exits with 0; any other exit is a failure.
+      std::size_t finished = 0;
       for (auto& child : children) {
-        if (!child->running()) {
-          std::fprintf(stderr, "panoptes_demo: %s exited early; see its log in %s\n", child->name().c_str(),
-                       run_dir.c_str());
-          panoptes::request_stop();
-          exit_code = panoptes::kExitFailure;
+        if (child->running()) continue;
+        if (child->exit_code() == 0 && now >= end - panoptes::kNsPerSecond) {
+          ++finished;
+          continue;
         }
+        std::fprintf(stderr, "panoptes_demo: %s exited early (code %d); see its log in %s\n",
+                     child->name().c_str(), child->exit_code(), run_dir.c_str());
+        panoptes::request_stop();
+        exit_code = panoptes::kExitFailure;
       }
+      if (finished + 1 >= children.size()) break;  // every camera is done; the estimator remains
     }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_demo: %s\n", error.what());

@@ -33,6 +33,7 @@ struct TrcSource {
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   TrcLoop loop = TrcLoop::kPingPong;
   double start_s = 0.0;
+  double turnaround_s = 0.0;
   double radius = kDefaultMarkerRadius;
 };
 
@@ -203,7 +204,8 @@ TrcLoop read_trc_loop(const YamlReader& reader) {
 
 TrcSource read_trc(const YamlReader& reader, const std::filesystem::path& base_dir,
                    std::vector<std::string>& names) {
-  reject_unknown_keys(reader, {"file", "offset", "up_axis", "loop", "markers", "radius", "start", "prefix"});
+  reject_unknown_keys(
+      reader, {"file", "offset", "up_axis", "loop", "turnaround", "markers", "radius", "start", "prefix"});
   TrcSource source;
   std::filesystem::path file = expand_environment(reader, "file", reader.get_string("file"));
   if (file.is_relative()) file = base_dir / file;
@@ -222,7 +224,18 @@ TrcSource read_trc(const YamlReader& reader, const std::filesystem::path& base_d
     reader.fail("up_axis", "expected y or z, got '" + up_axis + "'");
   }
   source.loop = read_trc_loop(reader);
+  const double length = source.data.times_s.back() - source.data.times_s.front();
   source.start_s = reader.get_double("start", 0.0);
+  if (!(source.start_s >= 0.0 && source.start_s <= length)) {
+    reader.fail("start", "must lie within the recording, [0, " + std::to_string(length) + "] s");
+  }
+  source.turnaround_s = reader.get_double("turnaround", 0.0);
+  if (!(source.turnaround_s >= 0.0 && source.turnaround_s <= 2.0 * length)) {
+    reader.fail("turnaround", "must be in [0, twice the recording's length] s");
+  }
+  if (source.turnaround_s > 0.0 && source.loop != TrcLoop::kPingPong) {
+    reader.fail("turnaround", "applies only to loop: pingpong");
+  }
   source.radius = read_marker_radius(reader, "radius");
   const std::string prefix = reader.get_string("prefix", "trc/");
   if (reader.has("markers")) {
@@ -244,6 +257,32 @@ TrcSource read_trc(const YamlReader& reader, const std::filesystem::path& base_d
   return source;
 }
 
+// File time (s after the first frame) that ping-pong playback shows at scene time t. Playing
+// backwards on odd passes keeps positions continuous, unlike wrapping. With a turnaround b > 0 the
+// playback clock also keeps its rate continuous: it decelerates uniformly to a stop over the last
+// b/2 s before each end of the recording and accelerates away over the first b/2 s after it,
+// instead of reversing instantly (which would need infinite acceleration).
+//
+// In u (scene time plus an offset) one cycle is a triangle wave between -b/4 and span + b/4 whose
+// corners are replaced by parabolas over |u - corner| <= b/2; they touch 0 and span and meet the
+// straight parts with slope +-1.
+double pingpong_file_time(double t, double start, double span, double turnaround) {
+  const double b = turnaround;
+  const double half = b / 2.0;
+  const double quarter = b / 4.0;
+  const double pass = span + half;  // u from a trough to the next peak
+  const double period = 2.0 * pass;
+  // u at t = 0: the rising pass shows `start` there.
+  double u0 = start + quarter;
+  if (b > 0.0 && start < quarter) u0 = std::sqrt(start * b);
+  if (b > 0.0 && start > span - quarter) u0 = pass - std::sqrt((span - start) * b);
+  double u = std::fmod(std::fmod(t + u0, period) + period, period);
+  if (u > pass) u = period - u;  // the falling pass mirrors the rising one
+  if (u < half) return u * u / b;
+  if (u > pass - half) return span - (u - pass) * (u - pass) / b;
+  return u - quarter;
+}
+
 // Fills `out[first + i]` for every selected TRC marker at scene time t_s.
 void sample_trc(const TrcSource& source, double t_s, std::vector<MarkerTruth>& out, std::size_t first) {
   const TrcData& data = source.data;
@@ -260,9 +299,7 @@ void sample_trc(const TrcSource& source, double t_s, std::vector<MarkerTruth>& o
     inside = local >= -kSlack && local <= span + kSlack;
     local = std::clamp(local, 0.0, span);
   } else if (source.loop == TrcLoop::kPingPong) {
-    // Playing backwards on odd passes keeps positions continuous, unlike wrapping.
-    local = std::fmod(std::fmod(local, 2.0 * span) + 2.0 * span, 2.0 * span);
-    if (local > span) local = 2.0 * span - local;
+    local = pingpong_file_time(t_s, source.start_s, span, source.turnaround_s);
   } else {
     // One frame interval after the last frame holds it, so the wrap never interpolates across
     // the jump back to the first frame.

@@ -169,6 +169,60 @@ TEST(Trc, LoopModesPlayPastTheEnd) {
   EXPECT_NEAR(x_of_a(wrap, 90), 0.05, 1e-12);
 }
 
+TEST(Trc, PingPongTurnaroundKeepsVelocityContinuous) {
+  const TempDir dir;
+  dir.write("gappy.trc", kGappyTrc);
+  // A moves at +5 m/s along x over the 60 ms recording; sample its velocity every 0.1 ms.
+  const auto largest_velocity_jump = [&](const std::string& keys, double* min_x, double* max_x) {
+    const Scene scene =
+        Scene::load(dir.write("scene.yaml", kCamera + "trc: {file: gappy.trc, up_axis: z" + keys + "}\n"));
+    constexpr TimeNs kStep = 100'000;
+    double previous_x = scene.markers_at(0)[0].p.x();
+    double previous_v = 5.0;
+    double jump = 0.0;
+    *min_x = *max_x = previous_x;
+    for (TimeNs t = kStep; t < 300 * kNsPerMillisecond; t += kStep) {
+      const MarkerTruth a = scene.markers_at(t)[0];
+      EXPECT_TRUE(a.valid);
+      const double v = (a.p.x() - previous_x) / ns_to_seconds(kStep);
+      jump = std::max(jump, std::abs(v - previous_v));
+      *min_x = std::min(*min_x, a.p.x());
+      *max_x = std::max(*max_x, a.p.x());
+      previous_x = a.p.x();
+      previous_v = v;
+    }
+    return jump;
+  };
+  double min_x = 0.0, max_x = 0.0;
+  EXPECT_GT(largest_velocity_jump(", start: 0.03", &min_x, &max_x), 9.0);  // instant reversal: -5 -> +5 m/s
+  // b = 20 ms: the playback decelerates at 2 / b = 100 s/s^2, A at 500 m/s^2, 0.05 m/s per step.
+  EXPECT_LT(largest_velocity_jump(", start: 0.03, turnaround: 0.02", &min_x, &max_x), 0.06);
+  EXPECT_NEAR(min_x, 0.0, 1e-4);  // still reaches both ends of the recording
+  EXPECT_NEAR(max_x, 0.3, 1e-4);
+  const Scene scene = Scene::load(dir.write(
+      "start.yaml", kCamera + "trc: {file: gappy.trc, up_axis: z, start: 0.03, turnaround: 0.02}\n"));
+  EXPECT_NEAR(scene.markers_at(0)[0].p.x(), 0.15, 1e-12);  // scene time 0 shows `start`, at full speed
+  EXPECT_NEAR(scene.markers_at(1'000'000)[0].p.x(), 0.155, 1e-12);
+  const Scene from_rest =
+      Scene::load(dir.write("rest.yaml", kCamera + "trc: {file: gappy.trc, up_axis: z, turnaround: 0.02}\n"));
+  EXPECT_NEAR(from_rest.markers_at(0)[0].p.x(), 0.0, 1e-12);
+  EXPECT_NEAR(from_rest.markers_at(1'000'000)[0].p.x(), 5.0 * 0.001 * 0.001 / 0.02,
+              1e-12);  // 5 tau, tau = t^2/b
+
+  try {
+    Scene::load(dir.write("late.yaml", kCamera + "trc: {file: gappy.trc, start: 0.5}\n"));
+    ADD_FAILURE();
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(error.key(), "trc.start");
+  }
+  try {
+    Scene::load(dir.write("wrap.yaml", kCamera + "trc: {file: gappy.trc, loop: wrap, turnaround: 0.01}\n"));
+    ADD_FAILURE();
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(error.key(), "trc.turnaround");
+  }
+}
+
 TEST(Trc, MalformedFilesNameTheFileAndLine) {
   const TempDir dir;
   std::string bad = kGappyTrc;
