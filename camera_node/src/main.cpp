@@ -18,6 +18,7 @@
 #include "panoptes/bounded_queue.h"
 #include "panoptes/camera/detector.h"
 #include "panoptes/camera/sources.h"
+#include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
@@ -197,7 +198,8 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
 
 int main(int argc, char** argv) {
   Options options;
-  CLI::App app{"camera_node: detects IR blobs in camera frames and publishes 2D features (Panoptes)"};
+  CLI::App app{"camera_node: detects IR blobs in camera frames and publishes 2D features (Panoptes)",
+               "camera_node"};
   app.add_option("--source", options.source, "sim:<scene.yaml>#<camera id> | images:<dir or glob>")
       ->required();
   app.add_option("--camera-id", options.camera_id, "camera id to publish under (default: the source's)");
@@ -219,16 +221,11 @@ int main(int argc, char** argv) {
                  "frames waiting for detection before the oldest is dropped")
       ->check(CLI::Range(1, 1024));
   app.add_flag("--quiet", options.quiet, "less output");
-  try {
-    app.parse(argc, argv);
-    if (options.no_dds && options.out_features.empty())
-      throw CLI::ValidationError("--no-dds needs --out-features");
-  } catch (const CLI::CallForHelp&) {
-    std::cout << app.help();
-    return panoptes::kExitOk;
-  } catch (const CLI::ParseError& error) {
-    std::fprintf(stderr, "camera_node: %s (see --help)\n", error.what());
-    return panoptes::kExitBadInput;
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv, [&] {
+        if (options.no_dds && options.out_features.empty())
+          throw CLI::ValidationError("--no-dds needs --out-features");
+      })) {
+    return *exit_code;
   }
 
   panoptes::install_stop_handlers();

@@ -20,6 +20,7 @@
 #include <CLI/CLI.hpp>
 
 #include "panoptes/calibration.h"
+#include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
@@ -231,7 +232,8 @@ int run_live(const Options& options, est::Tracker& tracker) {
 
 int main(int argc, char** argv) {
   Options options;
-  CLI::App app{"estimator_node: fuses asynchronous camera features into 3D tracks (Panoptes)"};
+  CLI::App app{"estimator_node: fuses asynchronous camera features into 3D tracks (Panoptes)",
+               "estimator_node"};
   app.add_option("--calibration", options.calibration_file, "calibration YAML (cameras with T_world_cam)");
   app.add_option("--bodies", options.bodies_file,
                  "rigid-body definitions YAML (validated; body tracking is not built yet)");
@@ -258,25 +260,20 @@ int main(int argc, char** argv) {
   app.add_option("--confirm-cameras", options.tracker.confirm_cameras,
                  "distinct cameras that must see a new track before it is published")
       ->check(CLI::Range(2, 64));
-  try {
-    app.parse(argc, argv);
-    if (options.no_dds && options.in_features.empty())
-      throw CLI::ValidationError("--no-dds needs --in-features");
-    if (!options.in_features.empty() && !options.no_dds) {
-      throw CLI::ValidationError(
-          "--in-features runs offline: add --no-dds (replaying onto DDS is camera_node's job)");
-    }
-    if (options.no_dds && options.calibration_file.empty()) {
-      throw CLI::ValidationError("offline mode needs --calibration");
-    }
-    if (!options.out_poses.empty() && options.bodies_file.empty())
-      throw CLI::ValidationError("--out-poses needs --bodies");
-  } catch (const CLI::CallForHelp&) {
-    std::cout << app.help();
-    return panoptes::kExitOk;
-  } catch (const CLI::ParseError& error) {
-    std::fprintf(stderr, "estimator_node: %s (see --help)\n", error.what());
-    return panoptes::kExitBadInput;
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv, [&] {
+        if (options.no_dds && options.in_features.empty())
+          throw CLI::ValidationError("--no-dds needs --in-features");
+        if (!options.in_features.empty() && !options.no_dds) {
+          throw CLI::ValidationError(
+              "--in-features runs offline: add --no-dds (replaying onto DDS is camera_node's job)");
+        }
+        if (options.no_dds && options.calibration_file.empty()) {
+          throw CLI::ValidationError("offline mode needs --calibration");
+        }
+        if (!options.out_poses.empty() && options.bodies_file.empty())
+          throw CLI::ValidationError("--out-poses needs --bodies");
+      })) {
+    return *exit_code;
   }
 
   panoptes::install_stop_handlers();

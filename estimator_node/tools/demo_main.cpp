@@ -27,6 +27,7 @@
 #include <nlohmann/json.hpp>
 
 #include "panoptes/calibration.h"
+#include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
 #include "panoptes/estimator/evaluation.h"
@@ -116,7 +117,8 @@ int main(int argc, char** argv) {
   std::string dds_profile;
   std::string log_dir;
   bool check = false;
-  CLI::App app{"panoptes_demo: simulated multi-camera tracking over DDS, with accuracy against ground truth"};
+  CLI::App app{"panoptes_demo: simulated multi-camera tracking over DDS, with accuracy against ground truth",
+               "panoptes_demo"};
   app.add_option("--scene", scene_file, "simulator scene")->capture_default_str();
   app.add_option("--duration", duration_s, "seconds of tracking")
       ->capture_default_str()
@@ -128,15 +130,7 @@ int main(int argc, char** argv) {
   app.add_flag(
       "--check", check,
       "exit 1 unless every marker meets the demo's targets (RMSE < 2 mm, >= 95% tracked, 0 ID switches)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    std::cout << app.help();
-    return panoptes::kExitOk;
-  } catch (const CLI::ParseError& error) {
-    std::fprintf(stderr, "panoptes_demo: %s (see --help)\n", error.what());
-    return panoptes::kExitBadInput;
-  }
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
 
   panoptes::install_stop_handlers();
   std::optional<panoptes::Scene> scene;

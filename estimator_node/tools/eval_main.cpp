@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/estimator/evaluation.h"
 #include "panoptes/process.h"
@@ -20,7 +21,7 @@ int main(int argc, char** argv) {
   long long epoch_ns = 1'700'000'000'000'000'000LL;
   double warmup_s = 1.0;
   double match_distance_m = 0.02;
-  CLI::App app{"panoptes_eval: accuracy of tracks against simulator ground truth"};
+  CLI::App app{"panoptes_eval: accuracy of tracks against simulator ground truth", "panoptes_eval"};
   app.add_option("--scene", scene_file, "simulator scene YAML that produced the features")->required();
   app.add_option("--tracks", tracks_file, "Track JSONL written by estimator_node --out-tracks")->required();
   app.add_option("--epoch-ns", epoch_ns, "absolute stamp of scene time 0 (panoptes_sim's default)")
@@ -40,15 +41,7 @@ int main(int argc, char** argv) {
                  "exit 1 unless every marker is tracked this fraction of the time")
       ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--require-no-id-switches", require_no_switches, "exit 1 if any marker changed track id");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    std::cout << app.help();
-    return panoptes::kExitOk;
-  } catch (const CLI::ParseError& error) {
-    std::fprintf(stderr, "panoptes_eval: %s (see --help)\n", error.what());
-    return panoptes::kExitBadInput;
-  }
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   try {
     const auto scene = panoptes::Scene::load(scene_file);
     std::vector<std::string> errors;

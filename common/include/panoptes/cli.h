@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: Apache-2.0
+// The command-line convention of every Panoptes program: --help prints and exits 0; a bad argument
+// prints one line naming the program and the reason, and exits 2. Include only from main files.
+#pragma once
+
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <optional>
+
+#include <CLI/CLI.hpp>
+
+#include "panoptes/process.h"
+
+namespace panoptes {
+
+// Parses; `validate` may throw CLI::ValidationError for checks across options. Returns the exit
+// code to leave with, or nullopt to carry on.
+inline std::optional<int> parse_command_line(CLI::App& app, int argc, char** argv,
+                                             const std::function<void()>& validate = {}) {
+  try {
+    app.parse(argc, argv);
+    if (validate) validate();
+  } catch (const CLI::CallForHelp&) {
+    std::cout << app.help();
+    return kExitOk;
+  } catch (const CLI::ParseError& error) {
+    std::fprintf(stderr, "%s: %s (see --help)\n", app.get_name().c_str(), error.what());
+    return kExitBadInput;
+  }
+  return std::nullopt;
+}
+
+}  // namespace panoptes
