@@ -166,20 +166,22 @@ std::vector<BodyDefinition> load_bodies(const std::filesystem::path& path) {
   if (items.empty()) reader.fail("bodies", "expected at least one body");
   std::vector<BodyDefinition> bodies;
   std::set<std::string> names;
-  for (const YamlReader& item : items) {
-    BodyDefinition body;
-    body.name = item.get_string("name");
-    if (body.name.empty()) item.fail("name", "must not be empty");
-    if (!names.insert(body.name).second) item.fail("name", "duplicate body name '" + body.name + "'");
-    const auto rows = item.get_double_rows("markers", 3);
-    if (rows.empty()) item.fail("markers", "expected at least one marker");
-    for (std::size_t i = 0; i < rows.size(); ++i) {
-      require_finite(item, "markers[" + std::to_string(i) + "]", rows[i]);
-      body.markers.emplace_back(rows[i][0], rows[i][1], rows[i][2]);
-    }
-    bodies.push_back(std::move(body));
-  }
+  for (const YamlReader& item : items) bodies.push_back(read_body_definition(item, names));
   return bodies;
+}
+
+BodyDefinition read_body_definition(const YamlReader& item, std::set<std::string>& names) {
+  BodyDefinition body;
+  body.name = item.get_string("name");
+  if (body.name.empty()) item.fail("name", "must not be empty");
+  if (!names.insert(body.name).second) item.fail("name", "duplicate body name '" + body.name + "'");
+  const auto rows = item.get_double_rows("markers", 3);
+  if (rows.empty()) item.fail("markers", "expected at least one marker");
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    require_finite(item, "markers[" + std::to_string(i) + "]", rows[i]);
+    body.markers.emplace_back(rows[i][0], rows[i][1], rows[i][2]);
+  }
+  return body;
 }
 
 void save_bodies(const std::vector<BodyDefinition>& bodies, const std::filesystem::path& path) {

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -13,6 +14,8 @@
 #include "panoptes/camera_model.h"
 
 namespace panoptes {
+
+class YamlReader;
 
 struct CameraCalibration {
   std::string id;
@@ -39,6 +42,9 @@ struct BodyDefinition {
 };
 
 std::vector<BodyDefinition> load_bodies(const std::filesystem::path& path);
+// Reads one body (`name`, `markers`) from a YAML map; `names` collects names to reject duplicates.
+// Used by body files and simulator scenes alike. Throws ConfigError naming the file and key.
+BodyDefinition read_body_definition(const YamlReader& item, std::set<std::string>& names);
 void save_bodies(const std::vector<BodyDefinition>& bodies, const std::filesystem::path& path);
 
 }  // namespace panoptes

@@ -414,12 +414,9 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
   for (const YamlReader& body : root.sequence_or_empty("bodies")) {
     reject_unknown_keys(body, {"name", "markers", "marker_radius", "path", "rotation"});
     BodySpec spec;
-    spec.name = body.get_string("name");
-    if (spec.name.empty()) body.fail("name", "must not be empty");
-    if (!body_names.insert(spec.name).second) body.fail("name", "duplicate body name '" + spec.name + "'");
-    const auto rows = body.get_double_rows("markers", 3);
-    if (rows.empty()) body.fail("markers", "expected at least one marker");
-    for (const auto& row : rows) spec.markers.emplace_back(row[0], row[1], row[2]);
+    BodyDefinition definition = read_body_definition(body, body_names);
+    spec.name = std::move(definition.name);
+    spec.markers = std::move(definition.markers);
     spec.marker_radius = read_marker_radius(body, "marker_radius");
     spec.path = sim::read_path(body.child("path"));
     if (body.has("rotation")) spec.rotation = sim::read_rotation(body.child("rotation"));

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "panoptes/config.h"
+
 namespace panoptes::testing {
 
 class TempDir {
@@ -41,3 +43,17 @@ class TempDir {
 };
 
 }  // namespace panoptes::testing
+
+namespace panoptes {
+// Runs `action`, which must throw ConfigError, and returns its what().
+template <class Action>
+std::string config_error_of(Action&& action) {
+  try {
+    action();
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  ADD_FAILURE() << "expected a ConfigError";
+  return {};
+}
+}  // namespace panoptes

@@ -11,17 +11,6 @@
 namespace panoptes {
 namespace {
 
-template <class Action>
-std::string config_error_of(Action&& action) {
-  try {
-    action();
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "expected a ConfigError";
-  return {};
-}
-
 // Values that need all 17 significant digits, so any loss of precision shows.
 SystemCalibration awkward_calibration() {
   std::mt19937_64 rng(99);

@@ -10,18 +10,6 @@
 namespace panoptes {
 namespace {
 
-// Runs `action`, which must throw ConfigError, and returns its what().
-template <class Action>
-std::string config_error_of(Action&& action) {
-  try {
-    action();
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  ADD_FAILURE() << "expected a ConfigError";
-  return {};
-}
-
 YamlReader reader_for(const std::string& text) {
   return YamlReader("test.yaml", YAML::Load(text));
 }
