@@ -4,25 +4,43 @@
 #include <stdexcept>
 #include <string>
 
+#include "aravis_source.h"
+#include "features_source.h"
 #include "image_source.h"
 #include "sim_source.h"
+#include "v4l2_source.h"
 
 namespace panoptes::camera {
+
+namespace {
+constexpr const char* kSourceForms =
+    "images:<dir or glob>, sim:<scene.yaml>#<camera id>, aravis:<ip or device id>, v4l2:/dev/videoN or "
+    "features:<file.jsonl>";
+}
 
 std::unique_ptr<FrameSource> open_source(const std::string& spec, const SourceOptions& options) {
   const auto colon = spec.find(':');
   const std::string kind = colon == std::string::npos ? spec : spec.substr(0, colon);
   const std::string target = colon == std::string::npos ? std::string() : spec.substr(colon + 1);
-  if (kind == "images") {
-    if (target.empty()) throw std::runtime_error("images: expected images:<directory or glob>");
-    return open_image_source(target, options);
+  using Opener = std::unique_ptr<FrameSource> (*)(const std::string&, const SourceOptions&);
+  struct Backend {
+    const char* kind;
+    const char* form;
+    Opener open;
+  };
+  static constexpr Backend kBackends[] = {
+      {"images", "images:<directory or glob>", open_image_source},
+      {"sim", "sim:<scene.yaml>#<camera id>", open_sim_source},
+      {"aravis", "aravis:<ip or device id>", open_aravis_source},
+      {"v4l2", "v4l2:/dev/videoN", open_v4l2_source},
+      {"features", "features:<file.jsonl>", open_features_source},
+  };
+  for (const Backend& backend : kBackends) {
+    if (kind != backend.kind) continue;
+    if (target.empty()) throw std::runtime_error(std::string(backend.kind) + ": expected " + backend.form);
+    return backend.open(target, options);
   }
-  if (kind == "sim") {
-    if (target.empty()) throw std::runtime_error("sim: expected sim:<scene.yaml>#<camera id>");
-    return open_sim_source(target, options);
-  }
-  throw std::runtime_error("unknown source '" + spec +
-                           "' (expected images:<dir or glob> or sim:<scene.yaml>#<camera id>)");
+  throw std::runtime_error("unknown source '" + spec + "' (expected " + kSourceForms + ")");
 }
 
 }  // namespace panoptes::camera

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/config.h"
 
+#include <algorithm>
 #include <fstream>
 #include <limits>
 #include <string_view>
@@ -97,6 +98,18 @@ std::string YamlReader::key_of(const std::string& key) const {
   if (key.empty()) return key_path_;
   if (key_path_.empty()) return key;
   return key_path_ + "." + key;
+}
+
+void YamlReader::expect_only(const std::vector<std::string>& allowed) const {
+  const YAML::Node& self = node();
+  if (!self.IsMap()) return;
+  for (const auto& entry : self) {
+    const std::string key = entry.first.as<std::string>();
+    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+    std::string known;
+    for (const std::string& name : allowed) known += (known.empty() ? "" : ", ") + name;
+    fail(key, "unknown key (expected one of: " + known + ")");
+  }
 }
 
 void YamlReader::fail(const std::string& key, const std::string& reason) const {

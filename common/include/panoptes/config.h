@@ -54,6 +54,9 @@ class YamlReader {
   // A list of lists of numbers, each of `inner_size`.
   std::vector<std::vector<double>> get_double_rows(const std::string& key, int inner_size) const;
 
+  // Fails on the first key of this map that is not in `allowed` (typos must not pass silently).
+  void expect_only(const std::vector<std::string>& allowed) const;
+
   const std::string& file() const { return file_; }
   const std::string& key_path() const { return key_path_; }
   std::string key_of(const std::string& key) const;  // full dotted path of a child key
