@@ -20,8 +20,8 @@ const char* control_name(Control control) {
 }
 
 SourceSettings SourceSettings::from_yaml(const YamlReader& reader) {
-  reader.expect_only({"exposure_us", "gain_db", "frame_rate_hz", "roi", "pixel_format", "buffers", "timeout_ms",
-                      "reconnect_interval_ms"});
+  reader.expect_only({"exposure_us", "gain_db", "frame_rate_hz", "roi", "pixel_format", "buffers",
+                      "timeout_ms", "reconnect_interval_ms"});
   SourceSettings settings;
   const auto non_negative = [&reader](const std::string& key, double fallback, double maximum) {
     const double value = reader.get_double(key, fallback);
@@ -34,7 +34,8 @@ SourceSettings SourceSettings::from_yaml(const YamlReader& reader) {
   settings.gain_db = non_negative("gain_db", settings.gain_db, 100);
   settings.frame_rate_hz = non_negative("frame_rate_hz", settings.frame_rate_hz, 100000);
   settings.timeout_ms = non_negative("timeout_ms", settings.timeout_ms, 600000);
-  settings.reconnect_interval_ms = non_negative("reconnect_interval_ms", settings.reconnect_interval_ms, 600000);
+  settings.reconnect_interval_ms =
+      non_negative("reconnect_interval_ms", settings.reconnect_interval_ms, 600000);
   const long long buffers = reader.get_int("buffers", settings.buffers);
   if (buffers < 2 || buffers > 256) reader.fail("buffers", "must be between 2 and 256");
   settings.buffers = static_cast<int>(buffers);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/records.h"
 
+#include <algorithm>
 #include <limits>
 #include <stdexcept>
 #include <utility>
@@ -180,7 +181,8 @@ std::string to_json_line(const FeatureFrame& frame) {
                      {"peak", blob.peak},
                      {"m20", blob.m20},
                      {"m11", blob.m11},
-                     {"m02", blob.m02}});
+                     {"m02", blob.m02},
+                     {"bbox", {blob.x0, blob.y0, blob.x1, blob.y1}}});
   }
   Json json = {{"camera_id", frame.camera_id},         {"frame", frame.frame},
                {"stamp_ns", frame.stamp_ns},           {"arrival_ns", frame.arrival_ns},
@@ -232,6 +234,16 @@ Parsed<FeatureFrame> parse_feature_frame(std::string_view line) {
       blob.m20 = get_double(item, "m20", prefix, false);
       blob.m11 = get_double(item, "m11", prefix, false);
       blob.m02 = get_double(item, "m02", prefix, false);
+      if (const Json* bbox = find_field(item, "bbox", prefix + ".bbox", false)) {
+        if (!bbox->is_array() || bbox->size() != 4 ||
+            !std::all_of(bbox->begin(), bbox->end(), [](const Json& v) { return v.is_number_integer(); })) {
+          throw FieldError{prefix + ".bbox: expected [x0, y0, x1, y1] in whole pixels"};
+        }
+        blob.x0 = (*bbox)[0].get<int>();
+        blob.y0 = (*bbox)[1].get<int>();
+        blob.x1 = (*bbox)[2].get<int>();
+        blob.y1 = (*bbox)[3].get<int>();
+      }
       frame.blobs.push_back(blob);
     }
     return frame;

@@ -18,11 +18,12 @@
 namespace panoptes {
 
 struct Blob {
-  double x = 0, y = 0;               // sub-pixel centroid, pixels
-  double area = 0;                   // pixels above threshold
-  double sum = 0;                    // intensity sum over the blob
-  int peak = 0;                      // brightest pixel value
-  double m20 = 0, m11 = 0, m02 = 0;  // central second moments (pixels^2), intensity weighted
+  double x = 0, y = 0;                 // sub-pixel centroid, pixels
+  double area = 0;                     // pixels above threshold
+  double sum = 0;                      // intensity sum over the blob
+  int peak = 0;                        // brightest pixel value
+  double m20 = 0, m11 = 0, m02 = 0;    // central second moments (pixels^2), intensity weighted
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // bounding box of the pixels above threshold, [x0, x1) x [y0, y1)
 };
 
 struct FeatureFrame {

@@ -24,6 +24,8 @@ msg::FeatureFrame to_message(const FeatureFrame& frame) {
     b.m20(static_cast<float>(blob.m20));
     b.m11(static_cast<float>(blob.m11));
     b.m02(static_cast<float>(blob.m02));
+    const auto coordinate = [](int value) { return static_cast<uint16_t>(std::clamp(value, 0, 65535)); };
+    b.bbox({coordinate(blob.x0), coordinate(blob.y0), coordinate(blob.x1), coordinate(blob.y1)});
     blobs.push_back(b);
   }
   return message;
@@ -47,6 +49,10 @@ FeatureFrame from_message(const msg::FeatureFrame& message) {
     blob.m20 = b.m20();
     blob.m11 = b.m11();
     blob.m02 = b.m02();
+    blob.x0 = b.bbox()[0];
+    blob.y0 = b.bbox()[1];
+    blob.x1 = b.bbox()[2];
+    blob.y1 = b.bbox()[3];
     frame.blobs.push_back(blob);
   }
   return frame;

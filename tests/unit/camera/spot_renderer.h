@@ -83,15 +83,20 @@ inline Image render_spots(int width, int height, const std::vector<Spot>& spots,
 }
 
 // Spots on a grid of `cell` pixels, each with a random sub-pixel offset and a random sigma, far
-// enough apart never to touch.
+// enough apart never to touch. With `amplitude_max` > `amplitude` the peak is drawn from
+// [amplitude, amplitude_max]; peaks above 255 saturate in the 8-bit picture.
 inline std::vector<Spot> random_spot_grid(int width, int height, int cell, double sigma_min, double sigma_max,
-                                          std::mt19937_64& rng, double amplitude = 200) {
+                                          std::mt19937_64& rng, double amplitude = 200,
+                                          double amplitude_max = 0) {
   std::uniform_real_distribution<double> offset(-0.5, 0.5);
   std::uniform_real_distribution<double> sigma(sigma_min, sigma_max);
+  std::uniform_real_distribution<double> peak(amplitude, std::max(amplitude, amplitude_max));
   std::vector<Spot> spots;
   for (int cy = cell / 2; cy + cell / 2 <= height; cy += cell) {
     for (int cx = cell / 2; cx + cell / 2 <= width; cx += cell) {
-      spots.push_back(Spot{cx + offset(rng), cy + offset(rng), sigma(rng), amplitude});
+      Spot spot{cx + offset(rng), cy + offset(rng), sigma(rng), amplitude};
+      if (amplitude_max > amplitude) spot.amplitude = peak(rng);
+      spots.push_back(spot);
     }
   }
   return spots;

@@ -45,6 +45,7 @@ DetectorConfig permissive(int threshold) {
   config.threshold = threshold;
   config.min_area = 1;
   config.max_area = std::numeric_limits<int>::max();
+  config.refine_margin = 0;  // exact moments of the pixels above threshold
   return config;
 }
 
@@ -79,18 +80,30 @@ void score(const std::vector<Spot>& truths, const std::vector<Blob>& blobs, Accu
   for (bool u : used) accuracy.false_blobs += u ? 0 : 1;
 }
 
-Accuracy measure(CentroidWeighting weighting, double noise_dn, int frames, std::uint64_t seed,
-                 int threshold = 0) {
-  std::mt19937_64 rng(seed);
+struct Scenario {
+  CentroidWeighting weighting = CentroidWeighting::kIntensitySquared;
+  double noise_dn = 0;
+  int frames = 4;
+  std::uint64_t seed = 11;
+  int refine_margin = DetectorConfig{}.refine_margin;
+  int bits = 8;  // 12 and 16 render the same picture times 16 in 16-bit words
+};
+
+// Spots of sigma 0.8-3 px at random sub-pixel positions, peaks 120-400 DN on a 10 DN background,
+// so about half of them saturate at 255.
+Accuracy measure(const Scenario& scenario) {
+  std::mt19937_64 rng(scenario.seed);
   DetectorConfig config;
-  config.weighting = weighting;
-  config.threshold = threshold;
+  config.weighting = scenario.weighting;
+  config.refine_margin = scenario.refine_margin;
+  if (scenario.bits == 16) config.threshold = 64 * 16;  // the 16-bit default would be 16384
   Detector detector(config);
   Accuracy accuracy;
   double sum_squares = 0;
-  for (int frame = 0; frame < frames; ++frame) {
-    const std::vector<Spot> spots = random_spot_grid(640, 480, 32, 0.8, 3.0, rng);
-    const Image image = render_spots(640, 480, spots, 10, noise_dn, &rng);
+  const double gain = scenario.bits > 8 ? 16.0 : 1.0;
+  for (int frame = 0; frame < scenario.frames; ++frame) {
+    const std::vector<Spot> spots = random_spot_grid(640, 480, 32, 0.8, 3.0, rng, 120, 400);
+    const Image image = render_spots(640, 480, spots, 10, scenario.noise_dn, &rng, gain, scenario.bits);
     score(spots, detector.detect(image), accuracy, &sum_squares);
   }
   if (accuracy.detected > 0) {
@@ -103,38 +116,54 @@ Accuracy measure(CentroidWeighting weighting, double noise_dn, int frames, std::
 
 void print(const char* label, const Accuracy& a) {
   std::printf(
-      "[ accuracy ] %-34s rms %.4f px  max %.4f px  bias (%+.4f, %+.4f) px  detected %d/%d  false %d\n",
+      "[ accuracy ] %-40s rms %.4f px  max %.4f px  bias (%+.4f, %+.4f) px  detected %d/%d  false %d\n",
       label, a.rms, a.max_error, a.bias_x, a.bias_y, a.detected, a.truths, a.false_blobs);
 }
 
-// Without noise the error left is the threshold's: the blob is the Gaussian cut at T, and the
-// pixels just above T still carry weight T^2 (seed 004 §2.2.1 weighting), so which pixels make the
-// cut shifts the centroid. It shrinks as T nears the background (measured: T=30 ~0.011 px,
-// T=64 ~0.034 px, T=100 ~0.072 px), and it is unbiased on average over sub-pixel positions.
-TEST(Detector, NoiseFreeCentroidsAreAccurateWithIntensitySquared) {
-  const Accuracy squared = measure(CentroidWeighting::kIntensitySquared, 0.0, 4, 11);
-  const Accuracy linear = measure(CentroidWeighting::kIntensity, 0.0, 4, 11);
-  const Accuracy low_threshold = measure(CentroidWeighting::kIntensitySquared, 0.0, 4, 11, 30);
-  print("I^2, noise-free, T=64 (default)", squared);
-  print("I, noise-free, T=64 (default)", linear);
-  print("I^2, noise-free, T=30", low_threshold);
-  EXPECT_EQ(squared.detected, squared.truths);
-  EXPECT_EQ(squared.false_blobs, 0);
-  EXPECT_LT(squared.rms, 0.045);
-  EXPECT_LT(squared.max_error, 0.15);
-  EXPECT_LT(std::abs(squared.bias_x), 0.005);
-  EXPECT_LT(std::abs(squared.bias_y), 0.005);
-  EXPECT_LT(squared.rms, 0.6 * linear.rms);
-  EXPECT_EQ(low_threshold.detected, low_threshold.truths);
-  EXPECT_LT(low_threshold.rms, 0.02);
-}
-
-TEST(Detector, NoisyCentroidsAreAccurateAndComplete) {
-  const Accuracy accuracy = measure(CentroidWeighting::kIntensitySquared, 2.0, 10, 12);
-  print("I^2, noise 2 DN, sigma 0.8-3 px", accuracy);
+void expect_noise_free_target(const Accuracy& accuracy) {
   EXPECT_EQ(accuracy.detected, accuracy.truths);
   EXPECT_EQ(accuracy.false_blobs, 0);
-  EXPECT_LT(accuracy.rms, 0.05);
+  EXPECT_LT(std::abs(accuracy.bias_x), 0.01);
+  EXPECT_LT(std::abs(accuracy.bias_y), 0.01);
+  EXPECT_LT(accuracy.rms, 0.02);
+}
+
+// Issue 3 target: noise-free bias < 0.01 px and RMS < 0.02 px, saturated spots included. The
+// pixels above threshold alone (seed 004 eq. 1-2 as written) leave the threshold's cut in the
+// centroid; the refinement over the grown box removes it.
+TEST(Detector, NoiseFreeCentroidsMeetTheAccuracyTarget) {
+  const Accuracy refined = measure({});
+  const Accuracy cut_only = measure({.refine_margin = 0});
+  const Accuracy linear = measure({.weighting = CentroidWeighting::kIntensity});
+  print("I^2 refined (default), noise-free", refined);
+  print("I^2 above threshold only, noise-free", cut_only);
+  print("I refined, noise-free", linear);
+  expect_noise_free_target(refined);
+  expect_noise_free_target(linear);
+  EXPECT_LT(refined.rms, 0.5 * cut_only.rms);
+}
+
+TEST(Detector, SixteenBitInputMeetsTheSameTarget) {
+  const Accuracy twelve = measure({.bits = 12});
+  const Accuracy sixteen = measure({.bits = 16});
+  print("I^2 refined, noise-free, 12-bit", twelve);
+  print("I^2 refined, noise-free, 16-bit", sixteen);
+  expect_noise_free_target(twelve);
+  expect_noise_free_target(sixteen);
+  const Accuracy noisy = measure({.noise_dn = 2.0, .frames = 10, .seed = 12, .bits = 12});
+  print("I^2 refined, noise 2 DN (x16), 12-bit", noisy);
+  EXPECT_LT(noisy.rms, 0.04);
+}
+
+// Issue 3 target with additive noise of 2 DN: RMS < 0.04 px, detection >= 99%, < 0.1 false
+// blobs per frame.
+TEST(Detector, NoisyCentroidsMeetTheAccuracyTarget) {
+  const int frames = 10;
+  const Accuracy accuracy = measure({.noise_dn = 2.0, .frames = frames, .seed = 12});
+  print("I^2 refined, noise 2 DN, sigma 0.8-3 px", accuracy);
+  EXPECT_GE(accuracy.detected, 0.99 * accuracy.truths);
+  EXPECT_LT(accuracy.false_blobs, 0.1 * frames);
+  EXPECT_LT(accuracy.rms, 0.04);
 }
 
 // Frame-to-frame jitter of a static spot under sensor noise: the property seed 004 §2.2.1 chose
@@ -180,7 +209,9 @@ TEST(Detector, IntensitySquaredJittersLessThanIntensityUnderNoise) {
   const double jitter_above = jitter(CentroidWeighting::kAboveThreshold, spots, 40, 22);
   std::printf("[ jitter   ] noise 2 DN, %zu spots x 40 frames: I^2 %.4f px, I %.4f px, I-T %.4f px\n",
               spots.size(), jitter_i2, jitter_i, jitter_above);
-  EXPECT_LT(jitter_i2, jitter_i);
+  // Seed 004 §2.2.1 reports the reduction qualitatively ("similar to a low-pass filter"); here
+  // it is about a third (0.0118 vs 0.0178 px when measured).
+  EXPECT_LT(jitter_i2, 0.8 * jitter_i);
 }
 
 TEST(Detector, SixteenBitImagesGiveTheSameCentroids) {

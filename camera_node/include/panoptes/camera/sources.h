@@ -53,7 +53,7 @@ struct SourceSettings {
   int roi_x = 0, roi_y = 0, roi_width = 0, roi_height = 0;  // width/height 0 = full sensor
   std::string pixel_format;                                 // e.g. Mono8, Mono12, Mono16, GREY, Y16
   int buffers = 8;                                          // driver/stream buffer pool size
-  double timeout_ms = 1000;         // a frame not arriving within this counts as a timeout
+  double timeout_ms = 1000;             // a frame not arriving within this counts as a timeout
   double reconnect_interval_ms = 1000;  // between attempts to reopen a vanished device
 
   // Reads the `source:` section (keys above); unknown keys and out-of-range values throw
@@ -82,7 +82,7 @@ class FrameSource {
 
   // Sets a camera control; returns "" on success, otherwise why not ("not supported by ...",
   // "out of range [a, b]").
-  virtual std::string set_control(Control control, double value) {
+  virtual std::string set_control(Control control, double /*value*/) {
     return std::string(control_name(control)) + " is not supported by the " + info().backend + " source";
   }
   // Current value of a control, if the source has it.
