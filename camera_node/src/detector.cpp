@@ -35,11 +35,16 @@ template <class Pixel, bool kMap>
   int written = 0;
   int x = begin;
   while (x < end) {
-    // Skip dark blocks.
+    // Skip dark blocks. The accumulators stay in the pixel type so the vectoriser keeps one
+    // lane per pixel (widening to int would quarter the throughput).
     while (x + kBlock<Pixel> <= end) {
-      unsigned any = 0;
-      for (int i = 0; i < kBlock<Pixel>; ++i)
-        any |= static_cast<unsigned>(row[x + i] > (kMap ? map[x + i] : scalar));
+      Pixel any = 0;
+      if constexpr (kMap) {
+        for (int i = 0; i < kBlock<Pixel>; ++i) any |= static_cast<Pixel>(row[x + i] > map[x + i]);
+      } else {
+        for (int i = 0; i < kBlock<Pixel>; ++i) any = std::max(any, row[x + i]);
+        any = static_cast<Pixel>(any > scalar);
+      }
       if (any != 0) break;
       x += kBlock<Pixel>;
     }
