@@ -1,20 +1,28 @@
 // SPDX-License-Identifier: Apache-2.0
-// camera_node: captures frames, finds and centroids IR blobs, publishes timestamped 2D features.
-//   live:    --source sim:<scene>#<camera> | images:<dir or glob>  → rt/panoptes/features
-//   offline: --source images:<...> --no-dds --out-features <file.jsonl>  (architecture.md, Contracts)
+// camera_node: captures frames, finds and centroids IR blobs, publishes timestamped 2D features
+// (docs/camera_node.md).
+//   live:    --source <spec>  → rt/panoptes/features, camera_info, camera_status (1 Hz),
+//            camera_preview (on request); ← camera_command, predictions
+//   offline: --source <spec> --no-dds --out-features <file.jsonl>  (architecture.md, Contracts)
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <deque>
 #include <iostream>
+#include <map>
+#include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
 #include <CLI/CLI.hpp>
 
+#include "node_control.h"
 #include "panoptes/bounded_queue.h"
 #include "panoptes/camera/detector.h"
 #include "panoptes/camera/sources.h"
@@ -42,7 +50,9 @@ struct Options {
   double duration_s = 0;
   long long max_frames = -1;
   bool unpaced = false;
+  double rate_scale = 1.0;
   std::size_t queue_capacity = 4;
+  double prediction_max_age_ms = 50;
   bool quiet = false;
 };
 
@@ -67,11 +77,50 @@ class Percentiles {
   std::vector<double> values_;
 };
 
-panoptes::FeatureFrame detect_frame(cam::Detector& detector, const cam::CapturedFrame& captured,
-                                    const std::string& camera_id) {
+// Counts what went wrong with frames and commands, by reason, and remembers the last error.
+struct NodeCounters {
+  std::map<std::string, std::uint64_t> counts;
+  std::string last_error;
+  void count(const std::string& reason, const std::string& message) {
+    const std::uint64_t n = ++counts[reason];
+    last_error = message;
+    // The first few of each kind are logged; after that only every 1000th, so a broken camera
+    // cannot flood the log.
+    if (n <= 3 || n % 1000 == 0) log(message + " (" + reason + " #" + std::to_string(n) + ")");
+  }
+};
+
+std::string counters_line(const panoptes::camera::SourceCounters& counters) {
+  std::string line;
+  for (const auto& [name, value] : counters)
+    line += (line.empty() ? "" : " ") + name + "=" + std::to_string(value);
+  return line.empty() ? "none" : line;
+}
+
+// Detects blobs in a captured frame (or takes the blobs a feature source delivered). nullopt when
+// the frame is unusable; the reason is counted.
+std::optional<panoptes::FeatureFrame> detect_frame(cam::Detector& detector,
+                                                   const cam::CapturedFrame& captured,
+                                                   const std::string& camera_id,
+                                                   std::span<const cam::SearchWindow> windows,
+                                                   NodeCounters& counters) {
   const TimeNs begin = panoptes::monotonic_now_ns();
   panoptes::FeatureFrame frame;
-  frame.blobs = detector.detect(captured.image);
+  if (captured.blobs) {
+    frame.blobs = *captured.blobs;
+  } else {
+    const panoptes::Image& image = captured.image;
+    if (image.width <= 0 || image.height <= 0) {
+      counters.count("empty_frame", "frame " + std::to_string(captured.sequence) + " has no pixels");
+      return std::nullopt;
+    }
+    try {
+      frame.blobs = detector.detect(image, windows);
+    } catch (const std::exception& error) {
+      counters.count("bad_frame", "frame " + std::to_string(captured.sequence) + ": " + error.what());
+      return std::nullopt;
+    }
+  }
   frame.processing_ns = panoptes::monotonic_now_ns() - begin;
   frame.camera_id = camera_id;
   frame.frame = captured.sequence;
@@ -86,21 +135,68 @@ int run_offline(const Options& options, cam::FrameSource& source, cam::Detector&
   panoptes::JsonlWriter out(options.out_features);
   std::size_t frames = 0;
   std::size_t blobs = 0;
+  NodeCounters counters;
   while (!panoptes::stop_requested()) {
     auto captured = source.next();
     if (!captured) break;
     if (captured->arrival_ns == 0) captured->arrival_ns = panoptes::wall_now_ns();
-    const auto frame = detect_frame(detector, *captured, camera_id);
-    blobs += frame.blobs.size();
-    out.write(frame);
+    const auto frame = detect_frame(detector, *captured, camera_id, {}, counters);
+    if (!frame) continue;
+    blobs += frame->blobs.size();
+    out.write(*frame);
     ++frames;
     if (!options.quiet && frames % 100 == 0) std::fprintf(stderr, "\r%s: %zu frames", g_name.c_str(), frames);
   }
   if (!options.quiet && frames >= 100) std::fprintf(stderr, "\n");
   log("wrote " + std::to_string(frames) + " frames with " + std::to_string(blobs) + " blobs to " +
       options.out_features);
+  auto all = source.counters();
+  for (const auto& [name, value] : counters.counts) all[name] += value;
+  log("source counters: " + counters_line(all));
   return panoptes::kExitOk;
 }
+
+// Predicted windows for this camera, written by the DDS listener, read by the detection loop.
+class PredictionBox {
+ public:
+  void store(TimeNs stamp_ns, std::vector<cam::SearchWindow> windows) {
+    std::lock_guard lock(mutex_);
+    stamp_ns_ = stamp_ns;
+    windows_ = std::move(windows);
+    ++received_;
+  }
+  // The windows if they were predicted within `max_age_ns` of `frame_stamp_ns`, else empty (a
+  // full-frame search).
+  void fresh_for(TimeNs frame_stamp_ns, TimeNs max_age_ns, std::vector<cam::SearchWindow>& out) const {
+    std::lock_guard lock(mutex_);
+    out.clear();
+    if (received_ > 0 && std::llabs(frame_stamp_ns - stamp_ns_) <= max_age_ns) out = windows_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  TimeNs stamp_ns_ = 0;
+  std::uint64_t received_ = 0;
+  std::vector<cam::SearchWindow> windows_;
+};
+
+template <class T>
+class Mailbox {
+ public:
+  void push(T value) {
+    std::lock_guard lock(mutex_);
+    if (items_.size() >= 256) items_.pop_front();  // a command storm must not grow memory
+    items_.push_back(std::move(value));
+  }
+  std::deque<T> take_all() {
+    std::lock_guard lock(mutex_);
+    return std::exchange(items_, {});
+  }
+
+ private:
+  std::mutex mutex_;
+  std::deque<T> items_;
+};
 
 int run_live(const Options& options, cam::FrameSource& source, cam::Detector& detector,
              const std::string& camera_id) {
@@ -112,6 +208,25 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   auto info_writer = bus.make_writer<msg::CameraInfo>();
   auto feature_writer = bus.make_writer<msg::FeatureFrame>();
   auto status_writer = bus.make_writer<msg::CameraStatus>();
+  auto preview_writer = bus.make_writer<msg::CameraPreview>();
+
+  Mailbox<cam::Command> commands;
+  auto command_reader = bus.make_reader<msg::CameraCommand>([&commands](msg::CameraCommand&& message) {
+    cam::Command command{message.target(), message.seq(), message.command(), {}};
+    command.arguments.assign(message.arguments().begin(), message.arguments().end());
+    commands.push(std::move(command));
+  });
+  PredictionBox predictions;
+  auto prediction_reader =
+      bus.make_reader<msg::Predictions>([&predictions, &camera_id](msg::Predictions&& message) {
+        if (message.camera_id() != camera_id) return;
+        std::vector<cam::SearchWindow> windows;
+        windows.reserve(message.windows().size());
+        for (const msg::PredictedWindow& w : message.windows()) {
+          windows.push_back({w.x(), w.y(), w.half_width(), w.half_height()});
+        }
+        predictions.store(message.stamp_ns(), std::move(windows));
+      });
 
   const auto& info = source.info();
   msg::CameraInfo camera_info;
@@ -145,40 +260,96 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
     queue.close();
   });
 
+  cam::CommandHandler handler(camera_id, detector, source);
+  cam::CommandEffects effects;
+  NodeCounters counters;
+  const TimeNs max_prediction_age_ns = static_cast<TimeNs>(options.prediction_max_age_ms * 1e6);
+  std::vector<cam::SearchWindow> windows;
+  std::vector<std::string> awaiting_frame;  // commands applied, logged with the first frame they govern
   const TimeNs start = panoptes::wall_now_ns();
   TimeNs next_status = start + panoptes::kNsPerSecond;
   std::uint64_t frames = 0;
   std::uint64_t frames_at_status = 0;
+  std::uint64_t guided_frames = 0;
   Percentiles detect_ms;
   std::optional<panoptes::JsonlWriter> out;
   if (!options.out_features.empty()) out.emplace(options.out_features);
 
   while (!panoptes::stop_requested()) {
+    // Commands apply between frames, so each one governs the very next frame.
+    for (const cam::Command& command : commands.take_all()) {
+      if (!handler.addressed_to_me(command)) continue;
+      const std::string error = handler.apply(command, effects);
+      if (error.empty()) {
+        awaiting_frame.push_back("command " + command.command + " #" + std::to_string(command.seq));
+      } else {
+        counters.last_error = error;
+        log("command #" + std::to_string(command.seq) + " rejected: " + error);
+      }
+    }
     auto captured = queue.pop(std::chrono::milliseconds(50));
     const TimeNs now = panoptes::wall_now_ns();
     if (captured) {
-      const auto frame = detect_frame(detector, *captured, camera_id);
-      auto message = panoptes::dds::to_message(frame);
-      message.publish_ns(panoptes::wall_now_ns());
-      feature_writer->write(message);
-      if (out) out->write(frame);
-      detect_ms.add(static_cast<double>(frame.processing_ns) * 1e-6);
-      ++frames;
+      const TimeNs stamp = captured->stamp_ns != 0 ? captured->stamp_ns : captured->arrival_ns;
+      predictions.fresh_for(stamp, max_prediction_age_ns, windows);
+      const auto frame = detect_frame(detector, *captured, camera_id, windows, counters);
+      for (const std::string& applied : awaiting_frame) {
+        log(applied + " applied from frame " + std::to_string(captured->sequence));
+      }
+      awaiting_frame.clear();
+      if (frame) {
+        auto message = panoptes::dds::to_message(*frame);
+        message.publish_ns(panoptes::wall_now_ns());
+        feature_writer->write(message);
+        if (out) out->write(*frame);
+        detect_ms.add(static_cast<double>(frame->processing_ns) * 1e-6);
+        ++frames;
+        if (!windows.empty() && !captured->blobs) ++guided_frames;
+      }
+      if (effects.preview_requests > 0 && captured->image.width > 0) {
+        const panoptes::Image preview = cam::make_preview(captured->image, effects.preview_max_width);
+        msg::CameraPreview preview_message;
+        preview_message.camera_id(camera_id);
+        preview_message.stamp_ns(stamp);
+        preview_message.width(static_cast<uint32_t>(preview.width));
+        preview_message.height(static_cast<uint32_t>(preview.height));
+        preview_message.pixels(preview.data);
+        preview_writer->write(preview_message);
+        --effects.preview_requests;
+      }
     } else if (source_ended.load() && queue.size() == 0) {
       break;
     }
     if (now >= next_status) {
       const double period = panoptes::ns_to_seconds(now - next_status) + 1.0;
+      cam::SourceCounters all = source.counters();
+      std::uint64_t source_drops = 0;
+      for (const auto& [name, value] : all) source_drops += value;
+      for (const auto& [name, value] : counters.counts) all[name] += value;
+      for (const auto& [name, value] : handler.counters()) all[name] += value;
+      all["drops_queue"] = queue.drops();
+      all["guided_frames"] = guided_frames;
       msg::CameraStatus status;
       status.camera_id(camera_id);
       status.stamp_ns(now);
       status.fps(static_cast<double>(frames - frames_at_status) / period);
       status.frames(frames);
       status.drops_queue(queue.drops());
+      status.drops_source(source_drops);
       status.detect_p50_ms(detect_ms.at(0.5));
       status.detect_p99_ms(detect_ms.at(0.99));
       status.queue_depth(static_cast<uint32_t>(queue.size()));
-      status.threshold(detector.config().threshold);
+      status.threshold(detector.config().threshold_for_bits(info.bits));
+      status.exposure_us(source.control(cam::Control::kExposureUs).value_or(0.0));
+      status.gain_db(source.control(cam::Control::kGainDb).value_or(0.0));
+      const std::string source_error = source.last_error();
+      status.last_error(counters.last_error.empty() ? source_error : counters.last_error);
+      for (const auto& [name, value] : all) {
+        msg::Counter counter;
+        counter.name(name);
+        counter.value(value);
+        status.counters().push_back(counter);
+      }
       status_writer->write(status);
       frames_at_status = frames;
       detect_ms.clear();
@@ -190,7 +361,11 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   queue.close();
   capture.join();
   log("stopped after " + std::to_string(frames) + " frames (" + std::to_string(queue.drops()) +
-      " dropped in the queue)");
+      " dropped in the queue, " + std::to_string(guided_frames) + " with prediction-guided search)");
+  auto all = source.counters();
+  for (const auto& [name, value] : counters.counts) all[name] += value;
+  for (const auto& [name, value] : handler.counters()) all[name] += value;
+  log("source counters: " + counters_line(all));
   return panoptes::kExitOk;
 }
 
@@ -200,11 +375,14 @@ int main(int argc, char** argv) {
   Options options;
   CLI::App app{"camera_node: detects IR blobs in camera frames and publishes 2D features (Panoptes)",
                "camera_node"};
-  app.add_option("--source", options.source, "sim:<scene.yaml>#<camera id> | images:<dir or glob>")
+  app.add_option("--source", options.source,
+                 "sim:<scene.yaml>#<camera id> | images:<dir or glob> | aravis:<ip or device id> | "
+                 "v4l2:/dev/videoN | features:<file.jsonl>")
       ->required();
   app.add_option("--camera-id", options.camera_id, "camera id to publish under (default: the source's)");
   app.add_option("--config", options.config_file,
-                 "YAML with a `detector:` section (threshold, min_area, ...)");
+                 "YAML with `detector:` (threshold, masks, ...) and `source:` (exposure_us, gain_db, "
+                 "frame_rate_hz, roi, pixel_format, ...) sections; see docs/camera_node.md");
   app.add_flag("--no-dds", options.no_dds, "offline: no DDS; requires --out-features");
   app.add_option("--out-features", options.out_features, "write every FeatureFrame to this JSONL file");
   app.add_option("--dds-profile", options.dds_profile,
@@ -216,7 +394,13 @@ int main(int argc, char** argv) {
   app.add_option("--max-frames", options.max_frames, "stop after this many frames")
       ->check(CLI::PositiveNumber);
   app.add_flag("--unpaced", options.unpaced,
-               "sim: produce frames as fast as possible instead of in real time");
+               "sim, features: produce frames as fast as possible instead of in real time");
+  app.add_option("--rate-scale", options.rate_scale, "features: replay speed (2 = twice the recorded pace)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--prediction-max-age-ms", options.prediction_max_age_ms,
+                 "use predicted windows (rt/panoptes/predictions) only if stamped within this many ms of the "
+                 "frame; otherwise search the full frame")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--queue-capacity", options.queue_capacity,
                  "frames waiting for detection before the oldest is dropped")
       ->check(CLI::Range(1, 1024));
@@ -231,16 +415,20 @@ int main(int argc, char** argv) {
   panoptes::install_stop_handlers();
   std::unique_ptr<cam::FrameSource> source;
   cam::DetectorConfig detector_config;
+  cam::SourceOptions source_options;
   try {
     if (!options.config_file.empty()) {
       const panoptes::YamlReader config(options.config_file, panoptes::load_yaml_file(options.config_file));
+      config.expect_only({"detector", "source"});
       if (config.has("detector")) detector_config = cam::DetectorConfig::from_yaml(config.child("detector"));
+      if (config.has("source"))
+        source_options.settings = cam::SourceSettings::from_yaml(config.child("source"));
     }
-    cam::SourceOptions source_options;
     source_options.camera_id = options.camera_id;
     source_options.sim_epoch_ns = options.sim_epoch_ns;
     source_options.paced = !options.unpaced;
     source_options.max_frames = options.max_frames;
+    source_options.rate_scale = options.rate_scale;
     source = cam::open_source(options.source, source_options);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "camera_node: %s\n", error.what());

@@ -209,9 +209,10 @@ int main(int argc, char** argv) {
     std::printf("  %-30s %9.1f us   (%zu calls, result %zu)\n", c.name.c_str(), median_us(c.samples),
                 c.samples.size(), c.result);
   }
-  std::printf("  ratio vs findContours+moments  %.3f\n  ratio vs connectedComponents   %.3f\n"
-              "  ratio vs memcpy                %.3f\n",
-              ours / contours, ours / components, ours / memcpy_us);
+  std::printf(
+      "  ratio vs findContours+moments  %.3f\n  ratio vs connectedComponents   %.3f\n"
+      "  ratio vs memcpy                %.3f\n",
+      ours / contours, ours / components, ours / memcpy_us);
   std::printf("by frame size:\n");
   for (const Case& c : by_size) {
     std::printf("  %-22s %9.1f us   (%zu blobs)\n", c.name.c_str(), median_us(c.samples), c.result);
@@ -224,11 +225,13 @@ int main(int argc, char** argv) {
     }
     std::printf(
         "{\"frame\": \"2048x2048_8bit\", \"blobs\": %d, \"detected\": %zu, \"panoptes_us\": %.2f, "
-        "\"opencv_findcontours_moments_us\": %.2f, \"opencv_connectedcomponents_us\": %.2f, \"memcpy_us\": %.2f, "
-        "\"panoptes_guided_us\": %.2f, \"panoptes_threshold_map_us\": %.2f, \"ratio_vs_findcontours\": %.4f, \"ratio_vs_connectedcomponents\": %.4f, "
+        "\"opencv_findcontours_moments_us\": %.2f, \"opencv_connectedcomponents_us\": %.2f, \"memcpy_us\": "
+        "%.2f, "
+        "\"panoptes_guided_us\": %.2f, \"panoptes_threshold_map_us\": %.2f, \"ratio_vs_findcontours\": %.4f, "
+        "\"ratio_vs_connectedcomponents\": %.4f, "
         "\"ratio_vs_memcpy\": %.4f, \"sizes\": {%s}}\n",
-        blob_count, comparison[0].result, ours, contours, components, memcpy_us, guided, with_map, ours / contours,
-        ours / components, ours / memcpy_us, sizes_json.c_str());
+        blob_count, comparison[0].result, ours, contours, components, memcpy_us, guided, with_map,
+        ours / contours, ours / components, ours / memcpy_us, sizes_json.c_str());
   }
   return 0;
 }

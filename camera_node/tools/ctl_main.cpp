@@ -1,0 +1,311 @@
+// SPDX-License-Identifier: Apache-2.0
+// panoptes_ctl: talk to running camera nodes over DDS (docs/camera_node.md).
+//   panoptes_ctl command <camera id | *> <command> [arguments...]
+//   panoptes_ctl script <file>                                    commands and sleeps from a file
+//   panoptes_ctl status [--camera <id>] [--count <n>]            one JSON line per CameraStatus
+//   panoptes_ctl preview <camera id> --out <file.pgm> [--width <px>]
+//   panoptes_ctl predict <camera id> --window <x> <y> <half w> <half h> [--duration <s>] [--rate <Hz>]
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "panoptes/cli.h"
+#include "panoptes/dds/bus.h"
+#include "panoptes/process.h"
+#include "panoptes/time.h"
+#include "panoptes_msgs/panoptes.h"
+
+namespace {
+
+namespace msg = panoptes::msg;
+using Clock = std::chrono::steady_clock;
+
+struct Options {
+  std::string dds_profile;
+  double timeout_s = 10;
+  // command
+  std::string target;
+  std::string command;
+  std::vector<std::string> arguments;
+  // status / preview / predict
+  std::string camera;
+  int count = 1;
+  std::string out;
+  int width = 320;
+  std::vector<double> window;
+  double duration_s = 5;
+  double rate_hz = 100;
+};
+
+panoptes::dds::Bus open_bus(const Options& options, const std::string& name) {
+  panoptes::dds::BusOptions bus_options;
+  bus_options.profile_file = options.dds_profile;
+  bus_options.participant_name = "panoptes_ctl/" + name;
+  return panoptes::dds::Bus(bus_options);
+}
+
+std::unique_ptr<panoptes::dds::Writer<msg::CameraCommand>> command_writer(panoptes::dds::Bus& bus,
+                                                                          const Options& options) {
+  auto writer = bus.make_writer<msg::CameraCommand>();
+  // Reliable, volatile: a command only reaches readers already matched, so wait for them.
+  if (!writer->wait_for_readers(1, std::chrono::milliseconds(static_cast<long>(options.timeout_s * 1000)))) {
+    std::fprintf(stderr, "panoptes_ctl: no camera node is listening for commands (waited %.0f s)\n",
+                 options.timeout_s);
+    return nullptr;
+  }
+  // Discovery completes reader by reader: give the others a moment to match too.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  return writer;
+}
+
+void write_command(panoptes::dds::Writer<msg::CameraCommand>& writer, const Options& options) {
+  msg::CameraCommand command;
+  command.target(options.target);
+  command.seq(static_cast<unsigned long long>(panoptes::wall_now_ns()));
+  command.command(options.command);
+  command.arguments(options.arguments);
+  writer.write(command);
+  std::printf("sent %s to %s (seq %llu, %d node(s) matched)\n", options.command.c_str(),
+              options.target.c_str(), static_cast<unsigned long long>(command.seq()),
+              writer.matched_readers());
+}
+
+int send_command(const Options& options) {
+  auto bus = open_bus(options, "command");
+  auto writer = command_writer(bus, options);
+  if (!writer) return panoptes::kExitFailure;
+  write_command(*writer, options);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // let reliable delivery finish
+  return panoptes::kExitOk;
+}
+
+// Lines "<target> <command> [arguments...]" or "sleep <seconds>"; '#' starts a comment.
+int run_script(const Options& options) {
+  std::ifstream file(options.out);
+  if (!file) {
+    std::fprintf(stderr, "panoptes_ctl: cannot read %s\n", options.out.c_str());
+    return panoptes::kExitBadInput;
+  }
+  auto bus = open_bus(options, "script");
+  auto writer = command_writer(bus, options);
+  if (!writer) return panoptes::kExitFailure;
+  std::string line;
+  int number = 0;
+  while (std::getline(file, line) && !panoptes::stop_requested()) {
+    ++number;
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    std::istringstream words(line);
+    std::vector<std::string> tokens;
+    for (std::string word; words >> word;) tokens.push_back(word);
+    if (tokens.empty()) continue;
+    if (tokens[0] == "sleep") {
+      double seconds = -1;
+      try {
+        seconds = tokens.size() == 2 ? std::stod(tokens[1]) : -1;
+      } catch (const std::exception&) {
+      }
+      if (!(seconds >= 0)) {
+        std::fprintf(stderr, "panoptes_ctl: %s:%d: expected 'sleep <seconds>'\n", options.out.c_str(),
+                     number);
+        return panoptes::kExitBadInput;
+      }
+      std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+      continue;
+    }
+    if (tokens.size() < 2) {
+      std::fprintf(stderr, "panoptes_ctl: %s:%d: expected '<target> <command> [arguments...]'\n",
+                   options.out.c_str(), number);
+      return panoptes::kExitBadInput;
+    }
+    Options command = options;
+    command.target = tokens[0];
+    command.command = tokens[1];
+    command.arguments.assign(tokens.begin() + 2, tokens.end());
+    write_command(*writer, command);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  return panoptes::kExitOk;
+}
+
+int show_status(const Options& options) {
+  auto bus = open_bus(options, "status");
+  std::mutex mutex;
+  std::atomic<int> printed{0};
+  auto reader = bus.make_reader<msg::CameraStatus>([&](msg::CameraStatus&& status) {
+    if (!options.camera.empty() && status.camera_id() != options.camera) return;
+    nlohmann::json counters = nlohmann::json::object();
+    for (const msg::Counter& counter : status.counters()) counters[counter.name()] = counter.value();
+    const nlohmann::json line = {{"camera_id", status.camera_id()},
+                                 {"stamp_ns", status.stamp_ns()},
+                                 {"fps", status.fps()},
+                                 {"frames", status.frames()},
+                                 {"drops_queue", status.drops_queue()},
+                                 {"drops_source", status.drops_source()},
+                                 {"detect_p50_ms", status.detect_p50_ms()},
+                                 {"detect_p99_ms", status.detect_p99_ms()},
+                                 {"queue_depth", status.queue_depth()},
+                                 {"threshold", status.threshold()},
+                                 {"exposure_us", status.exposure_us()},
+                                 {"gain_db", status.gain_db()},
+                                 {"last_error", status.last_error()},
+                                 {"counters", counters}};
+    std::lock_guard lock(mutex);
+    if (printed.load() >= options.count) return;
+    std::printf("%s\n", line.dump().c_str());
+    std::fflush(stdout);
+    ++printed;
+  });
+  const auto deadline = Clock::now() + std::chrono::milliseconds(static_cast<long>(options.timeout_s * 1000));
+  while (printed.load() < options.count && Clock::now() < deadline && !panoptes::stop_requested()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (printed.load() < options.count) {
+    std::fprintf(stderr, "panoptes_ctl: received %d of %d status messages within %.0f s\n", printed.load(),
+                 options.count, options.timeout_s);
+    return panoptes::kExitFailure;
+  }
+  return panoptes::kExitOk;
+}
+
+int get_preview(Options options) {
+  auto bus = open_bus(options, "preview");
+  std::mutex mutex;
+  std::optional<msg::CameraPreview> received;
+  auto reader = bus.make_reader<msg::CameraPreview>([&](msg::CameraPreview&& preview) {
+    if (preview.camera_id() != options.camera) return;
+    std::lock_guard lock(mutex);
+    received = std::move(preview);
+  });
+  options.target = options.camera;
+  options.command = "preview";
+  options.arguments = {std::to_string(options.width)};
+  if (const int code = send_command(options); code != panoptes::kExitOk) return code;
+  const auto deadline = Clock::now() + std::chrono::milliseconds(static_cast<long>(options.timeout_s * 1000));
+  while (Clock::now() < deadline) {
+    {
+      std::lock_guard lock(mutex);
+      if (received) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::lock_guard lock(mutex);
+  if (!received) {
+    std::fprintf(stderr, "panoptes_ctl: no preview from %s within %.0f s\n", options.camera.c_str(),
+                 options.timeout_s);
+    return panoptes::kExitFailure;
+  }
+  const std::size_t expected = static_cast<std::size_t>(received->width()) * received->height();
+  if (received->pixels().size() != expected) {
+    std::fprintf(stderr, "panoptes_ctl: preview from %s has %zu pixels, expected %ux%u\n",
+                 options.camera.c_str(), received->pixels().size(), received->width(), received->height());
+    return panoptes::kExitFailure;
+  }
+  std::ofstream file(options.out, std::ios::binary);
+  file << "P5\n" << received->width() << " " << received->height() << "\n255\n";
+  file.write(reinterpret_cast<const char*>(received->pixels().data()),
+             static_cast<std::streamsize>(expected));
+  if (!file) {
+    std::fprintf(stderr, "panoptes_ctl: cannot write %s\n", options.out.c_str());
+    return panoptes::kExitFailure;
+  }
+  std::printf("wrote %ux%u preview of %s to %s\n", received->width(), received->height(),
+              options.camera.c_str(), options.out.c_str());
+  return panoptes::kExitOk;
+}
+
+// Publishes a fixed window for a camera at `rate_hz`, stamped now: a stand-in for the estimator's
+// predictions when testing the guided search.
+int publish_predictions(const Options& options) {
+  auto bus = open_bus(options, "predict");
+  auto writer = bus.make_writer<msg::Predictions>();
+  msg::PredictedWindow window;
+  window.track_id(0);
+  window.x(static_cast<float>(options.window[0]));
+  window.y(static_cast<float>(options.window[1]));
+  window.half_width(static_cast<float>(options.window[2]));
+  window.half_height(static_cast<float>(options.window[3]));
+  const auto end = Clock::now() + std::chrono::milliseconds(static_cast<long>(options.duration_s * 1000));
+  const auto period = std::chrono::nanoseconds(static_cast<long>(1e9 / options.rate_hz));
+  std::uint64_t sent = 0;
+  for (auto next = Clock::now(); next < end && !panoptes::stop_requested(); next += period) {
+    std::this_thread::sleep_until(next);
+    msg::Predictions predictions;
+    predictions.camera_id(options.camera);
+    predictions.stamp_ns(panoptes::wall_now_ns());
+    predictions.windows({window});
+    writer->write(predictions);
+    ++sent;
+  }
+  std::printf("published %llu predictions for %s\n", static_cast<unsigned long long>(sent),
+              options.camera.c_str());
+  return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  CLI::App app{"panoptes_ctl: send commands to camera nodes and watch their status (Panoptes)",
+               "panoptes_ctl"};
+  app.require_subcommand(1);
+  app.fallthrough();  // --timeout and --dds-profile may follow the subcommand
+  app.add_option("--dds-profile", options.dds_profile,
+                 "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  app.add_option("--timeout", options.timeout_s, "seconds to wait for nodes and replies")
+      ->check(CLI::PositiveNumber);
+
+  auto* command = app.add_subcommand(
+      "command",
+      "send a command: " + std::string("set_threshold <T_a> [<T_r>] | set_exposure <us> | set_gain <dB> "
+                                       "| set_frame_rate <Hz> | capture_background [<frames>] | "
+                                       "clear_background | add_mask rect <x> <y> <w> <h> | add_mask poly "
+                                       "<x1> <y1> ... | clear_masks | preview [<width>] | restart"));
+  command->add_option("target", options.target, "camera id, or * for every camera")->required();
+  command->add_option("command", options.command, "command name")->required();
+  command->add_option("arguments", options.arguments, "command arguments");
+
+  auto* script = app.add_subcommand("script",
+                                    "send the commands of a file: lines '<target> <command> [args]' "
+                                    "or 'sleep <s>'");
+  script->add_option("file", options.out, "script file")->required();
+
+  auto* status = app.add_subcommand("status", "print CameraStatus messages as JSON lines");
+  status->add_option("--camera", options.camera, "only this camera");
+  status->add_option("--count", options.count, "messages to print before exiting")
+      ->check(CLI::PositiveNumber);
+
+  auto* preview = app.add_subcommand("preview", "request a downscaled image and save it as PGM");
+  preview->add_option("camera", options.camera, "camera id")->required();
+  preview->add_option("--out", options.out, "output .pgm file")->required();
+  preview->add_option("--width", options.width, "maximum preview width")->check(CLI::Range(16, 4096));
+
+  auto* predict = app.add_subcommand("predict", "publish a predicted search window for a camera (testing)");
+  predict->add_option("camera", options.camera, "camera id")->required();
+  predict->add_option("--window", options.window, "x y half_width half_height (px)")->expected(4)->required();
+  predict->add_option("--duration", options.duration_s, "seconds to publish")->check(CLI::PositiveNumber);
+  predict->add_option("--rate", options.rate_hz, "messages per second")->check(CLI::PositiveNumber);
+
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+  panoptes::install_stop_handlers();
+  try {
+    if (*command) return send_command(options);
+    if (*script) return run_script(options);
+    if (*status) return show_status(options);
+    if (*preview) return get_preview(options);
+    return publish_predictions(options);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
+    return panoptes::kExitFailure;
+  }
+}
