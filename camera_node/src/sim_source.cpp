@@ -2,6 +2,7 @@
 #include "sim_source.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
@@ -65,6 +66,12 @@ class SimSource final : public FrameSource {
     return frame;
   }
 
+  SourceCounters counters() const override {
+    const std::uint64_t overwritten = overwritten_.load(std::memory_order_relaxed);
+    if (overwritten == 0) return {};
+    return {{"overwritten", overwritten}};  // frames not collected before the next readout
+  }
+
   void stop() override {
     {
       std::lock_guard lock(mutex_);
@@ -93,7 +100,10 @@ class SimSource final : public FrameSource {
       return;
     }
     // Mid-stream: deliver the newest frame already read out, dropping older ones.
-    while (readout_wall_ns(next_k_ + 1) <= now) ++next_k_;
+    while (readout_wall_ns(next_k_ + 1) <= now) {
+      ++next_k_;
+      overwritten_.fetch_add(1, std::memory_order_relaxed);
+    }
   }
 
   bool wait_until_wall(TimeNs target_ns) {
@@ -122,6 +132,7 @@ class SimSource final : public FrameSource {
   std::mutex mutex_;
   std::condition_variable wake_;
   bool stopped_ = false;
+  std::atomic<std::uint64_t> overwritten_{0};
 };
 
 }  // namespace
