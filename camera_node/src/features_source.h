@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// "features:<file.jsonl>" frame source: replay of recorded FeatureFrames at the recorded pace (or --rate-scale) (private to panoptes_camera).
+// "features:<file.jsonl>" frame source: replay of recorded FeatureFrames at the recorded pace (or
+// --rate-scale) (private to panoptes_camera).
 #pragma once
 
 #include <memory>

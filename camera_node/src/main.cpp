@@ -153,6 +153,7 @@ int run_offline(const Options& options, cam::FrameSource& source, cam::Detector&
   auto all = source.counters();
   for (const auto& [name, value] : counters.counts) all[name] += value;
   log("source counters: " + counters_line(all));
+  if (const std::string error = source.last_error(); !error.empty()) log("source's last error: " + error);
   return panoptes::kExitOk;
 }
 
@@ -366,6 +367,7 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   for (const auto& [name, value] : counters.counts) all[name] += value;
   for (const auto& [name, value] : handler.counters()) all[name] += value;
   log("source counters: " + counters_line(all));
+  if (const std::string error = source.last_error(); !error.empty()) log("source's last error: " + error);
   return panoptes::kExitOk;
 }
 
