@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// "aravis:<ip or device id>" frame source: GenICam camera over GigE Vision / USB3 Vision via Aravis (private to panoptes_camera).
+// "aravis:<ip or device id>" frame source: GenICam camera over GigE Vision / USB3 Vision via Aravis (private
+// to panoptes_camera).
 #pragma once
 
 #include <memory>

@@ -99,7 +99,20 @@ class ImageFileSource final : public FrameSource {
  public:
   ImageFileSource(std::vector<fs::path> files, const SourceOptions& options)
       : files_(std::move(files)), max_frames_(options.max_frames) {
-    first_ = load_grey_image(files_.front());
+    // The first readable file sets the image size the node announces; if none can be read,
+    // the source cannot start.
+    while (!first_ && first_index_ < files_.size()) {
+      try {
+        first_ = load_grey_image(files_[first_index_]);
+      } catch (const std::runtime_error& error) {
+        skip(error.what());
+        ++first_index_;
+      }
+    }
+    if (!first_)
+      throw std::runtime_error("none of the " + std::to_string(files_.size()) + " files can be read (" +
+                               last_error_ + ")");
+    next_index_ = first_index_;
     info_.camera_id = options.camera_id.empty() ? "images" : options.camera_id;
     info_.backend = "images";
     info_.model = "image files";
@@ -117,7 +130,17 @@ class ImageFileSource final : public FrameSource {
       frame.image = std::move(*first_);
       first_.reset();
     } else {
-      frame.image = load_grey_image(files_[next_index_]);
+      // A corrupt, truncated or colour file is counted and skipped; the stream goes on.
+      while (true) {
+        if (next_index_ >= files_.size()) return std::nullopt;
+        try {
+          frame.image = load_grey_image(files_[next_index_]);
+          break;
+        } catch (const std::runtime_error& error) {
+          skip(error.what());
+          ++next_index_;
+        }
+      }
     }
     frame.sequence = static_cast<std::int64_t>(next_index_);
     frame.stamp_ns = 0;  // files carry no capture time
@@ -128,7 +151,27 @@ class ImageFileSource final : public FrameSource {
 
   void stop() override { stopped_ = true; }
 
+  SourceCounters counters() const override {
+    std::lock_guard lock(mutex_);
+    if (unreadable_ == 0) return {};
+    return {{"unreadable", unreadable_}};
+  }
+  std::string last_error() const override {
+    std::lock_guard lock(mutex_);
+    return last_error_;
+  }
+
  private:
+  void skip(const std::string& error) {
+    std::lock_guard lock(mutex_);
+    ++unreadable_;
+    last_error_ = error;
+  }
+
+  mutable std::mutex mutex_;
+  std::uint64_t unreadable_ = 0;
+  std::string last_error_;
+  std::size_t first_index_ = 0;
   std::vector<fs::path> files_;
   std::int64_t max_frames_;
   std::optional<Image> first_;  // loaded up front for info(); handed out by the first next()

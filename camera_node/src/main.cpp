@@ -103,7 +103,7 @@ std::optional<panoptes::FeatureFrame> detect_frame(cam::Detector& detector,
                                                    const cam::CapturedFrame& captured,
                                                    const std::string& camera_id,
                                                    std::span<const cam::SearchWindow> windows,
-                                                   NodeCounters& counters) {
+                                                   NodeCounters& counters, const cam::SourceInfo& info) {
   const TimeNs begin = panoptes::monotonic_now_ns();
   panoptes::FeatureFrame frame;
   if (captured.blobs) {
@@ -119,6 +119,16 @@ std::optional<panoptes::FeatureFrame> detect_frame(cam::Detector& detector,
     } catch (const std::exception& error) {
       counters.count("bad_frame", "frame " + std::to_string(captured.sequence) + ": " + error.what());
       return std::nullopt;
+    }
+    if (info.offset_x != 0 || info.offset_y != 0) {
+      for (panoptes::Blob& blob : frame.blobs) {
+        blob.x += info.offset_x;
+        blob.y += info.offset_y;
+        blob.x0 += info.offset_x;
+        blob.x1 += info.offset_x;
+        blob.y0 += info.offset_y;
+        blob.y1 += info.offset_y;
+      }
     }
   }
   frame.processing_ns = panoptes::monotonic_now_ns() - begin;
@@ -136,11 +146,33 @@ int run_offline(const Options& options, cam::FrameSource& source, cam::Detector&
   std::size_t frames = 0;
   std::size_t blobs = 0;
   NodeCounters counters;
+  // next() may block for long (a camera that is gone is retried until stop()): a signal must
+  // reach the source, not only this loop.
+  std::atomic<bool> done{false};
+  std::thread watcher([&] {
+    while (!done.load() && !panoptes::stop_requested())
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    source.stop();
+  });
+  struct JoinOnExit {
+    std::atomic<bool>& done;
+    std::thread& thread;
+    ~JoinOnExit() {
+      done.store(true);
+      thread.join();
+    }
+  } join_on_exit{done, watcher};
   while (!panoptes::stop_requested()) {
-    auto captured = source.next();
+    std::optional<cam::CapturedFrame> captured;
+    try {
+      captured = source.next();
+    } catch (const std::exception& error) {
+      counters.count("source_error", error.what());
+      break;
+    }
     if (!captured) break;
     if (captured->arrival_ns == 0) captured->arrival_ns = panoptes::wall_now_ns();
-    const auto frame = detect_frame(detector, *captured, camera_id, {}, counters);
+    const auto frame = detect_frame(detector, *captured, camera_id, {}, counters, source.info());
     if (!frame) continue;
     blobs += frame->blobs.size();
     out.write(*frame);
@@ -252,7 +284,15 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   std::atomic<bool> source_ended{false};
   std::thread capture([&] {
     while (!panoptes::stop_requested()) {
-      auto captured = source.next();
+      std::optional<cam::CapturedFrame> captured;
+      try {
+        captured = source.next();
+      } catch (const std::exception& error) {
+        // Sources recover by themselves; one that throws has no way back, so the stream ends
+        // (and is logged) instead of taking the process down.
+        log(std::string("source failed: ") + error.what());
+        break;
+      }
       if (!captured) break;
       if (captured->arrival_ns == 0) captured->arrival_ns = panoptes::wall_now_ns();
       queue.push(std::move(*captured));
@@ -293,7 +333,7 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
     if (captured) {
       const TimeNs stamp = captured->stamp_ns != 0 ? captured->stamp_ns : captured->arrival_ns;
       predictions.fresh_for(stamp, max_prediction_age_ns, windows);
-      const auto frame = detect_frame(detector, *captured, camera_id, windows, counters);
+      const auto frame = detect_frame(detector, *captured, camera_id, windows, counters, info);
       for (const std::string& applied : awaiting_frame) {
         log(applied + " applied from frame " + std::to_string(captured->sequence));
       }

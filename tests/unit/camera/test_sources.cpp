@@ -150,17 +150,22 @@ TEST(ImageSource, ErrorsNameTheSpecOrFile) {
 
   write_pgm(dir.path() / "a.pgm", 2, 2, 255, {0, 0, 0, 0});
   std::ofstream(dir.path() / "b.pgm") << "P5\n2 2\n255\n";  // truncated: no pixel data
+  // A broken file in the stream is counted and skipped, and named in last_error().
   auto source = open_source("images:" + dir.path().string(), {});
   EXPECT_TRUE(source->next().has_value());
-  try {
-    source->next();
-    ADD_FAILURE() << "a truncated file must not load";
-  } catch (const std::runtime_error& error) {
-    EXPECT_NE(std::string(error.what()).find("b.pgm"), std::string::npos) << error.what();
-  }
+  EXPECT_FALSE(source->next().has_value());
+  EXPECT_EQ(source->counters().at("unreadable"), 1u);
+  EXPECT_NE(source->last_error().find("b.pgm"), std::string::npos) << source->last_error();
 
-  fs::rename(dir.path() / "b.pgm", dir.path() / "0.pgm");  // now the first file is the bad one
-  EXPECT_NE(error_of("images:" + dir.path().string()).find("0.pgm"), std::string::npos);
+  // A broken first file is skipped too; when no file can be read the source cannot start.
+  fs::rename(dir.path() / "b.pgm", dir.path() / "0.pgm");
+  auto skipping = open_source("images:" + dir.path().string(), {});
+  EXPECT_EQ(skipping->counters().at("unreadable"), 1u);
+  EXPECT_TRUE(skipping->next().has_value());
+  fs::remove(dir.path() / "a.pgm");
+  const std::string none_error = error_of("images:" + dir.path().string());
+  EXPECT_NE(none_error.find("none of the 1 files can be read"), std::string::npos) << none_error;
+  EXPECT_NE(none_error.find("0.pgm"), std::string::npos) << none_error;
 
   EXPECT_NE(error_of("camera:xyz").find("unknown source"), std::string::npos);
 }

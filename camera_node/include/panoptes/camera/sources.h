@@ -40,6 +40,10 @@ struct SourceInfo {
   std::string serial;
   int width = 0;
   int height = 0;
+  // Position of the frame's top-left pixel on the sensor (a region of interest): blob coordinates
+  // are shifted by it so they stay in the full-sensor pixels the calibration uses.
+  int offset_x = 0;
+  int offset_y = 0;
   int bits = 8;  // significant bits per pixel of the frames it delivers
   double nominal_rate_hz = 0;
   std::optional<CameraCalibration> calibration;  // known intrinsics/pose (the simulator knows them)
