@@ -30,6 +30,8 @@ sleep 0.3
 cam0 clear_background
 other set_threshold 255  # addressed to another camera: ignored
 cam0 set_exposure 500    # the simulator has no exposure control: rejected
+cam0 set_gain 6          # nor gain
+cam0 set_frame_rate 90   # nor a settable frame rate
 cam0 set_threshold abc
 cam0 no_such_command
 sleep 0.2
@@ -79,10 +81,12 @@ check(frames.get(m - 1, 0) > 0 and all(frames.get(k, 0) == 0 for k in range(m, c
 for name in ("capture_background", "clear_background", "restart", "preview"):
     check(any(command == name for command, _, _ in applied), f"{name} applied")
 check("set_exposure: exposure is not supported by the sim source" in log, "set_exposure rejected with a reason")
+check("set_gain: gain is not supported by the sim source" in log, "set_gain rejected with a reason")
+check("set_frame_rate: frame rate is not supported by the sim source" in log, "set_frame_rate rejected with a reason")
 check("set_threshold: <T_a> 'abc' is not a number" in log, "bad argument rejected")
 check("unknown command 'no_such_command'" in log, "unknown command rejected")
 check(len([1 for command, _, _ in applied if command == "set_threshold"]) == 2, "the command for 'other' was ignored")
-check(re.search(r"source counters: .*bad_command=3", log) is not None, "3 bad commands counted")
+check(re.search(r"source counters: .*bad_command=5", log) is not None, "5 bad commands counted")
 sys.exit(0 if ok else 1)
 PY
 grep -E "command|counters" "$work/node.err" | head -20
