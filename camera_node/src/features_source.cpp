@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -18,13 +17,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "stop_signal.h"
+
 namespace panoptes::camera {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A stop() must end a sleeping next() promptly even if a notification were missed.
-constexpr TimeNs kMaxSleepSliceNs = 10 * kNsPerMillisecond;
 
 struct FrameSize {
   int width = 0;
@@ -110,7 +108,8 @@ class FeaturesSource final : public FrameSource {
   const SourceInfo& info() const override { return info_; }
 
   std::optional<CapturedFrame> next() override {
-    if (stopped()) return std::nullopt;
+    apply_rewind();
+    if (stop_.stopped()) return std::nullopt;
     if (next_index_ >= frames_.size()) return std::nullopt;
     if (max_frames_ >= 0 && static_cast<std::int64_t>(next_index_) >= max_frames_) return std::nullopt;
     const FeatureFrame& recorded = frames_[next_index_];
@@ -118,7 +117,7 @@ class FeaturesSource final : public FrameSource {
     const TimeNs offset_ns = static_cast<TimeNs>(
         std::llround(static_cast<double>(recorded.stamp_ns - frames_.front().stamp_ns) / rate_scale_));
     const TimeNs stamp_ns = replay_start_ns_ + offset_ns;
-    if (paced_ && !wait_until_wall(stamp_ns)) return std::nullopt;
+    if (paced_ && !stop_.sleep_until_wall(stamp_ns)) return std::nullopt;
 
     CapturedFrame frame;
     frame.sequence = recorded.frame;
@@ -129,13 +128,7 @@ class FeaturesSource final : public FrameSource {
     return frame;
   }
 
-  void stop() override {
-    {
-      std::lock_guard lock(mutex_);
-      stopped_ = true;
-    }
-    wake_.notify_all();
-  }
+  void stop() override { stop_.stop(); }
 
   // Rewinds: the replay starts again from the first frame, stamped from the next frame's time.
   void restart() override {
@@ -154,23 +147,12 @@ class FeaturesSource final : public FrameSource {
   }
 
  private:
-  bool wait_until_wall(TimeNs target_ns) {
-    std::unique_lock lock(mutex_);
-    while (!stopped_) {
-      const TimeNs remaining = target_ns - wall_now_ns();
-      if (remaining <= 0) return true;
-      wake_.wait_for(lock, std::chrono::nanoseconds(std::min(remaining, kMaxSleepSliceNs)));
-    }
-    return false;
-  }
-
-  bool stopped() {
+  void apply_rewind() {
     std::lock_guard lock(mutex_);
     if (rewind_requested_) {
       rewind_requested_ = false;
       next_index_ = 0;
     }
-    return stopped_;
   }
 
   const std::vector<FeatureFrame> frames_;
@@ -181,9 +163,8 @@ class FeaturesSource final : public FrameSource {
   std::size_t next_index_ = 0;  // capture thread (and restart(), under mutex_, applied by next())
   TimeNs replay_start_ns_ = 0;
 
+  StopSignal stop_;
   mutable std::mutex mutex_;
-  std::condition_variable wake_;
-  bool stopped_ = false;
   bool rewind_requested_ = false;
   SourceCounters counters_;
   std::string last_error_;

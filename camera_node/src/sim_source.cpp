@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -12,12 +11,10 @@
 #include <utility>
 
 #include "panoptes/simulator.h"
+#include "stop_signal.h"
 
 namespace panoptes::camera {
 namespace {
-
-// A stop() must end a sleeping next() promptly even if a notification were missed.
-constexpr TimeNs kMaxSleepSliceNs = 10 * kNsPerMillisecond;
 
 TimeNs next_whole_second(TimeNs wall_ns) {
   return (wall_ns + kNsPerSecond - 1) / kNsPerSecond * kNsPerSecond;
@@ -50,11 +47,11 @@ class SimSource final : public FrameSource {
   const SourceInfo& info() const override { return info_; }
 
   std::optional<CapturedFrame> next() override {
-    if (stopped()) return std::nullopt;
+    if (stop_.stopped()) return std::nullopt;
     if (max_frames_ >= 0 && delivered_ >= max_frames_) return std::nullopt;
     if (paced_) skip_frames_already_read_out();
     if (simulator_.frame_time_ns(next_k_) > scene_.duration_ns()) return std::nullopt;
-    if (paced_ && !wait_until_wall(readout_wall_ns(next_k_))) return std::nullopt;
+    if (paced_ && !stop_.sleep_until_wall(readout_wall_ns(next_k_))) return std::nullopt;
 
     CapturedFrame frame;
     frame.image = simulator_.render(next_k_);
@@ -72,13 +69,7 @@ class SimSource final : public FrameSource {
     return {{"overwritten", overwritten}};  // frames not collected before the next readout
   }
 
-  void stop() override {
-    {
-      std::lock_guard lock(mutex_);
-      stopped_ = true;
-    }
-    wake_.notify_all();
-  }
+  void stop() override { stop_.stop(); }
 
  private:
   // A frame exists once its exposure has ended: the sensor reads it out then.
@@ -106,21 +97,6 @@ class SimSource final : public FrameSource {
     }
   }
 
-  bool wait_until_wall(TimeNs target_ns) {
-    std::unique_lock lock(mutex_);
-    while (!stopped_) {
-      const TimeNs remaining = target_ns - wall_now_ns();
-      if (remaining <= 0) return true;
-      wake_.wait_for(lock, std::chrono::nanoseconds(std::min(remaining, kMaxSleepSliceNs)));
-    }
-    return false;
-  }
-
-  bool stopped() {
-    std::lock_guard lock(mutex_);
-    return stopped_;
-  }
-
   Scene scene_;  // declared before simulator_, which points into it
   CameraSimulator simulator_;
   TimeNs epoch_ns_;
@@ -129,9 +105,7 @@ class SimSource final : public FrameSource {
   std::int64_t next_k_ = 0;
   std::int64_t delivered_ = 0;
   SourceInfo info_;
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  bool stopped_ = false;
+  StopSignal stop_;
   std::atomic<std::uint64_t> overwritten_{0};
 };
 
