@@ -163,9 +163,19 @@ TEST(Tracker, CountsFramesFromUncalibratedCamerasAndLateFrames) {
   stranger.camera_id = "not-calibrated";
   EXPECT_EQ(tracker.process(stranger), FrameOutcome::kUnknownCamera);
   tracker.process(run.frames[10]);
-  EXPECT_EQ(tracker.process(run.frames[5]), FrameOutcome::kLate);
+  // Older than the newest frame but within the rewind horizon: replayed, not dropped.
+  EXPECT_EQ(tracker.process(run.frames[5]), FrameOutcome::kLateReplayed);
   EXPECT_EQ(tracker.stats().frames_unknown_camera, 1u);
   EXPECT_EQ(tracker.stats().frames_late, 1u);
+  EXPECT_EQ(tracker.stats().replays, 1u);
+  // Older than the horizon: dropped and counted.
+  FeatureFrame ancient = run.frames[5];
+  ancient.stamp_ns -= 2 * tracker.options().rewind_horizon_ns;
+  EXPECT_EQ(tracker.process(ancient), FrameOutcome::kTooLate);
+  EXPECT_EQ(tracker.stats().frames_too_late, 1u);
+  const auto& counters = tracker.camera_counters();
+  EXPECT_EQ(counters.at("not-calibrated").frames, 1u);
+  EXPECT_EQ(counters.at("not-calibrated").used, 0u);
 }
 
 TEST(Tracker, NoGhostTrackIsPublished) {

@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // Multi-point tracker: one-camera-at-a-time EKF over asynchronous cameras (seed 003 §2.2.3).
+// Per camera frame: project the tracks, gate (verify region), assign globally, update; start
+// tracks from what is left; coast, confirm, delete. Frames that arrive out of stamp order are
+// used by rewinding to a checkpoint and replaying the history (seed 003 §2.2.4.2 asks for
+// out-of-order packets not to starve a camera). Design and equations: docs/estimator.md.
 #pragma once
 
+#include <array>
 #include <cstdint>
-#include <deque>
 #include <map>
 #include <memory>
 #include <ostream>
@@ -11,26 +15,31 @@
 #include <vector>
 
 #include "panoptes/calibration.h"
+#include "panoptes/estimator/initiator.h"
 #include "panoptes/estimator/point_ekf.h"
 #include "panoptes/records.h"
 
 namespace panoptes::estimator {
 
 struct TrackerOptions {
-  double process_noise = 50.0;         // σ² of white acceleration, m²/s³ (seed 003 A.48)
-  double measurement_noise_px = 0.5;   // σ of a centroid, px (seed 003 A.30)
-  double gate_chi2 = 18.42;            // χ²₂ at p = 0.9999: the verify region (seed 003 §2.2.3.2)
-  TimeNs init_window_ns = 30'000'000;  // unmatched blobs of other cameras this recent may pair
-  double init_reprojection_px = 3.0;   // a candidate must reproject this well in every camera used
+  double process_noise = 50.0;        // σ² of white acceleration, m²/s³ (seed 003 A.48)
+  double measurement_noise_px = 0.5;  // σ of a centroid, px (seed 003 A.30)
+  double gate_chi2 = 18.42;           // χ²₂ at p = 0.9999: the verify region (seed 003 §2.2.3.2)
+  InitiatorOptions init;              // pairing of unmatched blobs into new points
   double init_position_sigma_m = 0.01;
-  double init_velocity_sigma_mps = 2.0;
-  int confirm_cameras = 3;             // distinct cameras that must update a track to confirm it
-  TimeNs coast_after_ns = 50'000'000;  // no update for this long: coasting
+  double init_velocity_sigma_mps = 2.0;           // velocity unknown at initiation
+  double init_measured_velocity_sigma_mps = 0.5;  // velocity from the tracklets' pixel velocities
+  int confirm_cameras = 3;              // distinct cameras that confirm a track ...
+  int confirm_updates = 12;             // ... or this many updates from at least two cameras
+  int tentative_max_misses = 4;         // a tentative track absent where it should be seen: ghost
+  TimeNs coast_after_ns = 50'000'000;   // no update for this long: coasting
   TimeNs delete_after_ns = 300'000'000;
   TimeNs tentative_delete_after_ns = 100'000'000;
   double merge_distance_m = 0.005;               // two tracks closer than this are one marker
   TimeNs recent_camera_window_ns = 500'000'000;  // for TrackRecord::cameras
-  double min_depth_m = 0.05;                     // candidates closer to a camera are rejected
+  TimeNs rewind_horizon_ns = 500'000'000;        // late frames up to this much older are replayed
+  TimeNs checkpoint_interval_ns = 10'000'000;    // state snapshots for rewinding
+  double grid_cell_px = 32.0;                    // spatial index of a frame's blobs
 
   void print(std::ostream& out) const;
 };
@@ -38,68 +47,81 @@ struct TrackerOptions {
 struct TrackerStats {
   std::uint64_t frames = 0;
   std::uint64_t frames_unknown_camera = 0;  // no calibration for the camera: ignored
-  std::uint64_t frames_late = 0;            // older than the last processed frame: dropped
+  std::uint64_t frames_late = 0;            // older than the newest processed frame: replayed
+  std::uint64_t frames_too_late = 0;        // older than the rewind horizon: dropped
+  std::uint64_t replays = 0;                // rewinds
+  std::uint64_t replayed_frames = 0;        // frames applied again by rewinds
   std::uint64_t blobs = 0;
+  std::uint64_t blobs_non_finite = 0;  // NaN/inf coordinates: ignored
   std::uint64_t blobs_associated = 0;
   std::uint64_t tracks_created = 0;
   std::uint64_t tracks_confirmed = 0;
   std::uint64_t tracks_deleted = 0;
   std::uint64_t tracks_merged = 0;
+  std::uint64_t ghosts_deleted = 0;  // tentative tracks that cameras did not see
 };
 
-enum class FrameOutcome { kProcessed, kUnknownCamera, kLate };
+// What became of each camera's frames (a camera's utilisation is used / frames).
+struct CameraCounters {
+  std::uint64_t frames = 0;
+  std::uint64_t used = 0;      // applied in order or by rewind and replay
+  std::uint64_t late = 0;      // of those, by rewind and replay
+  std::uint64_t too_late = 0;  // dropped: older than the rewind horizon
+  std::uint64_t blobs = 0;
+  std::uint64_t associated = 0;  // blobs that updated a track (final, after replays)
+  TimeNs last_stamp_ns = 0;
+};
+
+// A region of one camera's image where a track's blob is expected.
+struct PredictedWindow2D {
+  std::int64_t track_id = 0;
+  double x = 0, y = 0;  // predicted centre, px
+  double half_width = 0, half_height = 0;
+};
+
+enum class FrameOutcome { kProcessed, kLateReplayed, kTooLate, kUnknownCamera };
 
 class Tracker {
  public:
   explicit Tracker(TrackerOptions options = {});
+  ~Tracker();
+  Tracker(Tracker&&) noexcept;
+  Tracker& operator=(Tracker&&) noexcept;
 
-  // Cameras without T_world_cam are ignored (their frames count as unknown).
+  // Cameras without T_world_cam are ignored (their frames count as unknown). Changing a camera
+  // clears the rewind history.
   void set_calibration(const SystemCalibration& calibration);
   void set_camera(const CameraCalibration& camera);
   bool has_camera(const std::string& camera_id) const;
 
-  // Processes one camera frame (stamps must not decrease; an older frame is counted and dropped).
+  // Processes one camera frame. Frames normally come in stamp order; an older frame within the
+  // rewind horizon is inserted into the history and the state replayed from before it.
   FrameOutcome process(const FeatureFrame& frame);
 
   // Published tracks (confirmed or coasting), predicted to `stamp_ns`.
   std::vector<TrackRecord> tracks_at(TimeNs stamp_ns) const;
-  // Published tracks at the last processed frame's stamp.
-  std::vector<TrackRecord> current_tracks() const { return tracks_at(last_stamp_ns_); }
-  TimeNs last_stamp_ns() const { return last_stamp_ns_; }
-  std::size_t live_track_count() const { return tracks_.size(); }
+  // Published tracks at the newest processed frame's stamp.
+  std::vector<TrackRecord> current_tracks() const { return tracks_at(last_stamp_ns()); }
+  TimeNs last_stamp_ns() const;
+  std::size_t live_track_count() const;
+  // Live tracks by status at `stamp_ns`: {tentative, confirmed, coasting}.
+  std::array<std::size_t, 3> track_counts(TimeNs stamp_ns) const;
 
-  const TrackerStats& stats() const { return stats_; }
-  const TrackerOptions& options() const { return options_; }
+  // Where the live tracks should appear in `camera_id`'s frame at `stamp_ns` (for the
+  // prediction-guided detector): the gate's extent plus `margin_px`.
+  std::vector<PredictedWindow2D> predicted_windows(const std::string& camera_id, TimeNs stamp_ns,
+                                                   double margin_px = 3.0) const;
+
+  const TrackerStats& stats() const;
+  const std::map<std::string, CameraCounters>& camera_counters() const { return camera_counters_; }
+  const TrackerOptions& options() const;
 
  private:
-  struct Track {
-    std::int64_t id = 0;
-    PointState state;
-    TimeNs created_ns = 0;
-    TimeNs last_update_ns = 0;
-    std::uint64_t updates = 0;
-    bool confirmed = false;
-    std::map<std::string, TimeNs> camera_last_update;  // camera id -> stamp
-  };
-  struct PendingBlob {
-    std::string camera_id;
-    TimeNs stamp_ns = 0;
-    Eigen::Vector2d pixel;
-  };
+  struct Impl;
+  CameraCounters& counters_for(const std::string& camera_id);
 
-  void associate_and_update(const FeatureFrame& frame, const CameraModel& camera, std::vector<bool>& used);
-  void initiate(const FeatureFrame& frame, const CameraModel& camera, const std::vector<bool>& used);
-  void note_update(Track& track, const std::string& camera_id, TimeNs stamp_ns);
-  void prune(TimeNs now_ns);
-  TrackRecord to_record(const Track& track, TimeNs stamp_ns) const;
-
-  TrackerOptions options_;
-  std::map<std::string, CameraModel> cameras_;
-  std::vector<Track> tracks_;
-  std::deque<PendingBlob> pending_;
-  std::int64_t next_id_ = 1;
-  TimeNs last_stamp_ns_ = 0;
-  TrackerStats stats_;
+  std::unique_ptr<Impl> impl_;
+  std::map<std::string, CameraCounters> camera_counters_;
 };
 
 }  // namespace panoptes::estimator
