@@ -1,14 +1,17 @@
 // SPDX-License-Identifier: Apache-2.0
 // estimator_node: fuses the asynchronous 2D features of every camera into 3D tracks.
-//   live:    subscribes to rt/panoptes/features and camera_info, publishes rt/panoptes/tracks
+//   live:    subscribes to rt/panoptes/features and camera_info, publishes rt/panoptes/tracks,
+//            predictions and estimator_status, and serves rt/panoptes/time_sync
 //   offline: --no-dds --in-features <files...> --out-tracks <file>   (architecture.md, Contracts)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -24,8 +27,11 @@
 #include "panoptes/config.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
+#include "panoptes/dds/time_sync.h"
+#include "panoptes/estimator/frame_screen.h"
 #include "panoptes/estimator/inbox.h"
 #include "panoptes/estimator/tracker.h"
+#include "panoptes/estimator/usage.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
 #include "panoptes/time.h"
@@ -44,11 +50,16 @@ struct Options {
   std::string out_poses;
   std::string dds_profile;
   double latency_window_ms = 20.0;
+  double rewind_horizon_ms = 500.0;
+  bool replay_arrival = false;
   double duration_s = 0.0;
   double status_period_s = 1.0;
   bool quiet = false;
+  bool predictions = true;
+  double prediction_margin_px = 3.0;
   std::size_t inbox_capacity = 4096;
   est::TrackerOptions tracker;
+  est::FrameScreenOptions screen;
 };
 
 void log(const std::string& message) {
@@ -59,13 +70,63 @@ void log(const std::string& message) {
 class UnknownCameraWarnings {
  public:
   void note(const std::string& camera_id) {
-    if (warned_.insert(camera_id).second) {
+    if (warned_.size() < 64 && warned_.insert(camera_id).second) {
       log("camera '" + camera_id + "' has no calibration (T_world_cam): its frames are counted and ignored");
     }
   }
 
  private:
   std::set<std::string> warned_;
+};
+
+// Everything between a received frame and the tracker, shared by the offline and live modes:
+// the screen for bad input, usage statistics, the tracker and its timing.
+class Intake {
+ public:
+  Intake(est::Tracker& tracker, const Options& options) : tracker_(tracker), screen_(options.screen), options_(options) {}
+
+  // Screens a frame that arrived at `frame.received_ns` (0: unknown). False: rejected, counted.
+  bool admit(panoptes::FeatureFrame& frame, TimeNs reference_ns) {
+    const double latency_ms = frame.received_ns != 0 ? panoptes::ns_to_seconds(frame.received_ns - frame.stamp_ns) * 1e3
+                                                     : std::numeric_limits<double>::quiet_NaN();  // unknown
+    monitor_.note_received(frame.camera_id, latency_ms);
+    if (screen_.screen(frame, reference_ns)) return true;
+    monitor_.note_dropped(frame.camera_id, "", 1);  // the reason is in the screen's counts
+    return false;
+  }
+
+  est::FrameOutcome process(const panoptes::FeatureFrame& frame) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto outcome = tracker_.process(frame);
+    monitor_.note_update_time(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    if (outcome == est::FrameOutcome::kUnknownCamera) warnings_.note(frame.camera_id);
+    return outcome;
+  }
+
+  est::EstimatorUsage usage(TimeNs stamp_ns, std::uint64_t inbox_drops) const {
+    auto usage = monitor_.summarize(tracker_, stamp_ns, options_.latency_window_ms);
+    for (const auto& [reason, n] : screen_.counts()) usage.counters[reason] += n;
+    if (inbox_drops) usage.counters["inbox_overflow"] += inbox_drops;
+    return usage;
+  }
+
+  void print_summary(std::uint64_t inbox_drops, std::size_t bad_lines) const {
+    const auto& s = tracker_.stats();
+    log("processed " + std::to_string(s.frames) + " frames (" + std::to_string(s.frames_late) +
+        " late and replayed, " + std::to_string(s.frames_too_late) + " too late, " +
+        std::to_string(s.frames_unknown_camera) + " from uncalibrated cameras, " +
+        std::to_string(screen_.stats().frames_rejected) + " rejected, " + std::to_string(bad_lines) +
+        " malformed lines); tracks created " + std::to_string(s.tracks_created) + ", confirmed " +
+        std::to_string(s.tracks_confirmed) + ", ghosts removed " + std::to_string(s.ghosts_deleted));
+    for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops).lines()) log(line);
+  }
+
+ private:
+  est::Tracker& tracker_;
+  est::FrameScreen screen_;
+  est::UsageMonitor monitor_;
+  UnknownCameraWarnings warnings_;
+  const Options& options_;
 };
 
 int run_offline(const Options& options, est::Tracker& tracker) {
@@ -89,36 +150,114 @@ int run_offline(const Options& options, est::Tracker& tracker) {
   std::stable_sort(frames.begin(), frames.end(), [](const auto& a, const auto& b) {
     return std::tie(a.stamp_ns, a.camera_id, a.frame) < std::tie(b.stamp_ns, b.camera_id, b.frame);
   });
+  // Offline there is no wall clock: each stamp is judged against its neighbours'.
+  const auto references = est::offline_reference_stamps(frames);
+
+  // Order of delivery: by stamp, or (--replay-arrival) by the time each frame reached the
+  // estimator, through the same time-ordered inbox as live mode, with simulated time.
+  std::vector<std::size_t> order(frames.size());
+  std::iota(order.begin(), order.end(), 0);
+  const auto received = [&](std::size_t i) { return frames[i].received_ns != 0 ? frames[i].received_ns : frames[i].stamp_ns; };
+  if (options.replay_arrival) {
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return received(a) < received(b); });
+  }
 
   std::optional<panoptes::JsonlWriter> out;
   if (!options.out_tracks.empty()) out.emplace(options.out_tracks);
-  UnknownCameraWarnings warnings;
+  Intake intake(tracker, options);
   std::size_t records = 0;
-  const std::size_t progress_every = std::max<std::size_t>(frames.size() / 10, 1);
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    if (tracker.process(frames[i]) == est::FrameOutcome::kUnknownCamera) {
-      warnings.note(frames[i].camera_id);
-      continue;
-    }
-    if (out) {
+  auto handle = [&](const panoptes::FeatureFrame& frame) {
+    // Tracks are written when the newest stamp advances; a replayed late frame refines the
+    // state that the next frame's output shows.
+    if (intake.process(frame) == est::FrameOutcome::kProcessed && out) {
       for (const auto& track : tracker.current_tracks()) {
         out->write(track);
         ++records;
       }
     }
-    if (!options.quiet && (i + 1) % progress_every == 0) {
-      std::fprintf(stderr, "\restimator_node: %3zu%% (%zu/%zu frames, %zu live tracks)",
-                   (i + 1) * 100 / frames.size(), i + 1, frames.size(), tracker.live_track_count());
+  };
+  est::FrameInbox inbox(options.inbox_capacity, panoptes::seconds_to_ns(options.latency_window_ms * 1e-3));
+  const std::size_t progress_every = std::max<std::size_t>(frames.size() / 10, 1);
+  for (std::size_t n = 0; n < order.size(); ++n) {
+    const std::size_t i = order[n];
+    panoptes::FeatureFrame& frame = frames[i];
+    if (options.replay_arrival && frame.received_ns == 0) frame.received_ns = frame.stamp_ns;
+    if (intake.admit(frame, references[i])) {
+      if (options.replay_arrival) {
+        const TimeNs now = frame.received_ns;
+        inbox.push(std::move(frame));
+        for (const auto& due : inbox.pop_due(now)) handle(due);
+      } else {
+        handle(frame);
+      }
+    }
+    if (!options.quiet && (n + 1) % progress_every == 0) {
+      std::fprintf(stderr, "\restimator_node: %3zu%% (%zu/%zu frames, %zu live tracks)", (n + 1) * 100 / frames.size(),
+                   n + 1, frames.size(), tracker.live_track_count());
     }
   }
+  for (const auto& due : inbox.drain()) handle(due);
   if (!options.quiet && !frames.empty()) std::fprintf(stderr, "\n");
-  const auto& s = tracker.stats();
-  log("processed " + std::to_string(s.frames) + " frames (" + std::to_string(s.frames_unknown_camera) +
-      " from uncalibrated cameras, " + std::to_string(s.frames_late) + " late, " + std::to_string(bad_lines) +
-      " malformed lines); tracks created " + std::to_string(s.tracks_created) + ", confirmed " +
-      std::to_string(s.tracks_confirmed) + "; wrote " + std::to_string(records) + " track records");
+  intake.print_summary(inbox.drops(), bad_lines);
+  log("wrote " + std::to_string(records) + " track records");
   return panoptes::kExitOk;
 }
+
+panoptes::msg::EstimatorStatus to_message(const est::EstimatorUsage& usage) {
+  panoptes::msg::EstimatorStatus message;
+  message.stamp_ns(usage.stamp_ns);
+  message.tracks_confirmed(static_cast<uint32_t>(usage.tracks_confirmed));
+  message.tracks_tentative(static_cast<uint32_t>(usage.tracks_tentative));
+  message.tracks_coasting(static_cast<uint32_t>(usage.tracks_coasting));
+  message.frames(usage.frames);
+  message.replays(usage.replays);
+  message.update_p50_ms(usage.update_p50_ms);
+  message.update_p99_ms(usage.update_p99_ms);
+  message.latency_window_ms(usage.latency_window_ms);
+  for (const auto& c : usage.cameras) {
+    panoptes::msg::CameraUsage m;
+    m.camera_id(c.camera_id);
+    m.frames(c.frames);
+    m.used(c.used);
+    m.late(c.late);
+    m.dropped(c.dropped);
+    m.blobs(c.blobs);
+    m.blobs_associated(c.associated);
+    m.utilisation(c.utilisation);
+    m.latency_p50_ms(c.latency_p50_ms);
+    m.latency_p99_ms(c.latency_p99_ms);
+    m.last_stamp_ns(c.last_stamp_ns);
+    message.cameras().push_back(std::move(m));
+  }
+  for (const auto& [name, value] : usage.counters) {
+    panoptes::msg::Counter counter;
+    counter.name(name);
+    counter.value(value);
+    message.counters().push_back(std::move(counter));
+  }
+  return message;
+}
+
+// Frame period of each camera, to predict where its next frame will show the tracks.
+class FramePeriods {
+ public:
+  // Returns the expected stamp of the camera's next frame.
+  TimeNs next_stamp(const std::string& camera_id, TimeNs stamp_ns) {
+    auto& p = periods_[camera_id];
+    const TimeNs gap = stamp_ns - p.last_ns;
+    if (p.last_ns != 0 && gap > 0 && gap < panoptes::kNsPerSecond)
+      p.period_ns = p.period_ns == 0 ? static_cast<double>(gap) : 0.9 * p.period_ns + 0.1 * static_cast<double>(gap);
+    p.last_ns = stamp_ns;
+    return stamp_ns + static_cast<TimeNs>(p.period_ns);
+  }
+
+ private:
+  struct Period {
+    TimeNs last_ns = 0;
+    double period_ns = 0;
+  };
+  std::map<std::string, Period> periods_;
+};
 
 int run_live(const Options& options, est::Tracker& tracker) {
   namespace msg = panoptes::msg;
@@ -128,11 +267,15 @@ int run_live(const Options& options, est::Tracker& tracker) {
   panoptes::dds::Bus bus(bus_options);
   if (!options.quiet) log("DDS profile " + bus.profile_file().string());
 
+  // The common time base is this process's clock: camera nodes synchronise to it (architecture.md "Time").
+  panoptes::dds::TimeSyncServer time_service(bus);
+
   est::FrameInbox inbox(options.inbox_capacity, panoptes::seconds_to_ns(options.latency_window_ms * 1e-3));
   std::mutex info_mutex;
   std::vector<panoptes::CameraCalibration> announced;  // from CameraInfo, applied on the estimator thread
-  std::mutex frames_mutex;
-  std::map<std::string, std::uint64_t> frames_per_camera;
+  // DDS listener threads screen and count frames; the estimator thread owns the tracker.
+  std::mutex intake_mutex;
+  Intake intake(tracker, options);
 
   auto info_reader = bus.make_reader<msg::CameraInfo>([&](msg::CameraInfo&& info) {
     if (auto calibration = panoptes::dds::calibration_from(info); calibration && calibration->T_world_cam) {
@@ -142,32 +285,49 @@ int run_live(const Options& options, est::Tracker& tracker) {
   });
   auto feature_reader = bus.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&& message) {
     auto frame = panoptes::dds::from_message(message);
-    frame.arrival_ns = panoptes::wall_now_ns();
+    frame.received_ns = panoptes::wall_now_ns();
+    bool admitted = false;
     {
-      std::lock_guard<std::mutex> lock(frames_mutex);
-      ++frames_per_camera[frame.camera_id];
+      std::lock_guard<std::mutex> lock(intake_mutex);
+      admitted = intake.admit(frame, frame.received_ns);
     }
-    inbox.push(std::move(frame));
+    if (admitted) inbox.push(std::move(frame));
   });
   auto track_writer = bus.make_writer<msg::TrackFrame>();
+  auto prediction_writer = bus.make_writer<msg::Predictions>();
+  auto status_writer = bus.make_writer<msg::EstimatorStatus>();
 
   std::optional<panoptes::JsonlWriter> out;
   if (!options.out_tracks.empty()) out.emplace(options.out_tracks);
-  UnknownCameraWarnings warnings;
   std::set<std::string> from_file;
   if (!options.calibration_file.empty()) {
     for (const auto& camera : panoptes::load_calibration(options.calibration_file).cameras)
       from_file.insert(camera.id);
   }
 
-  const TimeNs start = panoptes::wall_now_ns();
-  TimeNs next_status = start + panoptes::seconds_to_ns(options.status_period_s);
-  std::map<std::string, std::uint64_t> last_counts;
+  FramePeriods periods;
+  auto publish_predictions = [&](const panoptes::FeatureFrame& frame) {
+    const TimeNs next = periods.next_stamp(frame.camera_id, frame.stamp_ns);
+    if (!options.predictions || next == frame.stamp_ns) return;
+    msg::Predictions message;
+    message.camera_id(frame.camera_id);
+    message.stamp_ns(next);
+    for (const auto& w : tracker.predicted_windows(frame.camera_id, next, options.prediction_margin_px)) {
+      msg::PredictedWindow window;
+      window.track_id(w.track_id);
+      window.x(static_cast<float>(w.x));
+      window.y(static_cast<float>(w.y));
+      window.half_width(static_cast<float>(w.half_width));
+      window.half_height(static_cast<float>(w.half_height));
+      message.windows().push_back(window);
+    }
+    prediction_writer->write(message);
+  };
   auto handle = [&](const panoptes::FeatureFrame& frame) {
-    const auto outcome = tracker.process(frame);
-    if (outcome == est::FrameOutcome::kUnknownCamera) {
-      warnings.note(frame.camera_id);
-      return;
+    est::FrameOutcome outcome;
+    {
+      std::lock_guard<std::mutex> lock(intake_mutex);
+      outcome = intake.process(frame);
     }
     if (outcome != est::FrameOutcome::kProcessed) return;
     const auto tracks = tracker.current_tracks();
@@ -181,8 +341,11 @@ int run_live(const Options& options, est::Tracker& tracker) {
     if (out) {
       for (const auto& track : tracks) out->write(track);
     }
+    publish_predictions(frame);
   };
 
+  const TimeNs start = panoptes::wall_now_ns();
+  TimeNs next_status = start + panoptes::seconds_to_ns(options.status_period_s);
   while (!panoptes::stop_requested()) {
     {
       std::lock_guard<std::mutex> lock(info_mutex);
@@ -199,20 +362,22 @@ int run_live(const Options& options, est::Tracker& tracker) {
     for (const auto& frame : inbox.pop_due(now)) handle(frame);
     if (now >= next_status) {
       next_status += panoptes::seconds_to_ns(options.status_period_s);
+      est::EstimatorUsage usage;
+      {
+        std::lock_guard<std::mutex> lock(intake_mutex);
+        usage = intake.usage(now, inbox.drops());
+      }
+      status_writer->write(to_message(usage));
       if (!options.quiet) {
-        std::string line =
-            "t=" + std::to_string(static_cast<int>(panoptes::ns_to_seconds(now - start))) + "s fps:";
-        std::lock_guard<std::mutex> lock(frames_mutex);
-        for (const auto& [camera, count] : frames_per_camera) {
-          char buffer[64];
-          std::snprintf(buffer, sizeof buffer, " %s %.0f", camera.c_str(),
-                        static_cast<double>(count - last_counts[camera]) / options.status_period_s);
+        std::string line = "t=" + std::to_string(static_cast<int>(panoptes::ns_to_seconds(now - start))) + "s";
+        for (const auto& c : usage.cameras) {
+          char buffer[96];
+          std::snprintf(buffer, sizeof buffer, " %s %.0f%%", c.camera_id.c_str(), 100.0 * c.utilisation);
           line += buffer;
-          last_counts[camera] = count;
         }
-        const auto& s = tracker.stats();
-        line += " | tracks " + std::to_string(tracker.current_tracks().size()) + " | late " +
-                std::to_string(s.frames_late) + " | inbox drops " + std::to_string(inbox.drops());
+        line += " | tracks " + std::to_string(usage.tracks_confirmed) + "+" + std::to_string(usage.tracks_coasting) +
+                " coasting | replays " + std::to_string(usage.replays) + " | time sync answered " +
+                std::to_string(time_service.answered());
         log(line);
       }
     }
@@ -220,11 +385,8 @@ int run_live(const Options& options, est::Tracker& tracker) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   for (const auto& frame : inbox.drain()) handle(frame);
-  const auto& s = tracker.stats();
-  log("stopped: " + std::to_string(s.frames) + " frames, " + std::to_string(s.frames_late) + " late, " +
-      std::to_string(s.frames_unknown_camera) + " from uncalibrated cameras, inbox drops " +
-      std::to_string(inbox.drops()) + ", tracks created " + std::to_string(s.tracks_created) +
-      ", confirmed " + std::to_string(s.tracks_confirmed));
+  std::lock_guard<std::mutex> lock(intake_mutex);
+  intake.print_summary(inbox.drops(), 0);
   return panoptes::kExitOk;
 }
 
@@ -247,6 +409,16 @@ int main(int argc, char** argv) {
   app.add_option("--latency-window-ms", options.latency_window_ms,
                  "live: how long frames wait to be ordered by stamp")
       ->check(CLI::Range(0.0, 10000.0));
+  app.add_flag("--replay-arrival", options.replay_arrival,
+               "offline: deliver frames in the order they reached the estimator (received_ns), through the "
+               "latency window, as live mode would");
+  app.add_flag("!--no-predictions", options.predictions, "live: do not publish predicted windows");
+  app.add_option("--prediction-margin-px", options.prediction_margin_px,
+                 "live: pixels added around each predicted gate")
+      ->check(CLI::Range(0.0, 1000.0));
+  app.add_option("--rewind-horizon-ms", options.rewind_horizon_ms,
+                 "late frames up to this much older than the newest are replayed, older ones dropped")
+      ->check(CLI::Range(0.0, 60000.0));
   app.add_option("--duration", options.duration_s, "live: stop after this many seconds (0 = until Ctrl-C)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--status-period", options.status_period_s, "live: seconds between progress lines")
@@ -277,6 +449,7 @@ int main(int argc, char** argv) {
   }
 
   panoptes::install_stop_handlers();
+  options.tracker.rewind_horizon_ns = panoptes::seconds_to_ns(options.rewind_horizon_ms * 1e-3);
   est::Tracker tracker(options.tracker);
   try {
     if (!options.calibration_file.empty()) {

@@ -100,8 +100,14 @@ struct Tracker::Impl {
   }
 
   void maybe_checkpoint(TimeNs stamp_ns, std::size_t absolute_index) {
-    if (checkpoints.empty() || stamp_ns - checkpoints.back().stamp_ns >= options.checkpoint_interval_ns)
+    if (checkpoints.empty()) {
+      // The empty initial state comes before any frame, however old.
+      const bool pristine = core.tracks.empty() && core.last_stamp_ns == std::numeric_limits<TimeNs>::min();
+      checkpoints.push_back({pristine ? std::numeric_limits<TimeNs>::min() : stamp_ns, absolute_index, core});
+    } else if (const TimeNs last = checkpoints.back().stamp_ns;
+               last == std::numeric_limits<TimeNs>::min() || stamp_ns - last >= options.checkpoint_interval_ns) {
       checkpoints.push_back({stamp_ns, absolute_index, core});
+    }
   }
 
   void trim() {
@@ -460,6 +466,14 @@ FrameOutcome Tracker::process(const FeatureFrame& frame) {
     return FrameOutcome::kUnknownCamera;
   }
   const int camera = found->second;
+  // Stamps this far from 1970 would overflow the time arithmetic (the node's screen rejects far
+  // smaller errors); such a frame is counted as too late.
+  constexpr TimeNs kStampLimit = TimeNs{1} << 62;
+  if (frame.stamp_ns <= 0 || frame.stamp_ns > kStampLimit) {
+    ++stats.frames_too_late;
+    ++counters.too_late;
+    return FrameOutcome::kTooLate;
+  }
   stats.blobs += frame.blobs.size();
   counters.blobs += frame.blobs.size();
   for (const auto& blob : frame.blobs) {

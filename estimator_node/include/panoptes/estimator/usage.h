@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: Apache-2.0
+// What the estimator did with each camera's frames: received, used (in order or replayed), late,
+// dropped by reason, latency from stamp to arrival, and the tracker's time per frame. The node
+// publishes it as rt/panoptes/estimator_status and prints it at exit. No DDS here.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "panoptes/time.h"
+
+namespace panoptes::estimator {
+
+class Tracker;
+
+// Quantiles of positive durations in log-spaced bins (0.1 µs to 1000 s, 2% wide): constant memory.
+class DurationHistogram {
+ public:
+  void add(double milliseconds);
+  double quantile_ms(double q) const;  // 0 when empty
+  std::uint64_t count() const { return count_; }
+
+ private:
+  static constexpr int kBins = 1200;
+  std::array<std::uint64_t, kBins> bins_{};
+  std::uint64_t count_ = 0;
+};
+
+struct CameraUsage {
+  std::string camera_id;
+  std::uint64_t frames = 0;  // received by the estimator
+  std::uint64_t used = 0;
+  std::uint64_t late = 0;
+  std::uint64_t dropped = 0;  // screened out, too late, uncalibrated or lost in the inbox
+  std::uint64_t blobs = 0;
+  std::uint64_t associated = 0;
+  double utilisation = 0;  // used / frames
+  double latency_p50_ms = 0;
+  double latency_p99_ms = 0;
+  TimeNs last_stamp_ns = 0;
+};
+
+struct EstimatorUsage {
+  TimeNs stamp_ns = 0;
+  std::size_t tracks_tentative = 0, tracks_confirmed = 0, tracks_coasting = 0;
+  std::uint64_t frames = 0;
+  std::uint64_t replays = 0;
+  double update_p50_ms = 0, update_p99_ms = 0;
+  double latency_window_ms = 0;
+  std::vector<CameraUsage> cameras;
+  std::map<std::string, std::uint64_t> counters;  // dropped frames and blobs by reason
+
+  // One line per camera: "camera <id>: frames N used N late N dropped N utilisation U latency
+  // p50 X ms p99 Y ms" (tests parse it), then one with the drop reasons.
+  std::vector<std::string> lines() const;
+};
+
+class UsageMonitor {
+ public:
+  // A frame reached the estimator `latency_ms` after its stamp (negative: clocks disagree; NaN:
+  // unknown, not part of the latency statistics).
+  void note_received(const std::string& camera_id, double latency_ms);
+  // A frame or blob did not reach the tracker (screen, inbox overflow), by reason.
+  void note_dropped(const std::string& camera_id, const std::string& reason, std::uint64_t frames = 1);
+  void note_reason(const std::string& reason, std::uint64_t n);
+  void note_update_time(double milliseconds) { update_.add(milliseconds); }
+
+  EstimatorUsage summarize(const Tracker& tracker, TimeNs stamp_ns, double latency_window_ms) const;
+
+ private:
+  struct PerCamera {
+    std::uint64_t received = 0;
+    std::uint64_t dropped_before_tracker = 0;
+    DurationHistogram latency;
+  };
+  PerCamera& camera(const std::string& camera_id);
+  std::map<std::string, PerCamera> cameras_;
+  std::map<std::string, std::uint64_t> reasons_;
+  DurationHistogram update_;
+};
+
+}  // namespace panoptes::estimator
