@@ -21,6 +21,19 @@ cat "$work/demo.out"
 [ "$rc" -eq 0 ] && pass "demo over DDS met its accuracy targets" || { fail "demo exit $rc"; tail -20 "$work"/logs/*.log; }
 grep -q '"targets_met": true' "$work/summary.json" && pass "summary JSON written" || fail "summary JSON missing or failing"
 
+# The estimator publishes predicted windows; every camera used them for guided search.
+for log in "$work"/logs/camera_node_*.log "$work"/logs/cam*.log; do
+  [ -f "$log" ] || continue
+  guided=$(grep -o '[0-9]* with prediction-guided search' "$log" | awk '{print $1}' | tail -1)
+  [ "${guided:-0}" -gt 0 ] && pass "$(basename "$log"): $guided frames searched with the estimator's predictions" ||
+    fail "$(basename "$log"): no prediction-guided frames"
+done
+# No camera starved: the estimator used >= 95% of every camera's frames.
+usage=$(grep -h 'estimator_node: camera .*utilisation' "$work"/logs/*.log || true)
+[ -n "$usage" ] && echo "$usage" || fail "the estimator printed no per-camera usage"
+echo "$usage" | awk '{for (i = 1; i < NF; ++i) if ($i == "utilisation") u = $(i + 1); if (u < 0.95) bad = 1}
+  END {exit bad}' && pass "every camera's utilisation >= 0.95" || fail "a camera's utilisation is below 0.95"
+
 if [ -s "$work/sockets.txt" ]; then
   nonlocal=$(awk '{print $4}' "$work/sockets.txt" | grep -v -E '^(127\.[0-9.]+|\[::ffff:127\.[0-9.]+\]):[0-9]+$' || true)
   [ -z "$nonlocal" ] && pass "every DDS socket is bound to loopback ($(wc -l <"$work/sockets.txt") sockets)" || fail "sockets not on loopback: $nonlocal"
