@@ -184,9 +184,14 @@ std::string to_json_line(const FeatureFrame& frame) {
                      {"m02", blob.m02},
                      {"bbox", {blob.x0, blob.y0, blob.x1, blob.y1}}});
   }
-  Json json = {{"camera_id", frame.camera_id},         {"frame", frame.frame},
-               {"stamp_ns", frame.stamp_ns},           {"arrival_ns", frame.arrival_ns},
-               {"processing_ns", frame.processing_ns}, {"blobs", std::move(blobs)}};
+  Json json = {{"camera_id", frame.camera_id},
+               {"frame", frame.frame},
+               {"stamp_ns", frame.stamp_ns},
+               {"arrival_ns", frame.arrival_ns},
+               {"processing_ns", frame.processing_ns}};
+  // Optional, so files without delivery timing stay exactly as they were.
+  if (frame.received_ns != 0) json["received_ns"] = frame.received_ns;
+  json["blobs"] = std::move(blobs);
   return dump(json);
 }
 
@@ -218,6 +223,7 @@ Parsed<FeatureFrame> parse_feature_frame(std::string_view line) {
     frame.stamp_ns = get_int64(json, "stamp_ns", "", true);
     frame.arrival_ns = get_int64(json, "arrival_ns", "", false);
     frame.processing_ns = get_int64(json, "processing_ns", "", false);
+    frame.received_ns = get_int64(json, "received_ns", "", false);
     const Json* blobs = find_field(json, "blobs", "blobs", true);
     if (!blobs->is_array()) throw FieldError{"blobs: expected a list"};
     frame.blobs.reserve(blobs->size());

@@ -129,16 +129,32 @@ int run_features(const Options& options) {
     JsonlWriter writer = fresh_jsonl(path);
     std::int64_t frames = 0;
     std::size_t blobs = 0;
+    std::size_t markers = 0;
+    std::size_t false_blobs = 0;
+    std::size_t late = 0;
+    const TimeNs on_time_delay = config.exposure_ns / 2 + config.latency_ns;
     for (std::int64_t k = first_frame(camera); camera.frame_time_ns(k) < duration_ns; ++k) {
       FeatureFrame frame = camera.features(k);
       frame.stamp_ns += options.epoch_ns;
+      frame.received_ns += options.epoch_ns;
       blobs += frame.blobs.size();
+      markers += camera.visible_markers(k).size();
+      false_blobs += static_cast<std::size_t>(camera.false_blob_count(k));
+      if (frame.received_ns - options.epoch_ns > camera.frame_time_ns(k) + on_time_delay) ++late;
       writer.write(frame);
       ++frames;
     }
     writer.flush();
-    std::cout << config.calibration.id << ": " << frames << " frames, " << blobs << " blobs -> "
-              << path.string() << std::endl;
+    // Spots merged away: every marker spot and false blob is one blob unless it merged.
+    const std::size_t merged = markers + false_blobs - blobs;
+    const double per_frame = frames > 0 ? 1.0 / static_cast<double>(frames) : 0.0;
+    char stats[160];
+    std::snprintf(stats, sizeof stats,
+                  " (per frame: %.2f markers, %.2f false blobs, %.3f spots merged away; %zu late frames)",
+                  static_cast<double>(markers) * per_frame, static_cast<double>(false_blobs) * per_frame,
+                  static_cast<double>(merged) * per_frame, late);
+    std::cout << config.calibration.id << ": " << frames << " frames, " << blobs << " blobs" << stats
+              << " -> " << path.string() << std::endl;
   }
 
   const fs::path truth_path = dir / "truth.jsonl";
@@ -172,6 +188,7 @@ int run_render(const Options& options) {
     write_pgm(image, dir / name);
     FeatureFrame frame = camera.features(k);
     frame.stamp_ns += options.epoch_ns;
+    frame.received_ns += options.epoch_ns;
     truth.write(frame);
   }
   truth.flush();

@@ -33,12 +33,24 @@ struct SimCameraConfig {
   double blob_min_sigma_px = 1.0;    // spots never render smaller than this
   double dropout_probability = 0.0;  // each marker missing from a frame at random
   int bits = 8;                      // 8, 10, 12 or 16
+  double false_blobs = 0.0;          // mean number of spurious blobs per frame (Poisson)
+  double merge_distance_px = 0.0;    // spots with centres closer than this form one blob; 0: off
+  // Delivery to the estimator: end of exposure + latency, plus a late delay for late_fraction of
+  // the frames (FeatureFrame::received_ns).
+  TimeNs latency_ns = 2'000'000;
+  double late_fraction = 0.0;
+  TimeNs late_delay_min_ns = 5'000'000;
+  TimeNs late_delay_max_ns = 30'000'000;
 };
 
 struct MarkerTruth {
   std::string name;
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   bool valid = true;  // false where the source (e.g. a TRC gap) has no data
+  // Self-occlusion (trc.occlusion): the marker is hidden from a camera whose direction, seen from
+  // the marker, is more than facing_angle_rad away from `normal`. A zero normal: seen from anywhere.
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  double facing_angle_rad = 0.0;
 };
 
 struct BodyTruth {
@@ -112,8 +124,18 @@ class CameraSimulator {
   // Deterministic for (scene seed, camera, k).
   Image render(std::int64_t k) const;
   // Frame k as ideal features (no rendering): projected centres plus centroid noise, markers
-  // outside the image or dropped omitted. stamp_ns = frame_stamp_ns(k) (relative to the epoch).
+  // outside the image, hidden or dropped omitted, false blobs added, spots closer than
+  // merge_distance merged. stamp_ns = frame_stamp_ns(k) and received_ns = frame_received_ns(k)
+  // (both relative to the epoch).
   FeatureFrame features(std::int64_t k) const;
+  // Indices into Scene::marker_names() of the markers whose spot frame k shows (before merging;
+  // the same decision features() and render() make), ascending.
+  std::vector<int> visible_markers(std::int64_t k) const;
+  // Number of false blobs (false_blobs) frame k shows, before merging.
+  int false_blob_count(std::int64_t k) const;
+  // True scene time at which frame k reaches the estimator: end of exposure + latency, plus a
+  // random late delay for a late_fraction of the frames. Deterministic for (seed, camera, k).
+  TimeNs frame_received_ns(std::int64_t k) const;
 
  private:
   const Scene* scene_;

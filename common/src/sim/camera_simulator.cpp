@@ -16,6 +16,8 @@ namespace {
 // marker's jitter and dropout unchanged.
 constexpr std::uint64_t kMarkerStream = 1;
 constexpr std::uint64_t kPixelNoiseStream = 2;
+constexpr std::uint64_t kFalseBlobStream = 3;
+constexpr std::uint64_t kDeliveryStream = 4;
 
 // Spots are truncated where the Gaussian has fallen below 3.4e-4 of its peak.
 constexpr double kSpotHalfWidthSigmas = 4.0;
@@ -47,24 +49,33 @@ struct Spot {
   Eigen::Vector2d centre;  // pixels, jitter included
   double sigma_px = 1.0;
   double flux = 0.0;  // DN summed over the spot, background excluded
+  int marker = -1;    // index into Scene::marker_names(); -1 for a false blob
 };
 
-// The one place that decides which markers a frame shows and where: features() reports and
-// render() draws exactly these.
-std::vector<Spot> visible_spots(const Scene& scene, const SimCameraConfig& config, std::size_t camera_index,
-                                std::int64_t k, TimeNs scene_time_ns) {
-  const std::uint64_t frame_key =
-      sim::hash_key(scene.seed(), static_cast<std::uint64_t>(camera_index), static_cast<std::uint64_t>(k));
-  const std::uint64_t marker_key = sim::hash_key(frame_key, kMarkerStream);
+std::uint64_t frame_key(const Scene& scene, std::size_t camera_index, std::int64_t k) {
+  return sim::hash_key(scene.seed(), static_cast<std::uint64_t>(camera_index), static_cast<std::uint64_t>(k));
+}
+
+// Constant surface brightness, as for a resolved retro-reflector: every spot has the same peak
+// density, so larger (closer) spots carry more flux. The density is set so that a minimum-size
+// spot centred on a pixel lights that pixel blob_peak above the background.
+double peak_density(const SimCameraConfig& config) {
+  const double centre_fraction = std::erf(0.5 / (std::numbers::sqrt2 * config.blob_min_sigma_px));
+  return config.blob_peak_dn / (2.0 * std::numbers::pi * config.blob_min_sigma_px * config.blob_min_sigma_px *
+                                centre_fraction * centre_fraction);
+}
+
+// The one place that decides which markers a frame shows and where: features() reports,
+// visible_markers() lists and render() draws exactly these (features() after merging).
+std::vector<Spot> marker_spots(const Scene& scene, const SimCameraConfig& config, std::size_t camera_index,
+                               std::int64_t k, TimeNs scene_time_ns) {
+  const std::uint64_t marker_key = sim::hash_key(frame_key(scene, camera_index, k), kMarkerStream);
   const CameraModel model = config.calibration.model();
   const CameraIntrinsics& intrinsics = model.intrinsics();
   const double focal = 0.5 * (intrinsics.fx + intrinsics.fy);
+  const Eigen::Vector3d camera_centre = config.calibration.T_world_cam->t;
   const std::vector<MarkerTruth> markers = scene.markers_at(scene_time_ns);
-
-  const double centre_fraction = std::erf(0.5 / (std::numbers::sqrt2 * config.blob_min_sigma_px));
-  const double peak_density =
-      config.blob_peak_dn / (2.0 * std::numbers::pi * config.blob_min_sigma_px * config.blob_min_sigma_px *
-                             centre_fraction * centre_fraction);
+  const double density = peak_density(config);
 
   std::vector<Spot> spots;
   for (std::size_t i = 0; i < markers.size(); ++i) {
@@ -77,6 +88,11 @@ std::vector<Spot> visible_spots(const Scene& scene, const SimCameraConfig& confi
     const Eigen::Vector3d p_cam = model.T_cam_world().apply(markers[i].p);
     if (!(p_cam.z() > 0.0)) continue;
     if (p_cam.head<2>().norm() > kMaxNormalizedRadius * p_cam.z()) continue;
+    if (!markers[i].normal.isZero()) {
+      // Hidden by the body when the camera lies more than facing_angle away from the normal.
+      const Eigen::Vector3d to_camera = (camera_centre - markers[i].p).normalized();
+      if (markers[i].normal.dot(to_camera) < std::cos(markers[i].facing_angle_rad)) continue;
+    }
     const auto pixel = model.project_camera_point(p_cam);
     if (!pixel) continue;
     if (dropout_draw < config.dropout_probability) continue;
@@ -86,13 +102,94 @@ std::vector<Spot> visible_spots(const Scene& scene, const SimCameraConfig& confi
     // A sphere of radius r at depth z images to a disc of radius f r / z; a Gaussian with half
     // that sigma puts its 2-sigma contour on the disc's edge.
     spot.sigma_px = std::max(config.blob_min_sigma_px, 0.5 * focal * scene.marker_radius(i) / p_cam.z());
-    // Constant surface brightness, as for a resolved retro-reflector: every spot has the same
-    // peak density, so larger (closer) spots carry more flux. The density is set so that a
-    // minimum-size spot centred on a pixel lights that pixel blob_peak above the background.
-    spot.flux = peak_density * 2.0 * std::numbers::pi * spot.sigma_px * spot.sigma_px;
+    spot.flux = density * 2.0 * std::numbers::pi * spot.sigma_px * spot.sigma_px;
+    spot.marker = static_cast<int>(i);
     spots.push_back(spot);
   }
   return spots;
+}
+
+// Spurious blobs (reflections, lamps): a Poisson number per frame, each a minimum-size spot
+// uniform over the image. The count comes from its own stream and every blob's position from
+// another, so a frame's false blobs never depend on its markers.
+std::vector<Spot> false_spots(const Scene& scene, const SimCameraConfig& config, std::size_t camera_index,
+                              std::int64_t k) {
+  std::vector<Spot> spots;
+  if (!(config.false_blobs > 0.0)) return spots;
+  const std::uint64_t false_key = sim::hash_key(frame_key(scene, camera_index, k), kFalseBlobStream);
+  // Poisson: the number of unit-rate exponential gaps that fit in the mean.
+  sim::Rng count_rng(false_key);
+  std::size_t count = 0;
+  for (double elapsed = -std::log(1.0 - count_rng.uniform()); elapsed <= config.false_blobs;
+       elapsed -= std::log(1.0 - count_rng.uniform())) {
+    ++count;
+  }
+  const double width = config.calibration.intrinsics.width;
+  const double height = config.calibration.intrinsics.height;
+  const double sigma = config.blob_min_sigma_px;
+  const double flux = peak_density(config) * 2.0 * std::numbers::pi * sigma * sigma;
+  for (std::size_t j = 0; j < count; ++j) {
+    sim::Rng rng(sim::hash_key(false_key, static_cast<std::uint64_t>(j)));
+    Spot spot;
+    spot.centre.x() = -0.5 + width * rng.uniform();
+    spot.centre.y() = -0.5 + height * rng.uniform();
+    spot.sigma_px = sigma;
+    spot.flux = flux;
+    spots.push_back(spot);
+  }
+  return spots;
+}
+
+// Marker spots (in marker order) followed by false blobs: everything frame k shows.
+std::vector<Spot> all_spots(const Scene& scene, const SimCameraConfig& config, std::size_t camera_index,
+                            std::int64_t k, TimeNs scene_time_ns) {
+  std::vector<Spot> spots = marker_spots(scene, config, camera_index, k, scene_time_ns);
+  std::vector<Spot> extra = false_spots(scene, config, camera_index, k);
+  spots.insert(spots.end(), extra.begin(), extra.end());
+  return spots;
+}
+
+// Groups of spots whose centres are chained by distances below merge_distance (their images
+// overlap into one connected blob), each group in ascending spot order, groups ordered by their
+// first spot. Without merging every spot is its own group.
+std::vector<std::vector<std::size_t>> merge_groups(const std::vector<Spot>& spots, double merge_distance) {
+  std::vector<std::size_t> parent(spots.size());
+  for (std::size_t i = 0; i < spots.size(); ++i) parent[i] = i;
+  const auto root = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  if (merge_distance > 0.0) {
+    // Sweep in x so only spots within merge_distance in x are compared.
+    std::vector<std::size_t> by_x(spots.size());
+    for (std::size_t i = 0; i < spots.size(); ++i) by_x[i] = i;
+    std::sort(by_x.begin(), by_x.end(),
+              [&](std::size_t a, std::size_t b) { return spots[a].centre.x() < spots[b].centre.x(); });
+    for (std::size_t a = 0; a < by_x.size(); ++a) {
+      for (std::size_t b = a + 1; b < by_x.size(); ++b) {
+        const Spot& first = spots[by_x[a]];
+        const Spot& second = spots[by_x[b]];
+        if (second.centre.x() - first.centre.x() >= merge_distance) break;
+        if ((second.centre - first.centre).norm() >= merge_distance) continue;
+        const std::size_t ra = root(by_x[a]);
+        const std::size_t rb = root(by_x[b]);
+        // The smaller index becomes the root, so a group's root is its first spot.
+        if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+      }
+    }
+  }
+  std::vector<std::vector<std::size_t>> groups;
+  std::vector<std::size_t> group_of(spots.size(), 0);
+  for (std::size_t i = 0; i < spots.size(); ++i) {
+    const std::size_t r = root(i);
+    if (r == i) {
+      group_of[i] = groups.size();
+      groups.push_back({i});
+    } else {
+      groups[group_of[r]].push_back(i);
+    }
+  }
+  return groups;
 }
 
 // Fraction of a unit Gaussian (centre c, std sigma) falling on each pixel first..last of one axis;
@@ -145,13 +242,92 @@ TimeNs CameraSimulator::frame_stamp_ns(std::int64_t k) const {
   return frame_time_ns(k) + config_->clock_offset_ns;
 }
 
+TimeNs CameraSimulator::frame_received_ns(std::int64_t k) const {
+  sim::Rng rng(sim::hash_key(frame_key(*scene_, camera_index_, k), kDeliveryStream));
+  // Both drawn always, so the late decision and the delay never shift other draws.
+  const double late_draw = rng.uniform();
+  const double delay_draw = rng.uniform();
+  TimeNs received = frame_time_ns(k) + config_->exposure_ns / 2 + config_->latency_ns;
+  if (late_draw < config_->late_fraction) {
+    const auto range = static_cast<double>(config_->late_delay_max_ns - config_->late_delay_min_ns);
+    received += config_->late_delay_min_ns + static_cast<TimeNs>(std::llround(delay_draw * range));
+  }
+  return received;
+}
+
+std::vector<int> CameraSimulator::visible_markers(std::int64_t k) const {
+  std::vector<int> markers;
+  for (const Spot& spot : marker_spots(*scene_, *config_, camera_index_, k, frame_time_ns(k))) {
+    markers.push_back(spot.marker);
+  }
+  return markers;
+}
+
+int CameraSimulator::false_blob_count(std::int64_t k) const {
+  return static_cast<int>(false_spots(*scene_, *config_, camera_index_, k).size());
+}
+
+namespace {
+
+// Value of the pixel nearest `at` without sensor noise, from the spots listed.
+double noiseless_pixel(const std::vector<Spot>& spots, const std::vector<std::size_t>& members,
+                       const Eigen::Vector2d& at) {
+  const int column = static_cast<int>(std::lround(at.x()));
+  const int row = static_cast<int>(std::lround(at.y()));
+  double value = 0.0;
+  for (std::size_t i : members) {
+    const Spot& spot = spots[i];
+    value += spot.flux * pixel_fractions(spot.centre.x(), spot.sigma_px, column, column)[0] *
+             pixel_fractions(spot.centre.y(), spot.sigma_px, row, row)[0];
+  }
+  return value;
+}
+
+// One blob from several overlapping spots: fluxes and areas add, the centre is flux-weighted, and
+// the second moments are those of the combined intensity (each spot's own plus its offset from
+// the common centre). The peak is the brightest of the pixels at the centre and at each spot.
+Blob merged_blob(const std::vector<Spot>& spots, const std::vector<std::size_t>& members, double background,
+                 double max_value) {
+  Blob blob;
+  Eigen::Vector2d weighted = Eigen::Vector2d::Zero();
+  for (std::size_t i : members) {
+    blob.sum += spots[i].flux;
+    blob.area += 4.0 * std::numbers::pi * spots[i].sigma_px * spots[i].sigma_px;
+    weighted += spots[i].flux * spots[i].centre;
+  }
+  const Eigen::Vector2d centre = weighted / blob.sum;
+  blob.x = centre.x();
+  blob.y = centre.y();
+  double brightest = noiseless_pixel(spots, members, centre);
+  for (std::size_t i : members) {
+    const Eigen::Vector2d offset = spots[i].centre - centre;
+    const double own = spots[i].sigma_px * spots[i].sigma_px + 1.0 / 12.0;
+    const double weight = spots[i].flux / blob.sum;
+    blob.m20 += weight * (own + offset.x() * offset.x());
+    blob.m02 += weight * (own + offset.y() * offset.y());
+    blob.m11 += weight * offset.x() * offset.y();
+    brightest = std::max(brightest, noiseless_pixel(spots, members, spots[i].centre));
+  }
+  blob.peak = static_cast<int>(std::lround(std::clamp(background + brightest, 0.0, max_value)));
+  return blob;
+}
+
+}  // namespace
+
 FeatureFrame CameraSimulator::features(std::int64_t k) const {
   FeatureFrame frame;
   frame.camera_id = config_->calibration.id;
   frame.frame = k;
   frame.stamp_ns = frame_stamp_ns(k);
+  frame.received_ns = frame_received_ns(k);
   const double max_value = static_cast<double>((1 << config_->bits) - 1);
-  for (const Spot& spot : visible_spots(*scene_, *config_, camera_index_, k, frame_time_ns(k))) {
+  const std::vector<Spot> spots = all_spots(*scene_, *config_, camera_index_, k, frame_time_ns(k));
+  for (const std::vector<std::size_t>& group : merge_groups(spots, config_->merge_distance_px)) {
+    if (group.size() > 1) {
+      frame.blobs.push_back(merged_blob(spots, group, config_->background_dn, max_value));
+      continue;
+    }
+    const Spot& spot = spots[group.front()];
     Blob blob;
     blob.x = spot.centre.x();
     blob.y = spot.centre.y();
@@ -179,7 +355,7 @@ Image CameraSimulator::render(std::int64_t k) const {
   Image image(width, height, config.bits);
 
   std::vector<Footprint> footprints;
-  for (const Spot& spot : visible_spots(*scene_, config, camera_index_, k, frame_time_ns(k))) {
+  for (const Spot& spot : all_spots(*scene_, config, camera_index_, k, frame_time_ns(k))) {
     const int half = static_cast<int>(std::ceil(kSpotHalfWidthSigmas * spot.sigma_px));
     const int cx = static_cast<int>(std::lround(spot.centre.x()));
     const int cy = static_cast<int>(std::lround(spot.centre.y()));
@@ -195,9 +371,7 @@ Image CameraSimulator::render(std::int64_t k) const {
     footprints.push_back(std::move(footprint));
   }
 
-  const std::uint64_t noise_key = sim::hash_key(
-      sim::hash_key(scene_->seed(), static_cast<std::uint64_t>(camera_index_), static_cast<std::uint64_t>(k)),
-      kPixelNoiseStream);
+  const std::uint64_t noise_key = sim::hash_key(frame_key(*scene_, camera_index_, k), kPixelNoiseStream);
   const float* normal = sim::normal_quantile_table();
   const auto background = static_cast<float>(config.background_dn);
   const auto noise = static_cast<float>(config.pixel_noise_dn);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <numbers>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -35,6 +36,8 @@ struct TrcSource {
   double start_s = 0.0;
   double turnaround_s = 0.0;
   double radius = kDefaultMarkerRadius;
+  // Self-occlusion by the body (trc.occlusion); 0: off.
+  double facing_angle_rad = 0.0;
 };
 
 struct MarkerSpec {
@@ -88,7 +91,7 @@ class CameraKeys {
 #define PANOPTES_SIM_CAMERA_KEYS                                                                           \
   "width", "height", "K", "distortion", "T_world_cam", "look_at", "rate", "phase", "clock_offset",         \
       "exposure", "pixel_noise", "centroid_noise", "background", "blob_peak", "blob_min_sigma", "dropout", \
-      "bits"
+      "bits", "false_blobs", "merge_distance", "latency", "late_fraction", "late_delay"
 
 RigidTransform read_pose(const YamlReader& camera, const std::optional<YamlReader>& defaults) {
   // The pose keys are one group: a camera's own pose replaces the defaults' whichever form it takes.
@@ -164,6 +167,25 @@ SimCameraConfig read_camera(const YamlReader& camera, const std::optional<YamlRe
     if (bits != 8 && bits != 10 && bits != 12 && bits != 16) reader.fail("bits", "expected 8, 10, 12 or 16");
     config.bits = static_cast<int>(bits);
   }
+  // Poisson counts are drawn by summing exponential gaps, whose cost grows with the mean.
+  constexpr double kMaxFalseBlobs = 10'000.0;
+  config.false_blobs = keys.non_negative("false_blobs", config.false_blobs);
+  if (config.false_blobs > kMaxFalseBlobs)
+    keys.source("false_blobs").fail("false_blobs", "must be at most 10000 per frame");
+  config.merge_distance_px = keys.non_negative("merge_distance", config.merge_distance_px);
+  config.latency_ns = seconds_to_ns(keys.non_negative("latency", ns_to_seconds(config.latency_ns)));
+  config.late_fraction = keys.non_negative("late_fraction", config.late_fraction);
+  if (config.late_fraction > 1.0)
+    keys.source("late_fraction").fail("late_fraction", "must be a probability in [0, 1]");
+  if (keys.has("late_delay")) {
+    const YamlReader& reader = keys.source("late_delay");
+    const std::vector<double> delay = reader.get_doubles("late_delay", 2);
+    if (!(std::isfinite(delay[0]) && std::isfinite(delay[1]) && delay[0] >= 0.0 && delay[1] >= delay[0])) {
+      reader.fail("late_delay", "expected [min, max] seconds with 0 <= min <= max");
+    }
+    config.late_delay_min_ns = seconds_to_ns(delay[0]);
+    config.late_delay_max_ns = seconds_to_ns(delay[1]);
+  }
   return config;
 }
 
@@ -204,8 +226,8 @@ TrcLoop read_trc_loop(const YamlReader& reader) {
 
 TrcSource read_trc(const YamlReader& reader, const std::filesystem::path& base_dir,
                    std::vector<std::string>& names) {
-  reject_unknown_keys(
-      reader, {"file", "offset", "up_axis", "loop", "turnaround", "markers", "radius", "start", "prefix"});
+  reject_unknown_keys(reader, {"file", "offset", "up_axis", "loop", "turnaround", "markers", "radius",
+                               "start", "prefix", "occlusion"});
   TrcSource source;
   std::filesystem::path file = expand_environment(reader, "file", reader.get_string("file"));
   if (file.is_relative()) file = base_dir / file;
@@ -237,6 +259,13 @@ TrcSource read_trc(const YamlReader& reader, const std::filesystem::path& base_d
     reader.fail("turnaround", "applies only to loop: pingpong");
   }
   source.radius = read_marker_radius(reader, "radius");
+  if (reader.has("occlusion")) {
+    const YamlReader occlusion = reader.child("occlusion");
+    reject_unknown_keys(occlusion, {"facing_angle"});
+    const double degrees = occlusion.get_double("facing_angle");
+    if (!(degrees > 0.0 && degrees <= 180.0)) occlusion.fail("facing_angle", "must be in (0, 180] degrees");
+    source.facing_angle_rad = degrees * std::numbers::pi / 180.0;
+  }
   const std::string prefix = reader.get_string("prefix", "trc/");
   if (reader.has("markers")) {
     const YAML::Node list = reader.node()["markers"];
@@ -281,6 +310,30 @@ double pingpong_file_time(double t, double start, double span, double turnaround
   if (u < half) return u * u / b;
   if (u > pass - half) return span - (u - pass) * (u - pass) / b;
   return u - quarter;
+}
+
+// The TRC markers belong to one body, roughly a vertical cylinder: each marker faces away from the
+// vertical line through the centroid of the valid markers, horizontally. A marker on that line
+// has no normal and is never hidden.
+void add_body_normals(const TrcSource& source, std::vector<MarkerTruth>& out, std::size_t first) {
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < source.columns.size(); ++i) {
+    if (!out[first + i].valid) continue;
+    centroid += out[first + i].p.head<2>();
+    ++valid;
+  }
+  if (valid == 0) return;
+  centroid /= static_cast<double>(valid);
+  constexpr double kOnAxisM = 1e-6;
+  for (std::size_t i = 0; i < source.columns.size(); ++i) {
+    MarkerTruth& truth = out[first + i];
+    if (!truth.valid) continue;
+    const Eigen::Vector2d outward = truth.p.head<2>() - centroid;
+    if (outward.norm() < kOnAxisM) continue;
+    truth.normal << outward.normalized(), 0.0;
+    truth.facing_angle_rad = source.facing_angle_rad;
+  }
 }
 
 // Fills `out[first + i]` for every selected TRC marker at scene time t_s.
@@ -336,6 +389,7 @@ void sample_trc(const TrcSource& source, double t_s, std::vector<MarkerTruth>& o
     truth.valid = valid;
     truth.p = valid ? Eigen::Vector3d(source.R_world_file * p + source.offset) : Eigen::Vector3d::Zero();
   }
+  if (source.facing_angle_rad > 0.0) add_body_normals(source, out, first);
 }
 
 }  // namespace

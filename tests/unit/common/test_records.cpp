@@ -33,6 +33,7 @@ void expect_same(const FeatureFrame& a, const FeatureFrame& b) {
   EXPECT_EQ(a.stamp_ns, b.stamp_ns);
   EXPECT_EQ(a.arrival_ns, b.arrival_ns);
   EXPECT_EQ(a.processing_ns, b.processing_ns);
+  EXPECT_EQ(a.received_ns, b.received_ns);
   ASSERT_EQ(a.blobs.size(), b.blobs.size());
   for (std::size_t i = 0; i < a.blobs.size(); ++i) {
     EXPECT_EQ(a.blobs[i].x, b.blobs[i].x);
@@ -55,6 +56,27 @@ TEST(Records, FeatureFrameRoundTripIsExact) {
   ASSERT_TRUE(parsed.value.has_value()) << parsed.error;
   EXPECT_TRUE(parsed.error.empty());
   expect_same(original, *parsed.value);
+}
+
+TEST(Records, FeatureFrameReceivedStampIsOptional) {
+  FeatureFrame frame = sample_frame();
+  const std::string without = to_json_line(frame);
+  // Unknown (0): the key is left out, so files written before it existed are unchanged.
+  EXPECT_EQ(without.find("received_ns"), std::string::npos) << without;
+  ASSERT_TRUE(parse_feature_frame(without).value.has_value());
+  EXPECT_EQ(parse_feature_frame(without).value->received_ns, 0);
+
+  frame.received_ns = kStamp + 4'000'001;
+  const std::string with = to_json_line(frame);
+  EXPECT_NE(with.find("\"received_ns\":1700000000127456790"), std::string::npos) << with;
+  const Parsed<FeatureFrame> parsed = parse_feature_frame(with);
+  ASSERT_TRUE(parsed.value.has_value()) << parsed.error;
+  expect_same(frame, *parsed.value);
+
+  const auto bad = parse_feature_frame(
+      R"({"camera_id": "cam0", "frame": 3, "stamp_ns": 1, "received_ns": "soon", "blobs": []})");
+  EXPECT_FALSE(bad.value.has_value());
+  EXPECT_NE(bad.error.find("received_ns"), std::string::npos) << bad.error;
 }
 
 TEST(Records, TrackRoundTripIsExact) {
