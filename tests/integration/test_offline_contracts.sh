@@ -60,6 +60,10 @@ expect_stderr_contains "mangled.jsonl:51" "the first malformed line is reported 
 sed 's/"cam0"/"cam9"/' "$work/sim/cam0.jsonl" >"$work/cam9.jsonl"
 expect_exit 0 "features from an uncalibrated camera" -- "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" \
   --no-dds --in-features "$work/cam9.jsonl" --out-tracks "$work/x.jsonl"
-[ "$(grep -c "cam9" "$work/last.err")" -eq 1 ] && pass "uncalibrated camera warned about once" || fail "warnings: $(grep -c cam9 "$work/last.err")"
+warnings=$(grep -c "camera 'cam9' has no calibration" "$work/last.err")
+[ "$warnings" -eq 1 ] && pass "uncalibrated camera warned about once" || fail "warnings: $warnings"
+grep -q "camera cam9: frames [0-9]* used 0 .*utilisation 0.0000" "$work/last.err" &&
+  grep -q "uncalibrated_camera=" "$work/last.err" && pass "its frames are counted as unused, by reason" ||
+  fail "no usage line for cam9"
 expect_stderr_contains "from uncalibrated cameras" "uncalibrated frames are counted"
 finish
