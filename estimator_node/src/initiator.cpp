@@ -59,7 +59,11 @@ Eigen::Vector2d Initiator::aligned(const Tracklet& t, TimeNs stamp_ns, double* a
     *allowance_px = 1.0;
     return t.pixel + dt * t.velocity;
   }
-  *allowance_px = options_.max_image_speed_px_s * std::abs(dt);
+  // Without a pixel velocity the partner may only pair when it is nearly simultaneous: a blob that
+  // never continues into a tracklet (a reflection, sensor noise) then pairs only by coincidence.
+  *allowance_px = std::abs(stamp_ns - t.stamp_ns) <= options_.unaligned_max_dt_ns
+                      ? options_.max_image_speed_px_s * std::abs(dt)
+                      : std::numeric_limits<double>::infinity();
   return t.pixel;
 }
 
@@ -145,6 +149,7 @@ std::vector<InitiationCandidate> Initiator::add_frame(
       for (std::size_t k = 0; k < partners.size(); ++k) {
         double allowance = 0;
         const Eigen::Vector2d partner_pixel = aligned(partners[k], stamp_ns, &allowance);
+        if (!std::isfinite(allowance)) continue;
         if (epipolar_distance_px(camera, mine.pixel, static_cast<int>(other), partner_pixel) >
             options_.epipolar_px + allowance) {
           continue;
@@ -169,6 +174,7 @@ std::vector<InitiationCandidate> Initiator::add_frame(
           for (std::size_t m = 0; m < per_camera_[third].size(); ++m) {
             double third_allowance = 0;
             const Eigen::Vector2d pixel = aligned(per_camera_[third][m], stamp_ns, &third_allowance);
+            if (!std::isfinite(third_allowance)) continue;
             const double e = reprojection_error(*cameras[third], point, pixel) - third_allowance;
             if (e < best_error) {
               best_error = e;

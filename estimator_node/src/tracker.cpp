@@ -38,6 +38,8 @@ struct Track {
   std::uint64_t updates = 0;
   bool confirmed = false;
   int misses = 0;                         // tentative only: frames that should have shown it
+  double nis_average = 0;                 // moving average of the normalised innovation d²
+  int nis_updates = 0;
   int distinct_cameras = 0;               // cameras that ever updated it
   std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
 
@@ -282,6 +284,11 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
       }
       for (const auto& [t, b] : chosen) {
         Track& track = core.tracks[t];
+        // Track quality: a real marker's d² follows χ²₂ (mean 2, less while R is generous); blobs
+        // of clutter that happen to fall in a wide gate land anywhere in it (mean ~χ²/2).
+        const double d2 = mahalanobis2(projected[t]->projection, pixels[b]);
+        track.nis_average = track.nis_updates == 0 ? d2 : 0.8 * track.nis_average + 0.2 * d2;
+        ++track.nis_updates;
         track.state = projected[t]->state;
         update(track.state, projected[t]->projection, pixels[b], options.measurement_noise_px);  // Joseph form
         note_update(track, camera_index, stamp);
@@ -336,7 +343,9 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
 
 void Tracker::Impl::prune(TimeNs now_ns) {
   std::erase_if(core.tracks, [&](const Track& track) {
-    if (!track.confirmed && track.misses >= options.tentative_max_misses) {
+    const bool implausible = track.nis_updates >= 4 && track.nis_average > (track.confirmed ? options.confirmed_max_nis
+                                                                                            : options.tentative_max_nis);
+    if (implausible || (!track.confirmed && track.misses >= options.tentative_max_misses)) {
       ++core.ghosts_deleted;
       ++core.tracks_deleted;
       return true;
