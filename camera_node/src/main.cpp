@@ -4,9 +4,12 @@
 //   live:    --source <spec>  → rt/panoptes/features, camera_info, camera_status (1 Hz),
 //            camera_preview (on request); ← camera_command, predictions
 //   offline: --source <spec> --no-dds --out-features <file.jsonl>  (architecture.md, Contracts)
+// Live, the node synchronises its clock with the estimator's time service (rt/panoptes/time_sync)
+// and publishes every stamp on the common time base.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <deque>
 #include <iostream>
@@ -30,8 +33,10 @@
 #include "panoptes/config.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
+#include "panoptes/dds/time_sync.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
+#include "panoptes/simulator.h"
 #include "panoptes/time.h"
 
 namespace {
@@ -54,7 +59,40 @@ struct Options {
   std::size_t queue_capacity = 4;
   double prediction_max_age_ms = 50;
   bool quiet = false;
+  bool no_clock_sync = false;
+  double clock_sync_wait_s = 2.0;
+  std::string clock_skew;  // "<offset_ms>,<drift_ppm>", parsed into the two below
+  TimeNs skew_offset_ns = 0;
+  double skew_drift_ppm = 0;
 };
+
+// Parses --clock-skew "<offset_ms>,<drift_ppm>"; throws CLI::ValidationError naming the option.
+void parse_clock_skew(Options& options) {
+  if (options.clock_skew.empty()) return;
+  const std::string& text = options.clock_skew;
+  const auto comma = text.find(',');
+  const auto bad = [&text](const std::string& why) {
+    return CLI::ValidationError("--clock-skew '" + text + "': " + why +
+                                " (expected <offset_ms>,<drift_ppm>)");
+  };
+  if (comma == std::string::npos) throw bad("no comma");
+  double offset_ms = 0;
+  double drift_ppm = 0;
+  try {
+    std::size_t used = 0;
+    offset_ms = std::stod(text.substr(0, comma), &used);
+    if (used != comma) throw bad("offset is not a number");
+    const std::string drift_text = text.substr(comma + 1);
+    drift_ppm = std::stod(drift_text, &used);
+    if (used != drift_text.size()) throw bad("drift is not a number");
+  } catch (const std::logic_error&) {
+    throw bad("not two numbers");
+  }
+  if (!std::isfinite(offset_ms) || std::abs(offset_ms) > 3.6e6) throw bad("offset beyond ±1 h");
+  if (!std::isfinite(drift_ppm) || std::abs(drift_ppm) > 1e4) throw bad("drift beyond ±10000 ppm");
+  options.skew_offset_ns = static_cast<TimeNs>(std::llround(offset_ms * 1e6));
+  options.skew_drift_ppm = drift_ppm;
+}
 
 std::string g_name = "camera_node";  // set once from the camera id, for log lines
 void log(const std::string& message) {
@@ -231,13 +269,202 @@ class Mailbox {
   std::deque<T> items_;
 };
 
+// The node's own clock, on which its stamps are read and which the time-sync client measures
+// (docs/camera_node.md, "Clock synchronisation"). Normally the host's wall clock. A sim camera's
+// scene `clock_offset` is part of it (that camera's stamps carry the offset), and --clock-skew, a
+// testing aid, makes it run off by offset + drift · (wall − start). Everything the node stamps is
+// read on this clock, so one correction fixes all of it.
+class NodeClock {
+ public:
+  NodeClock(TimeNs start_wall_ns, TimeNs source_offset_ns, TimeNs skew_offset_ns, double skew_drift_ppm)
+      : start_wall_ns_(start_wall_ns),
+        source_offset_ns_(source_offset_ns),
+        skew_offset_ns_(skew_offset_ns),
+        skew_drift_(skew_drift_ppm * 1e-6) {}
+
+  TimeNs now() const { return from_wall(panoptes::wall_now_ns()); }
+  TimeNs from_wall(TimeNs wall_ns) const { return wall_ns + source_offset_ns_ + skew(wall_ns); }
+  // A stamp delivered by the source (the wall clock plus the source's own offset).
+  TimeNs from_source(TimeNs stamp_ns) const { return stamp_ns + skew(stamp_ns - source_offset_ns_); }
+
+  bool skewed() const { return skew_offset_ns_ != 0 || skew_drift_ != 0; }
+  double drift_ppm() const { return skew_drift_ * 1e6; }
+
+ private:
+  TimeNs skew(TimeNs wall_ns) const {
+    return skew_offset_ns_ +
+           static_cast<TimeNs>(std::llround(skew_drift_ * static_cast<double>(wall_ns - start_wall_ns_)));
+  }
+
+  TimeNs start_wall_ns_;
+  TimeNs source_offset_ns_;
+  TimeNs skew_offset_ns_;
+  double skew_drift_;
+};
+
+// The scene's `clock_offset` of a sim:<scene>#<camera> source (0 for any other source).
+TimeNs source_clock_offset_ns(const std::string& spec) {
+  if (spec.rfind("sim:", 0) != 0) return 0;
+  const auto hash = spec.rfind('#');
+  if (hash == std::string::npos || hash < 4) return 0;
+  const panoptes::Scene scene = panoptes::Scene::load(spec.substr(4, hash - 4));
+  const panoptes::SimCameraConfig* camera = scene.find_camera(spec.substr(hash + 1));
+  return camera != nullptr ? camera->clock_offset_ns : 0;
+}
+
+std::string format_ms(double ns) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3f", ns * 1e-6);
+  return buffer;
+}
+
+std::string format_s(TimeNs ns) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.2f", panoptes::ns_to_seconds(ns));
+  return buffer;
+}
+
+std::string format_us(double ns) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%+.1f", ns * 1e-3);
+  return buffer;
+}
+
+std::string format_ppm(double ppm) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.2f", ppm);
+  return buffer;
+}
+
+// One line on the state of the clock synchronisation; with a simulated skew also the truth (the
+// time service is assumed to run on this host, whose wall clock is then the common time base).
+std::string clock_sync_line(const panoptes::dds::TimeSyncClientStatus& status, const NodeClock& clock) {
+  const panoptes::ClockEstimate& estimate = status.estimate;
+  if (!estimate.synchronised) {
+    return "not synchronised (" + std::to_string(status.requests) + " requests, " +
+           std::to_string(status.replies) + " replies)";
+  }
+  const TimeNs wall = panoptes::wall_now_ns();
+  const TimeNs local = clock.from_wall(wall);
+  const auto offset = static_cast<double>(estimate.offset_at(local));
+  std::string line = "offset " + format_ms(offset) + " ms";
+  if (clock.skewed()) {
+    const auto truth = static_cast<double>(local - wall);
+    line += " (true " + format_ms(truth) + " ms, error " + format_us(offset - truth) + " us)";
+  }
+  line += ", drift " + format_ppm(estimate.drift_ppm()) + " ppm";
+  if (clock.skewed()) line += " (true " + format_ppm(clock.drift_ppm()) + ")";
+  char sigma[32];
+  std::snprintf(sigma, sizeof sigma, "%.1f", estimate.offset_sigma_ns * 1e-3);
+  line += ", sigma " + std::string(sigma) + " us, round trip min/median/max " +
+          std::to_string(status.round_trip_min_ns / 1000) + "/" +
+          std::to_string(status.round_trip_median_ns / 1000) + "/" +
+          std::to_string(status.round_trip_max_ns / 1000) + " us, " + std::to_string(estimate.samples) +
+          " samples fitted";
+  return line;
+}
+
+// Publishes feature frames with every stamp moved from the node's clock to the common time base.
+// Until the clock is first synchronised, frames are held, at most until `hold_until_wall_ns`; if
+// the time service has not answered by then they go out with the node's own stamps (counted as
+// `unsynchronised`) until it does. Without a time-sync client (--no-clock-sync) stamps go out as
+// read.
+class FeaturePublisher {
+ public:
+  static constexpr std::size_t kHoldCapacity = 8192;  // frames; 16 s at 500 Hz
+
+  FeaturePublisher(const NodeClock& clock, const panoptes::dds::TimeSyncClient* sync,
+                   TimeNs hold_until_wall_ns, panoptes::dds::Writer<panoptes::msg::FeatureFrame>& writer,
+                   panoptes::JsonlWriter* out)
+      : clock_(clock), sync_(sync), hold_until_wall_ns_(hold_until_wall_ns), writer_(writer), out_(out) {}
+
+  // A local stamp on the common time base (unchanged while not synchronised).
+  TimeNs to_common(TimeNs local_ns) const {
+    if (sync_ == nullptr) return local_ns;
+    return sync_->to_server(local_ns).value_or(local_ns);
+  }
+
+  // `frame` has its stamps on the node's clock.
+  void add(panoptes::FeatureFrame frame) {
+    held_.push_back(std::move(frame));
+    if (holding()) {
+      ++held_total_;
+      if (held_.size() > kHoldCapacity) {
+        held_.pop_front();
+        ++hold_overflow_;
+      }
+      return;
+    }
+    release(false);
+  }
+
+  // Publishes what is held once synchronised, or once the hold has timed out (or `force`).
+  void release(bool force) {
+    if (held_.empty() || (!force && holding())) return;
+    std::optional<panoptes::ClockEstimate> estimate;
+    if (sync_ != nullptr) {
+      panoptes::ClockEstimate current = sync_->estimate();
+      if (current.synchronised) estimate = current;
+    }
+    if (sync_ != nullptr && !estimate && !warned_) {
+      warned_ = true;
+      log("no time service answered within the hold time; publishing the node's own stamps until one does "
+          "(counted as unsynchronised)");
+    }
+    for (panoptes::FeatureFrame& frame : held_) {
+      if (estimate) {
+        frame.stamp_ns = estimate->to_server(frame.stamp_ns);
+        frame.arrival_ns = estimate->to_server(frame.arrival_ns);
+      } else if (sync_ != nullptr) {
+        ++unsynchronised_;
+      }
+      auto message = panoptes::dds::to_message(frame);
+      const TimeNs now = clock_.now();
+      message.publish_ns(estimate ? estimate->to_server(now) : now);
+      writer_.write(message);
+      if (out_ != nullptr) out_->write(frame);
+    }
+    held_.clear();
+  }
+
+  std::uint64_t held_total() const { return held_total_; }
+  std::uint64_t unsynchronised() const { return unsynchronised_; }
+  std::uint64_t hold_overflow() const { return hold_overflow_; }
+
+ private:
+  bool holding() const {
+    return sync_ != nullptr && !sync_->synchronised() && panoptes::wall_now_ns() < hold_until_wall_ns_;
+  }
+
+  const NodeClock& clock_;
+  const panoptes::dds::TimeSyncClient* sync_;
+  TimeNs hold_until_wall_ns_;
+  panoptes::dds::Writer<panoptes::msg::FeatureFrame>& writer_;
+  panoptes::JsonlWriter* out_;
+  std::deque<panoptes::FeatureFrame> held_;
+  std::uint64_t held_total_ = 0;
+  std::uint64_t unsynchronised_ = 0;
+  std::uint64_t hold_overflow_ = 0;
+  bool warned_ = false;
+};
+
 int run_live(const Options& options, cam::FrameSource& source, cam::Detector& detector,
              const std::string& camera_id) {
   namespace msg = panoptes::msg;
   panoptes::dds::BusOptions bus_options;
   bus_options.profile_file = options.dds_profile;
   bus_options.participant_name = "camera_node/" + camera_id;
+  const NodeClock clock(panoptes::wall_now_ns(), source_clock_offset_ns(options.source),
+                        options.skew_offset_ns, options.skew_drift_ppm);
   panoptes::dds::Bus bus(bus_options);
+  // Started first: the estimate converges while the rest starts up.
+  std::unique_ptr<panoptes::dds::TimeSyncClient> time_sync;
+  if (!options.no_clock_sync) {
+    panoptes::dds::TimeSyncClientOptions sync_options;
+    sync_options.client_id = camera_id;
+    sync_options.local_clock = [clock] { return clock.now(); };
+    time_sync = std::make_unique<panoptes::dds::TimeSyncClient>(bus, std::move(sync_options));
+  }
   auto info_writer = bus.make_writer<msg::CameraInfo>();
   auto feature_writer = bus.make_writer<msg::FeatureFrame>();
   auto status_writer = bus.make_writer<msg::CameraStatus>();
@@ -315,6 +542,10 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   Percentiles detect_ms;
   std::optional<panoptes::JsonlWriter> out;
   if (!options.out_features.empty()) out.emplace(options.out_features);
+  FeaturePublisher publisher(clock, time_sync.get(),
+                             start + panoptes::seconds_to_ns(options.clock_sync_wait_s), *feature_writer,
+                             out ? &*out : nullptr);
+  bool logged_synchronised = false;
 
   while (!panoptes::stop_requested()) {
     // Commands apply between frames, so each one governs the very next frame.
@@ -331,27 +562,29 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
     auto captured = queue.pop(std::chrono::milliseconds(50));
     const TimeNs now = panoptes::wall_now_ns();
     if (captured) {
-      const TimeNs stamp = captured->stamp_ns != 0 ? captured->stamp_ns : captured->arrival_ns;
+      // On the node's clock; predictions are on the common time base, like published stamps.
+      const TimeNs local_stamp =
+          clock.from_source(captured->stamp_ns != 0 ? captured->stamp_ns : captured->arrival_ns);
+      const TimeNs stamp = publisher.to_common(local_stamp);
       predictions.fresh_for(stamp, max_prediction_age_ns, windows);
-      const auto frame = detect_frame(detector, *captured, camera_id, windows, counters, info);
+      auto frame = detect_frame(detector, *captured, camera_id, windows, counters, info);
       for (const std::string& applied : awaiting_frame) {
         log(applied + " applied from frame " + std::to_string(captured->sequence));
       }
       awaiting_frame.clear();
       if (frame) {
-        auto message = panoptes::dds::to_message(*frame);
-        message.publish_ns(panoptes::wall_now_ns());
-        feature_writer->write(message);
-        if (out) out->write(*frame);
         detect_ms.add(static_cast<double>(frame->processing_ns) * 1e-6);
         ++frames;
         if (!windows.empty() && !captured->blobs) ++guided_frames;
+        frame->stamp_ns = local_stamp;
+        frame->arrival_ns = clock.from_wall(frame->arrival_ns);
+        publisher.add(std::move(*frame));
       }
       if (effects.preview_requests > 0 && captured->image.width > 0) {
         const panoptes::Image preview = cam::make_preview(captured->image, effects.preview_max_width);
         msg::CameraPreview preview_message;
         preview_message.camera_id(camera_id);
-        preview_message.stamp_ns(stamp);
+        preview_message.stamp_ns(stamp);  // common time base once synchronised
         preview_message.width(static_cast<uint32_t>(preview.width));
         preview_message.height(static_cast<uint32_t>(preview.height));
         preview_message.pixels(preview.data);
@@ -360,6 +593,12 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
       }
     } else if (source_ended.load() && queue.size() == 0) {
       break;
+    }
+    publisher.release(false);
+    if (time_sync && !logged_synchronised && time_sync->synchronised()) {
+      logged_synchronised = true;
+      const auto sync_status = time_sync->status();
+      log("clock synchronised after " + format_s(now - start) + " s: " + clock_sync_line(sync_status, clock));
     }
     if (now >= next_status) {
       const double period = panoptes::ns_to_seconds(now - next_status) + 1.0;
@@ -371,8 +610,25 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
       all["drops_queue"] = queue.drops();
       all["guided_frames"] = guided_frames;
       msg::CameraStatus status;
+      if (time_sync) {
+        const auto sync_status = time_sync->status();
+        if (sync_status.estimate.synchronised) {
+          status.clock_offset_ns(sync_status.estimate.offset_at(clock.from_wall(now)));
+          status.clock_drift_ppm(sync_status.estimate.drift_ppm());
+        }
+        all["sync_held"] = publisher.held_total();
+        all["unsynchronised"] = publisher.unsynchronised();
+        all["sync_lost"] = sync_status.lost;
+        all["sync_rejected"] = sync_status.rejected;
+        all["sync_resets"] = sync_status.resets;
+        if (publisher.hold_overflow() > 0) all["sync_hold_overflow"] = publisher.hold_overflow();
+        // A simulated skew is a test: its truth is known, so the error is logged every second.
+        if (clock.skewed()) {
+          log("clock sync at " + format_s(now - start) + " s: " + clock_sync_line(sync_status, clock));
+        }
+      }
       status.camera_id(camera_id);
-      status.stamp_ns(now);
+      status.stamp_ns(publisher.to_common(clock.from_wall(now)));
       status.fps(static_cast<double>(frames - frames_at_status) / period);
       status.frames(frames);
       status.drops_queue(queue.drops());
@@ -401,6 +657,24 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   source.stop();
   queue.close();
   capture.join();
+  publisher.release(true);
+  if (time_sync) {
+    const auto sync_status = time_sync->status();
+    const double elapsed_s = panoptes::ns_to_seconds(panoptes::wall_now_ns() - start);
+    char traffic[64];
+    std::snprintf(traffic, sizeof traffic, "%.1f", static_cast<double>(sync_status.requests) / elapsed_s);
+    std::string when = "never synchronised";
+    if (sync_status.synchronised_local_ns != 0) {
+      when = "synchronised " + format_s(sync_status.synchronised_local_ns - clock.from_wall(start)) +
+             " s after start";
+    }
+    log("clock sync: " + clock_sync_line(sync_status, clock) + "; " + when + "; " +
+        std::to_string(sync_status.requests) + " requests (" + traffic + "/s), " +
+        std::to_string(sync_status.replies) + " replies, " + std::to_string(sync_status.lost) + " lost, " +
+        std::to_string(sync_status.rejected) + " rejected, " + std::to_string(sync_status.resets) +
+        " resets; frames held " + std::to_string(publisher.held_total()) + ", unsynchronised " +
+        std::to_string(publisher.unsynchronised()));
+  }
   log("stopped after " + std::to_string(frames) + " frames (" + std::to_string(queue.drops()) +
       " dropped in the queue, " + std::to_string(guided_frames) + " with prediction-guided search)");
   auto all = source.counters();
@@ -446,10 +720,24 @@ int main(int argc, char** argv) {
   app.add_option("--queue-capacity", options.queue_capacity,
                  "frames waiting for detection before the oldest is dropped")
       ->check(CLI::Range(1, 1024));
+  app.add_flag("--no-clock-sync", options.no_clock_sync,
+               "do not synchronise with the estimator's time service: publish stamps as read (for hosts "
+               "kept on the common time base by PTP or chrony)");
+  app.add_option("--clock-sync-wait", options.clock_sync_wait_s,
+                 "hold frames up to this many seconds after start until the clock is synchronised; "
+                 "later, unsynchronised stamps are published as read (and counted)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--clock-skew", options.clock_skew,
+                 "testing aid: <offset_ms>,<drift_ppm>; the node's clock runs off the host's by offset + "
+                 "drift * (time since start), for its frame stamps and its clock-sync requests alike");
   app.add_flag("--quiet", options.quiet, "less output");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv, [&] {
         if (options.no_dds && options.out_features.empty())
           throw CLI::ValidationError("--no-dds needs --out-features");
+        parse_clock_skew(options);
+        if (options.no_dds && !options.clock_skew.empty())
+          throw CLI::ValidationError(
+              "--clock-skew tests the clock synchronisation over DDS; not with --no-dds");
       })) {
     return *exit_code;
   }
