@@ -158,6 +158,8 @@ int show_status(const Options& options) {
                                  {"threshold", status.threshold()},
                                  {"exposure_us", status.exposure_us()},
                                  {"gain_db", status.gain_db()},
+                                 {"clock_offset_ns", status.clock_offset_ns()},
+                                 {"clock_drift_ppm", status.clock_drift_ppm()},
                                  {"last_error", status.last_error()},
                                  {"counters", counters}};
     std::lock_guard lock(mutex);
