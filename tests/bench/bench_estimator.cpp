@@ -1,0 +1,241 @@
+// SPDX-License-Identifier: Apache-2.0
+// bench_estimator: Tracker::process on one thread, offline, on precomputed simulated features.
+// A ring of cameras around a 6 x 6 m room looking inward, markers on Lissajous paths, 0.1 px
+// centroid noise. Reports observations (blobs) per second, per-frame latency p50/p99, the
+// real-time factor (simulated time / processing time: above 1 the tracker keeps up with the rig),
+// and the cost per observation as the marker count grows. Warm-up (track initiation and
+// confirmation) is processed first and not timed.
+//   bench_estimator [--json] [--seconds <s>] [--warmup <s>] [--cameras <n>] [--rate <hz>]
+//                   [--markers <n>] [--sweep <n,n,...> | --no-sweep] [--seed <n>]
+// With --json the last line of output is one JSON object (docs/benchmarks.md).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "panoptes/cli.h"
+#include "panoptes/estimator/tracker.h"
+#include "panoptes/simulator.h"
+
+namespace {
+
+using panoptes::FeatureFrame;
+using panoptes::Scene;
+using panoptes::TimeNs;
+namespace est = panoptes::estimator;
+
+constexpr TimeNs kEpoch = 1'700'000'000'000'000'000LL;
+
+struct Config {
+  int cameras = 32;
+  double rate_hz = 120;
+  int markers = 40;
+  double warmup_s = 1.0;
+  double seconds = 2.0;
+};
+
+// Cameras on a circle of radius 3 m (the walls of a 6 x 6 m room) at 2.3-2.9 m, looking at the
+// middle of the volume; random phases (the rig is not synchronised). Markers on Lissajous paths
+// with centres spread over the floor, |x|, |y| up to about 1.6 m, z 0.4-1.7 m, speeds up to
+// about 1.5 m/s.
+std::string scene_yaml(const Config& config, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  auto uniform = [&](double low, double high) {
+    return std::uniform_real_distribution<double>(low, high)(rng);
+  };
+  std::ostringstream yaml;
+  yaml.precision(9);
+  yaml << "seed: " << seed << "\nduration: " << config.warmup_s + config.seconds << "\n"
+       << "defaults: {width: 1280, height: 1024, K: [1000.0, 1000.0, 639.5, 511.5], rate: " << config.rate_hz
+       << ", centroid_noise: 0.1}\ncameras:\n";
+  for (int c = 0; c < config.cameras; ++c) {
+    const double angle = 2.0 * M_PI * c / config.cameras;
+    const double height = c % 2 == 0 ? 2.3 : 2.9;
+    yaml << "  - {id: cam" << c << ", look_at: {eye: [" << 3.0 * std::cos(angle) << ", "
+         << 3.0 * std::sin(angle) << ", " << height
+         << "], target: [0.0, 0.0, 1.0]}, phase: " << uniform(0.0, 1.0 / config.rate_hz) << "}\n";
+  }
+  yaml << "markers:\n";
+  for (int m = 0; m < config.markers; ++m) {
+    yaml << "  - {name: m" << m << ", path: {type: lissajous, center: [" << uniform(-0.5, 0.5) << ", "
+         << uniform(-0.5, 0.5) << ", " << uniform(0.9, 1.2) << "], amplitude: [" << uniform(0.5, 1.1) << ", "
+         << uniform(0.5, 1.1) << ", " << uniform(0.15, 0.45) << "], frequency: [" << uniform(0.08, 0.2)
+         << ", " << uniform(0.08, 0.2) << ", " << uniform(0.1, 0.3) << "], phase: [" << uniform(0, 2 * M_PI)
+         << ", " << uniform(0, 2 * M_PI) << ", " << uniform(0, 2 * M_PI) << "]}}\n";
+  }
+  return yaml.str();
+}
+
+std::vector<FeatureFrame> simulate(const Scene& scene) {
+  std::vector<FeatureFrame> frames;
+  for (const auto& camera : scene.cameras()) {
+    panoptes::CameraSimulator simulator(scene, camera.calibration.id);
+    for (std::int64_t k = 0; simulator.frame_time_ns(k) < scene.duration_ns(); ++k) {
+      frames.push_back(simulator.features(k));
+      frames.back().stamp_ns += kEpoch;
+    }
+  }
+  std::stable_sort(frames.begin(), frames.end(), [](const FeatureFrame& a, const FeatureFrame& b) {
+    return std::tie(a.stamp_ns, a.camera_id) < std::tie(b.stamp_ns, b.camera_id);
+  });
+  return frames;
+}
+
+// Markers with a published track within 1 cm at the tracker's last stamp.
+int markers_tracked(const est::Tracker& tracker, const Scene& scene) {
+  const auto tracks = tracker.current_tracks();
+  int tracked = 0;
+  for (const auto& marker : scene.markers_at(tracker.last_stamp_ns() - kEpoch)) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const auto& track : tracks) nearest = std::min(nearest, (track.p - marker.p).norm());
+    if (nearest < 0.01) ++tracked;
+  }
+  return tracked;
+}
+
+struct Result {
+  int markers = 0;
+  int cameras = 0;
+  std::size_t frames = 0;   // timed
+  std::uint64_t blobs = 0;  // timed observations
+  double process_s = 0;     // sum of the timed Tracker::process calls
+  double p50_us = 0, p99_us = 0, max_us = 0;
+  int tracked_at_start = 0;  // markers with a confirmed track when timing starts
+  int tracked_at_end = 0;
+  std::size_t tracks_at_end = 0;  // published tracks (false ones included)
+  double simulated_s = 0;
+  double observations_per_s() const { return process_s > 0 ? static_cast<double>(blobs) / process_s : 0; }
+  double us_per_observation() const { return blobs > 0 ? process_s * 1e6 / static_cast<double>(blobs) : 0; }
+  double realtime_factor() const { return process_s > 0 ? simulated_s / process_s : 0; }
+};
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0;
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1) + 0.5);
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+Result run(const Config& config, std::uint64_t seed) {
+  const Scene scene = Scene::from_yaml_string(scene_yaml(config, seed), ".", "bench_estimator scene");
+  const auto frames = simulate(scene);
+  est::Tracker tracker;
+  tracker.set_calibration(scene.calibration());
+  const TimeNs timed_from = kEpoch + panoptes::seconds_to_ns(config.warmup_s);
+
+  Result result;
+  result.markers = config.markers;
+  result.cameras = config.cameras;
+  result.simulated_s = config.seconds;
+  std::size_t i = 0;
+  for (; i < frames.size() && frames[i].stamp_ns < timed_from; ++i) tracker.process(frames[i]);
+  result.tracked_at_start = markers_tracked(tracker, scene);
+
+  std::vector<double> latencies;
+  latencies.reserve(frames.size() - i);
+  for (; i < frames.size(); ++i) {
+    const auto begin = std::chrono::steady_clock::now();
+    tracker.process(frames[i]);
+    const auto end = std::chrono::steady_clock::now();
+    latencies.push_back(std::chrono::duration<double>(end - begin).count());
+    result.blobs += frames[i].blobs.size();
+  }
+  result.frames = latencies.size();
+  for (double latency : latencies) result.process_s += latency;
+  result.p50_us = percentile(latencies, 0.5) * 1e6;
+  result.p99_us = percentile(latencies, 0.99) * 1e6;
+  result.max_us = latencies.empty() ? 0 : *std::max_element(latencies.begin(), latencies.end()) * 1e6;
+  result.tracked_at_end = markers_tracked(tracker, scene);
+  result.tracks_at_end = tracker.current_tracks().size();
+  return result;
+}
+
+std::string to_json(const Result& r) {
+  char buffer[512];
+  std::snprintf(buffer, sizeof buffer,
+                "{\"markers\": %d, \"cameras\": %d, \"frames\": %zu, \"observations\": %llu, "
+                "\"observations_per_s\": %.0f, \"us_per_observation\": %.4f, \"frame_p50_us\": %.2f, "
+                "\"frame_p99_us\": %.2f, \"frame_max_us\": %.1f, \"realtime_factor\": %.3f, "
+                "\"tracked_at_start\": %d, \"tracked_at_end\": %d, \"tracks_at_end\": %zu}",
+                r.markers, r.cameras, r.frames, static_cast<unsigned long long>(r.blobs),
+                r.observations_per_s(), r.us_per_observation(), r.p50_us, r.p99_us, r.max_us,
+                r.realtime_factor(), r.tracked_at_start, r.tracked_at_end, r.tracks_at_end);
+  return buffer;
+}
+
+void print_row(const Result& r) {
+  std::printf("  %7d %8zu %11llu %12.0f %10.3f %9.1f %9.1f %9.2f %6d/%-4d %6d/%-4d %6zu\n", r.markers,
+              r.frames, static_cast<unsigned long long>(r.blobs), r.observations_per_s(),
+              r.us_per_observation(), r.p50_us, r.p99_us, r.realtime_factor(), r.tracked_at_start, r.markers,
+              r.tracked_at_end, r.markers, r.tracks_at_end);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Config config;
+  bool json = false;
+  std::vector<int> sweep = {10, 25, 50, 100, 200};
+  std::uint64_t seed = 7;
+  CLI::App app{"bench_estimator: Tracker::process speed on simulated features, one thread",
+               "bench_estimator"};
+  app.add_flag("--json", json, "print one JSON object on the last line");
+  app.add_option("--seconds", config.seconds, "simulated seconds timed per case (after the warm-up)")
+      ->check(CLI::Range(0.05, 3600.0));
+  app.add_option("--warmup", config.warmup_s, "simulated seconds processed before timing (tracks confirm)")
+      ->check(CLI::Range(0.1, 60.0));
+  app.add_option("--cameras", config.cameras, "cameras on the ring")->check(CLI::Range(2, 1000));
+  app.add_option("--rate", config.rate_hz, "frame rate of every camera, Hz")->check(CLI::Range(1.0, 2000.0));
+  app.add_option("--markers", config.markers, "markers of the main case")->check(CLI::Range(1, 100000));
+  bool no_sweep = false;
+  app.add_option("--sweep", sweep, "marker counts of the scaling cases")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 100000));
+  app.add_flag("--no-sweep", no_sweep, "only the main case");
+  app.add_option("--seed", seed, "scene seed");
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+  if (no_sweep) sweep.clear();
+
+  std::printf(
+      "bench_estimator: %d cameras x %.0f Hz on a 3 m ring, Lissajous markers, 0.1 px noise;\n"
+      "warm-up %.2f s not timed, then %.2f s simulated, Tracker::process timed per frame, one thread\n",
+      config.cameras, config.rate_hz, config.warmup_s, config.seconds);
+  std::printf("  %7s %8s %11s %12s %10s %9s %9s %9s %11s %11s %6s\n", "markers", "frames", "observ.",
+              "observ./s", "us/observ", "p50 us", "p99 us", "realtime", "tracked@0", "tracked@end", "tracks");
+  const Result main_case = run(config, seed);
+  print_row(main_case);
+  std::fflush(stdout);
+  std::vector<Result> scaling;
+  if (!sweep.empty()) std::printf("scaling (same rig):\n");
+  for (int markers : sweep) {
+    Config c = config;
+    c.markers = markers;
+    scaling.push_back(run(c, seed));
+    print_row(scaling.back());
+    std::fflush(stdout);
+  }
+  if (!scaling.empty()) {
+    std::printf("  us/observation at %d markers / at %d markers: %.3f\n", scaling.back().markers,
+                scaling.front().markers,
+                scaling.back().us_per_observation() / scaling.front().us_per_observation());
+  }
+  if (json) {
+    std::string sweep_json;
+    for (const Result& r : scaling) sweep_json += (sweep_json.empty() ? "" : ", ") + to_json(r);
+    const double flatness =
+        scaling.empty() ? 0 : scaling.back().us_per_observation() / scaling.front().us_per_observation();
+    std::printf(
+        "{\"cameras\": %d, \"rate_hz\": %.1f, \"warmup_s\": %.3f, \"seconds\": %.3f, \"main\": %s, "
+        "\"scaling\": [%s], \"us_per_observation_ratio_last_to_first\": %.4f}\n",
+        config.cameras, config.rate_hz, config.warmup_s, config.seconds, to_json(main_case).c_str(),
+        sweep_json.c_str(), flatness);
+  }
+  return 0;
+}
