@@ -28,7 +28,8 @@ class BlobGrid {
     }
     for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
     std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-    for (std::size_t i = 0; i < points.size(); ++i) items_[fill[cell_of[i]]++] = static_cast<std::uint32_t>(i);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      items_[fill[cell_of[i]]++] = static_cast<std::uint32_t>(i);
   }
 
   // Calls f(index) for every blob in the cells that overlap the square of half-size `radius`

@@ -19,7 +19,9 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& t) {
   return m;
 }
 
-bool finite(const Eigen::Vector2d& v) { return std::isfinite(v.x()) && std::isfinite(v.y()); }
+bool finite(const Eigen::Vector2d& v) {
+  return std::isfinite(v.x()) && std::isfinite(v.y());
+}
 
 }  // namespace
 
@@ -161,10 +163,9 @@ std::vector<InitiationCandidate> Initiator::add_frame(
             cameras[other]->T_cam_world().apply(point).z() < options_.min_depth_m) {
           continue;
         }
-        std::vector<View> views = {
-            {camera, mine.pixel, mine.velocity, mine.links > 0, stamp_ns, j},
-            {static_cast<int>(other), partner_pixel, partners[k].velocity, partners[k].links > 0,
-             partners[k].stamp_ns, k}};
+        std::vector<View> views = {{camera, mine.pixel, mine.velocity, mine.links > 0, stamp_ns, j},
+                                   {static_cast<int>(other), partner_pixel, partners[k].velocity,
+                                    partners[k].links > 0, partners[k].stamp_ns, k}};
         // Support: in every further camera, the tracklet that reprojects best, if well enough.
         for (std::size_t third = 0; third < per_camera_.size(); ++third) {
           if (static_cast<int>(third) == camera || third == other) continue;
@@ -184,7 +185,8 @@ std::vector<InitiationCandidate> Initiator::add_frame(
           }
           if (best_error <= options_.reprojection_px) {
             const Tracklet& t = per_camera_[third][best_index];
-            views.push_back({static_cast<int>(third), best_pixel, t.velocity, t.links > 0, t.stamp_ns, best_index});
+            views.push_back(
+                {static_cast<int>(third), best_pixel, t.velocity, t.links > 0, t.stamp_ns, best_index});
           }
         }
         const int support = static_cast<int>(views.size()) - 2;
@@ -225,9 +227,11 @@ std::vector<InitiationCandidate> Initiator::add_frame(
     // Consume the partners (other cameras' pools) and this blob.
     consumed_new[j] = 1;
     std::vector<std::pair<int, std::size_t>> remove;
-    for (std::size_t v = 1; v < best.views.size(); ++v) remove.emplace_back(best.views[v].camera, best.views[v].index);
+    for (std::size_t v = 1; v < best.views.size(); ++v)
+      remove.emplace_back(best.views[v].camera, best.views[v].index);
     std::sort(remove.begin(), remove.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
-    for (const auto& [cam, index] : remove) per_camera_[cam].erase(per_camera_[cam].begin() + static_cast<std::ptrdiff_t>(index));
+    for (const auto& [cam, index] : remove)
+      per_camera_[cam].erase(per_camera_[cam].begin() + static_cast<std::ptrdiff_t>(index));
     if (!occupied || !occupied(candidate.position)) found.push_back(std::move(candidate));
   }
   for (std::size_t j = 0; j < blobs.size(); ++j) {

@@ -83,12 +83,14 @@ class UnknownCameraWarnings {
 // the screen for bad input, usage statistics, the tracker and its timing.
 class Intake {
  public:
-  Intake(est::Tracker& tracker, const Options& options) : tracker_(tracker), screen_(options.screen), options_(options) {}
+  Intake(est::Tracker& tracker, const Options& options)
+      : tracker_(tracker), screen_(options.screen), options_(options) {}
 
   // Screens a frame that arrived at `frame.received_ns` (0: unknown). False: rejected, counted.
   bool admit(panoptes::FeatureFrame& frame, TimeNs reference_ns) {
-    const double latency_ms = frame.received_ns != 0 ? panoptes::ns_to_seconds(frame.received_ns - frame.stamp_ns) * 1e3
-                                                     : std::numeric_limits<double>::quiet_NaN();  // unknown
+    const double latency_ms = frame.received_ns != 0
+                                  ? panoptes::ns_to_seconds(frame.received_ns - frame.stamp_ns) * 1e3
+                                  : std::numeric_limits<double>::quiet_NaN();  // unknown
     monitor_.note_received(frame.camera_id, latency_ms);
     if (screen_.screen(frame, reference_ns)) return true;
     monitor_.note_dropped(frame.camera_id, "", 1);  // the reason is in the screen's counts
@@ -98,7 +100,8 @@ class Intake {
   est::FrameOutcome process(const panoptes::FeatureFrame& frame) {
     const auto start = std::chrono::steady_clock::now();
     const auto outcome = tracker_.process(frame);
-    monitor_.note_update_time(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    monitor_.note_update_time(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     if (outcome == est::FrameOutcome::kUnknownCamera) warnings_.note(frame.camera_id);
     return outcome;
   }
@@ -157,9 +160,12 @@ int run_offline(const Options& options, est::Tracker& tracker) {
   // estimator, through the same time-ordered inbox as live mode, with simulated time.
   std::vector<std::size_t> order(frames.size());
   std::iota(order.begin(), order.end(), 0);
-  const auto received = [&](std::size_t i) { return frames[i].received_ns != 0 ? frames[i].received_ns : frames[i].stamp_ns; };
+  const auto received = [&](std::size_t i) {
+    return frames[i].received_ns != 0 ? frames[i].received_ns : frames[i].stamp_ns;
+  };
   if (options.replay_arrival) {
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return received(a) < received(b); });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return received(a) < received(b); });
   }
 
   std::optional<panoptes::JsonlWriter> out;
@@ -192,8 +198,8 @@ int run_offline(const Options& options, est::Tracker& tracker) {
       }
     }
     if (!options.quiet && (n + 1) % progress_every == 0) {
-      std::fprintf(stderr, "\restimator_node: %3zu%% (%zu/%zu frames, %zu live tracks)", (n + 1) * 100 / frames.size(),
-                   n + 1, frames.size(), tracker.live_track_count());
+      std::fprintf(stderr, "\restimator_node: %3zu%% (%zu/%zu frames, %zu live tracks)",
+                   (n + 1) * 100 / frames.size(), n + 1, frames.size(), tracker.live_track_count());
     }
   }
   for (const auto& due : inbox.drain()) handle(due);
@@ -246,7 +252,8 @@ class FramePeriods {
     auto& p = periods_[camera_id];
     const TimeNs gap = stamp_ns - p.last_ns;
     if (p.last_ns != 0 && gap > 0 && gap < panoptes::kNsPerSecond)
-      p.period_ns = p.period_ns == 0 ? static_cast<double>(gap) : 0.9 * p.period_ns + 0.1 * static_cast<double>(gap);
+      p.period_ns =
+          p.period_ns == 0 ? static_cast<double>(gap) : 0.9 * p.period_ns + 0.1 * static_cast<double>(gap);
     p.last_ns = stamp_ns;
     return stamp_ns + static_cast<TimeNs>(p.period_ns);
   }
@@ -369,14 +376,16 @@ int run_live(const Options& options, est::Tracker& tracker) {
       }
       status_writer->write(to_message(usage));
       if (!options.quiet) {
-        std::string line = "t=" + std::to_string(static_cast<int>(panoptes::ns_to_seconds(now - start))) + "s";
+        std::string line =
+            "t=" + std::to_string(static_cast<int>(panoptes::ns_to_seconds(now - start))) + "s";
         for (const auto& c : usage.cameras) {
           char buffer[96];
           std::snprintf(buffer, sizeof buffer, " %s %.0f%%", c.camera_id.c_str(), 100.0 * c.utilisation);
           line += buffer;
         }
-        line += " | tracks " + std::to_string(usage.tracks_confirmed) + "+" + std::to_string(usage.tracks_coasting) +
-                " coasting | replays " + std::to_string(usage.replays) + " | time sync answered " +
+        line += " | tracks " + std::to_string(usage.tracks_confirmed) + "+" +
+                std::to_string(usage.tracks_coasting) + " coasting | replays " +
+                std::to_string(usage.replays) + " | time sync answered " +
                 std::to_string(time_service.answered());
         log(line);
       }

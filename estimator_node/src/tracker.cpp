@@ -37,10 +37,10 @@ struct Track {
   TimeNs last_update_ns = 0;
   std::uint64_t updates = 0;
   bool confirmed = false;
-  int misses = 0;                         // tentative only: frames that should have shown it
-  double nis_average = 0;                 // moving average of the normalised innovation d²
+  int misses = 0;          // tentative only: frames that should have shown it
+  double nis_average = 0;  // moving average of the normalised innovation d²
   int nis_updates = 0;
-  int distinct_cameras = 0;               // cameras that ever updated it
+  int distinct_cameras = 0;                // cameras that ever updated it
   std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
 
   Eigen::Vector3d position_at(TimeNs stamp_ns) const {
@@ -81,7 +81,7 @@ struct Tracker::Impl {
   std::vector<std::string> camera_ids;
   std::map<std::string, int> camera_index;
   Core core;
-  std::deque<Entry> history;  // applied frames in stamp order, within the rewind horizon
+  std::deque<Entry> history;     // applied frames in stamp order, within the rewind horizon
   std::size_t history_base = 0;  // absolute index of history.front()
   std::deque<Checkpoint> checkpoints;
   TrackerStats stats;
@@ -107,7 +107,8 @@ struct Tracker::Impl {
       const bool pristine = core.tracks.empty() && core.last_stamp_ns == std::numeric_limits<TimeNs>::min();
       checkpoints.push_back({pristine ? std::numeric_limits<TimeNs>::min() : stamp_ns, absolute_index, core});
     } else if (const TimeNs last = checkpoints.back().stamp_ns;
-               last == std::numeric_limits<TimeNs>::min() || stamp_ns - last >= options.checkpoint_interval_ns) {
+               last == std::numeric_limits<TimeNs>::min() ||
+               stamp_ns - last >= options.checkpoint_interval_ns) {
       checkpoints.push_back({stamp_ns, absolute_index, core});
     }
   }
@@ -197,7 +198,8 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
                          options.process_noise * std::abs(dt * dt * dt);
     const double lateral = (p_cam.x() * p_cam.x() + p_cam.y() * p_cam.y()) / (p_cam.z() * p_cam.z());
     const double gain = 1.3 * focal / p_cam.z() * std::sqrt(1.0 + lateral);  // 1.3: distortion slack
-    const double radius = std::min(std::sqrt(options.gate_chi2 * (gain * gain * trace + sigma2_px)) + 1.0, 400.0);
+    const double radius =
+        std::min(std::sqrt(options.gate_chi2 * (gain * gain * trace + sigma2_px)) + 1.0, 400.0);
     if (!camera.in_image(*pixel, radius)) continue;
     in_view[i] = camera.in_image(*pixel, 0.0);
     grid.for_each_near(*pixel, radius, [&](std::size_t j) {
@@ -239,11 +241,13 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
     std::sort(blob_nodes.begin(), blob_nodes.end());
     blob_nodes.erase(std::unique(blob_nodes.begin(), blob_nodes.end()), blob_nodes.end());
     const auto t_node = [&](std::size_t t) {
-      return static_cast<std::size_t>(std::lower_bound(track_nodes.begin(), track_nodes.end(), t) - track_nodes.begin());
+      return static_cast<std::size_t>(std::lower_bound(track_nodes.begin(), track_nodes.end(), t) -
+                                      track_nodes.begin());
     };
     const auto b_node = [&](std::size_t b) {
       return track_nodes.size() +
-             static_cast<std::size_t>(std::lower_bound(blob_nodes.begin(), blob_nodes.end(), b) - blob_nodes.begin());
+             static_cast<std::size_t>(std::lower_bound(blob_nodes.begin(), blob_nodes.end(), b) -
+                                      blob_nodes.begin());
     };
     std::vector<std::size_t> parent(track_nodes.size() + blob_nodes.size());
     std::iota(parent.begin(), parent.end(), 0);
@@ -276,8 +280,9 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
           cost[static_cast<std::size_t>(r) * cols.size() + static_cast<std::size_t>(c)] = pairs[k].d2;
         }
         // Leaving a track and a blob both unmatched costs the gate: any gated pair is preferred.
-        const auto solution = solve_assignment(cost, static_cast<int>(rows.size()), static_cast<int>(cols.size()),
-                                               0.5 * options.gate_chi2, 0.5 * options.gate_chi2);
+        const auto solution =
+            solve_assignment(cost, static_cast<int>(rows.size()), static_cast<int>(cols.size()),
+                             0.5 * options.gate_chi2, 0.5 * options.gate_chi2);
         for (std::size_t r = 0; r < rows.size(); ++r) {
           if (solution[r] >= 0) chosen.emplace_back(rows[r], cols[static_cast<std::size_t>(solution[r])]);
         }
@@ -290,7 +295,8 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
         track.nis_average = track.nis_updates == 0 ? d2 : 0.8 * track.nis_average + 0.2 * d2;
         ++track.nis_updates;
         track.state = projected[t]->state;
-        update(track.state, projected[t]->projection, pixels[b], options.measurement_noise_px);  // Joseph form
+        update(track.state, projected[t]->projection, pixels[b],
+               options.measurement_noise_px);  // Joseph form
         note_update(track, camera_index, stamp);
         track_done[t] = 1;
         used[b] = 1;
@@ -328,7 +334,8 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
     track.state.P.setZero();
     const double sp = options.init_position_sigma_m;
-    const double sv = candidate.has_velocity ? options.init_measured_velocity_sigma_mps : options.init_velocity_sigma_mps;
+    const double sv =
+        candidate.has_velocity ? options.init_measured_velocity_sigma_mps : options.init_velocity_sigma_mps;
     track.state.P.diagonal().head<3>().setConstant(sp * sp);
     track.state.P.diagonal().tail<3>().setConstant(sv * sv);
     track.state.stamp_ns = stamp;
@@ -343,8 +350,9 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
 
 void Tracker::Impl::prune(TimeNs now_ns) {
   std::erase_if(core.tracks, [&](const Track& track) {
-    const bool implausible = track.nis_updates >= 4 && track.nis_average > (track.confirmed ? options.confirmed_max_nis
-                                                                                            : options.tentative_max_nis);
+    const bool implausible =
+        track.nis_updates >= 4 &&
+        track.nis_average > (track.confirmed ? options.confirmed_max_nis : options.tentative_max_nis);
     if (implausible || (!track.confirmed && track.misses >= options.tentative_max_misses)) {
       ++core.ghosts_deleted;
       ++core.tracks_deleted;
@@ -360,22 +368,27 @@ void Tracker::Impl::prune(TimeNs now_ns) {
 
   // Duplicates of one marker (two initiations before either took the blobs): keep the track
   // with the longer history. Checked every few ms, with a sweep along x.
-  if (now_ns - core.last_merge_check_ns < 5'000'000 && core.last_merge_check_ns != std::numeric_limits<TimeNs>::min())
+  if (now_ns - core.last_merge_check_ns < 5'000'000 &&
+      core.last_merge_check_ns != std::numeric_limits<TimeNs>::min())
     return;
   core.last_merge_check_ns = now_ns;
   std::vector<std::pair<Eigen::Vector3d, std::size_t>> positions;
   positions.reserve(core.tracks.size());
-  for (std::size_t i = 0; i < core.tracks.size(); ++i) positions.emplace_back(core.tracks[i].position_at(now_ns), i);
-  std::sort(positions.begin(), positions.end(), [](const auto& a, const auto& b) { return a.first.x() < b.first.x(); });
+  for (std::size_t i = 0; i < core.tracks.size(); ++i)
+    positions.emplace_back(core.tracks[i].position_at(now_ns), i);
+  std::sort(positions.begin(), positions.end(),
+            [](const auto& a, const auto& b) { return a.first.x() < b.first.x(); });
   std::vector<char> remove(core.tracks.size(), 0);
   const double d = options.merge_distance_m;
   for (std::size_t a = 0; a < positions.size(); ++a) {
-    for (std::size_t b = a + 1; b < positions.size() && positions[b].first.x() - positions[a].first.x() < d; ++b) {
+    for (std::size_t b = a + 1; b < positions.size() && positions[b].first.x() - positions[a].first.x() < d;
+         ++b) {
       const std::size_t i = positions[a].second, j = positions[b].second;
       if (remove[i] || remove[j] || (positions[a].first - positions[b].first).norm() >= d) continue;
       const auto& ti = core.tracks[i];
       const auto& tj = core.tracks[j];
-      const bool keep_i = std::make_tuple(ti.confirmed, ti.updates, -ti.id) >= std::make_tuple(tj.confirmed, tj.updates, -tj.id);
+      const bool keep_i = std::make_tuple(ti.confirmed, ti.updates, -ti.id) >=
+                          std::make_tuple(tj.confirmed, tj.updates, -tj.id);
       remove[keep_i ? j : i] = 1;
       ++core.tracks_merged;
     }
@@ -392,9 +405,9 @@ void Tracker::Impl::replay_with(const FeatureFrame& frame, int camera_index) {
   const std::size_t start = checkpoint->index - history_base;
   core = checkpoint->core;
   checkpoints.erase(checkpoint + 1, checkpoints.end());
-  const auto position = std::upper_bound(history.begin() + static_cast<std::ptrdiff_t>(start), history.end(),
-                                         frame.stamp_ns,
-                                         [](TimeNs stamp, const Entry& e) { return stamp < e.frame.stamp_ns; });
+  const auto position =
+      std::upper_bound(history.begin() + static_cast<std::ptrdiff_t>(start), history.end(), frame.stamp_ns,
+                       [](TimeNs stamp, const Entry& e) { return stamp < e.frame.stamp_ns; });
   history.insert(position, Entry{camera_index, frame});
   for (std::size_t i = start; i < history.size(); ++i) {
     maybe_checkpoint(history[i].frame.stamp_ns, history_base + i);
@@ -421,9 +434,8 @@ TrackRecord Tracker::Impl::to_record(const Track& track, TimeNs stamp_ns) const 
     record.status = TrackStatus::kConfirmed;
   }
   record.cameras = static_cast<int>(std::count_if(
-      track.camera_last_update.begin(), track.camera_last_update.end(), [&](TimeNs last) {
-        return last != 0 && stamp_ns - last <= options.recent_camera_window_ns;
-      }));
+      track.camera_last_update.begin(), track.camera_last_update.end(),
+      [&](TimeNs last) { return last != 0 && stamp_ns - last <= options.recent_camera_window_ns; }));
   return record;
 }
 
@@ -432,7 +444,9 @@ Tracker::~Tracker() = default;
 Tracker::Tracker(Tracker&&) noexcept = default;
 Tracker& Tracker::operator=(Tracker&&) noexcept = default;
 
-const TrackerOptions& Tracker::options() const { return impl_->options; }
+const TrackerOptions& Tracker::options() const {
+  return impl_->options;
+}
 
 void Tracker::set_calibration(const SystemCalibration& calibration) {
   for (const auto& camera : calibration.cameras) set_camera(camera);
@@ -452,7 +466,9 @@ void Tracker::set_camera(const CameraCalibration& camera) {
   impl.cameras_changed();
 }
 
-bool Tracker::has_camera(const std::string& camera_id) const { return impl_->camera_index.count(camera_id) != 0; }
+bool Tracker::has_camera(const std::string& camera_id) const {
+  return impl_->camera_index.count(camera_id) != 0;
+}
 
 CameraCounters& Tracker::counters_for(const std::string& camera_id) {
   // Garbage camera ids must not grow this map without bound.
@@ -534,7 +550,9 @@ TimeNs Tracker::last_stamp_ns() const {
   return last == std::numeric_limits<TimeNs>::min() ? 0 : last;
 }
 
-std::size_t Tracker::live_track_count() const { return impl_->core.tracks.size(); }
+std::size_t Tracker::live_track_count() const {
+  return impl_->core.tracks.size();
+}
 
 std::array<std::size_t, 3> Tracker::track_counts(TimeNs stamp_ns) const {
   std::array<std::size_t, 3> counts{};
@@ -550,7 +568,8 @@ std::vector<TrackRecord> Tracker::tracks_at(TimeNs stamp_ns) const {
   for (const auto& track : impl_->core.tracks) {
     if (track.confirmed) records.push_back(impl_->to_record(track, stamp_ns));
   }
-  std::sort(records.begin(), records.end(), [](const TrackRecord& a, const TrackRecord& b) { return a.id < b.id; });
+  std::sort(records.begin(), records.end(),
+            [](const TrackRecord& a, const TrackRecord& b) { return a.id < b.id; });
   return records;
 }
 

@@ -47,7 +47,8 @@ void UsageMonitor::note_received(const std::string& camera_id, double latency_ms
   camera.latency.add(latency_ms);
 }
 
-void UsageMonitor::note_dropped(const std::string& camera_id, const std::string& reason, std::uint64_t frames) {
+void UsageMonitor::note_dropped(const std::string& camera_id, const std::string& reason,
+                                std::uint64_t frames) {
   camera(camera_id).dropped_before_tracker += frames;
   reasons_[reason] += frames;
 }
@@ -56,7 +57,8 @@ void UsageMonitor::note_reason(const std::string& reason, std::uint64_t n) {
   if (n != 0) reasons_[reason] += n;
 }
 
-EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns, double latency_window_ms) const {
+EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns,
+                                       double latency_window_ms) const {
   EstimatorUsage usage;
   usage.stamp_ns = stamp_ns;
   const auto counts = tracker.track_counts(tracker.last_stamp_ns());
@@ -107,12 +109,13 @@ std::vector<std::string> EstimatorUsage::lines() const {
   std::vector<std::string> out;
   char buffer[512];
   for (const auto& c : cameras) {
-    std::snprintf(buffer, sizeof buffer,
-                  "camera %s: frames %llu used %llu late %llu dropped %llu utilisation %.4f latency p50 %.3f ms "
-                  "p99 %.3f ms",
-                  c.camera_id.c_str(), static_cast<unsigned long long>(c.frames), static_cast<unsigned long long>(c.used),
-                  static_cast<unsigned long long>(c.late), static_cast<unsigned long long>(c.dropped), c.utilisation,
-                  c.latency_p50_ms, c.latency_p99_ms);
+    std::snprintf(
+        buffer, sizeof buffer,
+        "camera %s: frames %llu used %llu late %llu dropped %llu utilisation %.4f latency p50 %.3f ms "
+        "p99 %.3f ms",
+        c.camera_id.c_str(), static_cast<unsigned long long>(c.frames),
+        static_cast<unsigned long long>(c.used), static_cast<unsigned long long>(c.late),
+        static_cast<unsigned long long>(c.dropped), c.utilisation, c.latency_p50_ms, c.latency_p99_ms);
     out.emplace_back(buffer);
   }
   std::string reasons = "dropped by reason:";

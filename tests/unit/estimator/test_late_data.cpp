@@ -85,12 +85,13 @@ TEST(LateData, TenPercentOfFramesFiveToThirtyMsLateAreAllUsedAndAccuracyHolds) {
     EXPECT_EQ(late.stats.frames_too_late, 0u);
     // With a 5 ms window about 10% of frames come after it and are replayed.
     if (window_ms == 5.0) EXPECT_GT(late.stats.frames_late, frames / 20);
-    std::printf("window %.0f ms: RMSE in order %.4f mm, with 10%% late %.4f mm (%+.2f%%), %llu late frames "
-                "replayed, %llu replays, min tracked %.4f\n",
-                window_ms, in_order.evaluation.rmse_m * 1e3, late.evaluation.rmse_m * 1e3,
-                100.0 * (late.evaluation.rmse_m / in_order.evaluation.rmse_m - 1.0),
-                static_cast<unsigned long long>(late.stats.frames_late),
-                static_cast<unsigned long long>(late.stats.replays), late.evaluation.min_tracked_fraction);
+    std::printf(
+        "window %.0f ms: RMSE in order %.4f mm, with 10%% late %.4f mm (%+.2f%%), %llu late frames "
+        "replayed, %llu replays, min tracked %.4f\n",
+        window_ms, in_order.evaluation.rmse_m * 1e3, late.evaluation.rmse_m * 1e3,
+        100.0 * (late.evaluation.rmse_m / in_order.evaluation.rmse_m - 1.0),
+        static_cast<unsigned long long>(late.stats.frames_late),
+        static_cast<unsigned long long>(late.stats.replays), late.evaluation.min_tracked_fraction);
     EXPECT_LE(late.evaluation.rmse_m, 1.05 * in_order.evaluation.rmse_m);
     EXPECT_GE(late.evaluation.min_tracked_fraction, 0.99);
     EXPECT_EQ(late.evaluation.id_switch_count, 0u);
@@ -101,8 +102,9 @@ TEST(LateData, ReplayGivesTheSameStateAsInOrderProcessing) {
   // The final state after a late frame equals the state of processing everything in order.
   const Scene scene = Scene::load(std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/demo.yaml");
   auto frames = simulate(scene, 0.0, 3);
-  std::stable_sort(frames.begin(), frames.end(),
-                   [](const Delivered& a, const Delivered& b) { return a.frame.stamp_ns < b.frame.stamp_ns; });
+  std::stable_sort(frames.begin(), frames.end(), [](const Delivered& a, const Delivered& b) {
+    return a.frame.stamp_ns < b.frame.stamp_ns;
+  });
   frames.resize(600);
   Tracker in_order, shuffled;
   in_order.set_calibration(scene.calibration());
@@ -111,7 +113,8 @@ TEST(LateData, ReplayGivesTheSameStateAsInOrderProcessing) {
   // Hold every 7th frame back by three frames.
   std::vector<std::size_t> order(frames.size());
   std::iota(order.begin(), order.end(), 0);
-  for (std::size_t i = 7; i + 3 < order.size(); i += 7) std::rotate(order.begin() + i, order.begin() + i + 1, order.begin() + i + 4);
+  for (std::size_t i = 7; i + 3 < order.size(); i += 7)
+    std::rotate(order.begin() + i, order.begin() + i + 1, order.begin() + i + 4);
   for (std::size_t i : order) shuffled.process(frames[i].frame);
   EXPECT_GT(shuffled.stats().frames_late, 50u);
   const auto a = in_order.current_tracks();

@@ -29,12 +29,12 @@ struct TrackerOptions {
   double init_position_sigma_m = 0.01;
   double init_velocity_sigma_mps = 2.0;           // velocity unknown at initiation
   double init_measured_velocity_sigma_mps = 0.5;  // velocity from the tracklets' pixel velocities
-  int confirm_cameras = 3;              // distinct cameras that confirm a track ...
-  int confirm_updates = 12;             // ... or this many updates from at least two cameras
-  int tentative_max_misses = 4;         // a tentative track absent where it should be seen: ghost
-  double tentative_max_nis = 4.0;       // moving average of d² above this: fed by clutter, deleted
+  int confirm_cameras = 3;                        // distinct cameras that confirm a track ...
+  int confirm_updates = 12;                       // ... or this many updates from at least two cameras
+  int tentative_max_misses = 4;                   // a tentative track absent where it should be seen: ghost
+  double tentative_max_nis = 4.0;                 // moving average of d² above this: fed by clutter, deleted
   double confirmed_max_nis = 8.0;
-  TimeNs coast_after_ns = 50'000'000;   // no update for this long: coasting
+  TimeNs coast_after_ns = 50'000'000;  // no update for this long: coasting
   TimeNs delete_after_ns = 300'000'000;
   TimeNs tentative_delete_after_ns = 100'000'000;
   double merge_distance_m = 0.005;               // two tracks closer than this are one marker
