@@ -9,13 +9,14 @@ namespace panoptes::estimator {
 
 namespace {
 
-// Square minimum-cost perfect matching (Kuhn–Munkres with row/column potentials and shortest
-// augmenting paths). `a` is n x n, 1-based in the classic formulation; returns column of each row.
-std::vector<int> hungarian_square(const std::vector<double>& a, int n) {
+// Minimum-cost matching of every one of n rows to distinct columns of an n x m matrix, n <= m
+// (Kuhn–Munkres with row/column potentials and shortest augmenting paths, O(n^2 m)). `a` is
+// row-major; returns the column of each row.
+std::vector<int> hungarian(const std::vector<double>& a, int n, int m) {
   constexpr double kInf = std::numeric_limits<double>::max() / 4;
-  std::vector<double> u(n + 1, 0.0), v(n + 1, 0.0), min_to(n + 1);
-  std::vector<int> p(n + 1, 0), way(n + 1, 0);  // p[j]: row matched to column j (0 = none)
-  std::vector<char> used(n + 1);
+  std::vector<double> u(n + 1, 0.0), v(m + 1, 0.0), min_to(m + 1);
+  std::vector<int> p(m + 1, 0), way(m + 1, 0);  // p[j]: row matched to column j (0 = none)
+  std::vector<char> used(m + 1);
   for (int i = 1; i <= n; ++i) {
     p[0] = i;
     int j0 = 0;
@@ -26,9 +27,10 @@ std::vector<int> hungarian_square(const std::vector<double>& a, int n) {
       const int i0 = p[j0];
       double delta = kInf;
       int j1 = 0;
-      for (int j = 1; j <= n; ++j) {
+      const double* row = &a[static_cast<std::size_t>(i0 - 1) * m];
+      for (int j = 1; j <= m; ++j) {
         if (used[j]) continue;
-        const double current = a[(i0 - 1) * n + (j - 1)] - u[i0] - v[j];
+        const double current = row[j - 1] - u[i0] - v[j];
         if (current < min_to[j]) {
           min_to[j] = current;
           way[j] = j0;
@@ -38,7 +40,7 @@ std::vector<int> hungarian_square(const std::vector<double>& a, int n) {
           j1 = j;
         }
       }
-      for (int j = 0; j <= n; ++j) {
+      for (int j = 0; j <= m; ++j) {
         if (used[j]) {
           u[p[j]] += delta;
           v[j] -= delta;
@@ -55,7 +57,7 @@ std::vector<int> hungarian_square(const std::vector<double>& a, int n) {
     } while (j0 != 0);
   }
   std::vector<int> column_of_row(n, -1);
-  for (int j = 1; j <= n; ++j) {
+  for (int j = 1; j <= m; ++j) {
     if (p[j] != 0) column_of_row[p[j] - 1] = j - 1;
   }
   return column_of_row;
@@ -69,33 +71,25 @@ std::vector<int> solve_assignment(const std::vector<double>& cost, int rows, int
     throw std::invalid_argument("solve_assignment: cost matrix size does not match rows x cols");
   std::vector<int> result(rows, -1);
   if (rows == 0 || cols == 0) return result;
-  // Forbidden pairs become a finite price above any feasible alternative, so the square problem
-  // always has a perfect matching; such pairs are discarded afterwards.
+  // Total = sum over pairs of (c - row_cost - col_cost) + rows * row_cost + cols * col_cost, so a
+  // pair is worth taking when its reduced cost is negative. Each row also gets a private "stay
+  // unassigned" column of reduced cost 0; the problem is then rows x (cols + rows), solved in
+  // O(rows^2 (cols + rows)). Forbidden or unprofitable pairs get a price above any alternative.
   const double leave_both = unassigned_row_cost + unassigned_col_cost;
-  double big = 1.0 + std::abs(leave_both);
-  for (double c : cost) {
-    if (std::isfinite(c)) big += std::abs(c);
-  }
-  big *= 2.0;
-  // Layout: [rows x cols real | rows x rows row-dummies]
-  //         [cols x cols col-dummies | cols x rows zeros]
-  const int n = rows + cols;
-  std::vector<double> square(static_cast<std::size_t>(n) * n, big);
+  const double big = 1.0;  // reduced costs of usable pairs are < 0, the private columns 0
+  const int m = cols + rows;
+  std::vector<double> reduced(static_cast<std::size_t>(rows) * m, big);
   for (int i = 0; i < rows; ++i) {
     for (int j = 0; j < cols; ++j) {
       const double c = cost[static_cast<std::size_t>(i) * cols + j];
-      if (std::isfinite(c) && c < leave_both) square[static_cast<std::size_t>(i) * n + j] = c;
+      if (std::isfinite(c) && c < leave_both) reduced[static_cast<std::size_t>(i) * m + j] = c - leave_both;
     }
-    square[static_cast<std::size_t>(i) * n + cols + i] = unassigned_row_cost;
+    reduced[static_cast<std::size_t>(i) * m + cols + i] = 0.0;
   }
-  for (int k = 0; k < cols; ++k) {
-    square[static_cast<std::size_t>(rows + k) * n + k] = unassigned_col_cost;
-    for (int i = 0; i < rows; ++i) square[static_cast<std::size_t>(rows + k) * n + cols + i] = 0.0;
-  }
-  const auto matching = hungarian_square(square, n);
+  const auto matching = hungarian(reduced, rows, m);
   for (int i = 0; i < rows; ++i) {
     const int j = matching[i];
-    if (j >= 0 && j < cols && square[static_cast<std::size_t>(i) * n + j] < big) result[i] = j;
+    if (j >= 0 && j < cols && reduced[static_cast<std::size_t>(i) * m + j] < 0.0) result[i] = j;
   }
   return result;
 }
