@@ -87,12 +87,15 @@ class Intake {
       : tracker_(tracker), screen_(options.screen), options_(options) {}
 
   // Screens a frame that arrived at `frame.received_ns` (0: unknown). False: rejected, counted.
-  bool admit(panoptes::FeatureFrame& frame, TimeNs reference_ns) {
-    const double latency_ms = frame.received_ns != 0
-                                  ? panoptes::ns_to_seconds(frame.received_ns - frame.stamp_ns) * 1e3
-                                  : std::numeric_limits<double>::quiet_NaN();  // unknown
+  // Live frames are also rejected when stamped ahead of the wall clock (`live`).
+  bool admit(panoptes::FeatureFrame& frame, TimeNs reference_ns, bool live) {
+    // In double: garbage stamps must not overflow.
+    const double latency_ms =
+        frame.received_ns != 0
+            ? (static_cast<double>(frame.received_ns) - static_cast<double>(frame.stamp_ns)) * 1e-6
+            : std::numeric_limits<double>::quiet_NaN();  // unknown
     monitor_.note_received(frame.camera_id, latency_ms);
-    if (screen_.screen(frame, reference_ns)) return true;
+    if (live ? screen_.screen_live(frame, reference_ns) : screen_.screen(frame, reference_ns)) return true;
     monitor_.note_dropped(frame.camera_id, "", 1);  // the reason is in the screen's counts
     return false;
   }
@@ -188,7 +191,7 @@ int run_offline(const Options& options, est::Tracker& tracker) {
     const std::size_t i = order[n];
     panoptes::FeatureFrame& frame = frames[i];
     if (options.replay_arrival && frame.received_ns == 0) frame.received_ns = frame.stamp_ns;
-    if (intake.admit(frame, references[i])) {
+    if (intake.admit(frame, references[i], false)) {
       if (options.replay_arrival) {
         const TimeNs now = frame.received_ns;
         inbox.push(std::move(frame));
@@ -296,7 +299,7 @@ int run_live(const Options& options, est::Tracker& tracker) {
     bool admitted = false;
     {
       std::lock_guard<std::mutex> lock(intake_mutex);
-      admitted = intake.admit(frame, frame.received_ns);
+      admitted = intake.admit(frame, frame.received_ns, true);
     }
     if (admitted) inbox.push(std::move(frame));
   });

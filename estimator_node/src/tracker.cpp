@@ -56,7 +56,7 @@ struct Core {
   TimeNs last_stamp_ns = std::numeric_limits<TimeNs>::min();
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
-                ghosts_deleted = 0, blobs_associated = 0;
+                ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
 };
 
@@ -319,7 +319,14 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
                              const std::vector<Eigen::Vector2d>& pixels, const std::vector<char>& used) {
   std::vector<Eigen::Vector2d> unmatched;
   for (std::size_t j = 0; j < pixels.size(); ++j) {
-    if (!used[j]) unmatched.push_back(pixels[j]);
+    if (used[j]) continue;
+    // Initiation pairs blobs across cameras, so its cost grows with their square: a frame full
+    // of garbage must not stall the tracker. Real frames leave a handful unmatched.
+    if (unmatched.size() >= options.max_unmatched_per_frame) {
+      ++core.blobs_not_initiated;
+      continue;
+    }
+    unmatched.push_back(pixels[j]);
   }
   const TimeNs stamp = frame.stamp_ns;
   const double near = 4.0 * options.merge_distance_m;
@@ -368,8 +375,8 @@ void Tracker::Impl::prune(TimeNs now_ns) {
 
   // Duplicates of one marker (two initiations before either took the blobs): keep the track
   // with the longer history. Checked every few ms, with a sweep along x.
-  if (now_ns - core.last_merge_check_ns < 5'000'000 &&
-      core.last_merge_check_ns != std::numeric_limits<TimeNs>::min())
+  if (core.last_merge_check_ns != std::numeric_limits<TimeNs>::min() &&
+      now_ns - core.last_merge_check_ns < 5'000'000)
     return;
   core.last_merge_check_ns = now_ns;
   std::vector<std::pair<Eigen::Vector3d, std::size_t>> positions;
@@ -542,6 +549,7 @@ const TrackerStats& Tracker::stats() const {
   s.tracks_deleted = core.tracks_deleted;
   s.tracks_merged = core.tracks_merged;
   s.ghosts_deleted = core.ghosts_deleted;
+  s.blobs_not_initiated = core.blobs_not_initiated;
   return s;
 }
 

@@ -75,6 +75,7 @@ EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns,
   if (stats.frames_unknown_camera) usage.counters["uncalibrated_camera"] += stats.frames_unknown_camera;
   if (stats.frames_too_late) usage.counters["too_late"] += stats.frames_too_late;
   if (stats.blobs_non_finite) usage.counters["non_finite_blob_in_tracker"] += stats.blobs_non_finite;
+  if (stats.blobs_not_initiated) usage.counters["blobs_not_initiated"] += stats.blobs_not_initiated;
 
   const auto& tracked = tracker.camera_counters();
   std::map<std::string, CameraUsage> merged;

@@ -20,8 +20,10 @@
 namespace panoptes::estimator {
 
 struct FrameScreenOptions {
-  // A real frame has at most a few hundred blobs; 4096 is far above any rig and bounds the
-  // tracker's work per frame.
+  // A real frame has at most a few hundred blobs; 4096 is far above any rig. It bounds memory and
+  // this screen's work, not the tracker's: thousands of plausible random blobs in a calibrated
+  // camera each start pairings, and a frame of 4096 cost the tracker up to 2 s (512: 10-40 ms) on
+  // the development machine. A deployment that knows its marker count should set this near it.
   std::size_t max_blobs = 4096;
   // |stamp - reference| beyond this rejects the frame. Live clocks are synchronised to well under
   // a millisecond and the inbox waits tens of ms, so 10 s only catches broken clocks.

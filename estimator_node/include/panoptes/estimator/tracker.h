@@ -42,6 +42,7 @@ struct TrackerOptions {
   TimeNs rewind_horizon_ns = 500'000'000;        // late frames up to this much older are replayed
   TimeNs checkpoint_interval_ns = 10'000'000;    // state snapshots for rewinding
   double grid_cell_px = 32.0;                    // spatial index of a frame's blobs
+  std::size_t max_unmatched_per_frame = 256;     // unmatched blobs of one frame offered to initiation
 
   void print(std::ostream& out) const;
 };
@@ -60,7 +61,8 @@ struct TrackerStats {
   std::uint64_t tracks_confirmed = 0;
   std::uint64_t tracks_deleted = 0;
   std::uint64_t tracks_merged = 0;
-  std::uint64_t ghosts_deleted = 0;  // tentative tracks that cameras did not see
+  std::uint64_t ghosts_deleted = 0;       // tentative tracks that cameras did not see
+  std::uint64_t blobs_not_initiated = 0;  // unmatched blobs beyond max_unmatched_per_frame
 };
 
 // What became of each camera's frames (a camera's utilisation is used / frames).
