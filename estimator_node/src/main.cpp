@@ -80,7 +80,9 @@ class UnknownCameraWarnings {
 };
 
 // Everything between a received frame and the tracker, shared by the offline and live modes:
-// the screen for bad input, usage statistics, the tracker and its timing.
+// the screen for bad input, usage statistics, the tracker and its timing. admit() runs on DDS
+// listener threads, process() on the estimator thread that owns the tracker; the lock covers only
+// the screen and the statistics, so listeners never wait for a tracker update.
 class Intake {
  public:
   Intake(est::Tracker& tracker, const Options& options)
@@ -94,6 +96,7 @@ class Intake {
         frame.received_ns != 0
             ? (static_cast<double>(frame.received_ns) - static_cast<double>(frame.stamp_ns)) * 1e-6
             : std::numeric_limits<double>::quiet_NaN();  // unknown
+    std::lock_guard<std::mutex> lock(mutex_);
     monitor_.note_received(frame.camera_id, latency_ms);
     if (live ? screen_.screen_live(frame, reference_ns) : screen_.screen(frame, reference_ns)) return true;
     monitor_.note_dropped(frame.camera_id, "", 1);  // the reason is in the screen's counts
@@ -103,13 +106,19 @@ class Intake {
   est::FrameOutcome process(const panoptes::FeatureFrame& frame) {
     const auto start = std::chrono::steady_clock::now();
     const auto outcome = tracker_.process(frame);
-    monitor_.note_update_time(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    const double elapsed_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      monitor_.note_update_time(elapsed_ms);
+    }
     if (outcome == est::FrameOutcome::kUnknownCamera) warnings_.note(frame.camera_id);
     return outcome;
   }
 
+  // Estimator thread only (reads the tracker).
   est::EstimatorUsage usage(TimeNs stamp_ns, std::uint64_t inbox_drops) const {
+    std::lock_guard<std::mutex> lock(mutex_);
     auto usage = monitor_.summarize(tracker_, stamp_ns, options_.latency_window_ms);
     for (const auto& [reason, n] : screen_.counts()) usage.counters[reason] += n;
     if (inbox_drops) usage.counters["inbox_overflow"] += inbox_drops;
@@ -118,12 +127,17 @@ class Intake {
 
   void print_summary(std::uint64_t inbox_drops, std::size_t bad_lines) const {
     const auto& s = tracker_.stats();
+    std::uint64_t rejected = 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      rejected = screen_.stats().frames_rejected;
+    }
     log("processed " + std::to_string(s.frames) + " frames (" + std::to_string(s.frames_late) +
         " late and replayed, " + std::to_string(s.frames_too_late) + " too late, " +
-        std::to_string(s.frames_unknown_camera) + " from uncalibrated cameras, " +
-        std::to_string(screen_.stats().frames_rejected) + " rejected, " + std::to_string(bad_lines) +
-        " malformed lines); tracks created " + std::to_string(s.tracks_created) + ", confirmed " +
-        std::to_string(s.tracks_confirmed) + ", ghosts removed " + std::to_string(s.ghosts_deleted));
+        std::to_string(s.frames_unknown_camera) + " from uncalibrated cameras, " + std::to_string(rejected) +
+        " rejected, " + std::to_string(bad_lines) + " malformed lines); tracks created " +
+        std::to_string(s.tracks_created) + ", confirmed " + std::to_string(s.tracks_confirmed) +
+        ", ghosts removed " + std::to_string(s.ghosts_deleted));
     for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops).lines()) log(line);
   }
 
@@ -133,6 +147,7 @@ class Intake {
   est::UsageMonitor monitor_;
   UnknownCameraWarnings warnings_;
   const Options& options_;
+  mutable std::mutex mutex_;  // screen_ and monitor_
 };
 
 int run_offline(const Options& options, est::Tracker& tracker) {
@@ -284,7 +299,6 @@ int run_live(const Options& options, est::Tracker& tracker) {
   std::mutex info_mutex;
   std::vector<panoptes::CameraCalibration> announced;  // from CameraInfo, applied on the estimator thread
   // DDS listener threads screen and count frames; the estimator thread owns the tracker.
-  std::mutex intake_mutex;
   Intake intake(tracker, options);
 
   auto info_reader = bus.make_reader<msg::CameraInfo>([&](msg::CameraInfo&& info) {
@@ -296,12 +310,7 @@ int run_live(const Options& options, est::Tracker& tracker) {
   auto feature_reader = bus.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&& message) {
     auto frame = panoptes::dds::from_message(message);
     frame.received_ns = panoptes::wall_now_ns();
-    bool admitted = false;
-    {
-      std::lock_guard<std::mutex> lock(intake_mutex);
-      admitted = intake.admit(frame, frame.received_ns, true);
-    }
-    if (admitted) inbox.push(std::move(frame));
+    if (intake.admit(frame, frame.received_ns, true)) inbox.push(std::move(frame));
   });
   auto track_writer = bus.make_writer<msg::TrackFrame>();
   auto prediction_writer = bus.make_writer<msg::Predictions>();
@@ -334,12 +343,7 @@ int run_live(const Options& options, est::Tracker& tracker) {
     prediction_writer->write(message);
   };
   auto handle = [&](const panoptes::FeatureFrame& frame) {
-    est::FrameOutcome outcome;
-    {
-      std::lock_guard<std::mutex> lock(intake_mutex);
-      outcome = intake.process(frame);
-    }
-    if (outcome != est::FrameOutcome::kProcessed) return;
+    if (intake.process(frame) != est::FrameOutcome::kProcessed) return;
     const auto tracks = tracker.current_tracks();
     msg::TrackFrame message;
     message.stamp_ns(frame.stamp_ns);
@@ -372,11 +376,7 @@ int run_live(const Options& options, est::Tracker& tracker) {
     for (const auto& frame : inbox.pop_due(now)) handle(frame);
     if (now >= next_status) {
       next_status += panoptes::seconds_to_ns(options.status_period_s);
-      est::EstimatorUsage usage;
-      {
-        std::lock_guard<std::mutex> lock(intake_mutex);
-        usage = intake.usage(now, inbox.drops());
-      }
+      const est::EstimatorUsage usage = intake.usage(now, inbox.drops());
       status_writer->write(to_message(usage));
       if (!options.quiet) {
         std::string line =
@@ -397,7 +397,6 @@ int run_live(const Options& options, est::Tracker& tracker) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   for (const auto& frame : inbox.drain()) handle(frame);
-  std::lock_guard<std::mutex> lock(intake_mutex);
   intake.print_summary(inbox.drops(), 0);
   return panoptes::kExitOk;
 }
