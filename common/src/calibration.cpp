@@ -181,6 +181,13 @@ BodyDefinition read_body_definition(const YamlReader& item, std::set<std::string
     require_finite(item, "markers[" + std::to_string(i) + "]", rows[i]);
     body.markers.emplace_back(rows[i][0], rows[i][1], rows[i][2]);
   }
+  const std::string type = item.get_string("type", "passive");
+  if (type == "led7") {
+    body.kind = BodyKind::kLed7;
+    if (body.markers.size() != 7) item.fail("markers", "a led7 body has exactly 7 markers (M0..M6 of seed 004)");
+  } else if (type != "passive") {
+    item.fail("type", "expected 'passive' or 'led7', got '" + type + "'");
+  }
   return body;
 }
 
@@ -190,6 +197,7 @@ void save_bodies(const std::vector<BodyDefinition>& bodies, const std::filesyste
   for (const auto& body : bodies) {
     out << YAML::BeginMap;
     out << YAML::Key << "name" << YAML::Value << YAML::DoubleQuoted << body.name;
+    if (body.kind == BodyKind::kLed7) out << YAML::Key << "type" << YAML::Value << "led7";
     out << YAML::Key << "markers" << YAML::Value << YAML::BeginSeq;
     for (const Eigen::Vector3d& marker : body.markers)
       emit_numbers(out, {marker.x(), marker.y(), marker.z()});

@@ -211,7 +211,13 @@ std::string to_json_line(const PoseRecord& pose) {
   Json json = {{"stamp_ns", pose.stamp_ns},
                {"body", pose.body},
                {"p", {pose.p.x(), pose.p.y(), pose.p.z()}},
-               {"q", {pose.q.x(), pose.q.y(), pose.q.z(), pose.q.w()}}};
+               {"q", {pose.q.x(), pose.q.y(), pose.q.z(), pose.q.w()}},
+               {"v", {pose.v.x(), pose.v.y(), pose.v.z()}},
+               {"w", {pose.w.x(), pose.w.y(), pose.w.z()}},
+               {"horizon_ns", pose.horizon_ns},
+               {"quality", pose.quality},
+               {"cameras", pose.cameras},
+               {"sigma", pose.sigma}};
   return dump(json);
 }
 
@@ -281,6 +287,9 @@ Parsed<PoseRecord> parse_pose(std::string_view line) {
     pose.body = get_string(json, "body", true);
     get_numbers<3>(json, "p", true, pose.p);
     get_numbers<4>(json, "q", true, pose.q);
+    get_numbers<3>(json, "v", false, pose.v);
+    get_numbers<3>(json, "w", false, pose.w);
+    pose.horizon_ns = get_int64(json, "horizon_ns", "", false);
     return pose;
   });
 }

@@ -6,9 +6,12 @@
 #include <deque>
 #include <limits>
 #include <numeric>
+#include <set>
+#include <stdexcept>
 #include <tuple>
 
 #include "blob_grid.h"
+#include "panoptes/config.h"
 #include "panoptes/estimator/assignment.h"
 
 namespace panoptes::estimator {
@@ -58,6 +61,7 @@ struct Core {
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
                 ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
+  BodySet bodies;
 };
 
 struct Checkpoint {
@@ -143,6 +147,7 @@ struct Tracker::Impl {
   void initiate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
                 const std::vector<char>& used);
   void prune(TimeNs now_ns);
+  std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
   void replay_with(const FeatureFrame& frame, int camera_index);
   TrackRecord to_record(const Track& track, TimeNs stamp_ns) const;
 };
@@ -156,9 +161,30 @@ void Tracker::Impl::apply(const FeatureFrame& frame, int camera_index) {
     pixels.emplace_back(frame.blobs[j].x, frame.blobs[j].y);
     if (!std::isfinite(pixels.back().x()) || !std::isfinite(pixels.back().y())) used[j] = 1;
   }
+  // Bodies and point tracks use the same blobs: the point tracks of body markers feed
+  // identification, and the poses stay independent of the point tracks' lifecycle.
+  const std::vector<char> excluded = used;
   associate(frame, camera_index, pixels, used);
   initiate(frame, camera_index, pixels, used);
   prune(frame.stamp_ns);
+  if (!core.bodies.empty()) {
+    std::vector<char> taken(pixels.size(), 0);
+    core.bodies.process_frame(camera_index, *models[camera_index], frame.stamp_ns, pixels, excluded, taken);
+    if (core.bodies.wants_points(frame.stamp_ns)) core.bodies.identify(frame.stamp_ns, confirmed_points(frame.stamp_ns));
+  }
+}
+
+std::vector<TrackedPoint> Tracker::Impl::confirmed_points(TimeNs stamp_ns) const {
+  std::vector<TrackedPoint> points;
+  for (const Track& track : core.tracks) {
+    if (!track.confirmed || stamp_ns - track.last_update_ns > options.coast_after_ns) continue;
+    TrackedPoint point;
+    point.p = track.position_at(stamp_ns);
+    point.v = track.state.velocity();
+    point.sigma_m = std::sqrt(std::max(0.0, track.state.P.block<3, 3>(0, 0).trace() / 3.0));
+    points.push_back(point);
+  }
+  return points;
 }
 
 void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
@@ -472,6 +498,31 @@ void Tracker::set_camera(const CameraCalibration& camera) {
   }
   impl.cameras_changed();
 }
+
+void Tracker::set_bodies(const std::vector<BodyDefinition>& bodies, const std::string& file_for_errors) {
+  std::set<std::string> names;
+  for (const auto& body : bodies) {
+    validate_body(body, file_for_errors);
+    if (!names.insert(body.name).second)
+      throw ConfigError(file_for_errors, "body '" + body.name + "'", "duplicate body name");
+  }
+  // Rewinds must see the same definitions: checkpoints are updated alike.
+  try {
+    BodySet probe = impl_->core.bodies;
+    probe.set_definitions(bodies, impl_->options.bodies);
+  } catch (const std::invalid_argument& error) {  // a led7 layout that is not seed 004's
+    throw ConfigError(file_for_errors, "bodies", error.what());
+  }
+  impl_->core.bodies.set_definitions(bodies, impl_->options.bodies);
+  for (auto& checkpoint : impl_->checkpoints) checkpoint.core.bodies.set_definitions(bodies, impl_->options.bodies);
+}
+
+std::vector<PoseRecord> Tracker::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) const {
+  return impl_->core.bodies.poses_at(stamp_ns, horizon_ns);
+}
+
+const BodyStats& Tracker::body_stats() const { return impl_->core.bodies.stats(); }
+std::size_t Tracker::body_count() const { return impl_->core.bodies.size(); }
 
 bool Tracker::has_camera(const std::string& camera_id) const {
   return impl_->camera_index.count(camera_id) != 0;

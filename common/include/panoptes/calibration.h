@@ -36,9 +36,15 @@ SystemCalibration load_calibration(const std::filesystem::path& path);
 void save_calibration(const SystemCalibration& calibration, const std::filesystem::path& path);
 std::string calibration_to_yaml(const SystemCalibration& calibration);
 
+// How a body is found: passive markers are identified from triangulated 3D points; a 7-LED marker
+// (seed 004, docs/monocular_markers.md) also from the blobs of a single camera. YAML key `type`:
+// `passive` (default) or `led7`.
+enum class BodyKind { kPassive, kLed7 };
+
 struct BodyDefinition {
   std::string name;
   std::vector<Eigen::Vector3d> markers;  // metres, body frame
+  BodyKind kind = BodyKind::kPassive;
 };
 
 std::vector<BodyDefinition> load_bodies(const std::filesystem::path& path);

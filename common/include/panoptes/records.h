@@ -54,6 +54,13 @@ struct PoseRecord {
   std::string body;
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   Eigen::Vector4d q = Eigen::Vector4d(0, 0, 0, 1);  // x, y, z, w
+  // Optional (extra JSON keys "v", "w", "horizon_ns", "quality", "cameras", "cov"):
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();  // linear velocity, world, m/s
+  Eigen::Vector3d w = Eigen::Vector3d::Zero();  // angular velocity, world, rad/s
+  TimeNs horizon_ns = 0;                        // the pose is predicted this far past stamp_ns
+  double quality = 0.0;                         // fraction of the markers seen recently, 0..1
+  int cameras = 0;                              // cameras that updated the body recently
+  std::array<double, 6> sigma{};                // 1-σ: x, y, z (m), rotation about x, y, z (rad)
 };
 
 // One JSON object per line. Parsing errors come back as a message, never an exception.

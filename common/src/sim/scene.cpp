@@ -52,6 +52,11 @@ struct BodySpec {
   double marker_radius = kDefaultMarkerRadius;
   sim::Path path;
   sim::Rotation rotation;
+  BodyKind kind = BodyKind::kPassive;
+  // occlusion: a marker is hidden from cameras more than facing_angle away from its normal: the
+  // body-frame `normal` if given, else outward from the markers' centroid. 0: never hidden.
+  double facing_angle_rad = 0.0;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
 };
 
 // Reads a camera key from the camera's own map, falling back to the scene's `defaults`, so that
@@ -466,11 +471,25 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
 
   std::set<std::string> body_names;
   for (const YamlReader& body : root.sequence_or_empty("bodies")) {
-    reject_unknown_keys(body, {"name", "markers", "marker_radius", "path", "rotation"});
+    reject_unknown_keys(body, {"name", "markers", "type", "marker_radius", "path", "rotation", "occlusion"});
     BodySpec spec;
     BodyDefinition definition = read_body_definition(body, body_names);
     spec.name = std::move(definition.name);
     spec.markers = std::move(definition.markers);
+    spec.kind = definition.kind;
+    if (body.has("occlusion")) {
+      const YamlReader occlusion = body.child("occlusion");
+      reject_unknown_keys(occlusion, {"facing_angle", "normal"});
+      const double degrees = occlusion.get_double("facing_angle");
+      if (!(degrees > 0.0 && degrees <= 180.0)) occlusion.fail("facing_angle", "must be in (0, 180] degrees");
+      spec.facing_angle_rad = degrees * std::numbers::pi / 180.0;
+      if (occlusion.has("normal")) {
+        const auto n = occlusion.get_doubles("normal", 3);
+        spec.normal = Eigen::Vector3d(n[0], n[1], n[2]);
+        if (!(spec.normal.norm() > 0.0)) occlusion.fail("normal", "must be a non-zero vector");
+        spec.normal.normalize();
+      }
+    }
     spec.marker_radius = read_marker_radius(body, "marker_radius");
     spec.path = sim::read_path(body.child("path"));
     if (body.has("rotation")) spec.rotation = sim::read_rotation(body.child("rotation"));
@@ -553,7 +572,18 @@ std::vector<MarkerTruth> Scene::markers_at(TimeNs scene_time_ns) const {
   for (const BodySpec& body : impl_->bodies) {
     const Eigen::Quaterniond q = sim::evaluate(body.rotation, t_s);
     const Eigen::Vector3d t = sim::evaluate(body.path, t_s);
-    for (const Eigen::Vector3d& marker : body.markers) out[index++].p = q * marker + t;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& marker : body.markers) centroid += marker;
+    centroid /= static_cast<double>(body.markers.size());
+    for (const Eigen::Vector3d& marker : body.markers) {
+      MarkerTruth& truth = out[index++];
+      truth.p = q * marker + t;
+      if (body.facing_angle_rad <= 0.0) continue;
+      const Eigen::Vector3d outward = body.normal.isZero() ? (marker - centroid) : body.normal;
+      if (outward.norm() < 1e-9) continue;
+      truth.normal = q * outward.normalized();
+      truth.facing_angle_rad = body.facing_angle_rad;
+    }
   }
   return out;
 }
@@ -571,7 +601,7 @@ std::vector<BodyTruth> Scene::bodies_at(TimeNs scene_time_ns) const {
 
 std::vector<BodyDefinition> Scene::body_definitions() const {
   std::vector<BodyDefinition> out;
-  for (const BodySpec& body : impl_->bodies) out.push_back({body.name, body.markers});
+  for (const BodySpec& body : impl_->bodies) out.push_back({body.name, body.markers, body.kind});
   return out;
 }
 

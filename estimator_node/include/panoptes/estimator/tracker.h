@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "panoptes/calibration.h"
+#include "panoptes/estimator/bodies.h"
 #include "panoptes/estimator/initiator.h"
 #include "panoptes/estimator/point_ekf.h"
 #include "panoptes/records.h"
@@ -43,6 +44,7 @@ struct TrackerOptions {
   TimeNs checkpoint_interval_ns = 10'000'000;    // state snapshots for rewinding
   double grid_cell_px = 32.0;                    // spatial index of a frame's blobs
   std::size_t max_unmatched_per_frame = 256;     // unmatched blobs of one frame offered to initiation
+  BodyTrackerOptions bodies;                     // rigid bodies (set_bodies)
 
   void print(std::ostream& out) const;
 };
@@ -97,6 +99,16 @@ class Tracker {
   void set_calibration(const SystemCalibration& calibration);
   void set_camera(const CameraCalibration& camera);
   bool has_camera(const std::string& camera_id) const;
+
+  // Rigid bodies to identify and track (docs/bodies.md). Throws ConfigError naming the body (and
+  // `file_for_errors`) for an unusable definition, keeping the previous definitions. Bodies whose
+  // definition is unchanged keep their state.
+  void set_bodies(const std::vector<BodyDefinition>& bodies, const std::string& file_for_errors = "bodies");
+  // Poses of the tracked bodies at `stamp_ns`, predicted `horizon_ns` further (seed 000 Ch. 5).
+  std::vector<PoseRecord> poses_at(TimeNs stamp_ns, TimeNs horizon_ns = 0) const;
+  std::vector<PoseRecord> current_poses(TimeNs horizon_ns = 0) const { return poses_at(last_stamp_ns(), horizon_ns); }
+  const BodyStats& body_stats() const;
+  std::size_t body_count() const;
 
   // Processes one camera frame. Frames normally come in stamp order; an older frame within the
   // rewind horizon is inserted into the history and the state replayed from before it.

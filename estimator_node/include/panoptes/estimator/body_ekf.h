@@ -1,0 +1,75 @@
+// SPDX-License-Identifier: Apache-2.0
+// Rigid-body EKF maths: an error-state filter with the orientation kept as an external quaternion
+// (seed 003 Appendix A.3.1, eqs. A.25–A.30) and a constant-acceleration / constant-angular-velocity
+// motion model whose prediction follows seed 000 Ch. 5 (the W, V, A kinematics, state eq. 5.35).
+// The filter state is
+//   x = (p, v, a, δθ, ω)          15 elements, world frame for p, v, a; body frame for δθ, ω
+// with the orientation R_world_body = q ⊗ exp(δθ); after each update δθ is folded into q and
+// zeroed (seed 003 eq. A.41). Each update takes one marker's 2D projection in one camera.
+#pragma once
+
+#include <optional>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "panoptes/camera_model.h"
+#include "panoptes/geometry.h"
+#include "panoptes/time.h"
+
+namespace panoptes::estimator {
+
+using Vector15d = Eigen::Matrix<double, 15, 1>;
+using Matrix15d = Eigen::Matrix<double, 15, 15>;
+
+// Indices of the state blocks.
+inline constexpr int kBodyP = 0, kBodyV = 3, kBodyA = 6, kBodyTheta = 9, kBodyW = 12;
+
+struct BodyMotionNoise {
+  double jerk = 50.0;           // σ² of white jerk, m²/s⁵ (drives a; with it v and p)
+  double angular_accel = 2.0;    // σ² of white angular acceleration, rad²/s³ (drives ω)
+};
+
+struct BodyState {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();  // body origin, world frame, m
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();  // m/s
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();  // m/s²
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  // R_world_body
+  Eigen::Vector3d w = Eigen::Vector3d::Zero();  // angular velocity, body frame, rad/s
+  Matrix15d P = Matrix15d::Identity();          // covariance of (p, v, a, δθ, ω)
+  TimeNs stamp_ns = 0;
+
+  RigidTransform pose() const { return {q, p}; }
+};
+
+// Moves the state to `stamp_ns` (forward or, for look-ups only, backward).
+void predict(BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise);
+BodyState predicted(const BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise);
+
+// The pose extrapolated `horizon_s` ahead with the W, V, A kinematics of seed 000 Ch. 5:
+// p + v h + a h²/2 and q ⊗ exp(ω h). No covariance (cheap; for publishing predictions).
+RigidTransform extrapolate_pose(const BodyState& state, double horizon_s);
+
+// Projection of one marker (body-frame position `marker`) into a camera.
+struct MarkerProjection {
+  Eigen::Vector2d pixel;
+  Eigen::Matrix<double, 2, 15> H;  // d(pixel)/d(x)
+  Eigen::Matrix2d S;               // H P Hᵀ + R
+  Eigen::Matrix2d S_inverse;
+};
+
+std::optional<MarkerProjection> project_marker(const BodyState& state, const Eigen::Vector3d& marker,
+                                               const CameraModel& camera, double measurement_sigma_px,
+                                               double min_depth_m = 0.05);
+
+double mahalanobis2(const MarkerProjection& projection, const Eigen::Vector2d& measurement);
+
+// EKF update with one marker measurement (Joseph form), then the reset δθ → q (eq. A.41).
+void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
+            double measurement_sigma_px);
+
+// Rotation vector -> quaternion (exp map) and back.
+Eigen::Quaterniond rotation_vector_to_quaternion(const Eigen::Vector3d& r);
+Eigen::Vector3d quaternion_to_rotation_vector(const Eigen::Quaterniond& q);
+
+}  // namespace panoptes::estimator

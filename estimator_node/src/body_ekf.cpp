@@ -1,0 +1,140 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/estimator/body_ekf.h"
+
+#include <cmath>
+
+#include <Eigen/LU>
+
+namespace panoptes::estimator {
+
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+// Transition matrix of the error state over Δt (linearised about the nominal ω).
+Matrix15d transition(const BodyState& state, double dt) {
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  Matrix15d A = Matrix15d::Identity();
+  // Constant acceleration (seed 000 Ch. 5, W, V, A): p' = p + v Δt + a Δt²/2, v' = v + a Δt.
+  A.block<3, 3>(kBodyP, kBodyV) = dt * I;
+  A.block<3, 3>(kBodyP, kBodyA) = 0.5 * dt * dt * I;
+  A.block<3, 3>(kBodyV, kBodyA) = dt * I;
+  // Constant angular velocity (seed 003 eq. A.27 for the (Δr, ṙ) pair). The error is expressed in
+  // the body frame, which itself turns by ω Δt: δθ' = exp(-[ω Δt]×) δθ + Δt δω.
+  A.block<3, 3>(kBodyTheta, kBodyTheta) = rotation_vector_to_quaternion(-dt * state.w).toRotationMatrix();
+  A.block<3, 3>(kBodyTheta, kBodyW) = dt * I;
+  return A;
+}
+
+// Q(Δt) for white jerk (positions) and white angular acceleration (rotations); seed 003 eq. A.28
+// generalised to three integrators. For Δt < 0 (look-ups into the past) the blocks take the signs
+// of backward extrapolation, so uncertainty still grows away from the last update.
+Matrix15d process_noise(double dt, const BodyMotionNoise& noise) {
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  const double d2 = dt * dt, d3 = d2 * dt, d4 = d3 * dt, d5 = d4 * dt;
+  Matrix15d Q = Matrix15d::Zero();
+  const double j = noise.jerk;
+  const double c[3][3] = {{d5 / 20, d4 / 8, d3 / 6}, {d4 / 8, d3 / 3, d2 / 2}, {d3 / 6, d2 / 2, dt}};
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) Q.block<3, 3>(3 * r, 3 * k) = j * c[r][k] * I;
+  const double w = noise.angular_accel;
+  Q.block<3, 3>(kBodyTheta, kBodyTheta) = w * d3 / 3 * I;
+  Q.block<3, 3>(kBodyTheta, kBodyW) = w * d2 / 2 * I;
+  Q.block<3, 3>(kBodyW, kBodyTheta) = w * d2 / 2 * I;
+  Q.block<3, 3>(kBodyW, kBodyW) = w * dt * I;
+  if (dt < 0) Q = -Q;
+  return Q;
+}
+
+}  // namespace
+
+Eigen::Quaterniond rotation_vector_to_quaternion(const Eigen::Vector3d& r) {
+  const double angle = r.norm();
+  if (angle < 1e-12) return Eigen::Quaterniond(1.0, 0.5 * r.x(), 0.5 * r.y(), 0.5 * r.z()).normalized();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, r / angle));
+}
+
+Eigen::Vector3d quaternion_to_rotation_vector(const Eigen::Quaterniond& q_in) {
+  Eigen::Quaterniond q = q_in.normalized();
+  if (q.w() < 0) q.coeffs() *= -1.0;
+  const double s = q.vec().norm();
+  if (s < 1e-12) return 2.0 * q.vec();
+  return 2.0 * std::atan2(s, q.w()) * q.vec() / s;
+}
+
+void predict(BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise) {
+  const double dt = ns_to_seconds(stamp_ns - state.stamp_ns);
+  if (dt != 0.0) {
+    const Matrix15d A = transition(state, dt);
+    state.p += dt * state.v + 0.5 * dt * dt * state.a;
+    state.v += dt * state.a;
+    state.q = (state.q * rotation_vector_to_quaternion(dt * state.w)).normalized();
+    state.P = A * state.P * A.transpose() + process_noise(dt, noise);
+    state.P = 0.5 * (state.P + state.P.transpose());
+  }
+  state.stamp_ns = stamp_ns;
+}
+
+BodyState predicted(const BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise) {
+  BodyState copy = state;
+  predict(copy, stamp_ns, noise);
+  return copy;
+}
+
+RigidTransform extrapolate_pose(const BodyState& state, double h) {
+  RigidTransform pose;
+  pose.t = state.p + h * state.v + 0.5 * h * h * state.a;
+  pose.q = (state.q * rotation_vector_to_quaternion(h * state.w)).normalized();
+  return pose;
+}
+
+std::optional<MarkerProjection> project_marker(const BodyState& state, const Eigen::Vector3d& marker,
+                                               const CameraModel& camera, double measurement_sigma_px,
+                                               double min_depth_m) {
+  const Eigen::Matrix3d R = state.q.toRotationMatrix();
+  const Eigen::Vector3d offset = R * marker;
+  const Eigen::Vector3d p_world = state.p + offset;
+  const Eigen::Vector3d p_cam = camera.T_cam_world().apply(p_world);
+  if (p_cam.z() < min_depth_m) return std::nullopt;
+  Eigen::Matrix<double, 2, 3> J;
+  const auto pixel = camera.project(p_world, &J);
+  if (!pixel) return std::nullopt;
+  MarkerProjection projection;
+  projection.pixel = *pixel;
+  projection.H.setZero();
+  projection.H.block<2, 3>(0, kBodyP) = J;
+  // p_world = p + R exp(δθ) m ≈ p + R m − R [m]× δθ  (seed 003 eq. A.29 linearised about δθ = 0).
+  projection.H.block<2, 3>(0, kBodyTheta) = -J * R * skew(marker);
+  const Eigen::Matrix2d Rm = measurement_sigma_px * measurement_sigma_px * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix<double, 2, 15> HP = projection.H * state.P;
+  projection.S = HP * projection.H.transpose() + Rm;
+  projection.S_inverse = projection.S.inverse();
+  return projection;
+}
+
+double mahalanobis2(const MarkerProjection& projection, const Eigen::Vector2d& measurement) {
+  const Eigen::Vector2d r = measurement - projection.pixel;
+  return r.dot(projection.S_inverse * r);
+}
+
+void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
+            double measurement_sigma_px) {
+  const Eigen::Matrix2d Rm = measurement_sigma_px * measurement_sigma_px * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix<double, 15, 2> K = state.P * projection.H.transpose() * projection.S_inverse;
+  const Vector15d dx = K * (measurement - projection.pixel);
+  state.p += dx.segment<3>(kBodyP);
+  state.v += dx.segment<3>(kBodyV);
+  state.a += dx.segment<3>(kBodyA);
+  state.w += dx.segment<3>(kBodyW);
+  // Reset (seed 003 eq. A.41): the incremental rotation is added onto the external quaternion.
+  state.q = (state.q * rotation_vector_to_quaternion(dx.segment<3>(kBodyTheta))).normalized();
+  const Matrix15d I_KH = Matrix15d::Identity() - K * projection.H;
+  state.P = I_KH * state.P * I_KH.transpose() + K * Rm * K.transpose();
+  state.P = 0.5 * (state.P + state.P.transpose());
+}
+
+}  // namespace panoptes::estimator

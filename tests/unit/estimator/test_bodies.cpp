@@ -1,0 +1,443 @@
+// SPDX-License-Identifier: Apache-2.0
+// Rigid bodies (issue 5): body EKF maths, identification, and seeded end-to-end scenes through the
+// tracker with the acceptance figures of issue 5 (docs/bodies.md, docs/benchmarks.md).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <random>
+
+#include "panoptes/config.h"
+#include "panoptes/estimator/body_ekf.h"
+#include "panoptes/estimator/body_identification.h"
+#include "panoptes/estimator/tracker.h"
+#include "panoptes/simulator.h"
+#include "test_cameras.h"
+
+namespace panoptes::estimator {
+namespace {
+
+constexpr TimeNs kEpoch = 1'700'000'000'000'000'000;
+
+double angle_deg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
+  return quaternion_to_rotation_vector(a.conjugate() * b).norm() * 180.0 / M_PI;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Body EKF maths
+
+TEST(BodyEkf, MeasurementJacobianMatchesFiniteDifferences) {
+  const auto cameras = make_ring_cameras(1, 4.0, 2.0, true);
+  BodyState state;
+  state.p = Eigen::Vector3d(0.2, -0.1, 1.1);
+  state.q = rotation_vector_to_quaternion(Eigen::Vector3d(0.3, -0.5, 1.0));
+  state.P = Matrix15d::Identity() * 1e-4;
+  const Eigen::Vector3d marker(0.08, -0.03, 0.05);
+  const auto projection = project_marker(state, marker, cameras[0], 0.3);
+  ASSERT_TRUE(projection);
+  const double h = 1e-7;
+  for (int k : {kBodyP, kBodyP + 1, kBodyP + 2, kBodyTheta, kBodyTheta + 1, kBodyTheta + 2}) {
+    BodyState moved = state;
+    if (k < kBodyTheta) {
+      moved.p(k - kBodyP) += h;
+    } else {
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      d(k - kBodyTheta) = h;
+      moved.q = state.q * rotation_vector_to_quaternion(d);
+    }
+    const auto other = project_marker(moved, marker, cameras[0], 0.3);
+    ASSERT_TRUE(other);
+    const Eigen::Vector2d numeric = (other->pixel - projection->pixel) / h;
+    EXPECT_NEAR((numeric - projection->H.col(k)).norm(), 0.0, 1e-3 * std::max(1.0, numeric.norm())) << k;
+  }
+  EXPECT_TRUE(projection->H.middleCols<3>(kBodyV).isZero());
+  EXPECT_TRUE(projection->H.middleCols<3>(kBodyW).isZero());
+}
+
+TEST(BodyEkf, PredictionFollowsConstantAccelerationAndAngularVelocity) {
+  BodyState state;
+  state.p = Eigen::Vector3d(1, 2, 3);
+  state.v = Eigen::Vector3d(0.5, 0, -0.2);
+  state.a = Eigen::Vector3d(0, 1.0, 0);
+  state.w = Eigen::Vector3d(0, 0, 2.0);  // body frame
+  state.stamp_ns = kEpoch;
+  const BodyState later = predicted(state, kEpoch + 100'000'000, BodyMotionNoise{});
+  EXPECT_NEAR((later.p - Eigen::Vector3d(1.05, 2.005, 2.98)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(angle_deg(later.q, Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()))), 0.0, 1e-9);
+  const RigidTransform pose = extrapolate_pose(state, 0.1);
+  EXPECT_NEAR((pose.t - later.p).norm(), 0.0, 1e-12);
+  // Uncertainty grows both ways from the last update.
+  const BodyState earlier = predicted(state, kEpoch - 100'000'000, BodyMotionNoise{});
+  EXPECT_GT(earlier.P.trace(), state.P.trace());
+  EXPECT_GT(later.P.trace(), state.P.trace());
+  EXPECT_TRUE(earlier.P.allFinite());
+}
+
+TEST(BodyEkf, ASingleCameraObservingFourMarkersRecoversThePose) {
+  const auto cameras = make_ring_cameras(1, 3.0, 2.0);
+  const std::vector<Eigen::Vector3d> markers = {
+      {0, 0, 0}, {0.1, 0, 0.01}, {0.02, 0.13, 0}, {-0.05, 0.04, 0.07}};
+  RigidTransform truth{rotation_vector_to_quaternion(Eigen::Vector3d(0.2, 0.4, -0.3)), {0.1, 0.2, 1.0}};
+  BodyState state;
+  state.p = truth.t + Eigen::Vector3d(0.004, -0.003, 0.002);
+  state.q = truth.q * rotation_vector_to_quaternion(Eigen::Vector3d(0.01, -0.01, 0.015));
+  state.P.setZero();
+  state.P.diagonal().segment<3>(kBodyP).setConstant(1e-4);
+  state.P.diagonal().segment<3>(kBodyV).setConstant(1e-6);
+  state.P.diagonal().segment<3>(kBodyA).setConstant(1e-6);
+  state.P.diagonal().segment<3>(kBodyTheta).setConstant(1e-3);
+  state.P.diagonal().segment<3>(kBodyW).setConstant(1e-6);
+  state.stamp_ns = kEpoch;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  BodyMotionNoise quiet{1e-6, 1e-6};
+  for (int k = 1; k <= 200; ++k) {
+    predict(state, kEpoch + k * 10'000'000LL, quiet);
+    for (const auto& marker : markers) {
+      const auto pixel = cameras[0].project(truth.apply(marker));
+      ASSERT_TRUE(pixel);
+      const auto projection = project_marker(state, marker, cameras[0], 0.05);
+      ASSERT_TRUE(projection);
+      update(state, *projection, *pixel + Eigen::Vector2d(noise(rng), noise(rng)), 0.05);
+    }
+  }
+  EXPECT_LT((state.p - truth.t).norm(), 0.5e-3);
+  EXPECT_LT(angle_deg(state.q, truth.q), 0.1);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Identification
+
+TEST(BodyIdentification, KabschRecoversARigidTransformAndRejectsDegenerateInput) {
+  const std::vector<Eigen::Vector3d> from = {{0, 0, 0}, {0.1, 0, 0}, {0, 0.2, 0}, {0.05, 0.05, 0.1}};
+  const RigidTransform T{rotation_vector_to_quaternion(Eigen::Vector3d(1.0, -2.0, 0.5)), {1, 2, 3}};
+  std::vector<Eigen::Vector3d> to;
+  for (const auto& p : from) to.push_back(T.apply(p));
+  double rms = 1;
+  const auto fitted = fit_rigid_transform(from, to, &rms);
+  ASSERT_TRUE(fitted);
+  EXPECT_LT(rms, 1e-12);
+  EXPECT_LT(angle_deg(fitted->q, T.q), 1e-9);
+  EXPECT_FALSE(fit_rigid_transform({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}));
+  EXPECT_FALSE(fit_rigid_transform({{0, 0, 0}, {1, 0, 0}}, {{0, 0, 0}, {1, 0, 0}}));
+}
+
+TEST(BodyIdentification, FindsTheBodyAmongClutterWithMissingMarkers) {
+  const std::vector<Eigen::Vector3d> markers = {
+      {0, 0, 0}, {0.12, 0, 0}, {0.31, 0, 0}, {-0.04, 0.16, 0}, {0.05, 0.07, 0.09}};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.0003);
+  for (int trial = 0; trial < 50; ++trial) {
+    const RigidTransform T{rotation_vector_to_quaternion(Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)) * 2),
+                           Eigen::Vector3d(uniform(rng), uniform(rng), 1 + uniform(rng))};
+    std::vector<MeasuredPoint> points;
+    std::vector<int> truth_index(markers.size(), -1);
+    for (int i = 0; i < 20; ++i) points.push_back({Eigen::Vector3d(uniform(rng), uniform(rng), 1 + uniform(rng)), 0.0003});
+    const int hidden = trial % static_cast<int>(markers.size());
+    for (std::size_t m = 0; m < markers.size(); ++m) {
+      if (static_cast<int>(m) == hidden) continue;
+      truth_index[m] = static_cast<int>(points.size());
+      points.push_back({T.apply(markers[m]) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)), 0.0003});
+    }
+    const auto match = identify_body(markers, points);
+    ASSERT_TRUE(match) << trial;
+    ASSERT_EQ(match->pairs.size(), markers.size() - 1) << trial;
+    for (const auto& [point, marker] : match->pairs) EXPECT_EQ(point, truth_index[static_cast<std::size_t>(marker)]);
+    EXPECT_LT((match->T_world_body.t - T.t).norm(), 0.002);
+  }
+}
+
+// Seed 000 §6.1.6's two near-identical triangles, each with a fourth marker.
+std::vector<BodyDefinition> near_identical_bodies() {
+  // Triangle sides a = |P1P2|, b = |P0P2|, c = |P0P1|: build from the side lengths.
+  const auto triangle = [](double c, double b, double a) {
+    const double x = (b * b + c * c - a * a) / (2 * c);
+    return std::vector<Eigen::Vector3d>{{0, 0, 0}, {c, 0, 0}, {x, std::sqrt(b * b - x * x), 0}};
+  };
+  BodyDefinition one{"tri_a", triangle(0.052, 0.064, 0.087)};
+  one.markers.emplace_back(0.02, 0.02, 0.045);
+  BodyDefinition two{"tri_b", triangle(0.051, 0.074, 0.100)};
+  two.markers.emplace_back(0.02, 0.02, 0.040);
+  return {one, two};
+}
+
+TEST(BodyIdentification, ValidationNamesTheBody) {
+  const auto expect_error = [](const BodyDefinition& body, const std::string& fragment) {
+    try {
+      validate_body(body, "bodies.yaml");
+      FAIL() << "no error for " << fragment;
+    } catch (const ConfigError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find("bodies.yaml"), std::string::npos) << message;
+      EXPECT_NE(message.find("'" + body.name + "'"), std::string::npos) << message;
+      EXPECT_NE(message.find(fragment), std::string::npos) << message;
+    }
+  };
+  expect_error({"two", {{0, 0, 0}, {0.1, 0, 0}}}, "at least 3 markers");
+  expect_error({"nan", {{0, 0, 0}, {0.1, 0, 0}, {0, NAN, 0}}}, "not finite");
+  expect_error({"same", {{0, 0, 0}, {0.1, 0, 0}, {0.1, 0.0005, 0}}}, "coincide");
+  expect_error({"line", {{0, 0, 0}, {0.1, 0, 0}, {0.25, 0, 0}}}, "one line");
+  Tracker tracker;
+  tracker.set_bodies({{"good", {{0, 0, 0}, {0.1, 0, 0}, {0, 0.1, 0}}}}, "bodies.yaml");
+  EXPECT_THROW(tracker.set_bodies({{"x", {{0, 0, 0}, {0.1, 0, 0}, {0, 0.1, 0}}}, {"x", {{0, 0, 0}, {0.2, 0, 0}, {0, 0.1, 0}}}}),
+               ConfigError);
+  EXPECT_EQ(tracker.body_count(), 1u);  // the previous definitions stay
+}
+
+TEST(BodyIdentification, WarnsAboutBodiesThatCannotBeToldApart) {
+  const std::vector<Eigen::Vector3d> base = {{0, 0, 0}, {0.1, 0, 0}, {0, 0.15, 0}, {0.03, 0.04, 0.08}};
+  std::vector<Eigen::Vector3d> moved;
+  const RigidTransform T{rotation_vector_to_quaternion(Eigen::Vector3d(0.3, 0.2, 0.1)), {1, 0, 0}};
+  for (const auto& m : base) moved.push_back(T.apply(m));
+  auto warnings = distinguishability_warnings({{"a", base}, {"b", moved}});
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("cannot be told apart"), std::string::npos) << warnings[0];
+  EXPECT_TRUE(distinguishability_warnings(near_identical_bodies()).empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Seeded scenes through the tracker
+
+struct BodyErrors {
+  double sum_p2 = 0, sum_a2 = 0, max_p = 0;
+  std::size_t samples = 0, published = 0, correct = 0, wrong = 0;
+  double rmse_mm() const { return samples ? std::sqrt(sum_p2 / samples) * 1e3 : NAN; }
+  double rmse_deg() const { return samples ? std::sqrt(sum_a2 / samples) : NAN; }
+  double tracked() const { return samples ? static_cast<double>(correct) / static_cast<double>(samples) : 0; }
+};
+
+// Filters a frame before the tracker sees it: camera index, the frame (blobs in visible_markers
+// order when the scene has no false blobs or merging), its visible marker indices. False: drop it.
+using FrameFilter = std::function<bool(std::size_t, FeatureFrame&, const std::vector<int>&)>;
+
+struct SceneRun {
+  std::map<std::string, BodyErrors> bodies;
+  BodyStats stats;
+};
+
+SceneRun run_scene(const Scene& scene, double warmup_s, const FrameFilter& filter = {}, TimeNs horizon_ns = 0,
+                   double window_start_s = 0, double window_end_s = 1e9) {
+  std::vector<CameraSimulator> simulators;
+  for (const auto& camera : scene.cameras()) simulators.emplace_back(scene, camera.calibration.id);
+  struct Next {
+    TimeNs stamp;
+    std::size_t camera;
+    std::int64_t k;
+    bool operator>(const Next& o) const { return std::tie(stamp, camera) > std::tie(o.stamp, o.camera); }
+  };
+  std::vector<Next> queue;
+  for (std::size_t c = 0; c < simulators.size(); ++c) {
+    for (std::int64_t k = 0; simulators[c].frame_time_ns(k) <= scene.duration_ns(); ++k)
+      queue.push_back({simulators[c].frame_stamp_ns(k), c, k});
+  }
+  std::sort(queue.begin(), queue.end(), [](const Next& a, const Next& b) { return b > a; });
+
+  Tracker tracker;
+  tracker.set_calibration(scene.calibration());
+  tracker.set_bodies(scene.body_definitions());
+  SceneRun run;
+  for (const Next& next : queue) {
+    FeatureFrame frame = simulators[next.camera].features(next.k);
+    if (filter && !filter(next.camera, frame, simulators[next.camera].visible_markers(next.k))) continue;
+    const TimeNs scene_time = frame.stamp_ns;
+    frame.stamp_ns += kEpoch;
+    tracker.process(frame);
+    const double t = ns_to_seconds(scene_time);
+    if (t < warmup_s || t < window_start_s || t > window_end_s) continue;
+    const auto poses = tracker.current_poses(horizon_ns);
+    for (const BodyTruth& truth : scene.bodies_at(scene_time + horizon_ns)) {
+      BodyErrors& errors = run.bodies[truth.name];
+      ++errors.samples;
+      for (const PoseRecord& pose : poses) {
+        if (pose.body != truth.name) continue;
+        ++errors.published;
+        const double dp = (pose.p - truth.T_world_body.t).norm();
+        const Eigen::Quaterniond q(pose.q.w(), pose.q.x(), pose.q.y(), pose.q.z());
+        const double da = angle_deg(q, truth.T_world_body.q);
+        if (dp > 0.02 || da > 5.0) {
+          ++errors.wrong;
+          continue;
+        }
+        ++errors.correct;
+        errors.sum_p2 += dp * dp;
+        errors.sum_a2 += da * da;
+        errors.max_p = std::max(errors.max_p, dp);
+      }
+    }
+  }
+  run.stats = tracker.body_stats();
+  return run;
+}
+
+void print(const char* scenario, const SceneRun& run) {
+  for (const auto& [name, e] : run.bodies) {
+    std::printf("%s: body %s tracked %.2f%% (wrong %zu of %zu) RMSE %.3f mm (max %.3f) / %.4f deg\n", scenario,
+                name.c_str(), 100.0 * e.tracked(), e.wrong, e.samples, e.rmse_mm(), e.max_p * 1e3, e.rmse_deg());
+  }
+  std::printf("%s: identified %llu reidentified %llu lost %llu marker updates %llu\n", scenario,
+              static_cast<unsigned long long>(run.stats.identified),
+              static_cast<unsigned long long>(run.stats.reidentified),
+              static_cast<unsigned long long>(run.stats.lost),
+              static_cast<unsigned long long>(run.stats.marker_updates));
+}
+
+// Six asynchronous cameras (90-120 Hz) around a 3 x 3 x 2 m volume.
+std::string six_camera_rig(const std::string& extra_defaults = "") {
+  return std::string(R"(
+seed: 23
+duration: 10.0
+defaults:
+  width: 1280
+  height: 1024
+  K: [1400.0, 1400.0, 639.5, 511.5]
+  pixel_noise: 1.0
+)") + (extra_defaults.find("centroid_noise") == std::string::npos ? "  centroid_noise: 0.1\n" : "") + extra_defaults + R"(
+cameras:
+  - {id: c0, look_at: {eye: [4.5, 0.3, 2.8], target: [0, 0, 1.0]}, rate: 90, phase: 0.0}
+  - {id: c1, look_at: {eye: [2.4, 3.9, 2.5], target: [0, 0, 1.0]}, rate: 100, phase: 0.0031}
+  - {id: c2, look_at: {eye: [-2.2, 4.0, 3.0], target: [0, 0, 1.0]}, rate: 110, phase: 0.0057}
+  - {id: c3, look_at: {eye: [-4.6, -0.2, 2.6], target: [0, 0, 1.0]}, rate: 120, phase: 0.0013}
+  - {id: c4, look_at: {eye: [-2.3, -4.0, 2.9], target: [0, 0, 1.0]}, rate: 95, phase: 0.0079}
+  - {id: c5, look_at: {eye: [2.5, -3.8, 2.4], target: [0, 0, 1.0]}, rate: 105, phase: 0.0042}
+)";
+}
+
+// The head (4 markers) and the tool (5 markers) of the acceptance scene.
+const char* kTwoBodies = R"(
+bodies:
+  - name: head
+    markers: [[0.0, 0.0, 0.0], [0.16, 0.0, 0.02], [0.05, 0.19, 0.0], [-0.07, 0.08, 0.10]]
+    path: {type: lissajous, center: [0.0, 0.0, 1.0], amplitude: [1.3, 1.3, 0.75], frequency: [0.13, 0.17, 0.11]}
+    rotation: {type: oscillate, amplitude: [0.5, 0.5, 1.5], frequency: [0.3, 0.25, 0.2]}
+    occlusion: {facing_angle: 110}
+  - name: tool
+    markers: [[0.0, 0.0, 0.0], [0.22, 0.0, 0.0], [0.09, 0.12, 0.0], [-0.07, 0.15, 0.04], [0.15, -0.08, 0.09]]
+    path: {type: lissajous, center: [0.0, 0.0, 1.0], amplitude: [1.2, 1.3, 0.7], frequency: [0.15, 0.12, 0.14], phase: [2.0, 1.0, 0.5]}
+    rotation: {type: oscillate, amplitude: [1.2, 0.6, 0.8], frequency: [0.25, 0.3, 0.2], initial: [0.0, 0.0, 0.7071068, 0.7071068]}
+    occlusion: {facing_angle: 110}
+)";
+
+TEST(BodyScenes, TwoBodiesSixAsynchronousCamerasDropoutsAndSelfOcclusion) {
+  const Scene scene = Scene::from_yaml_string(six_camera_rig("  dropout: 0.05\n") + kTwoBodies);
+  const SceneRun run = run_scene(scene, 0.5);
+  print("acceptance", run);
+  ASSERT_EQ(run.bodies.size(), 2u);
+  for (const auto& [name, e] : run.bodies) {
+    EXPECT_GE(e.tracked(), 0.98) << name;
+    EXPECT_EQ(e.wrong, 0u) << name;
+    EXPECT_LE(e.rmse_mm(), 0.3) << name;
+    EXPECT_LE(e.rmse_deg(), 0.1) << name;
+  }
+}
+
+TEST(BodyScenes, OneOfFourMarkersHiddenHalfTheTimeAndASingleCameraForTwoSeconds) {
+  const Scene scene = Scene::from_yaml_string(six_camera_rig() + kTwoBodies);
+  const auto& names = scene.marker_names();
+  const int hidden = static_cast<int>(std::find(names.begin(), names.end(), "head/1") - names.begin());
+  // head/1 is missing from every camera during the first half of each second.
+  const FrameFilter hide = [&](std::size_t, FeatureFrame& frame, const std::vector<int>& visible) {
+    EXPECT_EQ(frame.blobs.size(), visible.size());
+    if (std::fmod(ns_to_seconds(frame.stamp_ns), 1.0) >= 0.5) return true;
+    for (std::size_t i = visible.size(); i-- > 0;) {
+      if (visible[i] == hidden) frame.blobs.erase(frame.blobs.begin() + static_cast<std::ptrdiff_t>(i));
+    }
+    return true;
+  };
+  const SceneRun run = run_scene(scene, 0.5, hide);
+  print("hidden marker", run);
+  const BodyErrors& head = run.bodies.at("head");
+  EXPECT_EQ(run.stats.lost, 0u);
+  EXPECT_GE(head.tracked(), 0.999);
+  EXPECT_LE(head.rmse_mm(), 0.5);
+  EXPECT_LE(head.rmse_deg(), 0.2);
+
+  // Only camera c0 delivers between 4 s and 6 s (no self-occlusion here: c0 sees every marker).
+  std::string open_bodies = kTwoBodies;
+  for (std::size_t at; (at = open_bodies.find("    occlusion: {facing_angle: 110}\n")) != std::string::npos;)
+    open_bodies.erase(at, std::string("    occlusion: {facing_angle: 110}\n").size());
+  const Scene open_scene = Scene::from_yaml_string(six_camera_rig() + open_bodies);
+  const FrameFilter single = [](std::size_t camera, FeatureFrame& frame, const std::vector<int>&) {
+    const double t = ns_to_seconds(frame.stamp_ns);
+    return camera == 0 || t < 4.0 || t >= 6.0;
+  };
+  const SceneRun alone = run_scene(open_scene, 0.5, single, 0, 4.0, 6.0);
+  print("single camera 4-6 s", alone);
+  for (const auto& [name, e] : alone.bodies) {
+    EXPECT_GE(e.tracked(), 0.999) << name;
+    EXPECT_EQ(e.wrong, 0u) << name;
+  }
+}
+
+TEST(BodyScenes, NearIdenticalBodiesAreNeverConfused) {
+  std::string yaml = six_camera_rig() + "bodies:\n";
+  const auto bodies = near_identical_bodies();
+  const char* paths[] = {
+      "{type: lissajous, center: [0.2, 0.0, 1.0], amplitude: [0.9, 1.0, 0.6], frequency: [0.13, 0.17, 0.11]}",
+      "{type: lissajous, center: [-0.2, 0.0, 1.0], amplitude: [1.0, 0.9, 0.6], frequency: [0.16, 0.12, 0.15], phase: [1.0, 2.0, 0.3]}"};
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    yaml += "  - name: " + bodies[b].name + "\n    markers: [";
+    for (std::size_t m = 0; m < bodies[b].markers.size(); ++m) {
+      const auto& p = bodies[b].markers[m];
+      yaml += (m ? ", [" : "[") + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) + "]";
+    }
+    yaml += "]\n    marker_radius: 0.004\n    path: " + std::string(paths[b]) +
+            "\n    rotation: {type: oscillate, amplitude: [0.6, 0.6, 1.2], frequency: [0.3, 0.2, 0.25]}\n";
+  }
+  const Scene scene = Scene::from_yaml_string(yaml);
+  const SceneRun run = run_scene(scene, 0.5);
+  print("near-identical", run);
+  for (const auto& [name, e] : run.bodies) {
+    EXPECT_EQ(e.wrong, 0u) << name;
+    EXPECT_GE(e.tracked(), 0.98) << name;
+  }
+}
+
+TEST(BodyScenes, PredictionErrorAgainstHorizonOnHandLikeMotion) {
+  // A hand: ±10-15 cm at 0.5-0.9 Hz (peak speeds ~0.7 m/s) about a resting point, turning the wrist.
+  const Scene scene = Scene::from_yaml_string(six_camera_rig() + R"(
+bodies:
+  - name: hand
+    markers: [[0.0, 0.0, 0.0], [0.095, 0.0, 0.012], [0.03, 0.125, 0.0], [-0.045, 0.05, 0.065]]
+    path: {type: lissajous, center: [0.3, 0.0, 1.2], amplitude: [0.15, 0.12, 0.1], frequency: [0.7, 0.9, 0.5]}
+    rotation: {type: oscillate, amplitude: [0.4, 0.3, 0.5], frequency: [0.7, 0.9, 0.5]}
+)");
+  std::printf("horizon ms | position RMSE mm | orientation RMSE deg\n");
+  double at80 = 0;
+  for (int ms : {0, 20, 40, 60, 80, 100}) {
+    const SceneRun run = run_scene(scene, 1.0, {}, ms * 1'000'000LL);
+    const BodyErrors& e = run.bodies.at("hand");
+    std::printf("%10d | %16.3f | %20.4f\n", ms, e.rmse_mm(), e.rmse_deg());
+    if (ms == 80) at80 = e.rmse_mm();
+  }
+  EXPECT_LE(at80, 5.0);
+}
+
+TEST(BodyScenes, SevenLedMarkerIsAcquiredAndTrackedByOneCamera) {
+  // Seed 004's marker (d03 = 114.2 mm) about 2.7 m from camera c0, facing it (its LEDs point
+  // along -z of the body frame; they are hidden beyond 80 degrees), turning by up to ±0.35 rad.
+  const Scene scene = Scene::from_yaml_string(six_camera_rig() + R"(
+bodies:
+  - name: led
+    type: led7
+    markers: [[0.1142, 0, 0], [0.0759, 0, 0], [0.0379, 0, 0], [0, 0, 0], [0, -0.038, 0], [0, 0.038, 0], [-0.0383, 0, -0.0112]]
+    marker_radius: 0.003
+    path: {type: lissajous, center: [2.0, 0.1, 1.8], amplitude: [0.3, 0.4, 0.3], frequency: [0.2, 0.15, 0.25]}
+    rotation: {type: oscillate, amplitude: [0.35, 0.3, 0.35], frequency: [0.3, 0.2, 0.25], initial: [0, -0.7071068, 0, 0.7071068]}
+    occlusion: {facing_angle: 80, normal: [0, 0, -1]}
+)");
+  const FrameFilter only_c0 = [](std::size_t camera, FeatureFrame&, const std::vector<int>&) { return camera == 0; };
+  const SceneRun run = run_scene(scene, 0.5, only_c0);
+  print("led7 one camera", run);
+  const BodyErrors& led = run.bodies.at("led");
+  EXPECT_GE(run.stats.acquired_monocular, 1u);
+  EXPECT_GE(led.tracked(), 0.98);
+  EXPECT_EQ(led.wrong, 0u);
+  EXPECT_LE(led.rmse_mm(), 5.0);
+}
+
+}  // namespace
+}  // namespace panoptes::estimator
