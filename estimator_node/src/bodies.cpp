@@ -40,11 +40,16 @@ BodySet::BodySet(BodySet&&) noexcept = default;
 BodySet& BodySet::operator=(BodySet&&) noexcept = default;
 BodySet::~BodySet() = default;
 
-std::size_t BodySet::size() const { return bodies_.size(); }
-const BodyStats& BodySet::stats() const { return stats_; }
+std::size_t BodySet::size() const {
+  return bodies_.size();
+}
+const BodyStats& BodySet::stats() const {
+  return stats_;
+}
 
 std::size_t BodySet::tracked_count() const {
-  return static_cast<std::size_t>(std::count_if(bodies_.begin(), bodies_.end(), [](const Body& b) { return b.tracked; }));
+  return static_cast<std::size_t>(
+      std::count_if(bodies_.begin(), bodies_.end(), [](const Body& b) { return b.tracked; }));
 }
 
 void BodySet::set_definitions(std::vector<BodyDefinition> definitions, const BodyTrackerOptions& options) {
@@ -55,7 +60,8 @@ void BodySet::set_definitions(std::vector<BodyDefinition> definitions, const Bod
     const auto& markers = definitions[b].markers;
     double span = 0;
     for (std::size_t i = 0; i < markers.size(); ++i)
-      for (std::size_t k = i + 1; k < markers.size(); ++k) span = std::max(span, (markers[i] - markers[k]).norm());
+      for (std::size_t k = i + 1; k < markers.size(); ++k)
+        span = std::max(span, (markers[i] - markers[k]).norm());
     shared->span.push_back(span);
     if (definitions[b].kind == BodyKind::kLed7) {
       shared->led_models.push_back(LedMarkerModel::from_body(definitions[b]));  // throws naming the body
@@ -65,7 +71,8 @@ void BodySet::set_definitions(std::vector<BodyDefinition> definitions, const Bod
     // Keep the state of a body whose definition did not change.
     for (std::size_t old = 0; old < bodies_.size(); ++old) {
       const auto& previous = shared_->definitions[old];
-      if (previous.name == definitions[b].name && previous.markers == markers && previous.kind == definitions[b].kind)
+      if (previous.name == definitions[b].name && previous.markers == markers &&
+          previous.kind == definitions[b].kind)
         bodies[b] = bodies_[old];
     }
   }
@@ -183,7 +190,8 @@ void BodySet::acquire_monocular(int camera_index, const CameraModel& camera, Tim
                                 std::vector<char>& taken) {
   const BodyTrackerOptions& o = shared_->options;
   const auto& led_body = shared_->led_body;
-  if (std::none_of(led_body.begin(), led_body.end(), [&](std::size_t b) { return !bodies_[b].tracked; })) return;
+  if (std::none_of(led_body.begin(), led_body.end(), [&](std::size_t b) { return !bodies_[b].tracked; }))
+    return;
   // Seed 004 §2.2: identification and pose from the blobs of this one camera, in ideal
   // (undistorted, normalised) coordinates; blobs that tracked bodies took are left out.
   std::vector<Eigen::Vector2d> ideal;
@@ -246,7 +254,8 @@ bool BodySet::wants_points(TimeNs stamp_ns) const {
   const BodyTrackerOptions& o = shared_->options;
   if (bodies_.empty()) return false;
   if (!identified_once_) return true;
-  const bool any_untracked = std::any_of(bodies_.begin(), bodies_.end(), [](const Body& b) { return !b.tracked; });
+  const bool any_untracked =
+      std::any_of(bodies_.begin(), bodies_.end(), [](const Body& b) { return !b.tracked; });
   return (any_untracked && stamp_ns - last_identify_ns_ >= o.identify_interval_ns) ||
          stamp_ns - last_verify_ns_ >= o.verify_interval_ns;
 }
@@ -255,8 +264,8 @@ namespace {
 
 // Linear and angular velocity (world) of a rigid motion from its points' velocities:
 // v_i = v + ω × (p_i − c), least squares over ≥ 3 non-collinear points.
-bool rigid_velocity(const std::vector<TrackedPoint>& points, const std::vector<int>& used, const Eigen::Vector3d& c,
-                    Eigen::Vector3d& v, Eigen::Vector3d& w) {
+bool rigid_velocity(const std::vector<TrackedPoint>& points, const std::vector<int>& used,
+                    const Eigen::Vector3d& c, Eigen::Vector3d& v, Eigen::Vector3d& w) {
   if (used.size() < 3) return false;
   Eigen::MatrixXd A(3 * used.size(), 6);
   Eigen::VectorXd y(3 * used.size());
@@ -338,7 +347,8 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
     body.last_update_ns = stamp_ns;
     body.nis_average = 0;
     body.nis_updates = 0;
-    for (const auto& pair : match.pairs) body.marker_last_seen[static_cast<std::size_t>(pair.second)] = stamp_ns;
+    for (const auto& pair : match.pairs)
+      body.marker_last_seen[static_cast<std::size_t>(pair.second)] = stamp_ns;
   };
 
   // Verification: a tracked body whose identification among nearby points disagrees with its
@@ -389,7 +399,8 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
     start_body(best_body, *best, free_index);
     ++stats_.identified;
     pending[best_body] = 0;
-    for (const auto& pair : best->pairs) claimed[static_cast<std::size_t>(free_index[static_cast<std::size_t>(pair.first)])] = 1;
+    for (const auto& pair : best->pairs)
+      claimed[static_cast<std::size_t>(free_index[static_cast<std::size_t>(pair.first)])] = 1;
   }
 }
 
@@ -412,7 +423,8 @@ std::vector<PoseRecord> BodySet::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) co
     int seen = 0;
     for (TimeNs t : body.marker_last_seen) seen += (t != 0 && stamp_ns - t <= o.quality_window_ns) ? 1 : 0;
     record.quality = static_cast<double>(seen) / static_cast<double>(body.marker_last_seen.size());
-    for (TimeNs t : body.camera_last_update) record.cameras += (t != 0 && stamp_ns - t <= 500'000'000) ? 1 : 0;
+    for (TimeNs t : body.camera_last_update)
+      record.cameras += (t != 0 && stamp_ns - t <= 500'000'000) ? 1 : 0;
     for (int k = 0; k < 3; ++k) {
       record.sigma[static_cast<std::size_t>(k)] = std::sqrt(std::max(0.0, state.P(kBodyP + k, kBodyP + k)));
       record.sigma[static_cast<std::size_t>(3 + k)] =

@@ -230,14 +230,13 @@ std::vector<std::string> distinguishability_warnings(const std::vector<BodyDefin
       if (!match) continue;
       std::ostringstream out;
       if (match->pairs.size() == bodies[b].markers.size()) {
-        out << "bodies '" << bodies[a].name << "' and '" << bodies[b].name
-            << "' cannot be told apart: all " << bodies[b].markers.size() << " markers of '" << bodies[b].name
-            << "' match '" << bodies[a].name << "' within " << options.tolerance_floor_m * 1e3
-            << " mm; move a marker";
+        out << "bodies '" << bodies[a].name << "' and '" << bodies[b].name << "' cannot be told apart: all "
+            << bodies[b].markers.size() << " markers of '" << bodies[b].name << "' match '" << bodies[a].name
+            << "' within " << options.tolerance_floor_m * 1e3 << " mm; move a marker";
       } else {
-        out << "bodies '" << bodies[a].name << "' and '" << bodies[b].name << "' share " << match->pairs.size()
-            << " markers with the same distances (within " << options.tolerance_floor_m * 1e3
-            << " mm): when only those are visible they can be confused";
+        out << "bodies '" << bodies[a].name << "' and '" << bodies[b].name << "' share "
+            << match->pairs.size() << " markers with the same distances (within "
+            << options.tolerance_floor_m * 1e3 << " mm): when only those are visible they can be confused";
       }
       warnings.push_back(out.str());
     }

@@ -331,4 +331,92 @@ std::string Evaluation::summary() const {
   return out.str();
 }
 
+PoseEvaluation evaluate_poses(const Scene& scene, const std::vector<PoseRecord>& poses,
+                              const EvaluationOptions& options) {
+  constexpr TimeNs kBin = 10'000'000;
+  const auto definitions = scene.body_definitions();
+  const TimeNs first = options.warmup_ns, last = scene.duration_ns();
+  const std::size_t bins = last > first ? static_cast<std::size_t>((last - first) / kBin) + 1 : 0;
+  struct Sums {
+    double p2 = 0, a2 = 0;
+    std::size_t correct = 0;
+    std::vector<char> bins;
+  };
+  std::map<std::string, std::size_t> index;
+  PoseEvaluation evaluation;
+  std::vector<Sums> sums(definitions.size());
+  for (std::size_t b = 0; b < definitions.size(); ++b) {
+    index[definitions[b].name] = b;
+    evaluation.bodies.push_back({definitions[b].name});
+    sums[b].bins.assign(bins, 0);
+  }
+  for (const PoseRecord& pose : poses) {
+    const auto found = index.find(pose.body);
+    if (found == index.end()) continue;
+    const TimeNs t = pose.stamp_ns - options.epoch_ns;
+    if (t < first || t > last) continue;
+    const std::size_t b = found->second;
+    BodyEvaluation& e = evaluation.bodies[b];
+    ++e.records;
+    RigidTransform truth;
+    for (const BodyTruth& body : scene.bodies_at(t + pose.horizon_ns))
+      if (body.name == pose.body) truth = body.T_world_body;
+    const Eigen::Quaterniond q(pose.q.w(), pose.q.x(), pose.q.y(), pose.q.z());
+    const double dp = (pose.p - truth.t).norm();
+    const double da = q.normalized().angularDistance(truth.q) * 180.0 / M_PI;
+    if (!(dp <= 0.02 && da <= 5.0)) {
+      ++e.wrong;
+      continue;
+    }
+    Sums& s = sums[b];
+    s.p2 += dp * dp;
+    s.a2 += da * da;
+    ++s.correct;
+    e.max_m = std::max(e.max_m, dp);
+    e.max_deg = std::max(e.max_deg, da);
+    s.bins[static_cast<std::size_t>((t - first) / kBin)] = 1;
+  }
+  for (std::size_t b = 0; b < definitions.size(); ++b) {
+    BodyEvaluation& e = evaluation.bodies[b];
+    const Sums& s = sums[b];
+    if (s.correct > 0) {
+      e.rmse_m = std::sqrt(s.p2 / static_cast<double>(s.correct));
+      e.rmse_deg = std::sqrt(s.a2 / static_cast<double>(s.correct));
+    }
+    if (bins > 0)
+      e.tracked_fraction =
+          static_cast<double>(std::count(s.bins.begin(), s.bins.end(), 1)) / static_cast<double>(bins);
+  }
+  return evaluation;
+}
+
+std::string PoseEvaluation::summary() const {
+  std::ostringstream out;
+  char line[192];
+  std::snprintf(line, sizeof line, "%-20s %10s %10s %10s %10s %9s %8s\n", "body", "RMSE mm", "max mm",
+                "RMSE deg", "max deg", "tracked", "wrong");
+  out << line;
+  for (const auto& e : bodies) {
+    std::snprintf(line, sizeof line, "%-20s %10.3f %10.3f %10.4f %10.4f %8.2f%% %8zu\n", e.body.c_str(),
+                  e.rmse_m * 1e3, e.max_m * 1e3, e.rmse_deg, e.max_deg, 100.0 * e.tracked_fraction, e.wrong);
+    out << line;
+  }
+  return out.str();
+}
+
+std::string PoseEvaluation::to_json() const {
+  nlohmann::json json = nlohmann::json::array();
+  for (const auto& e : bodies) {
+    json.push_back({{"body", e.body},
+                    {"records", e.records},
+                    {"wrong", e.wrong},
+                    {"rmse_mm", e.rmse_m * 1e3},
+                    {"max_mm", e.max_m * 1e3},
+                    {"rmse_deg", e.rmse_deg},
+                    {"max_deg", e.max_deg},
+                    {"tracked", e.tracked_fraction}});
+  }
+  return nlohmann::json{{"bodies", json}}.dump(2);
+}
+
 }  // namespace panoptes::estimator

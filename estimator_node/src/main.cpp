@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <map>
@@ -58,6 +59,8 @@ struct Options {
   bool predictions = true;
   double prediction_margin_px = 3.0;
   std::size_t inbox_capacity = 4096;
+  double prediction_horizon_ms = 0.0;  // body poses are published this far ahead (seed 000 Ch. 5)
+  double bodies_poll_s = 1.0;          // live: how often the bodies file is checked for changes
   est::TrackerOptions tracker;
   est::FrameScreenOptions screen;
 };
@@ -77,6 +80,52 @@ class UnknownCameraWarnings {
 
  private:
   std::set<std::string> warned_;
+};
+
+// The bodies file: loaded at start (an error is fatal) and, live, reloaded when it changes (an
+// error keeps the previous definitions). Warns about bodies identification cannot tell apart.
+class BodyFile {
+ public:
+  explicit BodyFile(std::string path) : path_(std::move(path)) {}
+  bool enabled() const { return !path_.empty(); }
+
+  // Throws ConfigError naming the file and body.
+  void load(est::Tracker& tracker) {
+    stamp_ = modified();
+    const auto bodies = panoptes::load_bodies(path_);
+    tracker.set_bodies(bodies, path_);
+    std::size_t led = 0;
+    for (const auto& body : bodies) led += body.kind == panoptes::BodyKind::kLed7 ? 1 : 0;
+    log("tracking " + std::to_string(bodies.size()) + " rigid bod" + (bodies.size() == 1 ? "y" : "ies") +
+        (led ? " (" + std::to_string(led) + " monocular 7-LED)" : "") + " from " + path_);
+    for (const auto& warning :
+         est::distinguishability_warnings(bodies, tracker.options().bodies.identification))
+      log(path_ + ": warning: " + warning);
+  }
+
+  // Reloads if the file changed since the last load; a bad file is reported and ignored.
+  void reload_if_changed(est::Tracker& tracker) {
+    if (!enabled()) return;
+    const auto now = modified();
+    if (!now || now == stamp_) return;
+    try {
+      load(tracker);
+    } catch (const std::exception& error) {
+      stamp_ = now;  // report a bad version once
+      log(std::string(error.what()) + " (keeping the previous body definitions)");
+    }
+  }
+
+ private:
+  std::optional<std::filesystem::file_time_type> modified() const {
+    std::error_code error;
+    const auto time = std::filesystem::last_write_time(path_, error);
+    if (error) return std::nullopt;
+    return time;
+  }
+
+  std::string path_;
+  std::optional<std::filesystem::file_time_type> stamp_;
 };
 
 // Everything between a received frame and the tracker, shared by the offline and live modes:
@@ -139,6 +188,14 @@ class Intake {
         std::to_string(s.tracks_created) + ", confirmed " + std::to_string(s.tracks_confirmed) +
         ", ghosts removed " + std::to_string(s.ghosts_deleted));
     for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops).lines()) log(line);
+    if (tracker_.body_count() > 0) {
+      const auto& b = tracker_.body_stats();
+      log("bodies: identified " + std::to_string(b.identified) + ", acquired by one camera " +
+          std::to_string(b.acquired_monocular) + ", re-identified " + std::to_string(b.reidentified) +
+          ", lost " + std::to_string(b.lost) + ", marker updates " + std::to_string(b.marker_updates) +
+          "; tracked now " + std::to_string(tracker_.current_poses().size()) + "/" +
+          std::to_string(tracker_.body_count()));
+    }
   }
 
  private:
@@ -188,15 +245,25 @@ int run_offline(const Options& options, est::Tracker& tracker) {
 
   std::optional<panoptes::JsonlWriter> out;
   if (!options.out_tracks.empty()) out.emplace(options.out_tracks);
+  std::optional<panoptes::JsonlWriter> out_poses;
+  if (!options.out_poses.empty()) out_poses.emplace(options.out_poses);
+  const TimeNs horizon = panoptes::seconds_to_ns(options.prediction_horizon_ms * 1e-3);
   Intake intake(tracker, options);
-  std::size_t records = 0;
+  std::size_t records = 0, pose_records = 0;
   auto handle = [&](const panoptes::FeatureFrame& frame) {
-    // Tracks are written when the newest stamp advances; a replayed late frame refines the
-    // state that the next frame's output shows.
-    if (intake.process(frame) == est::FrameOutcome::kProcessed && out) {
+    // Tracks and poses are written when the newest stamp advances; a replayed late frame refines
+    // the state that the next frame's output shows.
+    if (intake.process(frame) != est::FrameOutcome::kProcessed) return;
+    if (out) {
       for (const auto& track : tracker.current_tracks()) {
         out->write(track);
         ++records;
+      }
+    }
+    if (out_poses) {
+      for (const auto& pose : tracker.current_poses(horizon)) {
+        out_poses->write(pose);
+        ++pose_records;
       }
     }
   };
@@ -223,7 +290,8 @@ int run_offline(const Options& options, est::Tracker& tracker) {
   for (const auto& due : inbox.drain()) handle(due);
   if (!options.quiet && !frames.empty()) std::fprintf(stderr, "\n");
   intake.print_summary(inbox.drops(), bad_lines);
-  log("wrote " + std::to_string(records) + " track records");
+  log("wrote " + std::to_string(records) + " track records" +
+      (out_poses ? ", " + std::to_string(pose_records) + " pose records" : ""));
   return panoptes::kExitOk;
 }
 
@@ -284,7 +352,7 @@ class FramePeriods {
   std::map<std::string, Period> periods_;
 };
 
-int run_live(const Options& options, est::Tracker& tracker) {
+int run_live(const Options& options, est::Tracker& tracker, BodyFile& body_file) {
   namespace msg = panoptes::msg;
   panoptes::dds::BusOptions bus_options;
   bus_options.profile_file = options.dds_profile;
@@ -315,9 +383,13 @@ int run_live(const Options& options, est::Tracker& tracker) {
   auto track_writer = bus.make_writer<msg::TrackFrame>();
   auto prediction_writer = bus.make_writer<msg::Predictions>();
   auto status_writer = bus.make_writer<msg::EstimatorStatus>();
+  auto body_writer = bus.make_writer<msg::BodyPose>();
 
   std::optional<panoptes::JsonlWriter> out;
   if (!options.out_tracks.empty()) out.emplace(options.out_tracks);
+  std::optional<panoptes::JsonlWriter> out_poses;
+  if (!options.out_poses.empty()) out_poses.emplace(options.out_poses);
+  const TimeNs horizon = panoptes::seconds_to_ns(options.prediction_horizon_ms * 1e-3);
   std::set<std::string> from_file;
   if (!options.calibration_file.empty()) {
     for (const auto& camera : panoptes::load_calibration(options.calibration_file).cameras)
@@ -355,11 +427,16 @@ int run_live(const Options& options, est::Tracker& tracker) {
     if (out) {
       for (const auto& track : tracks) out->write(track);
     }
+    for (const auto& pose : tracker.current_poses(horizon)) {
+      body_writer->write(panoptes::dds::to_message(pose));
+      if (out_poses) out_poses->write(pose);
+    }
     publish_predictions(frame);
   };
 
   const TimeNs start = panoptes::wall_now_ns();
   TimeNs next_status = start + panoptes::seconds_to_ns(options.status_period_s);
+  TimeNs next_body_poll = start + panoptes::seconds_to_ns(options.bodies_poll_s);
   while (!panoptes::stop_requested()) {
     {
       std::lock_guard<std::mutex> lock(info_mutex);
@@ -374,6 +451,10 @@ int run_live(const Options& options, est::Tracker& tracker) {
     }
     const TimeNs now = panoptes::wall_now_ns();
     for (const auto& frame : inbox.pop_due(now)) handle(frame);
+    if (now >= next_body_poll) {
+      next_body_poll = now + panoptes::seconds_to_ns(options.bodies_poll_s);
+      body_file.reload_if_changed(tracker);
+    }
     if (now >= next_status) {
       next_status += panoptes::seconds_to_ns(options.status_period_s);
       const est::EstimatorUsage usage = intake.usage(now, inbox.drops());
@@ -387,8 +468,11 @@ int run_live(const Options& options, est::Tracker& tracker) {
           line += buffer;
         }
         line += " | tracks " + std::to_string(usage.tracks_confirmed) + "+" +
-                std::to_string(usage.tracks_coasting) + " coasting | replays " +
-                std::to_string(usage.replays) + " | time sync answered " +
+                std::to_string(usage.tracks_coasting) + " coasting" +
+                (tracker.body_count() ? " | bodies " + std::to_string(tracker.current_poses().size()) + "/" +
+                                            std::to_string(tracker.body_count())
+                                      : "") +
+                " | replays " + std::to_string(usage.replays) + " | time sync answered " +
                 std::to_string(time_service.answered());
         log(line);
       }
@@ -404,17 +488,21 @@ int run_live(const Options& options, est::Tracker& tracker) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 2 && std::string_view(argv[1]) == "calibrate")
   Options options;
   CLI::App app{"estimator_node: fuses asynchronous camera features into 3D tracks (Panoptes)",
                "estimator_node"};
   app.add_option("--calibration", options.calibration_file, "calibration YAML (cameras with T_world_cam)");
   app.add_option("--bodies", options.bodies_file,
-                 "rigid-body definitions YAML (validated; body tracking is not built yet)");
+                 "rigid-body definitions YAML (docs/bodies.md); live, reloaded when the file changes");
   app.add_option("--in-features", options.in_features, "offline: FeatureFrame JSONL files (one per camera)")
       ->expected(1, -1);
   app.add_flag("--no-dds", options.no_dds, "offline: do not use DDS; requires --in-features");
   app.add_option("--out-tracks", options.out_tracks, "write every published TrackFrame as Track JSONL");
   app.add_option("--out-poses", options.out_poses, "write body poses as Pose JSONL (needs --bodies)");
+  app.add_option("--prediction-horizon-ms", options.prediction_horizon_ms,
+                 "publish body poses predicted this far ahead of the newest frame (seed 000 Ch. 5)")
+      ->check(CLI::Range(0.0, 1000.0));
   app.add_option("--dds-profile", options.dds_profile,
                  "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
   app.add_option("--latency-window-ms", options.latency_window_ms,
@@ -462,6 +550,7 @@ int main(int argc, char** argv) {
   panoptes::install_stop_handlers();
   options.tracker.rewind_horizon_ns = panoptes::seconds_to_ns(options.rewind_horizon_ms * 1e-3);
   est::Tracker tracker(options.tracker);
+  BodyFile body_file(options.bodies_file);
   try {
     if (!options.calibration_file.empty()) {
       const auto calibration = panoptes::load_calibration(options.calibration_file);
@@ -471,12 +560,7 @@ int main(int argc, char** argv) {
           log("camera '" + camera.id + "' in " + options.calibration_file + " has no T_world_cam: ignored");
       }
     }
-    if (!options.bodies_file.empty()) {
-      const auto bodies = panoptes::load_bodies(options.bodies_file);
-      log("loaded " + std::to_string(bodies.size()) +
-          " body definition(s); rigid-body tracking is not built yet, so no poses are produced");
-      if (!options.out_poses.empty()) panoptes::JsonlWriter poses(options.out_poses);  // empty but present
-    }
+    if (body_file.enabled()) body_file.load(tracker);
     if (!options.quiet) {
       std::ostringstream printed;
       options.tracker.print(printed);
@@ -491,7 +575,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    return options.no_dds ? run_offline(options, tracker) : run_live(options, tracker);
+    return options.no_dds ? run_offline(options, tracker) : run_live(options, tracker, body_file);
   } catch (const panoptes::ConfigError& error) {
     std::fprintf(stderr, "estimator_node: %s\n", error.what());
     return panoptes::kExitBadInput;

@@ -170,7 +170,8 @@ void Tracker::Impl::apply(const FeatureFrame& frame, int camera_index) {
   if (!core.bodies.empty()) {
     std::vector<char> taken(pixels.size(), 0);
     core.bodies.process_frame(camera_index, *models[camera_index], frame.stamp_ns, pixels, excluded, taken);
-    if (core.bodies.wants_points(frame.stamp_ns)) core.bodies.identify(frame.stamp_ns, confirmed_points(frame.stamp_ns));
+    if (core.bodies.wants_points(frame.stamp_ns))
+      core.bodies.identify(frame.stamp_ns, confirmed_points(frame.stamp_ns));
   }
 }
 
@@ -514,15 +515,20 @@ void Tracker::set_bodies(const std::vector<BodyDefinition>& bodies, const std::s
     throw ConfigError(file_for_errors, "bodies", error.what());
   }
   impl_->core.bodies.set_definitions(bodies, impl_->options.bodies);
-  for (auto& checkpoint : impl_->checkpoints) checkpoint.core.bodies.set_definitions(bodies, impl_->options.bodies);
+  for (auto& checkpoint : impl_->checkpoints)
+    checkpoint.core.bodies.set_definitions(bodies, impl_->options.bodies);
 }
 
 std::vector<PoseRecord> Tracker::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) const {
   return impl_->core.bodies.poses_at(stamp_ns, horizon_ns);
 }
 
-const BodyStats& Tracker::body_stats() const { return impl_->core.bodies.stats(); }
-std::size_t Tracker::body_count() const { return impl_->core.bodies.size(); }
+const BodyStats& Tracker::body_stats() const {
+  return impl_->core.bodies.stats();
+}
+std::size_t Tracker::body_count() const {
+  return impl_->core.bodies.size();
+}
 
 bool Tracker::has_camera(const std::string& camera_id) const {
   return impl_->camera_index.count(camera_id) != 0;

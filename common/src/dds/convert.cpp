@@ -2,6 +2,8 @@
 #include "panoptes/dds/convert.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 
 namespace panoptes::dds {
 
@@ -121,6 +123,43 @@ std::optional<CameraCalibration> calibration_from(const msg::CameraInfo& info) {
     calibration.T_world_cam = T;
   }
   return calibration;
+}
+
+msg::BodyPose to_message(const PoseRecord& pose) {
+  msg::BodyPose message;
+  message.name(pose.body);
+  message.stamp_ns(pose.stamp_ns);
+  msg::Pose3 pose3;
+  pose3.position({pose.p.x(), pose.p.y(), pose.p.z()});
+  pose3.orientation({pose.q.x(), pose.q.y(), pose.q.z(), pose.q.w()});
+  message.pose(pose3);
+  message.linear_velocity({pose.v.x(), pose.v.y(), pose.v.z()});
+  message.angular_velocity({pose.w.x(), pose.w.y(), pose.w.z()});
+  std::array<double, 36> covariance{};  // diagonal: the filter's marginal variances
+  for (std::size_t k = 0; k < 6; ++k) covariance[k * 6 + k] = pose.sigma[k] * pose.sigma[k];
+  message.covariance(covariance);
+  message.quality(static_cast<float>(pose.quality));
+  message.prediction_horizon_ns(pose.horizon_ns);
+  return message;
+}
+
+PoseRecord from_message(const msg::BodyPose& message) {
+  PoseRecord pose;
+  pose.body = message.name();
+  pose.stamp_ns = message.stamp_ns();
+  const auto& p = message.pose().position();
+  const auto& q = message.pose().orientation();
+  pose.p = Eigen::Vector3d(p[0], p[1], p[2]);
+  pose.q = Eigen::Vector4d(q[0], q[1], q[2], q[3]);
+  const auto& v = message.linear_velocity();
+  const auto& w = message.angular_velocity();
+  pose.v = Eigen::Vector3d(v[0], v[1], v[2]);
+  pose.w = Eigen::Vector3d(w[0], w[1], w[2]);
+  for (std::size_t k = 0; k < 6; ++k)
+    pose.sigma[k] = std::sqrt(std::max(0.0, message.covariance()[k * 6 + k]));
+  pose.quality = message.quality();
+  pose.horizon_ns = message.prediction_horizon_ns();
+  return pose;
 }
 
 }  // namespace panoptes::dds

@@ -66,7 +66,8 @@ TEST(BodyEkf, PredictionFollowsConstantAccelerationAndAngularVelocity) {
   state.stamp_ns = kEpoch;
   const BodyState later = predicted(state, kEpoch + 100'000'000, BodyMotionNoise{});
   EXPECT_NEAR((later.p - Eigen::Vector3d(1.05, 2.005, 2.98)).norm(), 0.0, 1e-12);
-  EXPECT_NEAR(angle_deg(later.q, Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()))), 0.0, 1e-9);
+  EXPECT_NEAR(angle_deg(later.q, Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()))), 0.0,
+              1e-9);
   const RigidTransform pose = extrapolate_pose(state, 0.1);
   EXPECT_NEAR((pose.t - later.p).norm(), 0.0, 1e-12);
   // Uncertainty grows both ways from the last update.
@@ -132,11 +133,13 @@ TEST(BodyIdentification, FindsTheBodyAmongClutterWithMissingMarkers) {
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   std::normal_distribution<double> noise(0.0, 0.0003);
   for (int trial = 0; trial < 50; ++trial) {
-    const RigidTransform T{rotation_vector_to_quaternion(Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)) * 2),
-                           Eigen::Vector3d(uniform(rng), uniform(rng), 1 + uniform(rng))};
+    const RigidTransform T{
+        rotation_vector_to_quaternion(Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)) * 2),
+        Eigen::Vector3d(uniform(rng), uniform(rng), 1 + uniform(rng))};
     std::vector<MeasuredPoint> points;
     std::vector<int> truth_index(markers.size(), -1);
-    for (int i = 0; i < 20; ++i) points.push_back({Eigen::Vector3d(uniform(rng), uniform(rng), 1 + uniform(rng)), 0.0003});
+    for (int i = 0; i < 20; ++i)
+      points.push_back({Eigen::Vector3d(uniform(rng), uniform(rng), 1 + uniform(rng)), 0.0003});
     const int hidden = trial % static_cast<int>(markers.size());
     for (std::size_t m = 0; m < markers.size(); ++m) {
       if (static_cast<int>(m) == hidden) continue;
@@ -146,7 +149,8 @@ TEST(BodyIdentification, FindsTheBodyAmongClutterWithMissingMarkers) {
     const auto match = identify_body(markers, points);
     ASSERT_TRUE(match) << trial;
     ASSERT_EQ(match->pairs.size(), markers.size() - 1) << trial;
-    for (const auto& [point, marker] : match->pairs) EXPECT_EQ(point, truth_index[static_cast<std::size_t>(marker)]);
+    for (const auto& [point, marker] : match->pairs)
+      EXPECT_EQ(point, truth_index[static_cast<std::size_t>(marker)]);
     EXPECT_LT((match->T_world_body.t - T.t).norm(), 0.002);
   }
 }
@@ -183,7 +187,8 @@ TEST(BodyIdentification, ValidationNamesTheBody) {
   expect_error({"line", {{0, 0, 0}, {0.1, 0, 0}, {0.25, 0, 0}}}, "one line");
   Tracker tracker;
   tracker.set_bodies({{"good", {{0, 0, 0}, {0.1, 0, 0}, {0, 0.1, 0}}}}, "bodies.yaml");
-  EXPECT_THROW(tracker.set_bodies({{"x", {{0, 0, 0}, {0.1, 0, 0}, {0, 0.1, 0}}}, {"x", {{0, 0, 0}, {0.2, 0, 0}, {0, 0.1, 0}}}}),
+  EXPECT_THROW(tracker.set_bodies({{"x", {{0, 0, 0}, {0.1, 0, 0}, {0, 0.1, 0}}},
+                                   {"x", {{0, 0, 0}, {0.2, 0, 0}, {0, 0.1, 0}}}}),
                ConfigError);
   EXPECT_EQ(tracker.body_count(), 1u);  // the previous definitions stay
 }
@@ -275,8 +280,9 @@ SceneRun run_scene(const Scene& scene, double warmup_s, const FrameFilter& filte
 
 void print(const char* scenario, const SceneRun& run) {
   for (const auto& [name, e] : run.bodies) {
-    std::printf("%s: body %s tracked %.2f%% (wrong %zu of %zu) RMSE %.3f mm (max %.3f) / %.4f deg\n", scenario,
-                name.c_str(), 100.0 * e.tracked(), e.wrong, e.samples, e.rmse_mm(), e.max_p * 1e3, e.rmse_deg());
+    std::printf("%s: body %s tracked %.2f%% (wrong %zu of %zu) RMSE %.3f mm (max %.3f) / %.4f deg\n",
+                scenario, name.c_str(), 100.0 * e.tracked(), e.wrong, e.samples, e.rmse_mm(), e.max_p * 1e3,
+                e.rmse_deg());
   }
   std::printf("%s: identified %llu reidentified %llu lost %llu marker updates %llu\n", scenario,
               static_cast<unsigned long long>(run.stats.identified),
@@ -295,7 +301,8 @@ defaults:
   height: 1024
   K: [1400.0, 1400.0, 639.5, 511.5]
   pixel_noise: 1.0
-)") + (extra_defaults.find("centroid_noise") == std::string::npos ? "  centroid_noise: 0.1\n" : "") + extra_defaults + R"(
+)") + (extra_defaults.find("centroid_noise") == std::string::npos ? "  centroid_noise: 0.1\n" : "") +
+         extra_defaults + R"(
 cameras:
   - {id: c0, look_at: {eye: [4.5, 0.3, 2.8], target: [0, 0, 1.0]}, rate: 90, phase: 0.0}
   - {id: c1, look_at: {eye: [2.4, 3.9, 2.5], target: [0, 0, 1.0]}, rate: 100, phase: 0.0031}
@@ -377,12 +384,14 @@ TEST(BodyScenes, NearIdenticalBodiesAreNeverConfused) {
   const auto bodies = near_identical_bodies();
   const char* paths[] = {
       "{type: lissajous, center: [0.2, 0.0, 1.0], amplitude: [0.9, 1.0, 0.6], frequency: [0.13, 0.17, 0.11]}",
-      "{type: lissajous, center: [-0.2, 0.0, 1.0], amplitude: [1.0, 0.9, 0.6], frequency: [0.16, 0.12, 0.15], phase: [1.0, 2.0, 0.3]}"};
+      "{type: lissajous, center: [-0.2, 0.0, 1.0], amplitude: [1.0, 0.9, 0.6], frequency: [0.16, 0.12, "
+      "0.15], phase: [1.0, 2.0, 0.3]}"};
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     yaml += "  - name: " + bodies[b].name + "\n    markers: [";
     for (std::size_t m = 0; m < bodies[b].markers.size(); ++m) {
       const auto& p = bodies[b].markers[m];
-      yaml += (m ? ", [" : "[") + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) + "]";
+      yaml += (m ? ", [" : "[") + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " +
+              std::to_string(p.z()) + "]";
     }
     yaml += "]\n    marker_radius: 0.004\n    path: " + std::string(paths[b]) +
             "\n    rotation: {type: oscillate, amplitude: [0.6, 0.6, 1.2], frequency: [0.3, 0.2, 0.25]}\n";
@@ -429,7 +438,9 @@ bodies:
     rotation: {type: oscillate, amplitude: [0.35, 0.3, 0.35], frequency: [0.3, 0.2, 0.25], initial: [0, -0.7071068, 0, 0.7071068]}
     occlusion: {facing_angle: 80, normal: [0, 0, -1]}
 )");
-  const FrameFilter only_c0 = [](std::size_t camera, FeatureFrame&, const std::vector<int>&) { return camera == 0; };
+  const FrameFilter only_c0 = [](std::size_t camera, FeatureFrame&, const std::vector<int>&) {
+    return camera == 0;
+  };
   const SceneRun run = run_scene(scene, 0.5, only_c0);
   print("led7 one camera", run);
   const BodyErrors& led = run.bodies.at("led");

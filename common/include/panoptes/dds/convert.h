@@ -15,6 +15,9 @@ msg::Track to_message(const TrackRecord& track);
 // The stamp comes from the enclosing TrackFrame.
 TrackRecord from_message(const msg::Track& message, TimeNs stamp_ns);
 
+msg::BodyPose to_message(const PoseRecord& pose);
+PoseRecord from_message(const msg::BodyPose& message);
+
 msg::CameraInfo to_camera_info(const std::string& camera_id, const CameraIntrinsics& intrinsics,
                                const std::optional<RigidTransform>& T_world_cam);
 // Calibration carried by a CameraInfo; nullopt if it has no intrinsics (fx == 0).

@@ -25,8 +25,8 @@ namespace panoptes::estimator {
 
 struct BodyTrackerOptions {
   BodyMotionNoise noise;
-  double measurement_noise_px = 0.3;        // σ of a marker's centroid in the body filter
-  double gate_chi2 = 13.82;                 // χ²₂ at p = 0.999 for a marker's blob
+  double measurement_noise_px = 0.3;  // σ of a marker's centroid in the body filter
+  double gate_chi2 = 13.82;           // χ²₂ at p = 0.999 for a marker's blob
   IdentificationOptions identification;
   TimeNs identify_interval_ns = 20'000'000;  // how often untracked bodies are looked for
   TimeNs verify_interval_ns = 100'000'000;   // how often a tracked body is checked against the points
@@ -43,9 +43,9 @@ struct BodyTrackerOptions {
 };
 
 struct BodyStats {
-  std::uint64_t identified = 0;      // acquisitions from 3D points
+  std::uint64_t identified = 0;          // acquisitions from 3D points
   std::uint64_t acquired_monocular = 0;  // acquisitions from a single camera (7-LED markers)
-  std::uint64_t reidentified = 0;    // tracked pose contradicted by identification: restarted
+  std::uint64_t reidentified = 0;        // tracked pose contradicted by identification: restarted
   std::uint64_t lost = 0;
   std::uint64_t marker_updates = 0;  // marker projections applied
   std::uint64_t markers_gated_out = 0;

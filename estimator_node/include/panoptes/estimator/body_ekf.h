@@ -26,17 +26,17 @@ using Matrix15d = Eigen::Matrix<double, 15, 15>;
 inline constexpr int kBodyP = 0, kBodyV = 3, kBodyA = 6, kBodyTheta = 9, kBodyW = 12;
 
 struct BodyMotionNoise {
-  double jerk = 50.0;           // σ² of white jerk, m²/s⁵ (drives a; with it v and p)
-  double angular_accel = 2.0;    // σ² of white angular acceleration, rad²/s³ (drives ω)
+  double jerk = 50.0;          // σ² of white jerk, m²/s⁵ (drives a; with it v and p)
+  double angular_accel = 2.0;  // σ² of white angular acceleration, rad²/s³ (drives ω)
 };
 
 struct BodyState {
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();  // body origin, world frame, m
-  Eigen::Vector3d v = Eigen::Vector3d::Zero();  // m/s
-  Eigen::Vector3d a = Eigen::Vector3d::Zero();  // m/s²
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();            // body origin, world frame, m
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();            // m/s
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();            // m/s²
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  // R_world_body
-  Eigen::Vector3d w = Eigen::Vector3d::Zero();  // angular velocity, body frame, rad/s
-  Matrix15d P = Matrix15d::Identity();          // covariance of (p, v, a, δθ, ω)
+  Eigen::Vector3d w = Eigen::Vector3d::Zero();            // angular velocity, body frame, rad/s
+  Matrix15d P = Matrix15d::Identity();                    // covariance of (p, v, a, δθ, ω)
   TimeNs stamp_ns = 0;
 
   RigidTransform pose() const { return {q, p}; }

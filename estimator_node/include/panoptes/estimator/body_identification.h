@@ -27,9 +27,9 @@ std::optional<RigidTransform> fit_rigid_transform(const std::vector<Eigen::Vecto
 struct IdentificationOptions {
   double tolerance_floor_m = 0.002;  // distances agree within floor + sigmas·σ(distance)
   double tolerance_sigmas = 4.0;
-  double max_rms_m = 0.003;           // the fitted pose must explain the points this well
+  double max_rms_m = 0.003;  // the fitted pose must explain the points this well
   int min_markers = 3;
-  std::size_t max_points = 256;       // points offered beyond this are ignored
+  std::size_t max_points = 256;           // points offered beyond this are ignored
   std::size_t max_clique_steps = 200000;  // bound on the clique search
 };
 

@@ -110,4 +110,24 @@ struct Evaluation {
 Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
                     const EvaluationOptions& options);
 
+// Body poses against the scene's body truth. A pose record is compared with the truth at its
+// stamp plus its prediction horizon; it is correct within 2 cm and 5 degrees (else "wrong": a
+// confusion or a lost pose still published). Tracked: the fraction of 10 ms bins of scene time
+// (after the warmup) in which the body had a correct pose.
+struct BodyEvaluation {
+  std::string body;
+  std::size_t records = 0, wrong = 0;
+  double rmse_m = 0, max_m = 0, rmse_deg = 0, max_deg = 0;
+  double tracked_fraction = 0;
+};
+
+struct PoseEvaluation {
+  std::vector<BodyEvaluation> bodies;  // every body of the scene, in scene order
+  std::string to_json() const;
+  std::string summary() const;
+};
+
+PoseEvaluation evaluate_poses(const Scene& scene, const std::vector<PoseRecord>& poses,
+                              const EvaluationOptions& options);
+
 }  // namespace panoptes::estimator
