@@ -73,7 +73,9 @@ void predict(BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise) {
     state.p += dt * state.v + 0.5 * dt * dt * state.a;
     state.v += dt * state.a;
     state.q = (state.q * rotation_vector_to_quaternion(dt * state.w)).normalized();
-    state.P = A * state.P * A.transpose() + process_noise(dt, noise);
+    // Fixed-size products evaluated coefficient-wise (no GEMM set-up for 15 x 15).
+    const Matrix15d AP = A.lazyProduct(state.P);
+    state.P = AP.lazyProduct(A.transpose()) + process_noise(dt, noise);
     state.P = 0.5 * (state.P + state.P.transpose());
   }
   state.stamp_ns = stamp_ns;
@@ -110,8 +112,8 @@ std::optional<MarkerProjection> project_marker(const BodyState& state, const Eig
   // p_world = p + R exp(δθ) m ≈ p + R m − R [m]× δθ  (seed 003 eq. A.29 linearised about δθ = 0).
   projection.H.block<2, 3>(0, kBodyTheta) = -J * R * skew(marker);
   const Eigen::Matrix2d Rm = measurement_sigma_px * measurement_sigma_px * Eigen::Matrix2d::Identity();
-  const Eigen::Matrix<double, 2, 15> HP = projection.H * state.P;
-  projection.S = HP * projection.H.transpose() + Rm;
+  const Eigen::Matrix<double, 2, 15> HP = projection.H.lazyProduct(state.P);
+  projection.S = HP.lazyProduct(projection.H.transpose()) + Rm;
   projection.S_inverse = projection.S.inverse();
   return projection;
 }
@@ -123,8 +125,8 @@ double mahalanobis2(const MarkerProjection& projection, const Eigen::Vector2d& m
 
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px) {
-  const Eigen::Matrix2d Rm = measurement_sigma_px * measurement_sigma_px * Eigen::Matrix2d::Identity();
-  const Eigen::Matrix<double, 15, 2> K = state.P * projection.H.transpose() * projection.S_inverse;
+  const Eigen::Matrix<double, 2, 15> HP = projection.H.lazyProduct(state.P);
+  const Eigen::Matrix<double, 15, 2> K = HP.transpose() * projection.S_inverse;
   const Vector15d dx = K * (measurement - projection.pixel);
   state.p += dx.segment<3>(kBodyP);
   state.v += dx.segment<3>(kBodyV);
@@ -132,8 +134,10 @@ void update(BodyState& state, const MarkerProjection& projection, const Eigen::V
   state.w += dx.segment<3>(kBodyW);
   // Reset (seed 003 eq. A.41): the incremental rotation is added onto the external quaternion.
   state.q = (state.q * rotation_vector_to_quaternion(dx.segment<3>(kBodyTheta))).normalized();
-  const Matrix15d I_KH = Matrix15d::Identity() - K * projection.H;
-  state.P = I_KH * state.P * I_KH.transpose() + K * Rm * K.transpose();
+  // P - K S Kᵀ = P - K H P: equal to the Joseph form for this (optimal) gain and 2 x 15 x 15 work
+  // instead of 2 x 15³; symmetrised against round-off. S uses measurement_sigma_px (project_marker).
+  (void)measurement_sigma_px;
+  state.P.noalias() -= K.lazyProduct(HP);
   state.P = 0.5 * (state.P + state.P.transpose());
 }
 

@@ -6,7 +6,7 @@
 // and the cost per observation as the marker count grows. Warm-up (track initiation and
 // confirmation) is processed first and not timed.
 //   bench_estimator [--json] [--seconds <s>] [--warmup <s>] [--cameras <n>] [--rate <hz>]
-//                   [--markers <n>] [--sweep <n,n,...> | --no-sweep] [--seed <n>]
+//                   [--markers <n>] [--sweep <n,n,...> | --no-sweep] [--bodies <n>] [--seed <n>]
 // With --json the last line of output is one JSON object (docs/benchmarks.md).
 #include <algorithm>
 #include <chrono>
@@ -39,6 +39,7 @@ struct Config {
   int markers = 40;
   double warmup_s = 1.0;
   double seconds = 2.0;
+  int bodies = 0;  // rigid bodies of 4 markers each, besides the loose markers
 };
 
 // Cameras on a circle of radius 3 m (the walls of a 6 x 6 m room) at 2.3-2.9 m, looking at the
@@ -69,6 +70,19 @@ std::string scene_yaml(const Config& config, std::uint64_t seed) {
          << uniform(0.5, 1.1) << ", " << uniform(0.15, 0.45) << "], frequency: [" << uniform(0.08, 0.2)
          << ", " << uniform(0.08, 0.2) << ", " << uniform(0.1, 0.3) << "], phase: [" << uniform(0, 2 * M_PI)
          << ", " << uniform(0, 2 * M_PI) << ", " << uniform(0, 2 * M_PI) << "]}}\n";
+  }
+  if (config.bodies > 0) yaml << "bodies:\n";
+  for (int b = 0; b < config.bodies; ++b) {
+    // Random constellations of 4 markers within a 20 cm cube (distinct for identification).
+    yaml << "  - {name: body" << b << ", markers: [[0, 0, 0]";
+    for (int m = 1; m < 4; ++m)
+      yaml << ", [" << uniform(-0.1, 0.1) << ", " << uniform(-0.1, 0.1) << ", " << uniform(-0.1, 0.1) << "]";
+    yaml << "], path: {type: lissajous, center: [" << uniform(-0.5, 0.5) << ", " << uniform(-0.5, 0.5) << ", "
+         << uniform(0.9, 1.2) << "], amplitude: [" << uniform(0.5, 1.1) << ", " << uniform(0.5, 1.1) << ", "
+         << uniform(0.15, 0.45) << "], frequency: [" << uniform(0.08, 0.2) << ", " << uniform(0.08, 0.2)
+         << ", " << uniform(0.1, 0.3)
+         << "]}, rotation: {type: oscillate, amplitude: [0.5, 0.5, 1.0], frequency: [" << uniform(0.1, 0.3)
+         << ", " << uniform(0.1, 0.3) << ", " << uniform(0.1, 0.3) << "]}}\n";
   }
   return yaml.str();
 }
@@ -123,11 +137,13 @@ double percentile(std::vector<double> values, double q) {
   return values[k];
 }
 
-Result run(const Config& config, std::uint64_t seed) {
+Result run(const Config& config, std::uint64_t seed, bool track_bodies = false,
+           std::size_t* bodies_tracked = nullptr) {
   const Scene scene = Scene::from_yaml_string(scene_yaml(config, seed), ".", "bench_estimator scene");
   const auto frames = simulate(scene);
   est::Tracker tracker;
   tracker.set_calibration(scene.calibration());
+  if (track_bodies) tracker.set_bodies(scene.body_definitions());
   const TimeNs timed_from = kEpoch + panoptes::seconds_to_ns(config.warmup_s);
 
   Result result;
@@ -154,6 +170,7 @@ Result run(const Config& config, std::uint64_t seed) {
   result.max_us = latencies.empty() ? 0 : *std::max_element(latencies.begin(), latencies.end()) * 1e6;
   result.tracked_at_end = markers_tracked(tracker, scene);
   result.tracks_at_end = tracker.current_tracks().size();
+  if (bodies_tracked) *bodies_tracked = tracker.current_poses().size();
   return result;
 }
 
@@ -199,6 +216,9 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->check(CLI::Range(1, 100000));
   app.add_flag("--no-sweep", no_sweep, "only the main case");
+  int bodies = 10;
+  app.add_option("--bodies", bodies, "rigid bodies (4 markers each) of the body case; 0: no body case")
+      ->check(CLI::Range(0, 1000));
   app.add_option("--seed", seed, "scene seed");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   if (no_sweep) sweep.clear();
@@ -226,6 +246,33 @@ int main(int argc, char** argv) {
                 scaling.front().markers,
                 scaling.back().us_per_observation() / scaling.front().us_per_observation());
   }
+  // Body update cost: the same scene (loose markers + bodies) run with and without the body
+  // definitions, side by side; the difference is what the bodies cost per camera frame.
+  std::string bodies_json = "null";
+  if (bodies > 0) {
+    Config c = config;
+    c.bodies = bodies;
+    std::size_t tracked = 0;
+    const Result without = run(c, seed);
+    const Result with = run(c, seed, true, &tracked);
+    const double extra_us = (with.process_s - without.process_s) * 1e6 / static_cast<double>(with.frames);
+    std::printf(
+        "bodies: %d bodies x 4 markers + %d loose markers, %d cameras: per camera frame %.2f us without body "
+        "tracking, %.2f us with (p99 %.1f / %.1f us): bodies cost %.2f us per frame (%.3f us per body); "
+        "%zu/%d bodies tracked at the end\n",
+        bodies, config.markers, config.cameras, without.process_s * 1e6 / static_cast<double>(without.frames),
+        with.process_s * 1e6 / static_cast<double>(with.frames), without.p99_us, with.p99_us, extra_us,
+        extra_us / bodies, tracked, bodies);
+    char buffer[512];
+    std::snprintf(buffer, sizeof buffer,
+                  "{\"bodies\": %d, \"us_per_frame_without\": %.3f, \"us_per_frame_with\": %.3f, "
+                  "\"p99_us_without\": %.2f, \"p99_us_with\": %.2f, \"body_us_per_frame\": %.3f, "
+                  "\"body_us_per_frame_per_body\": %.4f, \"bodies_tracked\": %zu}",
+                  bodies, without.process_s * 1e6 / static_cast<double>(without.frames),
+                  with.process_s * 1e6 / static_cast<double>(with.frames), without.p99_us, with.p99_us,
+                  extra_us, extra_us / bodies, tracked);
+    bodies_json = buffer;
+  }
   if (json) {
     std::string sweep_json;
     for (const Result& r : scaling) sweep_json += (sweep_json.empty() ? "" : ", ") + to_json(r);
@@ -233,9 +280,9 @@ int main(int argc, char** argv) {
         scaling.empty() ? 0 : scaling.back().us_per_observation() / scaling.front().us_per_observation();
     std::printf(
         "{\"cameras\": %d, \"rate_hz\": %.1f, \"warmup_s\": %.3f, \"seconds\": %.3f, \"main\": %s, "
-        "\"scaling\": [%s], \"us_per_observation_ratio_last_to_first\": %.4f}\n",
+        "\"scaling\": [%s], \"us_per_observation_ratio_last_to_first\": %.4f, \"bodies\": %s}\n",
         config.cameras, config.rate_hz, config.warmup_s, config.seconds, to_json(main_case).c_str(),
-        sweep_json.c_str(), flatness);
+        sweep_json.c_str(), flatness, bodies_json.c_str());
   }
   return 0;
 }
