@@ -8,6 +8,7 @@ packages=(
   build-essential cmake ninja-build pkg-config ccache git
   libfastrtps-dev fastddsgen fastdds-tools
   libopencv-dev libeigen3-dev libceres-dev
+  opencv-doc
   libaravis-dev aravis-tools libusb-1.0-0-dev
   libyaml-cpp-dev libspdlog-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev

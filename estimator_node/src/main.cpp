@@ -23,6 +23,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "panoptes/calib/calibrate_cli.h"
 #include "panoptes/calibration.h"
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
@@ -489,6 +490,7 @@ int run_live(const Options& options, est::Tracker& tracker, BodyFile& body_file)
 
 int main(int argc, char** argv) {
   if (argc >= 2 && std::string_view(argv[1]) == "calibrate")
+    return panoptes::calib::run_calibrate(argc - 1, argv + 1);
   Options options;
   CLI::App app{"estimator_node: fuses asynchronous camera features into 3D tracks (Panoptes)",
                "estimator_node"};

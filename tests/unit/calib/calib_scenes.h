@@ -1,0 +1,273 @@
+// SPDX-License-Identifier: Apache-2.0
+// Simulated wand calibration runs for the calibration tests: scenes, features, and the errors of
+// a solution against the truth after a rigid alignment.
+#pragma once
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "panoptes/calib/report.h"
+#include "panoptes/calib/wand.h"
+#include "panoptes/calib/wand_solver.h"
+#include "panoptes/simulator.h"
+
+namespace panoptes::calib::testing {
+
+constexpr TimeNs kEpoch = 1'700'000'000'000'000'000;
+
+struct CameraSpec {
+  Eigen::Vector3d eye, target;
+  double phase_s = 0, clock_offset_s = 0, rate_hz = 100;
+};
+
+struct SceneSpec {
+  std::vector<CameraSpec> cameras;
+  double noise_px = 0.1;
+  double duration_s = 20;
+  int width = 1280, height = 1024;
+  double focal = 700;
+  std::string distortion = "[0, 0, 0, 0, 0]";
+  std::string wand_path;      // YAML flow map of the body path
+  std::string wand_rotation;  // YAML flow map
+  std::string wand_markers = "[[-0.25, 0, 0], [-0.07, 0, 0], [0.25, 0, 0]]";
+  std::uint64_t seed = 7;
+};
+
+inline std::string v3(const Eigen::Vector3d& v) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
+  return out.str();
+}
+
+inline std::string scene_yaml(const SceneSpec& spec) {
+  std::ostringstream yaml;
+  yaml.precision(17);
+  yaml << "seed: " << spec.seed << "\nduration: " << spec.duration_s << "\ndefaults:\n  width: " << spec.width
+       << "\n  height: " << spec.height << "\n  K: [" << spec.focal << ", " << spec.focal << ", "
+       << (spec.width - 1) / 2.0 + 3.0 << ", " << (spec.height - 1) / 2.0 - 2.0
+       << "]\n  distortion: " << spec.distortion << "\n  centroid_noise: " << spec.noise_px << "\ncameras:\n";
+  for (std::size_t i = 0; i < spec.cameras.size(); ++i) {
+    const auto& camera = spec.cameras[i];
+    yaml << "  - id: cam" << i << "\n    look_at: {eye: " << v3(camera.eye)
+         << ", target: " << v3(camera.target) << "}\n    rate: " << camera.rate_hz
+         << "\n    phase: " << camera.phase_s << "\n    clock_offset: " << camera.clock_offset_s << "\n";
+  }
+  yaml << "bodies:\n  - name: wand\n    markers: " << spec.wand_markers << "\n    path: " << spec.wand_path
+       << "\n    rotation: " << spec.wand_rotation << "\n";
+  return yaml.str();
+}
+
+// Eight cameras round a 4 x 4 x 2.5 m room (corners and wall centres, near the ceiling).
+inline SceneSpec room8() {
+  SceneSpec spec;
+  for (int i = 0; i < 8; ++i) {
+    const double angle = M_PI / 4 * i + 0.1;
+    const double r = (i % 2 == 0) ? 1.95 : 2.6;  // wall centres and corners of the 4 m square
+    CameraSpec camera;
+    camera.eye = Eigen::Vector3d(r * std::cos(angle), r * std::sin(angle), 2.35 - 0.05 * (i % 3));
+    camera.target = Eigen::Vector3d(0.2 * std::cos(angle + 2), 0.2 * std::sin(angle + 2), 0.9);
+    spec.cameras.push_back(camera);
+  }
+  spec.wand_path =
+      "{type: lissajous, center: [0, 0, 1.15], amplitude: [1.25, 1.25, 0.75], frequency: [0.13, 0.171, "
+      "0.23]}";
+  spec.wand_rotation = "{type: oscillate, amplitude: [1.3, 1.1, 3.0], frequency: [0.29, 0.37, 0.083]}";
+  return spec;
+}
+
+// Ten ceiling cameras along an L-shaped corridor (8 m along x, then 6 m along y, 2 m wide); the
+// wand is carried along it once, weaving and turning. No point is seen by all cameras.
+inline SceneSpec corridor10() {
+  SceneSpec spec;
+  const auto centreline = [](double s) -> std::pair<Eigen::Vector2d, Eigen::Vector2d> {
+    // Straight to x = 6.5, a quarter circle of radius 1.5 round (6.5, 1.5), then straight along y.
+    const double straight = 6.5, arc = M_PI / 2 * 1.5;
+    if (s < straight) return {Eigen::Vector2d(s, 0), Eigen::Vector2d(1, 0)};
+    if (s < straight + arc) {
+      const double a = (s - straight) / 1.5;
+      return {Eigen::Vector2d(6.5 + 1.5 * std::sin(a), 1.5 - 1.5 * std::cos(a)),
+              Eigen::Vector2d(std::cos(a), std::sin(a))};
+    }
+    return {Eigen::Vector2d(8.0, 1.5 + (s - straight - arc)), Eigen::Vector2d(0, 1)};
+  };
+  const double total = 6.5 + M_PI / 2 * 1.5 + 4.5;
+  // Cameras every ~1.5 m of centreline, alternating sides, looking ahead and down.
+  for (int i = 0; i < 10; ++i) {
+    const double s = 0.2 + i * (total - 0.4) / 9.0;
+    const auto [p, tangent] = centreline(s);
+    const Eigen::Vector2d normal(-tangent.y(), tangent.x());
+    const double side = (i % 2 == 0) ? 0.9 : -0.9;
+    CameraSpec camera;
+    const Eigen::Vector2d eye = p + side * normal - 0.3 * tangent;
+    const auto [ahead, unused] = centreline(std::min(total, s + 1.2));
+    camera.eye = Eigen::Vector3d(eye.x(), eye.y(), 2.6);
+    camera.target =
+        Eigen::Vector3d(ahead.x() - 0.4 * side * normal.x(), ahead.y() - 0.4 * side * normal.y(), 0.9);
+    spec.cameras.push_back(camera);
+  }
+  spec.duration_s = 40;
+  std::ostringstream points, times;
+  points.precision(9);
+  for (int k = 0; k <= 4000; ++k) {
+    const double t = k * 0.01;
+    const double s = total * (1 - std::cos(M_PI * t / 40.0)) / 2;
+    const auto [p, tangent] = centreline(s);
+    const Eigen::Vector2d normal(-tangent.y(), tangent.x());
+    const Eigen::Vector2d q = p + 0.55 * std::sin(2 * M_PI * 0.21 * t) * normal;
+    const double z = 1.2 + 0.5 * std::sin(2 * M_PI * 0.33 * t + 1);
+    points << (k ? ", " : "") << "[" << q.x() << ", " << q.y() << ", " << z << "]";
+    times << (k ? ", " : "") << t;
+  }
+  spec.wand_path = "{type: waypoints, points: [" + points.str() + "], times: [" + times.str() + "]}";
+  spec.wand_rotation = "{type: oscillate, amplitude: [1.3, 1.1, 3.0], frequency: [0.29, 0.37, 0.083]}";
+  return spec;
+}
+
+struct Measured {
+  SolveResult result;
+  double max_position_error_mm = 0;
+  double max_rotation_error_deg = 0;
+  double max_offset_error_ms = 0;
+  double max_focal_error_rel = 0;
+  // The same observations triangulated with the true cameras: the floor set by the noise.
+  LengthStats truth_lengths;
+};
+
+// Wand lengths triangulated freely from the observations in `result.residuals` through `models`.
+inline LengthStats free_lengths(const SolveResult& result, const std::vector<CameraModel>& models,
+                                double length_m, int markers) {
+  std::map<TimeNs, std::vector<std::vector<std::pair<int, Eigen::Vector2d>>>> by_sample;
+  for (const auto& r : result.residuals) {
+    auto& sample = by_sample[r.t_ns];
+    sample.resize(static_cast<std::size_t>(markers));
+    sample[static_cast<std::size_t>(r.marker)].emplace_back(r.camera, r.observed);
+  }
+  std::vector<double> errors;
+  for (const auto& [t, sample] : by_sample) {
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& views : sample) {
+      std::vector<CameraModel> used;
+      std::vector<Eigen::Vector2d> pixels;
+      for (const auto& [camera, pixel] : views) {
+        used.push_back(models[static_cast<std::size_t>(camera)]);
+        pixels.push_back(pixel);
+      }
+      if (auto x = triangulate(used, pixels)) points.push_back(*x);
+    }
+    if (static_cast<int>(points.size()) == markers)
+      errors.push_back(((points.back() - points.front()).norm() - length_m) * 1e3);
+  }
+  LengthStats stats;
+  stats.count = static_cast<int>(errors.size());
+  if (errors.empty()) return stats;
+  for (double e : errors) stats.mean_error_mm += e / stats.count;
+  for (double e : errors) {
+    stats.sigma_mm += (e - stats.mean_error_mm) * (e - stats.mean_error_mm);
+    stats.max_abs_error_mm = std::max(stats.max_abs_error_mm, std::abs(e));
+  }
+  stats.sigma_mm = std::sqrt(stats.sigma_mm / std::max(1, stats.count - 1));
+  return stats;
+}
+
+inline std::vector<CameraWandTrack> simulate_tracks(const Scene& scene, const WandDefinition& wand,
+                                                    const std::vector<CameraIntrinsics>& intrinsics) {
+  std::vector<CameraWandTrack> tracks;
+  for (std::size_t c = 0; c < scene.cameras().size(); ++c) {
+    const auto& config = scene.cameras()[c];
+    CameraSimulator simulator(scene, config.calibration.id);
+    std::vector<FeatureFrame> frames;
+    for (std::int64_t k = 0; simulator.frame_time_ns(k) < scene.duration_ns(); ++k) {
+      FeatureFrame frame = simulator.features(k);
+      frame.stamp_ns += kEpoch;
+      frames.push_back(std::move(frame));
+    }
+    tracks.push_back(extract_wand_track(config.calibration.id, frames, intrinsics[c], wand));
+  }
+  return tracks;
+}
+
+// Solves and compares with the truth. `start` perturbs the intrinsics given to the solver.
+inline Measured solve_and_measure(const Scene& scene, const WandDefinition& wand, const SolveOptions& options,
+                                  double intrinsics_error = 0.0) {
+  std::vector<CameraCalibration> given;
+  std::vector<CameraIntrinsics> intrinsics;
+  for (const auto& config : scene.cameras()) {
+    CameraCalibration camera = config.calibration;
+    camera.T_world_cam.reset();
+    auto& k = camera.intrinsics;
+    k.fx *= 1 + intrinsics_error;
+    k.fy *= 1 - intrinsics_error;
+    k.cx += intrinsics_error * k.width * 0.2;
+    k.cy -= intrinsics_error * k.height * 0.2;
+    for (auto& d : k.distortion) d *= 1 + intrinsics_error;
+    given.push_back(camera);
+    intrinsics.push_back(k);
+  }
+  const auto tracks = simulate_tracks(scene, wand, intrinsics);
+  Measured measured;
+  measured.result = solve_wand_calibration(given, tracks, wand, options);
+  const auto& result = measured.result;
+  std::vector<Eigen::Vector3d> estimated, truth;
+  std::vector<std::size_t> index;
+  for (std::size_t c = 0; c < result.cameras.size(); ++c)
+    if (result.cameras[c].T_world_cam) {
+      estimated.push_back(result.cameras[c].T_world_cam->t);
+      truth.push_back(scene.cameras()[c].calibration.T_world_cam->t);
+      index.push_back(c);
+    }
+  std::vector<CameraModel> true_models;
+  for (const auto& config : scene.cameras()) true_models.push_back(config.calibration.model());
+  measured.truth_lengths =
+      free_lengths(result, true_models, wand.length(), static_cast<int>(wand.marker_count()));
+  if (estimated.size() < 3) return measured;
+  const RigidTransform T_true_est = align_rigid(estimated, truth);
+  std::size_t reference = 0;
+  for (std::size_t c = 0; c < result.cameras.size(); ++c)
+    if (result.cameras[c].id == result.reference_camera) reference = c;
+  const double true_reference_offset = static_cast<double>(scene.cameras()[reference].clock_offset_ns) * 1e-9;
+  for (std::size_t i = 0; i < index.size(); ++i) {
+    const std::size_t c = index[i];
+    const RigidTransform aligned = T_true_est * *result.cameras[c].T_world_cam;
+    const RigidTransform& true_pose = *scene.cameras()[c].calibration.T_world_cam;
+    const double position_mm = (aligned.t - true_pose.t).norm() * 1e3;
+    const double rotation_deg = true_pose.q.angularDistance(aligned.q) * 180 / M_PI;
+    const double true_offset =
+        static_cast<double>(scene.cameras()[c].clock_offset_ns) * 1e-9 - true_reference_offset;
+    const double offset_ms = std::abs(result.cameras[c].time_offset_s - true_offset) * 1e3;
+    const auto& k_true = scene.cameras()[c].calibration.intrinsics;
+    const auto& k = result.cameras[c].intrinsics;
+    const double focal_rel = std::max(std::abs(k.fx / k_true.fx - 1), std::abs(k.fy / k_true.fy - 1));
+    measured.max_position_error_mm = std::max(measured.max_position_error_mm, position_mm);
+    measured.max_rotation_error_deg = std::max(measured.max_rotation_error_deg, rotation_deg);
+    measured.max_offset_error_ms = std::max(measured.max_offset_error_ms, offset_ms);
+    measured.max_focal_error_rel = std::max(measured.max_focal_error_rel, focal_rel);
+  }
+  return measured;
+}
+
+inline void print(const char* name, const Measured& m) {
+  const auto& r = m.result;
+  std::printf(
+      "[%s] cameras %d/%zu, rms %.4f px (2D, interpolated), raw rms %.4f px/axis, position max %.4f mm, "
+      "rotation max %.5f deg, wand length mean %.4f mm "
+      "sigma %.4f mm max %.4f mm (%d samples; true cameras: mean %.4f sigma %.4f), offset max err %.4f ms, "
+      "focal max err %.5f%%, %.2f s, %d iterations\n",
+      name, r.calibrated_count(), r.cameras.size(), r.rms_px, r.raw_rms_axis_px, m.max_position_error_mm,
+      m.max_rotation_error_deg, r.lengths.mean_error_mm, r.lengths.sigma_mm, r.lengths.max_abs_error_mm,
+      r.lengths.count, m.truth_lengths.mean_error_mm, m.truth_lengths.sigma_mm, m.max_offset_error_ms,
+      m.max_focal_error_rel * 100, r.seconds, r.iterations);
+  for (const auto& e : r.errors) std::printf("  error: %s\n", e.c_str());
+}
+
+inline std::string report_summary_for_test(const SolveResult& result) {
+  return report_summary(result);
+}
+
+}  // namespace panoptes::calib::testing
