@@ -88,18 +88,27 @@ int main(int argc, char** argv) {
           throw CLI::ValidationError("give --tracks and/or --poses");
       }))
     return *exit_code;
+  // Reads a JSONL file, reporting (not failing on) malformed lines.
+  const auto read_reporting = [](const std::string& file, auto reader) {
+    std::vector<std::string> errors;
+    auto records = reader(file, &errors);
+    if (!errors.empty())
+      std::fprintf(stderr, "panoptes_eval: skipped %zu malformed lines, first: %s\n", errors.size(),
+                   errors[0].c_str());
+    return records;
+  };
+  const auto base_options = [&] {
+    panoptes::estimator::EvaluationOptions options;
+    options.epoch_ns = epoch_ns;
+    options.warmup_ns = panoptes::seconds_to_ns(warmup_s);
+    return options;
+  };
   try {
     const auto scene = panoptes::Scene::load(scene_file);
     std::vector<std::string> failures;
     if (!poses_file.empty()) {
-      std::vector<std::string> errors;
-      const auto poses = panoptes::read_poses(poses_file, &errors);
-      if (!errors.empty())
-        std::fprintf(stderr, "panoptes_eval: skipped %zu malformed lines, first: %s\n", errors.size(),
-                     errors[0].c_str());
-      panoptes::estimator::EvaluationOptions options;
-      options.epoch_ns = epoch_ns;
-      options.warmup_ns = panoptes::seconds_to_ns(warmup_s);
+      const auto poses = read_reporting(poses_file, panoptes::read_poses);
+      const auto options = base_options();
       const auto evaluation = panoptes::estimator::evaluate_poses(scene, poses, options);
       std::cout << evaluation.summary();
       if (!summary_json.empty() && tracks_file.empty()) {
@@ -119,14 +128,8 @@ int main(int argc, char** argv) {
       }
     }
     if (!tracks_file.empty()) {
-      std::vector<std::string> errors;
-      const auto tracks = panoptes::read_tracks(tracks_file, &errors);
-      if (!errors.empty())
-        std::fprintf(stderr, "panoptes_eval: skipped %zu malformed lines, first: %s\n", errors.size(),
-                     errors[0].c_str());
-      panoptes::estimator::EvaluationOptions options;
-      options.epoch_ns = epoch_ns;
-      options.warmup_ns = panoptes::seconds_to_ns(warmup_s);
+      const auto tracks = read_reporting(tracks_file, panoptes::read_tracks);
+      auto options = base_options();
       options.match_distance_m = match_distance_m;
       options.trackable_window_ns = panoptes::seconds_to_ns(trackable_window_s);
       options.keep_series = !plot_file.empty();
