@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// `estimator_node calibrate capture`: records every camera's FeatureFrames over DDS (reliable QoS)
+// `estimator_node calibrate capture`: records every camera's FeatureFrames over DDS
 // while the wand is waved, showing per-camera progress and image coverage. The only calibration
 // code that knows DDS; linked into estimator_node, not into panoptes_calib.
 #include <chrono>
@@ -53,9 +53,8 @@ int run_calibrate_capture(int argc, char** argv) {
   std::string out, profile;
   double duration_s = 0;
   bool time_service = false;
-  CLI::App app{
-      "calibrate capture: record FeatureFrames of all cameras over DDS (reliable) while the wand is waved",
-      "estimator_node calibrate capture"};
+  CLI::App app{"calibrate capture: record FeatureFrames of all cameras over DDS while the wand is waved",
+               "estimator_node calibrate capture"};
   app.add_option("--out", out, "FeatureFrame JSONL file to write (all cameras)")->required();
   app.add_option("--duration", duration_s, "seconds to record; default: until Ctrl-C");
   app.add_option("--dds-profile", profile,
@@ -83,21 +82,22 @@ int run_calibrate_capture(int argc, char** argv) {
       p.height = calibration->intrinsics.height;
     }
   });
-  auto reader = bus.make_reader<msg::FeatureFrame>(
-      [&](msg::FeatureFrame&& message) {
-        auto frame = dds::from_message(message);
-        frame.received_ns = wall_now_ns();
-        std::lock_guard<std::mutex> lock(mutex);
-        queue.push_back(std::move(frame));
-      },
-      dds::Qos::kReliable);
+  // The topic's own QoS: camera_node offers features best-effort, and a reliable reader does not
+  // match a best-effort writer in DDS (it received nothing). The listener moves every sample out at
+  // once, so the reader's history never overflows; on loopback and shared memory nothing is lost
+  // (tests/integration/test_calibration_capture.sh counts the frames).
+  auto reader = bus.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&& message) {
+    auto frame = dds::from_message(message);
+    frame.received_ns = wall_now_ns();
+    std::lock_guard<std::mutex> lock(mutex);
+    queue.push_back(std::move(frame));
+  });
   std::fprintf(stderr, "recording to %s%s; wave the wand through the whole volume, Ctrl-C to stop\n",
                out.c_str(), duration_s > 0 ? (" for " + std::to_string(duration_s) + " s").c_str() : "");
   const auto start = std::chrono::steady_clock::now();
   auto last_print = start;
   std::int64_t written = 0;
-  while (!stop_requested()) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const auto drain = [&] {
     std::vector<FeatureFrame> batch;
     {
       std::lock_guard<std::mutex> lock(mutex);
@@ -111,6 +111,10 @@ int run_calibrate_capture(int argc, char** argv) {
     }
     for (const auto& frame : batch) writer.write(frame);
     written += static_cast<std::int64_t>(batch.size());
+  };
+  while (!stop_requested()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    drain();
     const auto now = std::chrono::steady_clock::now();
     const double elapsed = std::chrono::duration<double>(now - start).count();
     if (now - last_print > std::chrono::seconds(1)) {
@@ -126,6 +130,7 @@ int run_calibrate_capture(int argc, char** argv) {
     if (duration_s > 0 && elapsed >= duration_s) break;
   }
   reader.reset();
+  drain();  // frames that arrived after the last pass would otherwise be lost
   writer.flush();
   std::printf("wrote %lld frames from %zu cameras to %s\n", static_cast<long long>(written), progress.size(),
               out.c_str());

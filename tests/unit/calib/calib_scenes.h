@@ -138,11 +138,15 @@ struct Measured {
   double max_focal_error_rel = 0;
   // The same observations triangulated with the true cameras: the floor set by the noise.
   LengthStats truth_lengths;
+  // The same, by the number of cameras that saw the wand's first marker: RMS length error (mm).
+  std::map<std::size_t, std::pair<int, double>> truth_rms_by_cameras;
 };
 
 // Wand lengths triangulated freely from the observations in `result.residuals` through `models`.
+// `rms_by_cameras`, if given, receives per number of cameras the sample count and RMS error (mm).
 inline LengthStats free_lengths(const SolveResult& result, const std::vector<CameraModel>& models,
-                                double length_m, int markers) {
+                                double length_m, int markers,
+                                std::map<std::size_t, std::pair<int, double>>* rms_by_cameras = nullptr) {
   std::map<TimeNs, std::vector<std::vector<std::pair<int, Eigen::Vector2d>>>> by_sample;
   for (const auto& r : result.residuals) {
     auto& sample = by_sample[r.t_ns];
@@ -161,9 +165,17 @@ inline LengthStats free_lengths(const SolveResult& result, const std::vector<Cam
       }
       if (auto x = triangulate(used, pixels)) points.push_back(*x);
     }
-    if (static_cast<int>(points.size()) == markers)
+    if (static_cast<int>(points.size()) == markers) {
       errors.push_back(((points.back() - points.front()).norm() - length_m) * 1e3);
+      if (rms_by_cameras) {
+        auto& [count, squared] = (*rms_by_cameras)[sample.front().size()];
+        ++count;
+        squared += errors.back() * errors.back();
+      }
+    }
   }
+  if (rms_by_cameras)
+    for (auto& [cameras, entry] : *rms_by_cameras) entry.second = std::sqrt(entry.second / entry.first);
   LengthStats stats;
   stats.count = static_cast<int>(errors.size());
   if (errors.empty()) return stats;
@@ -225,7 +237,8 @@ inline Measured solve_and_measure(const Scene& scene, const WandDefinition& wand
   std::vector<CameraModel> true_models;
   for (const auto& config : scene.cameras()) true_models.push_back(config.calibration.model());
   measured.truth_lengths =
-      free_lengths(result, true_models, wand.length(), static_cast<int>(wand.marker_count()));
+      free_lengths(result, true_models, wand.length(), static_cast<int>(wand.marker_count()),
+                   &measured.truth_rms_by_cameras);
   if (estimated.size() < 3) return measured;
   const RigidTransform T_true_est = align_rigid(estimated, truth);
   std::size_t reference = 0;
@@ -264,6 +277,29 @@ inline void print(const char* name, const Measured& m) {
       r.lengths.count, m.truth_lengths.mean_error_mm, m.truth_lengths.sigma_mm, m.max_offset_error_ms,
       m.max_focal_error_rel * 100, r.seconds, r.iterations);
   for (const auto& e : r.errors) std::printf("  error: %s\n", e.c_str());
+}
+
+// How much of the wand's path the cameras cover: the share of the grid instants that became a
+// sample (all markers seen by >= 2 cameras), cameras per sample, and wand frames per camera.
+inline void print_coverage(const Measured& measured, const Scene& scene) {
+  const SolveResult& result = measured.result;
+  const double instants = static_cast<double>(scene.duration_ns()) * 1e-9 * 100;  // 100 Hz grid
+  std::map<int, int> by_count;
+  double mean = 0;
+  for (const auto& sample : result.samples) {
+    ++by_count[sample.cameras];
+    mean += sample.cameras;
+  }
+  if (!result.samples.empty()) mean /= static_cast<double>(result.samples.size());
+  std::printf("  coverage: %zu samples (%.1f%% of the path), %.2f cameras per sample;", result.samples.size(),
+              100.0 * static_cast<double>(result.samples.size()) / instants, mean);
+  for (const auto& [count, n] : by_count) std::printf(" %d:%d", count, n);
+  std::printf("\n  wand frames per camera:");
+  for (const auto& camera : result.cameras) std::printf(" %s %d", camera.id.c_str(), camera.wand_frames);
+  std::printf("\n  length RMS with the true cameras by cameras seeing the sample:");
+  for (const auto& [cameras, entry] : measured.truth_rms_by_cameras)
+    std::printf(" %zu: %.3f mm (%d)", cameras, entry.second, entry.first);
+  std::printf("\n");
 }
 
 inline std::string report_summary_for_test(const SolveResult& result) {

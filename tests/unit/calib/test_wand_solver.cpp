@@ -15,6 +15,7 @@ TEST(WandSolver, EightCamerasRoomKnownIntrinsics) {
   options.progress = [](const std::string& m) { std::printf("  %s\n", m.c_str()); };
   const Measured m = solve_and_measure(scene, kWand, options);
   print("room8", m);
+  print_coverage(m, scene);
   ASSERT_TRUE(m.result.ok());
   EXPECT_EQ(m.result.calibrated_count(), 8);
   EXPECT_LE(m.result.raw_rms_axis_px, 0.11);
