@@ -95,7 +95,8 @@ class FeaturesSource final : public FrameSource {
         info_(std::move(info)),
         paced_(options.paced),
         rate_scale_(options.rate_scale),
-        max_frames_(options.max_frames) {
+        max_frames_(options.max_frames),
+        anchor_ns_(options.sim_epoch_ns) {
     if (!malformed.empty()) {
       counters_["malformed"] = malformed.size();
       // The first line that failed says most about a wrong file; the count says how much.
@@ -113,9 +114,17 @@ class FeaturesSource final : public FrameSource {
     if (next_index_ >= frames_.size()) return std::nullopt;
     if (max_frames_ >= 0 && static_cast<std::int64_t>(next_index_) >= max_frames_) return std::nullopt;
     const FeatureFrame& recorded = frames_[next_index_];
+    // Anchored (--sim-epoch-ns), the recording's epoch (its first stamp rounded down to a whole
+    // second, as panoptes_sim writes it) maps to the anchor, so nodes replaying the cameras of one
+    // recording stay aligned whenever each one started. Otherwise the replay starts now.
+    TimeNs origin_ns = frames_.front().stamp_ns;
     if (next_index_ == 0) replay_start_ns_ = wall_now_ns();
-    const TimeNs offset_ns = static_cast<TimeNs>(
-        std::llround(static_cast<double>(recorded.stamp_ns - frames_.front().stamp_ns) / rate_scale_));
+    if (anchor_ns_ != 0) {
+      origin_ns = frames_.front().stamp_ns / kNsPerSecond * kNsPerSecond;
+      replay_start_ns_ = anchor_ns_;
+    }
+    const TimeNs offset_ns =
+        static_cast<TimeNs>(std::llround(static_cast<double>(recorded.stamp_ns - origin_ns) / rate_scale_));
     const TimeNs stamp_ns = replay_start_ns_ + offset_ns;
     if (paced_ && !stop_.sleep_until_wall(stamp_ns)) return std::nullopt;
 
@@ -152,6 +161,7 @@ class FeaturesSource final : public FrameSource {
     if (rewind_requested_) {
       rewind_requested_ = false;
       next_index_ = 0;
+      anchor_ns_ = 0;  // a rewound replay starts from now
     }
   }
 
@@ -160,6 +170,7 @@ class FeaturesSource final : public FrameSource {
   const bool paced_;
   const double rate_scale_;
   const std::int64_t max_frames_;
+  TimeNs anchor_ns_;            // wall time of the recording's epoch; 0: the replay starts when it starts
   std::size_t next_index_ = 0;  // capture thread (and restart(), under mutex_, applied by next())
   TimeNs replay_start_ns_ = 0;
 

@@ -16,6 +16,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <span>
 #include <string>
 #include <thread>
@@ -64,6 +65,8 @@ struct Options {
   std::string clock_skew;  // "<offset_ms>,<drift_ppm>", parsed into the two below
   TimeNs skew_offset_ns = 0;
   double skew_drift_ppm = 0;
+  double inject_loss = 0;       // testing aid: fraction of feature frames not sent
+  double inject_jitter_ms = 0;  // testing aid: frames sent after a uniform delay in [0, 2·jitter]
 };
 
 // Parses --clock-skew "<offset_ms>,<drift_ppm>"; throws CLI::ValidationError naming the option.
@@ -421,17 +424,50 @@ class FeaturePublisher {
       auto message = panoptes::dds::to_message(frame);
       const TimeNs now = clock_.now();
       message.publish_ns(estimate ? estimate->to_server(now) : now);
-      writer_.write(message);
+      send(std::move(message));
       if (out_ != nullptr) out_->write(frame);
     }
     held_.clear();
   }
+
+  // --inject-loss / --inject-jitter-ms: a lossy, jittery link emulated in the sender, for hosts
+  // whose kernel has no netem (docs/deployment.md). The network then sees fewer, later frames.
+  void inject_faults(double loss, double jitter_ms, std::uint64_t seed) {
+    loss_ = loss;
+    jitter_ns_ = static_cast<TimeNs>(jitter_ms * 1e6);
+    random_.seed(seed);
+  }
+
+  // Sends delayed frames whose time has come.
+  void send_due() {
+    const TimeNs now = panoptes::wall_now_ns();
+    while (!delayed_.empty() && delayed_.begin()->first <= now) {
+      writer_.write(delayed_.begin()->second);
+      delayed_.erase(delayed_.begin());
+    }
+  }
+
+  std::uint64_t injected_losses() const { return injected_losses_; }
 
   std::uint64_t held_total() const { return held_total_; }
   std::uint64_t unsynchronised() const { return unsynchronised_; }
   std::uint64_t hold_overflow() const { return hold_overflow_; }
 
  private:
+  void send(panoptes::msg::FeatureFrame message) {
+    if (loss_ > 0 && std::uniform_real_distribution<double>(0.0, 1.0)(random_) < loss_) {
+      ++injected_losses_;
+      return;
+    }
+    if (jitter_ns_ <= 0) {
+      writer_.write(message);
+      return;
+    }
+    const auto delay = std::uniform_int_distribution<TimeNs>(0, 2 * jitter_ns_)(random_);
+    delayed_.emplace(panoptes::wall_now_ns() + delay, std::move(message));
+    send_due();
+  }
+
   bool holding() const {
     return sync_ != nullptr && !sync_->synchronised() && panoptes::wall_now_ns() < hold_until_wall_ns_;
   }
@@ -446,6 +482,11 @@ class FeaturePublisher {
   std::uint64_t unsynchronised_ = 0;
   std::uint64_t hold_overflow_ = 0;
   bool warned_ = false;
+  double loss_ = 0;
+  TimeNs jitter_ns_ = 0;
+  std::mt19937_64 random_;
+  std::multimap<TimeNs, panoptes::msg::FeatureFrame> delayed_;
+  std::uint64_t injected_losses_ = 0;
 };
 
 int run_live(const Options& options, cam::FrameSource& source, cam::Detector& detector,
@@ -545,6 +586,12 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   FeaturePublisher publisher(clock, time_sync.get(),
                              start + panoptes::seconds_to_ns(options.clock_sync_wait_s), *feature_writer,
                              out ? &*out : nullptr);
+  if (options.inject_loss > 0 || options.inject_jitter_ms > 0) {
+    publisher.inject_faults(options.inject_loss, options.inject_jitter_ms,
+                            std::hash<std::string>{}(camera_id));
+    log("testing aid: dropping " + std::to_string(options.inject_loss) + " of the feature frames, delaying " +
+        "the rest by 0.." + std::to_string(2 * options.inject_jitter_ms) + " ms");
+  }
   bool logged_synchronised = false;
 
   while (!panoptes::stop_requested()) {
@@ -595,6 +642,7 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
       break;
     }
     publisher.release(false);
+    publisher.send_due();
     if (time_sync && !logged_synchronised && time_sync->synchronised()) {
       logged_synchronised = true;
       const auto sync_status = time_sync->status();
@@ -609,6 +657,7 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
       for (const auto& [name, value] : handler.counters()) all[name] += value;
       all["drops_queue"] = queue.drops();
       all["guided_frames"] = guided_frames;
+      if (publisher.injected_losses() > 0) all["injected_losses"] = publisher.injected_losses();
       msg::CameraStatus status;
       if (time_sync) {
         const auto sync_status = time_sync->status();
@@ -680,6 +729,7 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   auto all = source.counters();
   for (const auto& [name, value] : counters.counts) all[name] += value;
   for (const auto& [name, value] : handler.counters()) all[name] += value;
+  if (publisher.injected_losses() > 0) all["injected_losses"] = publisher.injected_losses();
   log("source counters: " + counters_line(all));
   if (const std::string error = source.last_error(); !error.empty()) log("source's last error: " + error);
   return panoptes::kExitOk;
@@ -704,7 +754,9 @@ int main(int argc, char** argv) {
   app.add_option("--dds-profile", options.dds_profile,
                  "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
   app.add_option("--sim-epoch-ns", options.sim_epoch_ns,
-                 "sim: wall-clock ns of scene time 0 (default: now, rounded up to a whole second)");
+                 "sim: wall-clock ns of scene time 0 (default: now, rounded up to a whole second); features: "
+                 "wall-clock ns of the recording's epoch (its first stamp rounded down to a second), so "
+                 "several replaying nodes stay aligned (default: the replay starts now)");
   app.add_option("--duration", options.duration_s, "stop after this many seconds (0 = until the source ends)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--max-frames", options.max_frames, "stop after this many frames")
@@ -730,6 +782,13 @@ int main(int argc, char** argv) {
   app.add_option("--clock-skew", options.clock_skew,
                  "testing aid: <offset_ms>,<drift_ppm>; the node's clock runs off the host's by offset + "
                  "drift * (time since start), for its frame stamps and its clock-sync requests alike");
+  app.add_option("--inject-loss", options.inject_loss,
+                 "testing aid: drop this fraction of feature frames before sending (a lossy link where "
+                 "tc netem is unavailable)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--inject-jitter-ms", options.inject_jitter_ms,
+                 "testing aid: send each feature frame after a random delay, uniform in [0, 2 x this] ms")
+      ->check(CLI::Range(0.0, 1000.0));
   app.add_flag("--quiet", options.quiet, "less output");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv, [&] {
         if (options.no_dds && options.out_features.empty())

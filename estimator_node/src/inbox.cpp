@@ -14,7 +14,7 @@ FrameInbox::FrameInbox(std::size_t capacity, TimeNs latency_window_ns)
     : capacity_(std::max<std::size_t>(capacity, 1)), window_ns_(latency_window_ns) {}
 
 bool FrameInbox::push(FeatureFrame frame) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::unique_lock<std::mutex> lock(mutex_);
   bool dropped = false;
   if (heap_.size() >= capacity_) {
     // Drop the oldest: it is the most likely to be late already.
@@ -25,7 +25,19 @@ bool FrameInbox::push(FeatureFrame frame) {
   }
   heap_.push_back(std::move(frame));
   std::push_heap(heap_.begin(), heap_.end(), later);
+  ++pushes_;
+  lock.unlock();
+  pushed_.notify_one();
   return !dropped;
+}
+
+void FrameInbox::wait(TimeNs now_ns, std::chrono::nanoseconds max_wait) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  TimeNs wait_ns = max_wait.count();
+  if (!heap_.empty()) wait_ns = std::min(wait_ns, heap_.front().stamp_ns + window_ns_ - now_ns);
+  if (wait_ns <= 0) return;
+  const std::uint64_t pushes = pushes_;
+  pushed_.wait_for(lock, std::chrono::nanoseconds(wait_ns), [&] { return pushes_ != pushes; });
 }
 
 std::vector<FeatureFrame> FrameInbox::pop_due(TimeNs now_ns) {

@@ -479,7 +479,7 @@ int run_live(const Options& options, est::Tracker& tracker, BodyFile& body_file)
       }
     }
     if (options.duration_s > 0 && now - start >= panoptes::seconds_to_ns(options.duration_s)) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    inbox.wait(panoptes::wall_now_ns(), std::chrono::milliseconds(1));  // wakes as frames arrive (issue 7)
   }
   for (const auto& frame : inbox.drain()) handle(frame);
   intake.print_summary(inbox.drops(), 0);

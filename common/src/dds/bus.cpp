@@ -67,6 +67,7 @@ PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::k
 #undef PANOPTES_TOPIC
 
 constexpr int kReliableDepth = 2000;
+constexpr int kMaxInstances = 1024;  // cameras (or bodies) per keyed topic, as the estimator's own limit
 
 template <class Qos>
 void apply_spec(Qos& qos, const TopicSpec& spec, panoptes::dds::Qos override_qos) {
@@ -77,6 +78,11 @@ void apply_spec(Qos& qos, const TopicSpec& spec, panoptes::dds::Qos override_qos
                               : fdds::VOLATILE_DURABILITY_QOS;
   qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   qos.history().depth = override_qos == panoptes::dds::Qos::kReliable ? kReliableDepth : spec.depth;
+  // Keyed topics hold one instance per camera or body. Fast DDS's default limit of 10 instances
+  // made a reader silently discard every camera after the tenth (found with 32 cameras, issue 7).
+  qos.resource_limits().max_instances = kMaxInstances;
+  qos.resource_limits().max_samples_per_instance = qos.history().depth;
+  qos.resource_limits().max_samples = kMaxInstances * qos.history().depth;
 }
 
 std::filesystem::path executable_dir() {

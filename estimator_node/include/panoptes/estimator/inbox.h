@@ -3,6 +3,8 @@
 // stamp is older than the latency window, then leave in stamp order. Bounded; drops counted.
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <mutex>
 #include <vector>
@@ -22,6 +24,9 @@ class FrameInbox {
   std::vector<FeatureFrame> pop_due(TimeNs now_ns);
   // Everything, oldest first (shutdown).
   std::vector<FeatureFrame> drain();
+  // Blocks until a frame is pushed, the oldest frame falls due (on the clock `now_ns` is read
+  // from), or `max_wait` has passed: a live loop wakes as frames arrive instead of polling.
+  void wait(TimeNs now_ns, std::chrono::nanoseconds max_wait);
 
   TimeNs latency_window_ns() const { return window_ns_; }
   std::uint64_t drops() const;
@@ -33,6 +38,8 @@ class FrameInbox {
   mutable std::mutex mutex_;
   std::vector<FeatureFrame> heap_;  // min-heap on stamp_ns
   std::uint64_t drops_ = 0;
+  std::uint64_t pushes_ = 0;
+  std::condition_variable pushed_;
 };
 
 }  // namespace panoptes::estimator

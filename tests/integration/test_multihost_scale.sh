@@ -1,0 +1,121 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Scale across hosts: 32 camera_nodes replaying feature-level simulated cameras (panoptes_sim
+# features of deploy/scenes/scale32.yaml: 120 Hz each, no rendering), 4 per host on 8 namespace
+# hosts (netns.sh), and one estimator_node on a ninth, over the discovery-server profile (the one
+# deploy/dds recommends for tens of nodes; PANOPTES_SCALE_PROFILE=lan for multicast). Asserts that the
+# estimator keeps up (every camera's utilisation >= 95%, nothing dropped in its inbox, >= 90% of the
+# frames sent arrive) and tracks accurately; records its CPU and memory from /proc. A summary JSON
+# line ("scale:") goes to the output for docs/benchmarks.md. Root only; skips (77) otherwise.
+#
+# Configuration for 32 cameras (docs/deployment.md, "Many cameras"): the hosts share one clock, as
+# PTP or chrony would give them, so camera nodes run --no-clock-sync; and the estimator runs
+# --no-predictions, since feature-level sources do no detection to guide. Both one-to-one
+# exchanges share a topic among all nodes in this version, so their traffic grows with the square
+# of the number of cameras (32 cameras: ~1000 reliable time-sync pairs, ~120 000 prediction
+# deliveries/s), which a 2-core test machine cannot carry.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+source "$here/lib.sh"
+source "$here/netns.sh"
+set -eE
+# A command failing outside a check (also inside a function: -E) is a failure too, and keeps $work.
+trap 'failures=$((failures + 1)); echo "FAIL: unexpected error at line $LINENO"' ERR
+netns_require
+trap 'netns_cleanup; cleanup' EXIT
+trap 'exit 143' TERM INT
+
+cameras=32
+camera_hosts=8
+estimator_host=9
+seconds=${PANOPTES_SCALE_SECONDS:-15}
+scene="$source_dir/deploy/scenes/scale32.yaml"
+netns_create_lan "$estimator_host" || { fail "could not create the namespaces"; finish; }
+if [ "${PANOPTES_SCALE_PROFILE:-discovery_server}" = lan ]; then
+  profile="$source_dir/deploy/dds/lan.xml"
+else
+  server_ip="$(netns_ip "$estimator_host")"
+  profile="$work/discovery_client.xml"
+  sed "s#<address>127.0.0.1</address>#<address>$server_ip</address>#" \
+    "$source_dir/deploy/dds/discovery_client.xml" >"$profile"
+  netns_spawn "$estimator_host" fast-discovery-server -i 0 -l "$server_ip" -p 11811 >"$work/discovery_server.log" 2>&1 &
+  pids+=("$!")
+fi
+echo "profile: $profile"
+"$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/features" --duration "$seconds" >"$work/sim.log"
+
+epoch=$((($(date +%s) + 6) * 1000000000))
+netns_spawn "$estimator_host" "$bin/estimator_node" --calibration "$work/features/calibration.yaml" \
+  --dds-profile "$profile" --out-tracks "$work/tracks.jsonl" --duration $((seconds + 9)) \
+  --status-period 5 --no-predictions >"$work/estimator.log" 2>&1 &
+estimator=$!
+pids+=("$estimator")
+camera_pids=()
+for c in $(seq 0 $((cameras - 1))); do
+  netns_spawn $((c % camera_hosts + 1)) "$bin/camera_node" --source "features:$work/features/cam$c.jsonl" \
+    --sim-epoch-ns "$epoch" --dds-profile "$profile" --quiet --no-clock-sync >"$work/cam$c.log" 2>&1 &
+  camera_pids+=("$!")
+  pids+=("$!")
+done
+
+# CPU (utime + stime) and peak resident memory of the estimator over the replay.
+cpu_ticks() { awk '{print $14 + $15}' "/proc/$estimator/stat"; }
+sleep "$(python3 -c "import time; print(max(0.0, ($epoch - time.time_ns()) / 1e9))")"
+ticks0=$(cpu_ticks)
+t0=$(date +%s%N)
+sleep "$seconds"
+ticks1=$(cpu_ticks)
+t1=$(date +%s%N)
+rss_peak_kb=$(awk '/VmHWM/ {print $2}' "/proc/$estimator/status")
+rss_kb=$(awk '/VmRSS/ {print $2}' "/proc/$estimator/status")
+threads=$(awk '/Threads/ {print $2}' "/proc/$estimator/status")
+for pid in "${camera_pids[@]}"; do timeout 20 tail --pid="$pid" -f /dev/null || true; done
+timeout 20 tail --pid="$estimator" -f /dev/null || true
+wait "$estimator" && pass "estimator_node exited cleanly" || { fail "estimator_node"; tail "$work/estimator.log"; }
+
+sent=0
+for c in $(seq 0 $((cameras - 1))); do
+  n=$(grep -o "stopped after [0-9]* frames" "$work/cam$c.log" | awk '{print $3}' || true)
+  sent=$((sent + ${n:-0}))
+done
+python3 - "$work/estimator.log" "$cameras" "$sent" "$ticks0" "$ticks1" "$t0" "$t1" "$rss_peak_kb" "$rss_kb" \
+  "$threads" "$(getconf CLK_TCK)" "$seconds" >"$work/summary.json" <<'PY'
+import json, re, sys
+log, cameras, sent, ticks0, ticks1, t0, t1, peak_kb, rss_kb, threads, hz, seconds = sys.argv[1:]
+usage = {}
+dropped = ""
+for line in open(log):
+    m = re.search(r"camera (\S+): frames (\d+) used (\d+) .*utilisation ([0-9.]+)", line)
+    if m: usage[m.group(1)] = (int(m.group(2)), int(m.group(3)), float(m.group(4)))
+    if "dropped by reason:" in line: dropped = line.split("dropped by reason:")[1].strip()
+received = sum(f for f, _, _ in usage.values())
+summary = {
+    "cameras": int(cameras), "hosts": 8, "rate_hz": 120, "seconds": int(seconds),
+    "cameras_seen": len(usage), "frames_sent": int(sent), "frames_received": received,
+    "min_utilisation": min((u for _, _, u in usage.values()), default=0.0),
+    "estimator_dropped": dropped,
+    "estimator_cpu_percent": round(100.0 * (int(ticks1) - int(ticks0)) / int(hz) / ((int(t1) - int(t0)) / 1e9), 1),
+    "estimator_rss_peak_mb": round(int(peak_kb) / 1024, 1), "estimator_rss_mb": round(int(rss_kb) / 1024, 1),
+    "estimator_threads": int(threads),
+}
+print(json.dumps(summary))
+PY
+echo "scale: $(cat "$work/summary.json")"
+field() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$work/summary.json" "$1"; }
+[ "$(field cameras_seen)" -eq "$cameras" ] && pass "the estimator received all $cameras cameras" ||
+  fail "the estimator saw $(field cameras_seen) cameras"
+python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) >= 0.95 else 1)" "$(field min_utilisation)" &&
+  pass "every camera's utilisation >= 0.95 (min $(field min_utilisation))" || fail "utilisation $(field min_utilisation) < 0.95"
+python3 -c "import sys; sys.exit(0 if int(sys.argv[1]) >= 0.9 * int(sys.argv[2]) > 0 else 1)" "$(field frames_received)" "$sent" &&
+  pass "$(field frames_received) of $sent frames sent reached the estimator" || fail "only $(field frames_received) of $sent frames arrived"
+grep -q "dropped by reason: none" "$work/estimator.log" && pass "the estimator dropped nothing" ||
+  fail "the estimator dropped frames: $(field estimator_dropped)"
+if "$bin/panoptes_eval" --scene "$scene" --tracks "$work/tracks.jsonl" --epoch-ns "$epoch" \
+  --require-rmse-mm 2 --require-tracked 0.95 >"$work/eval.txt" 2>&1; then
+  pass "32 cameras: RMSE < 2 mm, >= 95% tracked ($(grep '^all:' "$work/eval.txt"))"
+else
+  fail "tracking accuracy with 32 cameras"; cat "$work/eval.txt"
+fi
+netns_cleanup
+[ "$(ip netns list | grep -c "^$netns_prefix" || true)" -eq 0 ] && pass "every namespace deleted" || fail "namespaces left"
+finish
