@@ -184,7 +184,8 @@ BodyDefinition read_body_definition(const YamlReader& item, std::set<std::string
   const std::string type = item.get_string("type", "passive");
   if (type == "led7") {
     body.kind = BodyKind::kLed7;
-    if (body.markers.size() != 7) item.fail("markers", "a led7 body has exactly 7 markers (M0..M6 of seed 004)");
+    if (body.markers.size() != 7)
+      item.fail("markers", "a led7 body has exactly 7 markers (M0..M6 of seed 004)");
   } else if (type != "passive") {
     item.fail("type", "expected 'passive' or 'led7', got '" + type + "'");
   }

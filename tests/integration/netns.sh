@@ -127,3 +127,14 @@ netns_cleanup() {
   netns_names=()
   rm -rf "$netns_shm_root"
 }
+
+# The common start of a multihost test (after sourcing lib.sh and this file): errors outside a
+# check count as failures (also inside functions), skip (77) unless namespaces can be made, and
+# delete every namespace on any exit.
+netns_test_start() {
+  set -eE
+  trap 'failures=$((failures + 1)); echo "FAIL: unexpected error at line $LINENO"' ERR
+  netns_require
+  trap 'netns_cleanup; cleanup' EXIT
+  trap 'exit 143' TERM INT
+}

@@ -13,12 +13,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 source "$here/lib.sh"
 source "$here/netns.sh"
-set -eE
-# A command failing outside a check (also inside a function: -E) is a failure too, and keeps $work.
-trap 'failures=$((failures + 1)); echo "FAIL: unexpected error at line $LINENO"' ERR
-netns_require
-trap 'netns_cleanup; cleanup' EXIT
-trap 'exit 143' TERM INT
+netns_test_start
 
 estimator_host=5
 app_host=6

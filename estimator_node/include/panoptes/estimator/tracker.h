@@ -106,7 +106,9 @@ class Tracker {
   void set_bodies(const std::vector<BodyDefinition>& bodies, const std::string& file_for_errors = "bodies");
   // Poses of the tracked bodies at `stamp_ns`, predicted `horizon_ns` further (seed 000 Ch. 5).
   std::vector<PoseRecord> poses_at(TimeNs stamp_ns, TimeNs horizon_ns = 0) const;
-  std::vector<PoseRecord> current_poses(TimeNs horizon_ns = 0) const { return poses_at(last_stamp_ns(), horizon_ns); }
+  std::vector<PoseRecord> current_poses(TimeNs horizon_ns = 0) const {
+    return poses_at(last_stamp_ns(), horizon_ns);
+  }
   const BodyStats& body_stats() const;
   std::size_t body_count() const;
 
