@@ -37,23 +37,7 @@ expect_exit 2 "intrinsics: no image matches" -- "$en" calibrate intrinsics --ima
 expect_stderr_contains "no file matches" "the error names the glob"
 
 # --- wand solve on a simulated room ------------------------------------------------------------
-cat >"$work/room.yaml" <<'YAML'
-seed: 3
-duration: 8
-defaults: {width: 1280, height: 1024, K: [700, 700, 642.5, 509.5], centroid_noise: 0.1, rate: 100}
-cameras:
-  - {id: cam0, look_at: {eye: [1.95, 0.2, 2.35], target: [0, 0, 0.9]}, phase: 0.000}
-  - {id: cam1, look_at: {eye: [1.8, 1.8, 2.3], target: [0, 0, 0.9]}, phase: 0.003}
-  - {id: cam2, look_at: {eye: [-0.2, 1.95, 2.35], target: [0, 0, 0.9]}, phase: 0.006}
-  - {id: cam3, look_at: {eye: [-1.8, 1.8, 2.3], target: [0, 0, 0.9]}, phase: 0.009}
-  - {id: cam4, look_at: {eye: [-1.95, -0.2, 2.35], target: [0, 0, 0.9]}, phase: 0.002}
-  - {id: cam5, look_at: {eye: [0.2, -1.95, 2.3], target: [0, 0, 0.9]}, phase: 0.005}
-bodies:
-  - name: wand
-    markers: [[-0.25, 0, 0], [-0.07, 0, 0], [0.25, 0, 0]]
-    path: {type: lissajous, center: [0, 0, 1.15], amplitude: [1.2, 1.2, 0.7], frequency: [0.13, 0.171, 0.23]}
-    rotation: {type: oscillate, amplitude: [1.3, 1.1, 3.0], frequency: [0.29, 0.37, 0.083]}
-YAML
+cp "$source_dir/deploy/scenes/wand_room.yaml" "$work/room.yaml"
 expect_exit 0 "simulate wand features" -- "$bin/panoptes_sim" features --scene "$work/room.yaml" --out-dir "$work/wand"
 expect_exit 0 "calibrate solve" -- "$en" calibrate solve --cameras "$work/wand/calibration.yaml" \
   --in-features "$work"/wand/cam*.jsonl --wand 0,0.18,0.5 --out "$work/cal.yaml"
