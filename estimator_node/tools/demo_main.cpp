@@ -47,64 +47,7 @@ fs::path executable_dir() {
   return fs::read_symlink("/proc/self/exe", error).parent_path();
 }
 
-// A child process with its output in a log file; killed (TERM, then KILL) when destroyed.
-class Child {
- public:
-  Child(const std::string& name, std::vector<std::string> argv, const fs::path& log_file) : name_(name) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-    posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-    std::vector<char*> args;
-    for (auto& a : argv) args.push_back(a.data());
-    args.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    if (rc != 0) throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(rc));
-  }
-  ~Child() { stop(std::chrono::seconds(5)); }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-
-  bool running() {
-    if (pid_ <= 0) return false;
-    int status = 0;
-    if (waitpid(pid_, &status, WNOHANG) == pid_) {
-      exit_status_ = status;
-      pid_ = -1;
-      return false;
-    }
-    return true;
-  }
-  // SIGINT (a clean stop), then SIGKILL after the timeout. Returns the exit code (-1 if killed).
-  int stop(std::chrono::milliseconds timeout) {
-    if (pid_ > 0) {
-      kill(pid_, SIGINT);
-      const auto deadline = std::chrono::steady_clock::now() + timeout;
-      while (running() && std::chrono::steady_clock::now() < deadline) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      }
-      if (pid_ > 0) {
-        kill(pid_, SIGKILL);
-        int status = 0;
-        waitpid(pid_, &status, 0);
-        exit_status_ = status;
-        pid_ = -1;
-      }
-    }
-    return WIFEXITED(exit_status_) ? WEXITSTATUS(exit_status_) : -1;
-  }
-  const std::string& name() const { return name_; }
-  // Exit code once the process has ended (-1 if it was killed by a signal).
-  int exit_code() const { return WIFEXITED(exit_status_) ? WEXITSTATUS(exit_status_) : -1; }
-
- private:
-  std::string name_;
-  pid_t pid_ = -1;
-  int exit_status_ = 0;
-};
+using Child = panoptes::ChildProcess;
 
 }  // namespace
 

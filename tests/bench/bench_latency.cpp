@@ -61,45 +61,7 @@ fs::path executable_path() {
   return fs::read_symlink("/proc/self/exe", error);
 }
 
-// A child process whose output goes to a log file; stopped with SIGINT, then SIGKILL.
-class Child {
- public:
-  Child(std::vector<std::string> argv, const fs::path& log_file) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-    posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-    std::vector<char*> args;
-    for (auto& arg : argv) args.push_back(arg.data());
-    args.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    if (rc != 0) throw std::runtime_error("cannot start " + argv[0]);
-  }
-  ~Child() { stop(); }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-  void stop() {
-    if (pid_ <= 0) return;
-    kill(pid_, SIGINT);
-    for (int i = 0; i < 250; ++i) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    kill(pid_, SIGKILL);
-    waitpid(pid_, nullptr, 0);
-    pid_ = -1;
-  }
-
- private:
-  pid_t pid_ = -1;
-};
+using Child = panoptes::ChildProcess;
 
 struct Stats {
   std::vector<double> ms;
@@ -258,10 +220,12 @@ int main(int argc, char** argv) {
     const double run_s = warmup_s + duration_s + 4;
     std::vector<std::unique_ptr<Child>> children;
     children.push_back(std::make_unique<Child>(
+        "echo",
         std::vector<std::string>{self.string(), "--role", "echo", "--dds-profile", profile, "--duration",
                                  std::to_string(run_s + 2), "--echo-tracks", std::to_string(markers)},
         run_dir / "echo.log"));
     children.push_back(std::make_unique<Child>(
+        "estimator_node",
         std::vector<std::string>{(bin_dir / "estimator_node").string(), "--calibration", calibration.string(),
                                  "--dds-profile", profile, "--latency-window-ms",
                                  std::to_string(latency_window_ms), "--duration", std::to_string(run_s + 2)},
@@ -269,6 +233,7 @@ int main(int argc, char** argv) {
     for (const auto& camera : scene.cameras()) {
       const std::string& id = camera.calibration.id;
       children.push_back(std::make_unique<Child>(
+          "camera_node[" + id + "]",
           std::vector<std::string>{(bin_dir / "camera_node").string(), "--source",
                                    "sim:" + scene_file + "#" + id, "--sim-epoch-ns", std::to_string(epoch),
                                    "--dds-profile", profile, "--duration", std::to_string(run_s), "--quiet"},

@@ -3,7 +3,10 @@
 // error convention for bad command lines.
 #pragma once
 
+#include <chrono>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 namespace panoptes {
 
@@ -11,6 +14,30 @@ namespace panoptes {
 void install_stop_handlers();
 bool stop_requested();
 void request_stop();
+
+// A child process started with posix_spawn, stdout and stderr to `log_file`, stdin from
+// /dev/null; stopped (SIGINT, then SIGKILL after 5 s) when destroyed. Used by the demo and the
+// benchmarks that run the nodes.
+class ChildProcess {
+ public:
+  // Throws std::runtime_error naming argv[0] if it cannot be started.
+  ChildProcess(std::string name, std::vector<std::string> argv, const std::filesystem::path& log_file);
+  ~ChildProcess();
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  bool running();
+  // SIGINT (a clean stop), then SIGKILL after the timeout. Returns the exit code (-1 if killed).
+  int stop(std::chrono::milliseconds timeout = std::chrono::seconds(5));
+  const std::string& name() const { return name_; }
+  // Exit code once the process has ended (-1 if it was killed by a signal).
+  int exit_code() const;
+
+ private:
+  std::string name_;
+  int pid_ = -1;
+  int exit_status_ = 0;
+};
 
 // Exit codes shared by every program.
 inline constexpr int kExitOk = 0;
