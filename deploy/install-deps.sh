@@ -12,7 +12,7 @@ packages=(
   libaravis-dev aravis-tools libusb-1.0-0-dev
   libyaml-cpp-dev libspdlog-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  iproute2 procps
+  iproute2 procps nftables
 )
 
 missing=()

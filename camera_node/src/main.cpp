@@ -518,8 +518,10 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
     commands.push(std::move(command));
   });
   PredictionBox predictions;
-  auto prediction_reader =
-      bus.make_reader<msg::Predictions>([&predictions, &camera_id](msg::Predictions&& message) {
+  // Only this camera's predictions: the estimator's writer filters, so per-camera traffic does not
+  // grow with the number of cameras.
+  auto prediction_reader = bus.make_reader<msg::Predictions>(
+      [&predictions, &camera_id](msg::Predictions&& message) {
         if (message.camera_id() != camera_id) return;
         std::vector<cam::SearchWindow> windows;
         windows.reserve(message.windows().size());
@@ -527,7 +529,8 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
           windows.push_back({w.x(), w.y(), w.half_width(), w.half_height()});
         }
         predictions.store(message.stamp_ns(), std::move(windows));
-      });
+      },
+      panoptes::dds::Qos::kDefault, camera_id);
 
   const auto& info = source.info();
   msg::CameraInfo camera_info;
@@ -725,7 +728,8 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
         std::to_string(publisher.unsynchronised()));
   }
   log("stopped after " + std::to_string(frames) + " frames (" + std::to_string(queue.drops()) +
-      " dropped in the queue, " + std::to_string(guided_frames) + " with prediction-guided search)");
+      " dropped in the queue, " + std::to_string(guided_frames) + " with prediction-guided search; " +
+      std::to_string(prediction_reader->received()) + " predictions received)");
   auto all = source.counters();
   for (const auto& [name, value] : counters.counts) all[name] += value;
   for (const auto& [name, value] : handler.counters()) all[name] += value;

@@ -25,7 +25,9 @@ namespace {
 struct CameraProgress {
   std::int64_t frames = 0;
   std::int64_t frames_with_blobs = 0;
-  int width = 0, height = 0;  // from CameraInfo; else grown from the blobs seen
+  std::int64_t missing = 0;      // frame numbers skipped between received frames (lost or not sent)
+  std::int64_t last_frame = -1;  // frame number of the newest frame received
+  int width = 0, height = 0;     // from CameraInfo; else grown from the blobs seen
   double max_x = 1, max_y = 1;
   bool cells[8][8] = {};
   std::vector<std::pair<double, double>> pending;  // blobs seen before the size was known
@@ -82,16 +84,19 @@ int run_calibrate_capture(int argc, char** argv) {
       p.height = calibration->intrinsics.height;
     }
   });
-  // The topic's own QoS: camera_node offers features best-effort, and a reliable reader does not
-  // match a best-effort writer in DDS (it received nothing). The listener moves every sample out at
-  // once, so the reader's history never overflows; on loopback and shared memory nothing is lost
-  // (tests/integration/test_calibration_capture.sh counts the frames).
-  auto reader = bus.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&& message) {
-    auto frame = dds::from_message(message);
-    frame.received_ns = wall_now_ns();
-    std::lock_guard<std::mutex> lock(mutex);
-    queue.push_back(std::move(frame));
-  });
+  // Reliable: camera_node's feature writers offer reliability (the estimator asks for best effort
+  // and gets it), so frames lost on a busy network are repaired from the writer's history. The
+  // listener moves every sample out at once, so the reader's history never overflows. Gaps in the
+  // frame numbers that remain are counted and shown
+  // (tests/integration/test_calibration_capture.sh checks that none are missing).
+  auto reader = bus.make_reader<msg::FeatureFrame>(
+      [&](msg::FeatureFrame&& message) {
+        auto frame = dds::from_message(message);
+        frame.received_ns = wall_now_ns();
+        std::lock_guard<std::mutex> lock(mutex);
+        queue.push_back(std::move(frame));
+      },
+      dds::Qos::kReliable);
   std::fprintf(stderr, "recording to %s%s; wave the wand through the whole volume, Ctrl-C to stop\n",
                out.c_str(), duration_s > 0 ? (" for " + std::to_string(duration_s) + " s").c_str() : "");
   const auto start = std::chrono::steady_clock::now();
@@ -105,6 +110,8 @@ int run_calibrate_capture(int argc, char** argv) {
       for (const auto& frame : batch) {
         auto& p = progress[frame.camera_id];
         ++p.frames;
+        if (p.last_frame >= 0 && frame.frame > p.last_frame + 1) p.missing += frame.frame - p.last_frame - 1;
+        p.last_frame = std::max(p.last_frame, frame.frame);
         if (!frame.blobs.empty()) ++p.frames_with_blobs;
         for (const auto& blob : frame.blobs) p.add(blob.x, blob.y);
       }
@@ -123,7 +130,8 @@ int run_calibrate_capture(int argc, char** argv) {
       std::string line = "[" + std::to_string(static_cast<int>(elapsed)) + " s]";
       for (const auto& [id, p] : progress)
         line += "  " + id + ": " + std::to_string(p.frames_with_blobs) + "/" + std::to_string(p.frames) +
-                " frames with blobs, coverage " + std::to_string(p.coverage_percent()) + "%";
+                " frames with blobs, coverage " + std::to_string(p.coverage_percent()) + "%" +
+                (p.missing > 0 ? ", " + std::to_string(p.missing) + " missing" : "");
       if (progress.empty()) line += "  waiting for cameras...";
       std::fprintf(stderr, "%s\n", line.c_str());
     }
@@ -135,9 +143,9 @@ int run_calibrate_capture(int argc, char** argv) {
   std::printf("wrote %lld frames from %zu cameras to %s\n", static_cast<long long>(written), progress.size(),
               out.c_str());
   for (const auto& [id, p] : progress)
-    std::printf("  %s: %lld frames, %lld with blobs, image coverage %d%%\n", id.c_str(),
+    std::printf("  %s: %lld frames, %lld with blobs, %lld missing, image coverage %d%%\n", id.c_str(),
                 static_cast<long long>(p.frames), static_cast<long long>(p.frames_with_blobs),
-                p.coverage_percent());
+                static_cast<long long>(p.missing), p.coverage_percent());
   return written > 0 ? kExitOk : kExitFailure;
 }
 

@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <map>
 #include <mutex>
+#include <optional>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -21,6 +23,9 @@
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/ContentFilteredTopic.hpp>
+#include <fastdds/dds/topic/IContentFilter.hpp>
+#include <fastdds/dds/topic/IContentFilterFactory.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
@@ -41,37 +46,110 @@ struct TopicSpec {
   bool reliable;
   Durability durability;
   int depth;  // keep-last depth per instance
+  // Writers offer reliability although readers ask for best effort by default: a reader that asks
+  // for it (Qos::kReliable, e.g. calibration capture) gets repairs, the others are unaffected.
+  bool offer_reliable;
+  // The first member is a string naming the camera or client the sample is for or from
+  // (Bus::make_reader's `only_id` filters on it).
+  bool leading_id;
 };
 
 template <class T>
 struct TopicTraits;
 
-#define PANOPTES_TOPIC(Type, topic_name, reliable, durability, depth)             \
-  template <>                                                                     \
-  struct TopicTraits<msg::Type> {                                                 \
-    using PubSubType = msg::Type##PubSubType;                                     \
-    static TopicSpec spec() { return {topic_name, reliable, durability, depth}; } \
+#define PANOPTES_TOPIC(Type, topic_name, reliable, durability, depth, offer_reliable, leading_id) \
+  template <>                                                                                     \
+  struct TopicTraits<msg::Type> {                                                                 \
+    using PubSubType = msg::Type##PubSubType;                                                     \
+    static TopicSpec spec() {                                                                     \
+      return {topic_name, reliable, durability, depth, offer_reliable, leading_id};               \
+    }                                                                                             \
   };
 
-PANOPTES_TOPIC(CameraInfo, "rt/panoptes/camera_info", true, Durability::kTransientLocal, 1)
-PANOPTES_TOPIC(FeatureFrame, "rt/panoptes/features", false, Durability::kVolatile, 8)
-PANOPTES_TOPIC(CameraStatus, "rt/panoptes/camera_status", false, Durability::kVolatile, 1)
-PANOPTES_TOPIC(CameraCommand, "rt/panoptes/camera_command", true, Durability::kVolatile, 32)
-PANOPTES_TOPIC(CameraPreview, "rt/panoptes/camera_preview", false, Durability::kVolatile, 1)
-PANOPTES_TOPIC(Predictions, "rt/panoptes/predictions", false, Durability::kVolatile, 1)
-PANOPTES_TOPIC(TimeSync, "rt/panoptes/time_sync", true, Durability::kVolatile, 64)
-PANOPTES_TOPIC(EstimatorStatus, "rt/panoptes/estimator_status", false, Durability::kVolatile, 1)
-PANOPTES_TOPIC(TrackFrame, "rt/panoptes/tracks", false, Durability::kVolatile, 1)
-PANOPTES_TOPIC(BodyPose, "rt/panoptes/bodies", false, Durability::kVolatile, 1)
-PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::kTransientLocal, 1)
+PANOPTES_TOPIC(CameraInfo, "rt/panoptes/camera_info", true, Durability::kTransientLocal, 1, false, true)
+PANOPTES_TOPIC(FeatureFrame, "rt/panoptes/features", false, Durability::kVolatile, 8, true, true)
+PANOPTES_TOPIC(CameraStatus, "rt/panoptes/camera_status", false, Durability::kVolatile, 1, false, true)
+PANOPTES_TOPIC(CameraCommand, "rt/panoptes/camera_command", true, Durability::kVolatile, 32, false, false)
+PANOPTES_TOPIC(CameraPreview, "rt/panoptes/camera_preview", false, Durability::kVolatile, 1, false, true)
+PANOPTES_TOPIC(Predictions, "rt/panoptes/predictions", false, Durability::kVolatile, 1, false, true)
+PANOPTES_TOPIC(TimeSync, "rt/panoptes/time_sync", true, Durability::kVolatile, 64, false, true)
+PANOPTES_TOPIC(EstimatorStatus, "rt/panoptes/estimator_status", false, Durability::kVolatile, 1, false, false)
+PANOPTES_TOPIC(TrackFrame, "rt/panoptes/tracks", false, Durability::kVolatile, 1, false, false)
+PANOPTES_TOPIC(BodyPose, "rt/panoptes/bodies", false, Durability::kVolatile, 1, false, true)
+PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::kTransientLocal, 1, false,
+               false)
 #undef PANOPTES_TOPIC
 
 constexpr int kReliableDepth = 2000;
 constexpr int kMaxInstances = 1024;  // cameras (or bodies) per keyed topic, as the estimator's own limit
+// A writer that offers reliability keeps this many samples per instance for repairs and announces
+// them this often: 64 frames are 270 ms at 240 Hz, several heartbeat periods.
+constexpr int kOfferedReliableDepth = 64;
+constexpr std::int32_t kOfferedHeartbeatNs = 50'000'000;
+
+// ---------------------------------------------------------------------------------------------
+// The `only_id` content filter. A custom filter class (not the SQL one, which needs the type's
+// TypeObject) that reads the first member, a CDR string, straight from the serialised payload.
+// Every participant registers it, so writers evaluate it for each matched reader and skip the
+// readers a sample is not for (Fast DDS writer-side filtering, up to reader_filters_allocation
+// readers per writer).
+
+constexpr const char* kIdFilterClass = "PANOPTES_LEADING_ID";
+constexpr const char* kIdFilterExpression = "leading_id = %0";
+
+// The first string of a sample: 4 bytes of encapsulation (its second byte's low bit: little
+// endian), a 4-byte length counting the terminating NUL, the characters.
+std::optional<std::string_view> leading_string(const eprosima::fastrtps::rtps::SerializedPayload_t& payload) {
+  if (payload.data == nullptr || payload.length < 8) return std::nullopt;
+  const unsigned char* d = payload.data;
+  const bool little_endian = (d[1] & 1) != 0;
+  std::uint32_t n = 0;
+  for (int i = 0; i < 4; ++i) {
+    const std::uint32_t byte = d[4 + (little_endian ? i : 3 - i)];
+    n |= byte << (8 * i);
+  }
+  if (n == 0 || n > payload.length - 8) return std::nullopt;
+  return std::string_view(reinterpret_cast<const char*>(d + 8), n - 1);
+}
+
+class LeadingIdFilter final : public fdds::IContentFilter {
+ public:
+  explicit LeadingIdFilter(std::string id) : id_(std::move(id)) {}
+  bool evaluate(const SerializedPayload& payload, const FilterSampleInfo&, const GUID_t&) const override {
+    const auto id = leading_string(payload);
+    return id.has_value() && *id == id_;
+  }
+
+ private:
+  std::string id_;
+};
+
+class LeadingIdFilterFactory : public fdds::IContentFilterFactory {
+ public:
+  ReturnCode_t create_content_filter(const char*, const char*, const fdds::TopicDataType*, const char*,
+                                     const ParameterSeq& parameters, fdds::IContentFilter*& filter) override {
+    if (parameters.length() != 1 || parameters[0] == nullptr) return ReturnCode_t::RETCODE_BAD_PARAMETER;
+    std::string_view id = parameters[0];
+    if (id.size() >= 2 && id.front() == '\'' && id.back() == '\'') id = id.substr(1, id.size() - 2);
+    delete static_cast<LeadingIdFilter*>(filter);
+    filter = new LeadingIdFilter(std::string(id));
+    return ReturnCode_t::RETCODE_OK;
+  }
+  ReturnCode_t delete_content_filter(const char*, fdds::IContentFilter* filter) override {
+    delete static_cast<LeadingIdFilter*>(filter);
+    return ReturnCode_t::RETCODE_OK;
+  }
+};
+
+LeadingIdFilterFactory& leading_id_filter_factory() {
+  static LeadingIdFilterFactory factory;  // outlives every participant
+  return factory;
+}
 
 template <class Qos>
 void apply_spec(Qos& qos, const TopicSpec& spec, panoptes::dds::Qos override_qos) {
-  const bool reliable = spec.reliable || override_qos == panoptes::dds::Qos::kReliable;
+  const bool reliable = override_qos == panoptes::dds::Qos::kReliable ||
+                        (spec.reliable && override_qos != panoptes::dds::Qos::kBestEffort);
   qos.reliability().kind = reliable ? fdds::RELIABLE_RELIABILITY_QOS : fdds::BEST_EFFORT_RELIABILITY_QOS;
   qos.durability().kind = spec.durability == Durability::kTransientLocal
                               ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS
@@ -146,6 +224,11 @@ class BusCore {
     participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos);
     if (participant_ == nullptr)
       throw DdsError("cannot create DDS participant (domain " + std::to_string(domain) + ")");
+    if (participant_->register_content_filter_factory(kIdFilterClass, &leading_id_filter_factory()) !=
+        ReturnCodeOk()) {
+      teardown();
+      throw DdsError("cannot register the DDS content filter " + std::string(kIdFilterClass));
+    }
     publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
     if (publisher_ == nullptr || subscriber_ == nullptr) {
@@ -172,6 +255,21 @@ class BusCore {
     return topic;
   }
 
+  // A content-filtered view of T's topic holding the samples whose leading id is `id`.
+  template <class T>
+  fdds::ContentFilteredTopic* filtered_topic(const std::string& id) {
+    fdds::Topic* related = topic<T>();
+    std::lock_guard<std::mutex> lock(mutex_);
+    const std::string name =
+        std::string(TopicTraits<T>::spec().name) + "|" + id + "|" + std::to_string(filtered_count_++);
+    return participant_->create_contentfilteredtopic(name, related, kIdFilterExpression, {"'" + id + "'"},
+                                                     kIdFilterClass);
+  }
+  void delete_filtered_topic(fdds::ContentFilteredTopic* topic) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    participant_->delete_contentfilteredtopic(topic);
+  }
+
   fdds::Publisher* publisher() const { return publisher_; }
   fdds::Subscriber* subscriber() const { return subscriber_; }
   const std::filesystem::path& profile_file() const { return profile_file_; }
@@ -190,6 +288,7 @@ class BusCore {
   fdds::Subscriber* subscriber_ = nullptr;
   std::mutex mutex_;
   std::map<std::string, fdds::Topic*> topics_;
+  std::uint64_t filtered_count_ = 0;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -282,6 +381,7 @@ class ReaderListener : public fdds::DataReaderListener {
 template <class T>
 struct Reader<T>::Impl {
   std::shared_ptr<BusCore> core;
+  fdds::ContentFilteredTopic* filtered_topic = nullptr;  // with `only_id`
   fdds::DataReader* reader = nullptr;
   std::unique_ptr<ReaderListener<T>> listener;
 };
@@ -297,6 +397,7 @@ Reader<T>::~Reader() {
     impl_->reader->set_listener(nullptr);
     impl_->core->subscriber()->delete_datareader(impl_->reader);
   }
+  if (impl_->filtered_topic != nullptr) impl_->core->delete_filtered_topic(impl_->filtered_topic);
 }
 
 template <class T>
@@ -325,7 +426,19 @@ std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos) {
   impl->core = core_;
   fdds::Topic* topic = core_->topic<T>();
   fdds::DataWriterQos writer_qos = fdds::DATAWRITER_QOS_DEFAULT;
-  apply_spec(writer_qos, TopicTraits<T>::spec(), qos);
+  const TopicSpec spec = TopicTraits<T>::spec();
+  apply_spec(writer_qos, spec, qos);
+  if (spec.offer_reliable && !spec.reliable && qos == Qos::kDefault) {
+    writer_qos.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+    writer_qos.history().depth = kOfferedReliableDepth;
+    writer_qos.resource_limits().max_samples_per_instance = kOfferedReliableDepth;
+    writer_qos.resource_limits().max_samples = kMaxInstances * kOfferedReliableDepth;
+    writer_qos.reliable_writer_qos().times.heartbeatPeriod =
+        eprosima::fastrtps::Duration_t(0, kOfferedHeartbeatNs);
+  }
+  // Evaluate the content filter of every matched reader (default: at most 32 readers per writer).
+  writer_qos.writer_resource_limits().reader_filters_allocation =
+      eprosima::fastrtps::ResourceLimitedContainerConfig(0, kMaxInstances, 1);
   impl->writer = core_->publisher()->create_datawriter(topic, writer_qos, &impl->listener);
   if (impl->writer == nullptr) {
     throw DdsError(std::string("cannot create DDS writer on ") + TopicTraits<T>::spec().name);
@@ -334,25 +447,38 @@ std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos) {
 }
 
 template <class T>
-std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_sample, Qos qos) {
+std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_sample, Qos qos,
+                                            const std::string& only_id) {
+  const TopicSpec spec = TopicTraits<T>::spec();
   auto impl = std::make_unique<typename Reader<T>::Impl>();
   impl->core = core_;
   impl->listener = std::make_unique<ReaderListener<T>>(std::move(on_sample));
-  fdds::Topic* topic = core_->topic<T>();
+  fdds::TopicDescription* topic = core_->topic<T>();
+  if (!only_id.empty()) {
+    if (!spec.leading_id)
+      throw DdsError(std::string("cannot filter ") + spec.name + " by id: it has no leading id");
+    impl->filtered_topic = core_->filtered_topic<T>(only_id);
+    if (impl->filtered_topic == nullptr)
+      throw DdsError(std::string("cannot create the content filter on ") + spec.name + " for '" + only_id +
+                     "'");
+    topic = impl->filtered_topic;
+  }
   fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
-  apply_spec(reader_qos, TopicTraits<T>::spec(), qos);
+  apply_spec(reader_qos, spec, qos);
   impl->reader = core_->subscriber()->create_datareader(topic, reader_qos, impl->listener.get());
   if (impl->reader == nullptr) {
-    throw DdsError(std::string("cannot create DDS reader on ") + TopicTraits<T>::spec().name);
+    if (impl->filtered_topic != nullptr) core_->delete_filtered_topic(impl->filtered_topic);
+    throw DdsError(std::string("cannot create DDS reader on ") + spec.name);
   }
   return std::make_unique<Reader<T>>(std::move(impl));
 }
 
-#define PANOPTES_INSTANTIATE(Type)                                              \
-  template class Writer<msg::Type>;                                             \
-  template class Reader<msg::Type>;                                             \
-  template std::unique_ptr<Writer<msg::Type>> Bus::make_writer<msg::Type>(Qos); \
-  template std::unique_ptr<Reader<msg::Type>> Bus::make_reader<msg::Type>(Reader<msg::Type>::Callback, Qos);
+#define PANOPTES_INSTANTIATE(Type)                                                                          \
+  template class Writer<msg::Type>;                                                                         \
+  template class Reader<msg::Type>;                                                                         \
+  template std::unique_ptr<Writer<msg::Type>> Bus::make_writer<msg::Type>(Qos);                             \
+  template std::unique_ptr<Reader<msg::Type>> Bus::make_reader<msg::Type>(Reader<msg::Type>::Callback, Qos, \
+                                                                          const std::string&);
 
 PANOPTES_INSTANTIATE(CameraInfo)
 PANOPTES_INSTANTIATE(FeatureFrame)

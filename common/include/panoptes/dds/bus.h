@@ -35,6 +35,9 @@ std::filesystem::path resolve_profile_file(const std::filesystem::path& requeste
 enum class Qos {
   kDefault,   // the topic's own QoS (docs/protocol.md)
   kReliable,  // reliable with a deep history, e.g. recording features for calibration
+  // Best effort on a reliable topic: what is lost is not repaired, and the writer sends this reader
+  // no heartbeats and no gaps (e.g. a time-sync reply, useless once late).
+  kBestEffort,
 };
 
 class BusCore;
@@ -85,8 +88,14 @@ class Bus {
   template <class T>
   std::unique_ptr<Writer<T>> make_writer(Qos qos = Qos::kDefault);
   // `on_sample` runs on a DDS listener thread: keep it short (enqueue and return).
+  // `only_id`, if not empty, subscribes to the samples addressed to one camera or client only: those
+  // whose first member (camera_id of Predictions, client_id of TimeSync) equals it. It is a DDS
+  // content filter that the writers apply (every Bus registers it), so the samples of the other
+  // cameras are not even sent: traffic per camera stays constant as cameras are added. Throws
+  // DdsError for a type without such a member.
   template <class T>
-  std::unique_ptr<Reader<T>> make_reader(typename Reader<T>::Callback on_sample, Qos qos = Qos::kDefault);
+  std::unique_ptr<Reader<T>> make_reader(typename Reader<T>::Callback on_sample, Qos qos = Qos::kDefault,
+                                         const std::string& only_id = {});
 
   const std::filesystem::path& profile_file() const;
 

@@ -1,0 +1,137 @@
+// SPDX-License-Identifier: Apache-2.0
+// The DDS bus over the loopback profile: per-camera content filters (Bus::make_reader's `only_id`)
+// and the reliability a feature writer offers to a calibration capture.
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "panoptes/dds/bus.h"
+#include "panoptes_msgs/panoptes.h"
+
+namespace panoptes::dds {
+namespace {
+
+using namespace std::chrono_literals;
+
+// One domain per test process, so that parallel ctest runs do not hear each other.
+BusOptions options(const std::string& name) {
+  BusOptions o;
+  o.domain_id = 100 + static_cast<int>(getpid() % 100);
+  o.participant_name = name;
+  return o;
+}
+
+template <class Predicate>
+bool wait_until(Predicate predicate, std::chrono::milliseconds timeout = 5s) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!predicate()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(5ms);
+  }
+  return true;
+}
+
+msg::Predictions predictions_for(const std::string& camera, long long stamp) {
+  msg::Predictions p;
+  p.camera_id(camera);
+  p.stamp_ns(stamp);
+  return p;
+}
+
+TEST(Bus, OnlyIdReaderGetsOnlyItsCamerasSamples) {
+  Bus estimator(options("estimator")), camera_a(options("cam_a")), camera_b(options("cam_b"));
+  std::mutex mutex;
+  std::vector<std::string> got_a, got_b;
+  auto reader_a = camera_a.make_reader<msg::Predictions>(
+      [&](msg::Predictions&& p) {
+        std::lock_guard lock(mutex);
+        got_a.push_back(p.camera_id());
+      },
+      Qos::kDefault, "cam_a");
+  auto reader_b = camera_b.make_reader<msg::Predictions>(
+      [&](msg::Predictions&& p) {
+        std::lock_guard lock(mutex);
+        got_b.push_back(p.camera_id());
+      },
+      Qos::kDefault, "cam_b");
+  auto writer = estimator.make_writer<msg::Predictions>();
+  ASSERT_TRUE(writer->wait_for_readers(2, 5s));
+  // Best effort: samples written before a reader has matched the writer are not for it.
+  ASSERT_TRUE(
+      wait_until([&] { return reader_a->matched_writers() == 1 && reader_b->matched_writers() == 1; }));
+  // Ids that share a prefix with a reader's, or are longer, must not pass.
+  const std::vector<std::string> ids = {"cam_a", "cam_b", "cam_", "cam_ab", "cam_c", ""};
+  for (int round = 0; round < 20; ++round) {
+    for (const auto& id : ids) writer->write(predictions_for(id, round));
+    std::this_thread::sleep_for(2ms);
+  }
+  ASSERT_TRUE(wait_until([&] {
+    std::lock_guard lock(mutex);
+    return got_a.size() >= 15 && got_b.size() >= 15;  // best effort: allow a little loss
+  }));
+  std::this_thread::sleep_for(100ms);
+  std::lock_guard lock(mutex);
+  for (const auto& id : got_a) EXPECT_EQ(id, "cam_a");
+  for (const auto& id : got_b) EXPECT_EQ(id, "cam_b");
+  EXPECT_LE(got_a.size(), 20u);
+  EXPECT_LE(got_b.size(), 20u);
+}
+
+TEST(Bus, UnfilteredReaderStillGetsEverything) {
+  Bus writer_bus(options("writer")), reader_bus(options("reader"));
+  std::atomic<int> received{0};
+  auto filtered = reader_bus.make_reader<msg::TimeSync>([](msg::TimeSync&&) {}, Qos::kDefault, "cam0");
+  auto all = reader_bus.make_reader<msg::TimeSync>([&](msg::TimeSync&&) { received.fetch_add(1); });
+  auto writer = writer_bus.make_writer<msg::TimeSync>();
+  ASSERT_TRUE(writer->wait_for_readers(2, 5s));
+  for (int i = 0; i < 10; ++i) {
+    msg::TimeSync sample;
+    sample.client_id(i % 2 == 0 ? "cam0" : "cam1");
+    sample.seq(static_cast<unsigned long long>(i));
+    writer->write(sample);
+  }
+  // TimeSync is reliable: every sample arrives at the unfiltered reader, 5 at the filtered one.
+  EXPECT_TRUE(wait_until([&] { return received.load() == 10; }));
+  EXPECT_TRUE(wait_until([&] { return filtered->received() == 5; }));
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(filtered->received(), 5u);
+}
+
+TEST(Bus, OnlyIdOnATypeWithoutLeadingIdIsRefused) {
+  Bus bus(options("refuse"));
+  EXPECT_THROW(bus.make_reader<msg::TrackFrame>([](msg::TrackFrame&&) {}, Qos::kDefault, "cam0"), DdsError);
+}
+
+// camera_node's feature writer offers reliability: the estimator's best-effort reader and a
+// calibration capture's reliable reader both match it.
+TEST(Bus, FeatureWriterMatchesBestEffortAndReliableReaders) {
+  Bus camera(options("camera")), estimator(options("estimator")), capture(options("capture"));
+  std::atomic<int> best_effort{0}, reliable{0};
+  auto estimator_reader =
+      estimator.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&&) { best_effort.fetch_add(1); });
+  auto capture_reader = capture.make_reader<msg::FeatureFrame>(
+      [&](msg::FeatureFrame&&) { reliable.fetch_add(1); }, Qos::kReliable);
+  auto writer = camera.make_writer<msg::FeatureFrame>();
+  ASSERT_TRUE(writer->wait_for_readers(2, 5s));
+  ASSERT_TRUE(wait_until(
+      [&] { return capture_reader->matched_writers() == 1 && estimator_reader->matched_writers() == 1; }));
+  for (int i = 0; i < 50; ++i) {
+    msg::FeatureFrame frame;
+    frame.camera_id("cam0");
+    frame.frame(i);
+    writer->write(frame);
+    std::this_thread::sleep_for(1ms);
+  }
+  EXPECT_TRUE(wait_until([&] { return reliable.load() == 50; }));
+  EXPECT_TRUE(wait_until([&] { return best_effort.load() >= 45; }));
+}
+
+}  // namespace
+}  // namespace panoptes::dds
