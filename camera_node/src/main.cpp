@@ -710,6 +710,10 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
   queue.close();
   capture.join();
   publisher.release(true);
+  // A reliable reader (a calibration capture) may still be owed repairs of the last frames.
+  if (!feature_writer->wait_for_acknowledgments(std::chrono::seconds(1))) {
+    log("some reliable readers did not acknowledge the last frames within 1 s");
+  }
   if (time_sync) {
     const auto sync_status = time_sync->status();
     const double elapsed_s = panoptes::ns_to_seconds(panoptes::wall_now_ns() - start);

@@ -14,7 +14,7 @@ cleanup() {
   sleep 0.5
   for pid in "${pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
   fastdds shm clean >/dev/null 2>&1 || true
-  if [ "$failures" -eq 0 ]; then rm -rf "$work"; else echo "kept $work for inspection"; fi
+  if [ "$failures" -eq 0 ] && [ -z "${PANOPTES_KEEP_WORK:-}" ]; then rm -rf "$work"; else echo "kept $work for inspection"; fi
 }
 trap cleanup EXIT
 

@@ -6,8 +6,11 @@
 #   t=10 s  camera 2's cable is pulled for 5 s                  -> rejoins by itself
 #   t=20 s  estimator_node is killed (-9) and restarted         -> tracks resume within 2 s
 #   always  camera 3's link loses 10% and jitters by 20 ms      -> tracking continues
-# The lossy link is `tc netem` on the host's eth0 when the kernel has sch_netem; otherwise the
-# camera node's sender-side emulation (--inject-loss/--inject-jitter-ms), which the log says.
+# The lossy link is `tc netem` on the host's eth0 when the kernel has sch_netem. Otherwise the loss
+# is real all the same: nftables on host 4 drops 10% of the UDP datagrams it sends and receives
+# (`numgen random`), and only the jitter is emulated by the sender (camera_node --inject-jitter-ms:
+# without netem no qdisc delays packets). Without nft either, the camera node emulates both
+# (--inject-loss). The log says which.
 # Recovery times are measured from the application's records (receive times of TrackFrames).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -46,11 +49,22 @@ start_camera() {  # start_camera INDEX TAG [extra args]
 
 # The lossy link of camera 3 (host 4).
 lossy_args=()
+nft_loss=0
 if netns_exec 4 tc qdisc add dev eth0 root netem loss 10% delay 20ms 20ms 2>"$work/netem.err"; then
   lossy="tc netem on host 4's eth0 (loss 10%, delay 20 ms ± 20 ms)"
+elif command -v nft >/dev/null && netns_exec 4 nft -f - 2>"$work/nft.err" <<'NFT'
+table inet lossy {
+  chain in { type filter hook input priority 0; meta l4proto udp numgen random mod 10 0 counter drop; }
+  chain out { type filter hook output priority 0; meta l4proto udp numgen random mod 10 0 counter drop; }
+}
+NFT
+then
+  nft_loss=1
+  lossy_args=(--inject-jitter-ms 20)
+  lossy="nftables on host 4 (10% of UDP datagrams dropped each way) and the sender's jitter (--inject-jitter-ms 20; no sch_netem: $(head -1 "$work/netem.err"))"
 else
   lossy_args=(--inject-loss 0.1 --inject-jitter-ms 20)
-  lossy="the sender (camera_node --inject-loss 0.1 --inject-jitter-ms 20: the kernel has no sch_netem: $(head -1 "$work/netem.err"))"
+  lossy="the sender (camera_node --inject-loss 0.1 --inject-jitter-ms 20: no sch_netem, no nft)"
 fi
 echo "lossy link: $lossy"
 
@@ -152,7 +166,10 @@ echo "$usage"
 echo "$usage" | awk '{for (i = 1; i < NF; ++i) { if ($i == "frames") f = $(i + 1); if ($i == "utilisation") u = $(i + 1) }}
   END {exit !(u >= 0.95 && f > 0)}' && pass "lossy camera: every frame that arrived was used (late ones replayed)" ||
   fail "lossy camera utilisation: $usage"
-if [ ${#lossy_args[@]} -gt 0 ]; then
+if [ "$nft_loss" = 1 ]; then
+  dropped=$(netns_exec 4 nft list table inet lossy | grep -o "packets [0-9]*" | awk '{s += $2} END {print s + 0}')
+  [ "${dropped:-0}" -gt 100 ] && pass "host 4's link dropped $dropped UDP datagrams" || fail "host 4 dropped only ${dropped:-0} datagrams"
+elif [[ " ${lossy_args[*]} " == *" --inject-loss "* ]]; then
   lost=$(grep -o "injected_losses=[0-9]*" "$work/cam3_a.log" | tail -1 | cut -d= -f2 || true)
   [ "${lost:-0}" -gt 100 ] && pass "sender-side loss injected ($lost frames)" || fail "no injected losses counted"
 fi

@@ -78,7 +78,25 @@ PANOPTES_TOPIC(TrackFrame, "rt/panoptes/tracks", false, Durability::kVolatile, 1
 PANOPTES_TOPIC(BodyPose, "rt/panoptes/bodies", false, Durability::kVolatile, 1, false, true)
 PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::kTransientLocal, 1, false,
                false)
+PANOPTES_TOPIC(LatencyTraces, "rt/panoptes/latency_probe/trace", false, Durability::kVolatile, 8, false, false)
 #undef PANOPTES_TOPIC
+
+// A probe measures one hop of the pipeline, so it takes the QoS of the topic it stands in for: the
+// QoS decides how Fast DDS carries a sample (seen with Fast DDS 2.9 and deploy/dds/loopback.xml: a
+// best-effort writer sends over UDP loopback, one that offers reliability over shared memory).
+#define PANOPTES_PROBE_TOPIC(Type, topic_name, Measured)   \
+  template <>                                              \
+  struct TopicTraits<msg::Type> {                          \
+    using PubSubType = msg::Type##PubSubType;              \
+    static TopicSpec spec() {                              \
+      TopicSpec spec = TopicTraits<msg::Measured>::spec(); \
+      spec.name = topic_name;                              \
+      return spec;                                         \
+    }                                                      \
+  };
+PANOPTES_PROBE_TOPIC(LatencyProbe, "rt/panoptes/latency_probe/request", FeatureFrame)
+PANOPTES_PROBE_TOPIC(LatencyProbeEcho, "rt/panoptes/latency_probe/echo", BodyPose)
+#undef PANOPTES_PROBE_TOPIC
 
 constexpr int kReliableDepth = 2000;
 constexpr int kMaxInstances = 1024;  // cameras (or bodies) per keyed topic, as the estimator's own limit
@@ -328,6 +346,14 @@ bool Writer<T>::write(const T& sample) {
 template <class T>
 int Writer<T>::matched_readers() const {
   return impl_->listener.matched.load();
+}
+
+template <class T>
+bool Writer<T>::wait_for_acknowledgments(std::chrono::milliseconds timeout) const {
+  const auto ms = timeout.count();
+  return impl_->writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
+             static_cast<std::int32_t>(ms / 1000), static_cast<std::uint32_t>((ms % 1000) * 1'000'000))) ==
+         ReturnCodeOk();
 }
 
 template <class T>

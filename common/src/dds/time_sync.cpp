@@ -70,8 +70,10 @@ TimeSyncServer::TimeSyncServer(Bus& bus, ClockFunction clock) : impl_(std::make_
   impl_->clock = std::move(clock);
   impl_->writer = bus.make_writer<msg::TimeSync>();
   Impl* impl = impl_.get();
+  // Best effort, like the clients' replies: a repaired request reaches the server too late and
+  // would only make a long round trip that the client rejects; a lost exchange is simply retried.
   impl_->reader = bus.make_reader<msg::TimeSync>(
-      [impl](msg::TimeSync&& message) { impl->on_sample(std::move(message)); });
+      [impl](msg::TimeSync&& message) { impl->on_sample(std::move(message)); }, Qos::kBestEffort);
   impl_->thread = std::thread([impl] { impl->run(); });
 }
 

@@ -52,6 +52,9 @@ class Writer {
   int matched_readers() const;
   // Waits until at least `count` readers matched; false on timeout.
   bool wait_for_readers(int count, std::chrono::milliseconds timeout) const;
+  // Waits until every reliable reader acknowledged every sample written (e.g. before a camera
+  // node exits, so that a calibration capture gets the last frames repaired); false on timeout.
+  bool wait_for_acknowledgments(std::chrono::milliseconds timeout) const;
 
   struct Impl;
   explicit Writer(std::unique_ptr<Impl> impl);
