@@ -210,8 +210,10 @@ int run_world(int argc, char** argv) {
   app.add_option("--in-features", feature_files, "a short recording of the static markers (JSONL)")
       ->required()
       ->expected(1, -1);
-  auto* lframe_option = app.add_option(
-      "--lframe", lframe, "L-frame of 3 markers: '<x arm m>,<y arm m>' (or 'auto': the longer arm is x)");
+  auto* lframe_option =
+      app.add_option("--lframe", lframe,
+                     "L-frame of 3 markers: '<x arm m>,<y arm m>' (or 'auto': the longer arm "
+                     "is x); on an unscaled (single-light) calibration the arms set the scale");
   auto* floor_option =
       app.add_flag("--floor", floor, "markers (>= 3) lying on the floor: z = their plane's normal");
   lframe_option->excludes(floor_option);
@@ -223,11 +225,19 @@ int run_world(int argc, char** argv) {
     return *exit;
   const std::string program = app.get_name();
   SystemCalibration calibration;
+  bool unscaled = false;
   try {
     calibration = load_calibration(calibration_file);
+    unscaled = calibration_file_is_unscaled(calibration_file);
   } catch (const std::exception& e) {
     return bad_input(program, e.what());
   }
+  // A single-light calibration has no metric scale: the L-frame's known arms give it.
+  if (unscaled && (floor || lframe == "auto"))
+    return bad_input(program,
+                     calibration_file +
+                         " is unscaled (a single-light calibration): give the L-frame's arm lengths, "
+                         "--lframe <x arm m>,<y arm m>, which set its metric scale");
   std::string error;
   auto by_camera = read_features(feature_files, error);
   if (!error.empty()) return bad_input(program, error);
@@ -245,24 +255,27 @@ int run_world(int argc, char** argv) {
   if (count == 0) return bad_input(program, calibration_file + ": no camera has T_world_cam");
   up_hint /= count;
   std::optional<RigidTransform> T_new_old;
+  double scale = 1.0;
   if (floor) {
     T_new_old = floor_frame(points, up_hint, &error);
   } else {
     double x_arm = 0, y_arm = 0;
-    if (lframe != "auto" && std::sscanf(lframe.c_str(), "%lf,%lf", &x_arm, &y_arm) != 2)
+    if (lframe != "auto" &&
+        (std::sscanf(lframe.c_str(), "%lf,%lf", &x_arm, &y_arm) != 2 || x_arm <= 0 || y_arm <= 0))
       return bad_input(program, "--lframe: expected '<x arm m>,<y arm m>' or 'auto', got '" + lframe + "'");
-    T_new_old = lframe_frame(points, up_hint, x_arm, y_arm, &error);
+    T_new_old = lframe_frame(points, up_hint, x_arm, y_arm, &error, unscaled ? &scale : nullptr);
   }
   if (!T_new_old) {
     std::fprintf(stderr, "%s: %s\n", program.c_str(), error.c_str());
     return kExitFailure;
   }
-  apply_world_transform(calibration, *T_new_old);
+  apply_world_transform(calibration, *T_new_old, scale);
   save_calibration(calibration, out);
   std::printf("world frame set from %s (%zu markers); wrote %s\n", floor ? "the floor" : "the L-frame",
               points.size(), out.c_str());
+  if (unscaled) std::printf("metric scale set from the L-frame's arms: %.6f m per unit\n", scale);
   for (const auto& p : points) {
-    const Eigen::Vector3d q = T_new_old->apply(p);
+    const Eigen::Vector3d q = scale * T_new_old->apply(p);
     std::printf("  marker at [%.4f, %.4f, %.4f] m\n", q.x(), q.y(), q.z());
   }
   return kExitOk;

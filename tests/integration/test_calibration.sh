@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # `estimator_node calibrate`: chessboard intrinsics against OpenCV's own figures, wand solve on
-# simulated features (report files, accuracy against the truth), world frame from an L-frame, and
-# the errors a user gets for bad input. No DDS.
+# simulated features (report files, accuracy against the truth), world frame from an L-frame, a
+# 2-marker bar, a single LED scaled by the L-frame, and the errors a user gets for bad input. No DDS.
 source "$(dirname "$0")/lib.sh"
 en="$bin/estimator_node"
 
@@ -60,7 +60,10 @@ expect_exit 0 "simulate the L-frame" -- "$bin/panoptes_sim" features --scene "$w
 expect_exit 0 "calibrate world --lframe" -- "$en" calibrate world --calibration "$work/cal.yaml" \
   --in-features "$work"/lf/cam*.jsonl --lframe 0.5,0.3 --out "$work/cal_world.yaml"
 cat "$work/last.out"
-if python3 - "$work/cal_world.yaml" "$work/wand/calibration.yaml" <<'PY'
+# largest_position_error CALIBRATION TRUTH LIMIT_M: prints the largest camera-centre distance and
+# succeeds if it is below LIMIT_M.
+largest_position_error() {
+  python3 - "$1" "$2" "$3" <<'PY'
 import sys, re, math
 def centres(path):
     text = open(path).read()
@@ -73,9 +76,57 @@ def centres(path):
 est, true = centres(sys.argv[1]), centres(sys.argv[2])
 worst = max(math.dist(est[k], true[k]) for k in true)
 print(f"largest camera position error after calibrate world: {worst * 1000:.2f} mm")
-sys.exit(0 if worst < 0.005 else 1)
+sys.exit(0 if worst < float(sys.argv[3]) else 1)
 PY
-then pass "world frame from the L-frame matches the true frame within 5 mm"; else fail "world frame off"; fi
+}
+if largest_position_error "$work/cal_world.yaml" "$work/wand/calibration.yaml" 0.005; then
+  pass "world frame from the L-frame matches the true frame within 5 mm"
+else
+  fail "world frame off"
+fi
+
+# --- a 2-marker bar: its ends look alike; the cameras' label runs are reconciled ----------------
+sed 's/markers: \[\[-0.25, 0, 0\], \[-0.07, 0, 0\], \[0.25, 0, 0\]\]/markers: [[-0.25, 0, 0], [0.25, 0, 0]]/' \
+  "$work/room.yaml" >"$work/bar.yaml"
+grep -q "markers: \[\[-0.25, 0, 0\], \[0.25, 0, 0\]\]" "$work/bar.yaml" || fail "bar.yaml: the wand was not replaced"
+expect_exit 0 "simulate a 2-marker bar" -- "$bin/panoptes_sim" features --scene "$work/bar.yaml" --out-dir "$work/bar"
+expect_exit 0 "calibrate solve --wand 0,0.5" -- "$en" calibrate solve --cameras "$work/bar/calibration.yaml" \
+  --in-features "$work"/bar/cam*.jsonl --wand 0,0.5 --out "$work/bar_cal.yaml"
+grep "bar ends\|wand length" "$work/last.out"
+grep -q "bar ends (they look alike)" "$work/last.out" && pass "the report tells how the bar's ends were labelled" ||
+  fail "no bar-ends line in the report"
+expect_exit 0 "calibrate world on the bar calibration" -- "$en" calibrate world --calibration "$work/bar_cal.yaml" \
+  --in-features "$work"/lf/cam*.jsonl --lframe 0.5,0.3 --out "$work/bar_world.yaml"
+if largest_position_error "$work/bar_world.yaml" "$work/wand/calibration.yaml" 0.005; then
+  pass "2-marker bar: cameras within 5 mm of the truth in the L-frame's world"
+else
+  fail "2-marker bar calibration off"
+fi
+
+# --- a single LED (seed 003): no scale until the L-frame's arms give it ------------------------
+sed 's/markers: \[\[-0.25, 0, 0\], \[-0.07, 0, 0\], \[0.25, 0, 0\]\]/markers: [[0, 0, 0]]/' \
+  "$work/room.yaml" >"$work/led.yaml"
+expect_exit 0 "simulate a single LED" -- "$bin/panoptes_sim" features --scene "$work/led.yaml" --out-dir "$work/led"
+expect_exit 0 "calibrate solve --wand 0" -- "$en" calibrate solve --cameras "$work/led/calibration.yaml" \
+  --in-features "$work"/led/cam*.jsonl --wand 0 --out "$work/led_cal.yaml"
+grep -q "^# UNSCALED" "$work/led_cal.yaml" && pass "the single-LED calibration is marked UNSCALED" ||
+  fail "led_cal.yaml is not marked UNSCALED"
+grep -q "UNSCALED" "$work/last.out" && pass "the summary says it is unscaled" || fail "the summary does not say UNSCALED"
+expect_exit 2 "calibrate world --floor on an unscaled calibration" -- "$en" calibrate world \
+  --calibration "$work/led_cal.yaml" --in-features "$work"/lf/cam*.jsonl --floor --out "$work/led_world.yaml"
+expect_stderr_contains "is unscaled" "the error says the calibration is unscaled and what to give"
+expect_exit 0 "calibrate world --lframe sets the scale" -- "$en" calibrate world --calibration "$work/led_cal.yaml" \
+  --in-features "$work"/lf/cam*.jsonl --lframe 0.5,0.3 --out "$work/led_world.yaml"
+cat "$work/last.out"
+grep -q "metric scale set from the L-frame" "$work/last.out" && pass "calibrate world reports the scale" ||
+  fail "calibrate world did not set the scale"
+grep -q "UNSCALED" "$work/led_world.yaml" && fail "led_world.yaml is still marked UNSCALED" ||
+  pass "the scaled calibration is no longer marked UNSCALED"
+if largest_position_error "$work/led_world.yaml" "$work/wand/calibration.yaml" 0.005; then
+  pass "single LED + L-frame: cameras within 5 mm of the truth"
+else
+  fail "single LED + L-frame calibration off"
+fi
 
 # --- bad input ----------------------------------------------------------------------------------
 expect_exit 2 "malformed --wand" -- "$en" calibrate solve --cameras "$work/wand/calibration.yaml" \

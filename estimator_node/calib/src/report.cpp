@@ -84,6 +84,15 @@ std::string report_summary(const SolveResult& result) {
         "sigma %.3f mm, max %.3f mm\n",
         result.lengths.count, result.lengths.mean_error_mm, result.lengths.sigma_mm,
         result.lengths.max_abs_error_mm);
+  if (!result.metric && result.calibrated_count() > 0)
+    out << "UNSCALED: a single light gives no metric scale; set it with `calibrate world --lframe <x arm "
+           "m>,<y arm m>`\n";
+  if (result.bar_labels)
+    out << format(
+        "bar ends (they look alike): %d label runs, %d reversed to agree across cameras, %d unrelated "
+        "runs dropped (%d frames); %d of %d votes against the labelling\n",
+        result.bar_labels->runs, result.bar_labels->flipped_runs, result.bar_labels->dropped_runs,
+        result.bar_labels->dropped_frames, result.bar_labels->conflicting_votes, result.bar_labels->votes);
   for (const auto& error : result.errors) out << "error: " << error << "\n";
   return out.str();
 }
@@ -93,12 +102,29 @@ std::string calibration_yaml(const SolveResult& result) {
   std::ostringstream header;
   header << "# Panoptes wand calibration: " << result.calibrated_count() << " of " << result.cameras.size()
          << " cameras calibrated, reference " << result.reference_camera << ".\n";
+  if (!result.metric)
+    header << kUnscaledMarker
+           << ": a single light gives no metric scale; positions are in units of the first camera pair's "
+              "baseline.\n# Set the scale with `estimator_node calibrate world --lframe <x arm m>,<y arm m>` "
+              "(docs/calibration.md, \"Single LED\").\n";
   for (const auto& camera : result.cameras) {
     calibration.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam});
     if (!camera.T_world_cam)
       header << "# NOT CALIBRATED (no T_world_cam): " << camera.id << ": " << camera.failure << "\n";
   }
   return header.str() + calibration_to_yaml(calibration);
+}
+
+bool calibration_file_is_unscaled(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot read");
+  const std::string marker = kUnscaledMarker;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty()) continue;
+    if (line.front() != '#') break;  // the leading comment block only
+    if (line.compare(0, marker.size(), marker) == 0) return true;
+  }
+  return false;
 }
 
 std::vector<std::filesystem::path> write_report(const SolveResult& result,
@@ -126,6 +152,17 @@ std::vector<std::filesystem::path> write_report(const SolveResult& result,
                          {"mean_error_mm", result.lengths.mean_error_mm},
                          {"sigma_mm", result.lengths.sigma_mm},
                          {"max_abs_error_mm", result.lengths.max_abs_error_mm}};
+  json["metric"] = result.metric;
+  if (result.bar_labels) {
+    const auto& labels = *result.bar_labels;
+    json["bar_labels"] = {{"runs", labels.runs},
+                          {"reversed_runs", labels.flipped_runs},
+                          {"dropped_runs", labels.dropped_runs},
+                          {"dropped_frames", labels.dropped_frames},
+                          {"camera_pairs", labels.camera_pairs},
+                          {"votes", labels.votes},
+                          {"conflicting_votes", labels.conflicting_votes}};
+  }
   json["errors"] = result.errors;
   json["cameras"] = nlohmann::json::array();
   for (std::size_t c = 0; c < result.cameras.size(); ++c) {

@@ -17,6 +17,15 @@ std::string WandDefinition::validate() const {
   return "";
 }
 
+bool WandDefinition::ends_indistinguishable() const {
+  if (positions.size() < 2) return false;
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    if (std::abs((positions[i] - positions.front()) -
+                 (positions.back() - positions[positions.size() - 1 - i])) > 1e-3 * length())
+      return false;
+  return true;
+}
+
 WandDefinition parse_wand(const std::string& text) {
   WandDefinition wand;
   std::stringstream stream(text);
@@ -184,14 +193,18 @@ std::optional<std::vector<Eigen::Vector2d>> identify_wand(
   std::vector<Eigen::Vector2d> pixels;
   for (int index : candidates[0].blobs) pixels.push_back(raw(index));
   if (candidates[0].symmetric) {
-    // A symmetric bar: the image cannot tell its ends apart, the previous frame can.
+    // A symmetric bar: the image cannot tell its ends apart, the previous frame can. Without one,
+    // a wand symmetric by definition starts a new label run (resolved across cameras later); an
+    // asymmetric wand seen so that both orientations fit is skipped.
     std::vector<Eigen::Vector2d> reversed(pixels.rbegin(), pixels.rend());
     if (previous == nullptr || previous->pixels.size() != pixels.size()) {
-      ++count.ambiguous;
-      return std::nullopt;
-    }
-    if (continuity_cost(reversed, previous->pixels) < continuity_cost(pixels, previous->pixels))
+      if (!wand.ends_indistinguishable()) {
+        ++count.ambiguous;
+        return std::nullopt;
+      }
+    } else if (continuity_cost(reversed, previous->pixels) < continuity_cost(pixels, previous->pixels)) {
       pixels = reversed;
+    }
   }
   ++count.identified;
   return pixels;
@@ -216,6 +229,8 @@ CameraWandTrack extract_wand_track(const std::string& camera_id, const std::vect
   }
   const WandFrame* previous = nullptr;
   TimeNs previous_stamp = 0;
+  const bool look_alike = wand.ends_indistinguishable();
+  int label_run = 0;
   for (const FeatureFrame* frame : ordered) {
     // Labels carry over only across a short gap.
     const bool recent =
@@ -225,7 +240,18 @@ CameraWandTrack extract_wand_track(const std::string& camera_id, const std::vect
         identify_wand(frame->blobs, intrinsics, wand, options, recent ? previous : nullptr, &track.counters);
     if (!pixels) continue;
     if (!track.frames.empty() && track.frames.back().stamp_ns == frame->stamp_ns) continue;  // duplicate
-    track.frames.push_back({frame->stamp_ns, std::move(*pixels)});
+    if (look_alike && !track.frames.empty()) {
+      // The run goes on only where continuity told the ends apart clearly.
+      bool carried = recent;
+      if (carried) {
+        const std::vector<Eigen::Vector2d> reversed(pixels->rbegin(), pixels->rend());
+        const double kept = continuity_cost(*pixels, previous->pixels);
+        const double swapped = continuity_cost(reversed, previous->pixels);
+        carried = swapped > 2.0 * kept && swapped - kept > options.label_margin_px;
+      }
+      if (!carried) ++label_run;
+    }
+    track.frames.push_back({frame->stamp_ns, std::move(*pixels), label_run});
     previous = &track.frames.back();
     previous_stamp = frame->stamp_ns;
   }

@@ -308,6 +308,7 @@ class Solver {
                   std::chrono::duration<double>(Clock::now() - start_).count());
     options_.progress(elapsed + message);
   }
+  void resolve_labels();
   void check_cameras();
   void build_samples();
   void pairwise();
@@ -334,6 +335,7 @@ class Solver {
 
   const std::vector<CameraCalibration>& input_;
   std::vector<const CameraWandTrack*> tracks_;
+  std::vector<CameraWandTrack> relabelled_;  // copies whose bar ends were reconciled
   WandDefinition wand_;
   SolveOptions options_;
   SolveResult result_;
@@ -344,6 +346,29 @@ class Solver {
   int reference_ = -1;
   Clock::time_point start_ = Clock::now();
 };
+
+// A wand whose ends look alike: the cameras' label runs agree only after resolve_bar_labels.
+void Solver::resolve_labels() {
+  std::vector<CameraIntrinsics> intrinsics;
+  for (std::size_t c = 0; c < input_.size(); ++c) {
+    if (tracks_[c] == nullptr) continue;
+    relabelled_.push_back(*tracks_[c]);
+    intrinsics.push_back(input_[c].intrinsics);
+  }
+  BarLabelOptions options;
+  options.sample_rate_hz = options_.sample_rate_hz;
+  options.max_gap_frames = options_.max_gap_frames;
+  options.min_pair_samples = options_.min_pair_samples;
+  const BarLabelReport report = resolve_bar_labels(relabelled_, intrinsics, options);
+  for (std::size_t c = 0, k = 0; c < input_.size(); ++c)
+    if (tracks_[c] != nullptr) tracks_[c] = &relabelled_[k++];
+  result_.bar_labels = report;
+  progress("bar ends: " + std::to_string(report.runs) + " label runs, " +
+           std::to_string(report.flipped_runs) + " reversed, " + std::to_string(report.dropped_runs) +
+           " unrelated runs dropped (" + std::to_string(report.dropped_frames) + " frames); " +
+           std::to_string(report.conflicting_votes) + " of " + std::to_string(report.votes) +
+           " votes against the labelling");
+}
 
 void Solver::check_cameras() {
   const std::size_t n = input_.size();
@@ -973,6 +998,8 @@ SolveResult Solver::run() {
     result_.errors.push_back("wand: " + problem);
     return result_;
   }
+  result_.metric = wand_.marker_count() >= 2;
+  if (wand_.ends_indistinguishable()) resolve_labels();
   check_cameras();
   build_samples();
   pairwise();

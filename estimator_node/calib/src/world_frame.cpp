@@ -89,9 +89,12 @@ void apply_world_transform(SolveResult& result, const RigidTransform& T_new_old)
     for (auto& p : sample.markers) p = T_new_old.apply(p);
 }
 
-void apply_world_transform(SystemCalibration& calibration, const RigidTransform& T_new_old) {
+void apply_world_transform(SystemCalibration& calibration, const RigidTransform& T_new_old, double scale) {
   for (auto& camera : calibration.cameras)
-    if (camera.T_world_cam) camera.T_world_cam = T_new_old * *camera.T_world_cam;
+    if (camera.T_world_cam) {
+      camera.T_world_cam = T_new_old * *camera.T_world_cam;
+      camera.T_world_cam->t *= scale;
+    }
 }
 
 std::optional<RigidTransform> floor_frame(const std::vector<Eigen::Vector3d>& floor_points,
@@ -116,7 +119,11 @@ std::optional<RigidTransform> floor_frame(const std::vector<Eigen::Vector3d>& fl
 
 std::optional<RigidTransform> lframe_frame(const std::vector<Eigen::Vector3d>& points,
                                            const Eigen::Vector3d& up_hint, double x_arm_m, double y_arm_m,
-                                           std::string* error) {
+                                           std::string* error, double* scale) {
+  if (scale != nullptr && !(x_arm_m > 0 && y_arm_m > 0)) {
+    if (error) *error = "an unscaled calibration needs the L-frame's arm lengths to set its scale";
+    return std::nullopt;
+  }
   double best = 1e9;
   std::optional<RigidTransform> frame;
   const std::size_t n = points.size();
@@ -125,11 +132,17 @@ std::optional<RigidTransform> lframe_frame(const std::vector<Eigen::Vector3d>& p
       for (std::size_t k = 0; k < n; ++k) {
         if (i == j || j == k || i == k) continue;
         const Eigen::Vector3d x = points[j] - points[i], y = points[k] - points[i];
+        if (x.norm() < 1e-9 || y.norm() < 1e-9) continue;
         const double cosine = std::abs(x.normalized().dot(y.normalized()));
         if (cosine > 0.1) continue;
         double cost = cosine;
+        // Metres per unit: 1 for a metric calibration; for an unscaled one the least-squares fit of
+        // the two arms, after which they are judged like metric ones.
+        double s = 1.0;
+        if (scale != nullptr)
+          s = (x.norm() * x_arm_m + y.norm() * y_arm_m) / (x.squaredNorm() + y.squaredNorm());
         if (x_arm_m > 0 && y_arm_m > 0) {
-          const double dx = std::abs(x.norm() - x_arm_m), dy = std::abs(y.norm() - y_arm_m);
+          const double dx = std::abs(s * x.norm() - x_arm_m), dy = std::abs(s * y.norm() - y_arm_m);
           if (dx > 0.02 || dy > 0.02) continue;
           cost += (dx + dy) * 10;
         } else if (x.norm() <= y.norm()) {
@@ -140,6 +153,7 @@ std::optional<RigidTransform> lframe_frame(const std::vector<Eigen::Vector3d>& p
           Eigen::Vector3d z = x.cross(y);
           if (z.dot(up_hint - points[i]) < 0) z = -z;
           frame = frame_from_axes(points[i], x, z);
+          if (scale != nullptr) *scale = s;
         }
       }
   if (!frame && error)

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <sstream>
 #include <string>
@@ -36,6 +37,7 @@ struct SceneSpec {
   std::string wand_path;      // YAML flow map of the body path
   std::string wand_rotation;  // YAML flow map
   std::string wand_markers = "[[-0.25, 0, 0], [-0.07, 0, 0], [0.25, 0, 0]]";
+  std::vector<Eigen::Vector3d> static_markers;  // e.g. an L-frame on the floor
   std::uint64_t seed = 7;
 };
 
@@ -59,12 +61,20 @@ inline std::string scene_yaml(const SceneSpec& spec) {
          << ", target: " << v3(camera.target) << "}\n    rate: " << camera.rate_hz
          << "\n    phase: " << camera.phase_s << "\n    clock_offset: " << camera.clock_offset_s << "\n";
   }
-  yaml << "bodies:\n  - name: wand\n    markers: " << spec.wand_markers << "\n    path: " << spec.wand_path
-       << "\n    rotation: " << spec.wand_rotation << "\n";
+  if (!spec.static_markers.empty()) {
+    yaml << "markers:\n";
+    for (std::size_t i = 0; i < spec.static_markers.size(); ++i)
+      yaml << "  - {name: static" << i << ", path: {type: static, position: " << v3(spec.static_markers[i])
+           << "}}\n";
+  }
+  if (!spec.wand_path.empty())
+    yaml << "bodies:\n  - name: wand\n    markers: " << spec.wand_markers << "\n    path: " << spec.wand_path
+         << "\n    rotation: " << spec.wand_rotation << "\n";
   return yaml.str();
 }
 
-// Eight cameras round a 4 x 4 x 2.5 m room (corners and wall centres, near the ceiling).
+// Eight cameras round a 4 x 4 x 2.5 m room (corners and wall centres, near the ceiling) with wide
+// 1280x1024 lenses (f = 700 px, 85 deg), aimed near the centre; the wand reaches the walls.
 inline SceneSpec room8() {
   SceneSpec spec;
   for (int i = 0; i < 8; ++i) {
@@ -78,6 +88,41 @@ inline SceneSpec room8() {
   spec.wand_path =
       "{type: lissajous, center: [0, 0, 1.15], amplitude: [1.25, 1.25, 0.75], frequency: [0.13, 0.171, "
       "0.23]}";
+  spec.wand_rotation = "{type: oscillate, amplitude: [1.3, 1.1, 3.0], frequency: [0.29, 0.37, 0.083]}";
+  return spec;
+}
+
+// The same 4 x 4 x 2.5 m room set up as a commercial studio would be: eight 2048x2048 cameras
+// with f = 2150 px (51 deg, the OptiTrack Prime 41 / Vicon Vantage class) at the four corners and
+// the four wall centres, 2.45-2.75 m high, aimed into the capture volume; the wand is waved
+// through that volume (about 2 x 2 x 1.5 m), not into the corners where only two cameras see it.
+struct StudioLayout {
+  double corner_height = 2.75, wall_height = 2.5;
+  double corner_target_z = 0.95, wall_target_z = 0.9;
+  double corner_target_r = 0.0, wall_target_r = 0.0;  // aim past the centre, towards the far side
+  Eigen::Vector3d centre{0, 0, 1.1}, amplitude{0.8, 0.8, 0.55};
+};
+
+inline SceneSpec studio8(const StudioLayout& layout = {}) {
+  SceneSpec spec;
+  spec.width = 2048;
+  spec.height = 2048;
+  spec.focal = 2150;
+  for (int i = 0; i < 8; ++i) {
+    const double angle = M_PI / 4 * i;
+    const bool corner = i % 2 == 1;
+    const double r = corner ? 1.9 * std::sqrt(2.0) : 1.92;  // 10 cm in from the walls
+    const Eigen::Vector2d out(std::cos(angle), std::sin(angle));
+    CameraSpec camera;
+    const double height = (corner ? layout.corner_height : layout.wall_height) - 0.05 * (i % 3 == 0);
+    camera.eye = Eigen::Vector3d(r * out.x(), r * out.y(), height);
+    const Eigen::Vector2d target = -(corner ? layout.corner_target_r : layout.wall_target_r) * out;
+    camera.target =
+        Eigen::Vector3d(target.x(), target.y(), corner ? layout.corner_target_z : layout.wall_target_z);
+    spec.cameras.push_back(camera);
+  }
+  spec.wand_path = "{type: lissajous, center: " + v3(layout.centre) + ", amplitude: " + v3(layout.amplitude) +
+                   ", frequency: [0.13, 0.171, 0.23]}";
   spec.wand_rotation = "{type: oscillate, amplitude: [1.3, 1.1, 3.0], frequency: [0.29, 0.37, 0.083]}";
   return spec;
 }
@@ -188,26 +233,32 @@ inline LengthStats free_lengths(const SolveResult& result, const std::vector<Cam
   return stats;
 }
 
+// Camera `camera`'s feature frames over the whole scene, stamped from kEpoch.
+inline std::vector<FeatureFrame> simulate_frames(const Scene& scene, std::size_t camera) {
+  CameraSimulator simulator(scene, scene.cameras()[camera].calibration.id);
+  std::vector<FeatureFrame> frames;
+  for (std::int64_t k = 0; simulator.frame_time_ns(k) < scene.duration_ns(); ++k) {
+    FeatureFrame frame = simulator.features(k);
+    frame.stamp_ns += kEpoch;
+    frames.push_back(std::move(frame));
+  }
+  return frames;
+}
+
 inline std::vector<CameraWandTrack> simulate_tracks(const Scene& scene, const WandDefinition& wand,
                                                     const std::vector<CameraIntrinsics>& intrinsics) {
   std::vector<CameraWandTrack> tracks;
-  for (std::size_t c = 0; c < scene.cameras().size(); ++c) {
-    const auto& config = scene.cameras()[c];
-    CameraSimulator simulator(scene, config.calibration.id);
-    std::vector<FeatureFrame> frames;
-    for (std::int64_t k = 0; simulator.frame_time_ns(k) < scene.duration_ns(); ++k) {
-      FeatureFrame frame = simulator.features(k);
-      frame.stamp_ns += kEpoch;
-      frames.push_back(std::move(frame));
-    }
-    tracks.push_back(extract_wand_track(config.calibration.id, frames, intrinsics[c], wand));
-  }
+  for (std::size_t c = 0; c < scene.cameras().size(); ++c)
+    tracks.push_back(extract_wand_track(scene.cameras()[c].calibration.id, simulate_frames(scene, c),
+                                        intrinsics[c], wand));
   return tracks;
 }
 
-// Solves and compares with the truth. `start` perturbs the intrinsics given to the solver.
+// Solves and compares with the truth. `intrinsics_error` perturbs the intrinsics given to the
+// solver; `edit`, if given, changes the simulated tracks before the solve (deliberate damage).
 inline Measured solve_and_measure(const Scene& scene, const WandDefinition& wand, const SolveOptions& options,
-                                  double intrinsics_error = 0.0) {
+                                  double intrinsics_error = 0.0,
+                                  const std::function<void(std::vector<CameraWandTrack>&)>& edit = {}) {
   std::vector<CameraCalibration> given;
   std::vector<CameraIntrinsics> intrinsics;
   for (const auto& config : scene.cameras()) {
@@ -222,7 +273,8 @@ inline Measured solve_and_measure(const Scene& scene, const WandDefinition& wand
     given.push_back(camera);
     intrinsics.push_back(k);
   }
-  const auto tracks = simulate_tracks(scene, wand, intrinsics);
+  auto tracks = simulate_tracks(scene, wand, intrinsics);
+  if (edit) edit(tracks);
   Measured measured;
   measured.result = solve_wand_calibration(given, tracks, wand, options);
   const auto& result = measured.result;

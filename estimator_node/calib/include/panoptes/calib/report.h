@@ -24,7 +24,14 @@ std::vector<std::filesystem::path> write_report(const SolveResult& result,
                                                 const std::filesystem::path& out_yaml);
 
 // The calibration as the contract YAML: calibrated cameras with T_world_cam, failed ones with
-// intrinsics only and a comment naming the reason.
+// intrinsics only and a comment naming the reason. A single-light result starts with the comment
+// line kUnscaledMarker...: its positions have no metric scale until `calibrate world` sets it.
 std::string calibration_yaml(const SolveResult& result);
+
+inline constexpr const char* kUnscaledMarker = "# UNSCALED";
+
+// Whether the calibration file at `path` carries the kUnscaledMarker comment (in its leading
+// comment lines). Throws std::runtime_error naming the file if it cannot be read.
+bool calibration_file_is_unscaled(const std::filesystem::path& path);
 
 }  // namespace panoptes::calib

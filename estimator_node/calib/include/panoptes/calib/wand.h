@@ -24,6 +24,9 @@ struct WandDefinition {
 
   std::size_t marker_count() const { return positions.size(); }
   double length() const { return positions.empty() ? 0.0 : positions.back() - positions.front(); }
+  // Two or more markers spaced the same from either end (a 2-marker bar always): an image cannot
+  // tell the ends apart, only continuity within a camera can (docs/calibration.md, "Bar ends").
+  bool ends_indistinguishable() const;
   // "" if usable, otherwise the reason (names the problem, e.g. "positions not ascending").
   std::string validate() const;
 };
@@ -42,6 +45,10 @@ struct IdentifyOptions {
   // Largest jump of a single LED or a 2-marker bar between consecutive frames used to keep
   // marker labels (pixels).
   double max_jump_px = 80.0;
+  // Labels of a wand whose ends look alike carry over from the previous frame only if swapping
+  // them would move the markers by this much more than keeping them (and at least twice as much);
+  // otherwise a new label run starts.
+  double label_margin_px = 6.0;
 };
 
 // Why a frame gave no wand: counted per camera so that "lengths never match" can be told apart
@@ -60,6 +67,10 @@ struct IdentifyCounters {
 struct WandFrame {
   TimeNs stamp_ns = 0;
   std::vector<Eigen::Vector2d> pixels;
+  // Frames of one camera with the same label run were labelled by continuity from each other.
+  // For a wand whose ends look alike, each run's end order is a guess of its own, which the solver
+  // reconciles across cameras (resolve_bar_labels); for other wands it is always 0.
+  int label_run = 0;
 };
 
 struct CameraWandTrack {

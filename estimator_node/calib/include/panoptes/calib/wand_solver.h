@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include "panoptes/calib/bar_labels.h"
 #include "panoptes/calib/wand.h"
 #include "panoptes/calibration.h"
 
@@ -94,6 +95,11 @@ struct SolveResult {
   double rms_px = 0;           // all cameras, 2D norm
   double raw_rms_axis_px = 0;  // all cameras, raw frames, per axis
   LengthStats lengths;         // end-to-end length of the wand triangulated freely from the result
+  // False for a single light: positions are in units of the first pair's baseline until `calibrate
+  // world --lframe <x>,<y>` scales them (docs/calibration.md, "Single LED").
+  bool metric = true;
+  // For a wand whose ends look alike (a 2-marker bar): how the cameras' label runs were reconciled.
+  std::optional<BarLabelReport> bar_labels;
   int iterations = 0;
   double seconds = 0;
   std::vector<std::string> errors;  // each names the cameras and the reason
@@ -102,8 +108,9 @@ struct SolveResult {
 };
 
 // `cameras` supplies the intrinsics (T_world_cam ignored); `tracks` one per camera (matched by
-// id; a camera without a track "never saw the wand"). Never throws on bad data: problems go to
-// SolveResult::errors and the cameras' failure fields.
+// id; a camera without a track "never saw the wand"). For a wand whose ends look alike, the
+// tracks' label runs are first reconciled across cameras (resolve_bar_labels, on a copy). Never
+// throws on bad data: problems go to SolveResult::errors and the cameras' failure fields.
 SolveResult solve_wand_calibration(const std::vector<CameraCalibration>& cameras,
                                    const std::vector<CameraWandTrack>& tracks, const WandDefinition& wand,
                                    const SolveOptions& options = {});
