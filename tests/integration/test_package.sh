@@ -55,6 +55,23 @@ for unit in camera_node@.service estimator_node.service panoptes-discovery.servi
     esac
   done
 done
+# systemd's own check of the installed units (syntax, directives, executables), which works without
+# systemd running as PID 1.
+if command -v systemd-analyze >/dev/null; then
+  for unit in camera_node@cam0.service estimator_node.service panoptes-discovery.service; do
+    # Unknown or invalid settings are only warnings ("..., ignoring.") with exit 0: count them too.
+    if systemd-analyze verify --man=no "$unit" >"$work/verify.log" 2>&1 && ! grep -qi "ignoring" "$work/verify.log"; then
+      pass "systemd-analyze verify $unit"
+    else
+      case "$unit" in
+        # fastdds-tools is recommended, not required: its program may be missing.
+        panoptes-discovery.service) grep -v "fast-discovery-server\|fastdds" "$work/verify.log" | grep -q . &&
+          { fail "systemd-analyze verify $unit"; cat "$work/verify.log"; } || pass "systemd-analyze verify $unit (fastdds-tools absent)" ;;
+        *) fail "systemd-analyze verify $unit"; cat "$work/verify.log" ;;
+      esac
+    fi
+  done
+fi
 grep -q "EnvironmentFile=/etc/panoptes/camera_node/%i.env" /lib/systemd/system/camera_node@.service &&
   pass "camera_node@.service reads /etc/panoptes/camera_node/<camera>.env" || fail "camera unit settings path"
 for env in /usr/share/panoptes/examples/*/camera_node/*.env /usr/share/panoptes/examples/*/*.env; do
