@@ -35,7 +35,7 @@ constexpr const char* kUsage =
     "  capture     record FeatureFrames from all cameras over DDS while the wand is waved\n"
     "  intrinsics  one camera's intrinsics from chessboard images (OpenCV)\n"
     "  solve       extrinsics (and optionally intrinsics, clock offsets) from wand features\n"
-    "  world       set the world frame from an L-frame or markers on the floor\n"
+    "  world       set the world frame from an L-frame, markers on the floor, or the wand on the floor\n"
     "  marker      self-calibration of a 7-LED marker (seed 004 §3)\n"
     "\n"
     "Each subcommand answers --help.\n";
@@ -200,14 +200,52 @@ int run_solve(int argc, char** argv) {
   return kExitOk;
 }
 
+// `calibrate world --wand-floor`: the floor plane fitted to the wand's positions (world_frame.h).
+int run_wand_floor(const std::string& program, SystemCalibration& calibration,
+                   const std::string& calibration_file, const std::vector<std::string>& feature_files,
+                   const std::vector<FeatureFrame>& frames, const WandDefinition& wand, bool unscaled,
+                   const WandFloorOptions& options, const std::string& out) {
+  const WandFloorResult result = wand_floor_frame(calibration, frames, wand, unscaled, options);
+  const std::string summary = wand_floor_summary(result);
+  if (!result.T_new_old) {
+    std::fprintf(stderr, "%s", summary.c_str());
+    std::string files;
+    for (const auto& file : feature_files) files += (files.empty() ? "" : " ") + file;
+    std::fprintf(stderr, "%s: %s: no world frame from the wand on the floor (cameras from %s): %s\n",
+                 program.c_str(), files.c_str(), calibration_file.c_str(), result.error.c_str());
+    return kExitFailure;
+  }
+  apply_world_transform(calibration, *result.T_new_old, result.scale);
+  const std::filesystem::path out_path(out);
+  const auto report_path = out_path.parent_path() / (out_path.stem().string() + ".world.txt");
+  try {
+    save_calibration(calibration, out);
+    std::ofstream report(report_path);
+    if (!report) throw std::runtime_error(report_path.string() + ": cannot write");
+    report << "calibrate world --wand-floor: " << calibration_file << " -> " << out << "\n"
+           << "floor offset " << options.floor_offset_m << " m\n"
+           << summary;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
+    return kExitFailure;
+  }
+  std::printf("%s", summary.c_str());
+  std::printf("wrote %s, %s\n", out.c_str(), report_path.filename().string().c_str());
+  return kExitOk;
+}
+
 int run_world(int argc, char** argv) {
-  std::string calibration_file, out, lframe;
+  std::string calibration_file, out, lframe, wand_text;
   std::vector<std::string> feature_files;
-  bool floor = false;
-  CLI::App app{"calibrate world: world frame (z up) from an L-frame or markers on the floor",
-               "estimator_node calibrate world"};
+  bool floor = false, wand_floor = false;
+  WandFloorOptions wand_floor_options;
+  CLI::App app{
+      "calibrate world: world frame (z up) from an L-frame, markers on the floor, or the wand laid on the "
+      "floor",
+      "estimator_node calibrate world"};
   app.add_option("--calibration", calibration_file, "calibration YAML from `calibrate solve`")->required();
-  app.add_option("--in-features", feature_files, "a short recording of the static markers (JSONL)")
+  app.add_option("--in-features", feature_files,
+                 "a short recording of the static markers, or of the wand on the floor (JSONL)")
       ->required()
       ->expected(1, -1);
   auto* lframe_option =
@@ -216,14 +254,39 @@ int run_world(int argc, char** argv) {
                      "is x); on an unscaled (single-light) calibration the arms set the scale");
   auto* floor_option =
       app.add_flag("--floor", floor, "markers (>= 3) lying on the floor: z = their plane's normal");
+  auto* wand_floor_option = app.add_flag(
+      "--wand-floor", wand_floor,
+      "the wand (--wand) laid on the floor at several places: z = the plane of its positions, origin = "
+      "its first marker at the first rest, x = along it; on an unscaled calibration its length sets the "
+      "scale");
+  auto* wand_option =
+      app.add_option("--wand", wand_text, "with --wand-floor: marker positions along the wand, m");
+  app.add_option("--floor-offset", wand_floor_options.floor_offset_m,
+                 "with --wand-floor: height of the marker centres above the floor, m (a marker's radius)")
+      ->capture_default_str();
   lframe_option->excludes(floor_option);
+  wand_floor_option->excludes(lframe_option)->excludes(floor_option)->needs(wand_option);
+  wand_option->needs(wand_floor_option);
   app.add_option("--out", out, "calibration YAML to write")->required();
   if (auto exit = parse_command_line(app, argc, argv, [&] {
-        if (lframe.empty() && !floor)
-          throw CLI::ValidationError("--lframe or --floor", "one of them is required");
+        if (lframe.empty() && !floor && !wand_floor)
+          throw CLI::ValidationError("--lframe, --floor or --wand-floor", "one of them is required");
       }))
     return *exit;
   const std::string program = app.get_name();
+  WandDefinition wand;
+  if (wand_floor) {
+    try {
+      wand = parse_wand(wand_text);
+    } catch (const std::exception& e) {
+      return bad_input(program, e.what());
+    }
+    if (wand.marker_count() < 2)
+      return bad_input(program,
+                       "--wand-floor needs a wand of two or more markers (its direction sets x, its "
+                       "length the scale of an unscaled calibration); --wand '" +
+                           wand_text + "' is a single light");
+  }
   SystemCalibration calibration;
   bool unscaled = false;
   try {
@@ -232,17 +295,22 @@ int run_world(int argc, char** argv) {
   } catch (const std::exception& e) {
     return bad_input(program, e.what());
   }
-  // A single-light calibration has no metric scale: the L-frame's known arms give it.
+  // A single-light calibration has no metric scale: the L-frame's known arms or the wand's known
+  // length give it.
   if (unscaled && (floor || lframe == "auto"))
     return bad_input(program,
                      calibration_file +
                          " is unscaled (a single-light calibration): give the L-frame's arm lengths, "
-                         "--lframe <x arm m>,<y arm m>, which set its metric scale");
+                         "--lframe <x arm m>,<y arm m>, or lay a wand of known length on the floor "
+                         "(--wand-floor --wand ...), which set its metric scale");
   std::string error;
   auto by_camera = read_features(feature_files, error);
   if (!error.empty()) return bad_input(program, error);
   std::vector<FeatureFrame> frames;
   for (auto& [id, list] : by_camera) frames.insert(frames.end(), list.begin(), list.end());
+  if (wand_floor)
+    return run_wand_floor(program, calibration, calibration_file, feature_files, frames, wand, unscaled,
+                          wand_floor_options, out);
   const auto points = triangulate_static_markers(calibration, frames);
   say("triangulated " + std::to_string(points.size()) + " static markers");
   Eigen::Vector3d up_hint = Eigen::Vector3d::Zero();

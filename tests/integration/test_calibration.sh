@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 # `estimator_node calibrate`: chessboard intrinsics against OpenCV's own figures, wand solve on
 # simulated features (report files, accuracy against the truth), world frame from an L-frame, a
-# 2-marker bar, a single LED scaled by the L-frame, and the errors a user gets for bad input. No DDS.
+# 2-marker bar, a single LED scaled by the L-frame, the world frame (and scale) from the wand laid on
+# the floor, and the errors a user gets for bad input. No DDS.
 source "$(dirname "$0")/lib.sh"
 en="$bin/estimator_node"
 
@@ -79,11 +80,16 @@ print(f"largest camera position error after calibrate world: {worst * 1000:.2f} 
 sys.exit(0 if worst < float(sys.argv[3]) else 1)
 PY
 }
-if largest_position_error "$work/cal_world.yaml" "$work/wand/calibration.yaml" 0.005; then
-  pass "world frame from the L-frame matches the true frame within 5 mm"
-else
-  fail "world frame off"
-fi
+# expect_cameras_within CALIBRATION LIMIT_M DESCRIPTION: every camera centre within LIMIT_M of the
+# simulated truth.
+expect_cameras_within() {
+  if largest_position_error "$1" "$work/wand/calibration.yaml" "$2"; then pass "$3"; else fail "$3"; fi
+}
+# expect_contains PATTERN FILE DESCRIPTION (grep -q)
+expect_contains() {
+  if grep -q -- "$1" "$2"; then pass "$3"; else fail "$3: $2 lacks '$1'"; fi
+}
+expect_cameras_within "$work/cal_world.yaml" 0.005 "world frame from the L-frame matches the true frame within 5 mm"
 
 # --- a 2-marker bar: its ends look alike; the cameras' label runs are reconciled ----------------
 sed 's/markers: \[\[-0.25, 0, 0\], \[-0.07, 0, 0\], \[0.25, 0, 0\]\]/markers: [[-0.25, 0, 0], [0.25, 0, 0]]/' \
@@ -97,11 +103,7 @@ grep -q "bar ends (they look alike)" "$work/last.out" && pass "the report tells 
   fail "no bar-ends line in the report"
 expect_exit 0 "calibrate world on the bar calibration" -- "$en" calibrate world --calibration "$work/bar_cal.yaml" \
   --in-features "$work"/lf/cam*.jsonl --lframe 0.5,0.3 --out "$work/bar_world.yaml"
-if largest_position_error "$work/bar_world.yaml" "$work/wand/calibration.yaml" 0.005; then
-  pass "2-marker bar: cameras within 5 mm of the truth in the L-frame's world"
-else
-  fail "2-marker bar calibration off"
-fi
+expect_cameras_within "$work/bar_world.yaml" 0.005 "2-marker bar: cameras within 5 mm of the truth in the L-frame's world"
 
 # --- a single LED (seed 003): no scale until the L-frame's arms give it ------------------------
 sed 's/markers: \[\[-0.25, 0, 0\], \[-0.07, 0, 0\], \[0.25, 0, 0\]\]/markers: [[0, 0, 0]]/' \
@@ -118,15 +120,55 @@ expect_stderr_contains "is unscaled" "the error says the calibration is unscaled
 expect_exit 0 "calibrate world --lframe sets the scale" -- "$en" calibrate world --calibration "$work/led_cal.yaml" \
   --in-features "$work"/lf/cam*.jsonl --lframe 0.5,0.3 --out "$work/led_world.yaml"
 cat "$work/last.out"
-grep -q "metric scale set from the L-frame" "$work/last.out" && pass "calibrate world reports the scale" ||
-  fail "calibrate world did not set the scale"
+expect_contains "metric scale set from the L-frame" "$work/last.out" "calibrate world reports the scale"
 grep -q "UNSCALED" "$work/led_world.yaml" && fail "led_world.yaml is still marked UNSCALED" ||
   pass "the scaled calibration is no longer marked UNSCALED"
-if largest_position_error "$work/led_world.yaml" "$work/wand/calibration.yaml" 0.005; then
-  pass "single LED + L-frame: cameras within 5 mm of the truth"
-else
-  fail "single LED + L-frame calibration off"
-fi
+expect_cameras_within "$work/led_world.yaml" 0.005 "single LED + L-frame: cameras within 5 mm of the truth"
+
+# --- world frame from the wand laid on the floor (--wand-floor) ----------------------------------
+# floor_recording NAME POINTS QUATERNIONS: the room with the wand resting (1.5 s) and sliding (1 s)
+# on the floor through the waypoints (each given twice: start and end of a rest), marker centres
+# 7 mm up (their radius); features in $work/NAME/.
+floor_recording() {
+  local times="0, 1.5, 2.5, 4, 5, 6.5, 7, 8.5"
+  sed -e '/^    path: {type: lissajous/d' -e '/^    rotation: {type: oscillate/d' "$work/room.yaml" >"$work/$1.yaml"
+  printf '    path: {type: waypoints, points: [%s], times: [%s]}\n    rotation: {type: waypoints, q: [%s], times: [%s]}\n' \
+    "$2" "$times" "$3" "$times" >>"$work/$1.yaml"
+  expect_exit 0 "simulate the wand on the floor ($1)" -- "$bin/panoptes_sim" features --scene "$work/$1.yaml" \
+    --out-dir "$work/$1" --duration 8.5
+}
+# The first rest puts the wand's first marker on the true origin, along +x: the frames must agree.
+floor_recording floor \
+  "[0.25, 0, 0.007], [0.25, 0, 0.007], [-0.8, 0.5, 0.007], [-0.8, 0.5, 0.007], [0.9, 0.8, 0.007], [0.9, 0.8, 0.007], [-0.5, -0.9, 0.007], [-0.5, -0.9, 0.007]" \
+  "[0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0.564642, 0.825336], [0, 0, 0.564642, 0.825336], [0, 0, -0.29552, 0.955336], [0, 0, -0.29552, 0.955336], [0, 0, 0.841471, 0.540302], [0, 0, 0.841471, 0.540302]"
+expect_exit 0 "calibrate world --wand-floor" -- "$en" calibrate world --calibration "$work/cal.yaml" \
+  --in-features "$work"/floor/cam*.jsonl --wand 0,0.18,0.5 --wand-floor --floor-offset 0.007 \
+  --out "$work/floor_world.yaml"
+cat "$work/last.out"
+expect_contains "4 placements" "$work/last.out" "the four placements were found"
+expect_contains "plane RMS" "$work/floor_world.world.txt" "wrote floor_world.world.txt with the plane RMS"
+expect_cameras_within "$work/floor_world.yaml" 0.001 "world frame from the wand on the floor matches the true frame within 1 mm"
+expect_exit 0 "--wand-floor scales an unscaled (single-LED) calibration" -- "$en" calibrate world \
+  --calibration "$work/led_cal.yaml" --in-features "$work"/floor/cam*.jsonl --wand 0,0.18,0.5 --wand-floor \
+  --floor-offset 0.007 --out "$work/led_floor.yaml"
+expect_contains "metric scale set from the wand's length" "$work/last.out" "the wand's length set the scale"
+expect_cameras_within "$work/led_floor.yaml" 0.001 "single LED + wand on the floor: cameras within 1 mm of the truth"
+expect_exit 2 "--wand-floor excludes --floor" -- "$en" calibrate world --calibration "$work/cal.yaml" \
+  --in-features "$work"/floor/cam*.jsonl --wand 0,0.18,0.5 --wand-floor --floor --out "$work/bad.yaml"
+expect_exit 2 "--wand-floor needs --wand" -- "$en" calibrate world --calibration "$work/cal.yaml" \
+  --in-features "$work"/floor/cam*.jsonl --wand-floor --out "$work/bad.yaml"
+expect_stderr_contains "--wand" "the error names --wand"
+expect_exit 2 "--wand-floor with a single light" -- "$en" calibrate world --calibration "$work/cal.yaml" \
+  --in-features "$work"/floor/cam*.jsonl --wand 0 --wand-floor --out "$work/bad.yaml"
+expect_stderr_contains "two or more markers" "the error says the wand needs two markers"
+# Laid end to end along one line: the floor's roll is unknown.
+floor_recording line \
+  "[-1, 0.1, 0.007], [-1, 0.1, 0.007], [-0.3, 0.1, 0.007], [-0.3, 0.1, 0.007], [0.4, 0.1, 0.007], [0.4, 0.1, 0.007], [1, 0.1, 0.007], [1, 0.1, 0.007]" \
+  "[0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0, 1]"
+expect_exit 1 "collinear placements are refused" -- "$en" calibrate world --calibration "$work/cal.yaml" \
+  --in-features "$work"/line/cam*.jsonl --wand 0,0.18,0.5 --wand-floor --out "$work/bad.yaml"
+expect_stderr_contains "on one line" "the error says the positions are on one line"
+expect_stderr_contains "line/cam0.jsonl" "the error names the recording"
 
 # --- bad input ----------------------------------------------------------------------------------
 expect_exit 2 "malformed --wand" -- "$en" calibrate solve --cameras "$work/wand/calibration.yaml" \

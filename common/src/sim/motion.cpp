@@ -61,6 +61,15 @@ struct RotationEvaluator {
     if (angle < 1e-15) return rotation.initial;
     return Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotation_vector / angle)) * rotation.initial;
   }
+  Eigen::Quaterniond operator()(const WaypointRotation& rotation) const {
+    const auto& times = rotation.times_s;
+    if (t <= times.front()) return rotation.orientations.front();
+    if (t >= times.back()) return rotation.orientations.back();
+    const auto upper = std::upper_bound(times.begin(), times.end(), t);
+    const std::size_t i = static_cast<std::size_t>(upper - times.begin()) - 1;
+    const double s = (t - times[i]) / (times[i + 1] - times[i]);
+    return rotation.orientations[i].slerp(s, rotation.orientations[i + 1]);
+  }
 };
 
 Eigen::Vector3d unit_vector(const YamlReader& reader, const std::string& key,
@@ -192,7 +201,25 @@ Rotation read_rotation(const YamlReader& reader) {
     rotation.initial = initial;
     return rotation;
   }
-  reader.fail("type", "unknown rotation type '" + type + "' (expected fixed, spin or oscillate)");
+  if (type == "waypoints") {
+    reject_unknown_keys(reader, {"type", "q", "times"});
+    WaypointRotation rotation;
+    const auto rows = reader.get_double_rows("q", 4);
+    if (rows.empty()) reader.fail("q", "expected at least one quaternion");
+    for (const auto& row : rows) {
+      const Eigen::Quaterniond q(row[3], row[0], row[1], row[2]);  // files are [x, y, z, w]
+      if (!std::isfinite(q.norm()) || q.norm() < 1e-6)
+        reader.fail("q", "expected quaternions [x, y, z, w] of non-zero norm");
+      rotation.orientations.push_back(q.normalized());
+    }
+    rotation.times_s = reader.get_doubles("times", static_cast<int>(rows.size()));
+    for (std::size_t i = 1; i < rotation.times_s.size(); ++i) {
+      if (!(rotation.times_s[i] > rotation.times_s[i - 1]))
+        reader.fail("times", "must be strictly increasing");
+    }
+    return rotation;
+  }
+  reader.fail("type", "unknown rotation type '" + type + "' (expected fixed, spin, oscillate or waypoints)");
 }
 
 }  // namespace panoptes::sim

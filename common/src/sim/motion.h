@@ -56,7 +56,13 @@ struct OscillateRotation {
   Eigen::Vector3d phase_rad = Eigen::Vector3d::Zero();
   Eigen::Quaterniond initial = Eigen::Quaterniond::Identity();
 };
-using Rotation = std::variant<FixedRotation, SpinRotation, OscillateRotation>;
+// Orientations held at given instants (e.g. a wand laid down at several places): spherical linear
+// interpolation between them; the first before times[0], the last after the end.
+struct WaypointRotation {
+  std::vector<Eigen::Quaterniond> orientations;
+  std::vector<double> times_s;  // strictly increasing, same length as orientations
+};
+using Rotation = std::variant<FixedRotation, SpinRotation, OscillateRotation, WaypointRotation>;
 
 Eigen::Vector3d evaluate(const Path& path, double t_s);
 Eigen::Quaterniond evaluate(const Rotation& rotation, double t_s);

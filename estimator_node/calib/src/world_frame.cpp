@@ -3,7 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <map>
+#include <random>
+#include <sstream>
 
 #include <Eigen/Dense>
 
@@ -255,6 +259,395 @@ std::vector<Eigen::Vector3d> triangulate_static_markers(const SystemCalibration&
     if (auto X = triangulate(models, pixels)) result.push_back(*X);
   }
   return result;
+}
+
+namespace {
+
+// One instant of the wand on the floor: its markers triangulated, in wand order.
+struct FloorInstant {
+  TimeNs t_ns = 0;
+  std::vector<Eigen::Vector3d> markers;
+};
+
+struct TrackView {
+  CameraModel model;
+  CameraWandTrack track;
+};
+
+// Largest reprojection error (px) of `points` (one per marker) in the given views.
+double max_reprojection_px(const std::vector<const CameraModel*>& models,
+                           const std::vector<std::vector<Eigen::Vector2d>>& pixels,
+                           const std::vector<Eigen::Vector3d>& points) {
+  double worst = 0;
+  for (std::size_t v = 0; v < models.size(); ++v)
+    for (std::size_t m = 0; m < points.size(); ++m) {
+      const auto projected = models[v]->project(points[m]);
+      if (!projected) return 1e9;
+      worst = std::max(worst, (*projected - pixels[v][m]).norm());
+    }
+  return worst;
+}
+
+// Triangulates every marker from all views; nullopt if one fails.
+std::optional<std::vector<Eigen::Vector3d>> triangulate_markers(
+    const std::vector<const CameraModel*>& models, const std::vector<std::vector<Eigen::Vector2d>>& pixels) {
+  std::vector<CameraModel> used;
+  for (const auto* model : models) used.push_back(*model);
+  std::vector<Eigen::Vector3d> points;
+  for (std::size_t m = 0; m < pixels.front().size(); ++m) {
+    std::vector<Eigen::Vector2d> rays;
+    for (const auto& view : pixels) rays.push_back(view[m]);
+    const auto X = triangulate(used, rays);
+    if (!X) return std::nullopt;
+    points.push_back(*X);
+  }
+  return points;
+}
+
+// The wand's instants seen by >= 2 cameras at the fastest camera's rate, interpolated in every
+// track as the solver does (wand.h, TrackSegment), triangulated and checked by reprojection.
+std::vector<FloorInstant> triangulate_wand_instants(const std::vector<TrackView>& views,
+                                                    const WandDefinition& wand,
+                                                    const WandFloorOptions& options) {
+  TimeNs first = std::numeric_limits<TimeNs>::max(), last = std::numeric_limits<TimeNs>::min();
+  double period = 1e9;
+  for (const auto& view : views) {
+    first = std::min(first, view.track.frames.front().stamp_ns);
+    last = std::max(last, view.track.frames.back().stamp_ns);
+    if (view.track.frame_period_s > 0) period = std::min(period, view.track.frame_period_s);
+  }
+  std::vector<FloorInstant> instants;
+  if (first >= last) return instants;
+  const double rate = options.sample_rate_hz > 0 ? options.sample_rate_hz : 1.0 / period;
+  const auto step = static_cast<TimeNs>(std::llround(1e9 / rate));
+  const std::size_t markers = wand.marker_count();
+  for (TimeNs t = first + step / 2; t < last; t += step) {
+    std::vector<const CameraModel*> models;
+    std::vector<std::vector<Eigen::Vector2d>> pixels;
+    for (const auto& view : views) {
+      const auto segment = find_segment(view.track, t, options.max_gap_frames * view.track.frame_period_s);
+      if (!segment) continue;
+      std::vector<Eigen::Vector2d> observed;
+      for (std::size_t m = 0; m < markers; ++m) observed.push_back(evaluate_segment(*segment, m, 0.0));
+      models.push_back(&view.model);
+      pixels.push_back(std::move(observed));
+    }
+    if (models.size() < 2) continue;
+    if (wand.ends_indistinguishable()) {
+      // Each camera's end order is its own guess (bar_labels.h); with calibrated cameras the
+      // order that triangulates consistently with the first camera's is the right one.
+      for (std::size_t v = 1; v < models.size(); ++v) {
+        const auto error_of = [&](const std::vector<Eigen::Vector2d>& candidate) {
+          const std::vector<const CameraModel*> pair{models[0], models[v]};
+          const std::vector<std::vector<Eigen::Vector2d>> pair_pixels{pixels[0], candidate};
+          const auto points = triangulate_markers(pair, pair_pixels);
+          return points ? max_reprojection_px(pair, pair_pixels, *points) : 1e9;
+        };
+        std::vector<Eigen::Vector2d> reversed(pixels[v].rbegin(), pixels[v].rend());
+        if (error_of(reversed) < error_of(pixels[v])) pixels[v] = std::move(reversed);
+      }
+    }
+    auto points = triangulate_markers(models, pixels);
+    if (!points || max_reprojection_px(models, pixels, *points) > options.max_reprojection_px) continue;
+    instants.push_back({t, std::move(*points)});
+  }
+  return instants;
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+// RANSAC over planes through three of `points`: the unit normal and a point of the plane with the
+// most points within `inlier_m`. Deterministic (fixed seed).
+std::pair<Eigen::Vector3d, Eigen::Vector3d> ransac_plane(const std::vector<Eigen::Vector3d>& points,
+                                                         double inlier_m, int iterations) {
+  std::mt19937 random(20261121);
+  std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
+  std::size_t best_count = 0;
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> best{Eigen::Vector3d::UnitZ(), points.front()};
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    const Eigen::Vector3d& a = points[pick(random)];
+    const Eigen::Vector3d normal = (points[pick(random)] - a).cross(points[pick(random)] - a);
+    if (normal.norm() < 1e-4) continue;  // the three (nearly) on one line: 1 cm^2 of area at least
+    const Eigen::Vector3d n = normal.normalized();
+    std::size_t count = 0;
+    for (const auto& p : points) count += std::abs(n.dot(p - a)) < inlier_m ? 1 : 0;
+    if (count > best_count) {
+      best_count = count;
+      best = {n, a};
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
+                                 const std::vector<FeatureFrame>& frames, const WandDefinition& wand,
+                                 bool unscaled, const WandFloorOptions& options) {
+  WandFloorResult result;
+  const std::size_t markers = wand.marker_count();
+  if (markers < 2) {
+    result.error = "the wand on the floor needs two or more markers (its direction sets x" +
+                   std::string(unscaled ? ", its length the scale" : "") + "); --wand gives " +
+                   std::to_string(markers);
+    return result;
+  }
+  std::map<std::string, std::vector<FeatureFrame>> by_camera;
+  for (const auto& frame : frames) by_camera[frame.camera_id].push_back(frame);
+  std::vector<TrackView> views;
+  Eigen::Vector3d camera_mean = Eigen::Vector3d::Zero();
+  int posed = 0;
+  for (const auto& camera : calibration.cameras) {
+    if (!camera.T_world_cam) continue;
+    camera_mean += camera.T_world_cam->t;
+    ++posed;
+    const auto found = by_camera.find(camera.id);
+    if (found == by_camera.end()) continue;
+    TrackView view{camera.model(),
+                   extract_wand_track(camera.id, found->second, camera.intrinsics, wand, options.identify)};
+    result.camera_frames.emplace_back(camera.id, static_cast<int>(view.track.frames.size()));
+    if (view.track.frames.size() >= 2) views.push_back(std::move(view));
+  }
+  std::string per_camera;
+  for (const auto& [id, count] : result.camera_frames)
+    per_camera += (per_camera.empty() ? "" : ", ") + id + " " + std::to_string(count);
+  if (per_camera.empty()) per_camera = "no calibrated camera has frames";
+  std::vector<FloorInstant> instants;
+  if (views.size() >= 2) instants = triangulate_wand_instants(views, wand, options);
+
+  // Scale: the wand's known length against its measured one (an unscaled calibration); metric
+  // calibrations only check it. Instants whose length is off are mismatches: dropped.
+  std::vector<double> lengths;
+  for (const auto& instant : instants)
+    lengths.push_back((instant.markers.back() - instant.markers.front()).norm());
+  const double measured = median(lengths);
+  const double scale = unscaled && measured > 0 ? wand.length() / measured : 1.0;
+  std::erase_if(instants, [&](const FloorInstant& instant) {
+    const double length = (instant.markers.back() - instant.markers.front()).norm();
+    return std::abs(length / measured - 1) > options.length_tolerance;
+  });
+  result.instants = static_cast<int>(instants.size());
+  if (result.instants < options.min_instants) {
+    result.error = "too few wand instants on the floor: " + std::to_string(result.instants) +
+                   " triangulated from >= 2 cameras (need " + std::to_string(options.min_instants) +
+                   "); identified wand frames per camera: " + per_camera;
+    return result;
+  }
+  result.scale = scale;
+  result.scaled_by_wand = unscaled;
+  result.median_length_m = measured * scale;
+  for (auto& instant : instants)
+    for (auto& p : instant.markers) p *= scale;
+  camera_mean *= scale / std::max(1, posed);
+  if (wand.ends_indistinguishable())  // keep the end order continuous in time
+    for (std::size_t i = 1; i < instants.size(); ++i) {
+      auto& now = instants[i].markers;
+      const auto& before = instants[i - 1].markers;
+      if ((now.front() - before.back()).norm() + (now.back() - before.front()).norm() <
+          (now.front() - before.front()).norm() + (now.back() - before.back()).norm())
+        std::reverse(now.begin(), now.end());
+    }
+
+  // Rests: every marker slower than rest_speed over +-0.1 s, for at least min_rest_s.
+  const double window_s = 0.1;
+  const auto seconds = [&](std::size_t i) {
+    return static_cast<double>(instants[i].t_ns - instants[0].t_ns) * 1e-9;
+  };
+  std::vector<bool> resting(instants.size(), false);
+  for (std::size_t i = 0, lo = 0, hi = 0; i < instants.size(); ++i) {
+    while (seconds(lo) < seconds(i) - window_s) ++lo;
+    while (hi + 1 < instants.size() && seconds(hi) < seconds(i) + window_s) ++hi;
+    const double dt = seconds(hi) - seconds(lo);
+    if (dt < window_s || dt > 4 * window_s) continue;  // too short to tell, or across a gap
+    double speed = 0;
+    for (std::size_t m = 0; m < markers; ++m)
+      speed = std::max(speed, (instants[hi].markers[m] - instants[lo].markers[m]).norm() / dt);
+    resting[i] = speed < options.rest_speed_m_s;
+  }
+  std::vector<std::pair<std::size_t, std::size_t>> rests;  // [first, last] instants
+  for (std::size_t i = 0; i < instants.size();) {
+    if (!resting[i]) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j + 1 < instants.size() && resting[j + 1] && seconds(j + 1) - seconds(j) < 2 * window_s) ++j;
+    if (seconds(j) - seconds(i) >= options.min_rest_s) rests.emplace_back(i, j);
+    i = j + 1;
+  }
+  if (rests.empty()) {
+    result.error = "the wand never rested on the floor for " + std::to_string(options.min_rest_s) + " s (" +
+                   std::to_string(result.instants) +
+                   " instants): lay it still where the origin should be, then at other places";
+    return result;
+  }
+
+  // The plane: RANSAC over every marker position (lifted or carried wands are outliers), then
+  // least squares over the inliers, twice.
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& instant : instants)
+    points.insert(points.end(), instant.markers.begin(), instant.markers.end());
+  auto [normal, on_plane] = ransac_plane(points, options.inlier_m, options.ransac_iterations);
+  Eigen::Vector3d centroid = on_plane;
+  std::vector<Eigen::Vector3d> inliers;
+  for (int pass = 0; pass < 2; ++pass) {
+    inliers.clear();
+    for (const auto& p : points)
+      if (std::abs(normal.dot(p - centroid)) < options.inlier_m) inliers.push_back(p);
+    if (inliers.size() < 3) break;
+    double flatness = 0;
+    fit_plane(inliers, centroid, normal, flatness);
+  }
+  if (normal.dot(camera_mean - centroid) < 0) normal = -normal;
+  const auto distance = [&](const Eigen::Vector3d& p) { return normal.dot(p - centroid); };
+  for (const auto& instant : instants) {
+    bool all = true;
+    for (const auto& p : instant.markers) all = all && std::abs(distance(p)) < options.inlier_m;
+    result.floor_instants += all ? 1 : 0;
+  }
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const auto& p : inliers) scatter += (p - centroid) * (p - centroid).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter / std::max<double>(1, inliers.size()));
+  result.spread_m[0] = std::sqrt(std::max(0.0, eigen.eigenvalues()(2)));
+  result.spread_m[1] = std::sqrt(std::max(0.0, eigen.eigenvalues()(1)));
+  result.tilt_deg = std::acos(std::clamp(normal.z(), -1.0, 1.0)) * 180 / M_PI;
+
+  // RMS over the floor points and every resting marker: a rest off the floor counts too.
+  double squared = 0;
+  std::size_t count = 0;
+  const auto add = [&](const Eigen::Vector3d& p) {
+    const double d = distance(p);
+    squared += d * d;
+    ++count;
+    result.max_distance_mm = std::max(result.max_distance_mm, std::abs(d) * 1e3);
+  };
+  for (const auto& p : inliers) add(p);
+  for (const auto& [first, last] : rests)
+    for (std::size_t i = first; i <= last; ++i)
+      for (const auto& p : instants[i].markers)
+        if (std::abs(distance(p)) >= options.inlier_m) add(p);
+  result.plane_rms_mm = std::sqrt(squared / static_cast<double>(std::max<std::size_t>(1, count))) * 1e3;
+
+  std::vector<std::vector<Eigen::Vector3d>> rest_means;
+  for (const auto& [first, last] : rests) {
+    std::vector<Eigen::Vector3d> mean(markers, Eigen::Vector3d::Zero());
+    for (std::size_t i = first; i <= last; ++i)
+      for (std::size_t m = 0; m < markers; ++m)
+        mean[m] += instants[i].markers[m] / static_cast<double>(last - first + 1);
+    rest_means.push_back(std::move(mean));
+  }
+  auto& origin_rest = rest_means.front();
+  if (wand.ends_indistinguishable()) {
+    // No image tells the ends apart: the end nearer the middle of the room is the first.
+    const Eigen::Vector3d middle = camera_mean - distance(camera_mean) * normal;
+    if ((origin_rest.back() - middle).norm() < (origin_rest.front() - middle).norm())
+      std::reverse(origin_rest.begin(), origin_rest.end());
+  }
+  const Eigen::Vector3d origin =
+      origin_rest.front() - (distance(origin_rest.front()) + options.floor_offset_m) * normal;
+  const RigidTransform T_metric = frame_from_axes(origin, origin_rest.back() - origin_rest.front(), normal);
+  RigidTransform T_new_old = T_metric;
+  T_new_old.t /= scale;  // p_new = scale * T_new_old(p_old)
+  result.T_new_old = T_new_old;
+  for (std::size_t r = 0; r < rests.size(); ++r) {
+    WandPlacement placement;
+    placement.start_s = seconds(rests[r].first);
+    placement.end_s = seconds(rests[r].second);
+    placement.instants = static_cast<int>(rests[r].second - rests[r].first + 1);
+    for (const auto& p : rest_means[r]) {
+      placement.markers.push_back(T_metric.apply(p));
+      placement.height_mm += distance(p) * 1e3 / static_cast<double>(markers);
+    }
+    result.placements.push_back(std::move(placement));
+  }
+
+  std::ostringstream why;
+  why.precision(3);
+  if (result.spread_m[1] < options.spread_error_m) {
+    why << "the wand's positions on the floor are (nearly) on one line: they spread " << result.spread_m[0]
+        << " m along it but " << result.spread_m[1] << " m across (SD; need " << options.spread_error_m
+        << " m, better " << options.spread_warning_m << " m): lay the wand at places around the room";
+    result.error = why.str();
+    result.T_new_old.reset();
+    return result;
+  }
+  for (std::size_t r = 0; r < result.placements.size(); ++r) {
+    const double height_mm = result.placements[r].height_mm;
+    if (std::abs(height_mm) <= options.inlier_m * 1e3) continue;
+    const bool refused = std::abs(height_mm) > options.off_plane_error_m * 1e3;
+    why << "wand placement " << r + 1 << " (at " << result.placements[r].start_s << " s) is " << height_mm
+        << " mm off the floor plane through the other positions";
+    if (refused) {
+      why << " (limit " << options.off_plane_error_m * 1e3 << " mm): was the wand on the floor?";
+      result.error = why.str();
+      result.T_new_old.reset();
+      return result;
+    }
+    why << ": left out of the fit";
+    result.warnings.push_back(why.str());
+    why.str("");
+  }
+  if (result.spread_m[1] < options.spread_warning_m) {
+    why << "the positions are nearly on one line (spread " << result.spread_m[0] << " m x "
+        << result.spread_m[1] << " m, SD): the floor's tilt is poorly defined; lay the wand further apart";
+    result.warnings.push_back(why.str());
+    why.str("");
+  }
+  if (result.plane_rms_mm > options.rms_warning_m * 1e3) {
+    why << "plane RMS " << result.plane_rms_mm << " mm (max " << result.max_distance_mm << " mm) exceeds "
+        << options.rms_warning_m * 1e3
+        << " mm: the wand was not flat on the floor everywhere, or the floor is uneven";
+    result.warnings.push_back(why.str());
+    why.str("");
+  }
+  if (!unscaled && std::abs(result.median_length_m / wand.length() - 1) > 0.01) {
+    why << "the wand measures " << result.median_length_m << " m end to end, --wand says " << wand.length()
+        << " m: check --wand";
+    result.warnings.push_back(why.str());
+  }
+  return result;
+}
+
+std::string wand_floor_summary(const WandFloorResult& result) {
+  std::ostringstream out;
+  char line[512];
+  std::string per_camera;
+  for (const auto& [id, count] : result.camera_frames)
+    per_camera += (per_camera.empty() ? "" : ", ") + id + " " + std::to_string(count);
+  std::snprintf(line, sizeof(line),
+                "world frame from the wand on the floor: %zu placements, %d of %d wand instants on the plane "
+                "(wand frames per camera: %s)\n",
+                result.placements.size(), result.floor_instants, result.instants, per_camera.c_str());
+  out << line;
+  std::snprintf(
+      line, sizeof(line),
+      "plane RMS %.3f mm, max distance %.3f mm; spread %.2f m x %.2f m (SD); old z tilted by %.3f deg\n",
+      result.plane_rms_mm, result.max_distance_mm, result.spread_m[0], result.spread_m[1], result.tilt_deg);
+  out << line;
+  if (result.scaled_by_wand)
+    std::snprintf(line, sizeof(line), "metric scale set from the wand's length: %.6f m per unit\n",
+                  result.scale);
+  else
+    std::snprintf(line, sizeof(line), "wand length measured %.5f m (median)\n", result.median_length_m);
+  out << line;
+  for (std::size_t r = 0; r < result.placements.size(); ++r) {
+    const auto& p = result.placements[r];
+    std::snprintf(
+        line, sizeof(line),
+        "  placement %zu: %.2f-%.2f s, %d instants, %.3f mm off the plane, first marker at [%.4f, %.4f, "
+        "%.4f] m, last at [%.4f, %.4f, %.4f] m\n",
+        r + 1, p.start_s, p.end_s, p.instants, p.height_mm, p.markers.front().x(), p.markers.front().y(),
+        p.markers.front().z(), p.markers.back().x(), p.markers.back().y(), p.markers.back().z());
+    out << line;
+  }
+  for (const auto& warning : result.warnings) out << "warning: " << warning << "\n";
+  if (!result.error.empty()) out << "error: " << result.error << "\n";
+  return out.str();
 }
 
 }  // namespace panoptes::calib

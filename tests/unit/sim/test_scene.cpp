@@ -245,6 +245,44 @@ bodies:
   EXPECT_LT((markers[4].p - bodies[1].T_world_body.apply(definitions[1].markers[0])).norm(), 1e-12);
 }
 
+TEST(Scene, WaypointRotationsHoldAndSlerpBetweenOrientations) {
+  // A wand laid down along x, then turned a quarter turn about z over 2 s and laid down again.
+  const Scene scene = Scene::from_yaml_string(kOneCamera + R"(
+bodies:
+  - name: wand
+    markers: [[0.5, 0, 0]]
+    path: {type: static, position: [0, 0, 0]}
+    rotation: {type: waypoints, q: [[0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0.70710678118654752, 0.70710678118654752]], times: [0, 1, 3]}
+)");
+  const auto q_at = [&](double t_s) { return scene.bodies_at(seconds_to_ns(t_s))[0].T_world_body.q; };
+  const auto about_z = [](double angle) {
+    return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()));
+  };
+  EXPECT_NEAR(q_at(-1.0).angularDistance(about_z(0)), 0.0, 1e-12);  // first held before times[0]
+  EXPECT_NEAR(q_at(0.5).angularDistance(about_z(0)), 0.0, 1e-12);   // at rest between equal orientations
+  EXPECT_NEAR(q_at(2.0).angularDistance(about_z(std::numbers::pi / 4)), 0.0, 1e-12);  // halfway: slerp
+  EXPECT_NEAR(q_at(9.0).angularDistance(about_z(std::numbers::pi / 2)), 0.0, 1e-12);  // last held
+  EXPECT_LT((scene.markers_at(seconds_to_ns(3.0))[0].p - Eigen::Vector3d(0, 0.5, 0)).norm(), 1e-12);
+
+  const ConfigError unordered = load_error(kOneCamera + R"(
+bodies:
+  - name: b
+    markers: [[0, 0, 0]]
+    path: {type: static, position: [0, 0, 1]}
+    rotation: {type: waypoints, q: [[0, 0, 0, 1], [0, 0, 1, 0]], times: [1, 1]}
+)");
+  EXPECT_EQ(unordered.key(), "bodies[0].rotation.times");
+  EXPECT_EQ(load_error(kOneCamera + R"(
+bodies:
+  - name: b
+    markers: [[0, 0, 0]]
+    path: {type: static, position: [0, 0, 1]}
+    rotation: {type: waypoints, q: [[0, 0, 0, 0]], times: [0]}
+)")
+                .key(),
+            "bodies[0].rotation.q");
+}
+
 TEST(Scene, CameraDefaultsApplyUnlessACameraOverridesThem) {
   const Scene scene = Scene::from_yaml_string(R"(
 seed: 5
