@@ -67,6 +67,7 @@ struct Options {
   double skew_drift_ppm = 0;
   double inject_loss = 0;       // testing aid: fraction of feature frames not sent
   double inject_jitter_ms = 0;  // testing aid: frames sent after a uniform delay in [0, 2·jitter]
+  bool latency_probe = false;   // benchmark aid: a LatencyProbe after each FeatureFrame
 };
 
 // Parses --clock-skew "<offset_ms>,<drift_ppm>"; throws CLI::ValidationError naming the option.
@@ -367,6 +368,36 @@ std::string clock_sync_line(const panoptes::dds::TimeSyncClientStatus& status, c
   return line;
 }
 
+// --latency-probe (tests/bench/bench_latency.cpp): right after each FeatureFrame, a LatencyProbe of
+// the same serialized size, which estimator_node --latency-probe echoes at once. The bench so
+// measures the raw DDS hops through the pipeline's own processes, under the same load, beside the
+// pipeline (docs/protocol.md, "Latency probes").
+class LatencyProbeSender {
+ public:
+  explicit LatencyProbeSender(panoptes::dds::Bus& bus)
+      : writer_(bus.make_writer<panoptes::msg::LatencyProbe>()) {}
+
+  // `frame` was written just now; `now_ns` is on the common time base.
+  void send(const panoptes::msg::FeatureFrame& frame, TimeNs now_ns) {
+    probe_.camera_id(frame.camera_id());
+    probe_.frame(frame.frame());
+    probe_.arrival_ns(frame.arrival_ns());
+    probe_.processing_ns(frame.processing_ns());
+    probe_.feature_publish_ns(frame.publish_ns());
+    probe_.padding().clear();
+    // The padding is last: each octet adds exactly one byte.
+    const std::size_t size = panoptes::msg::FeatureFrame::getCdrSerializedSize(frame);
+    const std::size_t bare = panoptes::msg::LatencyProbe::getCdrSerializedSize(probe_);
+    probe_.padding().resize(size > bare ? size - bare : 0);
+    probe_.publish_ns(now_ns);
+    writer_->write(probe_);
+  }
+
+ private:
+  std::unique_ptr<panoptes::dds::Writer<panoptes::msg::LatencyProbe>> writer_;
+  panoptes::msg::LatencyProbe probe_;  // reused: no allocation per frame once the padding has grown
+};
+
 // Publishes feature frames with every stamp moved from the node's clock to the common time base.
 // Until the clock is first synchronised, frames are held, at most until `hold_until_wall_ns`; if
 // the time service has not answered by then they go out with the node's own stamps (counted as
@@ -438,11 +469,14 @@ class FeaturePublisher {
     random_.seed(seed);
   }
 
+  // --latency-probe: `probe` sends a probe after each frame written.
+  void enable_latency_probe(LatencyProbeSender* probe) { probe_ = probe; }
+
   // Sends delayed frames whose time has come.
   void send_due() {
     const TimeNs now = panoptes::wall_now_ns();
     while (!delayed_.empty() && delayed_.begin()->first <= now) {
-      writer_.write(delayed_.begin()->second);
+      write(delayed_.begin()->second);
       delayed_.erase(delayed_.begin());
     }
   }
@@ -460,12 +494,17 @@ class FeaturePublisher {
       return;
     }
     if (jitter_ns_ <= 0) {
-      writer_.write(message);
+      write(message);
       return;
     }
     const auto delay = std::uniform_int_distribution<TimeNs>(0, 2 * jitter_ns_)(random_);
     delayed_.emplace(panoptes::wall_now_ns() + delay, std::move(message));
     send_due();
+  }
+
+  void write(const panoptes::msg::FeatureFrame& message) {
+    writer_.write(message);
+    if (probe_ != nullptr) probe_->send(message, to_common(clock_.now()));
   }
 
   bool holding() const {
@@ -487,6 +526,7 @@ class FeaturePublisher {
   std::mt19937_64 random_;
   std::multimap<TimeNs, panoptes::msg::FeatureFrame> delayed_;
   std::uint64_t injected_losses_ = 0;
+  LatencyProbeSender* probe_ = nullptr;
 };
 
 int run_live(const Options& options, cam::FrameSource& source, cam::Detector& detector,
@@ -594,6 +634,12 @@ int run_live(const Options& options, cam::FrameSource& source, cam::Detector& de
                             std::hash<std::string>{}(camera_id));
     log("testing aid: dropping " + std::to_string(options.inject_loss) + " of the feature frames, delaying " +
         "the rest by 0.." + std::to_string(2 * options.inject_jitter_ms) + " ms");
+  }
+  std::optional<LatencyProbeSender> latency_probe;
+  if (options.latency_probe) {
+    latency_probe.emplace(bus);
+    publisher.enable_latency_probe(&*latency_probe);
+    log("benchmark aid: a latency probe follows each feature frame (rt/panoptes/latency_probe/request)");
   }
   bool logged_synchronised = false;
 
@@ -797,6 +843,10 @@ int main(int argc, char** argv) {
   app.add_option("--inject-jitter-ms", options.inject_jitter_ms,
                  "testing aid: send each feature frame after a random delay, uniform in [0, 2 x this] ms")
       ->check(CLI::Range(0.0, 1000.0));
+  app.add_flag(
+      "--latency-probe", options.latency_probe,
+      "benchmark aid: after each feature frame, write a probe of the same size on "
+      "rt/panoptes/latency_probe/request for estimator_node --latency-probe to echo (bench_latency)");
   app.add_flag("--quiet", options.quiet, "less output");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv, [&] {
         if (options.no_dds && options.out_features.empty())

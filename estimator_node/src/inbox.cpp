@@ -51,6 +51,11 @@ std::vector<FeatureFrame> FrameInbox::pop_due(TimeNs now_ns) {
   return due;
 }
 
+bool FrameInbox::has_due(TimeNs now_ns) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return !heap_.empty() && heap_.front().stamp_ns <= now_ns - window_ns_;
+}
+
 std::vector<FeatureFrame> FrameInbox::drain() {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<FeatureFrame> all = std::move(heap_);

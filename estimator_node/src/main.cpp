@@ -4,6 +4,7 @@
 //            predictions and estimator_status, and serves rt/panoptes/time_sync
 //   offline: --no-dds --in-features <files...> --out-tracks <file>   (architecture.md, Contracts)
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -62,6 +63,7 @@ struct Options {
   std::size_t inbox_capacity = 4096;
   double prediction_horizon_ms = 0.0;  // body poses are published this far ahead (seed 000 Ch. 5)
   double bodies_poll_s = 1.0;          // live: how often the bodies file is checked for changes
+  bool latency_probe = false;          // live, benchmark aid: echo camera_node's latency probes
   est::TrackerOptions tracker;
   est::FrameScreenOptions screen;
 };
@@ -353,6 +355,91 @@ class FramePeriods {
   std::map<std::string, Period> periods_;
 };
 
+// --latency-probe (tests/bench/bench_latency.cpp; docs/protocol.md, "Latency probes"). Echoes each
+// LatencyProbe of camera_node --latency-probe at once, as a message of a BodyPose's serialized
+// size, and traces when each processed frame arrived and when its output was written.
+// The echo is written from the DDS listener thread that received the probe, not handed to the
+// estimator thread: that hand-over (inbox, wake-up) is part of what the benchmark measures against
+// the raw DDS floor, so the floor must not include it. Probes and feature frames reach this
+// process on the same receive thread, so the probe after a frame is echoed once that frame is in
+// the inbox, while the estimator thread works on it: both see the same contention.
+class LatencyProbeEchoer {
+ public:
+  explicit LatencyProbeEchoer(panoptes::dds::Bus& bus)
+      : echo_writer_(bus.make_writer<panoptes::msg::LatencyProbeEcho>()),
+        trace_writer_(bus.make_writer<panoptes::msg::LatencyTraces>()),
+        pose_size_(panoptes::msg::BodyPose::getCdrSerializedSize(panoptes::msg::BodyPose())),
+        probe_reader_(bus.make_reader<panoptes::msg::LatencyProbe>(
+            [this](panoptes::msg::LatencyProbe&& probe) { echo(std::move(probe)); })) {}
+
+  // Estimator thread: echoes take the size of the BodyPose last written.
+  void note_pose(const panoptes::msg::BodyPose& pose) {
+    pose_size_.store(panoptes::msg::BodyPose::getCdrSerializedSize(pose), std::memory_order_relaxed);
+  }
+
+  // When the estimator thread took a frame, had updated the tracker with it and wrote its poses.
+  struct Stamps {
+    TimeNs dequeued_ns = 0;
+    TimeNs updated_ns = 0;
+    TimeNs poses_published_ns = 0;
+    TimeNs pose_stamp_ns = 0;
+    std::uint32_t poses = 0;
+  };
+
+  // Estimator thread, once everything `frame` caused was written. Sent in batches by flush().
+  void trace(const panoptes::FeatureFrame& frame, const Stamps& stamps, TimeNs tracks_published_ns) {
+    panoptes::msg::LatencyTrace trace;
+    trace.camera_id(frame.camera_id);
+    trace.frame(frame.frame);
+    trace.stamp_ns(frame.stamp_ns);
+    trace.arrival_ns(frame.arrival_ns);
+    trace.processing_ns(frame.processing_ns);
+    trace.received_ns(frame.received_ns);
+    trace.dequeued_ns(stamps.dequeued_ns);
+    trace.updated_ns(stamps.updated_ns);
+    trace.poses_published_ns(stamps.poses_published_ns);
+    trace.pose_stamp_ns(stamps.pose_stamp_ns);
+    trace.poses(stamps.poses);
+    trace.tracks_published_ns(tracks_published_ns);
+    traces_.frames().push_back(std::move(trace));
+  }
+
+  // Estimator thread, when it has nothing more urgent to do: sends the traces every 20 ms (or all,
+  // with `force`).
+  void flush(TimeNs now_ns, bool force) {
+    if (traces_.frames().empty() || (!force && now_ns - flushed_ns_ < kFlushPeriodNs)) return;
+    trace_writer_->write(traces_);
+    traces_.frames().clear();
+    flushed_ns_ = now_ns;
+  }
+
+ private:
+  // Listener thread (one at a time: the reader's listener is serialised).
+  void echo(panoptes::msg::LatencyProbe&& probe) {
+    const TimeNs received_ns = panoptes::wall_now_ns();
+    echo_.probe(std::move(probe));
+    echo_.probe().padding().clear();
+    echo_.received_ns(received_ns);
+    echo_.padding().clear();
+    const std::size_t size = pose_size_.load(std::memory_order_relaxed);
+    const std::size_t bare = panoptes::msg::LatencyProbeEcho::getCdrSerializedSize(echo_);
+    echo_.padding().resize(size > bare ? size - bare : 0);  // last member: one byte per octet
+    echo_.publish_ns(panoptes::wall_now_ns());
+    echo_writer_->write(echo_);
+  }
+
+  static constexpr TimeNs kFlushPeriodNs = 20'000'000;
+
+  std::unique_ptr<panoptes::dds::Writer<panoptes::msg::LatencyProbeEcho>> echo_writer_;
+  std::unique_ptr<panoptes::dds::Writer<panoptes::msg::LatencyTraces>> trace_writer_;
+  std::atomic<std::size_t> pose_size_;
+  panoptes::msg::LatencyProbeEcho echo_;  // listener thread
+  panoptes::msg::LatencyTraces traces_;   // estimator thread
+  TimeNs flushed_ns_ = 0;
+  // Last: destroyed first, so no echo runs while the rest goes.
+  std::unique_ptr<panoptes::dds::Reader<panoptes::msg::LatencyProbe>> probe_reader_;
+};
+
 int run_live(const Options& options, est::Tracker& tracker, BodyFile& body_file) {
   namespace msg = panoptes::msg;
   panoptes::dds::BusOptions bus_options;
@@ -385,6 +472,11 @@ int run_live(const Options& options, est::Tracker& tracker, BodyFile& body_file)
   auto prediction_writer = bus.make_writer<msg::Predictions>();
   auto status_writer = bus.make_writer<msg::EstimatorStatus>();
   auto body_writer = bus.make_writer<msg::BodyPose>();
+  std::optional<LatencyProbeEchoer> latency_probe;
+  if (options.latency_probe) {
+    latency_probe.emplace(bus);
+    log("benchmark aid: echoing latency probes (rt/panoptes/latency_probe/...)");
+  }
 
   std::optional<panoptes::JsonlWriter> out;
   if (!options.out_tracks.empty()) out.emplace(options.out_tracks);
@@ -415,24 +507,63 @@ int run_live(const Options& options, est::Tracker& tracker, BodyFile& body_file)
     }
     prediction_writer->write(message);
   };
-  auto handle = [&](const panoptes::FeatureFrame& frame) {
+  // A frame's output in order of urgency: its poses right after the update (what applications
+  // wait for); then, once no other frame is due, its TrackFrame, the predictions for its camera's
+  // next frame, the files and the latency trace. So a frame that arrives while the previous one is
+  // being processed waits for that update only, not for its housekeeping (issue 7, bench_latency).
+  struct Processed {
+    panoptes::FeatureFrame frame;
+    std::vector<panoptes::TrackRecord> tracks;  // at its update
+    std::vector<panoptes::PoseRecord> poses;
+    LatencyProbeEchoer::Stamps stamps;  // --latency-probe
+  };
+  std::vector<Processed> processed;  // finished from the front; cleared (capacity kept) when all are
+  std::size_t finished = 0;
+  auto update = [&](panoptes::FeatureFrame&& frame) {
+    const TimeNs dequeued_ns = latency_probe ? panoptes::wall_now_ns() : 0;
     if (intake.process(frame) != est::FrameOutcome::kProcessed) return;
-    const auto tracks = tracker.current_tracks();
+    const TimeNs updated_ns = latency_probe ? panoptes::wall_now_ns() : 0;
+    auto poses = tracker.current_poses(horizon);
+    // Stamped before writing, like every publish_ns: delivery may complete within write().
+    const TimeNs poses_published_ns = latency_probe && !poses.empty() ? panoptes::wall_now_ns() : 0;
+    for (const auto& pose : poses) {
+      const msg::BodyPose pose_message = panoptes::dds::to_message(pose);
+      body_writer->write(pose_message);
+      if (latency_probe) latency_probe->note_pose(pose_message);
+    }
+    const LatencyProbeEchoer::Stamps stamps{dequeued_ns, updated_ns, poses_published_ns,
+                                            poses.empty() ? 0 : poses.front().stamp_ns,
+                                            static_cast<std::uint32_t>(poses.size())};
+    processed.push_back({std::move(frame), tracker.current_tracks(), std::move(poses), stamps});
+  };
+  auto finish = [&](Processed& done) {
     msg::TrackFrame message;
-    message.stamp_ns(frame.stamp_ns);
-    message.source_camera(frame.camera_id);
-    message.source_frame(frame.frame);
-    for (const auto& track : tracks) message.tracks().push_back(panoptes::dds::to_message(track));
+    message.stamp_ns(done.frame.stamp_ns);
+    message.source_camera(done.frame.camera_id);
+    message.source_frame(done.frame.frame);
+    for (const auto& track : done.tracks) message.tracks().push_back(panoptes::dds::to_message(track));
     message.publish_ns(panoptes::wall_now_ns());
     track_writer->write(message);
+    publish_predictions(done.frame);
     if (out) {
-      for (const auto& track : tracks) out->write(track);
+      for (const auto& track : done.tracks) out->write(track);
     }
-    for (const auto& pose : tracker.current_poses(horizon)) {
-      body_writer->write(panoptes::dds::to_message(pose));
-      if (out_poses) out_poses->write(pose);
+    if (out_poses) {
+      for (const auto& pose : done.poses) out_poses->write(pose);
     }
-    publish_predictions(frame);
+    if (latency_probe) {
+      latency_probe->trace(done.frame, done.stamps, message.publish_ns());
+    }
+  };
+  // Finishes processed frames while no other frame is due (all of them with `force`). True when
+  // all are finished.
+  auto finish_processed = [&](bool force) {
+    while (finished < processed.size() && (force || !inbox.has_due(panoptes::wall_now_ns())))
+      finish(processed[finished++]);
+    if (finished < processed.size()) return false;
+    processed.clear();
+    finished = 0;
+    return true;
   };
 
   const TimeNs start = panoptes::wall_now_ns();
@@ -451,7 +582,9 @@ int run_live(const Options& options, est::Tracker& tracker, BodyFile& body_file)
       announced.clear();
     }
     const TimeNs now = panoptes::wall_now_ns();
-    for (const auto& frame : inbox.pop_due(now)) handle(frame);
+    for (auto& frame : inbox.pop_due(now)) update(std::move(frame));
+    if (!finish_processed(false)) continue;  // a frame is due: its update first
+    if (latency_probe) latency_probe->flush(now, false);
     if (now >= next_body_poll) {
       next_body_poll = now + panoptes::seconds_to_ns(options.bodies_poll_s);
       body_file.reload_if_changed(tracker);
@@ -481,7 +614,9 @@ int run_live(const Options& options, est::Tracker& tracker, BodyFile& body_file)
     if (options.duration_s > 0 && now - start >= panoptes::seconds_to_ns(options.duration_s)) break;
     inbox.wait(panoptes::wall_now_ns(), std::chrono::milliseconds(1));  // wakes as frames arrive (issue 7)
   }
-  for (const auto& frame : inbox.drain()) handle(frame);
+  for (auto& frame : inbox.drain()) update(std::move(frame));
+  finish_processed(true);
+  if (latency_probe) latency_probe->flush(panoptes::wall_now_ns(), true);
   intake.print_summary(inbox.drops(), 0);
   return panoptes::kExitOk;
 }
@@ -524,6 +659,9 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--status-period", options.status_period_s, "live: seconds between progress lines")
       ->check(CLI::PositiveNumber);
+  app.add_flag("--latency-probe", options.latency_probe,
+               "live, benchmark aid: echo camera_node --latency-probe probes at once and trace when each "
+               "frame's output is written (rt/panoptes/latency_probe/..., bench_latency)");
   app.add_flag("--quiet", options.quiet, "no progress output");
   app.add_option("--process-noise", options.tracker.process_noise,
                  "σ² of white acceleration, m²/s³ (seed 003 A.48)")

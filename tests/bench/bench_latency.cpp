@@ -1,37 +1,39 @@
 // SPDX-License-Identifier: Apache-2.0
 // bench_latency: end-to-end latency of the live pipeline on this machine (loopback profile), side by
-// side with the DDS floor, as JSON (docs/benchmarks.md, "Distributed deployment").
+// side with the raw DDS floor through the same processes, as JSON (docs/benchmarks.md, "End-to-end
+// latency").
 //
 //   pipeline: simulated cameras -> camera_node (render handed over, detection, publish)
-//             -> estimator_node (tracker) -> this process, subscribed to rt/panoptes/tracks.
-//   (i)  per TrackFrame: its source frame's arrival at camera_node (FeatureFrame.arrival_ns) to the
-//        TrackFrame's arrival here; breakdown from the stamps both messages carry and the time
-//        this process received the same FeatureFrame (a stand-in for the estimator's reception,
-//        same host, same hop).
-//   (ii) floor: every FeatureFrame received here is sent again at once, as is, on another DDS
-//        domain to an echo process (this program, --role echo), which answers with a TrackFrame
-//        of the pipeline's size; two raw DDS hops with the same payloads between two processes,
-//        plus that frame's detection time.
-//   ratio_vs_dds_floor_p99 = p99(i) / p99(ii).
-// All stamps are wall-clock ns on one host (camera nodes synchronise to the estimator's clock, the
-// same clock here, so the correction is microseconds).
-// The output is TrackFrame for now; rigid-body BodyPose (rt/panoptes/bodies) takes the same path.
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
+//             -> estimator_node --bodies (tracker, rigid body) -> this process, subscribed to
+//             rt/panoptes/bodies.
+//   (i)  per camera frame: its arrival at camera_node (FeatureFrame.arrival_ns) to the arrival here
+//        of the BodyPose it produced. estimator_node --latency-probe traces each frame (when it
+//        arrived, when its poses were written, with which stamp), which ties poses to frames.
+//   (ii) floor: camera_node --latency-probe writes, right after each FeatureFrame, a probe of the
+//        same serialized size; estimator_node --latency-probe echoes it at once from its DDS
+//        listener as a message of a BodyPose's size; this process receives the echo. Two raw DDS
+//        hops with the pipeline's payloads between the pipeline's processes, at the same time as
+//        the pipeline, plus that frame's detection time.
+//   ratio_vs_dds_floor_p99 = p99(i) / p99(ii). TrackFrame (rt/panoptes/tracks) is a secondary row.
+// Every process runs in a DDS domain of the run's own (--domain), so other pipelines on the host
+// cannot mix in. All stamps are wall-clock ns on one host (camera nodes synchronise to the estimator's clock,
+// the same clock here, so the correction is microseconds).
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -46,22 +48,71 @@
 #include "panoptes/time.h"
 #include "panoptes_msgs/panoptes.h"
 
-extern char** environ;
-
 namespace {
 
 namespace fs = std::filesystem;
 using panoptes::TimeNs;
 namespace msg = panoptes::msg;
 
-constexpr int kFloorDomain = 77;
+// CPU time used so far by the whole host (busy, and stolen by the hypervisor) and by this process
+// and its children (the pipeline), from /proc: how loaded the machine was while measuring.
+struct CpuSample {
+  TimeNs at_ns = 0;
+  double host_busy_s = 0;
+  double host_steal_s = 0;
+  double pipeline_s = 0;
+};
+
+CpuSample sample_cpu() {
+  CpuSample sample;
+  sample.at_ns = panoptes::wall_now_ns();
+  const auto tick = static_cast<double>(sysconf(_SC_CLK_TCK));
+  std::ifstream host("/proc/stat");
+  std::string cpu;
+  unsigned long long user = 0, nice = 0, system = 0, idle = 0, iowait = 0, irq = 0, softirq = 0, steal = 0;
+  host >> cpu >> user >> nice >> system >> idle >> iowait >> irq >> softirq >> steal;
+  sample.host_busy_s = static_cast<double>(user + nice + system + irq + softirq) / tick;
+  sample.host_steal_s = static_cast<double>(steal) / tick;
+  const long self = getpid();
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator("/proc", error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry.path() / "stat");
+    std::string line;
+    std::getline(stat, line);
+    const auto paren = line.rfind(')');
+    if (paren == std::string::npos) continue;
+    std::istringstream fields(line.substr(paren + 1));
+    std::string state;
+    long ppid = 0;
+    fields >> state >> ppid;
+    if (std::stol(name) != self && ppid != self) continue;
+    std::string skip;
+    for (int i = 0; i < 9; ++i) fields >> skip;  // pgrp .. cmajflt
+    unsigned long long utime = 0, stime = 0;
+    fields >> utime >> stime;
+    sample.pipeline_s += static_cast<double>(utime + stime) / tick;
+  }
+  return sample;
+}
+
+nlohmann::json cpu_json(const CpuSample& from, const CpuSample& to) {
+  const double seconds = panoptes::ns_to_seconds(to.at_ns - from.at_ns);
+  if (seconds <= 0) return {};
+  const double busy = (to.host_busy_s - from.host_busy_s) / seconds;
+  const double pipeline = (to.pipeline_s - from.pipeline_s) / seconds;
+  return {{"cores", std::thread::hardware_concurrency()},
+          {"host_busy_cores", busy},
+          {"pipeline_cores", pipeline},
+          {"other_processes_cores", std::max(0.0, busy - pipeline)},
+          {"steal_cores", (to.host_steal_s - from.host_steal_s) / seconds}};
+}
 
 fs::path executable_path() {
   std::error_code error;
   return fs::read_symlink("/proc/self/exe", error);
 }
-
-using Child = panoptes::ChildProcess;
 
 struct Stats {
   std::vector<double> ms;
@@ -74,180 +125,289 @@ struct Stats {
   nlohmann::json json() { return {{"p50", at(0.5)}, {"p99", at(0.99)}, {"max", at(1.0)}, {"n", ms.size()}}; }
 };
 
-struct FeatureSeen {
-  TimeNs arrival_ns = 0;     // at camera_node
-  TimeNs processing_ns = 0;  // detection
-  TimeNs publish_ns = 0;     // written by camera_node
-  TimeNs received_ns = 0;    // here
-  TimeNs floor_sent_ns = 0;  // re-sent on the floor domain
+// What the listeners record, untouched; joined after the run so that the listeners stay short.
+struct Received {
+  TimeNs at_ns = 0;  // here
+};
+struct EchoReceived : Received {
+  msg::LatencyProbeEcho echo;
+};
+struct TraceReceived : Received {
+  msg::LatencyTrace trace;
+};
+struct PoseReceived : Received {
+  TimeNs stamp_ns = 0;
+};
+struct TracksReceived : Received {
+  std::string camera_id;
+  long long frame = 0;
+  TimeNs publish_ns = 0;
+};
+
+struct Recorder {
+  std::mutex mutex;
+  std::vector<EchoReceived> echoes;
+  std::vector<TraceReceived> traces;
+  std::vector<PoseReceived> poses;
+  std::vector<TracksReceived> tracks;
 };
 
 using FrameKey = std::pair<std::string, long long>;
 
-int run_echo(const std::string& profile, double duration_s, int tracks) {
-  panoptes::dds::BusOptions options;
-  options.profile_file = profile;
-  options.domain_id = kFloorDomain;
-  options.participant_name = "bench_latency_echo";
-  panoptes::dds::Bus bus(options);
-  auto writer = bus.make_writer<msg::TrackFrame>();
-  std::mutex mutex;
-  auto reader = bus.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&& frame) {
-    msg::TrackFrame reply;
-    reply.stamp_ns(frame.stamp_ns());
-    reply.source_camera(frame.camera_id());
-    reply.source_frame(frame.frame());
-    reply.tracks().resize(static_cast<std::size_t>(tracks));
-    reply.publish_ns(panoptes::wall_now_ns());
-    std::lock_guard lock(mutex);
-    writer->write(reply);
+struct Results {
+  Stats end_to_end, detection, camera_queue, transport_in, estimator, transport_out;
+  Stats estimator_inbox, estimator_update, estimator_publish;  // the estimator stage, split
+  Stats tracks_end_to_end, tracks_transport_out;
+  Stats floor_total, floor_hops, floor_hop_in, floor_hop_out;
+  std::size_t frames_traced = 0;        // in the window
+  std::size_t frames_with_pose = 0;     // of those, frames that updated the body
+  std::size_t poses_unmatched = 0;      // frames whose pose did not arrive
+  std::vector<nlohmann::json> samples;  // per frame, every stamp (--samples)
+};
+
+Results join(const Recorder& recorded, TimeNs from_ns, TimeNs to_ns) {
+  Results results;
+  const auto measured = [&](TimeNs arrival_ns) { return arrival_ns >= from_ns && arrival_ns <= to_ns; };
+
+  std::map<FrameKey, const msg::LatencyProbe*> probes;
+  for (const EchoReceived& received : recorded.echoes) {
+    const msg::LatencyProbe& probe = received.echo.probe();
+    probes[{probe.camera_id(), probe.frame()}] = &probe;
+    if (!measured(probe.arrival_ns())) continue;
+    results.floor_hops.add(received.at_ns - probe.publish_ns());
+    results.floor_total.add(received.at_ns - probe.publish_ns() + probe.processing_ns());
+    results.floor_hop_in.add(received.echo.received_ns() - probe.publish_ns());
+    results.floor_hop_out.add(received.at_ns - received.echo.publish_ns());
+  }
+
+  // A pose is tied to the frame whose trace names its stamp. A late frame, replayed, republishes
+  // the newest stamp, so one stamp can have several poses: they are taken in the order written.
+  std::map<TimeNs, std::deque<TimeNs>> pose_arrivals;
+  for (const PoseReceived& pose : recorded.poses) pose_arrivals[pose.stamp_ns].push_back(pose.at_ns);
+  std::vector<const TraceReceived*> traces;
+  for (const TraceReceived& received : recorded.traces) {
+    if (measured(received.trace.arrival_ns())) ++results.frames_traced;
+    if (received.trace.poses() > 0) traces.push_back(&received);
+  }
+  std::sort(traces.begin(), traces.end(), [](const TraceReceived* a, const TraceReceived* b) {
+    return a->trace.poses_published_ns() < b->trace.poses_published_ns();
   });
-  const TimeNs end = panoptes::wall_now_ns() + panoptes::seconds_to_ns(duration_s);
-  while (!panoptes::stop_requested() && panoptes::wall_now_ns() < end)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  return panoptes::kExitOk;
+  for (const TraceReceived* received : traces) {
+    const msg::LatencyTrace& trace = received->trace;
+    auto arrivals = pose_arrivals.find(trace.pose_stamp_ns());
+    if (arrivals == pose_arrivals.end() || arrivals->second.empty()) {
+      if (measured(trace.arrival_ns())) ++results.poses_unmatched;
+      continue;
+    }
+    const TimeNs pose_at_ns = arrivals->second.front();
+    arrivals->second.pop_front();
+    if (!measured(trace.arrival_ns())) continue;
+    ++results.frames_with_pose;
+    results.end_to_end.add(pose_at_ns - trace.arrival_ns());
+    results.detection.add(trace.processing_ns());
+    results.estimator.add(trace.poses_published_ns() - trace.received_ns());
+    results.estimator_inbox.add(trace.dequeued_ns() - trace.received_ns());
+    results.estimator_update.add(trace.updated_ns() - trace.dequeued_ns());
+    results.estimator_publish.add(trace.poses_published_ns() - trace.updated_ns());
+    results.transport_out.add(pose_at_ns - trace.poses_published_ns());
+    TimeNs feature_publish_ns = 0;
+    if (auto probe = probes.find({trace.camera_id(), trace.frame()}); probe != probes.end()) {
+      feature_publish_ns = probe->second->feature_publish_ns();
+      results.camera_queue.add(feature_publish_ns - trace.arrival_ns() - trace.processing_ns());
+      results.transport_in.add(trace.received_ns() - feature_publish_ns);
+    }
+    results.samples.push_back({{"camera", trace.camera_id()},
+                               {"frame", trace.frame()},
+                               {"stamp_ns", trace.stamp_ns()},
+                               {"arrival_ns", trace.arrival_ns()},
+                               {"processing_ns", trace.processing_ns()},
+                               {"feature_publish_ns", feature_publish_ns},
+                               {"received_ns", trace.received_ns()},
+                               {"dequeued_ns", trace.dequeued_ns()},
+                               {"updated_ns", trace.updated_ns()},
+                               {"poses_published_ns", trace.poses_published_ns()},
+                               {"pose_received_ns", pose_at_ns}});
+  }
+
+  std::map<FrameKey, const msg::LatencyTrace*> traced;
+  for (const TraceReceived& received : recorded.traces)
+    traced[{received.trace.camera_id(), received.trace.frame()}] = &received.trace;
+  for (const TracksReceived& tracks : recorded.tracks) {
+    auto trace = traced.find({tracks.camera_id, tracks.frame});
+    if (trace == traced.end() || !measured(trace->second->arrival_ns())) continue;
+    results.tracks_end_to_end.add(tracks.at_ns - trace->second->arrival_ns());
+    results.tracks_transport_out.add(tracks.at_ns - tracks.publish_ns);
+  }
+  return results;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const fs::path self = executable_path();
-  const fs::path bin_dir = self.parent_path();
+  const fs::path bin_dir = executable_path().parent_path();
   std::string scene_file = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/latency240.yaml";
   std::string profile = std::string(PANOPTES_SOURCE_DIR) + "/deploy/dds/loopback.xml";
-  std::string role = "bench";
   std::string log_dir;
+  std::string samples_file;
   double duration_s = 10;
   double warmup_s = 2;
   double latency_window_ms = 0;
-  int echo_tracks = 3;
+  int domain = 100 + static_cast<int>(getpid() % 100);
   bool json_output = false;
+  bool subscribe_tracks = true;
   CLI::App app{
-      "bench_latency: end-to-end latency camera_node -> estimator_node -> subscriber vs the DDS floor",
+      "bench_latency: end-to-end latency, simulated cameras -> camera_node -> estimator_node -> a "
+      "subscriber of the rigid body's BodyPose, against the raw DDS floor measured through the same "
+      "processes in the same run (docs/benchmarks.md). Progress on stderr, result on stdout.",
       "bench_latency"};
   app.add_flag("--json", json_output, "print the result as one JSON object");
-  app.add_option("--scene", scene_file, "simulator scene (its cameras are the camera_nodes)")
+  app.add_option("--scene", scene_file,
+                 "simulator scene: its cameras are the camera_nodes, its first body is the one measured")
+      ->check(CLI::ExistingFile)
       ->capture_default_str();
   app.add_option("--duration", duration_s, "seconds measured")
       ->check(CLI::Range(2.0, 600.0))
       ->capture_default_str();
-  app.add_option("--warmup", warmup_s, "seconds ignored after scene time 0")->capture_default_str();
+  app.add_option("--warmup", warmup_s, "seconds ignored after scene time 0 (body identification)")
+      ->check(CLI::Range(0.5, 60.0))
+      ->capture_default_str();
   app.add_option("--latency-window-ms", latency_window_ms,
                  "estimator_node --latency-window-ms (0: process frames as they arrive; the default "
                  "estimator configuration waits 20 ms to put frames of all cameras in order)")
+      ->check(CLI::Range(0.0, 1000.0))
       ->capture_default_str();
-  app.add_option("--dds-profile", profile, "Fast DDS profile for every process")->capture_default_str();
-  app.add_option("--log-dir", log_dir, "keep the child processes' logs here");
-  app.add_option("--role", role, "internal: bench | echo")->check(CLI::IsMember({"bench", "echo"}));
-  app.add_option("--echo-tracks", echo_tracks, "internal: tracks in the echo's TrackFrame");
+  app.add_flag("!--no-tracks", subscribe_tracks,
+               "do not subscribe to rt/panoptes/tracks (the secondary TrackFrame row)");
+  app.add_option("--domain", domain,
+                 "DDS domain of the run (default: 100 + pid % 100, so that other pipelines on this host do "
+                 "not mix in)")
+      ->check(CLI::Range(0, 232));
+  app.add_option("--dds-profile", profile, "Fast DDS profile for every process")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  app.add_option("--log-dir", log_dir, "keep the child processes' logs and inputs here");
+  app.add_option(
+      "--samples", samples_file,
+      "write every measured frame's stamps (camera_node, estimator_node, here) to this JSONL file");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
 
   try {
-    if (role == "echo") return run_echo(profile, duration_s, echo_tracks);
-
     const panoptes::Scene scene = panoptes::Scene::load(scene_file);
+    const auto bodies = scene.body_definitions();
+    if (bodies.empty()) {
+      std::fprintf(stderr, "bench_latency: %s has no `bodies:`; the output measured is a BodyPose\n",
+                   scene_file.c_str());
+      return panoptes::kExitBadInput;
+    }
+    const std::string body = bodies.front().name;
     const fs::path run_dir = log_dir.empty()
                                  ? fs::temp_directory_path() / ("bench-latency-" + std::to_string(getpid()))
                                  : fs::path(log_dir);
     fs::create_directories(run_dir);
     const fs::path calibration = run_dir / "calibration.yaml";
+    const fs::path bodies_file = run_dir / "bodies.yaml";
     panoptes::save_calibration(scene.calibration(), calibration);
-    const int markers = static_cast<int>(scene.marker_names().size());
+    panoptes::save_bodies(bodies, bodies_file);
 
-    std::mutex mutex;
-    std::map<FrameKey, FeatureSeen> features;
-    Stats end_to_end, detection, camera_queue, transport_in, estimator, transport_out, floor_hops,
-        floor_total;
-    std::map<FrameKey, TimeNs> pending_floor;  // detection time of frames sent on the floor domain
-    TimeNs measure_from = 0;
-    TimeNs measure_to = 0;
-
-    panoptes::dds::BusOptions floor_options;
-    floor_options.profile_file = profile;
-    floor_options.domain_id = kFloorDomain;
-    floor_options.participant_name = "bench_latency_floor";
-    panoptes::dds::Bus floor_bus(floor_options);
-    auto floor_writer = floor_bus.make_writer<msg::FeatureFrame>();
-    auto floor_reader = floor_bus.make_reader<msg::TrackFrame>([&](msg::TrackFrame&& reply) {
-      const TimeNs now = panoptes::wall_now_ns();
-      std::lock_guard lock(mutex);
-      auto it = features.find({reply.source_camera(), reply.source_frame()});
-      if (it == features.end() || it->second.floor_sent_ns == 0) return;
-      if (it->second.received_ns < measure_from || it->second.received_ns > measure_to) return;
-      floor_hops.add(now - it->second.floor_sent_ns);
-      floor_total.add(now - it->second.floor_sent_ns + it->second.processing_ns);
-    });
-
+    Recorder recorded;
     panoptes::dds::BusOptions options;
     options.profile_file = profile;
     options.participant_name = "bench_latency";
+    options.domain_id = domain;
+    setenv("PANOPTES_DOMAIN", std::to_string(domain).c_str(), 1);  // for the nodes
     panoptes::dds::Bus bus(options);
-    auto feature_reader = bus.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&& frame) {
+    // Listeners only append (timestamp first); everything is joined after the run.
+    auto echo_reader = bus.make_reader<msg::LatencyProbeEcho>([&](msg::LatencyProbeEcho&& echo) {
       const TimeNs now = panoptes::wall_now_ns();
-      {
-        std::lock_guard lock(mutex);
-        FeatureSeen& seen = features[{frame.camera_id(), frame.frame()}];
-        seen = {frame.arrival_ns(), frame.processing_ns(), frame.publish_ns(), now, panoptes::wall_now_ns()};
-        // Forget frames older than 2 s (bounded memory).
-        if (features.size() > 4096) {
-          for (auto it = features.begin(); it != features.end();) {
-            it = now - it->second.received_ns > panoptes::kNsPerSecond * 2 ? features.erase(it)
-                                                                           : std::next(it);
-          }
-        }
-      }
-      floor_writer->write(frame);
+      std::lock_guard lock(recorded.mutex);
+      recorded.echoes.push_back({{now}, std::move(echo)});
     });
-    auto track_reader = bus.make_reader<msg::TrackFrame>([&](msg::TrackFrame&& frame) {
+    auto pose_reader = bus.make_reader<msg::BodyPose>([&](msg::BodyPose&& pose) {
       const TimeNs now = panoptes::wall_now_ns();
-      std::lock_guard lock(mutex);
-      auto it = features.find({frame.source_camera(), frame.source_frame()});
-      if (it == features.end()) return;
-      const FeatureSeen& seen = it->second;
-      if (seen.received_ns < measure_from || seen.received_ns > measure_to) return;
-      end_to_end.add(now - seen.arrival_ns);
-      detection.add(seen.processing_ns);
-      camera_queue.add(seen.publish_ns - seen.arrival_ns - seen.processing_ns);
-      transport_in.add(seen.received_ns - seen.publish_ns);
-      estimator.add(frame.publish_ns() - seen.received_ns);
-      transport_out.add(now - frame.publish_ns());
+      if (pose.name() != body) return;
+      std::lock_guard lock(recorded.mutex);
+      recorded.poses.push_back({{now}, pose.stamp_ns()});
     });
+    auto trace_reader = bus.make_reader<msg::LatencyTraces>([&](msg::LatencyTraces&& traces) {
+      const TimeNs now = panoptes::wall_now_ns();
+      std::lock_guard lock(recorded.mutex);
+      for (msg::LatencyTrace& trace : traces.frames()) recorded.traces.push_back({{now}, std::move(trace)});
+    });
+    std::unique_ptr<panoptes::dds::Reader<msg::TrackFrame>> track_reader;
+    if (subscribe_tracks) {
+      track_reader = bus.make_reader<msg::TrackFrame>([&](msg::TrackFrame&& frame) {
+        const TimeNs now = panoptes::wall_now_ns();
+        std::lock_guard lock(recorded.mutex);
+        recorded.tracks.push_back({{now}, frame.source_camera(), frame.source_frame(), frame.publish_ns()});
+      });
+    }
 
     const TimeNs epoch = (panoptes::wall_now_ns() / panoptes::kNsPerSecond + 3) * panoptes::kNsPerSecond;
-    measure_from = epoch + panoptes::seconds_to_ns(warmup_s);
-    measure_to = measure_from + panoptes::seconds_to_ns(duration_s);
+    const TimeNs measure_from = epoch + panoptes::seconds_to_ns(warmup_s);
+    const TimeNs measure_to = measure_from + panoptes::seconds_to_ns(duration_s);
     const double run_s = warmup_s + duration_s + 4;
-    std::vector<std::unique_ptr<Child>> children;
-    children.push_back(std::make_unique<Child>(
-        "echo",
-        std::vector<std::string>{self.string(), "--role", "echo", "--dds-profile", profile, "--duration",
-                                 std::to_string(run_s + 2), "--echo-tracks", std::to_string(markers)},
-        run_dir / "echo.log"));
-    children.push_back(std::make_unique<Child>(
+    std::fprintf(stderr,
+                 "bench_latency: estimator_node and %zu camera_nodes (%s), body '%s', DDS domain %d; %.0f s "
+                 "warm-up, %.0f s measured; logs in %s\n",
+                 scene.cameras().size(), scene_file.c_str(), body.c_str(), domain, warmup_s, duration_s,
+                 run_dir.c_str());
+    std::vector<std::unique_ptr<panoptes::ChildProcess>> children;
+    children.push_back(std::make_unique<panoptes::ChildProcess>(
         "estimator_node",
         std::vector<std::string>{(bin_dir / "estimator_node").string(), "--calibration", calibration.string(),
-                                 "--dds-profile", profile, "--latency-window-ms",
-                                 std::to_string(latency_window_ms), "--duration", std::to_string(run_s + 2)},
+                                 "--bodies", bodies_file.string(), "--dds-profile", profile,
+                                 "--latency-window-ms", std::to_string(latency_window_ms), "--latency-probe",
+                                 "--duration", std::to_string(run_s + 2)},
         run_dir / "estimator_node.log"));
     for (const auto& camera : scene.cameras()) {
       const std::string& id = camera.calibration.id;
-      children.push_back(std::make_unique<Child>(
+      children.push_back(std::make_unique<panoptes::ChildProcess>(
           "camera_node[" + id + "]",
           std::vector<std::string>{(bin_dir / "camera_node").string(), "--source",
                                    "sim:" + scene_file + "#" + id, "--sim-epoch-ns", std::to_string(epoch),
-                                   "--dds-profile", profile, "--duration", std::to_string(run_s), "--quiet"},
+                                   "--dds-profile", profile, "--latency-probe", "--duration",
+                                   std::to_string(run_s), "--quiet"},
           run_dir / (id + ".log")));
     }
-    while (!panoptes::stop_requested() && panoptes::wall_now_ns() < measure_to + panoptes::kNsPerSecond / 2)
+    TimeNs next_progress = epoch;
+    std::optional<CpuSample> cpu_from, cpu_to;
+    while (!panoptes::stop_requested() && panoptes::wall_now_ns() < measure_to + panoptes::kNsPerSecond / 2) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      const TimeNs now = panoptes::wall_now_ns();
+      if (!cpu_from && now >= measure_from) cpu_from = sample_cpu();
+      if (!cpu_to && now >= measure_to) cpu_to = sample_cpu();
+      if (now < next_progress) continue;
+      next_progress += panoptes::kNsPerSecond;
+      std::size_t poses = 0, echoes = 0, traces = 0;
+      {
+        std::lock_guard lock(recorded.mutex);
+        poses = recorded.poses.size();
+        echoes = recorded.echoes.size();
+        traces = recorded.traces.size();
+      }
+      const char* phase = now < measure_from ? "warm-up" : now <= measure_to ? "measuring" : "draining";
+      std::fprintf(stderr, "bench_latency: t=%4.1f s %-9s poses %zu, frames traced %zu, probe echoes %zu\n",
+                   panoptes::ns_to_seconds(now - epoch), phase, poses, traces, echoes);
+    }
+    std::fprintf(stderr, "bench_latency: stopping the nodes\n");
     for (auto it = children.rbegin(); it != children.rend(); ++it) (*it)->stop();
+    track_reader.reset();
+    trace_reader.reset();
+    pose_reader.reset();
+    echo_reader.reset();
 
-    std::lock_guard lock(mutex);
+    Results r = join(recorded, measure_from, measure_to);
+    if (!samples_file.empty()) {
+      std::FILE* out = std::fopen(samples_file.c_str(), "w");
+      if (out == nullptr) throw std::runtime_error("cannot write " + samples_file);
+      for (const auto& sample : r.samples) std::fprintf(out, "%s\n", sample.dump().c_str());
+      std::fclose(out);
+    }
     double rate = 0;
     for (const auto& camera : scene.cameras()) rate = std::max(rate, camera.rate_hz);
-    const double floor_p99 = floor_total.at(0.99);
-    const double floor_p50 = floor_total.at(0.5);
+    const double floor_p99 = r.floor_total.at(0.99);
+    const double floor_p50 = r.floor_total.at(0.5);
     nlohmann::json result = {
         {"benchmark", "end-to-end latency, loopback"},
         {"cameras", scene.cameras().size()},
@@ -255,31 +415,49 @@ int main(int argc, char** argv) {
         {"scene", scene_file},
         {"duration_s", duration_s},
         {"estimator_latency_window_ms", latency_window_ms},
-        {"output", "TrackFrame (rt/panoptes/tracks)"},
-        {"track_frames_per_s", static_cast<double>(end_to_end.ms.size()) / duration_s},
-        {"end_to_end_ms", end_to_end.json()},
+        {"output", "BodyPose '" + body + "' (rt/panoptes/bodies)"},
+        {"poses_per_s", static_cast<double>(r.end_to_end.ms.size()) / duration_s},
+        {"frames_traced", r.frames_traced},
+        {"frames_with_pose", r.frames_with_pose},
+        {"poses_unmatched", r.poses_unmatched},
+        {"end_to_end_ms", r.end_to_end.json()},
         {"breakdown_ms",
-         {{"detection", detection.json()},
-          {"camera_node_queue_and_publish", camera_queue.json()},
-          {"transport_camera_to_estimator", transport_in.json()},
-          {"estimator", estimator.json()},
-          {"transport_estimator_to_subscriber", transport_out.json()}}},
-        {"dds_floor_ms", {{"two_hops", floor_hops.json()}, {"two_hops_plus_detection", floor_total.json()}}},
-        {"ratio_vs_dds_floor_p50", floor_p50 > 0 ? end_to_end.at(0.5) / floor_p50 : 0.0},
-        {"ratio_vs_dds_floor_p99", floor_p99 > 0 ? end_to_end.at(0.99) / floor_p99 : 0.0},
+         {{"detection", r.detection.json()},
+          {"camera_node_queue_and_publish", r.camera_queue.json()},
+          {"transport_camera_to_estimator", r.transport_in.json()},
+          {"estimator_queue_update_publish", r.estimator.json()},
+          {"estimator_split",
+           {{"inbox_and_wakeup", r.estimator_inbox.json()},
+            {"update", r.estimator_update.json()},
+            {"until_publish", r.estimator_publish.json()}}},
+          {"transport_estimator_to_subscriber", r.transport_out.json()}}},
+        {"dds_floor_ms",
+         {{"two_hops_plus_detection", r.floor_total.json()},
+          {"two_hops", r.floor_hops.json()},
+          {"hop_camera_to_estimator", r.floor_hop_in.json()},
+          {"hop_estimator_to_subscriber", r.floor_hop_out.json()}}},
+        {"ratio_vs_dds_floor_p50", floor_p50 > 0 ? r.end_to_end.at(0.5) / floor_p50 : 0.0},
+        {"ratio_vs_dds_floor_p99", floor_p99 > 0 ? r.end_to_end.at(0.99) / floor_p99 : 0.0},
+        {"cpu_while_measuring", cpu_from && cpu_to ? cpu_json(*cpu_from, *cpu_to) : nlohmann::json()},
+        {"dds_domain", domain},
         {"logs", run_dir.string()},
     };
+    if (subscribe_tracks) {
+      result["track_frame_ms"] = {{"end_to_end", r.tracks_end_to_end.json()},
+                                  {"transport_estimator_to_subscriber", r.tracks_transport_out.json()}};
+    }
     if (json_output) {
       std::printf("%s\n", result.dump(2).c_str());
     } else {
       std::printf(
-          "end to end p50 %.3f ms p99 %.3f ms; DDS floor + detection p50 %.3f ms p99 %.3f ms; ratio p99 "
-          "%.2f\n",
-          end_to_end.at(0.5), end_to_end.at(0.99), floor_p50, floor_p99,
+          "BodyPose end to end p50 %.3f ms p99 %.3f ms; DDS floor + detection p50 %.3f ms p99 %.3f ms; ratio "
+          "p99 %.2f\n",
+          r.end_to_end.at(0.5), r.end_to_end.at(0.99), floor_p50, floor_p99,
           result["ratio_vs_dds_floor_p99"].get<double>());
     }
-    if (end_to_end.ms.empty()) {
-      std::fprintf(stderr, "bench_latency: no TrackFrame matched a FeatureFrame; see the logs in %s\n",
+    if (r.end_to_end.ms.empty() || r.floor_total.ms.empty()) {
+      std::fprintf(stderr, "bench_latency: no %s; see the logs in %s\n",
+                   r.end_to_end.ms.empty() ? "BodyPose matched a traced frame" : "probe echo arrived",
                    run_dir.c_str());
       return panoptes::kExitFailure;
     }

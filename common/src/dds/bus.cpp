@@ -78,7 +78,9 @@ PANOPTES_TOPIC(TrackFrame, "rt/panoptes/tracks", false, Durability::kVolatile, 1
 PANOPTES_TOPIC(BodyPose, "rt/panoptes/bodies", false, Durability::kVolatile, 1, false, true)
 PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::kTransientLocal, 1, false,
                false)
-PANOPTES_TOPIC(LatencyTraces, "rt/panoptes/latency_probe/trace", false, Durability::kVolatile, 8, false, false)
+// Off by default: camera_node and estimator_node --latency-probe (docs/protocol.md, "Latency probes").
+PANOPTES_TOPIC(LatencyTraces, "rt/panoptes/latency_probe/trace", false, Durability::kVolatile, 8, false,
+               false)
 #undef PANOPTES_TOPIC
 
 // A probe measures one hop of the pipeline, so it takes the QoS of the topic it stands in for: the
@@ -517,6 +519,9 @@ PANOPTES_INSTANTIATE(EstimatorStatus)
 PANOPTES_INSTANTIATE(TrackFrame)
 PANOPTES_INSTANTIATE(BodyPose)
 PANOPTES_INSTANTIATE(SystemCalibration)
+PANOPTES_INSTANTIATE(LatencyProbe)
+PANOPTES_INSTANTIATE(LatencyProbeEcho)
+PANOPTES_INSTANTIATE(LatencyTraces)
 #undef PANOPTES_INSTANTIATE
 
 }  // namespace panoptes::dds

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // FrameInbox::wait: the live estimator loop sleeps in it and must wake when a frame arrives or
-// falls due, not only when the maximum wait has passed (issue 7, end-to-end latency).
+// falls due, not only when the maximum wait has passed; has_due lets a waiting frame go before
+// the less urgent output of earlier ones (issue 7, end-to-end latency).
 #include <chrono>
 #include <thread>
 
@@ -50,6 +51,16 @@ TEST(FrameInboxWait, WaitsUntilTheOldestFrameFallsDue) {
   const auto waited = Clock::now() - begin;
   EXPECT_GE(waited, std::chrono::milliseconds(4));
   EXPECT_LT(waited, std::chrono::seconds(10));
+}
+
+TEST(FrameInboxHasDue, TellsWhetherPopDueWouldReturnAFrame) {
+  FrameInbox inbox(16, 5'000'000);
+  EXPECT_FALSE(inbox.has_due(2'000'000'000));  // empty
+  inbox.push(frame_at(1'000'000'000));
+  EXPECT_FALSE(inbox.has_due(1'004'000'000));  // within the window
+  EXPECT_TRUE(inbox.has_due(1'005'000'000));
+  EXPECT_EQ(inbox.pop_due(1'005'000'000).size(), 1u);
+  EXPECT_FALSE(inbox.has_due(1'005'000'000));  // taken
 }
 
 }  // namespace

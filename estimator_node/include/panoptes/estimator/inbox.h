@@ -22,6 +22,9 @@ class FrameInbox {
   bool push(FeatureFrame frame);
   // Frames with stamp <= now - window, oldest first.
   std::vector<FeatureFrame> pop_due(TimeNs now_ns);
+  // Whether pop_due(now_ns) would return a frame: the live loop lets a waiting frame go before the
+  // less urgent output of the frames it has processed.
+  bool has_due(TimeNs now_ns) const;
   // Everything, oldest first (shutdown).
   std::vector<FeatureFrame> drain();
   // Blocks until a frame is pushed, the oldest frame falls due (on the clock `now_ns` is read
