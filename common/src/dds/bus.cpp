@@ -74,8 +74,8 @@ PANOPTES_TOPIC(CameraPreview, "rt/panoptes/camera_preview", false, Durability::k
 PANOPTES_TOPIC(Predictions, "rt/panoptes/predictions", false, Durability::kVolatile, 1, false, true)
 PANOPTES_TOPIC(TimeSync, "rt/panoptes/time_sync", true, Durability::kVolatile, 64, false, true)
 PANOPTES_TOPIC(EstimatorStatus, "rt/panoptes/estimator_status", false, Durability::kVolatile, 1, false, false)
-PANOPTES_TOPIC(TrackFrame, "rt/panoptes/tracks", false, Durability::kVolatile, 1, false, false)
-PANOPTES_TOPIC(BodyPose, "rt/panoptes/bodies", false, Durability::kVolatile, 1, false, true)
+PANOPTES_TOPIC(TrackFrame, "rt/panoptes/tracks", false, Durability::kVolatile, 1, true, false)
+PANOPTES_TOPIC(BodyPose, "rt/panoptes/bodies", false, Durability::kVolatile, 1, true, true)
 PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::kTransientLocal, 1, false,
                false)
 // Off by default: camera_node and estimator_node --latency-probe (docs/protocol.md, "Latency probes").
