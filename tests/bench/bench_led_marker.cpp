@@ -17,6 +17,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "led_marker_fixtures.h"
 #include "panoptes/cli.h"
 #include "panoptes/estimator/led_marker.h"
 
@@ -27,25 +28,9 @@ using Eigen::Vector3d;
 using panoptes::RigidTransform;
 namespace est = panoptes::estimator;
 
-constexpr double kFocal = 1600.0;
-
-std::array<Vector3d, 7> leds(double m1, double m2) {
-  return {Vector3d(0.1142, 0, 0),
-          Vector3d(m1, 0, 0),
-          Vector3d(m2, 0, 0),
-          Vector3d(0, 0, 0),
-          Vector3d(0, -0.038, 0),
-          Vector3d(0, 0.038, 0),
-          Vector3d(-0.0383, 0.0, -0.0112)};
-}
-
-RigidTransform make_pose(double x, double y, double z, double tilt, double azimuth, double roll) {
-  RigidTransform T;
-  T.q = Eigen::AngleAxisd(tilt, Vector3d(std::cos(azimuth), std::sin(azimuth), 0)) *
-        Eigen::AngleAxisd(roll, Vector3d::UnitZ());
-  T.t = Vector3d(x, y, z);
-  return T;
-}
+using panoptes::led_marker_fixtures::kFocal;
+using panoptes::led_marker_fixtures::paper_leds;
+const auto make_pose = panoptes::led_marker_fixtures::marker_pose;
 
 void add_marker(const est::LedMarkerModel& model, const RigidTransform& T, std::mt19937_64& rng,
                 std::vector<Vector2d>& out) {
@@ -74,9 +59,9 @@ int main(int argc, char** argv) {
   if (auto code = panoptes::parse_command_line(app, argc, argv)) return *code;
 
   const std::vector<est::LedMarkerModel> models = {
-      est::LedMarkerModel::from_points("a", leds(0.0759, 0.0379)),
-      est::LedMarkerModel::from_points("b", leds(0.0720, 0.0320)),
-      est::LedMarkerModel::from_points("c", leds(0.0800, 0.0450))};
+      est::LedMarkerModel::from_points("a", paper_leds(0.0759, 0.0379)),
+      est::LedMarkerModel::from_points("b", paper_leds(0.0720, 0.0320)),
+      est::LedMarkerModel::from_points("c", paper_leds(0.0800, 0.0450))};
   const est::LedMarkerDetector detector(models);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);

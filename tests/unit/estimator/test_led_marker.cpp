@@ -16,6 +16,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
+#include "led_marker_fixtures.h"
 #include "panoptes/calibration.h"
 #include "panoptes/estimator/led_marker.h"
 #include "panoptes/records.h"
@@ -31,20 +32,10 @@ using Eigen::Vector3d;
 using panoptes::RigidTransform;
 namespace est = panoptes::estimator;
 
-constexpr double kFocal = 1600.0;  // px: 2048 x 2048 sensor, 5.5 um pixels, 9 mm lens (seed 004 §4.1)
+using panoptes::led_marker_fixtures::kFocal;
+using panoptes::led_marker_fixtures::paper_leds;
 constexpr double kHalfWidth = 1024.0;
 constexpr double kDeg = M_PI / 180.0;
-
-// The seed's prototype marker (Table 1, rounded to an ideal layout): d03 = 114.2 mm, CR ~ 3.99.
-std::array<Vector3d, 7> paper_leds(double m1 = 0.0759, double m2 = 0.0379) {
-  return {Vector3d(0.1142, 0, 0),
-          Vector3d(m1, 0, 0),
-          Vector3d(m2, 0, 0),
-          Vector3d(0, 0, 0),
-          Vector3d(0, -0.038, 0),
-          Vector3d(0, 0.038, 0),
-          Vector3d(-0.0383, 0.0, -0.0112)};
-}
 
 double rotation_error_deg(const RigidTransform& a, const RigidTransform& b) {
   return a.q.angularDistance(b.q) / kDeg;
@@ -70,13 +61,7 @@ std::optional<est::LedPoints> project(const est::LedMarkerModel& model, const Ri
   return m;
 }
 
-RigidTransform pose(double x, double y, double z, double tilt, double azimuth, double roll) {
-  RigidTransform T;
-  T.q = Eigen::AngleAxisd(tilt, Vector3d(std::cos(azimuth), std::sin(azimuth), 0)) *
-        Eigen::AngleAxisd(roll, Vector3d::UnitZ());
-  T.t = Vector3d(x, y, z);
-  return T;
-}
+const auto pose = panoptes::led_marker_fixtures::marker_pose;
 
 // The §4.4 sequence: 2290 frames, marker from 0.5 m to 7.5 m, lateral sway, full in-plane roll,
 // tilt 20..50 degrees about a rotating axis (20..76 degrees in the first quarter, where the very
