@@ -31,6 +31,17 @@ struct BodySet::Body {
   std::uint64_t updates = 0;
   std::vector<TimeNs> marker_last_seen;    // by marker
   std::vector<TimeNs> camera_last_update;  // by camera index
+
+  // (Re)starts tracking from an initial state (identification or a monocular detection) with fresh
+  // consistency statistics.
+  void start(const BodyState& initial, TimeNs stamp_ns) {
+    state = initial;
+    tracked = true;
+    acquired_ns = stamp_ns;
+    last_update_ns = stamp_ns;
+    nis_average = 0;
+    nis_updates = 0;
+  }
 };
 
 BodySet::BodySet() : shared_(std::make_shared<Shared>()) {}
@@ -227,12 +238,7 @@ void BodySet::acquire_monocular(int camera_index, const CameraModel& camera, Tim
     state.P.block<3, 3>(kBodyA, kBodyA) = std::pow(o.init_accel_sigma_mps2, 2) * Eigen::Matrix3d::Identity();
     state.P.block<3, 3>(kBodyTheta, kBodyTheta) = std::pow(0.05, 2) * Eigen::Matrix3d::Identity();
     state.P.block<3, 3>(kBodyW, kBodyW) = 9.0 * Eigen::Matrix3d::Identity();
-    body.state = state;
-    body.tracked = true;
-    body.acquired_ns = stamp_ns;
-    body.last_update_ns = stamp_ns;
-    body.nis_average = 0;
-    body.nis_updates = 0;
+    body.start(state, stamp_ns);
     // The detection's blobs update the new state at once.
     const auto& markers = shared_->definitions[b].markers;
     for (std::size_t m = 0; m < markers.size(); ++m) {
@@ -341,12 +347,7 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
     set(kBodyA, o.init_accel_sigma_mps2);
     set(kBodyTheta, o.init_angle_sigma_rad);
     set(kBodyW, have_velocity ? o.init_angular_velocity_sigma : 5.0);
-    body.state = state;
-    body.tracked = true;
-    body.acquired_ns = stamp_ns;
-    body.last_update_ns = stamp_ns;
-    body.nis_average = 0;
-    body.nis_updates = 0;
+    body.start(state, stamp_ns);
     for (const auto& pair : match.pairs)
       body.marker_last_seen[static_cast<std::size_t>(pair.second)] = stamp_ns;
   };
