@@ -26,9 +26,12 @@ assert result["poses_unmatched"] <= 0.02 * end_to_end["n"], result["poses_unmatc
 assert 0 < floor["p50"] and 0 < end_to_end["p50"] and result["ratio_vs_dds_floor_p99"] > 0
 for line in open(sys.argv[2]):
     s = json.loads(line)
-    stamps = [s["arrival_ns"], s["received_ns"], s["dequeued_ns"], s["updated_ns"], s["poses_published_ns"]]
+    # The estimator's own stamps are on one clock: strictly in order.
+    stamps = [s["received_ns"], s["dequeued_ns"], s["updated_ns"], s["poses_published_ns"]]
     assert stamps == sorted(stamps), s
-    # The camera clock is synchronised to this host's within ~0.1 ms.
+    # The camera clock is synchronised to this host's within ~0.1 ms, so stamps taken in different
+    # processes are compared with that margin (CI once saw reception 10 us "before" arrival).
+    assert s["received_ns"] >= s["arrival_ns"] - 200_000, s
     assert s["feature_publish_ns"] - s["arrival_ns"] >= s["processing_ns"] - 200_000, s
     assert s["pose_received_ns"] >= s["poses_published_ns"] - 200_000, s
 PY
