@@ -37,6 +37,7 @@
 #include "panoptes/dds/time_sync.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
+#include "panoptes/jsonl.h"
 #include "panoptes/simulator.h"
 #include "panoptes/time.h"
 

@@ -26,6 +26,7 @@
 
 #include "panoptes/calib/calibrate_cli.h"
 #include "panoptes/calibration.h"
+#include "panoptes/calibration_file.h"
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/dds/bus.h"
@@ -37,6 +38,7 @@
 #include "panoptes/estimator/usage.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
+#include "panoptes/jsonl.h"
 #include "panoptes/time.h"
 
 namespace {

@@ -27,10 +27,11 @@
 #include <nlohmann/json.hpp>
 
 #include "panoptes/calibration.h"
+#include "panoptes/calibration_file.h"
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
-#include "panoptes/estimator/evaluation.h"
+#include "panoptes/eval/evaluation.h"
 #include "panoptes/process.h"
 #include "panoptes/simulator.h"
 #include "panoptes/time.h"

@@ -12,9 +12,10 @@
 #include "eval_plot.h"
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
-#include "panoptes/estimator/evaluation.h"
+#include "panoptes/eval/evaluation.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
+#include "panoptes/jsonl.h"
 #include "panoptes/simulator.h"
 
 int main(int argc, char** argv) {

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <string>
 
-#include "panoptes/estimator/evaluation.h"
+#include "panoptes/eval/evaluation.h"
 
 namespace panoptes::estimator {
 

@@ -41,6 +41,7 @@
 #include <nlohmann/json.hpp>
 
 #include "panoptes/calibration.h"
+#include "panoptes/calibration_file.h"
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/process.h"

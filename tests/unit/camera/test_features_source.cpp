@@ -15,6 +15,7 @@
 
 #include "panoptes/camera/sources.h"
 #include "panoptes/records.h"
+#include "panoptes/jsonl.h"
 #include "panoptes/time.h"
 
 namespace panoptes::camera {

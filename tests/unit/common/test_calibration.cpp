@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "panoptes/calibration.h"
+#include "panoptes/calibration_file.h"
 #include "panoptes/config.h"
 #include "temp_dir.h"
 

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "panoptes/records.h"
+#include "panoptes/jsonl.h"
 #include "temp_dir.h"
 
 namespace panoptes {

@@ -6,7 +6,7 @@
 #include <functional>
 #include <random>
 
-#include "../../../estimator_node/src/blob_grid.h"
+#include "../../../estimator_node/core/src/blob_grid.h"
 #include "panoptes/estimator/assignment.h"
 
 namespace panoptes::estimator {

@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "panoptes/estimator/evaluation.h"
+#include "panoptes/eval/evaluation.h"
 #include "panoptes/simulator.h"
 
 namespace panoptes::estimator {

@@ -21,6 +21,7 @@
 #include "panoptes/estimator/frame_screen.h"
 #include "panoptes/estimator/tracker.h"
 #include "panoptes/records.h"
+#include "panoptes/jsonl.h"
 #include "test_cameras.h"
 
 namespace panoptes::estimator {

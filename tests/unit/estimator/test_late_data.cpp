@@ -8,7 +8,7 @@
 #include <numeric>
 #include <random>
 
-#include "panoptes/estimator/evaluation.h"
+#include "panoptes/eval/evaluation.h"
 #include "panoptes/estimator/inbox.h"
 #include "panoptes/estimator/tracker.h"
 #include "panoptes/simulator.h"

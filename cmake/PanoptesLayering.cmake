@@ -1,0 +1,98 @@
+# SPDX-License-Identifier: Apache-2.0
+# The layering rules of docs/architecture.md, checked by the `lint.layering` test.
+#
+# At configure time every guarded library's transitive link closure (what the linker will really
+# pull in) and its source and header files are written to build/layering/<target>.txt; the test
+# (cmake/check_layering.cmake) matches them against the rules below. A dependency added to a
+# CMakeLists.txt or an #include added to a source reaches the test through the next build.
+
+# Dependencies that mean DDS, the simulator, command-line parsing or file I/O.
+set(_panoptes_dds_links "panoptes_dds|panoptes_msgs|fastrtps|fastcdr|panoptes_camera_app|panoptes_estimator_app")
+set(_panoptes_io_links "panoptes_io|panoptes_common|panoptes_session|yaml-cpp|nlohmann_json|opencv_imgcodecs|opencv_highgui|opencv_videoio|spdlog")
+set(_panoptes_pure_links "${_panoptes_dds_links}|${_panoptes_io_links}|panoptes_sim|panoptes_evaluation|CLI11")
+# Includes and calls that mean the same in a source or header.
+set(_panoptes_pure_sources
+  "#include [<\"](fastdds/|fastrtps/|fastcdr/|panoptes_msgs/|CLI/|yaml-cpp/|nlohmann/|spdlog/|fstream|filesystem|opencv2/imgcodecs|opencv2/highgui|opencv2/videoio|panoptes/dds/|panoptes/simulator\\.h|panoptes/config\\.h|panoptes/jsonl\\.h|panoptes/calibration_file\\.h|panoptes/process\\.h|panoptes/cli\\.h)|std::(i|o)?fstream|[^_a-z]fopen *\\(")
+
+# target | forbidden links (regex) | forbidden source text (regex, empty: none) | why
+set(PANOPTES_LAYERING_RULES
+  "panoptes_core|${_panoptes_pure_links}|opencv|Ceres|${_panoptes_pure_sources}|the core holds types and maths only"
+  "panoptes_estimator|${_panoptes_pure_links}|opencv|Ceres|${_panoptes_pure_sources}|the estimator core runs identically live, offline and in tests: no DDS, simulator, CLI or file I/O"
+  "panoptes_calib|${_panoptes_pure_links}|${_panoptes_pure_sources}|calibration maths: no DDS, simulator, CLI or file I/O"
+  "panoptes_io|${_panoptes_dds_links}||only panoptes_dds knows DDS"
+  "panoptes_sim|${_panoptes_dds_links}||only panoptes_dds knows DDS"
+  "panoptes_camera|${_panoptes_dds_links}||the camera pipeline runs without DDS (offline mode, tests)"
+  "panoptes_evaluation|${_panoptes_dds_links}||only panoptes_dds knows DDS"
+  "panoptes_session|${_panoptes_dds_links}||the estimator session runs without DDS (offline mode, tests)")
+
+# Transitive link closure of `target` (names of targets and libraries) into `out_var`.
+function(_panoptes_link_closure target out_var)
+  set(seen "")
+  set(queue ${target})
+  while(queue)
+    list(POP_FRONT queue item)
+    if(item IN_LIST seen)
+      continue()
+    endif()
+    list(APPEND seen ${item})
+    if(TARGET ${item})
+      get_target_property(aliased ${item} ALIASED_TARGET)
+      if(aliased)
+        list(APPEND queue ${aliased})
+      endif()
+      set(deps "")
+      get_target_property(type ${item} TYPE)
+      if(NOT type STREQUAL "INTERFACE_LIBRARY")
+        get_target_property(direct ${item} LINK_LIBRARIES)
+        if(direct)
+          list(APPEND deps ${direct})
+        endif()
+      endif()
+      get_target_property(interface ${item} INTERFACE_LINK_LIBRARIES)
+      if(interface)
+        list(APPEND deps ${interface})
+      endif()
+      foreach(dep ${deps})
+        # $<LINK_ONLY:x> (private deps of static libraries) still reach the final link.
+        string(REGEX REPLACE "^\\$<LINK_ONLY:(.*)>$" "\\1" dep "${dep}")
+        if(dep MATCHES "^\\$<" OR dep STREQUAL "")
+          continue()
+        endif()
+        list(APPEND queue ${dep})
+      endforeach()
+    endif()
+  endwhile()
+  list(REMOVE_ITEM seen ${target})
+  set(${out_var} ${seen} PARENT_SCOPE)
+endfunction()
+
+# Writes build/layering/<target>.txt for every guarded target that exists, and registers the test.
+function(panoptes_layering_manifest)
+  set(dir ${CMAKE_BINARY_DIR}/layering)
+  file(MAKE_DIRECTORY ${dir})
+  set(rules_file ${dir}/rules.txt)
+  string(REPLACE ";" "\n" rules_text "${PANOPTES_LAYERING_RULES}")
+  file(WRITE ${rules_file} "${rules_text}\n")
+  foreach(rule ${PANOPTES_LAYERING_RULES})
+    string(REGEX MATCH "^[^|]+" target "${rule}")
+    if(NOT TARGET ${target})
+      continue()
+    endif()
+    _panoptes_link_closure(${target} closure)
+    set(text "")
+    foreach(link ${closure})
+      string(APPEND text "link ${link}\n")
+    endforeach()
+    get_target_property(source_dir ${target} SOURCE_DIR)
+    get_target_property(sources ${target} SOURCES)
+    foreach(source ${sources})
+      get_filename_component(path ${source} ABSOLUTE BASE_DIR ${source_dir})
+      string(APPEND text "file ${path}\n")
+    endforeach()
+    file(GLOB_RECURSE headers ${source_dir}/include/*.h ${source_dir}/src/*.h)
+    foreach(header ${headers})
+      string(APPEND text "file ${header}\n")
+    endforeach()
+    file(WRITE ${dir}/${target}.txt "${text}")
+  endforeach()
+endfunction()

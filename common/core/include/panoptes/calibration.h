@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: Apache-2.0
+// Camera calibrations and rigid-body definitions (the files: panoptes/calibration_file.h).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "panoptes/camera_model.h"
+
+namespace panoptes {
+
+struct CameraCalibration {
+  std::string id;
+  CameraIntrinsics intrinsics;
+  std::optional<RigidTransform> T_world_cam;  // absent: intrinsics only
+
+  // Requires T_world_cam.
+  CameraModel model() const;
+};
+
+struct SystemCalibration {
+  std::vector<CameraCalibration> cameras;
+  const CameraCalibration* find(std::string_view camera_id) const;
+};
+
+// How a body is found: passive markers are identified from triangulated 3D points; a 7-LED marker
+// (seed 004, docs/monocular_markers.md) also from the blobs of a single camera. YAML key `type`:
+// `passive` (default) or `led7`.
+enum class BodyKind { kPassive, kLed7 };
+
+struct BodyDefinition {
+  std::string name;
+  std::vector<Eigen::Vector3d> markers;  // metres, body frame
+  BodyKind kind = BodyKind::kPassive;
+};
+
+}  // namespace panoptes

@@ -1,0 +1,27 @@
+// SPDX-License-Identifier: Apache-2.0
+// Calibration and body-definition files (docs/contracts.md).
+#pragma once
+
+#include <filesystem>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "panoptes/calibration.h"
+
+namespace panoptes {
+
+class YamlReader;
+
+// Throws ConfigError naming the file and key on any problem.
+SystemCalibration load_calibration(const std::filesystem::path& path);
+void save_calibration(const SystemCalibration& calibration, const std::filesystem::path& path);
+std::string calibration_to_yaml(const SystemCalibration& calibration);
+
+std::vector<BodyDefinition> load_bodies(const std::filesystem::path& path);
+// Reads one body (`name`, `markers`) from a YAML map; `names` collects names to reject duplicates.
+// Used by body files and simulator scenes alike. Throws ConfigError naming the file and key.
+BodyDefinition read_body_definition(const YamlReader& item, std::set<std::string>& names);
+void save_bodies(const std::vector<BodyDefinition>& bodies, const std::filesystem::path& path);
+
+}  // namespace panoptes

@@ -1,0 +1,659 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/estimator/tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <numeric>
+#include <set>
+#include <stdexcept>
+#include <tuple>
+
+#include "blob_grid.h"
+#include "panoptes/errors.h"
+#include "panoptes/estimator/assignment.h"
+
+namespace panoptes::estimator {
+
+void TrackerOptions::print(std::ostream& out) const {
+  out << "tracker options:\n"
+      << "  process_noise            " << process_noise << " m^2/s^3\n"
+      << "  measurement_noise_px     " << measurement_noise_px << " px\n"
+      << "  gate_chi2                " << gate_chi2 << "\n"
+      << "  init window              " << ns_to_seconds(init.window_ns) * 1e3 << " ms\n"
+      << "  init epipolar / reproj   " << init.epipolar_px << " / " << init.reprojection_px << " px\n"
+      << "  confirm                  " << confirm_cameras << " cameras, or " << confirm_updates
+      << " updates from 2\n"
+      << "  coast_after              " << ns_to_seconds(coast_after_ns) * 1e3 << " ms\n"
+      << "  delete_after             " << ns_to_seconds(delete_after_ns) * 1e3 << " ms\n"
+      << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
+      << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n";
+}
+
+namespace {
+
+struct Track {
+  std::int64_t id = 0;
+  PointState state;
+  TimeNs created_ns = 0;
+  TimeNs last_update_ns = 0;
+  std::uint64_t updates = 0;
+  bool confirmed = false;
+  int misses = 0;          // tentative only: frames that should have shown it
+  double nis_average = 0;  // moving average of the normalised innovation d²
+  int nis_updates = 0;
+  int distinct_cameras = 0;                // cameras that ever updated it
+  std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
+
+  Eigen::Vector3d position_at(TimeNs stamp_ns) const {
+    return state.position() + ns_to_seconds(stamp_ns - state.stamp_ns) * state.velocity();
+  }
+};
+
+// Everything a rewind restores.
+struct Core {
+  std::vector<Track> tracks;
+  Initiator initiator;
+  std::int64_t next_id = 1;
+  TimeNs last_stamp_ns = std::numeric_limits<TimeNs>::min();
+  TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
+  std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
+                ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
+  std::vector<std::uint64_t> associated_per_camera;
+  BodySet bodies;
+};
+
+struct Checkpoint {
+  TimeNs stamp_ns;    // stamp of the first history frame the state does not include
+  std::size_t index;  // absolute history index of that frame
+  Core core;
+};
+
+struct Entry {
+  int camera;
+  FeatureFrame frame;
+};
+
+}  // namespace
+
+struct Tracker::Impl {
+  explicit Impl(const TrackerOptions& o) : options(o) { core.initiator = Initiator(o.init); }
+
+  const TrackerOptions options;
+  std::vector<std::unique_ptr<CameraModel>> models;  // by camera index; pointers stay valid
+  std::vector<std::string> camera_ids;
+  std::map<std::string, int> camera_index;
+  Core core;
+  std::deque<Entry> history;     // applied frames in stamp order, within the rewind horizon
+  std::size_t history_base = 0;  // absolute index of history.front()
+  std::deque<Checkpoint> checkpoints;
+  TrackerStats stats;
+  mutable TrackerStats merged_stats;
+
+  int required_cameras() const {
+    return std::max(2, std::min<int>(options.confirm_cameras, static_cast<int>(models.size())));
+  }
+
+  void cameras_changed() {
+    std::vector<const CameraModel*> pointers;
+    for (const auto& model : models) pointers.push_back(model.get());
+    core.initiator.set_cameras(pointers);
+    core.associated_per_camera.resize(models.size(), 0);
+    history.clear();
+    checkpoints.clear();
+    history_base = 0;
+  }
+
+  void maybe_checkpoint(TimeNs stamp_ns, std::size_t absolute_index) {
+    if (checkpoints.empty()) {
+      // The empty initial state comes before any frame, however old.
+      const bool pristine = core.tracks.empty() && core.last_stamp_ns == std::numeric_limits<TimeNs>::min();
+      checkpoints.push_back({pristine ? std::numeric_limits<TimeNs>::min() : stamp_ns, absolute_index, core});
+    } else if (const TimeNs last = checkpoints.back().stamp_ns;
+               last == std::numeric_limits<TimeNs>::min() ||
+               stamp_ns - last >= options.checkpoint_interval_ns) {
+      checkpoints.push_back({stamp_ns, absolute_index, core});
+    }
+  }
+
+  void trim() {
+    const TimeNs oldest_kept = core.last_stamp_ns - options.rewind_horizon_ns;
+    while (checkpoints.size() >= 2 && checkpoints[1].stamp_ns <= oldest_kept) checkpoints.pop_front();
+    if (checkpoints.empty()) return;
+    while (history_base < checkpoints.front().index && !history.empty()) {
+      history.pop_front();
+      ++history_base;
+    }
+  }
+
+  void note_update(Track& track, int camera, TimeNs stamp_ns) {
+    track.last_update_ns = std::max(track.last_update_ns, stamp_ns);
+    ++track.updates;
+    if (track.camera_last_update.size() < models.size()) track.camera_last_update.resize(models.size(), 0);
+    if (track.camera_last_update[camera] == 0) ++track.distinct_cameras;
+    track.camera_last_update[camera] = std::max<TimeNs>(track.camera_last_update[camera], stamp_ns);
+    if (!track.confirmed && (track.distinct_cameras >= required_cameras() ||
+                             (track.distinct_cameras >= 2 &&
+                              track.updates >= static_cast<std::uint64_t>(options.confirm_updates)))) {
+      track.confirmed = true;
+      ++core.tracks_confirmed;
+    }
+  }
+
+  void apply(const FeatureFrame& frame, int camera_index);
+  void associate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
+                 std::vector<char>& used);
+  void initiate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
+                const std::vector<char>& used);
+  void prune(TimeNs now_ns);
+  std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
+  void replay_with(const FeatureFrame& frame, int camera_index);
+  TrackRecord to_record(const Track& track, TimeNs stamp_ns) const;
+};
+
+void Tracker::Impl::apply(const FeatureFrame& frame, int camera_index) {
+  core.last_stamp_ns = std::max(core.last_stamp_ns, frame.stamp_ns);
+  std::vector<Eigen::Vector2d> pixels;
+  pixels.reserve(frame.blobs.size());
+  std::vector<char> used(frame.blobs.size(), 0);
+  for (std::size_t j = 0; j < frame.blobs.size(); ++j) {
+    pixels.emplace_back(frame.blobs[j].x, frame.blobs[j].y);
+    if (!std::isfinite(pixels.back().x()) || !std::isfinite(pixels.back().y())) used[j] = 1;
+  }
+  // Bodies and point tracks use the same blobs: the point tracks of body markers feed
+  // identification, and the poses stay independent of the point tracks' lifecycle.
+  const std::vector<char> excluded = used;
+  associate(frame, camera_index, pixels, used);
+  initiate(frame, camera_index, pixels, used);
+  prune(frame.stamp_ns);
+  if (!core.bodies.empty()) {
+    std::vector<char> taken(pixels.size(), 0);
+    core.bodies.process_frame(camera_index, *models[camera_index], frame.stamp_ns, pixels, excluded, taken);
+    if (core.bodies.wants_points(frame.stamp_ns))
+      core.bodies.identify(frame.stamp_ns, confirmed_points(frame.stamp_ns));
+  }
+}
+
+std::vector<TrackedPoint> Tracker::Impl::confirmed_points(TimeNs stamp_ns) const {
+  std::vector<TrackedPoint> points;
+  for (const Track& track : core.tracks) {
+    if (!track.confirmed || stamp_ns - track.last_update_ns > options.coast_after_ns) continue;
+    TrackedPoint point;
+    point.p = track.position_at(stamp_ns);
+    point.v = track.state.velocity();
+    point.sigma_m = std::sqrt(std::max(0.0, track.state.P.block<3, 3>(0, 0).trace() / 3.0));
+    points.push_back(point);
+  }
+  return points;
+}
+
+void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
+                              const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used) {
+  const CameraModel& camera = *models[camera_index];
+  const auto& intrinsics = camera.intrinsics();
+  const double focal = std::max(intrinsics.fx, intrinsics.fy);
+  const double sigma2_px = options.measurement_noise_px * options.measurement_noise_px;
+  const BlobGrid grid(pixels, intrinsics.width, intrinsics.height, options.grid_cell_px);
+
+  // Gating (verify region, seed 003 §2.2.3.2). A cheap bound on the gate's radius from the
+  // position covariance selects the blobs worth the full projection and Mahalanobis test.
+  struct Gated {
+    std::size_t track;
+    std::size_t blob;
+    double d2;
+  };
+  std::vector<Gated> gated;
+  struct Projected {
+    PointState state;
+    PointProjection projection;
+  };
+  std::vector<std::optional<Projected>> projected(core.tracks.size());
+  std::vector<char> in_view(core.tracks.size(), 0);
+  const TimeNs stamp = frame.stamp_ns;
+  for (std::size_t i = 0; i < core.tracks.size(); ++i) {
+    const Track& track = core.tracks[i];
+    const double dt = ns_to_seconds(stamp - track.state.stamp_ns);
+    const Eigen::Vector3d p = track.state.position() + dt * track.state.velocity();
+    const Eigen::Vector3d p_cam = camera.T_cam_world().apply(p);
+    if (p_cam.z() < options.init.min_depth_m) continue;
+    const auto pixel = camera.project_camera_point(p_cam);
+    if (!pixel) continue;
+    const auto& P = track.state.P;
+    const double trace = P.block<3, 3>(0, 0).trace() + 2.0 * dt * P.block<3, 3>(0, 3).trace() +
+                         dt * dt * P.block<3, 3>(3, 3).trace() +
+                         options.process_noise * std::abs(dt * dt * dt);
+    const double lateral = (p_cam.x() * p_cam.x() + p_cam.y() * p_cam.y()) / (p_cam.z() * p_cam.z());
+    const double gain = 1.3 * focal / p_cam.z() * std::sqrt(1.0 + lateral);  // 1.3: distortion slack
+    const double radius =
+        std::min(std::sqrt(options.gate_chi2 * (gain * gain * trace + sigma2_px)) + 1.0, 400.0);
+    if (!camera.in_image(*pixel, radius)) continue;
+    in_view[i] = camera.in_image(*pixel, 0.0);
+    grid.for_each_near(*pixel, radius, [&](std::size_t j) {
+      if (used[j]) return;
+      if ((pixels[j] - *pixel).squaredNorm() > radius * radius) return;
+      if (!projected[i]) {
+        Projected full;
+        full.state = predicted(track.state, stamp, options.process_noise);
+        const auto projection = project_point(full.state, camera, options.measurement_noise_px);
+        if (!projection) return;
+        full.projection = *projection;
+        projected[i] = std::move(full);
+      }
+      const double d2 = mahalanobis2(projected[i]->projection, pixels[j]);
+      if (d2 < options.gate_chi2) gated.push_back({i, j, d2});
+    });
+  }
+
+  // Global assignment, confirmed tracks first, then tentative ones on the blobs left (a young,
+  // uncertain track must not take a blob from an established one). The gated pairs split into
+  // independent clusters; each is solved optimally (Hungarian), so the cost follows the clusters.
+  std::vector<char> track_done(core.tracks.size(), 0);
+  for (int stage = 0; stage < 2; ++stage) {
+    const bool want_confirmed = stage == 0;
+    std::vector<Gated> pairs;
+    for (const auto& g : gated) {
+      if (core.tracks[g.track].confirmed == want_confirmed && !used[g.blob] && !track_done[g.track])
+        pairs.push_back(g);
+    }
+    if (pairs.empty()) continue;
+    // Union-find over track and blob nodes.
+    std::vector<std::size_t> track_nodes, blob_nodes;
+    for (const auto& g : pairs) {
+      track_nodes.push_back(g.track);
+      blob_nodes.push_back(g.blob);
+    }
+    std::sort(track_nodes.begin(), track_nodes.end());
+    track_nodes.erase(std::unique(track_nodes.begin(), track_nodes.end()), track_nodes.end());
+    std::sort(blob_nodes.begin(), blob_nodes.end());
+    blob_nodes.erase(std::unique(blob_nodes.begin(), blob_nodes.end()), blob_nodes.end());
+    const auto t_node = [&](std::size_t t) {
+      return static_cast<std::size_t>(std::lower_bound(track_nodes.begin(), track_nodes.end(), t) -
+                                      track_nodes.begin());
+    };
+    const auto b_node = [&](std::size_t b) {
+      return track_nodes.size() +
+             static_cast<std::size_t>(std::lower_bound(blob_nodes.begin(), blob_nodes.end(), b) -
+                                      blob_nodes.begin());
+    };
+    std::vector<std::size_t> parent(track_nodes.size() + blob_nodes.size());
+    std::iota(parent.begin(), parent.end(), 0);
+    const auto find = [&](std::size_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (const auto& g : pairs) parent[find(t_node(g.track))] = find(b_node(g.blob));
+    std::map<std::size_t, std::vector<std::size_t>> clusters;  // root -> pair indices
+    for (std::size_t k = 0; k < pairs.size(); ++k) clusters[find(t_node(pairs[k].track))].push_back(k);
+
+    for (const auto& [root, members] : clusters) {
+      std::vector<std::pair<std::size_t, std::size_t>> chosen;  // (track, blob)
+      if (members.size() == 1) {
+        chosen.emplace_back(pairs[members[0]].track, pairs[members[0]].blob);
+      } else {
+        std::vector<std::size_t> rows, cols;
+        for (std::size_t k : members) {
+          rows.push_back(pairs[k].track);
+          cols.push_back(pairs[k].blob);
+        }
+        std::sort(rows.begin(), rows.end());
+        rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+        std::sort(cols.begin(), cols.end());
+        cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+        std::vector<double> cost(rows.size() * cols.size(), kForbidden);
+        for (std::size_t k : members) {
+          const auto r = std::lower_bound(rows.begin(), rows.end(), pairs[k].track) - rows.begin();
+          const auto c = std::lower_bound(cols.begin(), cols.end(), pairs[k].blob) - cols.begin();
+          cost[static_cast<std::size_t>(r) * cols.size() + static_cast<std::size_t>(c)] = pairs[k].d2;
+        }
+        // Leaving a track and a blob both unmatched costs the gate: any gated pair is preferred.
+        const auto solution =
+            solve_assignment(cost, static_cast<int>(rows.size()), static_cast<int>(cols.size()),
+                             0.5 * options.gate_chi2, 0.5 * options.gate_chi2);
+        for (std::size_t r = 0; r < rows.size(); ++r) {
+          if (solution[r] >= 0) chosen.emplace_back(rows[r], cols[static_cast<std::size_t>(solution[r])]);
+        }
+      }
+      for (const auto& [t, b] : chosen) {
+        Track& track = core.tracks[t];
+        // Track quality: a real marker's d² follows χ²₂ (mean 2, less while R is generous); blobs
+        // of clutter that happen to fall in a wide gate land anywhere in it (mean ~χ²/2).
+        const double d2 = mahalanobis2(projected[t]->projection, pixels[b]);
+        track.nis_average = track.nis_updates == 0 ? d2 : 0.8 * track.nis_average + 0.2 * d2;
+        ++track.nis_updates;
+        track.state = projected[t]->state;
+        update(track.state, projected[t]->projection, pixels[b],
+               options.measurement_noise_px);  // Joseph form
+        note_update(track, camera_index, stamp);
+        track_done[t] = 1;
+        used[b] = 1;
+        ++core.blobs_associated;
+        ++core.associated_per_camera[camera_index];
+      }
+    }
+  }
+
+  // A tentative track inside this image that took no blob was not seen: ghosts of wrong pairings
+  // are seen by no further camera (seed 000 §4.5 suppresses them the same way, by a third view).
+  for (std::size_t i = 0; i < core.tracks.size(); ++i) {
+    Track& track = core.tracks[i];
+    if (track.confirmed || track_done[i] || !in_view[i]) continue;
+    ++track.misses;
+  }
+}
+
+void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
+                             const std::vector<Eigen::Vector2d>& pixels, const std::vector<char>& used) {
+  std::vector<Eigen::Vector2d> unmatched;
+  for (std::size_t j = 0; j < pixels.size(); ++j) {
+    if (used[j]) continue;
+    // Initiation pairs blobs across cameras, so its cost grows with their square: a frame full
+    // of garbage must not stall the tracker. Real frames leave a handful unmatched.
+    if (unmatched.size() >= options.max_unmatched_per_frame) {
+      ++core.blobs_not_initiated;
+      continue;
+    }
+    unmatched.push_back(pixels[j]);
+  }
+  const TimeNs stamp = frame.stamp_ns;
+  const double near = 4.0 * options.merge_distance_m;
+  const auto occupied = [&](const Eigen::Vector3d& point) {
+    return std::any_of(core.tracks.begin(), core.tracks.end(),
+                       [&](const Track& track) { return (track.position_at(stamp) - point).norm() < near; });
+  };
+  for (auto& candidate : core.initiator.add_frame(camera_index, stamp, unmatched, occupied)) {
+    Track track;
+    track.id = core.next_id++;
+    track.state.x.head<3>() = candidate.position;
+    track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
+    track.state.P.setZero();
+    const double sp = options.init_position_sigma_m;
+    const double sv =
+        candidate.has_velocity ? options.init_measured_velocity_sigma_mps : options.init_velocity_sigma_mps;
+    track.state.P.diagonal().head<3>().setConstant(sp * sp);
+    track.state.P.diagonal().tail<3>().setConstant(sv * sv);
+    track.state.stamp_ns = stamp;
+    track.created_ns = stamp;
+    track.last_update_ns = stamp;
+    ++core.tracks_created;
+    for (std::size_t k = 0; k < candidate.cameras.size(); ++k)
+      note_update(track, candidate.cameras[k], candidate.camera_stamps[k]);
+    core.tracks.push_back(std::move(track));
+  }
+}
+
+void Tracker::Impl::prune(TimeNs now_ns) {
+  std::erase_if(core.tracks, [&](const Track& track) {
+    const bool implausible =
+        track.nis_updates >= 4 &&
+        track.nis_average > (track.confirmed ? options.confirmed_max_nis : options.tentative_max_nis);
+    if (implausible || (!track.confirmed && track.misses >= options.tentative_max_misses)) {
+      ++core.ghosts_deleted;
+      ++core.tracks_deleted;
+      return true;
+    }
+    const TimeNs limit = track.confirmed ? options.delete_after_ns : options.tentative_delete_after_ns;
+    if (now_ns - track.last_update_ns > limit) {
+      ++core.tracks_deleted;
+      return true;
+    }
+    return false;
+  });
+
+  // Duplicates of one marker (two initiations before either took the blobs): keep the track
+  // with the longer history. Checked every few ms, with a sweep along x.
+  if (core.last_merge_check_ns != std::numeric_limits<TimeNs>::min() &&
+      now_ns - core.last_merge_check_ns < 5'000'000)
+    return;
+  core.last_merge_check_ns = now_ns;
+  std::vector<std::pair<Eigen::Vector3d, std::size_t>> positions;
+  positions.reserve(core.tracks.size());
+  for (std::size_t i = 0; i < core.tracks.size(); ++i)
+    positions.emplace_back(core.tracks[i].position_at(now_ns), i);
+  std::sort(positions.begin(), positions.end(),
+            [](const auto& a, const auto& b) { return a.first.x() < b.first.x(); });
+  std::vector<char> remove(core.tracks.size(), 0);
+  const double d = options.merge_distance_m;
+  for (std::size_t a = 0; a < positions.size(); ++a) {
+    for (std::size_t b = a + 1; b < positions.size() && positions[b].first.x() - positions[a].first.x() < d;
+         ++b) {
+      const std::size_t i = positions[a].second, j = positions[b].second;
+      if (remove[i] || remove[j] || (positions[a].first - positions[b].first).norm() >= d) continue;
+      const auto& ti = core.tracks[i];
+      const auto& tj = core.tracks[j];
+      const bool keep_i = std::make_tuple(ti.confirmed, ti.updates, -ti.id) >=
+                          std::make_tuple(tj.confirmed, tj.updates, -tj.id);
+      remove[keep_i ? j : i] = 1;
+      ++core.tracks_merged;
+    }
+  }
+  std::size_t k = 0;
+  std::erase_if(core.tracks, [&](const Track&) { return remove[k++] != 0; });
+}
+
+void Tracker::Impl::replay_with(const FeatureFrame& frame, int camera_index) {
+  // Latest checkpoint whose state holds only frames stamped at or before the late one.
+  auto checkpoint = std::upper_bound(checkpoints.begin(), checkpoints.end(), frame.stamp_ns,
+                                     [](TimeNs stamp, const Checkpoint& c) { return stamp < c.stamp_ns; });
+  --checkpoint;  // exists: the caller checked the front
+  const std::size_t start = checkpoint->index - history_base;
+  core = checkpoint->core;
+  checkpoints.erase(checkpoint + 1, checkpoints.end());
+  const auto position =
+      std::upper_bound(history.begin() + static_cast<std::ptrdiff_t>(start), history.end(), frame.stamp_ns,
+                       [](TimeNs stamp, const Entry& e) { return stamp < e.frame.stamp_ns; });
+  history.insert(position, Entry{camera_index, frame});
+  for (std::size_t i = start; i < history.size(); ++i) {
+    maybe_checkpoint(history[i].frame.stamp_ns, history_base + i);
+    apply(history[i].frame, history[i].camera);
+  }
+  ++stats.replays;
+  stats.replayed_frames += history.size() - start;
+}
+
+TrackRecord Tracker::Impl::to_record(const Track& track, TimeNs stamp_ns) const {
+  const PointState state = predicted(track.state, stamp_ns, options.process_noise);
+  TrackRecord record;
+  record.stamp_ns = stamp_ns;
+  record.id = track.id;
+  record.p = state.position();
+  record.v = state.velocity();
+  const auto& P = state.P;
+  record.position_covariance = {P(0, 0), P(0, 1), P(0, 2), P(1, 1), P(1, 2), P(2, 2)};
+  if (!track.confirmed) {
+    record.status = TrackStatus::kTentative;
+  } else if (stamp_ns - track.last_update_ns > options.coast_after_ns) {
+    record.status = TrackStatus::kCoasting;
+  } else {
+    record.status = TrackStatus::kConfirmed;
+  }
+  record.cameras = static_cast<int>(std::count_if(
+      track.camera_last_update.begin(), track.camera_last_update.end(),
+      [&](TimeNs last) { return last != 0 && stamp_ns - last <= options.recent_camera_window_ns; }));
+  return record;
+}
+
+Tracker::Tracker(TrackerOptions options) : impl_(std::make_unique<Impl>(options)) {}
+Tracker::~Tracker() = default;
+Tracker::Tracker(Tracker&&) noexcept = default;
+Tracker& Tracker::operator=(Tracker&&) noexcept = default;
+
+const TrackerOptions& Tracker::options() const {
+  return impl_->options;
+}
+
+void Tracker::set_calibration(const SystemCalibration& calibration) {
+  for (const auto& camera : calibration.cameras) set_camera(camera);
+}
+
+void Tracker::set_camera(const CameraCalibration& camera) {
+  if (!camera.T_world_cam) return;
+  auto& impl = *impl_;
+  const auto found = impl.camera_index.find(camera.id);
+  if (found != impl.camera_index.end()) {
+    *impl.models[found->second] = camera.model();
+  } else {
+    impl.camera_index.emplace(camera.id, static_cast<int>(impl.models.size()));
+    impl.camera_ids.push_back(camera.id);
+    impl.models.push_back(std::make_unique<CameraModel>(camera.model()));
+  }
+  impl.cameras_changed();
+}
+
+void Tracker::set_bodies(const std::vector<BodyDefinition>& bodies, const std::string& file_for_errors) {
+  std::set<std::string> names;
+  for (const auto& body : bodies) {
+    validate_body(body, file_for_errors);
+    if (!names.insert(body.name).second)
+      throw ConfigError(file_for_errors, "body '" + body.name + "'", "duplicate body name");
+  }
+  // Rewinds must see the same definitions: checkpoints are updated alike.
+  try {
+    BodySet probe = impl_->core.bodies;
+    probe.set_definitions(bodies, impl_->options.bodies);
+  } catch (const std::invalid_argument& error) {  // a led7 layout that is not seed 004's
+    throw ConfigError(file_for_errors, "bodies", error.what());
+  }
+  impl_->core.bodies.set_definitions(bodies, impl_->options.bodies);
+  for (auto& checkpoint : impl_->checkpoints)
+    checkpoint.core.bodies.set_definitions(bodies, impl_->options.bodies);
+}
+
+std::vector<PoseRecord> Tracker::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) const {
+  return impl_->core.bodies.poses_at(stamp_ns, horizon_ns);
+}
+
+const BodyStats& Tracker::body_stats() const {
+  return impl_->core.bodies.stats();
+}
+std::size_t Tracker::body_count() const {
+  return impl_->core.bodies.size();
+}
+
+bool Tracker::has_camera(const std::string& camera_id) const {
+  return impl_->camera_index.count(camera_id) != 0;
+}
+
+CameraCounters& Tracker::counters_for(const std::string& camera_id) {
+  // Garbage camera ids must not grow this map without bound.
+  constexpr std::size_t kMaxCameras = 1024;
+  const auto found = camera_counters_.find(camera_id);
+  if (found != camera_counters_.end()) return found->second;
+  if (camera_counters_.size() >= kMaxCameras) return camera_counters_["<other>"];
+  return camera_counters_[camera_id];
+}
+
+FrameOutcome Tracker::process(const FeatureFrame& frame) {
+  auto& impl = *impl_;
+  auto& stats = impl.stats;
+  ++stats.frames;
+  CameraCounters& counters = counters_for(frame.camera_id);
+  ++counters.frames;
+  const auto found = impl.camera_index.find(frame.camera_id);
+  if (found == impl.camera_index.end()) {
+    ++stats.frames_unknown_camera;
+    return FrameOutcome::kUnknownCamera;
+  }
+  const int camera = found->second;
+  // Stamps this far from 1970 would overflow the time arithmetic (the node's screen rejects far
+  // smaller errors); such a frame is counted as too late.
+  constexpr TimeNs kStampLimit = TimeNs{1} << 62;
+  if (frame.stamp_ns <= 0 || frame.stamp_ns > kStampLimit) {
+    ++stats.frames_too_late;
+    ++counters.too_late;
+    return FrameOutcome::kTooLate;
+  }
+  stats.blobs += frame.blobs.size();
+  counters.blobs += frame.blobs.size();
+  for (const auto& blob : frame.blobs) {
+    if (!std::isfinite(blob.x) || !std::isfinite(blob.y)) ++stats.blobs_non_finite;
+  }
+  counters.last_stamp_ns = std::max(counters.last_stamp_ns, frame.stamp_ns);
+
+  FrameOutcome outcome = FrameOutcome::kProcessed;
+  if (frame.stamp_ns >= impl.core.last_stamp_ns) {
+    impl.maybe_checkpoint(frame.stamp_ns, impl.history_base + impl.history.size());
+    impl.apply(frame, camera);
+    impl.history.push_back(Entry{camera, frame});
+    counters.associated = impl.core.associated_per_camera[camera];
+  } else if (impl.checkpoints.empty() || frame.stamp_ns < impl.checkpoints.front().stamp_ns) {
+    ++stats.frames_too_late;
+    ++counters.too_late;
+    return FrameOutcome::kTooLate;
+  } else {
+    impl.replay_with(frame, camera);
+    ++stats.frames_late;
+    ++counters.late;
+    outcome = FrameOutcome::kLateReplayed;
+    // A replay may change what every camera's blobs were used for.
+    for (std::size_t c = 0; c < impl.camera_ids.size(); ++c) {
+      const auto entry = camera_counters_.find(impl.camera_ids[c]);
+      if (entry != camera_counters_.end()) entry->second.associated = impl.core.associated_per_camera[c];
+    }
+  }
+  impl.trim();
+  ++counters.used;
+  return outcome;
+}
+
+const TrackerStats& Tracker::stats() const {
+  auto& s = impl_->merged_stats;
+  s = impl_->stats;
+  const Core& core = impl_->core;
+  s.blobs_associated = core.blobs_associated;
+  s.tracks_created = core.tracks_created;
+  s.tracks_confirmed = core.tracks_confirmed;
+  s.tracks_deleted = core.tracks_deleted;
+  s.tracks_merged = core.tracks_merged;
+  s.ghosts_deleted = core.ghosts_deleted;
+  s.blobs_not_initiated = core.blobs_not_initiated;
+  return s;
+}
+
+TimeNs Tracker::last_stamp_ns() const {
+  const TimeNs last = impl_->core.last_stamp_ns;
+  return last == std::numeric_limits<TimeNs>::min() ? 0 : last;
+}
+
+std::size_t Tracker::live_track_count() const {
+  return impl_->core.tracks.size();
+}
+
+std::array<std::size_t, 3> Tracker::track_counts(TimeNs stamp_ns) const {
+  std::array<std::size_t, 3> counts{};
+  for (const auto& track : impl_->core.tracks) {
+    const auto status = impl_->to_record(track, stamp_ns).status;
+    ++counts[status == TrackStatus::kTentative ? 0 : status == TrackStatus::kConfirmed ? 1 : 2];
+  }
+  return counts;
+}
+
+std::vector<TrackRecord> Tracker::tracks_at(TimeNs stamp_ns) const {
+  std::vector<TrackRecord> records;
+  for (const auto& track : impl_->core.tracks) {
+    if (track.confirmed) records.push_back(impl_->to_record(track, stamp_ns));
+  }
+  std::sort(records.begin(), records.end(),
+            [](const TrackRecord& a, const TrackRecord& b) { return a.id < b.id; });
+  return records;
+}
+
+std::vector<PredictedWindow2D> Tracker::predicted_windows(const std::string& camera_id, TimeNs stamp_ns,
+                                                          double margin_px) const {
+  std::vector<PredictedWindow2D> windows;
+  const auto found = impl_->camera_index.find(camera_id);
+  if (found == impl_->camera_index.end()) return windows;
+  const CameraModel& camera = *impl_->models[found->second];
+  for (const auto& track : impl_->core.tracks) {
+    const PointState state = predicted(track.state, stamp_ns, impl_->options.process_noise);
+    const auto projection = project_point(state, camera, impl_->options.measurement_noise_px);
+    if (!projection) continue;
+    const double hw = std::sqrt(impl_->options.gate_chi2 * projection->S(0, 0)) + margin_px;
+    const double hh = std::sqrt(impl_->options.gate_chi2 * projection->S(1, 1)) + margin_px;
+    if (!camera.in_image(projection->pixel, std::max(hw, hh))) continue;
+    windows.push_back({track.id, projection->pixel.x(), projection->pixel.y(), hw, hh});
+  }
+  return windows;
+}
+
+}  // namespace panoptes::estimator
