@@ -113,8 +113,9 @@ std::optional<int> parse_node_command_line(int argc, char** argv, NodeCommandLin
   if (const auto exit_code = parse_command_line(app, argc, argv, [&] { validate(command_line); }))
     return exit_code;
   for (const auto& [option, apply] : flags->options) {
+    // The appliers read the parsed values from `flags`: keep it alive with them.
     if (option->count() > 0)
-      command_line.overrides.push_back([flags, apply](auto& config) { apply(config); });
+      command_line.overrides.push_back([flags, apply = apply](auto& config) { apply(config); });
   }
   return std::nullopt;
 }

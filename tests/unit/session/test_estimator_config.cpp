@@ -13,7 +13,7 @@ namespace panoptes::session {
 namespace {
 
 std::filesystem::path write_file(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / ("panoptes_session_" + name);
+  auto path = std::filesystem::temp_directory_path() / ("panoptes_session_" + name);
   std::ofstream(path) << text;
   return path;
 }

@@ -26,6 +26,7 @@ FeatureFrame frame(const std::string& camera, std::int64_t number, TimeNs stamp_
 
 std::vector<std::pair<std::string, std::int64_t>> names(const std::vector<FeatureFrame>& frames) {
   std::vector<std::pair<std::string, std::int64_t>> out;
+  out.reserve(frames.size());
   for (const auto& f : frames) out.emplace_back(f.camera_id, f.frame);
   return out;
 }
