@@ -213,7 +213,7 @@ void BodySet::acquire_monocular(int camera_index, const CameraModel& camera, Tim
     index.push_back(j);
   }
   if (ideal.size() < 7) return;
-  LedMarkerOptions options;
+  LedMarkerOptions options = o.led_marker;
   const double focal = 0.5 * (camera.intrinsics().fx + camera.intrinsics().fy);
   options.centroid_sigma = o.measurement_noise_px / focal;
   options.max_rms = 5.0 * options.centroid_sigma;

@@ -18,6 +18,7 @@
 #include "panoptes/camera_model.h"
 #include "panoptes/estimator/body_ekf.h"
 #include "panoptes/estimator/body_identification.h"
+#include "panoptes/estimator/led_marker.h"
 #include "panoptes/records.h"
 #include "panoptes/time.h"
 
@@ -40,6 +41,9 @@ struct BodyTrackerOptions {
   double init_angle_sigma_rad = 0.02;
   double init_angular_velocity_sigma = 1.0;  // rad/s
   TimeNs quality_window_ns = 100'000'000;    // BodyPose quality: markers seen in this window
+  // 7-LED marker detection; centroid_sigma and max_rms are derived from measurement_noise_px and
+  // each camera's focal length, so their values here are not used.
+  LedMarkerOptions led_marker;
 };
 
 struct BodyStats {

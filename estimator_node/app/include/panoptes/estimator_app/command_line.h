@@ -1,0 +1,39 @@
+// SPDX-License-Identifier: Apache-2.0
+// estimator_node's command line (architecture.md, Contracts): modes, files, and the settings that
+// may also come from --config <yaml>. Precedence: defaults < --config file < explicit flags.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "panoptes/session/estimator_config.h"
+
+namespace panoptes::estimator_app {
+
+struct NodeCommandLine {
+  std::string calibration_file;
+  std::string bodies_file;
+  std::string config_file;
+  bool print_config = false;
+  std::vector<std::string> in_features;
+  bool no_dds = false;
+  std::string out_tracks;
+  std::string out_poses;
+  std::string dds_profile;
+  bool replay_arrival = false;
+  double duration_s = 0.0;
+  bool latency_probe = false;
+  bool quiet = false;
+  // The settings flags given explicitly, applied over the --config file.
+  std::vector<std::function<void(session::EstimatorConfig&)>> overrides;
+
+  // Defaults, then the --config file, then the explicit flags. Throws ConfigError.
+  session::EstimatorConfig effective_config() const;
+};
+
+// Parses argv (--help prints the defaults). Returns the exit code to leave with, or nullopt.
+std::optional<int> parse_node_command_line(int argc, char** argv, NodeCommandLine& command_line);
+
+}  // namespace panoptes::estimator_app

@@ -1,0 +1,28 @@
+// SPDX-License-Identifier: Apache-2.0
+// Live mode of estimator_node: an EstimatorSession fed by rt/panoptes/features (DDS listener
+// threads screen frames into the session's inbox) and run on one estimator thread that publishes
+// rt/panoptes/tracks, predictions, body poses and estimator_status, serves rt/panoptes/time_sync,
+// applies calibrations announced by CameraInfo and reloads the bodies file when it changes.
+#pragma once
+
+#include <string>
+
+#include "panoptes/session/body_file.h"
+#include "panoptes/session/estimator_session.h"
+
+namespace panoptes::estimator_app {
+
+struct LiveOptions {
+  std::string dds_profile;       // empty: the loopback profile
+  std::string calibration_file;  // cameras in it are not recalibrated from their CameraInfo
+  std::string out_tracks;        // optional Track JSONL
+  std::string out_poses;         // optional Pose JSONL
+  double duration_s = 0.0;       // 0: until a stop signal
+  bool latency_probe = false;    // benchmark aid (latency_probe_echoer.h)
+  bool quiet = false;
+};
+
+// Runs until a stop signal (panoptes::stop_requested) or the duration; returns the exit code.
+int run_live(const LiveOptions& options, session::EstimatorSession& session, session::BodyFile& body_file);
+
+}  // namespace panoptes::estimator_app

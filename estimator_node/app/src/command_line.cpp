@@ -1,0 +1,123 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/estimator_app/command_line.h"
+
+#include <CLI/CLI.hpp>
+
+#include "panoptes/cli.h"
+#include "panoptes/time.h"
+
+namespace panoptes::estimator_app {
+
+namespace {
+
+// The settings flags, bound to a default configuration so --help shows the defaults.
+struct SettingsFlags {
+  session::EstimatorConfig values;
+  double rewind_horizon_ms = ns_to_seconds(values.tracker.rewind_horizon_ns) * 1e3;
+  std::vector<std::pair<CLI::Option*, std::function<void(session::EstimatorConfig&)>>> options;
+
+  void add(CLI::App& app) {
+    auto& node = values.node;
+    auto& tracker = values.tracker;
+    const auto bind = [&](CLI::Option* option, std::function<void(session::EstimatorConfig&)> apply) {
+      options.emplace_back(option, std::move(apply));
+    };
+    bind(app.add_option("--prediction-horizon-ms", node.prediction_horizon_ms,
+                        "publish body poses predicted this far ahead of the newest frame (seed 000 Ch. 5)")
+             ->check(CLI::Range(0.0, 1000.0)),
+         [this](auto& c) { c.node.prediction_horizon_ms = values.node.prediction_horizon_ms; });
+    bind(app.add_option("--latency-window-ms", node.latency_window_ms,
+                        "live: how long frames wait to be ordered by stamp")
+             ->check(CLI::Range(0.0, 10000.0)),
+         [this](auto& c) { c.node.latency_window_ms = values.node.latency_window_ms; });
+    bind(app.add_flag("!--no-predictions", node.predictions, "live: do not publish predicted windows"),
+         [this](auto& c) { c.node.predictions = values.node.predictions; });
+    bind(app.add_option("--prediction-margin-px", node.prediction_margin_px,
+                        "live: pixels added around each predicted gate")
+             ->check(CLI::Range(0.0, 1000.0)),
+         [this](auto& c) { c.node.prediction_margin_px = values.node.prediction_margin_px; });
+    bind(app.add_option("--rewind-horizon-ms", rewind_horizon_ms,
+                        "late frames up to this much older than the newest are replayed, older ones dropped")
+             ->check(CLI::Range(0.0, 60000.0)),
+         [this](auto& c) { c.tracker.rewind_horizon_ns = seconds_to_ns(rewind_horizon_ms * 1e-3); });
+    bind(app.add_option("--status-period", node.status_period_s, "live: seconds between progress lines")
+             ->check(CLI::PositiveNumber),
+         [this](auto& c) { c.node.status_period_s = values.node.status_period_s; });
+    bind(app.add_option("--process-noise", tracker.process_noise,
+                        "σ² of white acceleration, m²/s³ (seed 003 A.48)")
+             ->check(CLI::PositiveNumber),
+         [this](auto& c) { c.tracker.process_noise = values.tracker.process_noise; });
+    bind(app.add_option("--measurement-noise-px", tracker.measurement_noise_px, "σ of a centroid, px")
+             ->check(CLI::PositiveNumber),
+         [this](auto& c) { c.tracker.measurement_noise_px = values.tracker.measurement_noise_px; });
+    bind(app.add_option("--confirm-cameras", tracker.confirm_cameras,
+                        "distinct cameras that must see a new track before it is published")
+             ->check(CLI::Range(2, 64)),
+         [this](auto& c) { c.tracker.confirm_cameras = values.tracker.confirm_cameras; });
+  }
+};
+
+void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
+  app.add_option(
+      "--config", c.config_file,
+      "estimator settings YAML (docs/estimator.md, \"Configuration\"); flags given here override it");
+  app.add_flag("--print-config", c.print_config,
+               "print the effective settings as YAML (loadable with --config) and exit");
+  app.add_option("--calibration", c.calibration_file, "calibration YAML (cameras with T_world_cam)");
+  app.add_option("--bodies", c.bodies_file,
+                 "rigid-body definitions YAML (docs/bodies.md); live, reloaded when the file changes");
+  app.add_option("--in-features", c.in_features, "offline: FeatureFrame JSONL files (one per camera)")
+      ->expected(1, -1);
+  app.add_flag("--no-dds", c.no_dds, "offline: do not use DDS; requires --in-features");
+  app.add_option("--out-tracks", c.out_tracks, "write every published TrackFrame as Track JSONL");
+  app.add_option("--out-poses", c.out_poses, "write body poses as Pose JSONL (needs --bodies)");
+  app.add_option("--dds-profile", c.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  app.add_flag("--replay-arrival", c.replay_arrival,
+               "offline: deliver frames in the order they reached the estimator (received_ns), through the "
+               "latency window, as live mode would");
+  app.add_option("--duration", c.duration_s, "live: stop after this many seconds (0 = until Ctrl-C)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("--latency-probe", c.latency_probe,
+               "live, benchmark aid: echo camera_node --latency-probe probes at once and trace when each "
+               "frame's output is written (rt/panoptes/latency_probe/..., bench_latency)");
+  app.add_flag("--quiet", c.quiet, "no progress output");
+}
+
+void validate(const NodeCommandLine& c) {
+  if (c.print_config) return;  // prints and exits: no mode needed
+  if (c.no_dds && c.in_features.empty()) throw CLI::ValidationError("--no-dds needs --in-features");
+  if (!c.in_features.empty() && !c.no_dds) {
+    throw CLI::ValidationError(
+        "--in-features runs offline: add --no-dds (replaying onto DDS is camera_node's job)");
+  }
+  if (c.no_dds && c.calibration_file.empty()) throw CLI::ValidationError("offline mode needs --calibration");
+  if (!c.out_poses.empty() && c.bodies_file.empty()) throw CLI::ValidationError("--out-poses needs --bodies");
+}
+
+}  // namespace
+
+session::EstimatorConfig NodeCommandLine::effective_config() const {
+  session::EstimatorConfig config =
+      config_file.empty() ? session::EstimatorConfig{} : session::load_estimator_config(config_file);
+  for (const auto& apply : overrides) apply(config);
+  return config;
+}
+
+std::optional<int> parse_node_command_line(int argc, char** argv, NodeCommandLine& command_line) {
+  CLI::App app{"estimator_node: fuses asynchronous camera features into 3D tracks (Panoptes)",
+               "estimator_node"};
+  app.option_defaults()->always_capture_default();
+  add_modes_and_files(app, command_line);
+  auto flags = std::make_shared<SettingsFlags>();
+  flags->add(app);
+  if (const auto exit_code = parse_command_line(app, argc, argv, [&] { validate(command_line); }))
+    return exit_code;
+  for (const auto& [option, apply] : flags->options) {
+    // The appliers read the parsed values from `flags`: keep it alive with them.
+    if (option->count() > 0)
+      command_line.overrides.push_back([flags, apply = apply](auto& config) { apply(config); });
+  }
+  return std::nullopt;
+}
+
+}  // namespace panoptes::estimator_app

@@ -1,0 +1,256 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/estimator_app/live_estimator.h"
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "panoptes/calibration.h"
+#include "panoptes/calibration_file.h"
+#include "panoptes/dds/bus.h"
+#include "panoptes/dds/convert.h"
+#include "panoptes/dds/time_sync.h"
+#include "panoptes/estimator_app/frame_periods.h"
+#include "panoptes/estimator_app/latency_probe_echoer.h"
+#include "panoptes/estimator_app/status.h"
+#include "panoptes/process.h"
+#include "panoptes/session/log.h"
+#include "panoptes/session/output_sinks.h"
+
+namespace panoptes::estimator_app {
+
+namespace {
+
+namespace est = panoptes::estimator;
+using session::log;
+
+std::unique_ptr<dds::Bus> open_bus(const LiveOptions& options) {
+  dds::BusOptions bus_options;
+  bus_options.profile_file = options.dds_profile;
+  bus_options.participant_name = "estimator_node";
+  auto bus = std::make_unique<dds::Bus>(bus_options);
+  if (!options.quiet) log("DDS profile " + bus->profile_file().string());
+  return bus;
+}
+
+// The DDS entities and the estimator thread's loop. Members are declared in the order they are
+// created: the readers, whose listeners use what precedes them, go before the rest.
+class LiveEstimator {
+ public:
+  LiveEstimator(const LiveOptions& options, session::EstimatorSession& session, session::BodyFile& body_file)
+      : options_(options),
+        node_(session.config().node),
+        session_(session),
+        tracker_(session.tracker()),
+        body_file_(body_file),
+        bus_(open_bus(options)),
+        time_service_(*bus_),
+        info_reader_(bus_->make_reader<msg::CameraInfo>([this](msg::CameraInfo&& info) { announce(info); })),
+        feature_reader_(bus_->make_reader<msg::FeatureFrame>([this](msg::FeatureFrame&& message) {
+          auto frame = dds::from_message(message);
+          frame.received_ns = wall_now_ns();
+          session_.offer(std::move(frame), frame.received_ns, true);
+        })),
+        track_writer_(bus_->make_writer<msg::TrackFrame>()),
+        prediction_writer_(bus_->make_writer<msg::Predictions>()),
+        status_writer_(bus_->make_writer<msg::EstimatorStatus>()),
+        body_writer_(bus_->make_writer<msg::BodyPose>()) {
+    if (options_.latency_probe) {
+      latency_probe_.emplace(*bus_);
+      log("benchmark aid: echoing latency probes (rt/panoptes/latency_probe/...)");
+    }
+    outputs_.emplace(options_.out_tracks, options_.out_poses);
+    if (!options_.calibration_file.empty()) {
+      for (const auto& camera : load_calibration(options_.calibration_file).cameras)
+        from_file_.insert(camera.id);
+    }
+  }
+
+  int run();
+
+ private:
+  // A frame's output in order of urgency: its poses right after the update (what applications
+  // wait for); then, once no other frame is due, its TrackFrame, the predictions for its camera's
+  // next frame, the files and the latency trace. So a frame that arrives while the previous one is
+  // being processed waits for that update only, not for its housekeeping (issue 7, bench_latency).
+  struct Processed {
+    FeatureFrame frame;
+    std::vector<TrackRecord> tracks;  // at its update
+    std::vector<PoseRecord> poses;
+    LatencyProbeEchoer::Stamps stamps;  // --latency-probe
+  };
+
+  void announce(const msg::CameraInfo& info);
+  void apply_announced_cameras();
+  void update(FeatureFrame&& frame);
+  void finish(Processed& done);
+  bool finish_processed(bool force);
+  void publish_predictions(const FeatureFrame& frame);
+  void publish_status(TimeNs now, TimeNs start);
+
+  const LiveOptions& options_;
+  const session::NodeSettings& node_;
+  session::EstimatorSession& session_;
+  est::Tracker& tracker_;
+  session::BodyFile& body_file_;
+  std::unique_ptr<dds::Bus> bus_;
+  // The common time base is this process's clock: camera nodes synchronise to it (architecture.md "Time").
+  dds::TimeSyncServer time_service_;
+  std::mutex info_mutex_;
+  std::vector<CameraCalibration> announced_;  // from CameraInfo, applied on the estimator thread
+  std::unique_ptr<dds::Reader<msg::CameraInfo>> info_reader_;
+  std::unique_ptr<dds::Reader<msg::FeatureFrame>> feature_reader_;
+  std::unique_ptr<dds::Writer<msg::TrackFrame>> track_writer_;
+  std::unique_ptr<dds::Writer<msg::Predictions>> prediction_writer_;
+  std::unique_ptr<dds::Writer<msg::EstimatorStatus>> status_writer_;
+  std::unique_ptr<dds::Writer<msg::BodyPose>> body_writer_;
+  std::optional<LatencyProbeEchoer> latency_probe_;
+  std::optional<session::JsonlOutputs> outputs_;
+  std::set<std::string> from_file_;
+  FramePeriods periods_;
+  std::vector<Processed> processed_;  // finished from the front; cleared (capacity kept) when all are
+  std::size_t finished_ = 0;
+};
+
+void LiveEstimator::announce(const msg::CameraInfo& info) {
+  if (auto calibration = dds::calibration_from(info); calibration && calibration->T_world_cam) {
+    std::lock_guard<std::mutex> lock(info_mutex_);
+    announced_.push_back(*calibration);
+  }
+}
+
+void LiveEstimator::apply_announced_cameras() {
+  std::lock_guard<std::mutex> lock(info_mutex_);
+  for (const auto& camera : announced_) {
+    // The calibration file wins over what a camera announces about itself.
+    if (from_file_.count(camera.id) == 0 && !tracker_.has_camera(camera.id)) {
+      tracker_.set_camera(camera);
+      log("camera '" + camera.id + "' calibrated from its CameraInfo");
+    }
+  }
+  announced_.clear();
+}
+
+void LiveEstimator::publish_predictions(const FeatureFrame& frame) {
+  const TimeNs next = periods_.next_stamp(frame.camera_id, frame.stamp_ns);
+  if (!node_.predictions || next == frame.stamp_ns) return;
+  msg::Predictions message;
+  message.camera_id(frame.camera_id);
+  message.stamp_ns(next);
+  for (const auto& w : tracker_.predicted_windows(frame.camera_id, next, node_.prediction_margin_px)) {
+    msg::PredictedWindow window;
+    window.track_id(w.track_id);
+    window.x(static_cast<float>(w.x));
+    window.y(static_cast<float>(w.y));
+    window.half_width(static_cast<float>(w.half_width));
+    window.half_height(static_cast<float>(w.half_height));
+    message.windows().push_back(window);
+  }
+  prediction_writer_->write(message);
+}
+
+void LiveEstimator::update(FeatureFrame&& frame) {
+  const TimeNs dequeued_ns = latency_probe_ ? wall_now_ns() : 0;
+  if (session_.process(frame) != est::FrameOutcome::kProcessed) return;
+  const TimeNs updated_ns = latency_probe_ ? wall_now_ns() : 0;
+  auto poses = session_.current_poses();
+  // Stamped before writing, like every publish_ns: delivery may complete within write().
+  const TimeNs poses_published_ns = latency_probe_ && !poses.empty() ? wall_now_ns() : 0;
+  for (const auto& pose : poses) {
+    const msg::BodyPose pose_message = dds::to_message(pose);
+    body_writer_->write(pose_message);
+    if (latency_probe_) latency_probe_->note_pose(pose_message);
+  }
+  const LatencyProbeEchoer::Stamps stamps{dequeued_ns, updated_ns, poses_published_ns,
+                                          poses.empty() ? 0 : poses.front().stamp_ns,
+                                          static_cast<std::uint32_t>(poses.size())};
+  processed_.push_back({std::move(frame), tracker_.current_tracks(), std::move(poses), stamps});
+}
+
+void LiveEstimator::finish(Processed& done) {
+  msg::TrackFrame message;
+  message.stamp_ns(done.frame.stamp_ns);
+  message.source_camera(done.frame.camera_id);
+  message.source_frame(done.frame.frame);
+  for (const auto& track : done.tracks) message.tracks().push_back(dds::to_message(track));
+  message.publish_ns(wall_now_ns());
+  track_writer_->write(message);
+  publish_predictions(done.frame);
+  outputs_->write_tracks(done.tracks);
+  outputs_->write_poses(done.poses);
+  if (latency_probe_) latency_probe_->trace(done.frame, done.stamps, message.publish_ns());
+}
+
+// Finishes processed frames while no other frame is due (all of them with `force`). True when all
+// are finished.
+bool LiveEstimator::finish_processed(bool force) {
+  while (finished_ < processed_.size() && (force || !session_.inbox().has_due(wall_now_ns())))
+    finish(processed_[finished_++]);
+  if (finished_ < processed_.size()) return false;
+  processed_.clear();
+  finished_ = 0;
+  return true;
+}
+
+void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
+  const est::EstimatorUsage usage = session_.usage(now);
+  status_writer_->write(to_status_message(usage));
+  if (options_.quiet) return;
+  std::string line = "t=" + std::to_string(static_cast<int>(ns_to_seconds(now - start))) + "s";
+  for (const auto& c : usage.cameras) {
+    char buffer[96];
+    std::snprintf(buffer, sizeof buffer, " %s %.0f%%", c.camera_id.c_str(), 100.0 * c.utilisation);
+    line += buffer;
+  }
+  line += " | tracks " + std::to_string(usage.tracks_confirmed) + "+" +
+          std::to_string(usage.tracks_coasting) + " coasting" +
+          (tracker_.body_count() ? " | bodies " + std::to_string(tracker_.current_poses().size()) + "/" +
+                                       std::to_string(tracker_.body_count())
+                                 : "") +
+          " | replays " + std::to_string(usage.replays) + " | time sync answered " +
+          std::to_string(time_service_.answered());
+  log(line);
+}
+
+int LiveEstimator::run() {
+  auto& inbox = session_.inbox();
+  const TimeNs start = wall_now_ns();
+  TimeNs next_status = start + seconds_to_ns(node_.status_period_s);
+  TimeNs next_body_poll = start + seconds_to_ns(node_.bodies_poll_s);
+  while (!stop_requested()) {
+    apply_announced_cameras();
+    const TimeNs now = wall_now_ns();
+    for (auto& frame : inbox.pop_due(now)) update(std::move(frame));
+    if (!finish_processed(false)) continue;  // a frame is due: its update first
+    if (latency_probe_) latency_probe_->flush(now, false);
+    if (now >= next_body_poll) {
+      next_body_poll = now + seconds_to_ns(node_.bodies_poll_s);
+      body_file_.reload_if_changed(tracker_);
+    }
+    if (now >= next_status) {
+      next_status += seconds_to_ns(node_.status_period_s);
+      publish_status(now, start);
+    }
+    if (options_.duration_s > 0 && now - start >= seconds_to_ns(options_.duration_s)) break;
+    inbox.wait(wall_now_ns(), std::chrono::milliseconds(1));  // wakes as frames arrive (issue 7)
+  }
+  for (auto& frame : inbox.drain()) update(std::move(frame));
+  finish_processed(true);
+  if (latency_probe_) latency_probe_->flush(wall_now_ns(), true);
+  session_.print_summary(0);
+  return kExitOk;
+}
+
+}  // namespace
+
+int run_live(const LiveOptions& options, session::EstimatorSession& session, session::BodyFile& body_file) {
+  LiveEstimator live(options, session, body_file);
+  return live.run();
+}
+
+}  // namespace panoptes::estimator_app

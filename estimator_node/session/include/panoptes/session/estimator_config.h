@@ -1,0 +1,52 @@
+// SPDX-License-Identifier: Apache-2.0
+// EstimatorConfig: every setting of the estimator (tracker, initiation, bodies, identification,
+// 7-LED markers, frame screen, and the node's inbox, windows and periods) and its YAML form
+// (docs/estimator.md, "Configuration"). The YAML lives here, not in the estimator core, so
+// panoptes_estimator stays free of file formats. Errors name the file and the dotted key path
+// (panoptes::ConfigError, as the detector configuration).
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+
+#include "panoptes/estimator/frame_screen.h"
+#include "panoptes/estimator/tracker.h"
+
+namespace panoptes {
+class YamlReader;
+}
+
+namespace panoptes::session {
+
+// Settings of the session and the live node around the tracker.
+struct NodeSettings {
+  std::size_t inbox_capacity = 4096;   // frames waiting to be ordered by stamp
+  double latency_window_ms = 20.0;     // how long frames wait in the inbox (live, --replay-arrival)
+  bool predictions = true;             // live: publish predicted windows
+  double prediction_margin_px = 3.0;   // live: pixels added around each predicted gate
+  double prediction_horizon_ms = 0.0;  // body poses are published this far ahead (seed 000 Ch. 5)
+  double status_period_s = 1.0;        // live: seconds between status messages and progress lines
+  double bodies_poll_s = 1.0;          // live: how often the bodies file is checked for changes
+};
+
+struct EstimatorConfig {
+  NodeSettings node;
+  estimator::FrameScreenOptions screen;
+  estimator::TrackerOptions tracker;
+};
+
+// Reads a configuration: keys left out keep their defaults. Throws ConfigError
+// ("<file>: <key path>: <reason>") on a missing file, bad syntax, an unknown key or a value out of
+// range.
+EstimatorConfig load_estimator_config(const std::filesystem::path& path);
+EstimatorConfig estimator_config_from_yaml(const YamlReader& reader);
+
+// The complete configuration as YAML with a comment per key; loading it gives back equal options
+// (doubles are written in their shortest form that reads back exactly).
+std::string estimator_config_to_yaml(const EstimatorConfig& config);
+
+// Field-by-field equality (tests, round trips).
+bool operator==(const EstimatorConfig& a, const EstimatorConfig& b);
+
+}  // namespace panoptes::session

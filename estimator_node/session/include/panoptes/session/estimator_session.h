@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: Apache-2.0
+// EstimatorSession: admit frames -> screen -> inbox -> tracker (and its bodies). The one object
+// that live mode (app/), offline mode (offline_replay.h), tests and benchmarks drive, so they all
+// see the same screening, ordering and statistics. Outputs are the caller's: it reads the tracker
+// after each processed frame and writes to its sinks (JSONL here, DDS in the app).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "panoptes/estimator/inbox.h"
+#include "panoptes/estimator/tracker.h"
+#include "panoptes/records.h"
+#include "panoptes/session/estimator_config.h"
+#include "panoptes/session/intake.h"
+
+namespace panoptes::session {
+
+class EstimatorSession {
+ public:
+  explicit EstimatorSession(const EstimatorConfig& config);
+  EstimatorSession(const EstimatorSession&) = delete;
+  EstimatorSession& operator=(const EstimatorSession&) = delete;
+
+  const EstimatorConfig& config() const { return config_; }
+  // For calibration and bodies before the run; the owning thread only once frames flow.
+  estimator::Tracker& tracker() { return tracker_; }
+  const estimator::Tracker& tracker() const { return tracker_; }
+
+  // Any thread. Screens `frame` against `reference_ns` (see Intake::admit); false: rejected.
+  bool admit(FeatureFrame& frame, TimeNs reference_ns, bool live) {
+    return intake_.admit(frame, reference_ns, live);
+  }
+  // Any thread. Screens, then queues an admitted frame for ordering by stamp.
+  bool offer(FeatureFrame&& frame, TimeNs reference_ns, bool live) {
+    if (!intake_.admit(frame, reference_ns, live)) return false;
+    inbox_.push(std::move(frame));
+    return true;
+  }
+  estimator::FrameInbox& inbox() { return inbox_; }
+
+  // The owning thread: one tracker update.
+  estimator::FrameOutcome process(const FeatureFrame& frame) { return intake_.process(frame); }
+
+  estimator::EstimatorUsage usage(TimeNs stamp_ns) const { return intake_.usage(stamp_ns, inbox_.drops()); }
+  void print_summary(std::size_t bad_lines) const { intake_.print_summary(inbox_.drops(), bad_lines); }
+
+  // Body poses at the newest frame, predicted node.prediction_horizon_ms ahead.
+  std::vector<PoseRecord> current_poses() const { return tracker_.current_poses(pose_horizon_ns_); }
+
+ private:
+  EstimatorConfig config_;
+  estimator::Tracker tracker_;
+  Intake intake_;
+  estimator::FrameInbox inbox_;
+  TimeNs pose_horizon_ns_;
+};
+
+}  // namespace panoptes::session

@@ -1,0 +1,298 @@
+// SPDX-License-Identifier: Apache-2.0
+// EstimatorConfig <-> YAML. One description of the fields (visit_config) drives both the reader
+// and the writer, so every key that is printed can be read back and none is forgotten.
+#include "panoptes/session/estimator_config.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "panoptes/config.h"
+
+namespace panoptes::session {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// Shortest text that reads back as exactly `value`.
+std::string format_double(double value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+// Allowed values of a number: [low, high], or (low, high] with `low_open`.
+struct Limits {
+  double low = -kInfinity;
+  double high = kInfinity;
+  bool low_open = false;
+
+  bool admits(double value) const {
+    return std::isfinite(value) && (low_open ? value > low : value >= low) && value <= high;
+  }
+  std::string describe() const {
+    if (high == kInfinity)
+      return std::string("must be a finite number ") + (low_open ? "> " : ">= ") + format_double(low);
+    return std::string("must be a number in ") + (low_open ? "(" : "[") + format_double(low) + ", " +
+           format_double(high) + "]";
+  }
+};
+constexpr Limits kPositive{0.0, kInfinity, true};
+constexpr Limits kNonNegative{0.0, kInfinity, false};
+constexpr Limits between(double low, double high) {
+  return {low, high, false};
+}
+
+constexpr long long kHourNs = 3600LL * 1'000'000'000LL;
+
+// Reads fields from a YAML map; keys left out keep their values.
+class FieldReader {
+ public:
+  explicit FieldReader(const YamlReader& reader) : reader_(reader) {
+    if (!reader_.node().IsMap() && !reader_.node().IsNull()) reader_.fail("", "expected a map");
+  }
+
+  void number(const char* key, double& value, Limits limits, const char* /*doc*/) {
+    keys_.emplace_back(key);
+    if (!reader_.has(key)) return;
+    const double read = reader_.get_double(key);
+    if (!limits.admits(read)) reader_.fail(key, limits.describe());
+    value = read;
+  }
+
+  template <class Integer>
+  void integer(const char* key, Integer& value, long long low, long long high, const char* /*doc*/) {
+    keys_.emplace_back(key);
+    if (!reader_.has(key)) return;
+    const long long read = reader_.get_int(key);
+    if (read < low || read > high)
+      reader_.fail(key, "must be an integer in [" + std::to_string(low) + ", " + std::to_string(high) + "]");
+    value = static_cast<Integer>(read);
+  }
+
+  void flag(const char* key, bool& value, const char* /*doc*/) {
+    keys_.emplace_back(key);
+    value = reader_.get_bool(key, value);
+  }
+
+  template <class Visit>
+  void section(const char* key, const char* /*doc*/, Visit&& visit) {
+    keys_.emplace_back(key);
+    if (!reader_.has(key)) return;
+    FieldReader child(reader_.child(key));
+    visit(child);
+    child.finish();
+  }
+
+  // Unknown keys are errors: a misspelt key must not silently leave a default in place.
+  void finish() const { reader_.expect_only(keys_); }
+
+ private:
+  YamlReader reader_;
+  std::vector<std::string> keys_;
+};
+
+// Writes fields as YAML, one `key: value  # doc` line each.
+class FieldWriter {
+ public:
+  void number(const char* key, double& value, Limits, const char* doc) {
+    line(key, format_double(value), doc);
+  }
+
+  template <class Integer>
+  void integer(const char* key, Integer& value, long long, long long, const char* doc) {
+    line(key, std::to_string(value), doc);
+  }
+
+  void flag(const char* key, bool& value, const char* doc) { line(key, value ? "true" : "false", doc); }
+
+  template <class Visit>
+  void section(const char* key, const char* doc, Visit&& visit) {
+    line(key, "", doc);
+    indent_ += "  ";
+    visit(*this);
+    indent_.resize(indent_.size() - 2);
+  }
+
+  const std::string& text() const { return text_; }
+
+ private:
+  void line(const char* key, const std::string& value, const char* doc) {
+    text_ += indent_ + key + ":" + (value.empty() ? "" : " " + value);
+    if (doc && *doc) text_ += std::string("  # ") + doc;
+    text_ += "\n";
+  }
+
+  std::string indent_;
+  std::string text_;
+};
+
+template <class Fields>
+void visit_node(Fields& f, NodeSettings& o) {
+  f.integer("inbox_capacity", o.inbox_capacity, 1, 1 << 24, "frames waiting to be ordered by stamp");
+  f.number("latency_window_ms", o.latency_window_ms, between(0, 10000),
+           "how long frames wait to be ordered by stamp (live, --replay-arrival)");
+  f.flag("predictions", o.predictions, "live: publish predicted windows");
+  f.number("prediction_margin_px", o.prediction_margin_px, between(0, 1000),
+           "live: pixels added around each predicted gate");
+  f.number("prediction_horizon_ms", o.prediction_horizon_ms, between(0, 1000),
+           "body poses are published this far ahead of the newest frame (seed 000 Ch. 5)");
+  f.number("status_period_s", o.status_period_s, kPositive, "live: seconds between status messages");
+  f.number("bodies_poll_s", o.bodies_poll_s, kPositive, "live: how often the bodies file is checked");
+}
+
+template <class Fields>
+void visit_screen(Fields& f, estimator::FrameScreenOptions& o) {
+  f.integer("max_blobs", o.max_blobs, 1, 1 << 24, "frames with more blobs are rejected");
+  f.integer("max_stamp_skew_ns", o.max_stamp_skew_ns, 1, kHourNs,
+            "|stamp - reference| beyond this rejects a frame");
+  f.integer("max_future_ns", o.max_future_ns, 0, kHourNs,
+            "live: how far a stamp may lie ahead of the wall clock");
+  f.number("max_abs_coordinate_px", o.max_abs_coordinate_px, kPositive, "blobs farther outside are garbage");
+  f.integer("max_camera_id_length", o.max_camera_id_length, 1, 65536, "longer camera ids are rejected");
+}
+
+template <class Fields>
+void visit_initiator(Fields& f, estimator::InitiatorOptions& o) {
+  f.integer("window_ns", o.window_ns, 0, kHourNs, "other cameras' tracklets this recent may pair");
+  f.number("link_radius_px", o.link_radius_px, kPositive,
+           "a blob continues its camera's tracklet within this");
+  f.number("epipolar_px", o.epipolar_px, kPositive, "distance to the epipolar line, beyond time alignment");
+  f.number("reprojection_px", o.reprojection_px, kPositive, "every supporting view must reproject this well");
+  f.number("max_image_speed_px_s", o.max_image_speed_px_s, kNonNegative,
+           "allowance for a partner without a pixel velocity yet");
+  f.integer("unaligned_max_dt_ns", o.unaligned_max_dt_ns, 0, kHourNs,
+            "... which pairs only this close in time");
+  f.number("min_depth_m", o.min_depth_m, kNonNegative, "points closer to a camera are rejected");
+}
+
+template <class Fields>
+void visit_identification(Fields& f, estimator::IdentificationOptions& o) {
+  f.number("tolerance_floor_m", o.tolerance_floor_m, kNonNegative,
+           "distances agree within floor + sigmas * sigma(distance)");
+  f.number("tolerance_sigmas", o.tolerance_sigmas, kNonNegative, "see tolerance_floor_m");
+  f.number("max_rms_m", o.max_rms_m, kPositive, "the fitted pose must explain the points this well");
+  f.integer("min_markers", o.min_markers, 3, 1024, "markers that must match");
+  f.integer("max_points", o.max_points, 3, 1 << 20, "points offered beyond this are ignored");
+  f.integer("max_clique_steps", o.max_clique_steps, 1, 1LL << 40, "bound on the clique search");
+}
+
+template <class Fields>
+void visit_led_marker(Fields& f, estimator::LedMarkerOptions& o) {
+  f.number("line_tolerance", o.line_tolerance, kPositive, "collinearity tolerance (seed 004)");
+  f.number("cross_ratio_tolerance", o.cross_ratio_tolerance, kPositive, "relative cross-ratio tolerance");
+  f.number("cross_ratio_sigmas", o.cross_ratio_sigmas, kNonNegative, "... or this many sigmas of it");
+  f.integer("seed", o.seed, 0, std::numeric_limits<long long>::max(), "k-means initialisation");
+  f.integer("kmeans_iterations", o.kmeans_iterations, 1, 10000, "k-means iterations per clustering");
+  f.flag("retry_extra_cluster", o.retry_extra_cluster, "retry with one more cluster for partial markers");
+}
+
+template <class Fields>
+void visit_bodies(Fields& f, estimator::BodyTrackerOptions& o) {
+  f.section("noise", "body motion model", [&](auto& s) {
+    s.number("jerk", o.noise.jerk, kPositive, "sigma^2 of white jerk, m^2/s^5");
+    s.number("angular_accel", o.noise.angular_accel, kPositive,
+             "sigma^2 of white angular acceleration, rad^2/s^3");
+  });
+  f.number("measurement_noise_px", o.measurement_noise_px, kPositive, "sigma of a marker's centroid, px");
+  f.number("gate_chi2", o.gate_chi2, kPositive, "chi^2_2 gate for a marker's blob");
+  f.section("identification", "bodies from 3D points",
+            [&](auto& s) { visit_identification(s, o.identification); });
+  f.integer("identify_interval_ns", o.identify_interval_ns, 0, kHourNs,
+            "how often untracked bodies are looked for");
+  f.integer("verify_interval_ns", o.verify_interval_ns, 0, kHourNs, "how often a tracked body is checked");
+  f.number("verify_position_m", o.verify_position_m, kPositive,
+           "identification and EKF disagree more: re-identify");
+  f.number("verify_angle_rad", o.verify_angle_rad, kPositive, "... or in angle, rad");
+  f.integer("lost_after_ns", o.lost_after_ns, 0, kHourNs, "no marker update for this long: lost");
+  f.number("max_nis", o.max_nis, kPositive, "moving average of a marker's d^2 above this: lost");
+  f.number("init_position_sigma_m", o.init_position_sigma_m, kPositive,
+           "initial 1-sigma of an acquired body, m");
+  f.number("init_velocity_sigma_mps", o.init_velocity_sigma_mps, kPositive, "m/s");
+  f.number("init_accel_sigma_mps2", o.init_accel_sigma_mps2, kPositive, "m/s^2");
+  f.number("init_angle_sigma_rad", o.init_angle_sigma_rad, kPositive, "rad");
+  f.number("init_angular_velocity_sigma", o.init_angular_velocity_sigma, kPositive, "rad/s");
+  f.integer("quality_window_ns", o.quality_window_ns, 0, kHourNs,
+            "BodyPose quality: markers seen in this window");
+  f.section("led_marker", "7-LED markers (seed 004)", [&](auto& s) { visit_led_marker(s, o.led_marker); });
+}
+
+template <class Fields>
+void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
+  f.number("process_noise", o.process_noise, kPositive,
+           "sigma^2 of white acceleration, m^2/s^3 (seed 003 A.48)");
+  f.number("measurement_noise_px", o.measurement_noise_px, kPositive, "sigma of a centroid, px");
+  f.number("gate_chi2", o.gate_chi2, kPositive, "verify region (seed 003 2.2.3.2)");
+  f.section("init", "pairing of unmatched blobs into new points",
+            [&](auto& s) { visit_initiator(s, o.init); });
+  f.number("init_position_sigma_m", o.init_position_sigma_m, kPositive, "initial 1-sigma of a new point, m");
+  f.number("init_velocity_sigma_mps", o.init_velocity_sigma_mps, kPositive, "velocity unknown at initiation");
+  f.number("init_measured_velocity_sigma_mps", o.init_measured_velocity_sigma_mps, kPositive,
+           "velocity from the tracklets' pixel velocities");
+  f.integer("confirm_cameras", o.confirm_cameras, 2, 64, "distinct cameras that confirm a track ...");
+  f.integer("confirm_updates", o.confirm_updates, 1, 1 << 20, "... or this many updates from at least two");
+  f.integer("tentative_max_misses", o.tentative_max_misses, 1, 1 << 20,
+            "tentative track unseen this often: ghost");
+  f.number("tentative_max_nis", o.tentative_max_nis, kPositive, "moving average of d^2 above this: deleted");
+  f.number("confirmed_max_nis", o.confirmed_max_nis, kPositive, "... for a confirmed track");
+  f.integer("coast_after_ns", o.coast_after_ns, 0, kHourNs, "no update for this long: coasting");
+  f.integer("delete_after_ns", o.delete_after_ns, 0, kHourNs, "no update for this long: deleted");
+  f.integer("tentative_delete_after_ns", o.tentative_delete_after_ns, 0, kHourNs,
+            "... for a tentative track");
+  f.number("merge_distance_m", o.merge_distance_m, kNonNegative,
+           "two tracks closer than this are one marker");
+  f.integer("recent_camera_window_ns", o.recent_camera_window_ns, 0, kHourNs, "for a track record's cameras");
+  f.integer("rewind_horizon_ns", o.rewind_horizon_ns, 0, 60 * 1'000'000'000LL,
+            "late frames up to this much older than the newest are replayed");
+  f.integer("checkpoint_interval_ns", o.checkpoint_interval_ns, 0, kHourNs, "state snapshots for rewinding");
+  f.number("grid_cell_px", o.grid_cell_px, kPositive, "spatial index of a frame's blobs");
+  f.integer("max_unmatched_per_frame", o.max_unmatched_per_frame, 0, 1 << 20,
+            "unmatched blobs of one frame offered to initiation");
+  f.section("bodies", "rigid bodies (docs/bodies.md)", [&](auto& s) { visit_bodies(s, o.bodies); });
+}
+
+template <class Fields>
+void visit_config(Fields& f, EstimatorConfig& config) {
+  f.section("node", "the session and the live node", [&](auto& s) { visit_node(s, config.node); });
+  f.section("screen", "the gate for bad input", [&](auto& s) { visit_screen(s, config.screen); });
+  f.section("tracker", "the multi-point tracker (docs/estimator.md)",
+            [&](auto& s) { visit_tracker(s, config.tracker); });
+}
+
+}  // namespace
+
+EstimatorConfig estimator_config_from_yaml(const YamlReader& reader) {
+  EstimatorConfig config;
+  FieldReader fields(reader);
+  visit_config(fields, config);
+  fields.finish();
+  return config;
+}
+
+EstimatorConfig load_estimator_config(const std::filesystem::path& path) {
+  const YAML::Node root = load_yaml_file(path);
+  return estimator_config_from_yaml(YamlReader(path.string(), root));
+}
+
+std::string estimator_config_to_yaml(const EstimatorConfig& config) {
+  EstimatorConfig copy = config;  // the visitor takes references for reading and writing alike
+  FieldWriter fields;
+  visit_config(fields, copy);
+  return "# estimator_node configuration (docs/estimator.md, \"Configuration\"); durations *_ns in "
+         "nanoseconds\n" +
+         fields.text();
+}
+
+bool operator==(const EstimatorConfig& a, const EstimatorConfig& b) {
+  // Exact: every field is written, doubles in their shortest round-trip form.
+  return estimator_config_to_yaml(a) == estimator_config_to_yaml(b);
+}
+
+}  // namespace panoptes::session

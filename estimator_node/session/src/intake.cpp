@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/session/intake.h"
+
+#include <chrono>
+#include <limits>
+
+#include "panoptes/session/log.h"
+
+namespace panoptes::session {
+
+namespace est = panoptes::estimator;
+
+void UnknownCameraWarnings::note(const std::string& camera_id) {
+  if (warned_.size() < 64 && warned_.insert(camera_id).second) {
+    log("camera '" + camera_id + "' has no calibration (T_world_cam): its frames are counted and ignored");
+  }
+}
+
+Intake::Intake(est::Tracker& tracker, const est::FrameScreenOptions& screen, double latency_window_ms)
+    : tracker_(tracker), screen_(screen), latency_window_ms_(latency_window_ms) {}
+
+bool Intake::admit(FeatureFrame& frame, TimeNs reference_ns, bool live) {
+  // In double: garbage stamps must not overflow.
+  const double latency_ms =
+      frame.received_ns != 0
+          ? (static_cast<double>(frame.received_ns) - static_cast<double>(frame.stamp_ns)) * 1e-6
+          : std::numeric_limits<double>::quiet_NaN();  // unknown
+  std::lock_guard<std::mutex> lock(mutex_);
+  monitor_.note_received(frame.camera_id, latency_ms);
+  if (live ? screen_.screen_live(frame, reference_ns) : screen_.screen(frame, reference_ns)) return true;
+  monitor_.note_dropped(frame.camera_id, "", 1);  // the reason is in the screen's counts
+  return false;
+}
+
+est::FrameOutcome Intake::process(const FeatureFrame& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto outcome = tracker_.process(frame);
+  const double elapsed_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    monitor_.note_update_time(elapsed_ms);
+  }
+  if (outcome == est::FrameOutcome::kUnknownCamera) warnings_.note(frame.camera_id);
+  return outcome;
+}
+
+est::EstimatorUsage Intake::usage(TimeNs stamp_ns, std::uint64_t inbox_drops) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto usage = monitor_.summarize(tracker_, stamp_ns, latency_window_ms_);
+  for (const auto& [reason, n] : screen_.counts()) usage.counters[reason] += n;
+  if (inbox_drops) usage.counters["inbox_overflow"] += inbox_drops;
+  return usage;
+}
+
+std::uint64_t Intake::frames_rejected() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return screen_.stats().frames_rejected;
+}
+
+void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines) const {
+  const auto& s = tracker_.stats();
+  const std::uint64_t rejected = frames_rejected();
+  log("processed " + std::to_string(s.frames) + " frames (" + std::to_string(s.frames_late) +
+      " late and replayed, " + std::to_string(s.frames_too_late) + " too late, " +
+      std::to_string(s.frames_unknown_camera) + " from uncalibrated cameras, " + std::to_string(rejected) +
+      " rejected, " + std::to_string(bad_lines) + " malformed lines); tracks created " +
+      std::to_string(s.tracks_created) + ", confirmed " + std::to_string(s.tracks_confirmed) +
+      ", ghosts removed " + std::to_string(s.ghosts_deleted));
+  for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops).lines()) log(line);
+  if (tracker_.body_count() > 0) {
+    const auto& b = tracker_.body_stats();
+    log("bodies: identified " + std::to_string(b.identified) + ", acquired by one camera " +
+        std::to_string(b.acquired_monocular) + ", re-identified " + std::to_string(b.reidentified) +
+        ", lost " + std::to_string(b.lost) + ", marker updates " + std::to_string(b.marker_updates) +
+        "; tracked now " + std::to_string(tracker_.current_poses().size()) + "/" +
+        std::to_string(tracker_.body_count()));
+  }
+}
+
+}  // namespace panoptes::session

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# estimator_node --config / --print-config (issue 14; docs/estimator.md, "Configuration"): the
+# printed defaults reproduce the default offline run bit for bit, the printed file loads again,
+# explicit flags override the file, and a bad file names the file and key and exits 2.
+source "$(dirname "$0")/lib.sh"
+scene="$source_dir/deploy/scenes/bodies.yaml"
+
+expect_exit 0 "simulate the two-body scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim" --duration 3
+offline() {  # offline OUT-PREFIX [extra estimator_node arguments...]
+  local prefix="$1"
+  shift
+  "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
+    --in-features "$work"/sim/c*.jsonl --no-dds --out-tracks "$work/$prefix.tracks.jsonl" \
+    --out-poses "$work/$prefix.poses.jsonl" --quiet "$@" >"$work/$prefix.out" 2>"$work/$prefix.err"
+}
+
+# --- the printed defaults reproduce the default run ---------------------------------------------
+expect_exit 0 "--print-config" -- "$bin/estimator_node" --print-config
+cp "$work/last.out" "$work/c.yaml"
+grep -q '^tracker:' "$work/c.yaml" && grep -q '^  process_noise: 50' "$work/c.yaml" && grep -q 'led_marker:' "$work/c.yaml" &&
+  pass "the printed configuration has the tracker, bodies and LED-marker settings" || fail "printed configuration incomplete"
+offline default && pass "default offline run" || fail "default offline run: exit $?"
+offline config --config "$work/c.yaml" && pass "offline run with the printed configuration" || fail "run with --config: exit $?"
+[ -s "$work/default.tracks.jsonl" ] && [ -s "$work/default.poses.jsonl" ] && pass "the runs wrote tracks and poses" ||
+  fail "no tracks or poses written"
+cmp -s "$work/default.tracks.jsonl" "$work/config.tracks.jsonl" && pass "tracks identical with --config (printed defaults)" ||
+  fail "tracks differ with --config"
+cmp -s "$work/default.poses.jsonl" "$work/config.poses.jsonl" && pass "poses identical with --config (printed defaults)" ||
+  fail "poses differ with --config"
+cmp -s "$work/default.err" "$work/config.err" && pass "the same log with --config" || fail "logs differ with --config"
+expect_exit 0 "--print-config of a loaded configuration" -- "$bin/estimator_node" --config "$work/c.yaml" --print-config
+cmp -s "$work/c.yaml" "$work/last.out" && pass "the printed configuration loads back unchanged" ||
+  fail "printing a loaded configuration changed it"
+
+# --- the file takes effect; explicit flags win over it ------------------------------------------
+sed 's/^\(  process_noise:\) 50/\1 400/; s/^\(  confirm_cameras:\) 3/\1 4/' "$work/c.yaml" >"$work/tuned.yaml"
+expect_exit 0 "--print-config with a tuned file" -- "$bin/estimator_node" --config "$work/tuned.yaml" --print-config
+grep -q '^  process_noise: 400' "$work/last.out" && grep -q '^  confirm_cameras: 4' "$work/last.out" &&
+  pass "the file's values are in effect" || fail "the file's values are not in effect"
+expect_exit 0 "--print-config with a tuned file and a flag" -- "$bin/estimator_node" --config "$work/tuned.yaml" \
+  --confirm-cameras 2 --print-config
+grep -q '^  process_noise: 400' "$work/last.out" && grep -q '^  confirm_cameras: 2' "$work/last.out" &&
+  pass "an explicit flag overrides the file, the rest of the file stays" || fail "flag precedence wrong"
+offline tuned --config "$work/tuned.yaml" && pass "offline run with a tuned file" || fail "tuned run: exit $?"
+cmp -s "$work/default.tracks.jsonl" "$work/tuned.tracks.jsonl" && fail "a tuned file left the tracks unchanged" ||
+  pass "a tuned file changes the run"
+
+# --- bad files ----------------------------------------------------------------------------------
+printf 'tracker:\n  init:\n    windw_ns: 30000000\n' >"$work/unknown.yaml"
+expect_exit 2 "unknown key" -- "$bin/estimator_node" --config "$work/unknown.yaml" --print-config
+expect_stderr_contains "unknown.yaml: tracker.init.windw_ns: unknown key" "the file and key path are named"
+[ "$(wc -l <"$work/last.err")" -eq 1 ] && pass "one line for an unknown key" || fail "unknown key gave $(wc -l <"$work/last.err") lines"
+printf 'tracker:\n  bodies:\n    gate_chi2: -3\n' >"$work/range.yaml"
+expect_exit 2 "out-of-range value" -- "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" \
+  --in-features "$work"/sim/c*.jsonl --no-dds --config "$work/range.yaml"
+expect_stderr_contains "range.yaml: tracker.bodies.gate_chi2: must be a finite number > 0" "the file, key and range are named"
+[ "$(wc -l <"$work/last.err")" -eq 1 ] && pass "one line for an out-of-range value" || fail "out of range gave $(wc -l <"$work/last.err") lines"
+expect_exit 2 "missing configuration file" -- "$bin/estimator_node" --config "$work/none.yaml" --print-config
+expect_stderr_contains "none.yaml" "the missing file is named"
+expect_exit 0 "--help" -- "$bin/estimator_node" --help
+grep -q -- '--process-noise.*50' "$work/last.out" && pass "--help shows defaults" || fail "--help lacks defaults"
+
+finish

@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: Apache-2.0
+// EstimatorConfig YAML: printed configurations load back equal; errors name the file and key.
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "panoptes/config.h"
+#include "panoptes/session/estimator_config.h"
+
+namespace panoptes::session {
+namespace {
+
+std::filesystem::path write_file(const std::string& name, const std::string& text) {
+  auto path = std::filesystem::temp_directory_path() / ("panoptes_session_" + name);
+  std::ofstream(path) << text;
+  return path;
+}
+
+// "<file>: <key path>: <reason>" of loading `text`, or "" if it loads.
+std::string load_error(const std::string& name, const std::string& text) {
+  const auto path = write_file(name, text);
+  try {
+    load_estimator_config(path);
+  } catch (const ConfigError& error) {
+    std::filesystem::remove(path);
+    return error.what();
+  }
+  std::filesystem::remove(path);
+  return "";
+}
+
+EstimatorConfig unusual_config() {
+  EstimatorConfig config;
+  config.node.inbox_capacity = 123;
+  config.node.latency_window_ms = 0.1;  // not exact in binary: must still read back exactly
+  config.node.predictions = false;
+  config.node.prediction_horizon_ms = 1.0 / 3.0;
+  config.screen.max_blobs = 77;
+  config.screen.max_future_ns = 123'456'789;
+  config.tracker.process_noise = 12.345678901234567;
+  config.tracker.init.window_ns = 17'000'001;
+  config.tracker.init.epipolar_px = 2.5e-7;
+  config.tracker.confirm_cameras = 4;
+  config.tracker.max_unmatched_per_frame = 99;
+  config.tracker.bodies.noise.jerk = 3e10;
+  config.tracker.bodies.identification.min_markers = 4;
+  config.tracker.bodies.identification.max_clique_steps = 5'000'000'000ULL;
+  config.tracker.bodies.led_marker.retry_extra_cluster = false;
+  config.tracker.bodies.led_marker.seed = 42;
+  return config;
+}
+
+TEST(EstimatorConfig, PrintedConfigurationLoadsBackEqual) {
+  for (const EstimatorConfig& config : {EstimatorConfig{}, unusual_config()}) {
+    const auto path = write_file("round_trip.yaml", estimator_config_to_yaml(config));
+    const EstimatorConfig loaded = load_estimator_config(path);
+    std::filesystem::remove(path);
+    EXPECT_TRUE(loaded == config) << estimator_config_to_yaml(loaded);
+  }
+  const auto path = write_file("round_trip2.yaml", estimator_config_to_yaml(unusual_config()));
+  const EstimatorConfig loaded = load_estimator_config(path);
+  std::filesystem::remove(path);
+  EXPECT_EQ(loaded.node.latency_window_ms, 0.1);
+  EXPECT_EQ(loaded.node.prediction_horizon_ms, 1.0 / 3.0);
+  EXPECT_FALSE(loaded.node.predictions);
+  EXPECT_EQ(loaded.tracker.process_noise, 12.345678901234567);
+  EXPECT_EQ(loaded.tracker.init.window_ns, 17'000'001);
+  EXPECT_EQ(loaded.tracker.bodies.identification.max_clique_steps, 5'000'000'000ULL);
+  EXPECT_FALSE(loaded.tracker.bodies.led_marker.retry_extra_cluster);
+  EXPECT_FALSE(loaded == EstimatorConfig{});
+}
+
+TEST(EstimatorConfig, KeysLeftOutKeepTheirDefaults) {
+  const auto path = write_file("partial.yaml", "tracker:\n  gate_chi2: 9.5\n  bodies:\n    max_nis: 3\n");
+  const EstimatorConfig loaded = load_estimator_config(path);
+  std::filesystem::remove(path);
+  EstimatorConfig expected;
+  expected.tracker.gate_chi2 = 9.5;
+  expected.tracker.bodies.max_nis = 3;
+  EXPECT_TRUE(loaded == expected);
+  EXPECT_TRUE(load_error("empty.yaml", "").empty());
+}
+
+TEST(EstimatorConfig, UnknownKeysAreNamedWithTheirPath) {
+  const std::string error = load_error("unknown.yaml", "tracker:\n  init:\n    windw_ns: 5\n");
+  EXPECT_NE(error.find("panoptes_session_unknown.yaml: tracker.init.windw_ns: unknown key"),
+            std::string::npos)
+      << error;
+  EXPECT_NE(load_error("top.yaml", "trackers: {}\n").find("top.yaml: trackers: unknown key"),
+            std::string::npos);
+}
+
+TEST(EstimatorConfig, OutOfRangeValuesAreNamedWithTheirPath) {
+  std::string error = load_error("range.yaml", "tracker:\n  confirm_cameras: 1\n");
+  EXPECT_NE(error.find("range.yaml: tracker.confirm_cameras: must be an integer in [2, 64]"),
+            std::string::npos)
+      << error;
+  error = load_error("negative.yaml", "tracker:\n  bodies:\n    noise:\n      jerk: -1\n");
+  EXPECT_NE(error.find("negative.yaml: tracker.bodies.noise.jerk: must be a finite number > 0"),
+            std::string::npos)
+      << error;
+  error = load_error("window.yaml", "node:\n  latency_window_ms: 20000\n");
+  EXPECT_NE(error.find("window.yaml: node.latency_window_ms: must be a number in [0, 10000]"),
+            std::string::npos)
+      << error;
+  error = load_error("nan.yaml", "tracker:\n  process_noise: .nan\n");
+  EXPECT_NE(error.find("nan.yaml: tracker.process_noise:"), std::string::npos) << error;
+}
+
+TEST(EstimatorConfig, WrongTypesAreNamedWithTheirPath) {
+  std::string error = load_error("type.yaml", "screen:\n  max_blobs: many\n");
+  EXPECT_NE(error.find("type.yaml: screen.max_blobs: expected an integer"), std::string::npos) << error;
+  error = load_error("map.yaml", "node: 5\n");
+  EXPECT_NE(error.find("map.yaml: node"), std::string::npos) << error;
+  EXPECT_NE(error.find("expected a map"), std::string::npos) << error;
+  error = load_error("flag.yaml", "node:\n  predictions: perhaps\n");
+  EXPECT_NE(error.find("flag.yaml: node.predictions: expected true or false"), std::string::npos) << error;
+}
+
+TEST(EstimatorConfig, AMissingFileIsNamed) {
+  try {
+    load_estimator_config("/nonexistent/estimator.yaml");
+    FAIL() << "no error";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find("/nonexistent/estimator.yaml"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace panoptes::session
