@@ -9,25 +9,13 @@
 #include <string>
 #include <vector>
 
+#include "panoptes/camera/command.h"
 #include "panoptes/image.h"
 
 namespace panoptes::camera {
 
 class Detector;
 class FrameSource;
-
-struct Command {
-  std::string target;  // camera id, or "" / "*" for every camera
-  std::uint64_t seq = 0;
-  std::string command;
-  std::vector<std::string> arguments;
-};
-
-// What the node must do after a command that the handler cannot do itself.
-struct CommandEffects {
-  int preview_requests = 0;  // publish this many previews (one per following frame)
-  int preview_max_width = 0;
-};
 
 class CommandHandler {
  public:
