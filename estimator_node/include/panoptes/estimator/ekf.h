@@ -103,7 +103,12 @@ class FilterCovariance {
   }
 
  private:
-  void symmetrise() { P_ = 0.5 * (P_ + P_.transpose()); }
+  // Evaluated into a temporary first: assigning 0.5 (P + Pᵀ) to P in place would read entries
+  // already overwritten (Eigen does not guard transpose aliasing) and leave P slightly asymmetric.
+  void symmetrise() {
+    const Matrix symmetric = 0.5 * (P_ + P_.transpose());
+    P_ = symmetric;
+  }
 
   Matrix P_;
 };
