@@ -5,6 +5,8 @@
 
 #include <Eigen/LU>
 
+#include "panoptes/distortion.h"
+
 namespace panoptes {
 
 namespace {
@@ -26,17 +28,15 @@ CameraModel::CameraModel(const CameraIntrinsics& intrinsics, const RigidTransfor
   R_cam_world_ = T_cam_world_.rotation();
 }
 
-// The model is cv::projectPoints' with (k1, k2, p1, p2, k3), written out so the Jacobian can be
-// exact (OpenCV docs, "Camera Calibration and 3D Reconstruction", detailed description).
+// The model (distortion.h, shared with the calibration's Ceres costs) and its exact Jacobian.
 Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& xn, Eigen::Matrix2d* J) const {
   const auto& d = intrinsics_.distortion;
-  const double k1 = d[0], k2 = d[1], p1 = d[2], p2 = d[3], k3 = d[4];
-  const double x = xn.x(), y = xn.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-  Eigen::Vector2d xd(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
-                     y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
+  const Eigen::Vector2d xd = distort_normalized<double>(xn.x(), xn.y(), d.data());
   if (J != nullptr) {
+    const double k1 = d[0], k2 = d[1], p1 = d[2], p2 = d[3], k3 = d[4];
+    const double x = xn.x(), y = xn.y();
+    const double r2 = x * x + y * y;
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
     // d(radial)/d(r2), then the chain rule through d(r2)/dx = 2x, d(r2)/dy = 2y.
     const double dradial_dr2 = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
     const double dradial_dx = 2.0 * x * dradial_dr2;

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "panoptes/simulator.h"
+#include "panoptes/union_find.h"
 #include "random.h"
 
 namespace panoptes {
@@ -153,12 +154,7 @@ std::vector<Spot> all_spots(const Scene& scene, const SimCameraConfig& config, s
 // overlap into one connected blob), each group in ascending spot order, groups ordered by their
 // first spot. Without merging every spot is its own group.
 std::vector<std::vector<std::size_t>> merge_groups(const std::vector<Spot>& spots, double merge_distance) {
-  std::vector<std::size_t> parent(spots.size());
-  for (std::size_t i = 0; i < spots.size(); ++i) parent[i] = i;
-  const auto root = [&](std::size_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  UnionFind merged(spots.size());
   if (merge_distance > 0.0) {
     // Sweep in x so only spots within merge_distance in x are compared.
     std::vector<std::size_t> by_x(spots.size());
@@ -171,17 +167,17 @@ std::vector<std::vector<std::size_t>> merge_groups(const std::vector<Spot>& spot
         const Spot& second = spots[by_x[b]];
         if (second.centre.x() - first.centre.x() >= merge_distance) break;
         if ((second.centre - first.centre).norm() >= merge_distance) continue;
-        const std::size_t ra = root(by_x[a]);
-        const std::size_t rb = root(by_x[b]);
-        // The smaller index becomes the root, so a group's root is its first spot.
-        if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+        const std::size_t ra = merged.find(by_x[a]);
+        const std::size_t rb = merged.find(by_x[b]);
+        // The smaller index stays the root, so a group's root is its first spot.
+        if (ra != rb) merged.unite(std::min(ra, rb), std::max(ra, rb));
       }
     }
   }
   std::vector<std::vector<std::size_t>> groups;
   std::vector<std::size_t> group_of(spots.size(), 0);
   for (std::size_t i = 0; i < spots.size(); ++i) {
-    const std::size_t r = root(i);
+    const std::size_t r = merged.find(i);
     if (r == i) {
       group_of[i] = groups.size();
       groups.push_back({i});

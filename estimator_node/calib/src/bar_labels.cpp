@@ -13,6 +13,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
+#include "panoptes/union_find.h"
+
 namespace panoptes::calib {
 
 namespace {
@@ -68,45 +70,6 @@ std::map<std::pair<int, int>, Votes> vote(const std::vector<PairSample>& samples
   }
   return votes;
 }
-
-// Union-find that keeps each node's parity (end order reversed or not) relative to its root.
-class ParityForest {
- public:
-  explicit ParityForest(int n)
-      : parent_(static_cast<std::size_t>(n)), parity_(static_cast<std::size_t>(n), 0) {
-    std::iota(parent_.begin(), parent_.end(), 0);
-  }
-  std::pair<int, int> find(int x) {
-    int parity = 0, root = x;
-    while (parent_[static_cast<std::size_t>(root)] != root) {
-      parity ^= parity_[static_cast<std::size_t>(root)];
-      root = parent_[static_cast<std::size_t>(root)];
-    }
-    // Path compression, keeping parities relative to the root.
-    int running = parity;
-    while (parent_[static_cast<std::size_t>(x)] != x) {
-      const int next = parent_[static_cast<std::size_t>(x)];
-      const int own = parity_[static_cast<std::size_t>(x)];
-      parent_[static_cast<std::size_t>(x)] = root;
-      parity_[static_cast<std::size_t>(x)] = running;
-      running ^= own;
-      x = next;
-    }
-    return {root, parity};
-  }
-  // Joins the trees of a and b so that parity(a) ^ parity(b) == relative; false if already joined.
-  bool join(int a, int b, int relative) {
-    const auto [root_a, parity_a] = find(a);
-    const auto [root_b, parity_b] = find(b);
-    if (root_a == root_b) return false;
-    parent_[static_cast<std::size_t>(root_b)] = root_a;
-    parity_[static_cast<std::size_t>(root_b)] = parity_a ^ parity_b ^ relative;
-    return true;
-  }
-
- private:
-  std::vector<int> parent_, parity_;
-};
 
 }  // namespace
 
@@ -230,15 +193,17 @@ BarLabelReport resolve_bar_labels(std::vector<CameraWandTrack>& tracks,
   const auto margin = [](const Votes& v) { return std::abs(v.same - v.flipped); };
   std::sort(edges.begin(), edges.end(),
             [&](const auto& x, const auto& y) { return margin(x.second) > margin(y.second); });
-  ParityForest forest(static_cast<int>(runs.size()));
+  // Runs joined with their parity (ends reversed or not) relative to the group's root.
+  UnionFind forest(runs.size());
   for (const auto& [nodes, v] : edges) {
     if (margin(v) < options.min_votes) break;
-    forest.join(nodes.first, nodes.second, v.flipped > v.same ? 1 : 0);
+    forest.unite(static_cast<std::size_t>(nodes.first), static_cast<std::size_t>(nodes.second),
+                 v.flipped > v.same ? 1 : 0);
   }
   // The largest group (by frames) is kept; a run outside it has no known relation to it.
   std::map<int, std::size_t> frames_of_root;
   for (std::size_t r = 0; r < runs.size(); ++r)
-    frames_of_root[forest.find(static_cast<int>(r)).first] += runs[r].frames.frames.size();
+    frames_of_root[static_cast<int>(forest.find(r))] += runs[r].frames.frames.size();
   const int main_root =
       std::max_element(frames_of_root.begin(), frames_of_root.end(), [](const auto& x, const auto& y) {
         return x.second < y.second;
@@ -246,7 +211,8 @@ BarLabelReport resolve_bar_labels(std::vector<CameraWandTrack>& tracks,
   std::vector<int> parity(runs.size(), 0);
   std::vector<bool> kept(runs.size(), false);
   for (std::size_t r = 0; r < runs.size(); ++r) {
-    const auto [root, p] = forest.find(static_cast<int>(r));
+    const int root = static_cast<int>(forest.find(r));
+    const int p = forest.parity(r);
     kept[r] = root == main_root;
     parity[r] = p;
     if (!kept[r]) {

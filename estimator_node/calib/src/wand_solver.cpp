@@ -18,6 +18,9 @@
 #include <opencv2/core.hpp>
 
 #include "panoptes/calib/world_frame.h"
+#include "panoptes/distortion.h"
+#include "panoptes/triangulation.h"
+#include "panoptes/union_find.h"
 
 namespace panoptes::calib {
 
@@ -26,52 +29,15 @@ int SolveResult::calibrated_count() const {
                                         [](const CameraResult& c) { return c.T_world_cam.has_value(); }));
 }
 
-RigidTransform align_rigid(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to) {
-  const auto n = static_cast<Eigen::Index>(from.size());
-  Eigen::Matrix3Xd a(3, n), b(3, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    a.col(i) = from[i];
-    b.col(i) = to[i];
-  }
-  const Eigen::Matrix4d T = Eigen::umeyama(a, b, false);
-  RigidTransform result;
-  result.q = Eigen::Quaterniond(Eigen::Matrix3d(T.block<3, 3>(0, 0))).normalized();
-  result.t = T.block<3, 1>(0, 3);
-  return result;
-}
-
 std::optional<Eigen::Vector3d> triangulate(const std::vector<CameraModel>& models,
                                            const std::vector<Eigen::Vector2d>& pixels) {
-  if (models.size() < 2 || models.size() != pixels.size()) return std::nullopt;
-  // Linear: minimise the distance to every ray (midpoint method generalised), then Gauss-Newton
-  // on the pixel error, which is what the calibration minimises too.
-  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d b = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < models.size(); ++i) {
-    const Eigen::Vector3d d = models[i].pixel_to_world_ray(pixels[i]);
-    const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - d * d.transpose();
-    A += P;
-    b += P * models[i].center_world();
-  }
-  Eigen::Vector3d x = A.ldlt().solve(b);
-  for (int iteration = 0; iteration < 5; ++iteration) {
-    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d g = Eigen::Vector3d::Zero();
-    for (std::size_t i = 0; i < models.size(); ++i) {
-      Eigen::Matrix<double, 2, 3> J;
-      const auto projected = models[i].project(x, &J);
-      if (!projected) return std::nullopt;
-      const Eigen::Vector2d r = *projected - pixels[i];
-      H += J.transpose() * J;
-      g += J.transpose() * r;
-    }
-    const Eigen::Vector3d step = H.ldlt().solve(-g);
-    x += step;
-    if (step.norm() < 1e-10) break;
-  }
-  for (const auto& model : models)
-    if (!model.project(x)) return std::nullopt;
-  return x;
+  if (models.size() != pixels.size()) return std::nullopt;
+  std::vector<PixelObservation> observations;
+  observations.reserve(models.size());
+  for (std::size_t i = 0; i < models.size(); ++i) observations.push_back({&models[i], pixels[i]});
+  const auto triangulated = panoptes::triangulate(observations);
+  if (!triangulated) return std::nullopt;
+  return triangulated->point;
 }
 
 namespace {
@@ -98,14 +64,7 @@ MarkerSegment marker_segment(const TrackSegment& segment, std::size_t m) {
 
 template <class T>
 void evaluate(const MarkerSegment& s, const T& dt, T* out) {
-  const T tau = (dt - T(s.t0_s)) / T(s.h_s);
-  const T tau2 = tau * tau, tau3 = tau2 * tau;
-  const T h00 = T(2.0) * tau3 - T(3.0) * tau2 + T(1.0);
-  const T h10 = tau3 - T(2.0) * tau2 + tau;
-  const T h01 = T(-2.0) * tau3 + T(3.0) * tau2;
-  const T h11 = tau3 - tau2;
-  for (int i = 0; i < 2; ++i)
-    out[i] = h00 * s.p0[i] + h10 * T(s.h_s) * s.m0[i] + h01 * s.p1[i] + h11 * T(s.h_s) * s.m1[i];
+  for (int i = 0; i < 2; ++i) out[i] = cubic_hermite(s.t0_s, s.h_s, s.p0[i], s.m0[i], s.p1[i], s.m1[i], dt);
 }
 
 // Camera parameters as the bundle adjustment holds them: world -> camera (angle-axis, t), then
@@ -118,13 +77,9 @@ bool project(const T* pose, const T* intrinsics, const T* point, T* pixel) {
   p[1] += pose[4];
   p[2] += pose[5];
   if (p[2] < T(1e-6)) return false;
-  const T x = p[0] / p[2], y = p[1] / p[2];
-  const T r2 = x * x + y * y;
-  const T radial = T(1.0) + r2 * (intrinsics[4] + r2 * (intrinsics[5] + r2 * intrinsics[8]));
-  const T xd = x * radial + T(2.0) * intrinsics[6] * x * y + intrinsics[7] * (r2 + T(2.0) * x * x);
-  const T yd = y * radial + intrinsics[6] * (r2 + T(2.0) * y * y) + T(2.0) * intrinsics[7] * x * y;
-  pixel[0] = intrinsics[0] * xd + intrinsics[2];
-  pixel[1] = intrinsics[1] * yd + intrinsics[3];
+  const Eigen::Matrix<T, 2, 1> xd = distort_normalized<T>(p[0] / p[2], p[1] / p[2], intrinsics + 4);
+  pixel[0] = intrinsics[0] * xd[0] + intrinsics[2];
+  pixel[1] = intrinsics[1] * xd[1] + intrinsics[3];
   return true;
 }
 
@@ -566,13 +521,11 @@ void Solver::pairwise() {
 void Solver::unify() {
   const int n = static_cast<int>(state_.size());
   // Connected components of the view graph.
-  std::vector<int> parent(n);
-  std::iota(parent.begin(), parent.end(), 0);
-  const auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (const auto& pair : pairs_) parent[find(pair.a)] = find(pair.b);
+  UnionFind view_graph(static_cast<std::size_t>(n));
+  // b's root stays the root (the components below are keyed by it).
+  for (const auto& pair : pairs_)
+    view_graph.unite(static_cast<std::size_t>(pair.b), static_cast<std::size_t>(pair.a));
+  const auto find = [&](int c) { return static_cast<int>(view_graph.find(static_cast<std::size_t>(c))); };
   std::map<int, std::vector<int>> components;
   std::map<int, int> degree;
   for (const auto& pair : pairs_) {

@@ -3,7 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
+
+#include <Eigen/LU>
+
+#include "panoptes/union_find.h"
 
 namespace panoptes::estimator {
 
@@ -92,6 +97,76 @@ std::vector<int> solve_assignment(const std::vector<double>& cost, int rows, int
     if (j >= 0 && j < cols && reduced[static_cast<std::size_t>(i) * m + j] < 0.0) result[i] = j;
   }
   return result;
+}
+
+double gate_radius2(const Eigen::Matrix2d& S, double gate_chi2) {
+  const double half_trace = 0.5 * S.trace();
+  const double largest = half_trace + std::sqrt(std::max(0.0, half_trace * half_trace - S.determinant()));
+  return gate_chi2 * largest;
+}
+
+namespace {
+
+// Sorted distinct values of `values`, and the index of a value in them.
+std::vector<std::size_t> distinct(std::vector<std::size_t> values) {
+  std::sort(values.begin(), values.end());
+  values.erase(std::unique(values.begin(), values.end()), values.end());
+  return values;
+}
+
+std::size_t index_of(const std::vector<std::size_t>& sorted, std::size_t value) {
+  return static_cast<std::size_t>(std::lower_bound(sorted.begin(), sorted.end(), value) - sorted.begin());
+}
+
+// Optimal assignment within one cluster (pair indices `members`), appended to `chosen`.
+void solve_cluster(const std::vector<GatedPair>& pairs, const std::vector<std::size_t>& members,
+                   double unassigned_cost, std::vector<std::pair<std::size_t, std::size_t>>& chosen) {
+  if (members.size() == 1) {
+    const GatedPair& only = pairs[members[0]];
+    if (only.cost < 2.0 * unassigned_cost) chosen.emplace_back(only.row, only.col);
+    return;
+  }
+  std::vector<std::size_t> rows, cols;
+  for (std::size_t k : members) {
+    rows.push_back(pairs[k].row);
+    cols.push_back(pairs[k].col);
+  }
+  rows = distinct(std::move(rows));
+  cols = distinct(std::move(cols));
+  std::vector<double> cost(rows.size() * cols.size(), kForbidden);
+  for (std::size_t k : members) {
+    double& c = cost[index_of(rows, pairs[k].row) * cols.size() + index_of(cols, pairs[k].col)];
+    c = std::min(c, pairs[k].cost);
+  }
+  const auto solution = solve_assignment(cost, static_cast<int>(rows.size()), static_cast<int>(cols.size()),
+                                         unassigned_cost, unassigned_cost);
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    if (solution[r] >= 0) chosen.emplace_back(rows[r], cols[static_cast<std::size_t>(solution[r])]);
+}
+
+}  // namespace
+
+std::vector<std::pair<std::size_t, std::size_t>> assign_gated(const std::vector<GatedPair>& pairs,
+                                                              double unassigned_cost) {
+  std::vector<std::pair<std::size_t, std::size_t>> chosen;
+  if (pairs.empty()) return chosen;
+  std::vector<std::size_t> rows, cols;
+  for (const auto& pair : pairs) {
+    rows.push_back(pair.row);
+    cols.push_back(pair.col);
+  }
+  rows = distinct(std::move(rows));
+  cols = distinct(std::move(cols));
+  // Union-find over row nodes 0..rows-1 and column nodes rows..rows+cols-1.
+  UnionFind clusters(rows.size() + cols.size());
+  for (const auto& pair : pairs)
+    clusters.unite(index_of(rows, pair.row), rows.size() + index_of(cols, pair.col));
+  std::map<std::size_t, std::vector<std::size_t>> members_of_root;
+  for (std::size_t k = 0; k < pairs.size(); ++k)
+    members_of_root[clusters.find(index_of(rows, pairs[k].row))].push_back(k);
+  for (const auto& [root, members] : members_of_root) solve_cluster(pairs, members, unassigned_cost, chosen);
+  std::sort(chosen.begin(), chosen.end());
+  return chosen;
 }
 
 }  // namespace panoptes::estimator

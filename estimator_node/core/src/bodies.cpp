@@ -110,13 +110,8 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
     std::size_t body;
     std::size_t marker;
   };
-  struct Gated {
-    std::size_t row;
-    std::size_t blob;
-    double d2;
-  };
   std::vector<Row> rows;
-  std::vector<Gated> gated;
+  std::vector<GatedPair> gated;  // (row, blob, d²)
   std::vector<BodyState> predicted_states(bodies_.size());
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     if (!bodies_[b].tracked) continue;
@@ -125,16 +120,12 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
     for (std::size_t m = 0; m < markers.size(); ++m) {
       const auto projection = project_marker(predicted_states[b], markers[m], camera, o.measurement_noise_px);
       if (!projection || !camera.in_image(projection->pixel, 2.0)) continue;
-      // Bound on the gate in pixels from the largest eigenvalue of S (2x2, closed form).
-      const Eigen::Matrix2d& S = projection->S;
-      const double half_trace = 0.5 * S.trace();
-      const double largest = half_trace + std::sqrt(std::max(0.0, half_trace * half_trace - S.determinant()));
-      const double radius2 = o.gate_chi2 * largest;
+      const double radius2 = gate_radius2(projection->S, o.gate_chi2);
       bool any = false;
       for (std::size_t j = 0; j < pixels.size(); ++j) {
         if (excluded[j] || (pixels[j] - projection->pixel).squaredNorm() > radius2) continue;
         const double d2 = mahalanobis2(*projection, pixels[j]);
-        if (d2 >= o.gate_chi2) continue;
+        if (!inside_gate(d2, o.gate_chi2)) continue;
         gated.push_back({rows.size(), j, d2});
         any = true;
       }
@@ -142,30 +133,17 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
     }
   }
   if (!rows.empty()) {
-    std::vector<std::size_t> cols;
-    for (const auto& g : gated) cols.push_back(g.blob);
-    std::sort(cols.begin(), cols.end());
-    cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
-    std::vector<double> cost(rows.size() * cols.size(), kForbidden);
-    for (const auto& g : gated) {
-      const auto c = std::lower_bound(cols.begin(), cols.end(), g.blob) - cols.begin();
-      cost[g.row * cols.size() + static_cast<std::size_t>(c)] = g.d2;
-    }
-    const auto solution = solve_assignment(cost, static_cast<int>(rows.size()), static_cast<int>(cols.size()),
-                                           0.5 * o.gate_chi2, 0.5 * o.gate_chi2);
     // Sequential updates, one marker at a time, each re-projected with the state the previous
     // ones left (the one-camera-at-a-time idea of seed 003 applied within the frame).
     std::vector<char> body_updated(bodies_.size(), 0);
-    for (std::size_t r = 0; r < rows.size(); ++r) {
-      if (solution[r] < 0) continue;
+    for (const auto& [r, blob] : assign_gated(gated, 0.5 * o.gate_chi2)) {
       const std::size_t b = rows[r].body, m = rows[r].marker;
-      const std::size_t blob = cols[static_cast<std::size_t>(solution[r])];
       BodyState& state = predicted_states[b];
       const auto projection =
           project_marker(state, shared_->definitions[b].markers[m], camera, o.measurement_noise_px);
       if (!projection) continue;
       const double d2 = mahalanobis2(*projection, pixels[blob]);
-      if (d2 >= o.gate_chi2) {
+      if (!inside_gate(d2, o.gate_chi2)) {
         ++stats_.markers_gated_out;
         continue;
       }
@@ -227,17 +205,12 @@ void BodySet::acquire_monocular(int camera_index, const CameraModel& camera, Tim
     state.p = T_world_body.t;
     state.q = T_world_body.q;
     state.stamp_ns = stamp_ns;
-    state.P.setZero();
     // A single view: the depth is the least certain (σ_z ≈ z² σ_px / (f · size)).
     const double depth = detection.T_cam_marker.t.z();
     const double size = std::max(1e-3, shared_->span[b]);
     const double sigma_depth = depth * depth * o.measurement_noise_px / (focal * size) * 3.0;
-    state.P.block<3, 3>(kBodyP, kBodyP) =
-        std::pow(std::max(o.init_position_sigma_m, sigma_depth), 2) * Eigen::Matrix3d::Identity();
-    state.P.block<3, 3>(kBodyV, kBodyV) = 1.0 * Eigen::Matrix3d::Identity();
-    state.P.block<3, 3>(kBodyA, kBodyA) = std::pow(o.init_accel_sigma_mps2, 2) * Eigen::Matrix3d::Identity();
-    state.P.block<3, 3>(kBodyTheta, kBodyTheta) = std::pow(0.05, 2) * Eigen::Matrix3d::Identity();
-    state.P.block<3, 3>(kBodyW, kBodyW) = 9.0 * Eigen::Matrix3d::Identity();
+    state.P =
+        body_prior({std::max(o.init_position_sigma_m, sigma_depth), 1.0, o.init_accel_sigma_mps2, 0.05, 3.0});
     body.start(state, stamp_ns);
     // The detection's blobs update the new state at once.
     const auto& markers = shared_->definitions[b].markers;
@@ -277,10 +250,8 @@ bool rigid_velocity(const std::vector<TrackedPoint>& points, const std::vector<i
   Eigen::VectorXd y(3 * used.size());
   for (std::size_t k = 0; k < used.size(); ++k) {
     const Eigen::Vector3d r = points[static_cast<std::size_t>(used[k])].p - c;
-    Eigen::Matrix3d cross_r;
-    cross_r << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
     A.block<3, 3>(3 * k, 0).setIdentity();
-    A.block<3, 3>(3 * k, 3) = -cross_r;  // ω × r = −[r]× ω
+    A.block<3, 3>(3 * k, 3) = -skew(r);  // ω × r = −[r]× ω
     y.segment<3>(3 * k) = points[static_cast<std::size_t>(used[k])].v;
   }
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
@@ -337,16 +308,9 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
     const bool have_velocity = rigid_velocity(points, used, state.p, v, w_world);
     state.v = v;
     state.w = state.q.conjugate() * w_world;
-    state.P.setZero();
-    const double sp = std::max(o.init_position_sigma_m, match.rms_m);
-    const auto set = [&](int block, double sigma) {
-      state.P.block<3, 3>(block, block) = sigma * sigma * Eigen::Matrix3d::Identity();
-    };
-    set(kBodyP, sp);
-    set(kBodyV, have_velocity ? o.init_velocity_sigma_mps : 2.0);
-    set(kBodyA, o.init_accel_sigma_mps2);
-    set(kBodyTheta, o.init_angle_sigma_rad);
-    set(kBodyW, have_velocity ? o.init_angular_velocity_sigma : 5.0);
+    state.P = body_prior({std::max(o.init_position_sigma_m, match.rms_m),
+                          have_velocity ? o.init_velocity_sigma_mps : 2.0, o.init_accel_sigma_mps2,
+                          o.init_angle_sigma_rad, have_velocity ? o.init_angular_velocity_sigma : 5.0});
     body.start(state, stamp_ns);
     for (const auto& pair : match.pairs)
       body.marker_last_seen[static_cast<std::size_t>(pair.second)] = stamp_ns;

@@ -9,12 +9,6 @@ namespace panoptes::estimator {
 
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
 // Transition matrix of the error state over Δt (linearised about the nominal ω).
 Matrix15d transition(const BodyState& state, double dt) {
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
@@ -66,6 +60,14 @@ Eigen::Vector3d quaternion_to_rotation_vector(const Eigen::Quaterniond& q_in) {
   return 2.0 * std::atan2(s, q.w()) * q.vec() / s;
 }
 
+FilterCovariance<15> body_prior(const BodyPriorSigmas& sigmas) {
+  Vector15d variances;
+  const double blocks[5] = {sigmas.position_m, sigmas.velocity_mps, sigmas.acceleration_mps2,
+                            sigmas.angle_rad, sigmas.angular_velocity_radps};
+  for (int k = 0; k < 5; ++k) variances.segment<3>(3 * k).setConstant(blocks[k] * blocks[k]);
+  return FilterCovariance<15>::diagonal(variances);
+}
+
 void predict(BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise) {
   const double dt = ns_to_seconds(stamp_ns - state.stamp_ns);
   if (dt != 0.0) {
@@ -73,10 +75,7 @@ void predict(BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise) {
     state.p += dt * state.v + 0.5 * dt * dt * state.a;
     state.v += dt * state.a;
     state.q = (state.q * rotation_vector_to_quaternion(dt * state.w)).normalized();
-    // Fixed-size products evaluated coefficient-wise (no GEMM set-up for 15 x 15).
-    const Matrix15d AP = A.lazyProduct(state.P);
-    state.P = AP.lazyProduct(A.transpose()) + process_noise(dt, noise);
-    state.P = 0.5 * (state.P + state.P.transpose());
+    state.P.propagate(A, process_noise(dt, noise));
   }
   state.stamp_ns = stamp_ns;
 }
@@ -105,40 +104,22 @@ std::optional<MarkerProjection> project_marker(const BodyState& state, const Eig
   Eigen::Matrix<double, 2, 3> J;
   const auto pixel = camera.project(p_world, &J);
   if (!pixel) return std::nullopt;
-  MarkerProjection projection;
-  projection.pixel = *pixel;
-  projection.H.setZero();
-  projection.H.block<2, 3>(0, kBodyP) = J;
+  Eigen::Matrix<double, 2, 15> H = Eigen::Matrix<double, 2, 15>::Zero();
+  H.block<2, 3>(0, kBodyP) = J;
   // p_world = p + R exp(δθ) m ≈ p + R m − R [m]× δθ  (seed 003 eq. A.29 linearised about δθ = 0).
-  projection.H.block<2, 3>(0, kBodyTheta) = -J * R * skew(marker);
-  const Eigen::Matrix2d Rm = measurement_sigma_px * measurement_sigma_px * Eigen::Matrix2d::Identity();
-  const Eigen::Matrix<double, 2, 15> HP = projection.H.lazyProduct(state.P);
-  projection.S = HP.lazyProduct(projection.H.transpose()) + Rm;
-  projection.S_inverse = projection.S.inverse();
-  return projection;
-}
-
-double mahalanobis2(const MarkerProjection& projection, const Eigen::Vector2d& measurement) {
-  const Eigen::Vector2d r = measurement - projection.pixel;
-  return r.dot(projection.S_inverse * r);
+  H.block<2, 3>(0, kBodyTheta) = -J * R * skew(marker);
+  return state.P.pixel_measurement(*pixel, H, measurement_sigma_px);
 }
 
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px) {
-  const Eigen::Matrix<double, 2, 15> HP = projection.H.lazyProduct(state.P);
-  const Eigen::Matrix<double, 15, 2> K = HP.transpose() * projection.S_inverse;
-  const Vector15d dx = K * (measurement - projection.pixel);
+  const Vector15d dx = state.P.update(projection, measurement, measurement_sigma_px);
   state.p += dx.segment<3>(kBodyP);
   state.v += dx.segment<3>(kBodyV);
   state.a += dx.segment<3>(kBodyA);
   state.w += dx.segment<3>(kBodyW);
   // Reset (seed 003 eq. A.41): the incremental rotation is added onto the external quaternion.
   state.q = (state.q * rotation_vector_to_quaternion(dx.segment<3>(kBodyTheta))).normalized();
-  // P - K S Kᵀ = P - K H P: equal to the Joseph form for this (optimal) gain and 2 x 15 x 15 work
-  // instead of 2 x 15³; symmetrised against round-off. S uses measurement_sigma_px (project_marker).
-  (void)measurement_sigma_px;
-  state.P.noalias() -= K.lazyProduct(HP);
-  state.P = 0.5 * (state.P + state.P.transpose());
 }
 
 }  // namespace panoptes::estimator

@@ -7,17 +7,11 @@
 
 #include <Eigen/Geometry>
 
-#include "panoptes/estimator/triangulation.h"
+#include "panoptes/triangulation.h"
 
 namespace panoptes::estimator {
 
 namespace {
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& t) {
-  Eigen::Matrix3d m;
-  m << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
-  return m;
-}
 
 bool finite(const Eigen::Vector2d& v) {
   return std::isfinite(v.x()) && std::isfinite(v.y());
@@ -197,7 +191,7 @@ std::vector<InitiationCandidate> Initiator::add_frame(
     }
     if (best.support < 0) continue;
 
-    std::vector<Observation> observations;
+    std::vector<PixelObservation> observations;
     for (const auto& view : best.views) observations.push_back({cameras[view.camera], view.pixel});
     InitiationCandidate candidate;
     candidate.stamp_ns = stamp_ns;
@@ -209,7 +203,7 @@ std::vector<InitiationCandidate> Initiator::add_frame(
       candidate.max_reprojection_px = all->max_reprojection_px;
     }
     // Velocity: the views with a pixel velocity, 10 ms earlier.
-    std::vector<Observation> earlier;
+    std::vector<PixelObservation> earlier;
     constexpr double kBack = 0.01;
     for (const auto& view : best.views) {
       if (view.has_velocity) earlier.push_back({cameras[view.camera], view.pixel - kBack * view.velocity});

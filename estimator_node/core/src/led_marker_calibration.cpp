@@ -30,35 +30,6 @@ Vector3d homogeneous(const Vector2d& m) {
   return Vector3d(m.x(), m.y(), 1.0);
 }
 
-// Image-to-image homography b ~ G a from the six coplanar LEDs (normalised DLT, h33 = 1 in the
-// normalised frames).
-std::optional<Matrix3d> view_homography(const LedPoints& a, const LedPoints& b) {
-  Vector2d ca = Vector2d::Zero(), cb = Vector2d::Zero();
-  for (int i = 0; i < 6; ++i) ca += a[i], cb += b[i];
-  ca /= 6, cb /= 6;
-  double sa = 0, sb = 0;
-  for (int i = 0; i < 6; ++i) sa += (a[i] - ca).norm(), sb += (b[i] - cb).norm();
-  if (!(sa > 0) || !(sb > 0)) return std::nullopt;
-  sa = 6 * std::sqrt(2.0) / sa, sb = 6 * std::sqrt(2.0) / sb;
-  Eigen::Matrix<double, 8, 8> AtA = Eigen::Matrix<double, 8, 8>::Zero();
-  Eigen::Matrix<double, 8, 1> Atb = Eigen::Matrix<double, 8, 1>::Zero();
-  for (int i = 0; i < 6; ++i) {
-    const Vector2d x = (a[i] - ca) * sa, u = (b[i] - cb) * sb;
-    Eigen::Matrix<double, 8, 1> r1, r2;
-    r1 << x.x(), x.y(), 1, 0, 0, 0, -u.x() * x.x(), -u.x() * x.y();
-    r2 << 0, 0, 0, x.x(), x.y(), 1, -u.y() * x.x(), -u.y() * x.y();
-    AtA.noalias() += r1 * r1.transpose() + r2 * r2.transpose();
-    Atb += r1 * u.x() + r2 * u.y();
-  }
-  const Eigen::Matrix<double, 8, 1> h = AtA.ldlt().solve(Atb);
-  if (!h.allFinite()) return std::nullopt;
-  Matrix3d Hn, Ta, Tb_inv;
-  Hn << h(0), h(1), h(2), h(3), h(4), h(5), h(6), h(7), 1;
-  Ta << sa, 0, -sa * ca.x(), 0, sa, -sa * ca.y(), 0, 0, 1;
-  Tb_inv << 1 / sb, 0, cb.x(), 0, 1 / sb, cb.y(), 0, 0, 1;
-  return Tb_inv * Hn * Ta;
-}
-
 struct RelativePose {  // X_b = R X_a + T
   Matrix3d R;
   Vector3d T;
@@ -92,7 +63,7 @@ bool triangulate(const RelativePose& rel, const Vector2d& ma, const Vector2d& mb
 // four solutions, two with the plane in front of the camera, and the out-of-plane LED M6 (smaller
 // reprojection error of all seven triangulated LEDs) picks between them.
 std::optional<Leds> pair_structure(const LedPoints& a, const LedPoints& b) {
-  auto G = view_homography(a, b);
+  auto G = six_point_homography(a, b);  // image-to-image: b ~ G a
   if (!G) return std::nullopt;
   double sign = 0;
   for (int i = 0; i < 6; ++i) sign += homogeneous(b[i]).dot(*G * homogeneous(a[i]));

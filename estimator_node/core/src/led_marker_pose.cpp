@@ -8,9 +8,9 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
 
 #include "panoptes/estimator/led_marker.h"
+#include "panoptes/rigid_fit.h"
 
 namespace panoptes::estimator {
 
@@ -28,13 +28,6 @@ struct Pose {  // T_cam_plane
   Matrix3d R = Matrix3d::Identity();
   Vector3d t = Vector3d::Zero();
 };
-
-Matrix3d nearest_rotation(const Matrix3d& M) {
-  Eigen::JacobiSVD<Matrix3d> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Matrix3d U = svd.matrixU();
-  if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(2) = -U.col(2);
-  return U * svd.matrixV().transpose();
-}
 
 // e_proj (eq. 3) over the first n LEDs; +inf if an LED is not in front of the camera.
 double cost(const Pose& pose, const std::array<Vector3d, 7>& P, const LedPoints& m, int n) {
@@ -109,35 +102,15 @@ Pose refine(Pose pose, const std::array<Vector3d, 7>& P, const LedPoints& m, int
   return pose;
 }
 
-// Plane-to-image homography from the six coplanar LEDs (DLT on Hartley-normalised coordinates,
-// h33 = 1 in the normalised frame, where it is bounded away from zero), then the planar pose
-// (Xu et al. 2009; Zhang): H ~ [r1 r2 t].
+// Plane-to-image homography from the six coplanar LEDs (six_point_homography), then the planar
+// pose (Xu et al. 2009; Zhang): H ~ [r1 r2 t].
 std::optional<Pose> homography_pose(const std::array<Vector3d, 7>& P, const LedPoints& m) {
-  Vector2d cp = Vector2d::Zero(), cm = Vector2d::Zero();
-  for (int i = 0; i < 6; ++i) cp += P[i].head<2>(), cm += m[i];
-  cp /= 6, cm /= 6;
-  double sp = 0, sm = 0;
-  for (int i = 0; i < 6; ++i) sp += (P[i].head<2>() - cp).norm(), sm += (m[i] - cm).norm();
-  if (!(sp > 0) || !(sm > 0)) return std::nullopt;
-  sp = 6 * std::sqrt(2.0) / sp, sm = 6 * std::sqrt(2.0) / sm;
-  Eigen::Matrix<double, 8, 8> AtA = Eigen::Matrix<double, 8, 8>::Zero();
-  Eigen::Matrix<double, 8, 1> Atb = Eigen::Matrix<double, 8, 1>::Zero();
-  for (int i = 0; i < 6; ++i) {
-    const Vector2d x = (P[i].head<2>() - cp) * sp, u = (m[i] - cm) * sm;
-    Eigen::Matrix<double, 8, 1> a, b;
-    a << x.x(), x.y(), 1, 0, 0, 0, -u.x() * x.x(), -u.x() * x.y();
-    b << 0, 0, 0, x.x(), x.y(), 1, -u.y() * x.x(), -u.y() * x.y();
-    AtA.noalias() += a * a.transpose() + b * b.transpose();
-    Atb += a * u.x() + b * u.y();
-  }
-  const Eigen::Matrix<double, 8, 1> h = AtA.ldlt().solve(Atb);
-  if (!h.allFinite()) return std::nullopt;
-  Matrix3d Hn;
-  Hn << h(0), h(1), h(2), h(3), h(4), h(5), h(6), h(7), 1;
-  Matrix3d Tp, Tm_inv;
-  Tp << sp, 0, -sp * cp.x(), 0, sp, -sp * cp.y(), 0, 0, 1;
-  Tm_inv << 1 / sm, 0, cm.x(), 0, 1 / sm, cm.y(), 0, 0, 1;
-  const Matrix3d H = Tm_inv * Hn * Tp;
+  LedPoints plane;
+  for (int i = 0; i < kLedCount; ++i)
+    plane[static_cast<std::size_t>(i)] = P[static_cast<std::size_t>(i)].head<2>();
+  const auto homography = six_point_homography(plane, m);
+  if (!homography) return std::nullopt;
+  const Matrix3d& H = *homography;
   double scale = 0.5 * (H.col(0).norm() + H.col(1).norm());
   if (!(scale > 0)) return std::nullopt;
   if (H(2, 2) < 0) scale = -scale;  // the marker is in front of the camera: t_z > 0
@@ -240,6 +213,33 @@ std::optional<LedPose> estimate_led_marker_pose(const LedMarkerModel& model, con
   out.T_cam_marker = to_model(chosen, model);
   out.rms = std::sqrt(e7 / kLedCount);
   return out;
+}
+
+std::optional<Eigen::Matrix3d> six_point_homography(const LedPoints& from, const LedPoints& to) {
+  Vector2d c_from = Vector2d::Zero(), c_to = Vector2d::Zero();
+  for (int i = 0; i < 6; ++i) c_from += from[i], c_to += to[i];
+  c_from /= 6, c_to /= 6;
+  double s_from = 0, s_to = 0;
+  for (int i = 0; i < 6; ++i) s_from += (from[i] - c_from).norm(), s_to += (to[i] - c_to).norm();
+  if (!(s_from > 0) || !(s_to > 0)) return std::nullopt;
+  s_from = 6 * std::sqrt(2.0) / s_from, s_to = 6 * std::sqrt(2.0) / s_to;
+  Eigen::Matrix<double, 8, 8> AtA = Eigen::Matrix<double, 8, 8>::Zero();
+  Eigen::Matrix<double, 8, 1> Atb = Eigen::Matrix<double, 8, 1>::Zero();
+  for (int i = 0; i < 6; ++i) {
+    const Vector2d x = (from[i] - c_from) * s_from, u = (to[i] - c_to) * s_to;
+    Eigen::Matrix<double, 8, 1> a, b;
+    a << x.x(), x.y(), 1, 0, 0, 0, -u.x() * x.x(), -u.x() * x.y();
+    b << 0, 0, 0, x.x(), x.y(), 1, -u.y() * x.x(), -u.y() * x.y();
+    AtA.noalias() += a * a.transpose() + b * b.transpose();
+    Atb += a * u.x() + b * u.y();
+  }
+  const Eigen::Matrix<double, 8, 1> h = AtA.ldlt().solve(Atb);
+  if (!h.allFinite()) return std::nullopt;
+  Matrix3d Hn, T_from, T_to_inverse;
+  Hn << h(0), h(1), h(2), h(3), h(4), h(5), h(6), h(7), 1;
+  T_from << s_from, 0, -s_from * c_from.x(), 0, s_from, -s_from * c_from.y(), 0, 0, 1;
+  T_to_inverse << 1 / s_to, 0, c_to.x(), 0, 1 / s_to, c_to.y(), 0, 0, 1;
+  return T_to_inverse * Hn * T_from;
 }
 
 }  // namespace panoptes::estimator

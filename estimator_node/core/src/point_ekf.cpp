@@ -33,9 +33,8 @@ void predict(PointState& state, TimeNs stamp_ns, double sigma2) {
   const double dt = ns_to_seconds(stamp_ns - state.stamp_ns);
   if (dt != 0.0) {
     const Matrix6d A = transition_matrix(dt);
-    state.x = A * state.x;                                              // eq. A.31
-    state.P = A * state.P * A.transpose() + process_noise(dt, sigma2);  // eq. A.32
-    state.P = 0.5 * (state.P + state.P.transpose());
+    state.x = A * state.x;                            // eq. A.31
+    state.P.propagate(A, process_noise(dt, sigma2));  // eq. A.32
   }
   state.stamp_ns = stamp_ns;
 }
@@ -51,29 +50,14 @@ std::optional<PointProjection> project_point(const PointState& state, const Came
   Eigen::Matrix<double, 2, 3> J;
   const auto pixel = camera.project(state.position(), &J);
   if (!pixel) return std::nullopt;
-  PointProjection projection;
-  projection.pixel = *pixel;
-  projection.H.setZero();
-  projection.H.leftCols<3>() = J;
-  const Eigen::Matrix2d R = measurement_sigma_px * measurement_sigma_px * Eigen::Matrix2d::Identity();
-  projection.S = projection.H * state.P * projection.H.transpose() + R;
-  projection.S_inverse = projection.S.inverse();
-  return projection;
-}
-
-double mahalanobis2(const PointProjection& projection, const Eigen::Vector2d& measurement) {
-  const Eigen::Vector2d r = measurement - projection.pixel;
-  return r.dot(projection.S_inverse * r);
+  Eigen::Matrix<double, 2, 6> H = Eigen::Matrix<double, 2, 6>::Zero();
+  H.leftCols<3>() = J;
+  return state.P.pixel_measurement(*pixel, H, measurement_sigma_px);
 }
 
 void update(PointState& state, const PointProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px) {
-  const Eigen::Matrix2d R = measurement_sigma_px * measurement_sigma_px * Eigen::Matrix2d::Identity();
-  const Eigen::Matrix<double, 6, 2> K = state.P * projection.H.transpose() * projection.S_inverse;
-  state.x += K * (measurement - projection.pixel);
-  const Matrix6d I_KH = Matrix6d::Identity() - K * projection.H;
-  state.P = I_KH * state.P * I_KH.transpose() + K * R * K.transpose();
-  state.P = 0.5 * (state.P + state.P.transpose());
+  state.x += state.P.update(projection, measurement, measurement_sigma_px);
 }
 
 }  // namespace panoptes::estimator

@@ -4,7 +4,7 @@
 #include <limits>
 #include <vector>
 
-#include "panoptes/estimator/triangulation.h"
+#include "panoptes/triangulation.h"
 
 namespace panoptes::estimator {
 
@@ -38,7 +38,7 @@ std::optional<SyncEstimate> SyncBaseline::process(const FeatureFrame& frame) {
   }
 
   // Every camera's latest frame, treated as simultaneous with this one.
-  std::vector<Observation> observations;
+  std::vector<PixelObservation> observations;
   for (const auto& [id, entry] : latest_) {
     if (!entry.pixel || frame.stamp_ns - entry.stamp_ns > options_.max_frame_age_ns) continue;
     observations.push_back({&cameras_.at(id), *entry.pixel});

@@ -182,7 +182,7 @@ std::vector<TrackedPoint> Tracker::Impl::confirmed_points(TimeNs stamp_ns) const
     TrackedPoint point;
     point.p = track.position_at(stamp_ns);
     point.v = track.state.velocity();
-    point.sigma_m = std::sqrt(std::max(0.0, track.state.P.block<3, 3>(0, 0).trace() / 3.0));
+    point.sigma_m = std::sqrt(std::max(0.0, track.state.P.matrix().block<3, 3>(0, 0).trace() / 3.0));
     points.push_back(point);
   }
   return points;
@@ -198,12 +198,7 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
 
   // Gating (verify region, seed 003 §2.2.3.2). A cheap bound on the gate's radius from the
   // position covariance selects the blobs worth the full projection and Mahalanobis test.
-  struct Gated {
-    std::size_t track;
-    std::size_t blob;
-    double d2;
-  };
-  std::vector<Gated> gated;
+  std::vector<GatedPair> gated;  // (track, blob, d²)
   struct Projected {
     PointState state;
     PointProjection projection;
@@ -219,7 +214,7 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
     if (p_cam.z() < options.init.min_depth_m) continue;
     const auto pixel = camera.project_camera_point(p_cam);
     if (!pixel) continue;
-    const auto& P = track.state.P;
+    const auto& P = track.state.P.matrix();
     const double trace = P.block<3, 3>(0, 0).trace() + 2.0 * dt * P.block<3, 3>(0, 3).trace() +
                          dt * dt * P.block<3, 3>(3, 3).trace() +
                          options.process_noise * std::abs(dt * dt * dt);
@@ -241,7 +236,7 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
         projected[i] = std::move(full);
       }
       const double d2 = mahalanobis2(projected[i]->projection, pixels[j]);
-      if (d2 < options.gate_chi2) gated.push_back({i, j, d2});
+      if (inside_gate(d2, options.gate_chi2)) gated.push_back({i, j, d2});
     });
   }
 
@@ -251,85 +246,27 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
   std::vector<char> track_done(core.tracks.size(), 0);
   for (int stage = 0; stage < 2; ++stage) {
     const bool want_confirmed = stage == 0;
-    std::vector<Gated> pairs;
+    std::vector<GatedPair> pairs;
     for (const auto& g : gated) {
-      if (core.tracks[g.track].confirmed == want_confirmed && !used[g.blob] && !track_done[g.track])
+      if (core.tracks[g.row].confirmed == want_confirmed && !used[g.col] && !track_done[g.row])
         pairs.push_back(g);
     }
     if (pairs.empty()) continue;
-    // Union-find over track and blob nodes.
-    std::vector<std::size_t> track_nodes, blob_nodes;
-    for (const auto& g : pairs) {
-      track_nodes.push_back(g.track);
-      blob_nodes.push_back(g.blob);
-    }
-    std::sort(track_nodes.begin(), track_nodes.end());
-    track_nodes.erase(std::unique(track_nodes.begin(), track_nodes.end()), track_nodes.end());
-    std::sort(blob_nodes.begin(), blob_nodes.end());
-    blob_nodes.erase(std::unique(blob_nodes.begin(), blob_nodes.end()), blob_nodes.end());
-    const auto t_node = [&](std::size_t t) {
-      return static_cast<std::size_t>(std::lower_bound(track_nodes.begin(), track_nodes.end(), t) -
-                                      track_nodes.begin());
-    };
-    const auto b_node = [&](std::size_t b) {
-      return track_nodes.size() +
-             static_cast<std::size_t>(std::lower_bound(blob_nodes.begin(), blob_nodes.end(), b) -
-                                      blob_nodes.begin());
-    };
-    std::vector<std::size_t> parent(track_nodes.size() + blob_nodes.size());
-    std::iota(parent.begin(), parent.end(), 0);
-    const auto find = [&](std::size_t x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
-    for (const auto& g : pairs) parent[find(t_node(g.track))] = find(b_node(g.blob));
-    std::map<std::size_t, std::vector<std::size_t>> clusters;  // root -> pair indices
-    for (std::size_t k = 0; k < pairs.size(); ++k) clusters[find(t_node(pairs[k].track))].push_back(k);
-
-    for (const auto& [root, members] : clusters) {
-      std::vector<std::pair<std::size_t, std::size_t>> chosen;  // (track, blob)
-      if (members.size() == 1) {
-        chosen.emplace_back(pairs[members[0]].track, pairs[members[0]].blob);
-      } else {
-        std::vector<std::size_t> rows, cols;
-        for (std::size_t k : members) {
-          rows.push_back(pairs[k].track);
-          cols.push_back(pairs[k].blob);
-        }
-        std::sort(rows.begin(), rows.end());
-        rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-        std::sort(cols.begin(), cols.end());
-        cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
-        std::vector<double> cost(rows.size() * cols.size(), kForbidden);
-        for (std::size_t k : members) {
-          const auto r = std::lower_bound(rows.begin(), rows.end(), pairs[k].track) - rows.begin();
-          const auto c = std::lower_bound(cols.begin(), cols.end(), pairs[k].blob) - cols.begin();
-          cost[static_cast<std::size_t>(r) * cols.size() + static_cast<std::size_t>(c)] = pairs[k].d2;
-        }
-        // Leaving a track and a blob both unmatched costs the gate: any gated pair is preferred.
-        const auto solution =
-            solve_assignment(cost, static_cast<int>(rows.size()), static_cast<int>(cols.size()),
-                             0.5 * options.gate_chi2, 0.5 * options.gate_chi2);
-        for (std::size_t r = 0; r < rows.size(); ++r) {
-          if (solution[r] >= 0) chosen.emplace_back(rows[r], cols[static_cast<std::size_t>(solution[r])]);
-        }
-      }
-      for (const auto& [t, b] : chosen) {
-        Track& track = core.tracks[t];
-        // Track quality: a real marker's d² follows χ²₂ (mean 2, less while R is generous); blobs
-        // of clutter that happen to fall in a wide gate land anywhere in it (mean ~χ²/2).
-        const double d2 = mahalanobis2(projected[t]->projection, pixels[b]);
-        track.nis_average = track.nis_updates == 0 ? d2 : 0.8 * track.nis_average + 0.2 * d2;
-        ++track.nis_updates;
-        track.state = projected[t]->state;
-        update(track.state, projected[t]->projection, pixels[b],
-               options.measurement_noise_px);  // Joseph form
-        note_update(track, camera_index, stamp);
-        track_done[t] = 1;
-        used[b] = 1;
-        ++core.blobs_associated;
-        ++core.associated_per_camera[camera_index];
-      }
+    // Leaving a track and a blob both unmatched costs the gate: any gated pair is preferred.
+    for (const auto& [t, b] : assign_gated(pairs, 0.5 * options.gate_chi2)) {
+      Track& track = core.tracks[t];
+      // Track quality: a real marker's d² follows χ²₂ (mean 2, less while R is generous); blobs
+      // of clutter that happen to fall in a wide gate land anywhere in it (mean ~χ²/2).
+      const double d2 = mahalanobis2(projected[t]->projection, pixels[b]);
+      track.nis_average = track.nis_updates == 0 ? d2 : 0.8 * track.nis_average + 0.2 * d2;
+      ++track.nis_updates;
+      track.state = projected[t]->state;
+      update(track.state, projected[t]->projection, pixels[b], options.measurement_noise_px);
+      note_update(track, camera_index, stamp);
+      track_done[t] = 1;
+      used[b] = 1;
+      ++core.blobs_associated;
+      ++core.associated_per_camera[camera_index];
     }
   }
 
@@ -366,12 +303,12 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     track.id = core.next_id++;
     track.state.x.head<3>() = candidate.position;
     track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
-    track.state.P.setZero();
     const double sp = options.init_position_sigma_m;
     const double sv =
         candidate.has_velocity ? options.init_measured_velocity_sigma_mps : options.init_velocity_sigma_mps;
-    track.state.P.diagonal().head<3>().setConstant(sp * sp);
-    track.state.P.diagonal().tail<3>().setConstant(sv * sv);
+    Vector6d variances;
+    variances << sp * sp, sp * sp, sp * sp, sv * sv, sv * sv, sv * sv;
+    track.state.P = FilterCovariance<6>::diagonal(variances);
     track.state.stamp_ns = stamp;
     track.created_ns = stamp;
     track.last_update_ns = stamp;
@@ -458,7 +395,7 @@ TrackRecord Tracker::Impl::to_record(const Track& track, TimeNs stamp_ns) const 
   record.id = track.id;
   record.p = state.position();
   record.v = state.velocity();
-  const auto& P = state.P;
+  const auto& P = state.P.matrix();
   record.position_covariance = {P(0, 0), P(0, 1), P(0, 2), P(1, 1), P(1, 2), P(2, 2)};
   if (!track.confirmed) {
     record.status = TrackStatus::kTentative;

@@ -16,6 +16,7 @@
 #include "panoptes/calib/report.h"
 #include "panoptes/calib/wand.h"
 #include "panoptes/calib/wand_solver.h"
+#include "panoptes/rigid_fit.h"
 #include "panoptes/simulator.h"
 
 namespace panoptes::calib::testing {
@@ -292,7 +293,7 @@ inline Measured solve_and_measure(const Scene& scene, const WandDefinition& wand
       free_lengths(result, true_models, wand.length(), static_cast<int>(wand.marker_count()),
                    &measured.truth_rms_by_cameras);
   if (estimated.size() < 3) return measured;
-  const RigidTransform T_true_est = align_rigid(estimated, truth);
+  const RigidTransform T_true_est = fit_rigid_transform(estimated, truth).value();
   std::size_t reference = 0;
   for (std::size_t c = 0; c < result.cameras.size(); ++c)
     if (result.cameras[c].id == result.reference_camera) reference = c;

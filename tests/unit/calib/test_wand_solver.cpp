@@ -4,6 +4,7 @@
 
 #include "calib_expect.h"
 #include "panoptes/calib/world_frame.h"
+#include "panoptes/rigid_fit.h"
 
 namespace panoptes::calib::testing {
 namespace {
@@ -132,7 +133,7 @@ TEST(WandSolver, SingleLedIsScaledByAnLFrame) {
     truth.push_back(scene.cameras()[c].calibration.T_world_cam->t);
     direct_mm = std::max(direct_mm, (estimated.back() - truth.back()).norm() * 1e3);
   }
-  const RigidTransform T_true_est = align_rigid(estimated, truth);
+  const RigidTransform T_true_est = fit_rigid_transform(estimated, truth).value();
   double position_mm = 0, rotation_deg = 0;
   for (std::size_t c = 0; c < solved.cameras.size(); ++c) {
     const RigidTransform aligned = T_true_est * *solved.cameras[c].T_world_cam;

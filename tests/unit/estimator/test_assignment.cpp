@@ -9,6 +9,8 @@
 #include "../../../estimator_node/core/src/blob_grid.h"
 #include "panoptes/estimator/assignment.h"
 
+#include <Eigen/LU>
+
 namespace panoptes::estimator {
 namespace {
 
@@ -61,6 +63,68 @@ TEST(Assignment, MatchesBruteForceOnRandomGatedProblems) {
     total += (cols - matched) * half_gate;
     EXPECT_NEAR(total, brute_force(cost, rows, cols, half_gate, half_gate), 1e-9) << "trial " << trial;
   }
+}
+
+TEST(GatedAssignment, ClustersGiveTheSameTotalAsOneDenseProblem) {
+  // Sparse gated pairs over many rows and columns: solving the clusters apart must cost exactly what
+  // the whole dense problem costs, use each row and column at most once, and only gated pairs.
+  std::mt19937 random(9);
+  std::uniform_real_distribution<double> uniform(0.0, 12.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int rows = 1 + static_cast<int>(random() % 12), cols = 1 + static_cast<int>(random() % 12);
+    std::vector<double> dense(static_cast<std::size_t>(rows * cols), kForbidden);
+    std::vector<GatedPair> pairs;
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c)
+        if (random() % 5 == 0) {
+          const double d2 = uniform(random);
+          dense[static_cast<std::size_t>(r * cols + c)] = d2;
+          pairs.push_back({static_cast<std::size_t>(r), static_cast<std::size_t>(c), d2});
+        }
+    const double half_gate = 5.0;
+    const auto chosen = assign_gated(pairs, half_gate);
+    std::vector<char> row_used(rows, 0), col_used(cols, 0);
+    double total = 0;
+    for (const auto& [r, c] : chosen) {
+      ASSERT_FALSE(row_used[r]);
+      ASSERT_FALSE(col_used[c]);
+      row_used[r] = col_used[c] = 1;
+      const double d2 = dense[r * static_cast<std::size_t>(cols) + c];
+      ASSERT_TRUE(std::isfinite(d2)) << "a pair outside the gate was chosen";
+      total += d2 - 2.0 * half_gate;
+    }
+    EXPECT_TRUE(std::is_sorted(chosen.begin(), chosen.end()));
+    const auto reference = solve_assignment(dense, rows, cols, half_gate, half_gate);
+    double reference_total = 0;
+    for (int r = 0; r < rows; ++r)
+      if (reference[r] >= 0)
+        reference_total += dense[static_cast<std::size_t>(r * cols + reference[r])] - 2.0 * half_gate;
+    EXPECT_NEAR(total, reference_total, 1e-9) << "trial " << trial;
+  }
+}
+
+TEST(GatedAssignment, AloneAPairIsTakenOnlyWhenCheaperThanLeavingBoth) {
+  EXPECT_EQ(assign_gated({{3, 7, 1.0}}, 1.0).size(), 1U);
+  EXPECT_TRUE(assign_gated({{3, 7, 2.5}}, 1.0).empty());
+  EXPECT_TRUE(assign_gated({}, 1.0).empty());
+}
+
+TEST(GatedAssignment, TheGateRadiusHoldsEveryPointInsideTheGate) {
+  Eigen::Matrix2d S;
+  S << 4.0, 1.5, 1.5, 2.0;
+  const Eigen::Matrix2d S_inverse = S.inverse();
+  const double chi2 = 9.21;
+  const double radius2 = gate_radius2(S, chi2);
+  std::mt19937 random(2);
+  std::uniform_real_distribution<double> uniform(-10.0, 10.0);
+  for (int k = 0; k < 5000; ++k) {
+    const Eigen::Vector2d r(uniform(random), uniform(random));
+    if (inside_gate(r.dot(S_inverse * r), chi2)) {
+      EXPECT_LE(r.squaredNorm(), radius2 * (1 + 1e-12));
+    }
+  }
+  EXPECT_TRUE(inside_gate(9.2, chi2));
+  EXPECT_FALSE(inside_gate(9.21, chi2));
 }
 
 TEST(Assignment, PrefersTheGloballyBestPairsOverGreedy) {

@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "panoptes/estimator/point_ekf.h"
-#include "panoptes/estimator/triangulation.h"
+#include "panoptes/triangulation.h"
 #include "test_cameras.h"
 
 namespace panoptes::estimator {
@@ -39,9 +39,7 @@ TEST(PointEkf, TracksConstantVelocityTargetWithAsynchronousCameras) {
 
   PointState state;
   state.x.head<3>() = p0 + Eigen::Vector3d(0.01, -0.01, 0.01);  // a rough start, as after initiation
-  state.P = Matrix6d::Identity();
-  state.P.diagonal().head<3>().setConstant(1e-4);
-  state.P.diagonal().tail<3>().setConstant(4.0);
+  state.P = FilterCovariance<6>::diagonal((Vector6d() << 1e-4, 1e-4, 1e-4, 4.0, 4.0, 4.0).finished());
   state.stamp_ns = 0;
 
   // Four cameras at 100 Hz with different phases: one frame every 2.5 ms, one camera at a time.
@@ -71,38 +69,38 @@ TEST(PointEkf, TracksConstantVelocityTargetWithAsynchronousCameras) {
   // Consistency: the normalised innovation squared averages to its 2 degrees of freedom when the
   // filter's R and P describe the real errors, and the error matches the covariance.
   const double mean_nis = nis_sum / 400;
-  const double predicted_rmse = std::sqrt(state.P.block<3, 3>(0, 0).trace());
+  const double predicted_rmse = std::sqrt(state.P.matrix().block<3, 3>(0, 0).trace());
   std::printf("mean NIS %.2f (expect 2), predicted position RMSE %.3f mm\n", mean_nis, predicted_rmse * 1e3);
   EXPECT_GT(mean_nis, 1.5);
   EXPECT_LT(mean_nis, 2.5);
   EXPECT_LT(rmse, 2.0 * predicted_rmse);
   EXPECT_LT(rmse, 0.4e-3);
   EXPECT_LT((state.velocity() - v).norm(), 0.03);
-  // The covariance stays symmetric positive definite (Joseph form).
-  EXPECT_LT((state.P - state.P.transpose()).norm(), 1e-15);
-  EXPECT_GT(state.P.ldlt().vectorD().minCoeff(), 0.0);
+  // The covariance stays symmetric positive definite (ekf.h's update form, symmetrised).
+  EXPECT_LT((state.P.matrix() - state.P.matrix().transpose()).norm(), 1e-15);
+  EXPECT_GT(state.P.matrix().ldlt().vectorD().minCoeff(), 0.0);
 }
 
 TEST(PointEkf, UpdateMovesTowardMeasurementAndShrinksCovariance) {
   const auto cameras = make_ring_cameras(2, 3.0, 1.0);
   PointState state;
   state.x.head<3>() = Eigen::Vector3d(0, 0, 1);
-  state.P = 1e-2 * Matrix6d::Identity();
+  state.P = FilterCovariance<6>(1e-2 * Matrix6d::Identity());
   const Eigen::Vector3d truth(0.01, 0, 1);
   const auto projection = project_point(state, cameras[0], 0.5);
   ASSERT_TRUE(projection);
   const Eigen::Vector2d z = *cameras[0].project(truth);
   const double before = (*cameras[0].project(state.position()) - z).norm();
-  const double trace_before = state.P.trace();
+  const double trace_before = state.P.matrix().trace();
   update(state, *projection, z, 0.5);
   EXPECT_LT((*cameras[0].project(state.position()) - z).norm(), 0.1 * before);
-  EXPECT_LT(state.P.trace(), trace_before);
+  EXPECT_LT(state.P.matrix().trace(), trace_before);
 }
 
 TEST(Triangulation, RecoversPointThroughDistortedCameras) {
   const auto cameras = make_ring_cameras(3, 3.0, 1.5, /*distorted=*/true);
   const Eigen::Vector3d point(0.3, -0.2, 1.1);
-  std::vector<Observation> observations;
+  std::vector<PixelObservation> observations;
   for (const auto& camera : cameras) observations.push_back({&camera, *camera.project(point)});
   const auto result = triangulate(observations);
   ASSERT_TRUE(result);

@@ -20,6 +20,13 @@ struct RigidTransform {
   RigidTransform operator*(const RigidTransform& T_b_c) const { return {q * T_b_c.q, q * T_b_c.t + t}; }
 };
 
+// The cross-product matrix [v]×, with [v]× w = v × w.
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
 // A rotation that makes a camera at `eye` look at `target`, with image "up" close to `up`.
 // Returns T_world_cam in the OpenCV camera convention (x right, y down, z forward).
 RigidTransform look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,

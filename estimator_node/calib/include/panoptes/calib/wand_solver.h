@@ -115,12 +115,10 @@ SolveResult solve_wand_calibration(const std::vector<CameraCalibration>& cameras
                                    const std::vector<CameraWandTrack>& tracks, const WandDefinition& wand,
                                    const SolveOptions& options = {});
 
-// Triangulates one point from normalised rays of calibrated cameras (linear, then Gauss-Newton on
-// the pixel error). nullopt with fewer than two rays or a point behind a camera.
+// Triangulates one point seen by calibrated cameras (panoptes/triangulation.h: linear, then
+// Gauss-Newton on the pixel error). nullopt with fewer than two rays, (near) parallel rays or a
+// point behind a camera.
 std::optional<Eigen::Vector3d> triangulate(const std::vector<CameraModel>& models,
                                            const std::vector<Eigen::Vector2d>& pixels);
-
-// Rigid (no scale) least-squares alignment of `from` onto `to` (Umeyama/Kabsch): to ≈ R from + t.
-RigidTransform align_rigid(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to);
 
 }  // namespace panoptes::calib

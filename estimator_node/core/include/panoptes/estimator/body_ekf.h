@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "panoptes/camera_model.h"
+#include "panoptes/estimator/ekf.h"
 #include "panoptes/geometry.h"
 #include "panoptes/time.h"
 
@@ -36,11 +37,21 @@ struct BodyState {
   Eigen::Vector3d a = Eigen::Vector3d::Zero();            // m/s²
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  // R_world_body
   Eigen::Vector3d w = Eigen::Vector3d::Zero();            // angular velocity, body frame, rad/s
-  Matrix15d P = Matrix15d::Identity();                    // covariance of (p, v, a, δθ, ω)
+  FilterCovariance<15> P;                                 // covariance of (p, v, a, δθ, ω)
   TimeNs stamp_ns = 0;
 
   RigidTransform pose() const { return {q, p}; }
 };
+
+// 1-σ of each block of a prior whose blocks are independent and isotropic.
+struct BodyPriorSigmas {
+  double position_m = 0.0;
+  double velocity_mps = 0.0;
+  double acceleration_mps2 = 0.0;
+  double angle_rad = 0.0;
+  double angular_velocity_radps = 0.0;
+};
+FilterCovariance<15> body_prior(const BodyPriorSigmas& sigmas);
 
 // Moves the state to `stamp_ns` (forward or, for look-ups only, backward).
 void predict(BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise);
@@ -51,20 +62,14 @@ BodyState predicted(const BodyState& state, TimeNs stamp_ns, const BodyMotionNoi
 RigidTransform extrapolate_pose(const BodyState& state, double horizon_s);
 
 // Projection of one marker (body-frame position `marker`) into a camera.
-struct MarkerProjection {
-  Eigen::Vector2d pixel;
-  Eigen::Matrix<double, 2, 15> H;  // d(pixel)/d(x)
-  Eigen::Matrix2d S;               // H P Hᵀ + R
-  Eigen::Matrix2d S_inverse;
-};
+using MarkerProjection = PixelMeasurement<15>;
 
 std::optional<MarkerProjection> project_marker(const BodyState& state, const Eigen::Vector3d& marker,
                                                const CameraModel& camera, double measurement_sigma_px,
                                                double min_depth_m = 0.05);
 
-double mahalanobis2(const MarkerProjection& projection, const Eigen::Vector2d& measurement);
-
-// EKF update with one marker measurement (Joseph form), then the reset δθ → q (eq. A.41).
+// EKF update with one marker measurement through the filter layer (ekf.h), which returns the error
+// state δx; it is injected into the nominal state and δθ reset into q (eq. A.41).
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px);
 

@@ -2,7 +2,7 @@
 // Rigid-body identification from unlabelled 3D points (seed 000 §6.1.6, generalised): an
 // association graph whose nodes pair a measured point with a model marker and whose edges join
 // two pairs when the measured and the model distance agree within a tolerance; the largest
-// clique (≥ 3 pairs) is the identification, and Kabsch/Umeyama gives the pose.
+// clique (≥ 3 pairs) is the identification, and Kabsch/Umeyama (panoptes/rigid_fit.h) gives the pose.
 #pragma once
 
 #include <optional>
@@ -16,13 +16,6 @@
 #include "panoptes/geometry.h"
 
 namespace panoptes::estimator {
-
-// Least-squares rigid transform T (no scale) with T·from[i] ≈ to[i] (Kabsch/Umeyama: SVD of the
-// cross-covariance with the reflection fixed). Needs ≥ 3 points not all collinear; `rms`
-// receives the RMS residual. nullopt for degenerate input.
-std::optional<RigidTransform> fit_rigid_transform(const std::vector<Eigen::Vector3d>& from,
-                                                  const std::vector<Eigen::Vector3d>& to,
-                                                  double* rms = nullptr);
 
 struct IdentificationOptions {
   double tolerance_floor_m = 0.002;  // distances agree within floor + sigmas·σ(distance)

@@ -70,6 +70,11 @@ class LedMarkerModel {
 enum class LedCase { kL5, kL41, kL42 };
 std::string_view to_string(LedCase c);
 
+// Homography G with to[i] ~ G from[i] from the first six points of each (the marker's coplanar
+// LEDs M0..M5): DLT on Hartley-normalised coordinates with h33 = 1 in the normalised frames, where
+// it is bounded away from zero. nullopt for coincident points or a singular system.
+std::optional<Eigen::Matrix3d> six_point_homography(const LedPoints& from, const LedPoints& to);
+
 // Model-free 2D identification (§2.2.2) of the seven points of one cluster, for the paper's
 // handedness (+1; swap 4 and 5 for a mirrored model). index[i] is the input index of m_i. For
 // L42 the 2D criteria cannot tell m4/m5 from m6 (Figs. 2c, 2d): `alternative` then holds the

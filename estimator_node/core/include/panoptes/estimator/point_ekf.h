@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// Point-track EKF maths (seed 003 Appendix A.3): state apart from maths; this file is the only
-// place that changes a point track's covariance.
+// Point-track EKF maths (seed 003 Appendix A.3): state apart from maths. The covariance is a
+// FilterCovariance (ekf.h), changed only by the filter layer's propagate and update.
 #pragma once
 
 #include <optional>
@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include "panoptes/camera_model.h"
+#include "panoptes/estimator/ekf.h"
 #include "panoptes/time.h"
 
 namespace panoptes::estimator {
@@ -17,7 +18,7 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 struct PointState {
   Vector6d x = Vector6d::Zero();  // p (m), v (m/s), world frame
-  Matrix6d P = Matrix6d::Identity();
+  FilterCovariance<6> P;
   TimeNs stamp_ns = 0;
 
   Eigen::Vector3d position() const { return x.head<3>(); }
@@ -35,21 +36,13 @@ void predict(PointState& state, TimeNs stamp_ns, double sigma2);
 PointState predicted(const PointState& state, TimeNs stamp_ns, double sigma2);
 
 // The projection of a track into one camera with what gating and the update need.
-struct PointProjection {
-  Eigen::Vector2d pixel;
-  Eigen::Matrix<double, 2, 6> H;  // d(pixel)/d(x)
-  Eigen::Matrix2d S;              // innovation covariance H P Hᵀ + R
-  Eigen::Matrix2d S_inverse;
-};
+using PointProjection = PixelMeasurement<6>;
 
 // nullopt if the point is behind the camera.
 std::optional<PointProjection> project_point(const PointState& state, const CameraModel& camera,
                                              double measurement_sigma_px);
 
-// Squared Mahalanobis distance of a measurement under the projection's innovation covariance.
-double mahalanobis2(const PointProjection& projection, const Eigen::Vector2d& measurement);
-
-// EKF update with one 2D measurement, Joseph-form covariance (keeps P symmetric positive definite).
+// EKF update with one 2D measurement through the filter layer (ekf.h: P − K S Kᵀ, symmetrised).
 void update(PointState& state, const PointProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px);
 

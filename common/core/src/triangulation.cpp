@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "panoptes/estimator/triangulation.h"
+#include "panoptes/triangulation.h"
 
 #include <cmath>
 #include <limits>
@@ -7,7 +7,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
-namespace panoptes::estimator {
+namespace panoptes {
 
 double reprojection_error(const CameraModel& camera, const Eigen::Vector3d& point,
                           const Eigen::Vector2d& pixel) {
@@ -16,7 +16,8 @@ double reprojection_error(const CameraModel& camera, const Eigen::Vector3d& poin
   return (*projected - pixel).norm();
 }
 
-std::optional<Triangulated> triangulate(const std::vector<Observation>& observations, int refine_iterations) {
+std::optional<Triangulated> triangulate(const std::vector<PixelObservation>& observations,
+                                        int refine_iterations) {
   if (observations.size() < 2) return std::nullopt;
 
   // Linear step: the point minimising the summed squared distance to every ray,
@@ -65,4 +66,4 @@ std::optional<Triangulated> triangulate(const std::vector<Observation>& observat
   return result;
 }
 
-}  // namespace panoptes::estimator
+}  // namespace panoptes
