@@ -261,9 +261,10 @@ int main(int argc, char** argv) {
   CLI::App app{"panoptes_ctl: send commands to camera nodes and watch their status (Panoptes)",
                "panoptes_ctl"};
   app.require_subcommand(1);
-  app.fallthrough();  // --timeout and --dds-profile may follow the subcommand
-  app.add_option("--dds-profile", options.dds_profile,
-                 "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  app.fallthrough();                                // --timeout and --dds-profile may follow the subcommand
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("--dds-profile", options.dds_profile, "Fast DDS XML profile")
+      ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
   app.add_option("--timeout", options.timeout_s, "seconds to wait for nodes and replies")
       ->check(CLI::PositiveNumber);
 
@@ -283,7 +284,7 @@ int main(int argc, char** argv) {
   script->add_option("file", options.out, "script file")->required();
 
   auto* status = app.add_subcommand("status", "print CameraStatus messages as JSON lines");
-  status->add_option("--camera", options.camera, "only this camera");
+  status->add_option("--camera", options.camera, "only this camera")->default_str("every camera");
   status->add_option("--count", options.count, "messages to print before exiting")
       ->check(CLI::PositiveNumber);
 

@@ -13,6 +13,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "calib_scenes.h"
+#include "panoptes/cli.h"
 
 using namespace panoptes;
 using namespace panoptes::calib;
@@ -158,7 +159,13 @@ void stereo_side_by_side() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string only = argc > 1 ? argv[1] : "";
+  std::string only;
+  CLI::App app{"bench_calibration: wand calibration benchmarks, printed as JSON lines", "bench_calibration"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("section", only, "run only this one")
+      ->check(CLI::IsMember({"alternation", "stereo", "lens", "studio", "speed"}))
+      ->default_str("all");
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   if (only.empty() || only == "alternation") {
     const Scene scene = Scene::from_yaml_string(scene_yaml(room8()));
     for (int iterations : {1, 5, 40}) {

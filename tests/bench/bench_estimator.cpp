@@ -203,6 +203,7 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 7;
   CLI::App app{"bench_estimator: Tracker::process speed on simulated features, one thread",
                "bench_estimator"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_flag("--json", json, "print one JSON object on the last line");
   app.add_option("--seconds", config.seconds, "simulated seconds timed per case (after the warm-up)")
       ->check(CLI::Range(0.05, 3600.0));

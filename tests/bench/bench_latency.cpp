@@ -260,6 +260,7 @@ int main(int argc, char** argv) {
       "subscriber of the rigid body's BodyPose, against the raw DDS floor measured through the same "
       "processes in the same run (docs/benchmarks.md). Progress on stderr, result on stdout.",
       "bench_latency"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_flag("--json", json_output, "print the result as one JSON object");
   app.add_option("--scene", scene_file,
                  "simulator scene: its cameras are the camera_nodes, its first body is the one measured")
@@ -279,13 +280,14 @@ int main(int argc, char** argv) {
   app.add_flag("!--no-tracks", subscribe_tracks,
                "do not subscribe to rt/panoptes/tracks (the secondary TrackFrame row)");
   app.add_option("--domain", domain,
-                 "DDS domain of the run (default: 100 + pid % 100, so that other pipelines on this host do "
-                 "not mix in)")
-      ->check(CLI::Range(0, 232));
+                 "DDS domain of the run (so that other pipelines on this host do not mix in)")
+      ->check(CLI::Range(0, 232))
+      ->default_str("100 + pid % 100");
   app.add_option("--dds-profile", profile, "Fast DDS profile for every process")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
-  app.add_option("--log-dir", log_dir, "keep the child processes' logs and inputs here");
+  app.add_option("--log-dir", log_dir, "keep the child processes' logs and inputs here")
+      ->default_str("a temporary folder");
   app.add_option(
       "--samples", samples_file,
       "write every measured frame's stamps (camera_node, estimator_node, here) to this JSONL file");

@@ -48,7 +48,9 @@ double now_s() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"bench_led_marker: time per 7-LED marker pose (identification + pose), one thread"};
+  CLI::App app{"bench_led_marker: time per 7-LED marker pose (identification + pose), one thread",
+               "bench_led_marker"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   bool json = false;
   int frames = 2000, repeat = 20;
   std::uint64_t seed = 1;

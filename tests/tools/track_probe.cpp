@@ -25,8 +25,10 @@ int main(int argc, char** argv) {
   bool with_status = false;
   CLI::App app{"panoptes_track_probe: records received TrackFrames (and EstimatorStatus) as JSON lines",
                "panoptes_track_probe"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--out", out_file, "JSONL file to write")->required();
-  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile")
+      ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
   app.add_option("--duration", duration_s, "stop after this many seconds (0 = until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--status", with_status, "also record EstimatorStatus (per-camera utilisation)");
