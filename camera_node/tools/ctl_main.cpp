@@ -254,9 +254,7 @@ int publish_predictions(const Options& options) {
   return panoptes::kExitOk;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   Options options;
   CLI::App app{"panoptes_ctl: send commands to camera nodes and watch their status (Panoptes)",
                "panoptes_ctl"};
@@ -308,6 +306,17 @@ int main(int argc, char** argv) {
     if (*preview) return get_preview(options);
     return publish_predictions(options);
   } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
+    return panoptes::kExitFailure;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
     std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
     return panoptes::kExitFailure;
   }

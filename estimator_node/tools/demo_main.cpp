@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -34,8 +35,6 @@
 #include "panoptes/process.h"
 #include "panoptes/simulator.h"
 #include "panoptes/time.h"
-
-extern char** environ;
 
 namespace {
 
@@ -64,11 +63,12 @@ std::vector<std::unique_ptr<Child>> start_processes(const fs::path& bin_dir, con
   estimator_args.insert(estimator_args.end(), common_dds.begin(), common_dds.end());
   children.push_back(
       std::make_unique<Child>("estimator_node", estimator_args, run_dir / "estimator_node.log"));
+  const std::string source_prefix = "sim:" + scene_file + "#";
   for (const auto& camera : scene.cameras()) {
     const std::string& id = camera.calibration.id;
     std::vector<std::string> camera_args = {(bin_dir / "camera_node").string(),
                                             "--source",
-                                            "sim:" + scene_file + "#" + id,
+                                            source_prefix + id,
                                             "--sim-epoch-ns",
                                             std::to_string(epoch),
                                             "--duration",
@@ -145,9 +145,7 @@ int watch(const std::string& dds_profile, const std::vector<std::unique_ptr<Chil
   return exit_code;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   const fs::path bin_dir = executable_dir();
   std::string scene_file = (bin_dir / "../../deploy/scenes/demo.yaml").lexically_normal().string();
   if (!fs::exists(scene_file)) scene_file = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/demo.yaml";
@@ -241,4 +239,15 @@ int main(int argc, char** argv) {
     }
   }
   return check && !pass ? panoptes::kExitFailure : panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
+    return 1;
+  }
 }

@@ -179,9 +179,7 @@ void judge_tracks(const EvalArgs& args, const panoptes::Scene& scene, std::vecto
     failures.push_back("false record fraction " + std::to_string(evaluation.false_record_fraction()));
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   EvalArgs args;
   CLI::App app{"panoptes_eval: accuracy of tracks against simulator ground truth", "panoptes_eval"};
   add_options(app, args);
@@ -206,4 +204,15 @@ int main(int argc, char** argv) {
     return panoptes::kExitBadInput;
   }
   return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_eval: %s\n", error.what());
+    return 1;
+  }
 }

@@ -8,6 +8,7 @@
 //    chessboard with the same centroid noise.
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <random>
 
 #include <opencv2/calib3d.hpp>
@@ -156,9 +157,7 @@ void stereo_side_by_side() {
       cv_rms, cv_t_mm, cv_r_deg, simulate_s);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   std::string only;
   CLI::App app{"bench_calibration: wand calibration benchmarks, printed as JSON lines", "bench_calibration"};
   app.option_defaults()->always_capture_default();  // --help shows every default
@@ -230,4 +229,15 @@ int main(int argc, char** argv) {
     line("16 cameras x 2000 frames, time offsets on", m, total - m.result.seconds);
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "bench_calibration: %s\n", error.what());
+    return 1;
+  }
 }

@@ -24,6 +24,7 @@
 #include <chrono>
 #include <cstdio>
 #include <deque>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -241,9 +242,7 @@ Results join(const Recorder& recorded, TimeNs from_ns, TimeNs to_ns) {
   return results;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   const fs::path bin_dir = executable_path().parent_path();
   std::string scene_file = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/latency240.yaml";
   std::string profile = std::string(PANOPTES_SOURCE_DIR) + "/deploy/dds/loopback.xml";
@@ -362,14 +361,14 @@ int main(int argc, char** argv) {
                                  "--latency-window-ms", std::to_string(latency_window_ms), "--latency-probe",
                                  "--duration", std::to_string(run_s + 2)},
         run_dir / "estimator_node.log"));
+    const std::string source_prefix = "sim:" + scene_file + "#";
     for (const auto& camera : scene.cameras()) {
       const std::string& id = camera.calibration.id;
       children.push_back(std::make_unique<panoptes::ChildProcess>(
           "camera_node[" + id + "]",
-          std::vector<std::string>{(bin_dir / "camera_node").string(), "--source",
-                                   "sim:" + scene_file + "#" + id, "--sim-epoch-ns", std::to_string(epoch),
-                                   "--dds-profile", profile, "--latency-probe", "--duration",
-                                   std::to_string(run_s), "--quiet"},
+          std::vector<std::string>{(bin_dir / "camera_node").string(), "--source", source_prefix + id,
+                                   "--sim-epoch-ns", std::to_string(epoch), "--dds-profile", profile,
+                                   "--latency-probe", "--duration", std::to_string(run_s), "--quiet"},
           run_dir / (id + ".log")));
     }
     TimeNs next_progress = epoch;
@@ -469,4 +468,15 @@ int main(int argc, char** argv) {
     return panoptes::kExitFailure;
   }
   return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "bench_latency: %s\n", error.what());
+    return 1;
+  }
 }

@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <mutex>
 #include <optional>
 #include <random>
@@ -141,9 +142,7 @@ std::optional<int> parse(int argc, char** argv, Options& options) {
   });
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   Renderer renderer;
   if (const auto exit_code = parse(argc, argv, renderer.options)) return *exit_code;
   const Options& options = renderer.options;
@@ -191,4 +190,15 @@ int main(int argc, char** argv) {
   g_object_unref(camera);  // stops and joins the camera's thread before the renderer goes away
   if (renderer.truth != nullptr) std::fclose(renderer.truth);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_fake_gige: %s\n", error.what());
+    return 1;
+  }
 }

@@ -12,7 +12,9 @@
 #include "panoptes/cli.h"
 #include "panoptes/time.h"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   std::string spec;
   std::string frames_out;
   long long frames = 100;
@@ -57,4 +59,15 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "panoptes_source_probe: read %lld frames\n%s\n", count, line.c_str());
   if (!source->last_error().empty()) std::fprintf(stderr, "last error: %s\n", source->last_error().c_str());
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_source_probe: %s\n", error.what());
+    return 1;
+  }
 }

@@ -4,6 +4,7 @@
 // produced it, confirmed tracks) and, with --status, one per EstimatorStatus, so that a test can
 // measure from records when tracking stopped and when it came back.
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <mutex>
 #include <string>
@@ -18,7 +19,9 @@
 #include "panoptes/time.h"
 #include "panoptes_msgs/panoptes.h"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   std::string out_file;
   std::string dds_profile;
   double duration_s = 0;
@@ -91,4 +94,15 @@ int main(int argc, char** argv) {
     return panoptes::kExitFailure;
   }
   return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_track_probe: %s\n", error.what());
+    return 1;
+  }
 }
