@@ -10,8 +10,9 @@ packages=(
   libopencv-dev libeigen3-dev libceres-dev
   opencv-doc
   libaravis-dev aravis-tools libusb-1.0-0-dev
-  libyaml-cpp-dev libspdlog-dev libcli11-dev nlohmann-json3-dev
+  libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang-format clang-tidy
   iproute2 procps nftables
 )
 

@@ -254,16 +254,15 @@ int publish_predictions(const Options& options) {
   return panoptes::kExitOk;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   Options options;
   CLI::App app{"panoptes_ctl: send commands to camera nodes and watch their status (Panoptes)",
                "panoptes_ctl"};
   app.require_subcommand(1);
-  app.fallthrough();  // --timeout and --dds-profile may follow the subcommand
-  app.add_option("--dds-profile", options.dds_profile,
-                 "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  app.fallthrough();                                // --timeout and --dds-profile may follow the subcommand
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("--dds-profile", options.dds_profile, "Fast DDS XML profile")
+      ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
   app.add_option("--timeout", options.timeout_s, "seconds to wait for nodes and replies")
       ->check(CLI::PositiveNumber);
 
@@ -283,7 +282,7 @@ int main(int argc, char** argv) {
   script->add_option("file", options.out, "script file")->required();
 
   auto* status = app.add_subcommand("status", "print CameraStatus messages as JSON lines");
-  status->add_option("--camera", options.camera, "only this camera");
+  status->add_option("--camera", options.camera, "only this camera")->default_str("every camera");
   status->add_option("--count", options.count, "messages to print before exiting")
       ->check(CLI::PositiveNumber);
 
@@ -307,6 +306,17 @@ int main(int argc, char** argv) {
     if (*preview) return get_preview(options);
     return publish_predictions(options);
   } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
+    return panoptes::kExitFailure;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
     std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
     return panoptes::kExitFailure;
   }

@@ -205,6 +205,7 @@ int run(int argc, char** argv) {
   CLI::App app{
       "Panoptes simulator: calibration, features, images and ground truth of a scene (docs/simulator.md)"};
   app.require_subcommand(1);
+  app.option_defaults()->always_capture_default();  // --help shows every default
   Options options;
 
   CLI::App* calibration =
@@ -216,20 +217,19 @@ int run(int argc, char** argv) {
       "features", "Write ideal features per camera (<id>.jsonl), calibration.yaml, truth.jsonl, bodies.yaml");
   features->add_option("--scene", options.scene, "Scene file (YAML)")->required();
   features->add_option("--out-dir", options.out_dir, "Output directory (created if missing)")->required();
-  features->add_option("--epoch-ns", options.epoch_ns, "Absolute stamp of scene time 0 (ns)")
-      ->capture_default_str();
-  features->add_option("--duration", options.duration_s, "Seconds of scene time (default: the scene's)")
-      ->check(positive_number());
+  features->add_option("--epoch-ns", options.epoch_ns, "Absolute stamp of scene time 0 (ns)");
+  features->add_option("--duration", options.duration_s, "Seconds of scene time")
+      ->check(positive_number())
+      ->default_str("the scene's");
 
   CLI::App* render =
       app.add_subcommand("render", "Render one camera's frames as PGM images plus their features");
   render->add_option("--scene", options.scene, "Scene file (YAML)")->required();
   render->add_option("--camera", options.camera, "Camera id")->required();
   render->add_option("--frames", options.frames, "Number of frames")->required()->check(positive_number());
-  render->add_option("--first", options.first, "First frame index")->capture_default_str();
+  render->add_option("--first", options.first, "First frame index");
   render->add_option("--out-dir", options.out_dir, "Output directory (created if missing)")->required();
-  render->add_option("--epoch-ns", options.epoch_ns, "Absolute stamp of scene time 0 (ns)")
-      ->capture_default_str();
+  render->add_option("--epoch-ns", options.epoch_ns, "Absolute stamp of scene time 0 (ns)");
 
   try {
     app.parse(argc, argv);

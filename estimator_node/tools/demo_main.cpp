@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -36,8 +37,6 @@
 #include "panoptes/simulator.h"
 #include "panoptes/time.h"
 
-extern char** environ;
-
 namespace {
 
 namespace fs = std::filesystem;
@@ -50,95 +49,43 @@ fs::path executable_dir() {
 
 using Child = panoptes::ChildProcess;
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  const fs::path bin_dir = executable_dir();
-  std::string scene_file = (bin_dir / "../../deploy/scenes/demo.yaml").lexically_normal().string();
-  if (!fs::exists(scene_file)) scene_file = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/demo.yaml";
-  double duration_s = 20.0;
-  std::string summary_json;
-  std::string dds_profile;
-  std::string log_dir;
-  bool check = false;
-  CLI::App app{"panoptes_demo: simulated multi-camera tracking over DDS, with accuracy against ground truth",
-               "panoptes_demo"};
-  app.add_option("--scene", scene_file, "simulator scene")->capture_default_str();
-  app.add_option("--duration", duration_s, "seconds of tracking")
-      ->capture_default_str()
-      ->check(CLI::Range(2.0, 3600.0));
-  app.add_option("--summary-json", summary_json, "write the accuracy summary as JSON to this file");
-  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
-  app.add_option("--log-dir", log_dir,
-                 "keep process logs and recorded tracks here (default: a temporary folder)");
-  app.add_flag(
-      "--check", check,
-      "exit 1 unless every marker meets the demo's targets (RMSE < 2 mm, >= 95% tracked, 0 ID switches)");
-  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
-
-  panoptes::install_stop_handlers();
-  std::optional<panoptes::Scene> scene;
-  try {
-    scene.emplace(panoptes::Scene::load(scene_file));
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
-    return panoptes::kExitBadInput;
-  }
-  const double scene_s = panoptes::ns_to_seconds(scene->duration_ns());
-  if (duration_s > scene_s) {
-    std::printf(
-        "note: the scene lasts %.1f s; the demo runs for that long (raise `duration:` in the scene for "
-        "more)\n",
-        scene_s);
-    duration_s = scene_s;
-  }
-  const fs::path run_dir = log_dir.empty()
-                               ? fs::temp_directory_path() / ("panoptes-demo-" + std::to_string(getpid()))
-                               : fs::path(log_dir);
-  fs::create_directories(run_dir);
-  const fs::path calibration_file = run_dir / "calibration.yaml";
-  panoptes::save_calibration(scene->calibration(), calibration_file);
-
-  // Scene time 0 a little in the future, so that every process has started and discovered the
-  // others before the first frame.
-  const TimeNs epoch = (panoptes::wall_now_ns() / panoptes::kNsPerSecond + 3) * panoptes::kNsPerSecond;
-  const TimeNs end = epoch + panoptes::seconds_to_ns(duration_s);
-
-  std::printf("Panoptes demo: %zu simulated cameras, %zu markers, %.0f s (scene %s)\n",
-              scene->cameras().size(), scene->marker_names().size(), duration_s, scene_file.c_str());
-  std::printf("logs and recordings in %s\n", run_dir.c_str());
-
+// One estimator_node and one camera_node per simulated camera, logging into `run_dir`.
+std::vector<std::unique_ptr<Child>> start_processes(const fs::path& bin_dir, const panoptes::Scene& scene,
+                                                    const std::string& scene_file,
+                                                    const fs::path& calibration_file,
+                                                    const std::string& dds_profile, const fs::path& run_dir,
+                                                    TimeNs epoch, double duration_s) {
   std::vector<std::string> common_dds;
   if (!dds_profile.empty()) common_dds = {"--dds-profile", dds_profile};
   std::vector<std::unique_ptr<Child>> children;
-  try {
-    std::vector<std::string> estimator_args = {(bin_dir / "estimator_node").string(), "--calibration",
-                                               calibration_file.string(), "--out-tracks",
-                                               (run_dir / "tracks.jsonl").string()};
-    estimator_args.insert(estimator_args.end(), common_dds.begin(), common_dds.end());
+  std::vector<std::string> estimator_args = {(bin_dir / "estimator_node").string(), "--calibration",
+                                             calibration_file.string(), "--out-tracks",
+                                             (run_dir / "tracks.jsonl").string()};
+  estimator_args.insert(estimator_args.end(), common_dds.begin(), common_dds.end());
+  children.push_back(
+      std::make_unique<Child>("estimator_node", estimator_args, run_dir / "estimator_node.log"));
+  const std::string source_prefix = "sim:" + scene_file + "#";
+  for (const auto& camera : scene.cameras()) {
+    const std::string& id = camera.calibration.id;
+    std::vector<std::string> camera_args = {(bin_dir / "camera_node").string(),
+                                            "--source",
+                                            source_prefix + id,
+                                            "--sim-epoch-ns",
+                                            std::to_string(epoch),
+                                            "--duration",
+                                            std::to_string(duration_s + 4.0)};
+    camera_args.insert(camera_args.end(), common_dds.begin(), common_dds.end());
     children.push_back(
-        std::make_unique<Child>("estimator_node", estimator_args, run_dir / "estimator_node.log"));
-    for (const auto& camera : scene->cameras()) {
-      const std::string& id = camera.calibration.id;
-      std::vector<std::string> camera_args = {(bin_dir / "camera_node").string(),
-                                              "--source",
-                                              "sim:" + scene_file + "#" + id,
-                                              "--sim-epoch-ns",
-                                              std::to_string(epoch),
-                                              "--duration",
-                                              std::to_string(duration_s + 4.0)};
-      camera_args.insert(camera_args.end(), common_dds.begin(), common_dds.end());
-      children.push_back(
-          std::make_unique<Child>("camera_node[" + id + "]", camera_args, run_dir / (id + ".log")));
-    }
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
-    return panoptes::kExitFailure;
+        std::make_unique<Child>("camera_node[" + id + "]", camera_args, run_dir / (id + ".log")));
   }
+  return children;
+}
 
-  // Watch as an application would: subscribe to tracks and camera status.
+// Watches as an application would (tracks and camera status over DDS), printing a line a second,
+// until the scene ends, a process fails or a stop is requested. Returns the exit code so far.
+int watch(const std::string& dds_profile, const std::vector<std::unique_ptr<Child>>& children, TimeNs epoch,
+          TimeNs end, const fs::path& run_dir, std::vector<panoptes::TrackRecord>& tracks) {
   std::mutex mutex;
-  std::vector<panoptes::TrackRecord> tracks;
   std::map<std::string, double> camera_fps;
   std::size_t live_tracks = 0;
   panoptes::dds::BusOptions bus_options;
@@ -196,6 +143,77 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
     exit_code = panoptes::kExitFailure;
   }
+  return exit_code;
+}
+
+int run(int argc, char** argv) {
+  const fs::path bin_dir = executable_dir();
+  std::string scene_file = (bin_dir / "../../deploy/scenes/demo.yaml").lexically_normal().string();
+  if (!fs::exists(scene_file)) scene_file = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/demo.yaml";
+  double duration_s = 20.0;
+  std::string summary_json;
+  std::string dds_profile;
+  std::string log_dir;
+  bool check = false;
+  CLI::App app{"panoptes_demo: simulated multi-camera tracking over DDS, with accuracy against ground truth",
+               "panoptes_demo"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("--scene", scene_file, "simulator scene");
+  app.add_option("--duration", duration_s, "seconds of tracking")->check(CLI::Range(2.0, 3600.0));
+  app.add_option("--summary-json", summary_json, "write the accuracy summary as JSON to this file");
+  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile")
+      ->default_str("deploy/dds/loopback.xml");
+  app.add_option("--log-dir", log_dir, "keep process logs and recorded tracks here")
+      ->default_str("a temporary folder");
+  app.add_flag(
+      "--check", check,
+      "exit 1 unless every marker meets the demo's targets (RMSE < 2 mm, >= 95% tracked, 0 ID switches)");
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+
+  panoptes::install_stop_handlers();
+  std::optional<panoptes::Scene> scene;
+  try {
+    scene.emplace(panoptes::Scene::load(scene_file));
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
+    return panoptes::kExitBadInput;
+  }
+  const double scene_s = panoptes::ns_to_seconds(scene->duration_ns());
+  if (duration_s > scene_s) {
+    std::printf(
+        "note: the scene lasts %.1f s; the demo runs for that long (raise `duration:` in the scene for "
+        "more)\n",
+        scene_s);
+    duration_s = scene_s;
+  }
+  const fs::path run_dir = log_dir.empty()
+                               ? fs::temp_directory_path() / ("panoptes-demo-" + std::to_string(getpid()))
+                               : fs::path(log_dir);
+  fs::create_directories(run_dir);
+  const fs::path calibration_file = run_dir / "calibration.yaml";
+  panoptes::save_calibration(scene->calibration(), calibration_file);
+
+  // Scene time 0 a little in the future, so that every process has started and discovered the
+  // others before the first frame.
+  const TimeNs epoch = (panoptes::wall_now_ns() / panoptes::kNsPerSecond + 3) * panoptes::kNsPerSecond;
+  const TimeNs end = epoch + panoptes::seconds_to_ns(duration_s);
+
+  std::printf("Panoptes demo: %zu simulated cameras, %zu markers, %.0f s (scene %s)\n",
+              scene->cameras().size(), scene->marker_names().size(), duration_s, scene_file.c_str());
+  std::printf("logs and recordings in %s\n", run_dir.c_str());
+
+  std::vector<std::unique_ptr<Child>> children;
+  try {
+    children = start_processes(bin_dir, *scene, scene_file, calibration_file, dds_profile, run_dir, epoch,
+                               duration_s);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
+    return panoptes::kExitFailure;
+  }
+
+  // Watch as an application would: subscribe to tracks and camera status.
+  std::vector<panoptes::TrackRecord> tracks;
+  const int exit_code = watch(dds_profile, children, epoch, end, run_dir, tracks);
   for (auto it = children.rbegin(); it != children.rend(); ++it) (*it)->stop(std::chrono::seconds(5));
   children.clear();
   if (exit_code != panoptes::kExitOk) return exit_code;
@@ -222,4 +240,15 @@ int main(int argc, char** argv) {
     }
   }
   return check && !pass ? panoptes::kExitFailure : panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
+    return 1;
+  }
 }

@@ -8,11 +8,13 @@
 //    chessboard with the same centroid noise.
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <random>
 
 #include <opencv2/calib3d.hpp>
 
 #include "calib_scenes.h"
+#include "panoptes/cli.h"
 
 using namespace panoptes;
 using namespace panoptes::calib;
@@ -155,10 +157,14 @@ void stereo_side_by_side() {
       cv_rms, cv_t_mm, cv_r_deg, simulate_s);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  const std::string only = argc > 1 ? argv[1] : "";
+int run(int argc, char** argv) {
+  std::string only;
+  CLI::App app{"bench_calibration: wand calibration benchmarks, printed as JSON lines", "bench_calibration"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("section", only, "run only this one")
+      ->check(CLI::IsMember({"alternation", "stereo", "lens", "studio", "speed"}))
+      ->default_str("all");
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   if (only.empty() || only == "alternation") {
     const Scene scene = Scene::from_yaml_string(scene_yaml(room8()));
     for (int iterations : {1, 5, 40}) {
@@ -223,4 +229,15 @@ int main(int argc, char** argv) {
     line("16 cameras x 2000 frames, time offsets on", m, total - m.result.seconds);
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "bench_calibration: %s\n", error.what());
+    return 1;
+  }
 }

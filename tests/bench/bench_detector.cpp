@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <random>
 #include <string>
@@ -117,9 +118,7 @@ int usage(const char* message) {
   return 2;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   bool json = false;
   double min_time = 1.0;
   int blob_count = 30;
@@ -234,4 +233,15 @@ int main(int argc, char** argv) {
         ours / contours, ours / components, ours / memcpy_us, sizes_json.c_str());
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "bench_detector: %s\n", error.what());
+    return 1;
+  }
 }

@@ -10,7 +10,9 @@
 // With --json the last line of output is one JSON object (docs/benchmarks.md).
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <exception>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -132,7 +134,7 @@ struct Result {
 
 double percentile(std::vector<double> values, double q) {
   if (values.empty()) return 0;
-  const auto k = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1) + 0.5);
+  const auto k = static_cast<std::size_t>(std::lround(q * static_cast<double>(values.size() - 1)));
   std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
   return values[k];
 }
@@ -194,15 +196,14 @@ void print_row(const Result& r) {
               r.tracked_at_end, r.markers, r.tracks_at_end);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run_command_line(int argc, char** argv) {
   Config config;
   bool json = false;
   std::vector<int> sweep = {10, 25, 50, 100, 200};
   std::uint64_t seed = 7;
   CLI::App app{"bench_estimator: Tracker::process speed on simulated features, one thread",
                "bench_estimator"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_flag("--json", json, "print one JSON object on the last line");
   app.add_option("--seconds", config.seconds, "simulated seconds timed per case (after the warm-up)")
       ->check(CLI::Range(0.05, 3600.0));
@@ -285,4 +286,15 @@ int main(int argc, char** argv) {
         sweep_json.c_str(), flatness, bodies_json.c_str());
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run_command_line(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "bench_estimator: %s\n", error.what());
+    return 1;
+  }
 }

@@ -24,6 +24,7 @@
 #include <chrono>
 #include <cstdio>
 #include <deque>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -242,9 +243,7 @@ Results join(const Recorder& recorded, TimeNs from_ns, TimeNs to_ns) {
   return results;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   const fs::path bin_dir = executable_path().parent_path();
   std::string scene_file = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/latency240.yaml";
   std::string profile = std::string(PANOPTES_SOURCE_DIR) + "/deploy/dds/loopback.xml";
@@ -261,6 +260,7 @@ int main(int argc, char** argv) {
       "subscriber of the rigid body's BodyPose, against the raw DDS floor measured through the same "
       "processes in the same run (docs/benchmarks.md). Progress on stderr, result on stdout.",
       "bench_latency"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_flag("--json", json_output, "print the result as one JSON object");
   app.add_option("--scene", scene_file,
                  "simulator scene: its cameras are the camera_nodes, its first body is the one measured")
@@ -280,13 +280,14 @@ int main(int argc, char** argv) {
   app.add_flag("!--no-tracks", subscribe_tracks,
                "do not subscribe to rt/panoptes/tracks (the secondary TrackFrame row)");
   app.add_option("--domain", domain,
-                 "DDS domain of the run (default: 100 + pid % 100, so that other pipelines on this host do "
-                 "not mix in)")
-      ->check(CLI::Range(0, 232));
+                 "DDS domain of the run (so that other pipelines on this host do not mix in)")
+      ->check(CLI::Range(0, 232))
+      ->default_str("100 + pid % 100");
   app.add_option("--dds-profile", profile, "Fast DDS profile for every process")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
-  app.add_option("--log-dir", log_dir, "keep the child processes' logs and inputs here");
+  app.add_option("--log-dir", log_dir, "keep the child processes' logs and inputs here")
+      ->default_str("a temporary folder");
   app.add_option(
       "--samples", samples_file,
       "write every measured frame's stamps (camera_node, estimator_node, here) to this JSONL file");
@@ -361,14 +362,14 @@ int main(int argc, char** argv) {
                                  "--latency-window-ms", std::to_string(latency_window_ms), "--latency-probe",
                                  "--duration", std::to_string(run_s + 2)},
         run_dir / "estimator_node.log"));
+    const std::string source_prefix = "sim:" + scene_file + "#";
     for (const auto& camera : scene.cameras()) {
       const std::string& id = camera.calibration.id;
       children.push_back(std::make_unique<panoptes::ChildProcess>(
           "camera_node[" + id + "]",
-          std::vector<std::string>{(bin_dir / "camera_node").string(), "--source",
-                                   "sim:" + scene_file + "#" + id, "--sim-epoch-ns", std::to_string(epoch),
-                                   "--dds-profile", profile, "--latency-probe", "--duration",
-                                   std::to_string(run_s), "--quiet"},
+          std::vector<std::string>{(bin_dir / "camera_node").string(), "--source", source_prefix + id,
+                                   "--sim-epoch-ns", std::to_string(epoch), "--dds-profile", profile,
+                                   "--latency-probe", "--duration", std::to_string(run_s), "--quiet"},
           run_dir / (id + ".log")));
     }
     TimeNs next_progress = epoch;
@@ -468,4 +469,15 @@ int main(int argc, char** argv) {
     return panoptes::kExitFailure;
   }
   return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "bench_latency: %s\n", error.what());
+    return 1;
+  }
 }

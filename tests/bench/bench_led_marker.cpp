@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -45,10 +46,10 @@ double now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"bench_led_marker: time per 7-LED marker pose (identification + pose), one thread"};
+int run(int argc, char** argv) {
+  CLI::App app{"bench_led_marker: time per 7-LED marker pose (identification + pose), one thread",
+               "bench_led_marker"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   bool json = false;
   int frames = 2000, repeat = 20;
   std::uint64_t seed = 1;
@@ -125,4 +126,15 @@ int main(int argc, char** argv) {
         "\"found\": %zu, \"found_with_kmeans\": %zu}\n",
         frames, repeat, single_ms, triple_ms, found_single, found_triple);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "bench_led_marker: %s\n", error.what());
+    return 1;
+  }
 }

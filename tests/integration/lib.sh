@@ -35,6 +35,19 @@ expect_stderr_contains() {
   if grep -qF -- "$1" "$work/last.err"; then pass "$2"; else fail "$2: stderr lacks '$1'"; cat "$work/last.err"; fi
 }
 
+# require_shared_data PATH: data read from ../shared/data (not copied into tests/data) follows the
+# rule of tests/data/README.md: missing, it fails the test under CI and skips it (exit 77) elsewhere.
+# Checks that already failed are reported, never hidden by the skip.
+require_shared_data() {
+  [ -e "$1" ] && return 0
+  if [ -n "${CI:-}" ] || [ "$failures" -ne 0 ]; then
+    fail "$1 is missing (../shared/data must sit beside the checkout under CI; tests/data/README.md)"
+    finish
+  fi
+  echo "SKIP: $1 is missing (../shared/data beside the checkout; tests/data/README.md)"
+  exit 77
+}
+
 finish() {
   if [ "$failures" -eq 0 ]; then echo "all checks passed"; exit 0; fi
   echo "$failures check(s) failed"

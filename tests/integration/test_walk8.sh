@@ -8,8 +8,7 @@
 # accuracy stays within 5%.
 source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/walk8.yaml"
-trc="$source_dir/../shared/data/walk_41markers_100hz.trc"
-[ -f "$trc" ] || { fail "$trc is missing (the shared data folder must sit beside the checkout)"; finish; }
+trc="$source_dir/tests/data/walk_41markers_100hz.trc"
 
 json() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))$2)" "$1"; }
 

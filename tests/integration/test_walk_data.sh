@@ -1,15 +1,10 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# Real human motion: the 41-marker walk (../shared/data/walk_41markers_100hz.trc) projected into 6
+# Real human motion: the 41-marker walk (tests/data/walk_41markers_100hz.trc) projected into 6
 # simulated cameras, tracked by the offline estimator. One pass of the recording (2.37 s); the
 # looped scene reverses the recording instantly at each end, which no body can do.
 source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/walk.yaml"
-trc="$source_dir/../shared/data/walk_41markers_100hz.trc"
-if [ ! -f "$trc" ]; then
-  echo "FAIL: $trc is missing (the shared data folder must sit beside the checkout)"
-  exit 1
-fi
 expect_exit 0 "simulate one pass of the walk" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/walk" --duration 2.37
 expect_exit 0 "offline estimator on the walk" -- "$bin/estimator_node" --calibration "$work/walk/calibration.yaml" \
   --in-features "$work"/walk/cam*.jsonl --no-dds --out-tracks "$work/tracks.jsonl" --quiet

@@ -15,12 +15,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "panoptes/cli.h"
 #include "spot_renderer.h"
 
 namespace {
@@ -114,64 +117,34 @@ void fill_pattern(ArvBuffer* buffer, void* renderer, guint32 /*exposure_us*/, gu
   static_cast<Renderer*>(renderer)->fill(buffer, pixel_format);
 }
 
-[[noreturn]] void usage(const char* problem) {
-  std::fprintf(stderr,
-               "panoptes_fake_gige: %s\n"
-               "usage: panoptes_fake_gige [--interface lo] [--serial S] [--truth file.jsonl] [--width 640]\n"
-               "         [--height 480] [--rate 50] [--loss 0.001] [--cell 80] [--noise 1] [--seed 1]\n"
-               "         [--duration 0]\n",
-               problem);
-  std::exit(2);
+// Parses the command line into `options`; returns the exit code to leave with, or nullopt to run.
+std::optional<int> parse(int argc, char** argv, Options& options) {
+  CLI::App app{
+      "panoptes_fake_gige: a GigE Vision fake camera serving synthetic IR frames with known spots "
+      "(run it only inside a network namespace whose only interface is lo)",
+      "panoptes_fake_gige"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("--interface", options.interface_name, "network interface to listen on");
+  app.add_option("--serial", options.serial, "serial number the camera announces");
+  app.add_option("--truth", options.truth_file, "write every frame's spot positions to this JSONL file");
+  app.add_option("--width", options.width, "image width, px")->check(CLI::Range(16, 4096));
+  app.add_option("--height", options.height, "image height, px")->check(CLI::Range(16, 4096));
+  app.add_option("--rate", options.frame_rate_hz, "frames per second")->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--loss", options.loss_ratio, "fraction of stream packets not sent, in [0, 1)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--cell", options.cell_px, "one spot per cell of this size, px")
+      ->check(CLI::Range(16, 4096));
+  app.add_option("--noise", options.noise_dn, "sensor noise sigma, DN");
+  app.add_option("--seed", options.seed, "random seed");
+  app.add_option("--duration", options.duration_s, "seconds to serve (0 = until SIGINT/SIGTERM)");
+  return panoptes::parse_command_line(app, argc, argv, [&options] {
+    if (options.loss_ratio >= 1) throw CLI::ValidationError("--loss", "must be in [0, 1)");
+  });
 }
 
-Options parse(int argc, char** argv) {
-  Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (i + 1 >= argc) usage(("missing value after " + flag).c_str());
-    const std::string value = argv[++i];
-    try {
-      if (flag == "--interface")
-        options.interface_name = value;
-      else if (flag == "--serial")
-        options.serial = value;
-      else if (flag == "--truth")
-        options.truth_file = value;
-      else if (flag == "--width")
-        options.width = std::stoi(value);
-      else if (flag == "--height")
-        options.height = std::stoi(value);
-      else if (flag == "--rate")
-        options.frame_rate_hz = std::stod(value);
-      else if (flag == "--loss")
-        options.loss_ratio = std::stod(value);
-      else if (flag == "--cell")
-        options.cell_px = std::stoi(value);
-      else if (flag == "--noise")
-        options.noise_dn = std::stod(value);
-      else if (flag == "--seed")
-        options.seed = std::stoull(value);
-      else if (flag == "--duration")
-        options.duration_s = std::stod(value);
-      else
-        usage(("unknown option " + flag).c_str());
-    } catch (const std::exception&) {
-      usage(("bad value '" + value + "' for " + flag).c_str());
-    }
-  }
-  if (options.width < 16 || options.height < 16 || options.width > 4096 || options.height > 4096)
-    usage("--width/--height must be 16..4096");
-  if (!(options.frame_rate_hz >= 1 && options.frame_rate_hz <= 1000)) usage("--rate must be 1..1000 Hz");
-  if (!(options.loss_ratio >= 0 && options.loss_ratio < 1)) usage("--loss must be in [0, 1)");
-  if (options.cell_px < 16) usage("--cell must be at least 16 px");
-  return options;
-}
-
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   Renderer renderer;
-  renderer.options = parse(argc, argv);
+  if (const auto exit_code = parse(argc, argv, renderer.options)) return *exit_code;
   const Options& options = renderer.options;
   if (!options.truth_file.empty()) {
     renderer.truth = std::fopen(options.truth_file.c_str(), "w");
@@ -217,4 +190,15 @@ int main(int argc, char** argv) {
   g_object_unref(camera);  // stops and joins the camera's thread before the renderer goes away
   if (renderer.truth != nullptr) std::fclose(renderer.truth);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_fake_gige: %s\n", error.what());
+    return 1;
+  }
 }

@@ -5,57 +5,33 @@
 //   source counters: name=value name=value ...   (keys sorted; stderr)
 // Optionally calls restart() after a given number of frames.
 #include <cstdio>
-#include <cstdlib>
 #include <exception>
 #include <string>
 
 #include "panoptes/camera/sources.h"
+#include "panoptes/cli.h"
 #include "panoptes/time.h"
 
 namespace {
 
-[[noreturn]] void usage(const std::string& problem) {
-  std::fprintf(
-      stderr,
-      "panoptes_source_probe: %s\n"
-      "usage: panoptes_source_probe --source SPEC [--frames N] [--timeout-ms T] [--restart-after K]\n"
-      "         [--frames-out file.csv]\n",
-      problem.c_str());
-  std::exit(2);
-}
-
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   std::string spec;
   std::string frames_out;
   long long frames = 100;
   long long restart_after = -1;
   panoptes::camera::SourceOptions options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (i + 1 >= argc) usage("missing value after " + flag);
-    const std::string value = argv[++i];
-    try {
-      if (flag == "--source")
-        spec = value;
-      else if (flag == "--frames")
-        frames = std::stoll(value);
-      else if (flag == "--timeout-ms")
-        options.settings.timeout_ms = std::stod(value);
-      else if (flag == "--reconnect-ms")
-        options.settings.reconnect_interval_ms = std::stod(value);
-      else if (flag == "--restart-after")
-        restart_after = std::stoll(value);
-      else if (flag == "--frames-out")
-        frames_out = value;
-      else
-        usage("unknown option " + flag);
-    } catch (const std::exception&) {
-      usage("bad value '" + value + "' for " + flag);
-    }
-  }
-  if (spec.empty()) usage("--source is required");
+  CLI::App app{"panoptes_source_probe: reads frames from a camera_node frame source and prints its counters",
+               "panoptes_source_probe"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("--source", spec, "source spec, as camera_node --source")->required();
+  app.add_option("--frames", frames, "frames to read at most");
+  app.add_option("--timeout-ms", options.settings.timeout_ms, "source settings: frame timeout, ms");
+  app.add_option("--reconnect-ms", options.settings.reconnect_interval_ms,
+                 "source settings: interval between reconnection attempts, ms");
+  app.add_option("--restart-after", restart_after, "call restart() after this many frames")
+      ->default_str("never");
+  app.add_option("--frames-out", frames_out, "write one CSV line per frame to this file");
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   options.max_frames = frames;
 
   std::unique_ptr<panoptes::camera::FrameSource> source;
@@ -83,4 +59,15 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "panoptes_source_probe: read %lld frames\n%s\n", count, line.c_str());
   if (!source->last_error().empty()) std::fprintf(stderr, "last error: %s\n", source->last_error().c_str());
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_source_probe: %s\n", error.what());
+    return 1;
+  }
 }

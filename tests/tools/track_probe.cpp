@@ -4,6 +4,7 @@
 // produced it, confirmed tracks) and, with --status, one per EstimatorStatus, so that a test can
 // measure from records when tracking stopped and when it came back.
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <mutex>
 #include <string>
@@ -18,15 +19,19 @@
 #include "panoptes/time.h"
 #include "panoptes_msgs/panoptes.h"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   std::string out_file;
   std::string dds_profile;
   double duration_s = 0;
   bool with_status = false;
   CLI::App app{"panoptes_track_probe: records received TrackFrames (and EstimatorStatus) as JSON lines",
                "panoptes_track_probe"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--out", out_file, "JSONL file to write")->required();
-  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile")
+      ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
   app.add_option("--duration", duration_s, "stop after this many seconds (0 = until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--status", with_status, "also record EstimatorStatus (per-camera utilisation)");
@@ -89,4 +94,15 @@ int main(int argc, char** argv) {
     return panoptes::kExitFailure;
   }
   return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_track_probe: %s\n", error.what());
+    return 1;
+  }
 }

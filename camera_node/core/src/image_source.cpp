@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "image_source.h"
 
-#include <glob.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cctype>
@@ -16,6 +14,8 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+
+#include "panoptes/glob.h"
 
 namespace panoptes::camera {
 namespace {
@@ -42,24 +42,17 @@ std::vector<fs::path> list_files(const std::string& pattern) {
       if (entry.is_regular_file(error) && has_image_extension(entry.path())) files.push_back(entry.path());
     }
     if (error) throw std::runtime_error(spec + ": cannot list directory: " + error.message());
+    // Name order is the frame order (the offline contract); directory order is arbitrary.
+    std::sort(files.begin(), files.end());
   } else {
     if (!has_glob_magic(pattern) && !fs::exists(pattern, error)) {
       throw std::runtime_error(spec + ": no such directory");
     }
-    glob_t matches{};
-    const int status = ::glob(pattern.c_str(), 0, nullptr, &matches);
-    if (status == 0) {
-      for (std::size_t i = 0; i < matches.gl_pathc; ++i) {
-        const fs::path path = matches.gl_pathv[i];
-        if (fs::is_regular_file(path, error)) files.push_back(path);
-      }
-    }
-    ::globfree(&matches);
-    if (status != 0 && status != GLOB_NOMATCH) throw std::runtime_error(spec + ": glob failed");
+    // In name order; throws naming the pattern if glob(3) fails.
+    for (fs::path& path : glob_files(pattern))
+      if (fs::is_regular_file(path, error)) files.push_back(std::move(path));
   }
   if (files.empty()) throw std::runtime_error(spec + ": no PGM/PNG files match");
-  // Name order is the frame order (the offline contract); directory order is arbitrary.
-  std::sort(files.begin(), files.end());
   return files;
 }
 

@@ -219,7 +219,7 @@ std::filesystem::path resolve_profile_file(const std::filesystem::path& requeste
   throw DdsError("no DDS profile given (--dds-profile or PANOPTES_DDS_PROFILE) and none found at:" + tried);
 }
 
-ReturnCode ReturnCodeOk() {
+ReturnCode return_code_ok() {
   return ReturnCode::RETCODE_OK;
 }
 
@@ -227,11 +227,11 @@ class BusCore {
  public:
   explicit BusCore(const BusOptions& options) : profile_file_(resolve_profile_file(options.profile_file)) {
     auto* factory = fdds::DomainParticipantFactory::get_instance();
-    if (factory->load_XML_profiles_file(profile_file_.string()) != ReturnCodeOk()) {
+    if (factory->load_XML_profiles_file(profile_file_.string()) != return_code_ok()) {
       throw DdsError("DDS profile " + profile_file_.string() + ": cannot be parsed");
     }
     fdds::DomainParticipantQos qos;
-    if (factory->get_participant_qos_from_profile(options.participant_profile, qos) != ReturnCodeOk()) {
+    if (factory->get_participant_qos_from_profile(options.participant_profile, qos) != return_code_ok()) {
       throw DdsError("DDS profile " + profile_file_.string() + ": no participant profile named '" +
                      options.participant_profile + "'");
     }
@@ -245,7 +245,7 @@ class BusCore {
     if (participant_ == nullptr)
       throw DdsError("cannot create DDS participant (domain " + std::to_string(domain) + ")");
     if (participant_->register_content_filter_factory(kIdFilterClass, &leading_id_filter_factory()) !=
-        ReturnCodeOk()) {
+        return_code_ok()) {
       teardown();
       throw DdsError("cannot register the DDS content filter " + std::string(kIdFilterClass));
     }
@@ -266,7 +266,7 @@ class BusCore {
     const TopicSpec spec = TopicTraits<T>::spec();
     if (auto it = topics_.find(spec.name); it != topics_.end()) return it->second;
     fdds::TypeSupport type(new typename TopicTraits<T>::PubSubType());
-    if (type.register_type(participant_) != ReturnCodeOk()) {
+    if (type.register_type(participant_) != return_code_ok()) {
       throw DdsError(std::string("cannot register DDS type for ") + spec.name);
     }
     fdds::Topic* topic = participant_->create_topic(spec.name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
@@ -355,7 +355,7 @@ bool Writer<T>::wait_for_acknowledgments(std::chrono::milliseconds timeout) cons
   const auto ms = timeout.count();
   return impl_->writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
              static_cast<std::int32_t>(ms / 1000), static_cast<std::uint32_t>((ms % 1000) * 1'000'000))) ==
-         ReturnCodeOk();
+         return_code_ok();
 }
 
 template <class T>

@@ -58,10 +58,11 @@ int run_calibrate_capture(int argc, char** argv) {
   bool time_service = false;
   CLI::App app{"calibrate capture: record FeatureFrames of all cameras over DDS while the wand is waved",
                "estimator_node calibrate capture"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--out", out, "FeatureFrame JSONL file to write (all cameras)")->required();
-  app.add_option("--duration", duration_s, "seconds to record; default: until Ctrl-C");
-  app.add_option("--dds-profile", profile,
-                 "Fast DDS XML profile (default: $PANOPTES_DDS_PROFILE or loopback)");
+  app.add_option("--duration", duration_s, "seconds to record")->default_str("until Ctrl-C");
+  app.add_option("--dds-profile", profile, "Fast DDS XML profile")
+      ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
   app.add_flag("--time-service", time_service,
                "serve the common time base (when no estimator_node is running during the capture)");
   if (auto exit = parse_command_line(app, argc, argv)) return *exit;

@@ -3,11 +3,13 @@
 #include "panoptes/calib/calibrate_cli.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -22,6 +24,7 @@
 #include "panoptes/calibration_file.h"
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
+#include "panoptes/glob.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
 #include "panoptes/jsonl.h"
@@ -77,7 +80,9 @@ int run_intrinsics(int argc, char** argv) {
   double square = 0;
   CLI::App app{"calibrate intrinsics: one camera's intrinsics and distortion from chessboard images (OpenCV)",
                "estimator_node calibrate intrinsics"};
-  app.add_option("--images", images, "glob of the images, quoted (e.g. 'left*.jpg')")->required();
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("--images", images, "glob(3) pattern of the images, quoted (e.g. 'left[0-9]*.jpg')")
+      ->required();
   app.add_option("--board", board, "inner corners, <cols>x<rows> (e.g. 9x6)")->required();
   app.add_option("--square", square, "square size, m")->required();
   app.add_option("--out", out, "calibration YAML to write (the camera is added or replaced)")->required();
@@ -89,7 +94,12 @@ int run_intrinsics(int argc, char** argv) {
     return bad_input(program, "--board: expected <cols>x<rows>, got '" + board + "'");
   options.square_m = square;
   options.progress = say;
-  const auto paths = expand_glob(images);
+  std::vector<std::filesystem::path> paths;
+  try {
+    paths = glob_files(images);
+  } catch (const std::runtime_error& error) {
+    return bad_input(program, std::string("--images: ") + error.what());
+  }
   if (paths.empty()) return bad_input(program, "--images: no file matches '" + images + "'");
   const ChessboardResult result = calibrate_chessboard(paths, options);
   if (!result.error.empty()) return bad_input(program, result.error);
@@ -127,6 +137,7 @@ int run_solve(int argc, char** argv) {
   SolveOptions options;
   CLI::App app{"calibrate solve: camera poses from a waved wand (seed 003 Ch. 3, seed 000 §4.5.8)",
                "estimator_node calibrate solve"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--cameras", cameras_file, "calibration YAML with every camera's intrinsics")->required();
   app.add_option("--in-features", feature_files,
                  "FeatureFrame JSONL files (from `calibrate capture` or camera_node)")
@@ -138,16 +149,18 @@ int run_solve(int argc, char** argv) {
   app.add_option("--out", out, "calibration YAML to write; the report goes next to it")->required();
   app.add_flag("--refine-intrinsics", options.refine_intrinsics, "also refine fx, fy, cx, cy and distortion");
   app.add_flag("--time-offsets", options.time_offsets, "estimate a clock offset per camera");
-  app.add_option("--reference", reference, "camera whose pose fixes the gauge (default: best connected)");
-  app.add_option("--sample-rate", options.sample_rate_hz,
-                 "wand instants per second (default: fastest camera)");
+  app.add_option("--reference", reference, "camera whose pose fixes the gauge")
+      ->default_str("best connected");
+  app.add_option("--sample-rate", options.sample_rate_hz, "wand instants per second")
+      ->default_str("fastest camera");
   app.add_option("--min-frames", options.min_camera_frames, "wand frames a camera needs")
       ->capture_default_str();
   app.add_option("--min-pair-samples", options.min_pair_samples, "common samples for a relative pose")
       ->capture_default_str();
   app.add_option(
-      "--alternation", options.alternation_iterations,
-      "seed 003 §3.3.2 alternation with this many iterations instead of bundle adjustment (comparison)");
+         "--alternation", options.alternation_iterations,
+         "seed 003 §3.3.2 alternation with this many iterations instead of bundle adjustment (comparison)")
+      ->default_str("off");
   if (auto exit = parse_command_line(app, argc, argv)) return *exit;
   const std::string program = app.get_name();
   options.reference_camera = reference;
@@ -245,6 +258,7 @@ int run_world(int argc, char** argv) {
       "calibrate world: world frame (z up) from an L-frame, markers on the floor, or the wand laid on the "
       "floor",
       "estimator_node calibrate world"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--calibration", calibration_file, "calibration YAML from `calibrate solve`")->required();
   app.add_option("--in-features", feature_files,
                  "a short recording of the static markers, or of the wand on the floor (JSONL)")

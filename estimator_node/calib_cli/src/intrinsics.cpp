@@ -11,18 +11,6 @@
 
 namespace panoptes::calib {
 
-std::vector<std::filesystem::path> expand_glob(const std::string& pattern) {
-  std::vector<cv::String> names;
-  try {
-    cv::glob(pattern, names, false);
-  } catch (const cv::Exception&) {
-    return {};
-  }
-  std::vector<std::filesystem::path> paths(names.begin(), names.end());
-  std::sort(paths.begin(), paths.end());
-  return paths;
-}
-
 ChessboardResult calibrate_chessboard(const std::vector<std::filesystem::path>& images,
                                       const ChessboardOptions& options) {
   ChessboardResult result;

@@ -14,7 +14,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kWalk = fs::path(PANOPTES_SOURCE_DIR) / ".." / "shared" / "data" / "walk_41markers_100hz.trc";
+// A copy of ../shared/data/walk_41markers_100hz.trc (Apache-2.0; tests/data/README.md).
+const fs::path kWalk = fs::path(PANOPTES_SOURCE_DIR) / "tests" / "data" / "walk_41markers_100hz.trc";
 
 const std::string kCamera = R"(
 cameras:

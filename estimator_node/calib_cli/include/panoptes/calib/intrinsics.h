@@ -26,9 +26,6 @@ struct ChessboardResult {
   std::string error;                                  // "" on success
 };
 
-// Expands a glob (e.g. "data/left*.jpg") into sorted file names.
-std::vector<std::filesystem::path> expand_glob(const std::string& pattern);
-
 // Never throws: problems go to `error` (naming the file where one is at fault).
 ChessboardResult calibrate_chessboard(const std::vector<std::filesystem::path>& images,
                                       const ChessboardOptions& options);

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Lint test: every project .cpp/.h is formatted as the project's .clang-format says
+# (clang-format --dry-run --Werror). Build trees (any folder holding a CMakeCache.txt, or named
+# build*) and hidden folders are not ours and are skipped. To fix: clang-format -i <file>.
+# Usage: clang_format.sh <source dir>
+set -uo pipefail
+source_dir="$(cd "$1" && pwd)"
+format="$(command -v clang-format || command -v clang-format-14 || true)"
+[ -n "$format" ] || { echo "FAIL: clang-format is not installed (deploy/install-deps.sh installs it)"; exit 1; }
+
+mapfile -t files < <(cd "$source_dir" && find . \( -name '.*' -o -name 'build*' -o -exec test -e '{}/CMakeCache.txt' \; \) \
+  -mindepth 1 -type d -prune -o -type f \( -name '*.cpp' -o -name '*.h' \) -print | sed 's#^\./##' | sort)
+[ ${#files[@]} -gt 0 ] || { echo "FAIL: no .cpp/.h files under $source_dir"; exit 1; }
+
+unformatted=()
+for file in "${files[@]}"; do
+  "$format" --dry-run --Werror --style=file "$source_dir/$file" >/dev/null 2>&1 || unformatted+=("$file")
+done
+echo "clang-format $("$format" --version | sed -n 's/.*version \([0-9.]*\).*/\1/p'): ${#files[@]} files"
+if [ ${#unformatted[@]} -ne 0 ]; then
+  printf '  not formatted: %s\n' "${unformatted[@]}"
+  echo "FAIL: ${#unformatted[@]} file(s) differ from .clang-format (fix: clang-format -i <file>)"
+  exit 1
+fi
+echo "PASS: every file is formatted"
