@@ -16,8 +16,8 @@
 #include "panoptes/calibration.h"
 #include "panoptes/calibration_file.h"
 #include "panoptes/config.h"
-#include "panoptes/records.h"
 #include "panoptes/jsonl.h"
+#include "panoptes/records.h"
 #include "panoptes/simulator.h"
 
 namespace fs = std::filesystem;

@@ -14,9 +14,9 @@
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/eval/evaluation.h"
+#include "panoptes/jsonl.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
-#include "panoptes/jsonl.h"
 #include "panoptes/simulator.h"
 
 namespace {

@@ -11,10 +11,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include "motion.h"
+#include "panoptes/calibration_file.h"
 #include "panoptes/config.h"
 #include "panoptes/geometry.h"
 #include "panoptes/simulator.h"
-#include "panoptes/calibration_file.h"
 
 namespace panoptes {
 

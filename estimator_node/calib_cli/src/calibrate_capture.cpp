@@ -14,9 +14,9 @@
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
 #include "panoptes/dds/time_sync.h"
+#include "panoptes/jsonl.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
-#include "panoptes/jsonl.h"
 #include "panoptes/time.h"
 
 namespace panoptes::calib {

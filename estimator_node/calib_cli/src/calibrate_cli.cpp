@@ -25,9 +25,9 @@
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/glob.h"
+#include "panoptes/jsonl.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
-#include "panoptes/jsonl.h"
 
 namespace panoptes::calib {
 

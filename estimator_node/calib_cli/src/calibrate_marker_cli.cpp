@@ -14,9 +14,9 @@
 #include "panoptes/calibration_file.h"
 #include "panoptes/cli.h"
 #include "panoptes/estimator/led_marker.h"
+#include "panoptes/jsonl.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
-#include "panoptes/jsonl.h"
 
 namespace panoptes::estimator {
 

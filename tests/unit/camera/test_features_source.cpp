@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "panoptes/camera/sources.h"
-#include "panoptes/records.h"
 #include "panoptes/jsonl.h"
+#include "panoptes/records.h"
 #include "panoptes/time.h"
 
 namespace panoptes::camera {

@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "panoptes/records.h"
 #include "panoptes/jsonl.h"
+#include "panoptes/records.h"
 #include "temp_dir.h"
 
 namespace panoptes {

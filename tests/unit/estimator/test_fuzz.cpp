@@ -20,8 +20,8 @@
 
 #include "panoptes/estimator/frame_screen.h"
 #include "panoptes/estimator/tracker.h"
-#include "panoptes/records.h"
 #include "panoptes/jsonl.h"
+#include "panoptes/records.h"
 #include "test_cameras.h"
 
 namespace panoptes::estimator {

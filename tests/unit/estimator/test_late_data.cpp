@@ -8,9 +8,9 @@
 #include <numeric>
 #include <random>
 
-#include "panoptes/eval/evaluation.h"
 #include "panoptes/estimator/inbox.h"
 #include "panoptes/estimator/tracker.h"
+#include "panoptes/eval/evaluation.h"
 #include "panoptes/simulator.h"
 
 namespace panoptes::estimator {

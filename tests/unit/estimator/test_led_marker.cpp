@@ -20,8 +20,8 @@
 #include "panoptes/calibration.h"
 #include "panoptes/calibration_file.h"
 #include "panoptes/estimator/led_marker.h"
-#include "panoptes/records.h"
 #include "panoptes/jsonl.h"
+#include "panoptes/records.h"
 
 namespace panoptes::estimator {
 int run_calibrate_marker(int argc, char** argv);  // estimator_node/calib_cli/src/calibrate_marker_cli.h
