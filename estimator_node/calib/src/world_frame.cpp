@@ -292,10 +292,12 @@ double max_reprojection_px(const std::vector<const CameraModel*>& models,
 std::optional<std::vector<Eigen::Vector3d>> triangulate_markers(
     const std::vector<const CameraModel*>& models, const std::vector<std::vector<Eigen::Vector2d>>& pixels) {
   std::vector<CameraModel> used;
+  used.reserve(models.size());
   for (const auto* model : models) used.push_back(*model);
   std::vector<Eigen::Vector3d> points;
   for (std::size_t m = 0; m < pixels.front().size(); ++m) {
     std::vector<Eigen::Vector2d> rays;
+    rays.reserve(pixels.size());
     for (const auto& view : pixels) rays.push_back(view[m]);
     const auto X = triangulate(used, rays);
     if (!X) return std::nullopt;
@@ -641,6 +643,7 @@ WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
   // Scale: the wand's known length against its measured one (an unscaled calibration); metric
   // calibrations only check it. Instants whose length is off are mismatches: dropped.
   std::vector<double> lengths;
+  lengths.reserve(instants.size());
   for (const auto& instant : instants)
     lengths.push_back((instant.markers.back() - instant.markers.front()).norm());
   const double measured = median(lengths);

@@ -147,7 +147,7 @@ Initiator::Pairing Initiator::best_pairing(int camera, TimeNs stamp_ns, const Tr
         if (static_cast<int>(third) == camera || third == other) continue;
         double best_error = std::numeric_limits<double>::infinity();
         std::size_t best_index = 0;
-        Eigen::Vector2d best_pixel;
+        Eigen::Vector2d best_pixel = Eigen::Vector2d::Zero();  // set whenever best_error is finite
         for (std::size_t m = 0; m < per_camera_[third].size(); ++m) {
           double third_allowance = 0;
           const Eigen::Vector2d pixel = aligned(per_camera_[third][m], stamp_ns, &third_allowance);
