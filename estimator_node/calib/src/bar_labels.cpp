@@ -71,22 +71,26 @@ std::map<std::pair<int, int>, Votes> vote(const std::vector<PairSample>& samples
   return votes;
 }
 
-}  // namespace
+// One run of a camera's track: frames between two relabellings, with the ends labelled alike.
+struct Run {
+  int camera = 0;
+  int label_run = 0;
+  CameraWandTrack frames;
+};
 
-BarLabelReport resolve_bar_labels(std::vector<CameraWandTrack>& tracks,
-                                  const std::vector<CameraIntrinsics>& intrinsics,
-                                  const BarLabelOptions& options) {
-  BarLabelReport report;
-  // Nodes: every (camera, run), each with a sub-track of its frames to interpolate within.
-  struct Run {
-    int camera = 0;
-    int label_run = 0;
-    CameraWandTrack frames;
-  };
+// Every camera's track cut into runs (the graph's nodes), and the span and fastest period of all.
+struct RunSet {
   std::vector<Run> runs;
-  std::vector<std::vector<int>> runs_of_camera(tracks.size());
+  std::vector<std::vector<int>> runs_of_camera;
   TimeNs first = std::numeric_limits<TimeNs>::max(), last = std::numeric_limits<TimeNs>::min();
   double period = std::numeric_limits<double>::infinity();
+};
+
+RunSet split_into_runs(const std::vector<CameraWandTrack>& tracks) {
+  RunSet set;
+  auto& runs = set.runs;
+  auto& runs_of_camera = set.runs_of_camera;
+  runs_of_camera.resize(tracks.size());
   for (std::size_t c = 0; c < tracks.size(); ++c) {
     const auto& track = tracks[c];
     for (const auto& frame : track.frames) {
@@ -103,25 +107,31 @@ BarLabelReport resolve_bar_labels(std::vector<CameraWandTrack>& tracks,
       runs[static_cast<std::size_t>(runs_of_camera[c].back())].frames.frames.push_back(frame);
     }
     if (!track.frames.empty()) {
-      first = std::min(first, track.frames.front().stamp_ns);
-      last = std::max(last, track.frames.back().stamp_ns);
-      if (track.frame_period_s > 0) period = std::min(period, track.frame_period_s);
+      set.first = std::min(set.first, track.frames.front().stamp_ns);
+      set.last = std::max(set.last, track.frames.back().stamp_ns);
+      if (track.frame_period_s > 0) set.period = std::min(set.period, track.frame_period_s);
     }
   }
-  report.runs = static_cast<int>(runs.size());
-  if (runs.empty() || first >= last || !std::isfinite(period)) return report;
+  return set;
+}
 
-  // Every camera's view of the ends on a common grid of instants, interpolated within its run.
-  const double rate = options.sample_rate_hz > 0 ? options.sample_rate_hz : 1.0 / period;
+// Every camera's view of the ends on a common grid of instants, interpolated within its run,
+// gathered per camera pair.
+std::map<std::pair<int, int>, std::vector<PairSample>> sample_camera_pairs(
+    const RunSet& set, const std::vector<CameraIntrinsics>& intrinsics, const BarLabelOptions& options) {
+  const auto& runs = set.runs;
+  const auto& runs_of_camera = set.runs_of_camera;
+  const std::size_t cameras = runs_of_camera.size();
+  const double rate = options.sample_rate_hz > 0 ? options.sample_rate_hz : 1.0 / set.period;
   const auto step = static_cast<TimeNs>(std::llround(1e9 / rate));
   std::vector<CameraModel> models;
   models.reserve(intrinsics.size());
   for (const auto& k : intrinsics) models.emplace_back(k, RigidTransform{});
   std::map<std::pair<int, int>, std::vector<PairSample>> pairs;
-  std::vector<std::size_t> cursor(tracks.size(), 0);
-  for (TimeNs t = first + step / 2; t < last; t += step) {
+  std::vector<std::size_t> cursor(cameras, 0);
+  for (TimeNs t = set.first + step / 2; t < set.last; t += step) {
     std::vector<std::pair<int, EndsView>> views;
-    for (std::size_t c = 0; c < tracks.size(); ++c) {
+    for (std::size_t c = 0; c < cameras; ++c) {
       auto& k = cursor[c];
       const auto& list = runs_of_camera[c];
       while (k < list.size() && runs[static_cast<std::size_t>(list[k])].frames.frames.back().stamp_ns <= t)
@@ -141,46 +151,68 @@ BarLabelReport resolve_bar_labels(std::vector<CameraWandTrack>& tracks,
       for (std::size_t j = i + 1; j < views.size(); ++j)
         pairs[{views[i].first, views[j].first}].push_back({views[i].second, views[j].second});
   }
+  return pairs;
+}
 
-  // Votes per camera pair: first from an essential matrix of the midpoints, then again from one of
-  // the ends labelled by those votes.
+// One camera pair's votes: first from an essential matrix of the midpoints, then again from one of
+// the ends labelled by those votes. Nothing when the pair has too few samples or no geometry.
+std::optional<std::map<std::pair<int, int>, Votes>> camera_pair_votes(const std::vector<PairSample>& samples,
+                                                                      const BarLabelOptions& options) {
+  if (static_cast<int>(samples.size()) < options.min_pair_samples) return std::nullopt;
+  const std::size_t stride =
+      std::max<std::size_t>(1, samples.size() / static_cast<std::size_t>(options.max_pair_samples));
+  std::vector<cv::Point2d> mid_a, mid_b;
+  for (std::size_t s = 0; s < samples.size(); s += stride) {
+    const Eigen::Vector2d a = 0.5 * (samples[s].a.first + samples[s].a.last);
+    const Eigen::Vector2d b = 0.5 * (samples[s].b.first + samples[s].b.last);
+    mid_a.emplace_back(a.x(), a.y());
+    mid_b.emplace_back(b.x(), b.y());
+  }
+  auto E = essential(mid_a, mid_b, options.midpoint_threshold);
+  if (!E) return std::nullopt;
+  auto pair_votes = vote(samples, *E, options.midpoint_threshold, options.decisive_ratio);
+  std::vector<cv::Point2d> ends_a, ends_b;
+  for (std::size_t s = 0; s < samples.size(); s += stride) {
+    const auto found = pair_votes.find({samples[s].a.node, samples[s].b.node});
+    if (found == pair_votes.end() || std::abs(found->second.same - found->second.flipped) < options.min_votes)
+      continue;
+    const bool flipped = found->second.flipped > found->second.same;
+    const auto& a = samples[s].a;
+    const auto& b = samples[s].b;
+    ends_a.emplace_back(a.first.x(), a.first.y());
+    ends_a.emplace_back(a.last.x(), a.last.y());
+    const Eigen::Vector2d& b_first = flipped ? b.last : b.first;
+    const Eigen::Vector2d& b_last = flipped ? b.first : b.last;
+    ends_b.emplace_back(b_first.x(), b_first.y());
+    ends_b.emplace_back(b_last.x(), b_last.y());
+  }
+  if (auto refined = essential(ends_a, ends_b, options.midpoint_threshold / 4)) {
+    E = refined;
+    pair_votes = vote(samples, *E, options.midpoint_threshold / 4, options.decisive_ratio);
+  }
+  return pair_votes;
+}
+
+}  // namespace
+
+BarLabelReport resolve_bar_labels(std::vector<CameraWandTrack>& tracks,
+                                  const std::vector<CameraIntrinsics>& intrinsics,
+                                  const BarLabelOptions& options) {
+  BarLabelReport report;
+  // Nodes: every (camera, run), each with a sub-track of its frames to interpolate within.
+  const RunSet set = split_into_runs(tracks);
+  const auto& runs = set.runs;
+  const auto& runs_of_camera = set.runs_of_camera;
+  report.runs = static_cast<int>(runs.size());
+  if (runs.empty() || set.first >= set.last || !std::isfinite(set.period)) return report;
+
+  const auto pairs = sample_camera_pairs(set, intrinsics, options);
   std::map<std::pair<int, int>, Votes> votes;
   for (const auto& [key, samples] : pairs) {
-    if (static_cast<int>(samples.size()) < options.min_pair_samples) continue;
-    const std::size_t stride =
-        std::max<std::size_t>(1, samples.size() / static_cast<std::size_t>(options.max_pair_samples));
-    std::vector<cv::Point2d> mid_a, mid_b;
-    for (std::size_t s = 0; s < samples.size(); s += stride) {
-      const Eigen::Vector2d a = 0.5 * (samples[s].a.first + samples[s].a.last);
-      const Eigen::Vector2d b = 0.5 * (samples[s].b.first + samples[s].b.last);
-      mid_a.emplace_back(a.x(), a.y());
-      mid_b.emplace_back(b.x(), b.y());
-    }
-    auto E = essential(mid_a, mid_b, options.midpoint_threshold);
-    if (!E) continue;
-    auto pair_votes = vote(samples, *E, options.midpoint_threshold, options.decisive_ratio);
-    std::vector<cv::Point2d> ends_a, ends_b;
-    for (std::size_t s = 0; s < samples.size(); s += stride) {
-      const auto found = pair_votes.find({samples[s].a.node, samples[s].b.node});
-      if (found == pair_votes.end() ||
-          std::abs(found->second.same - found->second.flipped) < options.min_votes)
-        continue;
-      const bool flipped = found->second.flipped > found->second.same;
-      const auto& a = samples[s].a;
-      const auto& b = samples[s].b;
-      ends_a.emplace_back(a.first.x(), a.first.y());
-      ends_a.emplace_back(a.last.x(), a.last.y());
-      const Eigen::Vector2d& b_first = flipped ? b.last : b.first;
-      const Eigen::Vector2d& b_last = flipped ? b.first : b.last;
-      ends_b.emplace_back(b_first.x(), b_first.y());
-      ends_b.emplace_back(b_last.x(), b_last.y());
-    }
-    if (auto refined = essential(ends_a, ends_b, options.midpoint_threshold / 4)) {
-      E = refined;
-      pair_votes = vote(samples, *E, options.midpoint_threshold / 4, options.decisive_ratio);
-    }
+    const auto pair_votes = camera_pair_votes(samples, options);
+    if (!pair_votes) continue;
     ++report.camera_pairs;
-    for (const auto& [nodes, v] : pair_votes) {
+    for (const auto& [nodes, v] : *pair_votes) {
       auto& total = votes[nodes];
       total.same += v.same;
       total.flipped += v.flipped;

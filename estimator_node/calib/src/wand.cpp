@@ -105,6 +105,7 @@ std::optional<std::vector<Eigen::Vector2d>> identify_wand(
     }
     ++count.collinear_candidates;
     std::vector<Eigen::Vector2d> pixels;
+    pixels.reserve(picked.size());
     for (int i : picked) pixels.push_back(raw(i));
     if (marker_count == 2) {
       std::vector<Eigen::Vector2d> swapped{pixels[1], pixels[0]};
@@ -216,6 +217,7 @@ CameraWandTrack extract_wand_track(const std::string& camera_id, const std::vect
   CameraWandTrack track;
   track.camera_id = camera_id;
   std::vector<const FeatureFrame*> ordered;
+  ordered.reserve(frames.size());
   for (const auto& frame : frames) ordered.push_back(&frame);
   std::sort(ordered.begin(), ordered.end(),
             [](const FeatureFrame* a, const FeatureFrame* b) { return a->stamp_ns < b->stamp_ns; });

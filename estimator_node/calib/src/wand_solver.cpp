@@ -676,6 +676,7 @@ void Solver::triangulate_all() {
     }
     for (std::size_t m = 0; m < markers; ++m) {
       std::vector<Eigen::Vector2d> pixels;
+      pixels.reserve(used.size());
       for (const auto* observation : used) pixels.push_back(observed(*observation, m));
       const auto x = triangulate(models, pixels);
       if (!x) {

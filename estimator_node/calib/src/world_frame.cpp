@@ -292,10 +292,12 @@ double max_reprojection_px(const std::vector<const CameraModel*>& models,
 std::optional<std::vector<Eigen::Vector3d>> triangulate_markers(
     const std::vector<const CameraModel*>& models, const std::vector<std::vector<Eigen::Vector2d>>& pixels) {
   std::vector<CameraModel> used;
+  used.reserve(models.size());
   for (const auto* model : models) used.push_back(*model);
   std::vector<Eigen::Vector3d> points;
   for (std::size_t m = 0; m < pixels.front().size(); ++m) {
     std::vector<Eigen::Vector2d> rays;
+    rays.reserve(pixels.size());
     for (const auto& view : pixels) rays.push_back(view[m]);
     const auto X = triangulate(used, rays);
     if (!X) return std::nullopt;
@@ -384,80 +386,56 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> ransac_plane(const std::vector<Eigen
   return best;
 }
 
-}  // namespace
-
-WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
-                                 const std::vector<FeatureFrame>& frames, const WandDefinition& wand,
-                                 bool unscaled, const WandFloorOptions& options) {
-  WandFloorResult result;
-  const std::size_t markers = wand.marker_count();
-  if (markers < 2) {
-    result.error = "the wand on the floor needs two or more markers (its direction sets x" +
-                   std::string(unscaled ? ", its length the scale" : "") + "); --wand gives " +
-                   std::to_string(markers);
-    return result;
-  }
-  std::map<std::string, std::vector<FeatureFrame>> by_camera;
-  for (const auto& frame : frames) by_camera[frame.camera_id].push_back(frame);
+// The posed cameras' wand tracks (those of two or more frames) and the posed cameras' mean position.
+struct FloorViews {
   std::vector<TrackView> views;
   Eigen::Vector3d camera_mean = Eigen::Vector3d::Zero();
   int posed = 0;
+};
+
+// Also records every posed camera's count of identified wand frames in `camera_frames`.
+FloorViews wand_track_views(const SystemCalibration& calibration, const std::vector<FeatureFrame>& frames,
+                            const WandDefinition& wand, const WandFloorOptions& options,
+                            std::vector<std::pair<std::string, int>>& camera_frames) {
+  std::map<std::string, std::vector<FeatureFrame>> by_camera;
+  for (const auto& frame : frames) by_camera[frame.camera_id].push_back(frame);
+  FloorViews result;
   for (const auto& camera : calibration.cameras) {
     if (!camera.T_world_cam) continue;
-    camera_mean += camera.T_world_cam->t;
-    ++posed;
+    result.camera_mean += camera.T_world_cam->t;
+    ++result.posed;
     const auto found = by_camera.find(camera.id);
     if (found == by_camera.end()) continue;
     TrackView view{camera.model(),
                    extract_wand_track(camera.id, found->second, camera.intrinsics, wand, options.identify)};
-    result.camera_frames.emplace_back(camera.id, static_cast<int>(view.track.frames.size()));
-    if (view.track.frames.size() >= 2) views.push_back(std::move(view));
+    camera_frames.emplace_back(camera.id, static_cast<int>(view.track.frames.size()));
+    if (view.track.frames.size() >= 2) result.views.push_back(std::move(view));
   }
-  std::string per_camera;
-  for (const auto& [id, count] : result.camera_frames)
-    per_camera += (per_camera.empty() ? "" : ", ") + id + " " + std::to_string(count);
-  if (per_camera.empty()) per_camera = "no calibrated camera has frames";
-  std::vector<FloorInstant> instants;
-  if (views.size() >= 2) instants = triangulate_wand_instants(views, wand, options);
+  return result;
+}
 
-  // Scale: the wand's known length against its measured one (an unscaled calibration); metric
-  // calibrations only check it. Instants whose length is off are mismatches: dropped.
-  std::vector<double> lengths;
-  for (const auto& instant : instants)
-    lengths.push_back((instant.markers.back() - instant.markers.front()).norm());
-  const double measured = median(lengths);
-  const double scale = unscaled && measured > 0 ? wand.length() / measured : 1.0;
-  std::erase_if(instants, [&](const FloorInstant& instant) {
-    const double length = (instant.markers.back() - instant.markers.front()).norm();
-    return std::abs(length / measured - 1) > options.length_tolerance;
-  });
-  result.instants = static_cast<int>(instants.size());
-  if (result.instants < options.min_instants) {
-    result.error = "too few wand instants on the floor: " + std::to_string(result.instants) +
-                   " triangulated from >= 2 cameras (need " + std::to_string(options.min_instants) +
-                   "); identified wand frames per camera: " + per_camera;
-    return result;
+// A wand whose ends look alike has no end order of its own: keep it continuous in time.
+void keep_end_order_continuous(std::vector<FloorInstant>& instants) {
+  for (std::size_t i = 1; i < instants.size(); ++i) {
+    auto& now = instants[i].markers;
+    const auto& before = instants[i - 1].markers;
+    if ((now.front() - before.back()).norm() + (now.back() - before.front()).norm() <
+        (now.front() - before.front()).norm() + (now.back() - before.back()).norm())
+      std::reverse(now.begin(), now.end());
   }
-  result.scale = scale;
-  result.scaled_by_wand = unscaled;
-  result.median_length_m = measured * scale;
-  for (auto& instant : instants)
-    for (auto& p : instant.markers) p *= scale;
-  camera_mean *= scale / std::max(1, posed);
-  if (wand.ends_indistinguishable())  // keep the end order continuous in time
-    for (std::size_t i = 1; i < instants.size(); ++i) {
-      auto& now = instants[i].markers;
-      const auto& before = instants[i - 1].markers;
-      if ((now.front() - before.back()).norm() + (now.back() - before.front()).norm() <
-          (now.front() - before.front()).norm() + (now.back() - before.back()).norm())
-        std::reverse(now.begin(), now.end());
-    }
+}
 
-  // Rests: every marker slower than rest_speed over +-0.1 s, for at least min_rest_s.
+double seconds_after_first(const std::vector<FloorInstant>& instants, std::size_t i) {
+  return static_cast<double>(instants[i].t_ns - instants[0].t_ns) * 1e-9;
+}
+
+using Rest = std::pair<std::size_t, std::size_t>;  // [first, last] instants
+
+// Rests: every marker slower than rest_speed over +-0.1 s, for at least min_rest_s.
+std::vector<Rest> find_rests(const std::vector<FloorInstant>& instants, std::size_t markers,
+                             const WandFloorOptions& options) {
   const double window_s = 0.1;
-  const auto seconds = [&](std::size_t i) {
-    return static_cast<double>(instants[i].t_ns - instants[0].t_ns) * 1e-9;
-  };
+  const auto seconds = [&](std::size_t i) { return seconds_after_first(instants, i); };
   std::vector<bool> resting(instants.size(), false);
   for (std::size_t i = 0, lo = 0, hi = 0; i < instants.size(); ++i) {
     while (seconds(lo) < seconds(i) - window_s) ++lo;
@@ -469,7 +447,7 @@ WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
       speed = std::max(speed, (instants[hi].markers[m] - instants[lo].markers[m]).norm() / dt);
     resting[i] = speed < options.rest_speed_m_s;
   }
-  std::vector<std::pair<std::size_t, std::size_t>> rests;  // [first, last] instants
+  std::vector<Rest> rests;
   for (std::size_t i = 0; i < instants.size();) {
     if (!resting[i]) {
       ++i;
@@ -480,48 +458,61 @@ WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
     if (seconds(j) - seconds(i) >= options.min_rest_s) rests.emplace_back(i, j);
     i = j + 1;
   }
-  if (rests.empty()) {
-    result.error = "the wand never rested on the floor for " + std::to_string(options.min_rest_s) + " s (" +
-                   std::to_string(result.instants) +
-                   " instants): lay it still where the origin should be, then at other places";
-    return result;
-  }
+  return rests;
+}
 
-  // The plane: RANSAC over every marker position (lifted or carried wands are outliers), then
-  // least squares over the inliers, twice.
+// The floor plane, its normal towards the cameras, and the marker positions on it.
+struct FloorPlane {
+  Eigen::Vector3d normal, centroid;
+  std::vector<Eigen::Vector3d> inliers;
+
+  [[nodiscard]] double distance(const Eigen::Vector3d& p) const { return normal.dot(p - centroid); }
+};
+
+// RANSAC over every marker position (lifted or carried wands are outliers), then least squares over
+// the inliers, twice.
+FloorPlane fit_floor_plane(const std::vector<FloorInstant>& instants, const Eigen::Vector3d& camera_mean,
+                           const WandFloorOptions& options) {
   std::vector<Eigen::Vector3d> points;
   for (const auto& instant : instants)
     points.insert(points.end(), instant.markers.begin(), instant.markers.end());
-  auto [normal, on_plane] = ransac_plane(points, options.inlier_m, options.ransac_iterations);
-  Eigen::Vector3d centroid = on_plane;
-  std::vector<Eigen::Vector3d> inliers;
+  const auto ransac = ransac_plane(points, options.inlier_m, options.ransac_iterations);
+  FloorPlane plane{ransac.first, ransac.second, {}};
   for (int pass = 0; pass < 2; ++pass) {
-    inliers.clear();
+    plane.inliers.clear();
     for (const auto& p : points)
-      if (std::abs(normal.dot(p - centroid)) < options.inlier_m) inliers.push_back(p);
-    if (inliers.size() < 3) break;
+      if (std::abs(plane.normal.dot(p - plane.centroid)) < options.inlier_m) plane.inliers.push_back(p);
+    if (plane.inliers.size() < 3) break;
     double flatness = 0;
-    fit_plane(inliers, centroid, normal, flatness);
+    fit_plane(plane.inliers, plane.centroid, plane.normal, flatness);
   }
-  if (normal.dot(camera_mean - centroid) < 0) normal = -normal;
-  const auto distance = [&](const Eigen::Vector3d& p) { return normal.dot(p - centroid); };
+  if (plane.normal.dot(camera_mean - plane.centroid) < 0) plane.normal = -plane.normal;
+  return plane;
+}
+
+// How well the plane fits: instants wholly on it, the positions' spread on it, its tilt, and the RMS
+// over the floor points and every resting marker (a rest off the floor counts too).
+void measure_floor_fit(const FloorPlane& plane, const std::vector<FloorInstant>& instants,
+                       const std::vector<Rest>& rests, const WandFloorOptions& options,
+                       WandFloorResult& result) {
   for (const auto& instant : instants) {
     bool all = true;
-    for (const auto& p : instant.markers) all = all && std::abs(distance(p)) < options.inlier_m;
+    for (const auto& p : instant.markers) all = all && std::abs(plane.distance(p)) < options.inlier_m;
     result.floor_instants += all ? 1 : 0;
   }
+  const auto& inliers = plane.inliers;
+  const Eigen::Vector3d& centroid = plane.centroid;
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
   for (const auto& p : inliers) scatter += (p - centroid) * (p - centroid).transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter / std::max<double>(1, inliers.size()));
   result.spread_m[0] = std::sqrt(std::max(0.0, eigen.eigenvalues()(2)));
   result.spread_m[1] = std::sqrt(std::max(0.0, eigen.eigenvalues()(1)));
-  result.tilt_deg = std::acos(std::clamp(normal.z(), -1.0, 1.0)) * 180 / M_PI;
+  result.tilt_deg = std::acos(std::clamp(plane.normal.z(), -1.0, 1.0)) * 180 / M_PI;
 
-  // RMS over the floor points and every resting marker: a rest off the floor counts too.
   double squared = 0;
   std::size_t count = 0;
   const auto add = [&](const Eigen::Vector3d& p) {
-    const double d = distance(p);
+    const double d = plane.distance(p);
     squared += d * d;
     ++count;
     result.max_distance_mm = std::max(result.max_distance_mm, std::abs(d) * 1e3);
@@ -530,9 +521,17 @@ WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
   for (const auto& [first, last] : rests)
     for (std::size_t i = first; i <= last; ++i)
       for (const auto& p : instants[i].markers)
-        if (std::abs(distance(p)) >= options.inlier_m) add(p);
+        if (std::abs(plane.distance(p)) >= options.inlier_m) add(p);
   result.plane_rms_mm = std::sqrt(squared / static_cast<double>(std::max<std::size_t>(1, count))) * 1e3;
+}
 
+// The new frame from the first rest (origin under its first marker, x along the wand, z up the
+// floor's normal), and every rest's placement in it.
+void place_world_frame(const std::vector<FloorInstant>& instants, const std::vector<Rest>& rests,
+                       const FloorPlane& plane, const Eigen::Vector3d& camera_mean,
+                       const WandDefinition& wand, double scale, const WandFloorOptions& options,
+                       WandFloorResult& result) {
+  const std::size_t markers = wand.marker_count();
   std::vector<std::vector<Eigen::Vector3d>> rest_means;
   for (const auto& [first, last] : rests) {
     std::vector<Eigen::Vector3d> mean(markers, Eigen::Vector3d::Zero());
@@ -544,28 +543,35 @@ WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
   auto& origin_rest = rest_means.front();
   if (wand.ends_indistinguishable()) {
     // No image tells the ends apart: the end nearer the middle of the room is the first.
-    const Eigen::Vector3d middle = camera_mean - distance(camera_mean) * normal;
+    const Eigen::Vector3d middle = camera_mean - plane.distance(camera_mean) * plane.normal;
     if ((origin_rest.back() - middle).norm() < (origin_rest.front() - middle).norm())
       std::reverse(origin_rest.begin(), origin_rest.end());
   }
   const Eigen::Vector3d origin =
-      origin_rest.front() - (distance(origin_rest.front()) + options.floor_offset_m) * normal;
-  const RigidTransform T_metric = frame_from_axes(origin, origin_rest.back() - origin_rest.front(), normal);
+      origin_rest.front() - (plane.distance(origin_rest.front()) + options.floor_offset_m) * plane.normal;
+  const RigidTransform T_metric =
+      frame_from_axes(origin, origin_rest.back() - origin_rest.front(), plane.normal);
   RigidTransform T_new_old = T_metric;
   T_new_old.t /= scale;  // p_new = scale * T_new_old(p_old)
   result.T_new_old = T_new_old;
   for (std::size_t r = 0; r < rests.size(); ++r) {
     WandPlacement placement;
-    placement.start_s = seconds(rests[r].first);
-    placement.end_s = seconds(rests[r].second);
+    placement.start_s = seconds_after_first(instants, rests[r].first);
+    placement.end_s = seconds_after_first(instants, rests[r].second);
     placement.instants = static_cast<int>(rests[r].second - rests[r].first + 1);
     for (const auto& p : rest_means[r]) {
       placement.markers.push_back(T_metric.apply(p));
-      placement.height_mm += distance(p) * 1e3 / static_cast<double>(markers);
+      placement.height_mm += plane.distance(p) * 1e3 / static_cast<double>(markers);
     }
     result.placements.push_back(std::move(placement));
   }
+}
 
+// Refuses a frame from positions on one line or a placement far off the plane (an error, the frame
+// reset); warns of a placement left out, a poorly defined tilt, a high RMS or a wand length that
+// disagrees with --wand.
+void check_floor_fit(const WandDefinition& wand, bool unscaled, const WandFloorOptions& options,
+                     WandFloorResult& result) {
   std::ostringstream why;
   why.precision(3);
   if (result.spread_m[1] < options.spread_error_m) {
@@ -574,7 +580,7 @@ WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
         << " m, better " << options.spread_warning_m << " m): lay the wand at places around the room";
     result.error = why.str();
     result.T_new_old.reset();
-    return result;
+    return;
   }
   for (std::size_t r = 0; r < result.placements.size(); ++r) {
     const double height_mm = result.placements[r].height_mm;
@@ -586,7 +592,7 @@ WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
       why << " (limit " << options.off_plane_error_m * 1e3 << " mm): was the wand on the floor?";
       result.error = why.str();
       result.T_new_old.reset();
-      return result;
+      return;
     }
     why << ": left out of the fit";
     result.warnings.push_back(why.str());
@@ -610,6 +616,68 @@ WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
         << " m: check --wand";
     result.warnings.push_back(why.str());
   }
+}
+
+}  // namespace
+
+WandFloorResult wand_floor_frame(const SystemCalibration& calibration,
+                                 const std::vector<FeatureFrame>& frames, const WandDefinition& wand,
+                                 bool unscaled, const WandFloorOptions& options) {
+  WandFloorResult result;
+  const std::size_t markers = wand.marker_count();
+  if (markers < 2) {
+    result.error = "the wand on the floor needs two or more markers (its direction sets x" +
+                   std::string(unscaled ? ", its length the scale" : "") + "); --wand gives " +
+                   std::to_string(markers);
+    return result;
+  }
+  auto [views, camera_mean, posed] =
+      wand_track_views(calibration, frames, wand, options, result.camera_frames);
+  std::string per_camera;
+  for (const auto& [id, count] : result.camera_frames)
+    per_camera += (per_camera.empty() ? "" : ", ") + id + " " + std::to_string(count);
+  if (per_camera.empty()) per_camera = "no calibrated camera has frames";
+  std::vector<FloorInstant> instants;
+  if (views.size() >= 2) instants = triangulate_wand_instants(views, wand, options);
+
+  // Scale: the wand's known length against its measured one (an unscaled calibration); metric
+  // calibrations only check it. Instants whose length is off are mismatches: dropped.
+  std::vector<double> lengths;
+  lengths.reserve(instants.size());
+  for (const auto& instant : instants)
+    lengths.push_back((instant.markers.back() - instant.markers.front()).norm());
+  const double measured = median(lengths);
+  const double scale = unscaled && measured > 0 ? wand.length() / measured : 1.0;
+  std::erase_if(instants, [&](const FloorInstant& instant) {
+    const double length = (instant.markers.back() - instant.markers.front()).norm();
+    return std::abs(length / measured - 1) > options.length_tolerance;
+  });
+  result.instants = static_cast<int>(instants.size());
+  if (result.instants < options.min_instants) {
+    result.error = "too few wand instants on the floor: " + std::to_string(result.instants) +
+                   " triangulated from >= 2 cameras (need " + std::to_string(options.min_instants) +
+                   "); identified wand frames per camera: " + per_camera;
+    return result;
+  }
+  result.scale = scale;
+  result.scaled_by_wand = unscaled;
+  result.median_length_m = measured * scale;
+  for (auto& instant : instants)
+    for (auto& p : instant.markers) p *= scale;
+  camera_mean *= scale / std::max(1, posed);
+  if (wand.ends_indistinguishable()) keep_end_order_continuous(instants);
+
+  const std::vector<Rest> rests = find_rests(instants, markers, options);
+  if (rests.empty()) {
+    result.error = "the wand never rested on the floor for " + std::to_string(options.min_rest_s) + " s (" +
+                   std::to_string(result.instants) +
+                   " instants): lay it still where the origin should be, then at other places";
+    return result;
+  }
+  const FloorPlane plane = fit_floor_plane(instants, camera_mean, options);
+  measure_floor_fit(plane, instants, rests, options, result);
+  place_world_frame(instants, rests, plane, camera_mean, wand, scale, options, result);
+  check_floor_fit(wand, unscaled, options, result);
   return result;
 }
 

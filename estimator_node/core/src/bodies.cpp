@@ -392,7 +392,7 @@ std::vector<PoseRecord> BodySet::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) co
       record.cameras += (t != 0 && stamp_ns - t <= 500'000'000) ? 1 : 0;
     for (int k = 0; k < 3; ++k) {
       record.sigma[static_cast<std::size_t>(k)] = std::sqrt(std::max(0.0, state.P(kBodyP + k, kBodyP + k)));
-      record.sigma[static_cast<std::size_t>(3 + k)] =
+      record.sigma[3 + static_cast<std::size_t>(k)] =
           std::sqrt(std::max(0.0, state.P(kBodyTheta + k, kBodyTheta + k)));
     }
     poses.push_back(std::move(record));

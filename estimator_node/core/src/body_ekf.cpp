@@ -34,7 +34,7 @@ Matrix15d process_noise(double dt, const BodyMotionNoise& noise) {
   const double j = noise.jerk;
   const double c[3][3] = {{d5 / 20, d4 / 8, d3 / 6}, {d4 / 8, d3 / 3, d2 / 2}, {d3 / 6, d2 / 2, dt}};
   for (int r = 0; r < 3; ++r)
-    for (int k = 0; k < 3; ++k) Q.block<3, 3>(3 * r, 3 * k) = j * c[r][k] * I;
+    for (int k = 0; k < 3; ++k) Q.block<3, 3>(3 * Eigen::Index{r}, 3 * Eigen::Index{k}) = j * c[r][k] * I;
   const double w = noise.angular_accel;
   Q.block<3, 3>(kBodyTheta, kBodyTheta) = w * d3 / 3 * I;
   Q.block<3, 3>(kBodyTheta, kBodyW) = w * d2 / 2 * I;
@@ -64,7 +64,7 @@ FilterCovariance<15> body_prior(const BodyPriorSigmas& sigmas) {
   Vector15d variances;
   const double blocks[5] = {sigmas.position_m, sigmas.velocity_mps, sigmas.acceleration_mps2,
                             sigmas.angle_rad, sigmas.angular_velocity_radps};
-  for (int k = 0; k < 5; ++k) variances.segment<3>(3 * k).setConstant(blocks[k] * blocks[k]);
+  for (int k = 0; k < 5; ++k) variances.segment<3>(3 * Eigen::Index{k}).setConstant(blocks[k] * blocks[k]);
   return FilterCovariance<15>::diagonal(variances);
 }
 

@@ -78,21 +78,11 @@ double Initiator::epipolar_distance_px(int camera_a, const Eigen::Vector2d& pixe
   return std::abs(line.dot(Eigen::Vector3d(xb.x(), xb.y(), 1.0))) / norm * focal;
 }
 
-std::vector<InitiationCandidate> Initiator::add_frame(
-    int camera, TimeNs stamp_ns, const std::vector<Eigen::Vector2d>& blobs,
-    const std::function<bool(const Eigen::Vector3d&)>& occupied) {
-  std::vector<InitiationCandidate> found;
-  const auto& cameras = geometry_->cameras;
-  if (camera < 0 || static_cast<std::size_t>(camera) >= cameras.size()) return found;
-
-  // Forget tracklets too old to pair with anything from now on.
-  for (auto& tracklets : per_camera_) {
-    std::erase_if(tracklets, [&](const Tracklet& t) { return stamp_ns - t.stamp_ns > options_.window_ns; });
-  }
-
-  // Continue this camera's tracklets: nearest new blob within the link radius, closest pairs
-  // first. Tracklets that no blob continues ended (their marker was taken by a track, or left).
-  auto& own = per_camera_[camera];
+std::vector<Initiator::Tracklet> Initiator::continue_tracklets(
+    int camera, TimeNs stamp_ns, const std::vector<Eigen::Vector2d>& blobs) const {
+  // Nearest new blob within the link radius, closest pairs first. Tracklets that no blob continues
+  // ended (their marker was taken by a track, or left).
+  const auto& own = per_camera_[camera];
   struct Link {
     double d;
     std::size_t tracklet;
@@ -124,6 +114,81 @@ std::vector<InitiationCandidate> Initiator::add_frame(
   for (std::size_t j = 0; j < blobs.size(); ++j) {
     if (!blob_linked[j]) next[j] = Tracklet{blobs[j], Eigen::Vector2d::Zero(), stamp_ns, 0};
   }
+  return next;
+}
+
+Initiator::Pairing Initiator::best_pairing(int camera, TimeNs stamp_ns, const Tracklet& mine,
+                                           std::size_t blob) const {
+  const auto& cameras = geometry_->cameras;
+  Pairing best;
+  for (std::size_t other = 0; other < per_camera_.size(); ++other) {
+    if (static_cast<int>(other) == camera) continue;
+    const auto& partners = per_camera_[other];
+    for (std::size_t k = 0; k < partners.size(); ++k) {
+      double allowance = 0;
+      const Eigen::Vector2d partner_pixel = aligned(partners[k], stamp_ns, &allowance);
+      if (!std::isfinite(allowance)) continue;
+      if (epipolar_distance_px(camera, mine.pixel, static_cast<int>(other), partner_pixel) >
+          options_.epipolar_px + allowance) {
+        continue;
+      }
+      const auto pair = triangulate({{cameras[camera], mine.pixel}, {cameras[other], partner_pixel}}, 3);
+      if (!pair || pair->max_reprojection_px > options_.reprojection_px + allowance) continue;
+      const Eigen::Vector3d point = pair->point;
+      if (cameras[camera]->T_cam_world().apply(point).z() < options_.min_depth_m ||
+          cameras[other]->T_cam_world().apply(point).z() < options_.min_depth_m) {
+        continue;
+      }
+      std::vector<View> views = {{camera, mine.pixel, mine.velocity, mine.links > 0, stamp_ns, blob},
+                                 {static_cast<int>(other), partner_pixel, partners[k].velocity,
+                                  partners[k].links > 0, partners[k].stamp_ns, k}};
+      // Support: in every further camera, the tracklet that reprojects best, if well enough.
+      for (std::size_t third = 0; third < per_camera_.size(); ++third) {
+        if (static_cast<int>(third) == camera || third == other) continue;
+        double best_error = std::numeric_limits<double>::infinity();
+        std::size_t best_index = 0;
+        Eigen::Vector2d best_pixel = Eigen::Vector2d::Zero();  // set whenever best_error is finite
+        for (std::size_t m = 0; m < per_camera_[third].size(); ++m) {
+          double third_allowance = 0;
+          const Eigen::Vector2d pixel = aligned(per_camera_[third][m], stamp_ns, &third_allowance);
+          if (!std::isfinite(third_allowance)) continue;
+          const double e = reprojection_error(*cameras[third], point, pixel) - third_allowance;
+          if (e < best_error) {
+            best_error = e;
+            best_index = m;
+            best_pixel = pixel;
+          }
+        }
+        if (best_error <= options_.reprojection_px) {
+          const Tracklet& t = per_camera_[third][best_index];
+          views.push_back(
+              {static_cast<int>(third), best_pixel, t.velocity, t.links > 0, t.stamp_ns, best_index});
+        }
+      }
+      const int support = static_cast<int>(views.size()) - 2;
+      if (support > best.support || (support == best.support && pair->max_reprojection_px < best.error)) {
+        best = {support, pair->max_reprojection_px, std::move(views), point};
+      }
+    }
+  }
+  return best;
+}
+
+std::vector<InitiationCandidate> Initiator::add_frame(
+    int camera, TimeNs stamp_ns, const std::vector<Eigen::Vector2d>& blobs,
+    const std::function<bool(const Eigen::Vector3d&)>& occupied) {
+  std::vector<InitiationCandidate> found;
+  const auto& cameras = geometry_->cameras;
+  if (camera < 0 || static_cast<std::size_t>(camera) >= cameras.size()) return found;
+
+  // Forget tracklets too old to pair with anything from now on.
+  for (auto& tracklets : per_camera_) {
+    std::erase_if(tracklets, [&](const Tracklet& t) { return stamp_ns - t.stamp_ns > options_.window_ns; });
+  }
+
+  // Continue this camera's tracklets.
+  const std::vector<Tracklet> next = continue_tracklets(camera, stamp_ns, blobs);
+  auto& own = per_camera_[camera];
   own.clear();
 
   std::vector<char> consumed_new(blobs.size(), 0);
@@ -132,63 +197,7 @@ std::vector<InitiationCandidate> Initiator::add_frame(
       consumed_new[j] = 1;
       continue;
     }
-    const Tracklet& mine = next[j];
-    struct Best {
-      int support = -1;
-      double error = std::numeric_limits<double>::infinity();
-      std::vector<View> views;
-      Eigen::Vector3d point;
-    } best;
-    for (std::size_t other = 0; other < per_camera_.size(); ++other) {
-      if (static_cast<int>(other) == camera) continue;
-      const auto& partners = per_camera_[other];
-      for (std::size_t k = 0; k < partners.size(); ++k) {
-        double allowance = 0;
-        const Eigen::Vector2d partner_pixel = aligned(partners[k], stamp_ns, &allowance);
-        if (!std::isfinite(allowance)) continue;
-        if (epipolar_distance_px(camera, mine.pixel, static_cast<int>(other), partner_pixel) >
-            options_.epipolar_px + allowance) {
-          continue;
-        }
-        const auto pair = triangulate({{cameras[camera], mine.pixel}, {cameras[other], partner_pixel}}, 3);
-        if (!pair || pair->max_reprojection_px > options_.reprojection_px + allowance) continue;
-        const Eigen::Vector3d point = pair->point;
-        if (cameras[camera]->T_cam_world().apply(point).z() < options_.min_depth_m ||
-            cameras[other]->T_cam_world().apply(point).z() < options_.min_depth_m) {
-          continue;
-        }
-        std::vector<View> views = {{camera, mine.pixel, mine.velocity, mine.links > 0, stamp_ns, j},
-                                   {static_cast<int>(other), partner_pixel, partners[k].velocity,
-                                    partners[k].links > 0, partners[k].stamp_ns, k}};
-        // Support: in every further camera, the tracklet that reprojects best, if well enough.
-        for (std::size_t third = 0; third < per_camera_.size(); ++third) {
-          if (static_cast<int>(third) == camera || third == other) continue;
-          double best_error = std::numeric_limits<double>::infinity();
-          std::size_t best_index = 0;
-          Eigen::Vector2d best_pixel;
-          for (std::size_t m = 0; m < per_camera_[third].size(); ++m) {
-            double third_allowance = 0;
-            const Eigen::Vector2d pixel = aligned(per_camera_[third][m], stamp_ns, &third_allowance);
-            if (!std::isfinite(third_allowance)) continue;
-            const double e = reprojection_error(*cameras[third], point, pixel) - third_allowance;
-            if (e < best_error) {
-              best_error = e;
-              best_index = m;
-              best_pixel = pixel;
-            }
-          }
-          if (best_error <= options_.reprojection_px) {
-            const Tracklet& t = per_camera_[third][best_index];
-            views.push_back(
-                {static_cast<int>(third), best_pixel, t.velocity, t.links > 0, t.stamp_ns, best_index});
-          }
-        }
-        const int support = static_cast<int>(views.size()) - 2;
-        if (support > best.support || (support == best.support && pair->max_reprojection_px < best.error)) {
-          best = {support, pair->max_reprojection_px, std::move(views), point};
-        }
-      }
-    }
+    const Pairing best = best_pairing(camera, stamp_ns, next[j], j);
     if (best.support < 0) continue;
 
     std::vector<PixelObservation> observations;

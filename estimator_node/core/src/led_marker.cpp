@@ -278,7 +278,7 @@ std::optional<LedIdentification> identify_led_pattern(const LedPoints& p, double
     unsigned mask;
     double quality;
   };
-  std::array<Subset, 35> subsets;
+  std::array<Subset, 35> subsets{};
   int count = 0;
   for (unsigned mask = 0; mask < 128; ++mask) {
     if (std::popcount(mask) != 4) continue;
@@ -358,6 +358,7 @@ std::vector<std::vector<int>> cluster_led_points(const std::vector<Vector2d>& po
   for (int c = 0; c < k && !unassigned.empty(); ++c) {
     const int pick = unassigned[std::uniform_int_distribution<int>(0, int(unassigned.size()) - 1)(rng)];
     std::vector<std::pair<double, int>> near;
+    near.reserve(unassigned.size());
     for (int i : unassigned) near.emplace_back((points[i] - points[pick]).squaredNorm(), i);
     const int m = std::min<int>(kLedCount, int(near.size()));
     std::partial_sort(near.begin(), near.begin() + m, near.end());
@@ -480,7 +481,7 @@ std::vector<LedMarkerDetection> LedMarkerDetector::detect(const std::vector<Vect
         all_seven = false;
         continue;
       }
-      std::array<int, 7> idx;
+      std::array<int, 7> idx{};
       for (int i = 0; i < kLedCount; ++i) idx[i] = valid[cluster[i]];
       if (auto d = detect_cluster(ideal_points, idx)) found.push_back(*d);
     }

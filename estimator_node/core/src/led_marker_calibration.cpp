@@ -73,7 +73,7 @@ std::optional<Leds> pair_structure(const LedPoints& a, const LedPoints& b) {
   if (!(s2 > 0)) return std::nullopt;
   const Matrix3d H = *G / s2;
   Eigen::SelfAdjointEigenSolver<Matrix3d> eig(H.transpose() * H);
-  const Vector3d ev = eig.eigenvalues();  // ascending: sigma3^2, 1, sigma1^2
+  const Vector3d& ev = eig.eigenvalues();  // ascending: sigma3^2, 1, sigma1^2
   const double l1 = ev(2), l3 = ev(0);
   if (!(l1 - l3 > 1e-9)) return std::nullopt;  // no translation: pure rotation
   const Vector3d v1 = eig.eigenvectors().col(2), v2 = eig.eigenvectors().col(1),
@@ -82,7 +82,7 @@ std::optional<Leds> pair_structure(const LedPoints& a, const LedPoints& b) {
                d = std::sqrt(l1 - l3);
   std::array<RelativePose, 4> candidates;
   std::array<Vector3d, 4> normals;
-  for (int k = 0; k < 2; ++k) {
+  for (std::size_t k = 0; k < 2; ++k) {
     const Vector3d u = (c1 * v1 + (k == 0 ? c3 : -c3) * v3) / d;
     Matrix3d U, W;
     U << v2, u, v2.cross(u);

@@ -175,39 +175,39 @@ double led_reprojection_error(const LedMarkerModel& model, const RigidTransform&
   return cost(from_model(T_cam_marker, model), model.plane_leds(), points, kLedCount) / kLedCount;
 }
 
-std::optional<LedPose> estimate_led_marker_pose(const LedMarkerModel& model, const LedPoints& m,
+std::optional<LedPose> estimate_led_marker_pose(const LedMarkerModel& model, const LedPoints& points,
                                                 LedPoseMethod method) {
-  if (!finite(m)) return std::nullopt;
+  if (!finite(points)) return std::nullopt;
   const auto& P = model.plane_leds();
-  const auto PH = homography_pose(P, m);
+  const auto PH = homography_pose(P, points);
   if (!PH) return std::nullopt;
   Pose chosen;
   double e = kInf;
   if (method == LedPoseMethod::kAllSeven) {
-    chosen = refine(*PH, P, m, kLedCount, &e);  // eq. 11
+    chosen = refine(*PH, P, points, kLedCount, &e);  // eq. 11
   } else {
     double e1 = kInf;
-    const Pose P1 = refine(*PH, P, m, 6, &e1);  // P1 = argmin e_proj(P, 5), eq. 3
+    const Pose P1 = refine(*PH, P, points, 6, &e1);  // P1 = argmin e_proj(P, 5), eq. 3
     if (!std::isfinite(e1)) return std::nullopt;
     if (method == LedPoseMethod::kCoplanar) {
       chosen = P1;  // eq. 9
     } else {
       double e2 = kInf;
-      const Pose P2 = refine(mirrored(P1, P), P, m, 6, &e2);
+      const Pose P2 = refine(mirrored(P1, P), P, points, 6, &e2);
       if (method == LedPoseMethod::kCoplanarBestOfTwo) {
         chosen = e2 < e1 ? P2 : P1;  // eq. 10
       } else {
         // eq. 4-5: the pointer LED M6 decides between the two minima.
         auto e_pointer = [&](const Pose& pose) {
           const Vector3d q = pose.R * P[6] + pose.t;
-          return q.z() > 0 ? (q.head<2>() / q.z() - m[6]).squaredNorm() : kInf;
+          return q.z() > 0 ? (q.head<2>() / q.z() - points[6]).squaredNorm() : kInf;
         };
         const Pose& best = std::isfinite(e2) && e_pointer(P2) < e_pointer(P1) ? P2 : P1;
-        chosen = refine(best, P, m, kLedCount, &e);  // final pose: argmin e_proj(P, 6)
+        chosen = refine(best, P, points, kLedCount, &e);  // final pose: argmin e_proj(P, 6)
       }
     }
   }
-  const double e7 = cost(chosen, P, m, kLedCount);
+  const double e7 = cost(chosen, P, points, kLedCount);
   if (!std::isfinite(e7)) return std::nullopt;
   LedPose out;
   out.T_cam_marker = to_model(chosen, model);

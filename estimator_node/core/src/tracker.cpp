@@ -6,6 +6,7 @@
 #include <deque>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <tuple>
@@ -73,6 +74,19 @@ struct Checkpoint {
 struct Entry {
   int camera;
   FeatureFrame frame;
+};
+
+// A track predicted to a frame's stamp and projected into its camera.
+struct Projected {
+  PointState state;
+  PointProjection projection;
+};
+
+// The tracks and blobs of one frame that may belong together.
+struct Gating {
+  std::vector<GatedPair> gated;                     // (track, blob, d²)
+  std::vector<std::optional<Projected>> projected;  // by track; set when a blob came near it
+  std::vector<char> in_view;                        // by track: predicted inside the image
 };
 
 }  // namespace
@@ -144,6 +158,8 @@ struct Tracker::Impl {
   void apply(const FeatureFrame& frame, int camera_index);
   void associate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
                  std::vector<char>& used);
+  Gating gate(const CameraModel& camera, TimeNs stamp, const std::vector<Eigen::Vector2d>& pixels,
+              const std::vector<char>& used) const;
   void initiate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
                 const std::vector<char>& used);
   void prune(TimeNs now_ns);
@@ -188,24 +204,19 @@ std::vector<TrackedPoint> Tracker::Impl::confirmed_points(TimeNs stamp_ns) const
   return points;
 }
 
-void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
-                              const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used) {
-  const CameraModel& camera = *models[camera_index];
+// Gating (verify region, seed 003 §2.2.3.2). A cheap bound on the gate's radius from the position
+// covariance selects the blobs worth the full projection and Mahalanobis test.
+Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
+                           const std::vector<Eigen::Vector2d>& pixels, const std::vector<char>& used) const {
   const auto& intrinsics = camera.intrinsics();
   const double focal = std::max(intrinsics.fx, intrinsics.fy);
   const double sigma2_px = options.measurement_noise_px * options.measurement_noise_px;
   const BlobGrid grid(pixels, intrinsics.width, intrinsics.height, options.grid_cell_px);
-
-  // Gating (verify region, seed 003 §2.2.3.2). A cheap bound on the gate's radius from the
-  // position covariance selects the blobs worth the full projection and Mahalanobis test.
-  std::vector<GatedPair> gated;  // (track, blob, d²)
-  struct Projected {
-    PointState state;
-    PointProjection projection;
-  };
-  std::vector<std::optional<Projected>> projected(core.tracks.size());
-  std::vector<char> in_view(core.tracks.size(), 0);
-  const TimeNs stamp = frame.stamp_ns;
+  Gating gating;
+  auto& gated = gating.gated;
+  auto& projected = gating.projected;
+  projected.resize(core.tracks.size());
+  gating.in_view.assign(core.tracks.size(), 0);
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
     const double dt = ns_to_seconds(stamp - track.state.stamp_ns);
@@ -223,7 +234,7 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
     const double radius =
         std::min(std::sqrt(options.gate_chi2 * (gain * gain * trace + sigma2_px)) + 1.0, 400.0);
     if (!camera.in_image(*pixel, radius)) continue;
-    in_view[i] = camera.in_image(*pixel, 0.0);
+    gating.in_view[i] = camera.in_image(*pixel, 0.0);
     grid.for_each_near(*pixel, radius, [&](std::size_t j) {
       if (used[j]) return;
       if ((pixels[j] - *pixel).squaredNorm() > radius * radius) return;
@@ -239,6 +250,16 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
       if (inside_gate(d2, options.gate_chi2)) gated.push_back({i, j, d2});
     });
   }
+  return gating;
+}
+
+void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
+                              const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used) {
+  const TimeNs stamp = frame.stamp_ns;
+  const Gating gating = gate(*models[camera_index], stamp, pixels, used);
+  const auto& gated = gating.gated;
+  const auto& projected = gating.projected;
+  const auto& in_view = gating.in_view;
 
   // Global assignment, confirmed tracks first, then tentative ones on the blobs left (a young,
   // uncertain track must not take a blob from an established one). The gated pairs split into

@@ -67,7 +67,7 @@ class BodySet {
   BodySet();
   // Validated definitions (validate_body); states of bodies whose name and markers are unchanged
   // are kept, others start untracked.
-  void set_definitions(std::vector<BodyDefinition> bodies, const BodyTrackerOptions& options);
+  void set_definitions(std::vector<BodyDefinition> definitions, const BodyTrackerOptions& options);
   std::size_t size() const;
   bool empty() const { return size() == 0; }
 

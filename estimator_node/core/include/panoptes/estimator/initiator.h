@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -83,6 +84,20 @@ class Initiator {
   Eigen::Vector2d aligned(const Tracklet& t, TimeNs stamp_ns, double* allowance_px) const;
   double epipolar_distance_px(int camera_a, const Eigen::Vector2d& pixel_a, int camera_b,
                               const Eigen::Vector2d& pixel_b) const;
+
+  // The best-supported pairing of a new blob with another camera's tracklet (support < 0: none).
+  struct Pairing {
+    int support = -1;  // further cameras that agree
+    double error = std::numeric_limits<double>::infinity();
+    std::vector<View> views;  // the new blob's first, its partner's second
+    Eigen::Vector3d point;
+  };
+
+  // The new blobs of `camera` as tracklets, each continuing the nearest of its old tracklets.
+  std::vector<Tracklet> continue_tracklets(int camera, TimeNs stamp_ns,
+                                           const std::vector<Eigen::Vector2d>& blobs) const;
+  // Pairs the new tracklet `mine` (blob `blob` of `camera`) with the other cameras' tracklets.
+  Pairing best_pairing(int camera, TimeNs stamp_ns, const Tracklet& mine, std::size_t blob) const;
 
   // Shared and immutable, so that copying an initiator (tracker checkpoints) copies only the pool.
   struct Geometry {
