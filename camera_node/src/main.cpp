@@ -134,9 +134,7 @@ std::unique_ptr<cam::FrameSource> open_source(const Options& options, cam::Detec
   return cam::open_source(options.source, source_options);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run_camera_node(int argc, char** argv) {
   Options options;
   CLI::App app{"camera_node: detects IR blobs in camera frames and publishes 2D features (Panoptes)",
                "camera_node"};
@@ -171,4 +169,19 @@ int main(int argc, char** argv) {
     log(error.what());
     return panoptes::kExitFailure;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // run_camera_node reports the errors it expects; anything else escaping is a bug, named here
+  // rather than left to std::terminate.
+  try {
+    return run_camera_node(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "camera_node: unexpected error: %s\n", error.what());
+  } catch (...) {
+    std::fprintf(stderr, "camera_node: unexpected error\n");
+  }
+  return panoptes::kExitFailure;
 }

@@ -153,9 +153,9 @@ void LiveCamera::on_preview(const Image& preview, TimeNs stamp_ns) {
   preview_writer_->write(message);
 }
 
-void LiveCamera::publish_status(TimeNs now) {
+void LiveCamera::publish_status(TimeNs wall_now_ns) {
   camera::StatusInputs inputs;
-  inputs.period_s = ns_to_seconds(now - next_status_) + 1.0;
+  inputs.period_s = ns_to_seconds(wall_now_ns - next_status_) + 1.0;
   inputs.source_counters = source_.counters();
   inputs.node_counters = pipeline_.counters().counts();
   inputs.command_counters = pipeline_.command_counters();
@@ -167,7 +167,7 @@ void LiveCamera::publish_status(TimeNs now) {
     camera::ClockSyncFigures sync;
     sync.synchronised = sync_status.estimate.synchronised;
     if (sync.synchronised) {
-      sync.offset_ns = sync_status.estimate.offset_at(clock_.from_wall(now));
+      sync.offset_ns = sync_status.estimate.offset_at(clock_.from_wall(wall_now_ns));
       sync.drift_ppm = sync_status.estimate.drift_ppm();
     }
     sync.held = sink_.hold().held_total();
@@ -179,11 +179,12 @@ void LiveCamera::publish_status(TimeNs now) {
     inputs.clock_sync = sync;
     // A simulated skew is a test: its truth is known, so the error is logged every second.
     if (clock_.skewed()) {
-      log_("clock sync at " + format_seconds(now - start_) + " s: " + clock_sync_line(sync_status, clock_));
+      log_("clock sync at " + format_seconds(wall_now_ns - start_) +
+           " s: " + clock_sync_line(sync_status, clock_));
     }
   }
   inputs.camera_id = camera_id_;
-  inputs.stamp_ns = stamps_.to_common(clock_.from_wall(now));
+  inputs.stamp_ns = stamps_.to_common(clock_.from_wall(wall_now_ns));
   inputs.frames = pipeline_.frames();
   inputs.frames_in_period = pipeline_.frames() - frames_at_status_;
   camera::Percentiles& detect_ms = pipeline_.detect_times_ms();
@@ -198,7 +199,7 @@ void LiveCamera::publish_status(TimeNs now) {
   status_writer_->write(to_message(camera::assemble_status(inputs)));
   frames_at_status_ = pipeline_.frames();
   detect_ms.clear();
-  next_status_ = now + kNsPerSecond;
+  next_status_ = wall_now_ns + kNsPerSecond;
 }
 
 int LiveCamera::run() {

@@ -773,7 +773,8 @@ class AravisSource final : public FrameSource {
         // GenICam multi-byte pixels are little-endian whatever the host is.
         std::uint16_t* out = frame.image.row16(y);
         for (int x = 0; x < width; ++x) {
-          out[x] = static_cast<std::uint16_t>(row[2 * x] | (row[2 * x + 1] << 8));
+          const std::size_t low_byte = 2 * static_cast<std::size_t>(x);
+          out[x] = static_cast<std::uint16_t>(row[low_byte] | (row[low_byte + 1] << 8));
         }
       }
     }

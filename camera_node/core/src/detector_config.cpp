@@ -46,7 +46,8 @@ MaskRegion MaskRegion::parse(const std::string& text) {
       if (used != token.size() || !std::isfinite(value)) throw std::invalid_argument(token);
       numbers.push_back(value);
     } catch (const std::exception&) {
-      throw std::invalid_argument("mask '" + text + "': '" + token + "' is not a number");
+      throw std::invalid_argument(
+          std::string("mask '").append(text).append("': '").append(token).append("' is not a number"));
     }
   }
   if (kind == "rect") {

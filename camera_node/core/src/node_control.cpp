@@ -119,7 +119,8 @@ Image make_preview(const Image& image, int max_width) {
           sum += image.bytes_per_pixel() == 1 ? image.row8(sy)[sx] : (image.row16(sy)[sx] >> shift);
         }
       }
-      preview.row8(y)[x] = static_cast<std::uint8_t>(std::min<unsigned long>(255, sum / (factor * factor)));
+      preview.row8(y)[x] = static_cast<std::uint8_t>(
+          std::min<unsigned long>(255, sum / (static_cast<unsigned long>(factor) * factor)));
     }
   }
   return preview;

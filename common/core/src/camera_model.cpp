@@ -31,7 +31,7 @@ CameraModel::CameraModel(const CameraIntrinsics& intrinsics, const RigidTransfor
 // The model (distortion.h, shared with the calibration's Ceres costs) and its exact Jacobian.
 Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& xn, Eigen::Matrix2d* J) const {
   const auto& d = intrinsics_.distortion;
-  const Eigen::Vector2d xd = distort_normalized<double>(xn.x(), xn.y(), d.data());
+  Eigen::Vector2d xd = distort_normalized<double>(xn.x(), xn.y(), d.data());
   if (J != nullptr) {
     const double k1 = d[0], k2 = d[1], p1 = d[2], p2 = d[3], k3 = d[4];
     const double x = xn.x(), y = xn.y();

@@ -37,7 +37,7 @@ std::optional<RigidTransform> fit_rigid_transform(const std::vector<Eigen::Vecto
   Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
   for (std::size_t i = 0; i < n; ++i) cross += (to[i] - mean_to) * (from[i] - mean_from).transpose();
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Vector3d singular = svd.singularValues();
+  const Eigen::Vector3d& singular = svd.singularValues();
   if (!(singular(1) > 1e-12 * std::max(1.0, singular(0)))) return std::nullopt;
   const Eigen::Matrix3d R = rotation_from_svd(svd);
   RigidTransform T;

@@ -105,6 +105,7 @@ SystemCalibration load_calibration(const std::filesystem::path& path) {
   const std::vector<YamlReader> items = reader.sequence("cameras");
   if (items.empty()) reader.fail("cameras", "expected at least one camera");
   SystemCalibration calibration;
+  calibration.cameras.reserve(items.size());
   std::set<std::string> ids;
   for (const YamlReader& item : items) {
     CameraCalibration camera = read_camera(item);
@@ -153,6 +154,7 @@ std::vector<BodyDefinition> load_bodies(const std::filesystem::path& path) {
   const std::vector<YamlReader> items = reader.sequence("bodies");
   if (items.empty()) reader.fail("bodies", "expected at least one body");
   std::vector<BodyDefinition> bodies;
+  bodies.reserve(items.size());
   std::set<std::string> names;
   for (const YamlReader& item : items) bodies.push_back(read_body_definition(item, names));
   return bodies;

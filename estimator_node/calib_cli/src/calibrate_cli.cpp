@@ -68,8 +68,11 @@ std::map<std::string, std::vector<FeatureFrame>> read_features(const std::vector
       return {};
     }
     if (!errors.empty())
-      say(file + ": " + std::to_string(errors.size()) +
-          " malformed line(s) skipped, first: " + errors.front());
+      say(std::string(file)
+              .append(": ")
+              .append(std::to_string(errors.size()))
+              .append(" malformed line(s) skipped, first: ")
+              .append(errors.front()));
     for (auto& frame : frames) by_camera[frame.camera_id].push_back(std::move(frame));
   }
   return by_camera;
@@ -181,16 +184,24 @@ int run_solve(int argc, char** argv) {
   if (!error.empty()) return bad_input(program, error);
   for (const auto& [id, frames] : by_camera)
     if (!given.find(id))
-      say("warning: " + std::to_string(frames.size()) + " frames of camera '" + id + "' ignored: not in " +
-          cameras_file);
+      say(std::string("warning: ")
+              .append(std::to_string(frames.size()))
+              .append(" frames of camera '")
+              .append(id)
+              .append("' ignored: not in ")
+              .append(cameras_file));
   std::vector<CameraWandTrack> tracks;
   for (const auto& camera : given.cameras) {
     const auto found = by_camera.find(camera.id);
     if (found == by_camera.end()) continue;
     tracks.push_back(extract_wand_track(camera.id, found->second, camera.intrinsics, wand));
     const auto& c = tracks.back().counters;
-    say("camera " + camera.id + ": " + std::to_string(c.frames) + " frames, wand identified in " +
-        std::to_string(c.identified));
+    say(std::string("camera ")
+            .append(camera.id)
+            .append(": ")
+            .append(std::to_string(c.frames))
+            .append(" frames, wand identified in ")
+            .append(std::to_string(c.identified)));
   }
   options.progress = say;
   const SolveResult result = solve_wand_calibration(given.cameras, tracks, wand, options);

@@ -20,6 +20,67 @@
 
 namespace panoptes::estimator {
 
+namespace {
+
+// The frames usable for the calibration, and why the others were left out.
+struct IdentifiedMarkerFrames {
+  std::vector<LedPoints> observations;
+  int other_camera = 0, too_few = 0, no_cluster = 0, unidentified = 0, l42 = 0;
+};
+
+// Frames of that camera -> one cluster of seven -> model-free identification; L42 frames are
+// left out (§3: they cannot be assigned without the 3D structure).
+IdentifiedMarkerFrames identify_marker_frames(const std::vector<FeatureFrame>& frames,
+                                              const std::string& camera_id, const CameraModel& model,
+                                              double line_tolerance) {
+  IdentifiedMarkerFrames identified;
+  for (const FeatureFrame& frame : frames) {
+    if (frame.camera_id != camera_id) {
+      ++identified.other_camera;
+      continue;
+    }
+    std::vector<Eigen::Vector2d> points;
+    for (const Blob& blob : frame.blobs) {
+      const Eigen::Vector2d p = model.pixel_to_normalized(Eigen::Vector2d(blob.x, blob.y));
+      if (p.allFinite()) points.push_back(p);
+    }
+    if (points.size() < std::size_t(kLedCount)) {
+      ++identified.too_few;
+      continue;
+    }
+    std::vector<int> chosen;
+    for (const auto& cluster : cluster_led_points(points, int(points.size()) / kLedCount)) {
+      if (cluster.size() != std::size_t(kLedCount)) continue;
+      if (!chosen.empty()) {  // two complete clusters: not a single marker in view
+        chosen.clear();
+        break;
+      }
+      chosen = cluster;
+    }
+    if (chosen.empty()) {
+      ++identified.no_cluster;
+      continue;
+    }
+    LedPoints p;
+    for (int i = 0; i < kLedCount; ++i) p[i] = points[chosen[i]];
+    const auto id = identify_led_pattern(p, line_tolerance);
+    if (!id) {
+      ++identified.unidentified;
+      continue;
+    }
+    if (id->alternative) {
+      ++identified.l42;
+      continue;
+    }
+    LedPoints ordered;
+    for (int i = 0; i < kLedCount; ++i) ordered[i] = p[id->index[i]];
+    identified.observations.push_back(ordered);
+  }
+  return identified;
+}
+
+}  // namespace
+
 int run_calibrate_marker(int argc, char** argv) {
   const std::string program = argc > 0 ? argv[0] : "calibrate marker";
   CLI::App app{
@@ -86,57 +147,13 @@ int run_calibrate_marker(int argc, char** argv) {
   std::printf("%s: %zu frames read from %s (%zu malformed lines skipped)\n", program.c_str(), frames.size(),
               features_file.c_str(), errors.size());
 
-  // Frames of that camera -> one cluster of seven -> model-free identification; L42 frames are
-  // left out (§3: they cannot be assigned without the 3D structure).
-  std::vector<LedPoints> observations;
-  int other_camera = 0, too_few = 0, no_cluster = 0, unidentified = 0, l42 = 0;
-  for (const FeatureFrame& frame : frames) {
-    if (frame.camera_id != camera_id) {
-      ++other_camera;
-      continue;
-    }
-    std::vector<Eigen::Vector2d> points;
-    for (const Blob& blob : frame.blobs) {
-      const Eigen::Vector2d p = model.pixel_to_normalized(Eigen::Vector2d(blob.x, blob.y));
-      if (p.allFinite()) points.push_back(p);
-    }
-    if (points.size() < std::size_t(kLedCount)) {
-      ++too_few;
-      continue;
-    }
-    std::vector<int> chosen;
-    for (const auto& cluster : cluster_led_points(points, int(points.size()) / kLedCount)) {
-      if (cluster.size() != std::size_t(kLedCount)) continue;
-      if (!chosen.empty()) {  // two complete clusters: not a single marker in view
-        chosen.clear();
-        break;
-      }
-      chosen = cluster;
-    }
-    if (chosen.empty()) {
-      ++no_cluster;
-      continue;
-    }
-    LedPoints p;
-    for (int i = 0; i < kLedCount; ++i) p[i] = points[chosen[i]];
-    const auto id = identify_led_pattern(p, line_tolerance);
-    if (!id) {
-      ++unidentified;
-      continue;
-    }
-    if (id->alternative) {
-      ++l42;
-      continue;
-    }
-    LedPoints ordered;
-    for (int i = 0; i < kLedCount; ++i) ordered[i] = p[id->index[i]];
-    observations.push_back(ordered);
-  }
+  const IdentifiedMarkerFrames identified = identify_marker_frames(frames, camera_id, model, line_tolerance);
+  const auto& observations = identified.observations;
   std::printf(
       "%s: camera '%s': %zu frames identified; skipped: %d other camera, %d fewer than 7 blobs, %d without "
       "a single 7-blob cluster, %d not identified, %d L42 (ambiguous without the model)\n",
-      program.c_str(), camera_id.c_str(), observations.size(), other_camera, too_few, no_cluster,
-      unidentified, l42);
+      program.c_str(), camera_id.c_str(), observations.size(), identified.other_camera, identified.too_few,
+      identified.no_cluster, identified.unidentified, identified.l42);
   if (observations.size() < 20)
     return fail(kExitBadInput, features_file + ": only " + std::to_string(observations.size()) +
                                    " usable frames of camera '" + camera_id +

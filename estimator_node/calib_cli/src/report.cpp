@@ -128,21 +128,25 @@ bool calibration_file_is_unscaled(const std::filesystem::path& path) {
   return false;
 }
 
-std::vector<std::filesystem::path> write_report(const SolveResult& result,
-                                                const std::filesystem::path& out_yaml) {
-  std::vector<std::filesystem::path> written;
+namespace {
+
+// The summary and the pairwise relative poses as text.
+void write_text_report(const SolveResult& result, const std::filesystem::path& out_yaml,
+                       std::vector<std::filesystem::path>& written) {
   const auto text_path = sibling(out_yaml, ".report.txt");
-  {
-    std::ofstream text(text_path);
-    if (!text) throw std::runtime_error(text_path.string() + ": cannot write");
-    text << report_summary(result);
-    text << "\npairwise relative poses (seed 003 §3.3.1 ranking):\n";
-    for (const auto& edge : result.edges)
-      text << format("  %s-%s: %d common samples, %d inliers, residual %.3f px, scale %.4f m%s\n",
-                     edge.camera_a.c_str(), edge.camera_b.c_str(), edge.samples, edge.inliers,
-                     edge.residual_px, edge.scale, edge.used ? ", used" : "");
-    written.push_back(text_path);
-  }
+  std::ofstream text(text_path);
+  if (!text) throw std::runtime_error(text_path.string() + ": cannot write");
+  text << report_summary(result);
+  text << "\npairwise relative poses (seed 003 §3.3.1 ranking):\n";
+  for (const auto& edge : result.edges)
+    text << format("  %s-%s: %d common samples, %d inliers, residual %.3f px, scale %.4f m%s\n",
+                   edge.camera_a.c_str(), edge.camera_b.c_str(), edge.samples, edge.inliers, edge.residual_px,
+                   edge.scale, edge.used ? ", used" : "");
+  written.push_back(text_path);
+}
+
+// Everything a script may want to check, machine-readable.
+nlohmann::json report_json(const SolveResult& result) {
   nlohmann::json json;
   json["reference_camera"] = result.reference_camera;
   json["rms_px"] = result.rms_px;
@@ -194,15 +198,22 @@ std::vector<std::filesystem::path> write_report(const SolveResult& result,
                              {"residual_px", edge.residual_px},
                              {"scale", edge.scale},
                              {"used", edge.used}});
-  const auto json_path = sibling(out_yaml, ".report.json");
-  {
-    std::ofstream out(json_path);
-    if (!out) throw std::runtime_error(json_path.string() + ": cannot write");
-    out << json.dump(2) << "\n";
-    written.push_back(json_path);
-  }
+  return json;
+}
 
-  // Coverage: where in each image the wand was seen, coloured by the residual.
+void write_json_report(const SolveResult& result, const std::filesystem::path& out_yaml,
+                       std::vector<std::filesystem::path>& written) {
+  const nlohmann::json json = report_json(result);
+  const auto json_path = sibling(out_yaml, ".report.json");
+  std::ofstream out(json_path);
+  if (!out) throw std::runtime_error(json_path.string() + ": cannot write");
+  out << json.dump(2) << "\n";
+  written.push_back(json_path);
+}
+
+// Coverage: where in each image the wand was seen, coloured by the residual.
+void write_coverage_images(const SolveResult& result, const std::filesystem::path& out_yaml,
+                           std::vector<std::filesystem::path>& written) {
   for (std::size_t c = 0; c < result.cameras.size(); ++c) {
     const auto& camera = result.cameras[c];
     const auto& k = camera.intrinsics;
@@ -226,67 +237,83 @@ std::vector<std::filesystem::path> write_report(const SolveResult& result,
                 {4, image.rows - 7}, cv::FONT_HERSHEY_SIMPLEX, 0.4, {255, 255, 255});
     write_png(sibling(out_yaml, ".coverage_" + camera.id + ".png"), image, written);
   }
+}
 
-  // Residuals over time, one colour per camera.
-  if (!result.residuals.empty()) {
-    const int width = 900, height = 360, margin = 40;
-    cv::Mat plot(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
-    TimeNs t0 = result.residuals.front().t_ns, t1 = t0;
-    double top = 0;
-    for (const auto& r : result.residuals) {
-      t0 = std::min(t0, r.t_ns);
-      t1 = std::max(t1, r.t_ns);
-      top = std::max(top, r.error.norm());
-    }
-    top = std::min(std::max(top, 0.1), 4.0 * std::max(result.rms_px, 0.05));
-    for (const auto& r : result.residuals) {
-      const double x = margin + (width - 2 * margin) * static_cast<double>(r.t_ns - t0) /
-                                    std::max<double>(1.0, static_cast<double>(t1 - t0));
-      const double y = height - margin - (height - 2 * margin) * std::min(1.0, r.error.norm() / top);
-      cv::circle(plot, {static_cast<int>(x), static_cast<int>(y)}, 1, kPalette[r.camera % 8], cv::FILLED);
-    }
-    cv::rectangle(plot, {margin, margin}, {width - margin, height - margin}, {0, 0, 0});
-    cv::putText(plot,
-                format("reprojection error (px, 0..%.2f) over %.1f s; one colour per camera", top,
-                       static_cast<double>(t1 - t0) * 1e-9),
-                {margin, margin - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
-    write_png(sibling(out_yaml, ".residuals.png"), plot, written);
+// Residuals over time, one colour per camera.
+void write_residual_plot(const SolveResult& result, const std::filesystem::path& out_yaml,
+                         std::vector<std::filesystem::path>& written) {
+  if (result.residuals.empty()) return;
+  const int width = 900, height = 360, margin = 40;
+  cv::Mat plot(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  TimeNs t0 = result.residuals.front().t_ns, t1 = t0;
+  double top = 0;
+  for (const auto& r : result.residuals) {
+    t0 = std::min(t0, r.t_ns);
+    t1 = std::max(t1, r.t_ns);
+    top = std::max(top, r.error.norm());
   }
+  top = std::min(std::max(top, 0.1), 4.0 * std::max(result.rms_px, 0.05));
+  for (const auto& r : result.residuals) {
+    const double x = margin + (width - 2 * margin) * static_cast<double>(r.t_ns - t0) /
+                                  std::max<double>(1.0, static_cast<double>(t1 - t0));
+    const double y = height - margin - (height - 2 * margin) * std::min(1.0, r.error.norm() / top);
+    cv::circle(plot, {static_cast<int>(x), static_cast<int>(y)}, 1, kPalette[r.camera % 8], cv::FILLED);
+  }
+  cv::rectangle(plot, {margin, margin}, {width - margin, height - margin}, {0, 0, 0});
+  cv::putText(plot,
+              format("reprojection error (px, 0..%.2f) over %.1f s; one colour per camera", top,
+                     static_cast<double>(t1 - t0) * 1e-9),
+              {margin, margin - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
+  write_png(sibling(out_yaml, ".residuals.png"), plot, written);
+}
 
-  // Top view: cameras (with viewing direction) and the wand path.
-  {
-    const int size = 640;
-    cv::Mat view(size, size, CV_8UC3, cv::Scalar(255, 255, 255));
-    double lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
-    const auto extend = [&](const Eigen::Vector3d& p) {
-      lo_x = std::min(lo_x, p.x());
-      hi_x = std::max(hi_x, p.x());
-      lo_y = std::min(lo_y, p.y());
-      hi_y = std::max(hi_y, p.y());
+// Top view: cameras (with viewing direction) and the wand path.
+void write_layout_view(const SolveResult& result, const std::filesystem::path& out_yaml,
+                       std::vector<std::filesystem::path>& written) {
+  const int size = 640;
+  cv::Mat view(size, size, CV_8UC3, cv::Scalar(255, 255, 255));
+  double lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
+  const auto extend = [&](const Eigen::Vector3d& p) {
+    lo_x = std::min(lo_x, p.x());
+    hi_x = std::max(hi_x, p.x());
+    lo_y = std::min(lo_y, p.y());
+    hi_y = std::max(hi_y, p.y());
+  };
+  for (const auto& camera : result.cameras)
+    if (camera.T_world_cam) extend(camera.T_world_cam->t);
+  for (const auto& sample : result.samples) extend(sample.markers.front());
+  if (hi_x > lo_x || hi_y > lo_y) {
+    const double span = std::max(hi_x - lo_x, hi_y - lo_y) * 1.15 + 1e-6;
+    // size is even, so size / 2.0 is the same centre the integer division gave.
+    const auto pixel = [&](const Eigen::Vector3d& p) {
+      return cv::Point(static_cast<int>(size / 2.0 + (p.x() - (lo_x + hi_x) / 2) / span * size),
+                       static_cast<int>(size / 2.0 - (p.y() - (lo_y + hi_y) / 2) / span * size));
     };
-    for (const auto& camera : result.cameras)
-      if (camera.T_world_cam) extend(camera.T_world_cam->t);
-    for (const auto& sample : result.samples) extend(sample.markers.front());
-    if (hi_x > lo_x || hi_y > lo_y) {
-      const double span = std::max(hi_x - lo_x, hi_y - lo_y) * 1.15 + 1e-6;
-      const auto pixel = [&](const Eigen::Vector3d& p) {
-        return cv::Point(static_cast<int>(size / 2 + (p.x() - (lo_x + hi_x) / 2) / span * size),
-                         static_cast<int>(size / 2 - (p.y() - (lo_y + hi_y) / 2) / span * size));
-      };
-      for (const auto& sample : result.samples)
-        cv::circle(view, pixel(sample.markers.front()), 1, {180, 180, 180});
-      for (const auto& camera : result.cameras) {
-        if (!camera.T_world_cam) continue;
-        const Eigen::Vector3d c = camera.T_world_cam->t;
-        const Eigen::Vector3d forward = camera.T_world_cam->rotation().col(2);
-        cv::arrowedLine(view, pixel(c), pixel(c + 0.4 * span / 4 * forward), {0, 0, 200}, 2);
-        cv::putText(view, camera.id, pixel(c) + cv::Point(4, -4), cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 0, 0});
-      }
-      cv::putText(view, format("top view, %.2f m across; grey: wand path", span), {8, 16},
-                  cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
+    for (const auto& sample : result.samples)
+      cv::circle(view, pixel(sample.markers.front()), 1, {180, 180, 180});
+    for (const auto& camera : result.cameras) {
+      if (!camera.T_world_cam) continue;
+      const Eigen::Vector3d c = camera.T_world_cam->t;
+      const Eigen::Vector3d forward = camera.T_world_cam->rotation().col(2);
+      cv::arrowedLine(view, pixel(c), pixel(c + 0.4 * span / 4 * forward), {0, 0, 200}, 2);
+      cv::putText(view, camera.id, pixel(c) + cv::Point(4, -4), cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 0, 0});
     }
-    write_png(sibling(out_yaml, ".layout.png"), view, written);
+    cv::putText(view, format("top view, %.2f m across; grey: wand path", span), {8, 16},
+                cv::FONT_HERSHEY_SIMPLEX, 0.45, {0, 0, 0});
   }
+  write_png(sibling(out_yaml, ".layout.png"), view, written);
+}
+
+}  // namespace
+
+std::vector<std::filesystem::path> write_report(const SolveResult& result,
+                                                const std::filesystem::path& out_yaml) {
+  std::vector<std::filesystem::path> written;
+  write_text_report(result, out_yaml, written);
+  write_json_report(result, out_yaml, written);
+  write_coverage_images(result, out_yaml, written);
+  write_residual_plot(result, out_yaml, written);
+  write_layout_view(result, out_yaml, written);
   return written;
 }
 

@@ -59,7 +59,7 @@ TEST(TwoMarkerBar, RunsStartAtGapsAndWhereTheEndsCannotBeToldApart) {
   const auto add = [&](int index, Eigen::Vector2d a, Eigen::Vector2d b) {
     FeatureFrame frame;
     frame.camera_id = "cam";
-    frame.stamp_ns = kEpoch + index * 10'000'000;
+    frame.stamp_ns = kEpoch + static_cast<TimeNs>(index) * 10'000'000;
     frame.blobs.resize(2);
     frame.blobs[0].x = a.x();
     frame.blobs[0].y = a.y();

@@ -48,7 +48,7 @@ TEST(FaultInjector, LossFractionAndJitterRangeAsAsked) {
   }
   EXPECT_EQ(injector.injected_losses(), static_cast<std::uint64_t>(lost));
   // 20000 draws at p = 0.25: sigma ≈ 61, so ±400 is far outside chance.
-  EXPECT_NEAR(lost, count / 4, 400);
+  EXPECT_NEAR(lost, count / 4.0, 400);
   EXPECT_GT(longest, 3 * kNsPerMillisecond);
 }
 

@@ -160,7 +160,7 @@ TEST(ClockSync, SynchronisedAfterMinSamplesAndMapsBothWays) {
   const TimeNs ahead = 42 * kMs;
   for (int i = 0; i < 4; ++i) {
     EXPECT_FALSE(sync.estimate().synchronised) << i;
-    const TimeNs t = kServerStart + i * 50 * kMs;
+    const TimeNs t = kServerStart + static_cast<TimeNs>(i) * 50 * kMs;
     EXPECT_EQ(sync.add({t + ahead, t + 100 * kUs, t + 120 * kUs, t + 220 * kUs + ahead}),
               ClockSync::Verdict::kKept);
   }
@@ -194,7 +194,7 @@ TEST(ClockSync, EachIntervalKeepsItsShortestRoundTrips) {
   // Ten exchanges in one interval, round trips 1000, 900, ..., 100 µs.
   for (int i = 0; i < 10; ++i) {
     const TimeNs rtt = (1000 - 100 * i) * kUs;
-    const TimeNs t = base + i * 50 * kMs;
+    const TimeNs t = base + static_cast<TimeNs>(i) * 50 * kMs;
     sync.add({t, t + rtt / 2, t + rtt / 2, t + rtt});
   }
   EXPECT_EQ(sync.kept(), 4u);

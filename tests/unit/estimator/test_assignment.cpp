@@ -41,7 +41,7 @@ TEST(Assignment, MatchesBruteForceOnRandomGatedProblems) {
   std::uniform_real_distribution<double> uniform(0.0, 20.0);
   for (int trial = 0; trial < 300; ++trial) {
     const int rows = 1 + static_cast<int>(random() % 6), cols = 1 + static_cast<int>(random() % 6);
-    std::vector<double> cost(rows * cols);
+    std::vector<double> cost(static_cast<std::size_t>(rows) * cols);
     for (double& c : cost) c = (random() % 3 == 0) ? kForbidden : uniform(random);
     const double half_gate = 9.2;
     const auto assignment = solve_assignment(cost, rows, cols, half_gate, half_gate);
@@ -78,7 +78,7 @@ TEST(GatedAssignment, ClustersGiveTheSameTotalAsOneDenseProblem) {
       for (int c = 0; c < cols; ++c)
         if (random() % 5 == 0) {
           const double d2 = uniform(random);
-          dense[static_cast<std::size_t>(r * cols + c)] = d2;
+          dense[static_cast<std::size_t>(r) * cols + c] = d2;
           pairs.push_back({static_cast<std::size_t>(r), static_cast<std::size_t>(c), d2});
         }
     const double half_gate = 5.0;
@@ -98,7 +98,7 @@ TEST(GatedAssignment, ClustersGiveTheSameTotalAsOneDenseProblem) {
     double reference_total = 0;
     for (int r = 0; r < rows; ++r)
       if (reference[r] >= 0)
-        reference_total += dense[static_cast<std::size_t>(r * cols + reference[r])] - 2.0 * half_gate;
+        reference_total += dense[static_cast<std::size_t>(r) * cols + reference[r]] - 2.0 * half_gate;
     EXPECT_NEAR(total, reference_total, 1e-9) << "trial " << trial;
   }
 }

@@ -20,7 +20,7 @@ constexpr TimeNs kEpoch = 1'700'000'000'000'000'000;
 
 struct Delivered {
   FeatureFrame frame;
-  TimeNs received_ns;
+  TimeNs received_ns = 0;
 };
 
 std::vector<Delivered> simulate(const Scene& scene, double late_fraction, std::uint64_t seed) {
@@ -84,7 +84,9 @@ TEST(LateData, TenPercentOfFramesFiveToThirtyMsLateAreAllUsedAndAccuracyHolds) {
     }
     EXPECT_EQ(late.stats.frames_too_late, 0u);
     // With a 5 ms window about 10% of frames come after it and are replayed.
-    if (window_ms == 5.0) EXPECT_GT(late.stats.frames_late, frames / 20);
+    if (window_ms == 5.0) {
+      EXPECT_GT(late.stats.frames_late, frames / 20);
+    }
     std::printf(
         "window %.0f ms: RMSE in order %.4f mm, with 10%% late %.4f mm (%+.2f%%), %llu late frames "
         "replayed, %llu replays, min tracked %.4f\n",

@@ -119,7 +119,7 @@ TEST(LedMarkerModel, PaperLayoutAndValidation) {
   EXPECT_NEAR(model.d03(), 0.1142, 1e-12);
   EXPECT_EQ(model.handedness(), 1);
 
-  auto expect_error = [](std::array<Vector3d, 7> leds, const std::string& what) {
+  auto expect_error = [](const std::array<Vector3d, 7>& leds, const std::string& what) {
     std::string error;
     EXPECT_FALSE(est::LedMarkerModel::create("bad", leds, &error).has_value()) << what;
     EXPECT_NE(error.find(what), std::string::npos) << "error: " << error;
@@ -259,7 +259,7 @@ TEST(LedMarkerPose, TranslationAccuracyAt2m) {
     Eigen::Matrix<double, 14, 1> r;
     for (int i = 0; i < 7; ++i) {
       const Vector3d q = T.apply(model.leds()[i]);
-      r.segment<2>(2 * i) = q.head<2>() / q.z();
+      r.segment<2>(2 * static_cast<Eigen::Index>(i)) = q.head<2>() / q.z();
     }
     return r;
   };
@@ -318,7 +318,7 @@ TEST(LedMarkerDetector, MultipleMarkersByCrossRatio) {
         ok = false;
         break;
       }
-      std::array<int, 7> w;
+      std::array<int, 7> w{};
       for (int i = 0; i < 7; ++i) w[i] = int(points.size()), points.push_back((*m)[i]);
       where.push_back(w);
     }
@@ -334,7 +334,7 @@ TEST(LedMarkerDetector, MultipleMarkersByCrossRatio) {
     ++frames;
     const auto detections = detector.detect(shuffled);
     for (const auto& d : detections) {
-      std::array<int, 7> expected;
+      std::array<int, 7> expected{};
       for (int i = 0; i < 7; ++i) expected[i] = position[where[d.model][i]];
       if (d.blob == expected)
         ++found;

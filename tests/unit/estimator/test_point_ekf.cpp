@@ -111,10 +111,10 @@ TEST(Triangulation, RecoversPointThroughDistortedCameras) {
 TEST(Triangulation, RejectsSingleObservationAndParallelRays) {
   const auto cameras = make_ring_cameras(2, 3.0, 1.0);
   const Eigen::Vector3d point(0, 0, 1);
-  EXPECT_FALSE(triangulate({{&cameras[0], *cameras[0].project(point)}}));
+  EXPECT_FALSE(triangulate({{cameras.data(), *cameras[0].project(point)}}));
   // The same ray twice is parallel.
-  EXPECT_FALSE(
-      triangulate({{&cameras[0], *cameras[0].project(point)}, {&cameras[0], *cameras[0].project(point)}}));
+  EXPECT_FALSE(triangulate(
+      {{cameras.data(), *cameras[0].project(point)}, {cameras.data(), *cameras[0].project(point)}}));
 }
 
 }  // namespace
