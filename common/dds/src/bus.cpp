@@ -31,6 +31,8 @@
 
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/panoptesPubSubTypes.h"
+#include "panoptes_msgs/ros2.h"
+#include "panoptes_msgs/ros2PubSubTypes.h"
 
 namespace fdds = eprosima::fastdds::dds;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
@@ -78,6 +80,9 @@ PANOPTES_TOPIC(TrackFrame, "rt/panoptes/tracks", false, Durability::kVolatile, 1
 PANOPTES_TOPIC(BodyPose, "rt/panoptes/bodies", false, Durability::kVolatile, 1, true, true)
 PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::kTransientLocal, 1, false,
                false)
+PANOPTES_TOPIC(MocapFrame, "rt/panoptes/frames", false, Durability::kVolatile, 8, true, false)
+PANOPTES_TOPIC(BodyDescriptions, "rt/panoptes/body_descriptions", true, Durability::kTransientLocal, 1, false,
+               false)
 // Off by default: camera_node and estimator_node --latency-probe (docs/protocol.md, "Latency probes").
 PANOPTES_TOPIC(LatencyTraces, "rt/panoptes/latency_probe/trace", false, Durability::kVolatile, 8, false,
                false)
@@ -99,6 +104,22 @@ PANOPTES_TOPIC(LatencyTraces, "rt/panoptes/latency_probe/trace", false, Durabili
 PANOPTES_PROBE_TOPIC(LatencyProbe, "rt/panoptes/latency_probe/request", FeatureFrame)
 PANOPTES_PROBE_TOPIC(LatencyProbeEcho, "rt/panoptes/latency_probe/echo", BodyPose)
 #undef PANOPTES_PROBE_TOPIC
+
+// ROS 2 types (idl/ros2.idl, docs/ros2.md): reliable, volatile, keep-last, which a ROS 2
+// SensorDataQoS (best-effort) subscriber and a default (reliable) one both match. An empty name:
+// the caller names the topic (per body).
+#define PANOPTES_ROS2_TOPIC(Package, Type, topic_name, depth)                                          \
+  template <>                                                                                          \
+  struct TopicTraits<Package::msg::dds_::Type##_> {                                                    \
+    using PubSubType = Package::msg::dds_::Type##_PubSubType;                                          \
+    static TopicSpec spec() { return {topic_name, true, Durability::kVolatile, depth, false, false}; } \
+  };
+PANOPTES_ROS2_TOPIC(geometry_msgs, PoseStamped, "", 10)
+PANOPTES_ROS2_TOPIC(geometry_msgs, TwistStamped, "", 10)
+PANOPTES_ROS2_TOPIC(tf2_msgs, TFMessage, "rt/tf", 100)
+PANOPTES_ROS2_TOPIC(mocap4r2_msgs, RigidBodies, "rt/rigid_bodies", 10)
+PANOPTES_ROS2_TOPIC(mocap4r2_msgs, Markers, "rt/markers", 10)
+#undef PANOPTES_ROS2_TOPIC
 
 constexpr int kReliableDepth = 2000;
 constexpr int kMaxInstances = 1024;  // cameras (or bodies) per keyed topic, as the estimator's own limit
@@ -261,27 +282,25 @@ class BusCore {
   BusCore& operator=(const BusCore&) = delete;
 
   template <class T>
-  fdds::Topic* topic() {
+  fdds::Topic* topic(const std::string& name) {
     std::lock_guard<std::mutex> lock(mutex_);
-    const TopicSpec spec = TopicTraits<T>::spec();
-    if (auto it = topics_.find(spec.name); it != topics_.end()) return it->second;
+    if (auto it = topics_.find(name); it != topics_.end()) return it->second;
     fdds::TypeSupport type(new typename TopicTraits<T>::PubSubType());
     if (type.register_type(participant_) != return_code_ok()) {
-      throw DdsError(std::string("cannot register DDS type for ") + spec.name);
+      throw DdsError("cannot register DDS type for " + name);
     }
-    fdds::Topic* topic = participant_->create_topic(spec.name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
-    if (topic == nullptr) throw DdsError(std::string("cannot create DDS topic ") + spec.name);
-    topics_.emplace(spec.name, topic);
+    fdds::Topic* topic = participant_->create_topic(name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+    if (topic == nullptr) throw DdsError("cannot create DDS topic " + name);
+    topics_.emplace(name, topic);
     return topic;
   }
 
   // A content-filtered view of T's topic holding the samples whose leading id is `id`.
   template <class T>
-  fdds::ContentFilteredTopic* filtered_topic(const std::string& id) {
-    fdds::Topic* related = topic<T>();
+  fdds::ContentFilteredTopic* filtered_topic(const std::string& topic_name, const std::string& id) {
+    fdds::Topic* related = topic<T>(topic_name);
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string name =
-        std::string(TopicTraits<T>::spec().name) + "|" + id + "|" + std::to_string(filtered_count_++);
+    const std::string name = topic_name + "|" + id + "|" + std::to_string(filtered_count_++);
     return participant_->create_contentfilteredtopic(name, related, kIdFilterExpression, {"'" + id + "'"},
                                                      kIdFilterClass);
   }
@@ -448,11 +467,25 @@ const std::filesystem::path& Bus::profile_file() const {
   return core_->profile_file();
 }
 
+namespace {
+
+// The topic's name: `requested` if given, else the type's own; DdsError if neither.
 template <class T>
-std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos) {
+std::string topic_name_for(const std::string& requested) {
+  if (!requested.empty()) return requested;
+  const std::string name = TopicTraits<T>::spec().name;
+  if (name.empty()) throw DdsError("a DDS topic of this type needs a name (e.g. rt/panoptes/<body>/pose)");
+  return name;
+}
+
+}  // namespace
+
+template <class T>
+std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos, const std::string& topic_name) {
   auto impl = std::make_unique<typename Writer<T>::Impl>();
   impl->core = core_;
-  fdds::Topic* topic = core_->topic<T>();
+  const std::string name = topic_name_for<T>(topic_name);
+  fdds::Topic* topic = core_->topic<T>(name);
   fdds::DataWriterQos writer_qos = fdds::DATAWRITER_QOS_DEFAULT;
   const TopicSpec spec = TopicTraits<T>::spec();
   apply_spec(writer_qos, spec, qos);
@@ -469,26 +502,25 @@ std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos) {
       eprosima::fastrtps::ResourceLimitedContainerConfig(0, kMaxInstances, 1);
   impl->writer = core_->publisher()->create_datawriter(topic, writer_qos, &impl->listener);
   if (impl->writer == nullptr) {
-    throw DdsError(std::string("cannot create DDS writer on ") + TopicTraits<T>::spec().name);
+    throw DdsError("cannot create DDS writer on " + name);
   }
   return std::make_unique<Writer<T>>(std::move(impl));
 }
 
 template <class T>
 std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_sample, Qos qos,
-                                            const std::string& only_id) {
+                                            const std::string& only_id, const std::string& topic_name) {
   const TopicSpec spec = TopicTraits<T>::spec();
+  const std::string name = topic_name_for<T>(topic_name);
   auto impl = std::make_unique<typename Reader<T>::Impl>();
   impl->core = core_;
   impl->listener = std::make_unique<ReaderListener<T>>(std::move(on_sample));
-  fdds::TopicDescription* topic = core_->topic<T>();
+  fdds::TopicDescription* topic = core_->topic<T>(name);
   if (!only_id.empty()) {
-    if (!spec.leading_id)
-      throw DdsError(std::string("cannot filter ") + spec.name + " by id: it has no leading id");
-    impl->filtered_topic = core_->filtered_topic<T>(only_id);
+    if (!spec.leading_id) throw DdsError("cannot filter " + name + " by id: it has no leading id");
+    impl->filtered_topic = core_->filtered_topic<T>(name, only_id);
     if (impl->filtered_topic == nullptr)
-      throw DdsError(std::string("cannot create the content filter on ") + spec.name + " for '" + only_id +
-                     "'");
+      throw DdsError("cannot create the content filter on " + name + " for '" + only_id + "'");
     topic = impl->filtered_topic;
   }
   fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
@@ -496,17 +528,18 @@ std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_samp
   impl->reader = core_->subscriber()->create_datareader(topic, reader_qos, impl->listener.get());
   if (impl->reader == nullptr) {
     if (impl->filtered_topic != nullptr) core_->delete_filtered_topic(impl->filtered_topic);
-    throw DdsError(std::string("cannot create DDS reader on ") + spec.name);
+    throw DdsError("cannot create DDS reader on " + name);
   }
   return std::make_unique<Reader<T>>(std::move(impl));
 }
 
-#define PANOPTES_INSTANTIATE(Type)                                                                          \
-  template class Writer<msg::Type>;                                                                         \
-  template class Reader<msg::Type>;                                                                         \
-  template std::unique_ptr<Writer<msg::Type>> Bus::make_writer<msg::Type>(Qos);                             \
-  template std::unique_ptr<Reader<msg::Type>> Bus::make_reader<msg::Type>(Reader<msg::Type>::Callback, Qos, \
-                                                                          const std::string&);
+#define PANOPTES_INSTANTIATE_TYPE(Type)                                                      \
+  template class Writer<Type>;                                                               \
+  template class Reader<Type>;                                                               \
+  template std::unique_ptr<Writer<Type>> Bus::make_writer<Type>(Qos, const std::string&);    \
+  template std::unique_ptr<Reader<Type>> Bus::make_reader<Type>(Reader<Type>::Callback, Qos, \
+                                                                const std::string&, const std::string&);
+#define PANOPTES_INSTANTIATE(Type) PANOPTES_INSTANTIATE_TYPE(msg::Type)
 
 PANOPTES_INSTANTIATE(CameraInfo)
 PANOPTES_INSTANTIATE(FeatureFrame)
@@ -522,6 +555,14 @@ PANOPTES_INSTANTIATE(SystemCalibration)
 PANOPTES_INSTANTIATE(LatencyProbe)
 PANOPTES_INSTANTIATE(LatencyProbeEcho)
 PANOPTES_INSTANTIATE(LatencyTraces)
+PANOPTES_INSTANTIATE(MocapFrame)
+PANOPTES_INSTANTIATE(BodyDescriptions)
+PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::PoseStamped_)
+PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::TwistStamped_)
+PANOPTES_INSTANTIATE_TYPE(tf2_msgs::msg::dds_::TFMessage_)
+PANOPTES_INSTANTIATE_TYPE(mocap4r2_msgs::msg::dds_::RigidBodies_)
+PANOPTES_INSTANTIATE_TYPE(mocap4r2_msgs::msg::dds_::Markers_)
 #undef PANOPTES_INSTANTIATE
+#undef PANOPTES_INSTANTIATE_TYPE
 
 }  // namespace panoptes::dds

@@ -14,6 +14,7 @@ msg::FeatureFrame to_message(const FeatureFrame& frame) {
   message.stamp_ns(frame.stamp_ns);
   message.arrival_ns(frame.arrival_ns);
   message.processing_ns(frame.processing_ns);
+  message.publish_ns(frame.publish_ns);
   auto& blobs = message.blobs();
   blobs.reserve(frame.blobs.size());
   for (const Blob& blob : frame.blobs) {
@@ -40,6 +41,7 @@ FeatureFrame from_message(const msg::FeatureFrame& message) {
   frame.stamp_ns = message.stamp_ns();
   frame.arrival_ns = message.arrival_ns();
   frame.processing_ns = message.processing_ns();
+  frame.publish_ns = message.publish_ns();
   frame.blobs.reserve(message.blobs().size());
   for (const msg::Blob& b : message.blobs()) {
     Blob blob;

@@ -15,6 +15,7 @@
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
 #include "panoptes/dds/time_sync.h"
+#include "panoptes/estimator_app/frame_messages.h"
 #include "panoptes/estimator_app/frame_periods.h"
 #include "panoptes/estimator_app/latency_probe_echoer.h"
 #include "panoptes/estimator_app/status.h"
@@ -59,7 +60,9 @@ class LiveEstimator {
         track_writer_(bus_->make_writer<msg::TrackFrame>()),
         prediction_writer_(bus_->make_writer<msg::Predictions>()),
         status_writer_(bus_->make_writer<msg::EstimatorStatus>()),
-        body_writer_(bus_->make_writer<msg::BodyPose>()) {
+        body_writer_(bus_->make_writer<msg::BodyPose>()),
+        frame_writer_(bus_->make_writer<msg::MocapFrame>()),
+        descriptions_writer_(bus_->make_writer<msg::BodyDescriptions>()) {
     if (options_.latency_probe) {
       latency_probe_.emplace(*bus_);
       log("benchmark aid: echoing latency probes (rt/panoptes/latency_probe/...)");
@@ -83,6 +86,7 @@ class LiveEstimator {
     std::vector<TrackRecord> tracks;  // at its update
     std::vector<PoseRecord> poses;
     LatencyProbeEchoer::Stamps stamps;  // --latency-probe
+    session::FrameOutput output;        // what rt/panoptes/frames carried
   };
 
   void announce(const msg::CameraInfo& info);
@@ -92,6 +96,7 @@ class LiveEstimator {
   bool finish_processed(bool force);
   void publish_predictions(const FeatureFrame& frame);
   void publish_status(TimeNs now, TimeNs start);
+  void publish_descriptions_if_changed();
 
   const LiveOptions& options_;
   const session::NodeSettings& node_;
@@ -109,6 +114,11 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::Predictions>> prediction_writer_;
   std::unique_ptr<dds::Writer<msg::EstimatorStatus>> status_writer_;
   std::unique_ptr<dds::Writer<msg::BodyPose>> body_writer_;
+  std::unique_ptr<dds::Writer<msg::MocapFrame>> frame_writer_;
+  std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
+  session::FrameOutputBuilder frame_builder_;
+  std::uint64_t descriptions_generation_ = 0;
+  bool descriptions_published_ = false;
   std::optional<LatencyProbeEchoer> latency_probe_;
   std::optional<session::JsonlOutputs> outputs_;
   std::set<std::string> from_file_;
@@ -155,9 +165,9 @@ void LiveEstimator::publish_predictions(const FeatureFrame& frame) {
 }
 
 void LiveEstimator::update(FeatureFrame&& frame) {
-  const TimeNs dequeued_ns = latency_probe_ ? wall_now_ns() : 0;
+  const TimeNs dequeued_ns = wall_now_ns();
   if (session_.process(frame) != est::FrameOutcome::kProcessed) return;
-  const TimeNs updated_ns = latency_probe_ ? wall_now_ns() : 0;
+  const TimeNs updated_ns = wall_now_ns();
   auto poses = session_.current_poses();
   // Stamped before writing, like every publish_ns: delivery may complete within write().
   const TimeNs poses_published_ns = latency_probe_ && !poses.empty() ? wall_now_ns() : 0;
@@ -166,10 +176,23 @@ void LiveEstimator::update(FeatureFrame&& frame) {
     body_writer_->write(pose_message);
     if (latency_probe_) latency_probe_->note_pose(pose_message);
   }
+  auto tracks = tracker_.current_tracks();
+  const session::FrameStages stages{frame.arrival_ns,  frame.processing_ns, frame.publish_ns,
+                                    frame.received_ns, dequeued_ns,         updated_ns};
+  auto output = frame_builder_.build(tracker_, frame, stages, poses, tracks);
+  frame_writer_->write(to_frame_message(output, wall_now_ns()));
   const LatencyProbeEchoer::Stamps stamps{dequeued_ns, updated_ns, poses_published_ns,
                                           poses.empty() ? 0 : poses.front().stamp_ns,
                                           static_cast<std::uint32_t>(poses.size())};
-  processed_.push_back({std::move(frame), tracker_.current_tracks(), std::move(poses), stamps});
+  processed_.push_back({std::move(frame), std::move(tracks), std::move(poses), stamps, std::move(output)});
+}
+
+void LiveEstimator::publish_descriptions_if_changed() {
+  if (descriptions_published_ && body_file_.generation() == descriptions_generation_) return;
+  descriptions_generation_ = body_file_.generation();
+  descriptions_published_ = true;
+  descriptions_writer_->write(to_descriptions_message(
+      tracker_.body_definitions(), descriptions_generation_ + 1, body_file_.path(), wall_now_ns()));
 }
 
 void LiveEstimator::finish(Processed& done) {
@@ -232,6 +255,7 @@ int LiveEstimator::run() {
       next_body_poll = now + seconds_to_ns(node_.bodies_poll_s);
       body_file_.reload_if_changed(tracker_);
     }
+    publish_descriptions_if_changed();
     if (now >= next_status) {
       next_status += seconds_to_ns(node_.status_period_s);
       publish_status(now, start);

@@ -54,6 +54,9 @@ BodySet::~BodySet() = default;
 std::size_t BodySet::size() const {
   return bodies_.size();
 }
+const std::vector<BodyDefinition>& BodySet::definitions() const {
+  return shared_->definitions;
+}
 const BodyStats& BodySet::stats() const {
   return stats_;
 }

@@ -488,6 +488,10 @@ std::size_t Tracker::body_count() const {
   return impl_->core.bodies.size();
 }
 
+const std::vector<BodyDefinition>& Tracker::body_definitions() const {
+  return impl_->core.bodies.definitions();
+}
+
 bool Tracker::has_camera(const std::string& camera_id) const {
   return impl_->camera_index.count(camera_id) != 0;
 }

@@ -11,6 +11,7 @@ void BodyFile::load(estimator::Tracker& tracker) {
   stamp_ = modified();
   const auto bodies = load_bodies(path_);
   tracker.set_bodies(bodies, path_);
+  ++generation_;
   std::size_t led = 0;
   for (const auto& body : bodies) led += body.kind == BodyKind::kLed7 ? 1 : 0;
   log("tracking " + std::to_string(bodies.size()) + " rigid bod" + (bodies.size() == 1 ? "y" : "ies") +

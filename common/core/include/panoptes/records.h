@@ -29,6 +29,7 @@ struct FeatureFrame {
   TimeNs stamp_ns = 0;       // mid-exposure, common time base
   TimeNs arrival_ns = 0;     // when the image reached the node (0 if unknown)
   TimeNs processing_ns = 0;  // detection time
+  TimeNs publish_ns = 0;     // when camera_node wrote the frame to DDS (0 if unknown)
   TimeNs received_ns = 0;    // when the frame reached the estimator, on the estimator's clock; 0 if unknown
   std::vector<Blob> blobs;
 };

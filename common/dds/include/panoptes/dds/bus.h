@@ -87,9 +87,12 @@ class Bus {
   Bus(const Bus&) = delete;
   Bus& operator=(const Bus&) = delete;
 
-  // T is one of the generated panoptes::msg types that has a topic (docs/protocol.md).
+  // T is one of the generated panoptes::msg types that has a topic (docs/protocol.md), or one of the
+  // ROS 2 types of idl/ros2.idl (docs/ros2.md). `topic_name`, if not empty, replaces the type's
+  // topic name (same QoS): the ROS 2 per-body topics rt/panoptes/<body>/pose. Types without a
+  // topic of their own (geometry_msgs PoseStamped, TwistStamped) need one; DdsError otherwise.
   template <class T>
-  std::unique_ptr<Writer<T>> make_writer(Qos qos = Qos::kDefault);
+  std::unique_ptr<Writer<T>> make_writer(Qos qos = Qos::kDefault, const std::string& topic_name = {});
   // `on_sample` runs on a DDS listener thread: keep it short (enqueue and return).
   // `only_id`, if not empty, subscribes to the samples addressed to one camera or client only: those
   // whose first member (camera_id of Predictions, client_id of TimeSync) equals it. It is a DDS
@@ -98,7 +101,7 @@ class Bus {
   // DdsError for a type without such a member.
   template <class T>
   std::unique_ptr<Reader<T>> make_reader(typename Reader<T>::Callback on_sample, Qos qos = Qos::kDefault,
-                                         const std::string& only_id = {});
+                                         const std::string& only_id = {}, const std::string& topic_name = {});
 
   const std::filesystem::path& profile_file() const;
 

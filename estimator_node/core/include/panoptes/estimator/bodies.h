@@ -70,6 +70,8 @@ class BodySet {
   void set_definitions(std::vector<BodyDefinition> definitions, const BodyTrackerOptions& options);
   std::size_t size() const;
   bool empty() const { return size() == 0; }
+  // In the order given to set_definitions (the bodies file's).
+  const std::vector<BodyDefinition>& definitions() const;
 
   // One camera frame: every tracked body's markers are projected, gated and assigned to blobs
   // (Hungarian over all bodies' markers), and each assigned marker updates its body. `excluded`

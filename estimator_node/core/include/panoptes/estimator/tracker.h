@@ -111,6 +111,8 @@ class Tracker {
   }
   const BodyStats& body_stats() const;
   std::size_t body_count() const;
+  // The bodies in the order given to set_bodies.
+  const std::vector<BodyDefinition>& body_definitions() const;
 
   // Processes one camera frame. Frames normally come in stamp order; an older frame within the
   // rewind horizon is inserted into the history and the state replayed from before it.

@@ -4,6 +4,7 @@
 // cannot tell apart.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -23,11 +24,16 @@ class BodyFile {
   // Reloads if the file changed since the last load; a bad file is reported once and ignored.
   void reload_if_changed(estimator::Tracker& tracker);
 
+  // Counts the successful loads: it changes whenever the tracker's body definitions do.
+  std::uint64_t generation() const { return generation_; }
+  const std::string& path() const { return path_; }
+
  private:
   std::optional<std::filesystem::file_time_type> modified() const;
 
   std::string path_;
   std::optional<std::filesystem::file_time_type> stamp_;
+  std::uint64_t generation_ = 0;
 };
 
 }  // namespace panoptes::session

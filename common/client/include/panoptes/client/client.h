@@ -1,0 +1,175 @@
+// SPDX-License-Identifier: Apache-2.0
+// Panoptes client library: the one way applications read Panoptes (docs/clients.md).
+//
+//   panoptes::client::Client client;                    // loopback profile, $PANOPTES_DOMAIN
+//   auto result = client.wait_for_frame(std::chrono::seconds(2));
+//   if (result.status == panoptes::client::Status::kOk)
+//     for (const auto& body : result.frame.bodies) ...
+//
+// No DDS and no generated types in this header: it depends on the C++ standard library only.
+// Errors: the constructor throws ClientError (the bus cannot be opened: a bad profile, domain or
+// option); body_description() throws UnknownBody. Nothing else throws: other failures are reported
+// in Status and Stats. Every member function is thread-safe.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace panoptes::client {
+
+using Vec3 = std::array<double, 3>;
+using Quat = std::array<double, 4>;  // x, y, z, w
+
+class ClientError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A body name that no BodyDescription carries; what() names it.
+class UnknownBody : public ClientError {
+ public:
+  using ClientError::ClientError;
+};
+
+struct ClientOptions {
+  std::string profile_file;  // DDS XML profile; empty: $PANOPTES_DDS_PROFILE, else the loopback profile
+  int domain_id = -1;        // -1: $PANOPTES_DOMAIN, else 0
+  // A frame older than this (by arrival) makes the client "stale"; status_text() says since when.
+  std::chrono::milliseconds stale_after{1000};
+  std::size_t queue_depth = 1024;  // frames kept for wait_for_frame(); older ones are dropped (counted)
+  bool reliable = true;            // ask the estimator to repair lost frames (no drops on a busy host)
+};
+
+// A point track (a 3D marker) with its label. Labelled markers are the markers of tracked rigid
+// bodies (body, body_marker); unlabelled ones are loose markers. Both keep a stable id while tracked.
+struct Marker {
+  std::int64_t id = 0;
+  Vec3 position{};    // m, world
+  Vec3 velocity{};    // m/s
+  std::array<double, 6> covariance{};  // position covariance, m²: xx xy xz yy yz zz
+  int cameras = 0;                     // cameras that updated it recently
+  bool occluded = false;               // coasting: no camera saw it lately, position predicted
+  std::string body;                    // "": unlabelled
+  int body_marker = -1;                // index in the body's marker layout
+  bool labelled() const { return !body.empty(); }
+};
+
+struct RigidBody {
+  std::string name;
+  int id = 0;  // 1-based position in the bodies file
+  bool tracking_valid = false;
+  Vec3 position{};                  // m, world
+  Quat orientation{0, 0, 0, 1};     // x, y, z, w: body frame -> world
+  Vec3 linear_velocity{};           // m/s, world
+  Vec3 angular_velocity{};          // rad/s, world
+  std::array<double, 6> sigma{};    // 1-σ: x, y, z (m), rotation about x, y, z (rad)
+  double quality = 0.0;             // fraction of its markers seen recently, 0..1
+  double mean_marker_error = 0.0;   // m, labelled markers against the layout
+  std::int64_t prediction_horizon_ns = 0;  // the pose is predicted this far past the frame's stamp
+  int cameras = 0;
+};
+
+// Latency of a frame, ns. Stages measured on different hosts are on the common time base (camera
+// nodes synchronise their clocks to the estimator's); 0 means unknown.
+struct Latency {
+  std::int64_t capture_to_publish_ns = 0;  // mid-exposure -> the estimator wrote the frame
+  std::int64_t publish_to_receive_ns = 0;  // the estimator wrote it -> this client received it
+  std::int64_t capture_to_receive_ns = 0;  // the total an application sees
+  // Per stage (0 if unknown):
+  std::int64_t camera_ns = 0;     // mid-exposure -> camera_node published the 2D features
+  std::int64_t network_ns = 0;    // camera_node published -> estimator_node received
+  std::int64_t queue_ns = 0;      // waiting in the estimator's inbox (its latency window)
+  std::int64_t update_ns = 0;     // the filter update
+  std::int64_t output_ns = 0;     // the update -> the frame was written
+};
+
+struct Frame {
+  std::uint64_t frame_number = 0;  // from 1 in each estimator run (restarts begin again at 1)
+  std::int64_t stamp_ns = 0;       // mid-exposure capture time, common clock
+  std::int64_t publish_ns = 0;     // the estimator wrote it
+  std::int64_t receive_ns = 0;     // this client received it (its system clock)
+  std::string source_camera;       // camera whose frame produced this update
+  std::int64_t source_frame = 0;
+  Latency latency;
+  std::vector<RigidBody> bodies;   // every defined body, tracked or not
+  std::vector<Marker> markers;     // labelled and unlabelled
+  std::vector<Vec3> unlabelled_markers() const;
+  // nullptr if no body of that name is in this frame.
+  const RigidBody* body(const std::string& name) const;
+};
+
+struct BodyDescription {
+  std::string name;
+  int id = 0;
+  std::string kind;           // passive | led7
+  std::vector<Vec3> markers;  // m, body frame
+};
+
+enum class Status {
+  kOk,       // a frame
+  kTimeout,  // no frame within the timeout (see status_text())
+  kClosed,   // close() was called
+};
+
+struct FrameResult {
+  Status status = Status::kTimeout;
+  Frame frame;  // empty unless kOk
+};
+
+struct Stats {
+  std::uint64_t frames_received = 0;
+  std::uint64_t frames_dropped = 0;         // overflowed the queue
+  std::uint64_t frames_missed = 0;          // gaps in frame_number: not delivered by the bus
+  std::uint64_t frames_malformed = 0;       // counted and ignored
+  std::uint64_t descriptions_received = 0;
+  std::uint64_t descriptions_malformed = 0;  // counted and ignored
+  std::uint64_t estimator_restarts = 0;      // frame_number went back: a new estimator run
+  std::uint64_t callback_errors = 0;         // exceptions thrown by callbacks (caught)
+};
+
+class Client {
+ public:
+  // Opens the bus and subscribes. Throws ClientError naming what failed.
+  explicit Client(const ClientOptions& options = {});
+  ~Client();  // close()
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
+
+  // Push: `callback` runs on the bus's thread for every frame; keep it short. Returns a handle
+  // for remove_callback. Exceptions it throws are caught and counted (Stats::callback_errors).
+  using FrameCallback = std::function<void(const Frame&)>;
+  int add_callback(FrameCallback callback);
+  void remove_callback(int handle);  // after it returns the callback does not run
+
+  // Pull: the next frame not yet returned by wait_for_frame (in order, from a queue of
+  // ClientOptions::queue_depth), waiting up to `timeout`.
+  FrameResult wait_for_frame(std::chrono::milliseconds timeout);
+  // The newest frame received, if any (does not consume the queue).
+  std::optional<Frame> latest() const;
+
+  // The estimator's bodies (from rt/panoptes/body_descriptions, known to late joiners too).
+  std::vector<BodyDescription> body_descriptions() const;
+  BodyDescription body_description(const std::string& name) const;  // throws UnknownBody
+
+  // A frame arrived within stale_after.
+  bool connected() const;
+  // "receiving (N frames/s)", "no data for 3.2 s" or "no data yet (waited 1.0 s)".
+  std::string status_text() const;
+  Stats stats() const;
+
+  // Stops delivery and wakes wait_for_frame (kClosed). Idempotent.
+  void close();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace panoptes::client
