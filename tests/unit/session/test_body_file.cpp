@@ -38,14 +38,19 @@ TEST(BodyFile, ReloadsAChangedFileAndKeepsThePreviousBodiesOnABadOne) {
   file.load(tracker);
   EXPECT_EQ(tracker.body_count(), 1u);
 
+  EXPECT_EQ(file.generation(), 1u);
+
   file.reload_if_changed(tracker);  // unchanged
   EXPECT_EQ(tracker.body_count(), 1u);
+  EXPECT_EQ(file.generation(), 1u) << "an unchanged file is not a new generation";
   write(path, kTwoBodies, 10);
   file.reload_if_changed(tracker);
   EXPECT_EQ(tracker.body_count(), 2u);
+  EXPECT_EQ(file.generation(), 2u);
   write(path, "bodies:\n  - name: \"broken\"\n    markers:\n      - [0, 0, 0]\n", 20);
   file.reload_if_changed(tracker);
   EXPECT_EQ(tracker.body_count(), 2u) << "a bad version keeps the previous definitions";
+  EXPECT_EQ(file.generation(), 2u) << "the descriptions follow the definitions in use";
   std::filesystem::remove(path);
 }
 
