@@ -473,7 +473,7 @@ namespace {
 template <class T>
 std::string topic_name_for(const std::string& requested) {
   if (!requested.empty()) return requested;
-  const std::string name = TopicTraits<T>::spec().name;
+  std::string name = TopicTraits<T>::spec().name;
   if (name.empty()) throw DdsError("a DDS topic of this type needs a name (e.g. rt/panoptes/<body>/pose)");
   return name;
 }
@@ -533,6 +533,7 @@ std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_samp
   return std::make_unique<Reader<T>>(std::move(impl));
 }
 
+// NOLINTBEGIN(bugprone-macro-parentheses): a type argument of a template cannot be parenthesised
 #define PANOPTES_INSTANTIATE_TYPE(Type)                                                      \
   template class Writer<Type>;                                                               \
   template class Reader<Type>;                                                               \
@@ -564,5 +565,6 @@ PANOPTES_INSTANTIATE_TYPE(mocap4r2_msgs::msg::dds_::RigidBodies_)
 PANOPTES_INSTANTIATE_TYPE(mocap4r2_msgs::msg::dds_::Markers_)
 #undef PANOPTES_INSTANTIATE
 #undef PANOPTES_INSTANTIATE_TYPE
+// NOLINTEND(bugprone-macro-parentheses)
 
 }  // namespace panoptes::dds
