@@ -21,7 +21,7 @@ class DdsError : public std::runtime_error {
 
 struct BusOptions {
   // XML profile file. Empty: $PANOPTES_DDS_PROFILE, else deploy/dds/loopback.xml found next to the
-  // executable (build tree or install prefix). Without a profile the bus refuses to start, so Fast
+  // executable or to libpanoptes_client.so (build tree or install prefix). Without a profile the bus refuses to start, so Fast
   // DDS's default multicast discovery never runs by accident.
   std::filesystem::path profile_file;
   std::string participant_profile = "panoptes_participant";
