@@ -10,7 +10,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <deque>
-#include <map>
 #include <mutex>
 #include <utility>
 
@@ -87,8 +86,11 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
 
   // Held while callbacks run, so that remove_callback() returns only when its callback cannot run.
   // Recursive: a callback may add or remove callbacks.
+  // The list is replaced, never changed in place, so that a frame's delivery takes a snapshot
+  // without copying or allocating.
+  using CallbackList = std::vector<std::pair<int, std::shared_ptr<const FrameCallback>>>;
   std::recursive_mutex callbacks_mutex;
-  std::map<int, std::shared_ptr<FrameCallback>> callbacks;
+  std::shared_ptr<const CallbackList> callbacks = std::make_shared<const CallbackList>();
   int next_handle = 1;
 
   // Serialises close(); the bus and readers go last, after delivery stopped.
@@ -130,19 +132,17 @@ void Client::Impl::on_frame(const msg::MocapFrame& message) {
     queue.push_back(frame);
     newest = frame;
   }
-  frame_ready.notify_one();
+  // Callbacks first: they are the low-latency way in, and waking a waiting thread costs a system call.
   dispatch(*frame);
+  frame_ready.notify_one();
 }
 
 void Client::Impl::dispatch(const Frame& frame) {
   std::lock_guard lock(callbacks_mutex);
-  if (callbacks.empty()) return;
-  // A copy: a callback may add or remove callbacks.
-  std::vector<std::shared_ptr<FrameCallback>> current;
-  current.reserve(callbacks.size());
-  for (const auto& [handle, callback] : callbacks) current.push_back(callback);
+  if (callbacks->empty()) return;
+  const std::shared_ptr<const CallbackList> current = callbacks;  // a callback may add or remove callbacks
   dispatching_client = this;
-  for (const auto& callback : current) {
+  for (const auto& [handle, callback] : *current) {
     std::string failure;
     try {
       (*callback)(frame);
@@ -212,13 +212,17 @@ Client::~Client() {
 int Client::add_callback(FrameCallback callback) {
   std::lock_guard lock(impl_->callbacks_mutex);
   const int handle = impl_->next_handle++;
-  impl_->callbacks.emplace(handle, std::make_shared<FrameCallback>(std::move(callback)));
+  auto list = std::make_shared<Impl::CallbackList>(*impl_->callbacks);
+  list->emplace_back(handle, std::make_shared<const FrameCallback>(std::move(callback)));
+  impl_->callbacks = std::move(list);
   return handle;
 }
 
 void Client::remove_callback(int handle) {
   std::lock_guard lock(impl_->callbacks_mutex);
-  impl_->callbacks.erase(handle);
+  auto list = std::make_shared<Impl::CallbackList>(*impl_->callbacks);
+  std::erase_if(*list, [&](const auto& entry) { return entry.first == handle; });
+  impl_->callbacks = std::move(list);
 }
 
 FrameResult Client::wait_for_frame(std::chrono::milliseconds timeout) {

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <set>
+#include <string_view>
 #include <utility>
 
 namespace panoptes::client::detail {
@@ -77,6 +78,22 @@ std::optional<Marker> to_marker(const msg::FrameMarker& in, std::string& error) 
   return out;
 }
 
+// A name that two bodies share, or nullptr. Without allocating for the usual handful of bodies:
+// this runs for every frame on the delivery path.
+const std::string* duplicate_name(const std::vector<RigidBody>& bodies) {
+  constexpr std::size_t kLinearLimit = 32;
+  if (bodies.size() <= kLinearLimit) {
+    for (std::size_t i = 0; i < bodies.size(); ++i)
+      for (std::size_t j = i + 1; j < bodies.size(); ++j)
+        if (bodies[i].name == bodies[j].name) return &bodies[i].name;
+    return nullptr;
+  }
+  std::set<std::string_view> names;
+  for (const auto& body : bodies)
+    if (!names.insert(body.name).second) return &body.name;
+  return nullptr;
+}
+
 // b - a when both stamps are known (non-zero), else 0.
 std::int64_t span(std::int64_t a, std::int64_t b) {
   return a != 0 && b != 0 ? b - a : 0;
@@ -112,15 +129,14 @@ std::optional<Frame> to_frame(const msg::MocapFrame& message, std::int64_t recei
   frame.source_frame = message.source_frame();
   frame.latency = latency_of(message, receive_ns);
   frame.bodies.reserve(message.bodies().size());
-  std::set<std::string> names;
   for (const auto& body : message.bodies()) {
     auto converted = to_body(body, error);
     if (!converted) return std::nullopt;
-    if (!names.insert(converted->name).second) {
-      error = "body '" + converted->name + "' appears twice";
-      return std::nullopt;
-    }
     frame.bodies.push_back(std::move(*converted));
+  }
+  if (const std::string* twice = duplicate_name(frame.bodies)) {
+    error = "body '" + *twice + "' appears twice";
+    return std::nullopt;
   }
   frame.markers.reserve(message.markers().size());
   for (const auto& marker : message.markers()) {
