@@ -79,7 +79,7 @@ int publish(double rate_hz, double duration_s, int readers) {
     std::fprintf(stderr, "bench_client --publish: %d readers did not match\n", readers);
     return panoptes::kExitFailure;
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // both readers fully matched
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // the readers fully matched
   const auto period = std::chrono::duration<double>(1.0 / rate_hz);
   const auto start = std::chrono::steady_clock::now();
   const auto count = static_cast<std::uint64_t>(rate_hz * duration_s);
@@ -219,6 +219,7 @@ int main(int argc, char** argv) {
   int domain = -1;
   bool publisher = false;
   bool client_first = false;
+  int readers = 2;
   CLI::App app{"bench_client: latency the client library adds on top of a raw DDS reader (JSON on stdout)",
                "bench_client"};
   app.option_defaults()->always_capture_default();
@@ -228,12 +229,13 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--domain", domain, "DDS domain (-1: $PANOPTES_DOMAIN, else 0)");
   app.add_flag("--client-first", client_first, "create the client's participant before the raw reader's");
-  app.add_flag("--publish", publisher, "be the publisher (started by the measuring process)");
+  app.add_flag("--publish", publisher, "only publish (the measuring process starts one); also a frame source for tests");
+  app.add_option("--readers", readers, "with --publish: start once this many readers matched")->check(CLI::PositiveNumber);
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
   if (domain >= 0) setenv("PANOPTES_DOMAIN", std::to_string(domain).c_str(), 1);
   try {
-    if (publisher) return publish(rate_hz, duration_s, 2);
+    if (publisher) return publish(rate_hz, duration_s, readers);
     return measure(rate_hz, duration_s, warmup_s, client_first,
                    std::filesystem::read_symlink("/proc/self/exe").string());
   } catch (const std::exception& e) {
