@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
       print_frame(result.frame);
     }
     const auto stats = client.stats();
-    std::fprintf(stderr, "sample_client: %llu frames, %llu missed, %llu malformed\n",
+    std::fprintf(stderr, "sample_client: received %llu frames, %llu missed, %llu malformed\n",
                  static_cast<unsigned long long>(stats.frames_received),
                  static_cast<unsigned long long>(stats.frames_missed),
                  static_cast<unsigned long long>(stats.frames_malformed));
