@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -210,9 +211,7 @@ int measure(double rate_hz, double duration_s, double warmup_s, bool client_firs
   return complete > published / 2 ? panoptes::kExitOk : panoptes::kExitFailure;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   double rate_hz = 1000;
   double duration_s = 10;
   double warmup_s = 1;
@@ -229,8 +228,10 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--domain", domain, "DDS domain (-1: $PANOPTES_DOMAIN, else 0)");
   app.add_flag("--client-first", client_first, "create the client's participant before the raw reader's");
-  app.add_flag("--publish", publisher, "only publish (the measuring process starts one); also a frame source for tests");
-  app.add_option("--readers", readers, "with --publish: start once this many readers matched")->check(CLI::PositiveNumber);
+  app.add_flag("--publish", publisher,
+               "only publish (the measuring process starts one); also a frame source for tests");
+  app.add_option("--readers", readers, "with --publish: start once this many readers matched")
+      ->check(CLI::PositiveNumber);
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
   if (domain >= 0) setenv("PANOPTES_DOMAIN", std::to_string(domain).c_str(), 1);
@@ -241,5 +242,16 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_client: %s\n", e.what());
     return panoptes::kExitFailure;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "bench_client: %s\n", error.what());
+    return 1;
   }
 }

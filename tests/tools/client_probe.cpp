@@ -5,6 +5,7 @@
 // per change of the body descriptions, and the client's Stats at the end.
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <string>
 
@@ -74,9 +75,7 @@ std::int64_t wall_ns() {
       .count();
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   std::string out_file;
   double duration_s = 10;
   pc::ClientOptions options;
@@ -114,4 +113,15 @@ int main(int argc, char** argv) {
     return panoptes::kExitFailure;
   }
   return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_client_probe: %s\n", error.what());
+    return 1;
+  }
 }

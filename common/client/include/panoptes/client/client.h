@@ -150,7 +150,7 @@ class PANOPTES_CLIENT_API Client {
  public:
   // Opens the bus and subscribes. Throws ClientError naming what failed.
   explicit Client(const ClientOptions& options = {});
-  ~Client();  // close()
+  ~Client();  // close(). Not from one of this client's callbacks (it would wait for itself).
   Client(const Client&) = delete;
   Client& operator=(const Client&) = delete;
 
@@ -173,14 +173,15 @@ class PANOPTES_CLIENT_API Client {
   // A frame arrived within stale_after.
   bool connected() const;
   // "receiving (240 frames/s)", "no data for 3.2 s (last frame 1234)" or, before the first frame,
-  // "no data for 1.0 s (nothing received since the client started)".
+  // "no data for 1.0 s (nothing received since the client started)"; "closed" after close().
   std::string status_text() const;
   Stats stats() const;
   // The DDS profile file and domain the client opened (for diagnostics: "which bus am I on?").
   std::string profile_file() const;
   int domain_id() const;
 
-  // Stops delivery and wakes wait_for_frame (kClosed). Idempotent.
+  // Stops delivery and wakes wait_for_frame (kClosed). Idempotent; may be called from a callback.
+  // After it returns (called from another thread) no callback is running or will run.
   void close();
 
  private:
