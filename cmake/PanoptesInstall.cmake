@@ -7,10 +7,31 @@
 #   <prefix>/share/doc/panoptes       the guides
 #   /lib/systemd/system (deb) or <prefix>/lib/systemd/system: units whose paths point at the above
 #   /etc/panoptes                     settings the units read (created, left to the administrator)
+#   <prefix>/lib/libpanoptes_client.so*, <prefix>/include/panoptes/client: the client library, with
+#   <prefix>/lib/cmake/Panoptes (find_package(Panoptes) -> Panoptes::client) and
+#   <prefix>/lib/pkgconfig/panoptes-client.pc (docs/clients.md)
 include(GNUInstallDirs)
+include(CMakePackageConfigHelpers)
 
 install(TARGETS camera_node estimator_node panoptes_ctl panoptes_sim_tool panoptes_eval panoptes_demo
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+
+# The client library and its CMake and pkg-config packages.
+install(TARGETS panoptes_client EXPORT PanoptesTargets
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(DIRECTORY ${PANOPTES_SOURCE_DIR}/common/client/include/panoptes/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/panoptes)
+set(PANOPTES_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/Panoptes)
+install(EXPORT PanoptesTargets NAMESPACE Panoptes:: DESTINATION ${PANOPTES_CMAKE_DIR})
+configure_package_config_file(${PANOPTES_SOURCE_DIR}/cmake/PanoptesConfig.cmake.in
+  ${CMAKE_BINARY_DIR}/PanoptesConfig.cmake INSTALL_DESTINATION ${PANOPTES_CMAKE_DIR})
+# Before 1.0 a minor version may break the API: only the same minor version is compatible.
+write_basic_package_version_file(${CMAKE_BINARY_DIR}/PanoptesConfigVersion.cmake
+  VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
+install(FILES ${CMAKE_BINARY_DIR}/PanoptesConfig.cmake ${CMAKE_BINARY_DIR}/PanoptesConfigVersion.cmake
+  DESTINATION ${PANOPTES_CMAKE_DIR})
+configure_file(${PANOPTES_SOURCE_DIR}/cmake/panoptes-client.pc.in ${CMAKE_BINARY_DIR}/panoptes-client.pc @ONLY)
+install(FILES ${CMAKE_BINARY_DIR}/panoptes-client.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
 
 set(PANOPTES_DATA_DIR ${CMAKE_INSTALL_DATADIR}/panoptes)
 install(DIRECTORY ${PANOPTES_SOURCE_DIR}/deploy/dds/ DESTINATION ${PANOPTES_DATA_DIR}/dds FILES_MATCHING PATTERN "*.xml")
@@ -50,6 +71,8 @@ set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "Distributed optical motion tracking over 
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+# libpanoptes_client.so: a shlibs file and the ldconfig trigger.
+set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS ON)
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "fastdds-tools, aravis-tools")
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 # Staged with DESTDIR and the prefix /usr, so the units written at install time name /usr/bin/...

@@ -23,7 +23,8 @@ set(PANOPTES_LAYERING_RULES
   "panoptes_sim|${_panoptes_dds_links}||only panoptes_dds knows DDS"
   "panoptes_camera|${_panoptes_dds_links}||the camera pipeline runs without DDS (offline mode, tests)"
   "panoptes_evaluation|${_panoptes_dds_links}||only panoptes_dds knows DDS"
-  "panoptes_session|${_panoptes_dds_links}||the estimator session runs without DDS (offline mode, tests)")
+  "panoptes_session|${_panoptes_dds_links}||the estimator session runs without DDS (offline mode, tests)"
+  "panoptes_client|${_panoptes_io_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](CLI/|yaml-cpp/|nlohmann/|spdlog/|fstream|opencv2/|panoptes/jsonl\\.h|panoptes/config\\.h)|the client library applications link: the bus and its messages, no file formats, simulator or CLI")
 
 # Transitive link closure of `target` (names of targets and libraries) into `out_var`.
 function(_panoptes_link_closure target out_var)

@@ -38,13 +38,19 @@ for path in /usr/bin/camera_node /usr/bin/estimator_node /usr/bin/panoptes_ctl /
   /usr/share/panoptes/dds/discovery_client.xml /lib/systemd/system/camera_node@.service \
   /lib/systemd/system/estimator_node.service /lib/systemd/system/panoptes-discovery.service \
   /usr/share/panoptes/scenes/demo.yaml /usr/share/panoptes/examples/lab4/camera_node/cam0.env \
-  /usr/share/panoptes/examples/sim/estimator_node.env /usr/share/doc/panoptes/deployment.md; do
+  /usr/share/panoptes/examples/sim/estimator_node.env /usr/share/doc/panoptes/deployment.md \
+  /usr/lib/libpanoptes_client.so /usr/include/panoptes/client/client.h /usr/lib/cmake/Panoptes/PanoptesConfig.cmake \
+  /usr/lib/pkgconfig/panoptes-client.pc /usr/share/doc/panoptes/clients.md; do
   grep -qx "$path" "$work/contents.txt" && pass "package holds $path" || fail "package lacks $path"
 done
 dpkg-deb -f "$deb" Depends | grep -q libfastrtps && pass "depends on the Fast DDS library" || fail "Depends: $(dpkg-deb -f "$deb" Depends)"
 
 # --- install --------------------------------------------------------------------------------------
 if dpkg -i "$deb" >"$work/dpkg.log" 2>&1; then installed=1; pass "dpkg -i"; else fail "dpkg -i"; cat "$work/dpkg.log"; finish; fi
+# The client library is known to the dynamic linker and to pkg-config (docs/clients.md).
+ldconfig -p | grep -q "libpanoptes_client.so" && pass "ldconfig knows libpanoptes_client" || fail "libpanoptes_client not in the ldconfig cache"
+[ "$(pkg-config --modversion panoptes-client 2>/dev/null)" = "$(dpkg-deb -f "$deb" Version)" ] &&
+  pass "pkg-config finds panoptes-client $(pkg-config --modversion panoptes-client)" || fail "pkg-config panoptes-client"
 # Every absolute path a unit names (programs, its settings' examples) exists once installed.
 for unit in camera_node@.service estimator_node.service panoptes-discovery.service; do
   file=/lib/systemd/system/$unit

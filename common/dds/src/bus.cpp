@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/dds/bus.h"
 
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -211,6 +212,14 @@ std::filesystem::path executable_dir() {
   return std::filesystem::path(std::string(buffer.data(), static_cast<std::size_t>(n))).parent_path();
 }
 
+// The directory of the binary holding this code: the executable, or a shared library that links
+// panoptes_dds (libpanoptes_client.so in <prefix>/lib, used by programs installed anywhere).
+std::filesystem::path module_dir() {
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<const void*>(&module_dir), &info) == 0 || info.dli_fname == nullptr) return {};
+  return std::filesystem::path(info.dli_fname).parent_path();
+}
+
 }  // namespace
 
 std::filesystem::path resolve_profile_file(const std::filesystem::path& requested) {
@@ -228,8 +237,10 @@ std::filesystem::path resolve_profile_file(const std::filesystem::path& requeste
   }
   const std::filesystem::path exe = executable_dir();
   const std::vector<std::filesystem::path> candidates = {
-      exe / "../../deploy/dds/loopback.xml",       // build/bin in a source checkout
-      exe / "../share/panoptes/dds/loopback.xml",  // installed prefix
+      exe / "../../deploy/dds/loopback.xml",                // build/bin in a source checkout
+      exe / "../share/panoptes/dds/loopback.xml",           // installed prefix
+      module_dir() / "../share/panoptes/dds/loopback.xml",  // <prefix>/lib/libpanoptes_client.so
+      std::filesystem::path(PANOPTES_INSTALL_DATADIR) / "panoptes/dds/loopback.xml",  // configured prefix
       std::filesystem::path(PANOPTES_SOURCE_DIR) / "deploy/dds/loopback.xml",  // a build tree elsewhere
   };
   for (const auto& candidate : candidates) {

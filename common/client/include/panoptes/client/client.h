@@ -22,37 +22,48 @@
 #include <string>
 #include <vector>
 
+// Only what this header declares is exported from libpanoptes_client.so (built with hidden
+// visibility and a version script).
+#if defined(__GNUC__)
+#define PANOPTES_CLIENT_API __attribute__((visibility("default")))
+#else
+#define PANOPTES_CLIENT_API
+#endif
+
 namespace panoptes::client {
 
 using Vec3 = std::array<double, 3>;
 using Quat = std::array<double, 4>;  // x, y, z, w
 
-class ClientError : public std::runtime_error {
+class PANOPTES_CLIENT_API ClientError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
 
 // A body name that no BodyDescription carries; what() names it.
-class UnknownBody : public ClientError {
+class PANOPTES_CLIENT_API UnknownBody : public ClientError {
  public:
   using ClientError::ClientError;
 };
 
 struct ClientOptions {
   std::string profile_file;  // DDS XML profile; empty: $PANOPTES_DDS_PROFILE, else the loopback profile
-  int domain_id = -1;        // -1: $PANOPTES_DOMAIN, else 0
+  int domain_id = -1;        // 0..232; -1: $PANOPTES_DOMAIN, else 0
   // A frame older than this (by arrival) makes the client "stale"; status_text() says since when.
   std::chrono::milliseconds stale_after{1000};
-  std::size_t queue_depth = 1024;  // frames kept for wait_for_frame(); older ones are dropped (counted)
-  bool reliable = true;            // ask the estimator to repair lost frames (no drops on a busy host)
+  // Frames kept for wait_for_frame() (>= 1). When it is full the oldest is dropped; drops are counted
+  // once wait_for_frame() has been called (before that the queue only remembers the latest frames,
+  // so an application that reads by callback or latest() alone sees no drops).
+  std::size_t queue_depth = 1024;
+  bool reliable = true;  // ask the estimator to repair lost frames (no drops on a busy host)
 };
 
 // A point track (a 3D marker) with its label. Labelled markers are the markers of tracked rigid
 // bodies (body, body_marker); unlabelled ones are loose markers. Both keep a stable id while tracked.
 struct Marker {
   std::int64_t id = 0;
-  Vec3 position{};    // m, world
-  Vec3 velocity{};    // m/s
+  Vec3 position{};                     // m, world
+  Vec3 velocity{};                     // m/s
   std::array<double, 6> covariance{};  // position covariance, m²: xx xy xz yy yz zz
   int cameras = 0;                     // cameras that updated it recently
   bool occluded = false;               // coasting: no camera saw it lately, position predicted
@@ -65,13 +76,13 @@ struct RigidBody {
   std::string name;
   int id = 0;  // 1-based position in the bodies file
   bool tracking_valid = false;
-  Vec3 position{};                  // m, world
-  Quat orientation{0, 0, 0, 1};     // x, y, z, w: body frame -> world
-  Vec3 linear_velocity{};           // m/s, world
-  Vec3 angular_velocity{};          // rad/s, world
-  std::array<double, 6> sigma{};    // 1-σ: x, y, z (m), rotation about x, y, z (rad)
-  double quality = 0.0;             // fraction of its markers seen recently, 0..1
-  double mean_marker_error = 0.0;   // m, labelled markers against the layout
+  Vec3 position{};                         // m, world
+  Quat orientation{0, 0, 0, 1};            // x, y, z, w: body frame -> world
+  Vec3 linear_velocity{};                  // m/s, world
+  Vec3 angular_velocity{};                 // rad/s, world
+  std::array<double, 6> sigma{};           // 1-σ: x, y, z (m), rotation about x, y, z (rad)
+  double quality = 0.0;                    // fraction of its markers seen recently, 0..1
+  double mean_marker_error = 0.0;          // m, labelled markers against the layout
   std::int64_t prediction_horizon_ns = 0;  // the pose is predicted this far past the frame's stamp
   int cameras = 0;
 };
@@ -83,14 +94,14 @@ struct Latency {
   std::int64_t publish_to_receive_ns = 0;  // the estimator wrote it -> this client received it
   std::int64_t capture_to_receive_ns = 0;  // the total an application sees
   // Per stage (0 if unknown):
-  std::int64_t camera_ns = 0;     // mid-exposure -> camera_node published the 2D features
-  std::int64_t network_ns = 0;    // camera_node published -> estimator_node received
-  std::int64_t queue_ns = 0;      // waiting in the estimator's inbox (its latency window)
-  std::int64_t update_ns = 0;     // the filter update
-  std::int64_t output_ns = 0;     // the update -> the frame was written
+  std::int64_t camera_ns = 0;   // mid-exposure -> camera_node published the 2D features
+  std::int64_t network_ns = 0;  // camera_node published -> estimator_node received
+  std::int64_t queue_ns = 0;    // waiting in the estimator's inbox (its latency window)
+  std::int64_t update_ns = 0;   // the filter update
+  std::int64_t output_ns = 0;   // the update -> the frame was written
 };
 
-struct Frame {
+struct PANOPTES_CLIENT_API Frame {
   std::uint64_t frame_number = 0;  // from 1 in each estimator run (restarts begin again at 1)
   std::int64_t stamp_ns = 0;       // mid-exposure capture time, common clock
   std::int64_t publish_ns = 0;     // the estimator wrote it
@@ -98,8 +109,8 @@ struct Frame {
   std::string source_camera;       // camera whose frame produced this update
   std::int64_t source_frame = 0;
   Latency latency;
-  std::vector<RigidBody> bodies;   // every defined body, tracked or not
-  std::vector<Marker> markers;     // labelled and unlabelled
+  std::vector<RigidBody> bodies;  // every defined body, tracked or not
+  std::vector<Marker> markers;    // labelled and unlabelled
   std::vector<Vec3> unlabelled_markers() const;
   // nullptr if no body of that name is in this frame.
   const RigidBody* body(const std::string& name) const;
@@ -125,20 +136,21 @@ struct FrameResult {
 
 struct Stats {
   std::uint64_t frames_received = 0;
-  std::uint64_t frames_dropped = 0;         // overflowed the queue
-  std::uint64_t frames_missed = 0;          // gaps in frame_number: not delivered by the bus
-  std::uint64_t frames_malformed = 0;       // counted and ignored
+  std::uint64_t frames_dropped = 0;    // overflowed the queue
+  std::uint64_t frames_missed = 0;     // gaps in frame_number: not delivered by the bus
+  std::uint64_t frames_malformed = 0;  // counted and ignored
   std::uint64_t descriptions_received = 0;
   std::uint64_t descriptions_malformed = 0;  // counted and ignored
   std::uint64_t estimator_restarts = 0;      // frame_number went back: a new estimator run
   std::uint64_t callback_errors = 0;         // exceptions thrown by callbacks (caught)
+  std::string last_error;  // why the last malformed sample was ignored, or the last callback's exception
 };
 
-class Client {
+class PANOPTES_CLIENT_API Client {
  public:
   // Opens the bus and subscribes. Throws ClientError naming what failed.
   explicit Client(const ClientOptions& options = {});
-  ~Client();  // close()
+  ~Client();  // close(). Not from one of this client's callbacks (it would wait for itself).
   Client(const Client&) = delete;
   Client& operator=(const Client&) = delete;
 
@@ -160,11 +172,16 @@ class Client {
 
   // A frame arrived within stale_after.
   bool connected() const;
-  // "receiving (N frames/s)", "no data for 3.2 s" or "no data yet (waited 1.0 s)".
+  // "receiving (240 frames/s)", "no data for 3.2 s (last frame 1234)" or, before the first frame,
+  // "no data for 1.0 s (nothing received since the client started)"; "closed" after close().
   std::string status_text() const;
   Stats stats() const;
+  // The DDS profile file and domain the client opened (for diagnostics: "which bus am I on?").
+  std::string profile_file() const;
+  int domain_id() const;
 
-  // Stops delivery and wakes wait_for_frame (kClosed). Idempotent.
+  // Stops delivery and wakes wait_for_frame (kClosed). Idempotent; may be called from a callback.
+  // After it returns (called from another thread) no callback is running or will run.
   void close();
 
  private:

@@ -21,8 +21,8 @@ class DdsError : public std::runtime_error {
 
 struct BusOptions {
   // XML profile file. Empty: $PANOPTES_DDS_PROFILE, else deploy/dds/loopback.xml found next to the
-  // executable (build tree or install prefix). Without a profile the bus refuses to start, so Fast
-  // DDS's default multicast discovery never runs by accident.
+  // executable or to libpanoptes_client.so (build tree or install prefix). Without a profile the bus refuses
+  // to start, so Fast DDS's default multicast discovery never runs by accident.
   std::filesystem::path profile_file;
   std::string participant_profile = "panoptes_participant";
   int domain_id = -1;  // -1: $PANOPTES_DOMAIN, else the profile's domain, else 0

@@ -1,0 +1,182 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "conversion.h"
+
+#include <cmath>
+#include <set>
+#include <string_view>
+#include <utility>
+
+namespace panoptes::client::detail {
+namespace {
+
+constexpr std::uint8_t kTrackCoasting = 2;  // msg::Track::status
+// A unit quaternion written as doubles is within 1e-9 of norm 1; this tolerates float-rounded
+// writers while rejecting what is not a rotation.
+constexpr double kQuaternionNormTolerance = 1e-3;
+
+template <std::size_t N>
+bool all_finite(const std::array<double, N>& values) {
+  for (const double v : values)
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+// The body's fields, or an error naming what is wrong with them.
+std::optional<RigidBody> to_body(const msg::FrameBody& in, std::string& error) {
+  RigidBody out;
+  out.name = in.name();
+  out.id = in.id();
+  out.tracking_valid = in.tracking_valid();
+  const std::string what = "body '" + in.name() + "'";
+  if (out.name.empty()) {
+    error = "a body without a name (id " + std::to_string(in.id()) + ")";
+    return std::nullopt;
+  }
+  if (!out.tracking_valid) return out;  // the pose fields are zero: nothing to check or copy
+  out.position = in.pose().position();
+  out.orientation = in.pose().orientation();
+  out.linear_velocity = in.linear_velocity();
+  out.angular_velocity = in.angular_velocity();
+  out.sigma = in.sigma();
+  if (!all_finite(out.position) || !all_finite(out.orientation) || !all_finite(out.linear_velocity) ||
+      !all_finite(out.angular_velocity)) {
+    error = what + ": a non-finite pose or velocity while tracking_valid";
+    return std::nullopt;
+  }
+  const auto& q = out.orientation;
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (std::abs(norm - 1.0) > kQuaternionNormTolerance) {
+    error = what + ": orientation is not a unit quaternion (norm " + std::to_string(norm) + ")";
+    return std::nullopt;
+  }
+  out.quality = in.quality();
+  out.mean_marker_error = in.mean_marker_error();
+  out.prediction_horizon_ns = in.prediction_horizon_ns();
+  out.cameras = in.cameras();
+  return out;
+}
+
+std::optional<Marker> to_marker(const msg::FrameMarker& in, std::string& error) {
+  const msg::Track& track = in.state();
+  Marker out;
+  out.id = track.id();
+  out.position = track.position();
+  out.velocity = track.velocity();
+  out.covariance = track.covariance();
+  out.cameras = track.cameras();
+  out.occluded = track.status() == kTrackCoasting;
+  out.body = in.body();
+  out.body_marker = in.body().empty() ? -1 : in.body_marker();
+  if (!all_finite(out.position) || !all_finite(out.velocity)) {
+    error = "marker " + std::to_string(out.id) + ": a non-finite position or velocity";
+    return std::nullopt;
+  }
+  if (!out.body.empty() && out.body_marker < 0) {
+    error = "marker " + std::to_string(out.id) + ": labelled '" + out.body + "' without a body_marker index";
+    return std::nullopt;
+  }
+  return out;
+}
+
+// A name that two bodies share, or nullptr. Without allocating for the usual handful of bodies:
+// this runs for every frame on the delivery path.
+const std::string* duplicate_name(const std::vector<RigidBody>& bodies) {
+  constexpr std::size_t kLinearLimit = 32;
+  if (bodies.size() <= kLinearLimit) {
+    for (std::size_t i = 0; i < bodies.size(); ++i)
+      for (std::size_t j = i + 1; j < bodies.size(); ++j)
+        if (bodies[i].name == bodies[j].name) return &bodies[i].name;
+    return nullptr;
+  }
+  std::set<std::string_view> names;
+  for (const auto& body : bodies)
+    if (!names.insert(body.name).second) return &body.name;
+  return nullptr;
+}
+
+// b - a when both stamps are known (non-zero), else 0.
+std::int64_t span(std::int64_t a, std::int64_t b) {
+  return a != 0 && b != 0 ? b - a : 0;
+}
+
+}  // namespace
+
+Latency latency_of(const msg::MocapFrame& message, std::int64_t receive_ns) {
+  const msg::FrameStages& s = message.stages();
+  Latency l;
+  l.capture_to_publish_ns = span(message.stamp_ns(), message.publish_ns());
+  l.publish_to_receive_ns = span(message.publish_ns(), receive_ns);
+  l.capture_to_receive_ns = span(message.stamp_ns(), receive_ns);
+  l.camera_ns = span(message.stamp_ns(), s.feature_publish_ns());
+  l.network_ns = span(s.feature_publish_ns(), s.received_ns());
+  l.queue_ns = span(s.received_ns(), s.dequeued_ns());
+  l.update_ns = span(s.dequeued_ns(), s.updated_ns());
+  l.output_ns = span(s.updated_ns(), message.publish_ns());
+  return l;
+}
+
+std::optional<Frame> to_frame(const msg::MocapFrame& message, std::int64_t receive_ns, std::string& error) {
+  if (message.frame_number() == 0) {
+    error = "frame_number 0 (numbers start at 1)";
+    return std::nullopt;
+  }
+  Frame frame;
+  frame.frame_number = message.frame_number();
+  frame.stamp_ns = message.stamp_ns();
+  frame.publish_ns = message.publish_ns();
+  frame.receive_ns = receive_ns;
+  frame.source_camera = message.source_camera();
+  frame.source_frame = message.source_frame();
+  frame.latency = latency_of(message, receive_ns);
+  frame.bodies.reserve(message.bodies().size());
+  for (const auto& body : message.bodies()) {
+    auto converted = to_body(body, error);
+    if (!converted) return std::nullopt;
+    frame.bodies.push_back(std::move(*converted));
+  }
+  if (const std::string* twice = duplicate_name(frame.bodies)) {
+    error = "body '" + *twice + "' appears twice";
+    return std::nullopt;
+  }
+  frame.markers.reserve(message.markers().size());
+  for (const auto& marker : message.markers()) {
+    auto converted = to_marker(marker, error);
+    if (!converted) return std::nullopt;
+    frame.markers.push_back(std::move(*converted));
+  }
+  return frame;
+}
+
+std::optional<std::vector<BodyDescription>> to_descriptions(const msg::BodyDescriptions& message,
+                                                            std::string& error) {
+  std::vector<BodyDescription> bodies;
+  std::set<std::string> names;
+  for (const auto& in : message.bodies()) {
+    if (in.name().empty()) {
+      error = "a body description without a name (id " + std::to_string(in.id()) + ")";
+      return std::nullopt;
+    }
+    const std::string what = "body description '" + in.name() + "'";
+    if (!names.insert(in.name()).second) {
+      error = what + " appears twice";
+      return std::nullopt;
+    }
+    if (in.markers().empty()) {
+      error = what + ": no markers";
+      return std::nullopt;
+    }
+    BodyDescription out{in.name(), in.id(), in.kind(), {}};
+    for (std::size_t i = 0; i < in.markers().size(); ++i) {
+      const auto& position = in.markers()[i].position();
+      if (!all_finite(position)) {
+        error = what + ": markers[" + std::to_string(i) + "] is not finite";
+        return std::nullopt;
+      }
+      out.markers.push_back(position);
+    }
+    bodies.push_back(std::move(out));
+  }
+  return bodies;
+}
+
+}  // namespace panoptes::client::detail

@@ -1,0 +1,28 @@
+// SPDX-License-Identifier: Apache-2.0
+// The DDS messages of rt/panoptes/frames and rt/panoptes/body_descriptions as the public types of
+// panoptes/client/client.h, with the checks that keep a malformed sample away from applications.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "panoptes/client/client.h"
+#include "panoptes_msgs/panoptes.h"
+
+namespace panoptes::client::detail {
+
+// A MocapFrame received at `receive_ns` (wall clock) as a Frame; nullopt with `error` saying what
+// is wrong (the field, the body or marker) for a malformed sample.
+std::optional<Frame> to_frame(const msg::MocapFrame& message, std::int64_t receive_ns, std::string& error);
+
+// The latency figures of a frame from its stamps; 0 for what a missing (0) stamp leaves unknown.
+Latency latency_of(const msg::MocapFrame& message, std::int64_t receive_ns);
+
+// A BodyDescriptions sample as the body set; nullopt with `error` for a malformed one (an empty or
+// duplicate name, a body without markers, a non-finite marker position).
+std::optional<std::vector<BodyDescription>> to_descriptions(const msg::BodyDescriptions& message,
+                                                            std::string& error);
+
+}  // namespace panoptes::client::detail

@@ -1,0 +1,252 @@
+// SPDX-License-Identifier: Apache-2.0
+// The Client over the loopback bus in one process: a Bus writer plays the estimator. Delivery in
+// order to the queue, latest() and callbacks; late-joining body descriptions and their replacement
+// by a restarted estimator; malformed samples counted and ignored; gaps, restarts, drops, timeouts,
+// callback exceptions, close(); errors naming what is wrong.
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <limits>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "panoptes/client/client.h"
+#include "panoptes/dds/bus.h"
+#include "panoptes_msgs/panoptes.h"
+
+namespace panoptes::client {
+namespace {
+
+using namespace std::chrono_literals;
+
+int test_domain() {
+  return 100 + static_cast<int>(getpid() % 100);
+}
+
+ClientOptions client_options() {
+  ClientOptions o;
+  o.domain_id = test_domain();
+  return o;
+}
+
+template <class Predicate>
+bool wait_until(Predicate predicate, std::chrono::milliseconds timeout = 5s) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!predicate()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(5ms);
+  }
+  return true;
+}
+
+// The estimator's side of the two topics.
+struct FakeEstimator {
+  FakeEstimator() : bus(make_options()) {}
+  static dds::BusOptions make_options() {
+    dds::BusOptions o;
+    o.domain_id = test_domain();
+    o.participant_name = "fake_estimator";
+    return o;
+  }
+  dds::Bus bus;
+  std::unique_ptr<dds::Writer<msg::MocapFrame>> frames = bus.make_writer<msg::MocapFrame>();
+  std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions = bus.make_writer<msg::BodyDescriptions>();
+};
+
+msg::MocapFrame frame(std::uint64_t number) {
+  msg::MocapFrame f;
+  f.frame_number(number);
+  f.stamp_ns(static_cast<long long>(number) * 1000);
+  f.publish_ns(static_cast<long long>(number) * 1000 + 500);
+  msg::FrameBody body;
+  body.name("head");
+  body.id(1);
+  body.tracking_valid(true);
+  body.pose().position({0.5, static_cast<double>(number), 1.5});
+  body.pose().orientation({0, 0, 0, 1});
+  f.bodies().push_back(body);
+  return f;
+}
+
+msg::BodyDescriptions descriptions(std::uint64_t generation, const std::string& name) {
+  msg::BodyDescriptions d;
+  d.generation(generation);
+  msg::BodyDescription b;
+  b.name(name);
+  b.id(1);
+  b.kind("passive");
+  for (double x : {0.0, 0.1, 0.2}) {
+    msg::MarkerPosition p;
+    p.position({x, 0.0, 0.0});
+    b.markers().push_back(p);
+  }
+  d.bodies().push_back(b);
+  return d;
+}
+
+TEST(Client, DeliversFramesInOrderToQueueLatestAndCallbacks) {
+  FakeEstimator estimator;
+  estimator.descriptions->write(descriptions(1, "head"));  // before the client: a late joiner
+  Client client(client_options());
+  std::atomic<int> called{0};
+  client.add_callback([&](const Frame& f) { called += static_cast<int>(f.frame_number); });
+  ASSERT_TRUE(estimator.frames->wait_for_readers(1, 5s));
+  for (std::uint64_t n = 1; n <= 5; ++n) estimator.frames->write(frame(n));
+  for (std::uint64_t n = 1; n <= 5; ++n) {
+    const FrameResult result = client.wait_for_frame(2s);
+    ASSERT_EQ(result.status, Status::kOk) << client.status_text();
+    EXPECT_EQ(result.frame.frame_number, n);
+    EXPECT_EQ(result.frame.bodies.at(0).position[1], static_cast<double>(n));
+    EXPECT_EQ(result.frame.latency.capture_to_publish_ns, 500);
+    EXPECT_GT(result.frame.receive_ns, 0);
+  }
+  EXPECT_TRUE(wait_until([&] { return called.load() == 1 + 2 + 3 + 4 + 5; }));
+  ASSERT_TRUE(client.latest());
+  EXPECT_EQ(client.latest()->frame_number, 5U);
+  EXPECT_TRUE(client.connected());
+  EXPECT_NE(client.status_text().find("receiving"), std::string::npos) << client.status_text();
+  ASSERT_TRUE(wait_until([&] { return client.body_descriptions().size() == 1; }));
+  EXPECT_EQ(client.body_description("head").markers.size(), 3U);
+  try {
+    client.body_description("nobody");
+    FAIL() << "no UnknownBody";
+  } catch (const UnknownBody& e) {
+    EXPECT_NE(std::string(e.what()).find("'nobody'"), std::string::npos) << e.what();
+  }
+  const Stats stats = client.stats();
+  EXPECT_EQ(stats.frames_received, 5U);
+  EXPECT_EQ(stats.frames_missed, 0U);
+  EXPECT_EQ(client.domain_id(), test_domain());
+}
+
+TEST(Client, CountsAndIgnoresMalformedSamples) {
+  FakeEstimator estimator;
+  Client client(client_options());
+  ASSERT_TRUE(estimator.frames->wait_for_readers(1, 5s));
+  ASSERT_TRUE(estimator.descriptions->wait_for_readers(1, 5s));
+  estimator.descriptions->write(descriptions(1, "head"));
+  ASSERT_TRUE(wait_until([&] { return client.stats().descriptions_received == 1; }));
+  estimator.descriptions->write(descriptions(2, ""));  // malformed: the previous set stays
+  msg::MocapFrame bad = frame(1);
+  bad.bodies()[0].pose().position({std::numeric_limits<double>::quiet_NaN(), 0, 0});
+  estimator.frames->write(bad);
+  estimator.frames->write(frame(2));
+  ASSERT_EQ(client.wait_for_frame(2s).frame.frame_number, 2U);
+  ASSERT_TRUE(wait_until([&] { return client.stats().descriptions_malformed == 1; }));
+  const Stats stats = client.stats();
+  EXPECT_EQ(stats.frames_malformed, 1U);
+  EXPECT_EQ(stats.frames_received, 1U);
+  EXPECT_EQ(client.body_descriptions().at(0).name, "head");
+  EXPECT_FALSE(stats.last_error.empty());
+}
+
+TEST(Client, GapsRestartsAndTheNewRunsDescriptions) {
+  auto first = std::make_unique<FakeEstimator>();
+  Client client(client_options());
+  ASSERT_TRUE(first->frames->wait_for_readers(1, 5s));
+  first->descriptions->write(descriptions(1, "head"));
+  for (std::uint64_t n : {1, 2, 5}) first->frames->write(frame(n));
+  ASSERT_TRUE(wait_until([&] { return client.stats().frames_received == 3; }));
+  first.reset();  // the estimator goes away; a new one starts with other bodies
+  FakeEstimator second;
+  second.descriptions->write(descriptions(1, "tool"));
+  ASSERT_TRUE(second.frames->wait_for_readers(1, 5s));
+  second.frames->write(frame(1));
+  ASSERT_TRUE(wait_until([&] { return client.stats().frames_received == 4; }));
+  ASSERT_TRUE(wait_until([&] {
+    const auto bodies = client.body_descriptions();
+    return bodies.size() == 1 && bodies[0].name == "tool";
+  }));
+  const Stats stats = client.stats();
+  EXPECT_EQ(stats.frames_missed, 2U);
+  EXPECT_EQ(stats.estimator_restarts, 1U);
+  EXPECT_EQ(client.latest()->frame_number, 1U);
+}
+
+TEST(Client, QueueOverflowDropsTheOldestOnceWaitedOn) {
+  FakeEstimator estimator;
+  ClientOptions options = client_options();
+  options.queue_depth = 2;
+  Client client(options);
+  ASSERT_TRUE(estimator.frames->wait_for_readers(1, 5s));
+  EXPECT_EQ(client.wait_for_frame(1ms).status, Status::kTimeout);
+  for (std::uint64_t n = 1; n <= 5; ++n) estimator.frames->write(frame(n));
+  ASSERT_TRUE(wait_until([&] { return client.stats().frames_received == 5; }));
+  EXPECT_EQ(client.stats().frames_dropped, 3U);
+  EXPECT_EQ(client.wait_for_frame(1s).frame.frame_number, 4U);
+  EXPECT_EQ(client.wait_for_frame(1s).frame.frame_number, 5U);
+}
+
+TEST(Client, CallbackExceptionsAreCaughtAndRemovedCallbacksStop) {
+  FakeEstimator estimator;
+  Client client(client_options());
+  std::atomic<int> calls{0};
+  const int thrower = client.add_callback([](const Frame&) { throw std::runtime_error("application bug"); });
+  client.add_callback([&](const Frame&) { ++calls; });
+  ASSERT_TRUE(estimator.frames->wait_for_readers(1, 5s));
+  estimator.frames->write(frame(1));
+  ASSERT_TRUE(wait_until([&] { return calls.load() == 1; }));
+  EXPECT_EQ(client.stats().callback_errors, 1U);
+  EXPECT_NE(client.stats().last_error.find("application bug"), std::string::npos);
+  client.remove_callback(thrower);
+  estimator.frames->write(frame(2));
+  ASSERT_TRUE(wait_until([&] { return calls.load() == 2; }));
+  EXPECT_EQ(client.stats().callback_errors, 1U);
+}
+
+TEST(Client, TimeoutSaysNoDataAndCloseWakesAWaiter) {
+  Client client(client_options());
+  const FrameResult result = client.wait_for_frame(50ms);
+  EXPECT_EQ(result.status, Status::kTimeout);
+  EXPECT_EQ(result.frame.frame_number, 0U);
+  EXPECT_FALSE(client.connected());
+  EXPECT_NE(client.status_text().find("no data for"), std::string::npos) << client.status_text();
+  FrameResult woken;
+  std::thread waiter([&] { woken = client.wait_for_frame(10s); });
+  std::this_thread::sleep_for(50ms);
+  client.close();
+  waiter.join();
+  EXPECT_EQ(woken.status, Status::kClosed);
+  client.close();  // idempotent
+  EXPECT_EQ(client.wait_for_frame(1ms).status, Status::kClosed);
+}
+
+TEST(Client, CloseFromItsOwnCallback) {
+  FakeEstimator estimator;
+  Client client(client_options());
+  std::atomic<int> calls{0};
+  client.add_callback([&](const Frame&) {
+    ++calls;
+    client.close();
+  });
+  ASSERT_TRUE(estimator.frames->wait_for_readers(1, 5s));
+  estimator.frames->write(frame(1));
+  ASSERT_TRUE(wait_until([&] { return calls.load() == 1; }));
+  estimator.frames->write(frame(2));
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(calls.load(), 1);
+  EXPECT_EQ(client.wait_for_frame(1ms).status, Status::kClosed);
+}
+
+TEST(Client, BadOptionsNameWhatIsWrong) {
+  ClientOptions options = client_options();
+  options.profile_file = "/nonexistent/profile.xml";
+  try {
+    Client client(options);
+    FAIL() << "no ClientError";
+  } catch (const ClientError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/profile.xml"), std::string::npos) << e.what();
+  }
+  options = client_options();
+  options.queue_depth = 0;
+  EXPECT_THROW(Client{options}, ClientError);
+  options = client_options();
+  options.domain_id = 300;
+  EXPECT_THROW(Client{options}, ClientError);
+}
+
+}  // namespace
+}  // namespace panoptes::client

@@ -1,0 +1,234 @@
+// SPDX-License-Identifier: Apache-2.0
+// The client's conversion of rt/panoptes/frames and rt/panoptes/body_descriptions samples, the
+// checks that reject malformed ones, the latency figures and the frame-number bookkeeping.
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "conversion.h"
+#include "frame_sequence.h"
+
+namespace panoptes::client::detail {
+namespace {
+
+msg::FrameBody tracked_body(const std::string& name, int id) {
+  msg::FrameBody body;
+  body.name(name);
+  body.id(id);
+  body.tracking_valid(true);
+  body.pose().position({0.1, 0.2, 0.30000000000000004});
+  body.pose().orientation({0.0, 0.0, std::sqrt(0.5), std::sqrt(0.5)});
+  body.linear_velocity({1, 2, 3});
+  body.angular_velocity({0.1, 0.2, 0.3});
+  body.sigma({1e-4, 2e-4, 3e-4, 1e-3, 2e-3, 3e-3});
+  body.quality(0.75F);
+  body.mean_marker_error(0.0004);
+  body.prediction_horizon_ns(5'000'000);
+  body.cameras(4);
+  return body;
+}
+
+msg::FrameMarker marker(long long id, const std::string& body, int index) {
+  msg::FrameMarker m;
+  m.state().id(id);
+  m.state().position({1.0 / 3.0, 2, 3});
+  m.state().velocity({0, 0, 0.5});
+  m.state().covariance({1e-8, 0, 0, 1e-8, 0, 1e-8});
+  m.state().status(index == 99 ? 2 : 1);
+  m.state().cameras(3);
+  m.body(body);
+  m.body_marker(index);
+  return m;
+}
+
+msg::MocapFrame good_frame() {
+  msg::MocapFrame f;
+  f.frame_number(42);
+  f.stamp_ns(1'000'000'000);
+  f.publish_ns(1'004'000'000);
+  f.source_camera("cam0");
+  f.source_frame(7);
+  f.stages().feature_publish_ns(1'001'000'000);
+  f.stages().received_ns(1'001'500'000);
+  f.stages().dequeued_ns(1'002'500'000);
+  f.stages().updated_ns(1'003'000'000);
+  f.bodies().push_back(tracked_body("head", 1));
+  msg::FrameBody lost;
+  lost.name("tool");
+  lost.id(2);
+  f.bodies().push_back(lost);
+  f.markers().push_back(marker(5, "head", 0));
+  f.markers().push_back(marker(9, "", -1));
+  f.markers().push_back(marker(11, "", 99));  // coasting, unlabelled
+  return f;
+}
+
+TEST(Conversion, CopiesEveryFieldExactly) {
+  std::string error;
+  const auto frame = to_frame(good_frame(), 1'005'000'000, error);
+  ASSERT_TRUE(frame) << error;
+  EXPECT_EQ(frame->frame_number, 42U);
+  EXPECT_EQ(frame->stamp_ns, 1'000'000'000);
+  EXPECT_EQ(frame->publish_ns, 1'004'000'000);
+  EXPECT_EQ(frame->receive_ns, 1'005'000'000);
+  EXPECT_EQ(frame->source_camera, "cam0");
+  EXPECT_EQ(frame->source_frame, 7);
+  ASSERT_EQ(frame->bodies.size(), 2U);
+  const RigidBody& head = frame->bodies[0];
+  EXPECT_EQ(head.name, "head");
+  EXPECT_EQ(head.id, 1);
+  EXPECT_TRUE(head.tracking_valid);
+  EXPECT_EQ(head.position[2], 0.30000000000000004);  // bit for bit, no float detour
+  EXPECT_EQ(head.orientation[3], std::sqrt(0.5));
+  EXPECT_EQ(head.linear_velocity[1], 2.0);
+  EXPECT_EQ(head.angular_velocity[2], 0.3);
+  EXPECT_EQ(head.sigma[5], 3e-3);
+  EXPECT_FLOAT_EQ(head.quality, 0.75);
+  EXPECT_EQ(head.mean_marker_error, 0.0004);
+  EXPECT_EQ(head.prediction_horizon_ns, 5'000'000);
+  EXPECT_EQ(head.cameras, 4);
+  EXPECT_FALSE(frame->bodies[1].tracking_valid);
+  EXPECT_EQ(frame->bodies[1].orientation[3], 1.0);
+  ASSERT_EQ(frame->markers.size(), 3U);
+  EXPECT_TRUE(frame->markers[0].labelled());
+  EXPECT_EQ(frame->markers[0].body, "head");
+  EXPECT_EQ(frame->markers[0].body_marker, 0);
+  EXPECT_EQ(frame->markers[0].position[0], 1.0 / 3.0);
+  EXPECT_EQ(frame->markers[0].cameras, 3);
+  EXPECT_FALSE(frame->markers[0].occluded);
+  EXPECT_FALSE(frame->markers[1].labelled());
+  EXPECT_EQ(frame->markers[1].body_marker, -1);
+  EXPECT_TRUE(frame->markers[2].occluded);
+  EXPECT_EQ(frame->markers[2].body_marker, -1);  // unlabelled: no index whatever was sent
+  EXPECT_EQ(frame->unlabelled_markers().size(), 2U);
+  ASSERT_NE(frame->body("head"), nullptr);
+  EXPECT_EQ(frame->body("head")->id, 1);
+  EXPECT_EQ(frame->body("nobody"), nullptr);
+}
+
+TEST(Conversion, LatencyFromTheStamps) {
+  const Latency l = latency_of(good_frame(), 1'005'000'000);
+  EXPECT_EQ(l.capture_to_publish_ns, 4'000'000);
+  EXPECT_EQ(l.publish_to_receive_ns, 1'000'000);
+  EXPECT_EQ(l.capture_to_receive_ns, 5'000'000);
+  EXPECT_EQ(l.camera_ns, 1'000'000);
+  EXPECT_EQ(l.network_ns, 500'000);
+  EXPECT_EQ(l.queue_ns, 1'000'000);
+  EXPECT_EQ(l.update_ns, 500'000);
+  EXPECT_EQ(l.output_ns, 1'000'000);
+  msg::MocapFrame without_stages = good_frame();
+  without_stages.stages(msg::FrameStages());
+  const Latency unknown = latency_of(without_stages, 1'005'000'000);
+  EXPECT_EQ(unknown.camera_ns, 0);
+  EXPECT_EQ(unknown.network_ns, 0);
+  EXPECT_EQ(unknown.queue_ns, 0);
+  EXPECT_EQ(unknown.update_ns, 0);
+  EXPECT_EQ(unknown.output_ns, 0);
+  EXPECT_EQ(unknown.capture_to_receive_ns, 5'000'000);
+}
+
+// Each malformed variant is rejected with an error naming what is wrong.
+void expect_rejected(const msg::MocapFrame& frame, const std::string& named) {
+  std::string error;
+  EXPECT_FALSE(to_frame(frame, 1, error));
+  EXPECT_NE(error.find(named), std::string::npos) << error;
+}
+
+TEST(Conversion, RejectsMalformedFrames) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  msg::MocapFrame f = good_frame();
+  f.bodies()[0].pose().position({nan, 0, 0});
+  expect_rejected(f, "body 'head'");
+  f = good_frame();
+  f.bodies()[0].pose().orientation({0, 0, 0, 0.5});
+  expect_rejected(f, "unit quaternion");
+  f = good_frame();
+  f.bodies()[0].angular_velocity({0, std::numeric_limits<double>::infinity(), 0});
+  expect_rejected(f, "non-finite");
+  f = good_frame();
+  f.bodies()[1].name("");
+  expect_rejected(f, "without a name");
+  f = good_frame();
+  f.bodies()[1].name("head");
+  expect_rejected(f, "'head' appears twice");
+  f = good_frame();
+  f.markers()[1].state().position({0, nan, 0});
+  expect_rejected(f, "marker 9");
+  f = good_frame();
+  f.markers()[0].body_marker(-1);
+  expect_rejected(f, "marker 5");
+  f = good_frame();
+  f.frame_number(0);
+  expect_rejected(f, "frame_number");
+  // A body that is not tracked may carry anything in its (unused) pose fields.
+  f = good_frame();
+  f.bodies()[1].pose().position({nan, nan, nan});
+  std::string error;
+  EXPECT_TRUE(to_frame(f, 1, error)) << error;
+}
+
+msg::BodyDescriptions good_descriptions() {
+  msg::BodyDescriptions d;
+  d.generation(3);
+  for (const char* name : {"head", "tool"}) {
+    msg::BodyDescription b;
+    b.name(name);
+    b.id(static_cast<int>(d.bodies().size()) + 1);
+    b.kind("passive");
+    for (double x : {0.0, 0.1, 0.2}) {
+      msg::MarkerPosition p;
+      p.position({x, x * x, 0.0});
+      b.markers().push_back(p);
+    }
+    d.bodies().push_back(b);
+  }
+  return d;
+}
+
+TEST(Conversion, Descriptions) {
+  std::string error;
+  const auto bodies = to_descriptions(good_descriptions(), error);
+  ASSERT_TRUE(bodies) << error;
+  ASSERT_EQ(bodies->size(), 2U);
+  EXPECT_EQ((*bodies)[1].name, "tool");
+  EXPECT_EQ((*bodies)[1].id, 2);
+  EXPECT_EQ((*bodies)[1].kind, "passive");
+  ASSERT_EQ((*bodies)[1].markers.size(), 3U);
+  EXPECT_EQ((*bodies)[1].markers[2][1], 0.2 * 0.2);
+}
+
+TEST(Conversion, RejectsMalformedDescriptions) {
+  std::string error;
+  msg::BodyDescriptions d = good_descriptions();
+  d.bodies()[1].name("head");
+  EXPECT_FALSE(to_descriptions(d, error));
+  EXPECT_NE(error.find("'head' appears twice"), std::string::npos) << error;
+  d = good_descriptions();
+  d.bodies()[0].name("");
+  EXPECT_FALSE(to_descriptions(d, error));
+  EXPECT_NE(error.find("without a name"), std::string::npos) << error;
+  d = good_descriptions();
+  d.bodies()[1].markers()[2].position({0, std::numeric_limits<double>::quiet_NaN(), 0});
+  EXPECT_FALSE(to_descriptions(d, error));
+  EXPECT_NE(error.find("'tool': markers[2]"), std::string::npos) << error;
+  d = good_descriptions();
+  d.bodies()[0].markers().clear();
+  EXPECT_FALSE(to_descriptions(d, error));
+  EXPECT_NE(error.find("'head': no markers"), std::string::npos) << error;
+}
+
+TEST(FrameSequence, CountsGapsAndRestarts) {
+  FrameSequence sequence;
+  EXPECT_EQ(sequence.observe(100).missed, 0U);  // joined late: not missed
+  EXPECT_EQ(sequence.observe(101).missed, 0U);
+  EXPECT_EQ(sequence.observe(105).missed, 3U);
+  const auto restart = sequence.observe(3);  // a new run whose frames 1 and 2 did not arrive
+  EXPECT_TRUE(restart.restart);
+  EXPECT_EQ(restart.missed, 2U);
+  EXPECT_FALSE(sequence.observe(4).restart);
+}
+
+}  // namespace
+}  // namespace panoptes::client::detail
