@@ -3,11 +3,11 @@
 // by Cyclone's own idlc from idl/panoptes.idl and idl/ros2.idl) that reads what estimator_node
 // publishes with Fast DDS, as evidence that any DDS implementation and ROS 2 can consume it
 // (issue 15, docs/interop.md). It subscribes to the native rt/panoptes/bodies and rt/panoptes/tracks
-// and, with --ros2, to the ROS 2 topics rt/panoptes/<body>/pose, rt/panoptes/<body>/twist, rt/tf,
-// rt/rigid_bodies and rt/markers; writes what it decoded as Pose and Track JSON Lines
-// (docs/contracts.md) for panoptes_eval; cross-checks the ROS 2 topics against each other and the
-// native ones; and prints a JSON summary. Exit 0: every topic read had samples and every check
-// held; 1: not; 2: bad arguments or no DDS.
+// (plus rt/panoptes/frames and the transient-local rt/panoptes/body_descriptions) and, with --ros2, to the
+// ROS 2 topics rt/panoptes/<body>/pose, rt/panoptes/<body>/twist, rt/tf, rt/rigid_bodies and rt/markers;
+// writes what it decoded as Pose and Track JSON Lines (docs/contracts.md) for panoptes_eval; cross-checks the
+// ROS 2 topics against each other and the native ones; and prints a JSON summary. Exit 0: every topic read
+// had samples and every check held; 1: not; 2: bad arguments or no DDS.
 #include <errno.h>
 #include <inttypes.h>
 #include <math.h>
@@ -31,7 +31,7 @@ enum {
   kMaxNameLength = 63,
   kTakeBatch = 64,
   kReaderDepth = 256,  // samples a reader keeps (per instance) between two takes
-  kMaxReaders = 8 + 3 * kMaxBodies,
+  kMaxReaders = 16 + 3 * kMaxBodies,
 };
 
 // Two values are "the same" when they differ by less than this: the ROS 2 messages are built from
@@ -71,7 +71,7 @@ typedef struct PoseList {
 typedef struct FrameNumbers {
   uint64_t count;
   uint64_t not_increasing;  // frame_number <= the previous one
-  uint32_t last;
+  uint64_t last;
 } FrameNumbers;
 
 typedef struct MarkerStats {
@@ -106,6 +106,14 @@ typedef struct Capture {
   FILE* native_tracks_out;
   FILE* ros_poses_out;
   uint64_t native_poses;
+  uint64_t native_poses_reliable;
+  FrameNumbers mocap_frames;  // rt/panoptes/frames
+  uint64_t mocap_frame_bodies_unknown;
+  uint64_t mocap_frame_markers;
+  uint64_t mocap_frame_markers_labelled;
+  uint64_t body_descriptions;  // rt/panoptes/body_descriptions samples
+  uint64_t body_descriptions_wrong;
+  uint64_t body_descriptions_generation;
   uint64_t native_poses_unknown_body;
   uint64_t native_pose_not_finite;
   uint64_t track_frames;
@@ -127,6 +135,7 @@ typedef struct Capture {
   FrameNumbers marker_frames;
   MarkerStats marker_stats;
   PoseList native;               // rt/panoptes/bodies
+  PoseList mocap_bodies;         // rt/panoptes/frames: the tracked bodies' poses
   PoseList ros_poses;            // rt/panoptes/<body>/pose (best-effort reader)
   PoseList ros_twists;           // rt/panoptes/<body>/twist: v, w
   PoseList tf;                   // rt/tf transforms
@@ -272,6 +281,48 @@ static void on_track_frame(Capture* capture, const panoptes_msg_TrackFrame* samp
                     capture->track_index.positions_count - first);
 }
 
+static void count_frame_number(FrameNumbers* numbers, uint64_t frame_number) {
+  if (numbers->count > 0 && frame_number <= numbers->last) ++numbers->not_increasing;
+  numbers->last = frame_number;
+  ++numbers->count;
+}
+
+static void on_mocap_frame(Capture* capture, const panoptes_msg_MocapFrame* sample) {
+  count_frame_number(&capture->mocap_frames, sample->frame_number);
+  for (uint32_t i = 0; i < sample->bodies._length; ++i) {
+    const panoptes_msg_FrameBody* frame_body = &sample->bodies._buffer[i];
+    const int body = body_index(capture->options, frame_body->name);
+    if (body < 0) {
+      ++capture->mocap_frame_bodies_unknown;
+      continue;
+    }
+    if (!frame_body->tracking_valid) continue;
+    PoseRecord* pose = pose_list_add(&capture->mocap_bodies);
+    pose->body = body;
+    pose->stamp_ns = sample->stamp_ns;
+    memcpy(pose->p, frame_body->pose.position, sizeof pose->p);
+    memcpy(pose->q, frame_body->pose.orientation, sizeof pose->q);
+  }
+  capture->mocap_frame_markers += sample->markers._length;
+  for (uint32_t i = 0; i < sample->markers._length; ++i) {
+    if (sample->markers._buffer[i].body[0] != '\0') ++capture->mocap_frame_markers_labelled;
+  }
+}
+
+// The whole set of defined bodies: exactly the names given with --bodies, each with a layout.
+static void on_body_descriptions(Capture* capture, const panoptes_msg_BodyDescriptions* sample) {
+  ++capture->body_descriptions;
+  capture->body_descriptions_generation = sample->generation;
+  bool seen[kMaxBodies] = {false};
+  bool right = (int)sample->bodies._length == capture->options->body_count;
+  for (uint32_t i = 0; right && i < sample->bodies._length; ++i) {
+    const int body = body_index(capture->options, sample->bodies._buffer[i].name);
+    right = body >= 0 && !seen[body] && sample->bodies._buffer[i].markers._length >= 3;
+    if (body >= 0) seen[body] = true;
+  }
+  if (!right) ++capture->body_descriptions_wrong;
+}
+
 static void on_ros_pose(Capture* capture, int body, bool reliable,
                         const geometry_msgs_msg_dds__PoseStamped_* sample) {
   if (reliable) {
@@ -325,12 +376,6 @@ static void on_tf(Capture* capture, const tf2_msgs_msg_dds__TFMessage_* sample) 
     memcpy(pose->p, p, sizeof p);
     memcpy(pose->q, q, sizeof q);
   }
-}
-
-static void count_frame_number(FrameNumbers* numbers, uint32_t frame_number) {
-  if (numbers->count > 0 && frame_number <= numbers->last) ++numbers->not_increasing;
-  numbers->last = frame_number;
-  ++numbers->count;
 }
 
 static void on_rigid_bodies(Capture* capture, const mocap4r2_msgs_msg_dds__RigidBodies_* sample) {
@@ -398,7 +443,10 @@ static void on_markers(Capture* capture, const mocap4r2_msgs_msg_dds__Markers_* 
 
 typedef enum TopicKind {
   kNativePose,
+  kNativePoseReliable,
   kNativeTracks,
+  kNativeFrames,
+  kNativeBodyDescriptions,
   kRosPose,
   kRosPoseReliable,
   kRosTwist,
@@ -419,8 +467,11 @@ typedef struct Readers {
   int count;
 } Readers;
 
+typedef enum ReaderQos { kBestEffort, kReliable, kReliableTransientLocal } ReaderQos;
+
 static bool add_reader(dds_entity_t participant, Readers* readers, TopicKind kind, int body,
-                       const dds_topic_descriptor_t* descriptor, const char* topic_name, bool reliable) {
+                       const dds_topic_descriptor_t* descriptor, const char* topic_name,
+                       ReaderQos reader_qos) {
   Reader* reader = &readers->items[readers->count];
   snprintf(reader->topic_name, sizeof reader->topic_name, "%s", topic_name);
   reader->kind = kind;
@@ -431,8 +482,11 @@ static bool add_reader(dds_entity_t participant, Readers* readers, TopicKind kin
     return false;
   }
   dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT, DDS_SECS(1));
-  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, kReaderDepth);
+  dds_qset_reliability(
+      qos, reader_qos == kBestEffort ? DDS_RELIABILITY_BEST_EFFORT : DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  // The body descriptions are kept for late joiners (transient-local, keep-last 1).
+  if (reader_qos == kReliableTransientLocal) dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, reader_qos == kReliableTransientLocal ? 1 : kReaderDepth);
   reader->entity = dds_create_reader(participant, topic, qos, NULL);
   dds_delete_qos(qos);
   if (reader->entity < 0) {
@@ -443,36 +497,56 @@ static bool add_reader(dds_entity_t participant, Readers* readers, TopicKind kin
   return true;
 }
 
+static bool create_native_readers(dds_entity_t participant, Readers* readers) {
+  // rt/panoptes/bodies twice: best effort (what the topic asks) and reliable (what its writers offer).
+  return add_reader(participant, readers, kNativePose, -1, &panoptes_msg_BodyPose_desc, "rt/panoptes/bodies",
+                    kBestEffort) &&
+         add_reader(participant, readers, kNativePoseReliable, -1, &panoptes_msg_BodyPose_desc,
+                    "rt/panoptes/bodies", kReliable) &&
+         add_reader(participant, readers, kNativeTracks, -1, &panoptes_msg_TrackFrame_desc,
+                    "rt/panoptes/tracks", kBestEffort) &&
+         add_reader(participant, readers, kNativeFrames, -1, &panoptes_msg_MocapFrame_desc,
+                    "rt/panoptes/frames", kBestEffort) &&
+         add_reader(participant, readers, kNativeBodyDescriptions, -1, &panoptes_msg_BodyDescriptions_desc,
+                    "rt/panoptes/body_descriptions", kReliableTransientLocal);
+}
+
 static bool create_readers(dds_entity_t participant, const Options* options, Readers* readers) {
-  bool ok = add_reader(participant, readers, kNativePose, -1, &panoptes_msg_BodyPose_desc,
-                       "rt/panoptes/bodies", false) &&
-            add_reader(participant, readers, kNativeTracks, -1, &panoptes_msg_TrackFrame_desc,
-                       "rt/panoptes/tracks", false);
+  bool ok = create_native_readers(participant, readers);
   if (!options->ros2) return ok;
   for (int body = 0; ok && body < options->body_count; ++body) {
+    const dds_topic_descriptor_t* pose = &geometry_msgs_msg_dds__PoseStamped__desc;
     char name[128];
     snprintf(name, sizeof name, "rt/panoptes/%s/pose", options->bodies[body]);
     // Both QoS a ROS 2 subscriber asks for: SensorDataQoS (best effort) and the default (reliable).
-    ok = add_reader(participant, readers, kRosPose, body, &geometry_msgs_msg_dds__PoseStamped__desc, name,
-                    false) &&
-         add_reader(participant, readers, kRosPoseReliable, body, &geometry_msgs_msg_dds__PoseStamped__desc,
-                    name, true);
+    ok = add_reader(participant, readers, kRosPose, body, pose, name, kBestEffort) &&
+         add_reader(participant, readers, kRosPoseReliable, body, pose, name, kReliable);
     snprintf(name, sizeof name, "rt/panoptes/%s/twist", options->bodies[body]);
     ok = ok && add_reader(participant, readers, kRosTwist, body, &geometry_msgs_msg_dds__TwistStamped__desc,
-                          name, false);
+                          name, kBestEffort);
   }
   return ok &&
-         add_reader(participant, readers, kRosTf, -1, &tf2_msgs_msg_dds__TFMessage__desc, "rt/tf", false) &&
+         add_reader(participant, readers, kRosTf, -1, &tf2_msgs_msg_dds__TFMessage__desc, "rt/tf",
+                    kBestEffort) &&
          add_reader(participant, readers, kRosRigidBodies, -1, &mocap4r2_msgs_msg_dds__RigidBodies__desc,
-                    "rt/rigid_bodies", false) &&
+                    "rt/rigid_bodies", kBestEffort) &&
          add_reader(participant, readers, kRosMarkers, -1, &mocap4r2_msgs_msg_dds__Markers__desc,
-                    "rt/markers", false);
+                    "rt/markers", kBestEffort);
 }
 
 static void dispatch(Capture* capture, const Reader* reader, const void* sample) {
   switch (reader->kind) {
     case kNativePose:
       on_native_pose(capture, sample);
+      break;
+    case kNativePoseReliable:
+      ++capture->native_poses_reliable;
+      break;
+    case kNativeFrames:
+      on_mocap_frame(capture, sample);
+      break;
+    case kNativeBodyDescriptions:
+      on_body_descriptions(capture, sample);
       break;
     case kNativeTracks:
       on_track_frame(capture, sample);
@@ -628,7 +702,7 @@ static void match_markers_to_tracks(Capture* capture) {
 }
 
 static void print_agreement(const char* name, const Agreement* agreement, bool last) {
-  printf("    \"%s\": {\"records\": %" PRIu64 ", \"matched\": %" PRIu64 ", \"differing\": %" PRIu64
+  printf("      \"%s\": {\"records\": %" PRIu64 ", \"matched\": %" PRIu64 ", \"differing\": %" PRIu64
          ", \"max_difference\": %.3g}%s\n",
          name, agreement->records, agreement->matched, agreement->differing, agreement->max_difference,
          last ? "" : ",");
@@ -692,27 +766,52 @@ static void print_ros2_summary(const Capture* capture, const RosAgreements* agre
 }
 
 // Prints the JSON summary; returns whether every check held.
-static bool report(Capture* capture) {
+static bool report_native(Capture* capture) {
   const Options* options = capture->options;
-  bool ok = capture->native_poses > 0 && capture->tracks > 0 && capture->native_pose_not_finite == 0 &&
-            capture->native_poses_unknown_body == 0 && capture->track_not_finite == 0;
+  bool ok = capture->native_poses > 0 && capture->native_poses_reliable > 0 && capture->tracks > 0 &&
+            capture->native_pose_not_finite == 0 && capture->native_poses_unknown_body == 0 &&
+            capture->track_not_finite == 0;
   uint64_t per_body[kMaxBodies] = {0};
   for (size_t i = 0; i < capture->native.count; ++i) ++per_body[capture->native.items[i].body];
-  printf("{\n  \"domain\": %" PRIu32 ",\n  \"duration_s\": %.3f,\n", options->domain, options->duration_s);
-  printf("  \"native\": {\n    \"bodies\": {\"samples\": %" PRIu64 ", \"unknown_body\": %" PRIu64
-         ", \"not_finite\": %" PRIu64 ", \"per_body\": {",
-         capture->native_poses, capture->native_poses_unknown_body, capture->native_pose_not_finite);
+  printf("  \"native\": {\n    \"bodies\": {\"samples\": %" PRIu64 ", \"reliable\": %" PRIu64
+         ", \"unknown_body\": %" PRIu64 ", \"not_finite\": %" PRIu64 ", \"per_body\": {",
+         capture->native_poses, capture->native_poses_reliable, capture->native_poses_unknown_body,
+         capture->native_pose_not_finite);
   for (int body = 0; body < options->body_count; ++body) {
     printf("%s\"%s\": %" PRIu64, body == 0 ? "" : ", ", options->bodies[body], per_body[body]);
     ok = ok && per_body[body] > 0;
   }
   printf("}},\n    \"tracks\": {\"frames\": %" PRIu64 ", \"tracks\": %" PRIu64 ", \"invalid\": %" PRIu64
-         "}\n  },\n",
+         "},\n",
          capture->track_frames, capture->tracks, capture->track_not_finite);
+  // rt/panoptes/frames: its tracked bodies' poses are the BodyPoses of the same frame.
+  const Agreement frames_vs_bodies = agree(&capture->mocap_bodies, &capture->native, kComparePose);
+  printf("    \"frames\": {\"samples\": %" PRIu64 ", \"frame_number_not_increasing\": %" PRIu64
+         ", \"unknown_body\": %" PRIu64 ", \"markers\": %" PRIu64 ", \"labelled_markers\": %" PRIu64 "},\n",
+         capture->mocap_frames.count, capture->mocap_frames.not_increasing,
+         capture->mocap_frame_bodies_unknown, capture->mocap_frame_markers,
+         capture->mocap_frame_markers_labelled);
+  printf("    \"body_descriptions\": {\"samples\": %" PRIu64 ", \"wrong\": %" PRIu64
+         ", \"generation\": %" PRIu64 "},\n",
+         capture->body_descriptions, capture->body_descriptions_wrong, capture->body_descriptions_generation);
+  printf("    \"agreement\": {\n");
+  print_agreement("frames_vs_bodies", &frames_vs_bodies, true);
+  printf("    }\n  },\n");
+  return ok && capture->mocap_frames.count > 0 && capture->mocap_frames.not_increasing == 0 &&
+         capture->mocap_frame_bodies_unknown == 0 && capture->body_descriptions > 0 &&
+         capture->body_descriptions_wrong == 0 && frames_vs_bodies.matched > 0 &&
+         frames_vs_bodies.differing == 0;
+}
+
+// Prints the JSON summary; returns whether every check held.
+static bool report(Capture* capture) {
+  const Options* options = capture->options;
+  PoseList* native = &capture->native;
+  qsort(native->items, native->count, sizeof *native->items, compare_body_stamp);
+  printf("{\n  \"domain\": %" PRIu32 ",\n  \"duration_s\": %.3f,\n", options->domain, options->duration_s);
+  bool ok = report_native(capture);
   if (options->ros2) {
-    PoseList* native = &capture->native;
     PoseList* ros_poses = &capture->ros_poses;
-    qsort(native->items, native->count, sizeof *native->items, compare_body_stamp);
     qsort(ros_poses->items, ros_poses->count, sizeof *ros_poses->items, compare_body_stamp);
     match_markers_to_tracks(capture);
     const RosAgreements agreements = {
@@ -722,7 +821,7 @@ static bool report(Capture* capture) {
         .rigid_bodies_vs_pose = agree(&capture->rigid_bodies, ros_poses, kComparePose),
     };
     print_ros2_summary(capture, &agreements);
-    ok = ok && ros2_checks_hold(capture, &agreements);
+    ok = ros2_checks_hold(capture, &agreements) && ok;
   }
   printf("  \"ros2_checked\": %s,\n  \"ok\": %s\n}\n", options->ros2 ? "true" : "false",
          ok ? "true" : "false");
@@ -836,8 +935,8 @@ static FILE* open_output(const char* dir, const char* name) {
 }
 
 static void free_capture(Capture* capture) {
-  PoseList* lists[] = {&capture->native, &capture->ros_poses, &capture->ros_twists, &capture->tf,
-                       &capture->rigid_bodies};
+  PoseList* lists[] = {&capture->native,     &capture->mocap_bodies, &capture->ros_poses,
+                       &capture->ros_twists, &capture->tf,           &capture->rigid_bodies};
   for (size_t i = 0; i < sizeof lists / sizeof lists[0]; ++i) free(lists[i]->items);
   TrackFrameIndex* indexes[] = {&capture->track_index, &capture->marker_index};
   for (size_t i = 0; i < 2; ++i) {
