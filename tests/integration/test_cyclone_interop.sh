@@ -79,6 +79,12 @@ decoded=$(jq '.native.bodies.samples' "$summary")
 echo "poses: estimator wrote $own, Cyclone decoded $decoded from rt/panoptes/bodies"
 [ "$decoded" -ge $((own * 95 / 100)) ] && pass "Cyclone decoded >= 95% of the poses ($decoded of $own)" ||
   fail "Cyclone decoded $decoded of $own poses"
+# What Cyclone decoded is what the estimator wrote: the same doubles for the same body and stamp.
+jq -c '[.stamp_ns, .body, .p, .q, .v, .w]' "$work/own_poses.jsonl" | sort >"$work/own_poses.keys"
+jq -c '[.stamp_ns, .body, .p, .q, .v, .w]' "$work/cyclone/native_poses.jsonl" | sort >"$work/cyclone_poses.keys"
+differing=$(comm -13 "$work/own_poses.keys" "$work/cyclone_poses.keys" | wc -l)
+[ "$differing" -eq 0 ] && pass "every pose Cyclone decoded equals the estimator's own output, bit for bit" ||
+  { fail "$differing poses Cyclone decoded differ from the estimator's own output"; comm -13 "$work/own_poses.keys" "$work/cyclone_poses.keys" | head -3; }
 own_frames=$(jq -s 'map(.stamp_ns) | unique | length' "$work/own_tracks.jsonl")
 decoded_frames=$(jq -s 'map(.stamp_ns) | unique | length' "$work/cyclone/native_tracks.jsonl")
 [ "$decoded_frames" -ge $((own_frames * 95 / 100)) ] &&
