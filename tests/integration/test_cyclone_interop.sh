@@ -56,7 +56,7 @@ outside=$(echo "$sockets" | awk -v probe="pid=$probe_pid," -v first="$first_port
   if (address == "0.0.0.0" && index($0, probe) && port >= first && port < first + 160) { wildcard++; next }
   print } END { if (wildcard > 2) print "more than two wildcard sockets" }')
 if [ -n "$sockets" ] && [ -z "$outside" ]; then
-  pass "UDP sockets bound to 127.0.0.0/8 only, but Cyclone's unicast receive ports ($(echo "$sockets" | wc -l) sockets)"
+  pass "UDP sockets bound to 127.0.0.0/8, except Cyclone's two unicast receive ports ($(echo "$sockets" | wc -l) sockets)"
 else
   fail "UDP sockets outside loopback (or none seen):"
   echo "$sockets"
