@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/estimator_app/ros2_outputs.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cstddef>
 #include <limits>
@@ -48,7 +49,8 @@ std::string ros2_name_token(const std::string& body_name) {
     }
   }
   while (!token.empty() && token.back() == '_') token.pop_back();
-  if (token.empty() || std::isdigit(static_cast<unsigned char>(token.front())) != 0) token = "body_" + token;
+  if (token.empty()) return "body";
+  if (std::isdigit(static_cast<unsigned char>(token.front())) != 0) token.insert(0, "body_");
   return token;
 }
 
@@ -217,7 +219,20 @@ Ros2Outputs::BodyWriters& Ros2Outputs::writers_of(const session::BodyOutput& bod
   return body_writers_.emplace(body.name, std::move(writers)).first->second;
 }
 
+void Ros2Outputs::assign_new_tokens(const session::FrameOutput& frame) {
+  // Names that are tokens already claim theirs first, so that they keep them.
+  for (const bool valid_names : {true, false}) {
+    for (const auto& body : frame.bodies) {
+      if (tokens_.count(body.name) == 0 && (ros2_name_token(body.name) == body.name) == valid_names)
+        token_of(body);
+    }
+  }
+}
+
 void Ros2Outputs::publish(const session::FrameOutput& frame) {
+  if (std::any_of(frame.bodies.begin(), frame.bodies.end(),
+                  [this](const session::BodyOutput& body) { return tokens_.count(body.name) == 0; }))
+    assign_new_tokens(frame);
   frame_tokens_.resize(frame.bodies.size());
   for (std::size_t b = 0; b < frame.bodies.size(); ++b) {
     const session::BodyOutput& body = frame.bodies[b];

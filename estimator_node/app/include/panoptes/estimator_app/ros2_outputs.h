@@ -29,7 +29,8 @@ builtin_interfaces::msg::dds_::Time_ to_ros2_time(TimeNs stamp_ns);
 
 // A body name as one ROS 2 name token: characters outside [A-Za-z0-9_] become '_', runs of '_'
 // become one, leading and trailing '_' are dropped, and a token that would be empty or start with a
-// digit gets the prefix "body_". Names that are already tokens are returned unchanged.
+// digit gets the prefix "body_" (an empty one is "body"). Names that are already tokens are returned
+// unchanged.
 std::string ros2_name_token(const std::string& body_name);
 
 // The message builders, apart from the writers so that tests and benchmarks can check them.
@@ -74,7 +75,9 @@ class Ros2Outputs {
 
   // The token of `body`, unique among the bodies: the first body to claim a token keeps it, a later
   // one whose name maps to the same token gets "_<id>" appended (id: its place in the bodies file).
+  // Within a frame, names that are tokens already claim first (assign_new_tokens).
   const std::string& token_of(const session::BodyOutput& body);
+  void assign_new_tokens(const session::FrameOutput& frame);
   BodyWriters& writers_of(const session::BodyOutput& body);
 
   dds::Bus& bus_;
