@@ -55,6 +55,9 @@ typedef struct PoseRecord {
   int body;
   int64_t stamp_ns;
   int64_t horizon_ns;
+  // The time the pose is for: stamp_ns + horizon_ns (the ROS 2 header stamp of a predicted pose).
+  // Records of different topics are paired on (body, pose_time_ns).
+  int64_t pose_time_ns;
   double p[3];
   double q[4];  // x, y, z, w
   double v[3];
@@ -79,8 +82,9 @@ typedef struct MarkerStats {
   uint64_t labelled;   // named "<body>/<index>" with a known body
   uint64_t bad_names;  // neither "" nor "<body>/<index>"
   uint64_t not_finite;
-  uint64_t with_track;               // translation equals a track of the TrackFrame with the same stamp
-  uint64_t frames_with_track_frame;  // a TrackFrame with the same stamp was decoded
+  uint64_t with_track;                  // translation equals a track of the TrackFrame with the same stamp
+  uint64_t frames_with_track_frame;     // a TrackFrame with the same stamp was decoded
+  uint64_t in_frames_with_track_frame;  // markers of those messages
 } MarkerStats;
 
 // Positions of every track of every decoded TrackFrame (or marker of every rt/markers message), for
@@ -232,6 +236,7 @@ static void on_native_pose(Capture* capture, const panoptes_msg_BodyPose* sample
   pose->body = body;
   pose->stamp_ns = sample->stamp_ns;
   pose->horizon_ns = sample->prediction_horizon_ns;
+  pose->pose_time_ns = sample->stamp_ns + sample->prediction_horizon_ns;
   memcpy(pose->p, sample->pose.position, sizeof pose->p);
   memcpy(pose->q, sample->pose.orientation, sizeof pose->q);
   memcpy(pose->v, sample->linear_velocity, sizeof pose->v);
@@ -300,6 +305,7 @@ static void on_mocap_frame(Capture* capture, const panoptes_msg_MocapFrame* samp
     PoseRecord* pose = pose_list_add(&capture->mocap_bodies);
     pose->body = body;
     pose->stamp_ns = sample->stamp_ns;
+    pose->pose_time_ns = sample->stamp_ns + frame_body->prediction_horizon_ns;
     memcpy(pose->p, frame_body->pose.position, sizeof pose->p);
     memcpy(pose->q, frame_body->pose.orientation, sizeof pose->q);
   }
@@ -334,6 +340,7 @@ static void on_ros_pose(Capture* capture, int body, bool reliable,
   PoseRecord* pose = pose_list_add(&capture->ros_poses);
   pose->body = body;
   pose->stamp_ns = ros_stamp_ns(&sample->header.stamp);
+  pose->pose_time_ns = pose->stamp_ns;
   const geometry_msgs_msg_dds__Pose_* source = &sample->pose;
   const double p[3] = {source->position.x, source->position.y, source->position.z};
   const double q[4] = {source->orientation.x, source->orientation.y, source->orientation.z,
@@ -349,6 +356,7 @@ static void on_ros_twist(Capture* capture, int body, const geometry_msgs_msg_dds
   PoseRecord* twist = pose_list_add(&capture->ros_twists);
   twist->body = body;
   twist->stamp_ns = ros_stamp_ns(&sample->header.stamp);
+  twist->pose_time_ns = twist->stamp_ns;
   const geometry_msgs_msg_dds__Twist_* source = &sample->twist;
   const double v[3] = {source->linear.x, source->linear.y, source->linear.z};
   const double w[3] = {source->angular.x, source->angular.y, source->angular.z};
@@ -370,6 +378,7 @@ static void on_tf(Capture* capture, const tf2_msgs_msg_dds__TFMessage_* sample) 
     PoseRecord* pose = pose_list_add(&capture->tf);
     pose->body = body;
     pose->stamp_ns = ros_stamp_ns(&transform->header.stamp);
+    pose->pose_time_ns = pose->stamp_ns;
     const geometry_msgs_msg_dds__Transform_* source = &transform->transform;
     const double p[3] = {source->translation.x, source->translation.y, source->translation.z};
     const double q[4] = {source->rotation.x, source->rotation.y, source->rotation.z, source->rotation.w};
@@ -391,6 +400,7 @@ static void on_rigid_bodies(Capture* capture, const mocap4r2_msgs_msg_dds__Rigid
     PoseRecord* pose = pose_list_add(&capture->rigid_bodies);
     pose->body = body;
     pose->stamp_ns = ros_stamp_ns(&sample->header.stamp);
+    pose->pose_time_ns = pose->stamp_ns;
     const geometry_msgs_msg_dds__Pose_* source = &rigid_body->pose;
     const double p[3] = {source->position.x, source->position.y, source->position.z};
     const double q[4] = {source->orientation.x, source->orientation.y, source->orientation.z,
@@ -605,11 +615,11 @@ static void capture_loop(Capture* capture, dds_entity_t participant, const Reade
 // ------------------------------------------------------------------------------------------------
 // Checks after the capture.
 
-static int compare_body_stamp(const void* left, const void* right) {
+static int compare_body_time(const void* left, const void* right) {
   const PoseRecord* a = left;
   const PoseRecord* b = right;
   if (a->body != b->body) return a->body < b->body ? -1 : 1;
-  if (a->stamp_ns != b->stamp_ns) return a->stamp_ns < b->stamp_ns ? -1 : 1;
+  if (a->pose_time_ns != b->pose_time_ns) return a->pose_time_ns < b->pose_time_ns ? -1 : 1;
   return 0;
 }
 
@@ -626,13 +636,13 @@ static const PoseRecord* find_first(const PoseList* sorted, const PoseRecord* ke
   size_t high = sorted->count;
   while (low < high) {
     const size_t middle = low + (high - low) / 2;
-    if (compare_body_stamp(&sorted->items[middle], key) < 0) {
+    if (compare_body_time(&sorted->items[middle], key) < 0) {
       low = middle + 1;
     } else {
       high = middle;
     }
   }
-  if (low == sorted->count || compare_body_stamp(&sorted->items[low], key) != 0) return NULL;
+  if (low == sorted->count || compare_body_time(&sorted->items[low], key) != 0) return NULL;
   return &sorted->items[low];
 }
 
@@ -642,10 +652,10 @@ static double max_difference(const double* a, const double* b, int count) {
   return largest;
 }
 
-// How the records of one topic agree with those of another with the same body and stamp.
+// How the records of one topic agree with those of another for the same body and pose time.
 typedef struct Agreement {
   uint64_t records;
-  uint64_t matched;    // a reference record with the same body and stamp exists
+  uint64_t matched;    // a reference record for the same body and pose time exists
   uint64_t differing;  // ... but none of them has the same values
   double max_difference;
 } Agreement;
@@ -662,7 +672,7 @@ static Agreement agree(const PoseList* subject, const PoseList* sorted_reference
     ++agreement.matched;
     double best = INFINITY;
     const PoseRecord* end = sorted_reference->items + sorted_reference->count;
-    for (; candidate != end && compare_body_stamp(candidate, record) == 0; ++candidate) {
+    for (; candidate != end && compare_body_time(candidate, record) == 0; ++candidate) {
       const double difference =
           compared == kComparePose
               ? fmax(max_difference(candidate->p, record->p, 3), max_difference(candidate->q, record->q, 4))
@@ -689,6 +699,7 @@ static void match_markers_to_tracks(Capture* capture) {
                                                   sizeof *tracks->frames, compare_slice_stamp);
     if (track_frame == NULL) continue;
     ++capture->marker_stats.frames_with_track_frame;
+    capture->marker_stats.in_frames_with_track_frame += marker_frame->count;
     for (size_t i = 0; i < marker_frame->count; ++i) {
       const double* marker = markers->positions[marker_frame->first + i];
       for (size_t k = 0; k < track_frame->count; ++k) {
@@ -725,7 +736,8 @@ static bool ros2_checks_hold(const Capture* capture, const RosAgreements* agreem
        capture->tf_bad_parent == 0 && capture->tf_unknown_child == 0 &&
        capture->rigid_bodies_unknown_name == 0 && capture->rigid_body_frames.not_increasing == 0 &&
        capture->marker_frames.not_increasing == 0 && capture->marker_stats.bad_names == 0 &&
-       capture->marker_stats.not_finite == 0;
+       capture->marker_stats.not_finite == 0 && capture->marker_stats.frames_with_track_frame > 0 &&
+       capture->marker_stats.with_track == capture->marker_stats.in_frames_with_track_frame;
   const Agreement* all[] = {&agreements->pose_vs_native, &agreements->twist_vs_native,
                             &agreements->tf_vs_pose, &agreements->rigid_bodies_vs_pose};
   for (size_t i = 0; i < sizeof all / sizeof all[0]; ++i)
@@ -751,12 +763,13 @@ static void print_ros2_summary(const Capture* capture, const RosAgreements* agre
          capture->rigid_body_messages, capture->rigid_bodies.count, capture->rigid_bodies_unknown_name,
          capture->rigid_body_frames.not_increasing);
   const MarkerStats* markers = &capture->marker_stats;
-  printf(
-      "    \"markers\": {\"messages\": %" PRIu64 ", \"markers\": %" PRIu64 ", \"labelled\": %" PRIu64
-      ", \"bad_names\": %" PRIu64 ", \"not_finite\": %" PRIu64 ", \"frame_number_not_increasing\": %" PRIu64
-      ", \"messages_with_track_frame\": %" PRIu64 ", \"equal_to_a_track\": %" PRIu64 "},\n",
-      capture->markers_messages, markers->markers, markers->labelled, markers->bad_names, markers->not_finite,
-      capture->marker_frames.not_increasing, markers->frames_with_track_frame, markers->with_track);
+  printf("    \"markers\": {\"messages\": %" PRIu64 ", \"markers\": %" PRIu64 ", \"labelled\": %" PRIu64
+         ", \"bad_names\": %" PRIu64 ", \"not_finite\": %" PRIu64
+         ", \"frame_number_not_increasing\": %" PRIu64 ", \"messages_with_track_frame\": %" PRIu64
+         ", \"their_markers\": %" PRIu64 ", \"equal_to_a_track\": %" PRIu64 "},\n",
+         capture->markers_messages, markers->markers, markers->labelled, markers->bad_names,
+         markers->not_finite, capture->marker_frames.not_increasing, markers->frames_with_track_frame,
+         markers->in_frames_with_track_frame, markers->with_track);
   printf("    \"agreement\": {\n");
   print_agreement("pose_vs_native_bodies", &agreements->pose_vs_native, false);
   print_agreement("twist_vs_native_bodies", &agreements->twist_vs_native, false);
@@ -807,12 +820,12 @@ static bool report_native(Capture* capture) {
 static bool report(Capture* capture) {
   const Options* options = capture->options;
   PoseList* native = &capture->native;
-  qsort(native->items, native->count, sizeof *native->items, compare_body_stamp);
+  qsort(native->items, native->count, sizeof *native->items, compare_body_time);
   printf("{\n  \"domain\": %" PRIu32 ",\n  \"duration_s\": %.3f,\n", options->domain, options->duration_s);
   bool ok = report_native(capture);
   if (options->ros2) {
     PoseList* ros_poses = &capture->ros_poses;
-    qsort(ros_poses->items, ros_poses->count, sizeof *ros_poses->items, compare_body_stamp);
+    qsort(ros_poses->items, ros_poses->count, sizeof *ros_poses->items, compare_body_time);
     match_markers_to_tracks(capture);
     const RosAgreements agreements = {
         .pose_vs_native = agree(ros_poses, native, kComparePose),
