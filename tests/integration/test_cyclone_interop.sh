@@ -6,7 +6,8 @@
 # rt/panoptes/frames, rt/panoptes/body_descriptions) and the ROS 2 topics (rt/panoptes/<body>/pose
 # and /twist, rt/tf, rt/rigid_bodies, rt/markers). Every topic must decode, the ROS 2 topics must
 # agree with each other and with the native ones, and the poses and tracks Cyclone decoded must
-# score against the simulator's truth as well as the estimator's own output of the same run. PANOPTES_CYCLONE_ROS2=0 leaves the ROS 2 topics out.
+# score against the simulator's truth as well as the estimator's own output of the same run.
+# PANOPTES_CYCLONE_ROS2=0 leaves the ROS 2 topics out.
 source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/clients.yaml"
 probe="$bin/panoptes_cyclone_probe"
