@@ -64,16 +64,10 @@ TimeNs pose_time(const session::BodyOutput& body) {
   return body.pose.stamp_ns + body.pose.horizon_ns;
 }
 
-ros2::Point_ point(const Eigen::Vector3d& p) {
-  ros2::Point_ out;
-  out.x(p.x());
-  out.y(p.y());
-  out.z(p.z());
-  return out;
-}
-
-ros2::Vector3_ vector3(const Eigen::Vector3d& v) {
-  ros2::Vector3_ out;
+// geometry_msgs Point_ or Vector3_ (the same three members).
+template <class Xyz>
+Xyz xyz(const Eigen::Vector3d& v) {
+  Xyz out;
   out.x(v.x());
   out.y(v.y());
   out.z(v.z());
@@ -98,7 +92,7 @@ void labelled_marker(const session::MarkerOutput& marker, mocap::Marker_& out) {
   out.id_type(kMarkerUseBoth);
   out.marker_index(marker.body_marker);
   out.marker_name(marker.body + "/" + std::to_string(marker.body_marker));
-  out.translation(point(marker.track.p));
+  out.translation(xyz<ros2::Point_>(marker.track.p));
 }
 
 }  // namespace
@@ -110,14 +104,14 @@ void Ros2Messages::header(TimeNs stamp_ns, std_msgs::msg::dds_::Header_& out) co
 
 void Ros2Messages::pose(const session::BodyOutput& body, ros2::PoseStamped_& out) const {
   header(pose_time(body), out.header());
-  out.pose().position(point(body.pose.p));
+  out.pose().position(xyz<ros2::Point_>(body.pose.p));
   out.pose().orientation(quaternion(body.pose.q));
 }
 
 void Ros2Messages::twist(const session::BodyOutput& body, ros2::TwistStamped_& out) const {
   header(pose_time(body), out.header());
-  out.twist().linear(vector3(body.pose.v));
-  out.twist().angular(vector3(body.pose.w));
+  out.twist().linear(xyz<ros2::Vector3_>(body.pose.v));
+  out.twist().angular(xyz<ros2::Vector3_>(body.pose.w));
 }
 
 void Ros2Messages::transforms(const session::FrameOutput& frame, const std::vector<std::string>& tokens,
@@ -130,7 +124,7 @@ void Ros2Messages::transforms(const session::FrameOutput& frame, const std::vect
     ros2::TransformStamped_& transform = out.transforms()[n++];
     header(pose_time(body), transform.header());
     transform.child_frame_id(settings_.child_frame_prefix + tokens[b]);
-    transform.transform().translation(vector3(body.pose.p));
+    transform.transform().translation(xyz<ros2::Vector3_>(body.pose.p));
     transform.transform().rotation(quaternion(body.pose.q));
   }
   out.transforms().resize(n);
@@ -160,7 +154,7 @@ void Ros2Messages::rigid_bodies(const session::FrameOutput& frame, mocap::RigidB
       labelled_marker(marker, rigid_body.markers()[m++]);
     }
     rigid_body.markers().resize(m);
-    rigid_body.pose().position(point(body.pose.p));
+    rigid_body.pose().position(xyz<ros2::Point_>(body.pose.p));
     rigid_body.pose().orientation(quaternion(body.pose.q));
   }
   out.rigidbodies().resize(n);
@@ -177,7 +171,7 @@ void Ros2Messages::markers(const session::FrameOutput& frame, mocap::Markers_& o
       m.id_type(kMarkerUseIndex);
       m.marker_index(index_of_track(marker.track.id));
       m.marker_name().clear();
-      m.translation(point(marker.track.p));
+      m.translation(xyz<ros2::Point_>(marker.track.p));
     } else {
       labelled_marker(marker, m);
     }

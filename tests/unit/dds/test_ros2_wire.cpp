@@ -113,15 +113,9 @@ std_msgs::msg::dds_::Header_ header_of(const Stamp& h) {
   out.frame_id(h.frame_id);
   return out;
 }
-geometry::Point_ point_of(const Xyz& v) {
-  geometry::Point_ out;
-  out.x(v.x);
-  out.y(v.y);
-  out.z(v.z);
-  return out;
-}
-geometry::Vector3_ vector_of(const Xyz& v) {
-  geometry::Vector3_ out;
+template <class Out>  // geometry_msgs Point_ or Vector3_
+Out xyz_of(const Xyz& v) {
+  Out out;
   out.x(v.x);
   out.y(v.y);
   out.z(v.z);
@@ -140,7 +134,7 @@ mocap::Marker_ marker_of(const MarkerValues& m) {
   out.id_type(m.id_type);
   out.marker_index(m.index);
   out.marker_name(m.name);
-  out.translation(point_of(m.p));
+  out.translation(xyz_of<geometry::Point_>(m.p));
   return out;
 }
 
@@ -196,7 +190,7 @@ TEST(Ros2Wire, ReferenceEncoderMatchesHandWrittenBytes) {
 TEST(Ros2Wire, PoseStamped) {
   geometry::PoseStamped_ sample;
   sample.header(header_of(kStamp));
-  sample.pose().position(point_of(kPosition));
+  sample.pose().position(xyz_of<geometry::Point_>(kPosition));
   sample.pose().orientation(quaternion_of(kRotation));
   Cdr1 reference;
   encode(reference, kStamp);
@@ -208,8 +202,8 @@ TEST(Ros2Wire, PoseStamped) {
 TEST(Ros2Wire, TwistStamped) {
   geometry::TwistStamped_ sample;
   sample.header(header_of(kOtherStamp));
-  sample.twist().linear(vector_of(kPosition));
-  sample.twist().angular(vector_of(kAngular));
+  sample.twist().linear(xyz_of<geometry::Vector3_>(kPosition));
+  sample.twist().angular(xyz_of<geometry::Vector3_>(kAngular));
   Cdr1 reference;
   encode(reference, kOtherStamp);
   encode(reference, kPosition);
@@ -226,7 +220,7 @@ TEST(Ros2Wire, TFMessage) {
     geometry::TransformStamped_ transform;
     transform.header(header_of(stamp));
     transform.child_frame_id(child);
-    transform.transform().translation(vector_of(kPosition));
+    transform.transform().translation(xyz_of<geometry::Vector3_>(kPosition));
     transform.transform().rotation(quaternion_of(kRotation));
     sample.transforms().push_back(transform);
     encode(reference, stamp);
@@ -275,7 +269,7 @@ TEST(Ros2Wire, RigidBodies) {
       body.markers().push_back(marker_of(marker));
       encode(reference, marker);
     }
-    body.pose().position(point_of(kPosition));
+    body.pose().position(xyz_of<geometry::Point_>(kPosition));
     body.pose().orientation(quaternion_of(kRotation));
     encode(reference, kPosition);
     encode(reference, kRotation);
