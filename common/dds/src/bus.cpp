@@ -55,6 +55,11 @@ struct TopicSpec {
   // The first member is a string naming the camera or client the sample is for or from
   // (Bus::make_reader's `only_id` filters on it).
   bool leading_id;
+  // How long after sending a sample a reliable writer ignores requests to resend it (Fast DDS's
+  // nackSupressionDuration, 0 by default). 0 re-arms a timer on the event thread for every sample
+  // and every reliable reader, which then contends for the writer: at the frame rate of the ROS 2
+  // topics that doubled their cost (docs/benchmarks.md, "Issue 15: ROS 2 publishers").
+  int nack_suppression_ms = 0;
 };
 
 template <class T>
@@ -109,11 +114,11 @@ PANOPTES_PROBE_TOPIC(LatencyProbeEcho, "rt/panoptes/latency_probe/echo", BodyPos
 // ROS 2 types (idl/ros2.idl, docs/ros2.md): reliable, volatile, keep-last, which a ROS 2
 // SensorDataQoS (best-effort) subscriber and a default (reliable) one both match. An empty name:
 // the caller names the topic (per body).
-#define PANOPTES_ROS2_TOPIC(Package, Type, topic_name, depth)                                          \
-  template <>                                                                                          \
-  struct TopicTraits<Package::msg::dds_::Type##_> {                                                    \
-    using PubSubType = Package::msg::dds_::Type##_PubSubType;                                          \
-    static TopicSpec spec() { return {topic_name, true, Durability::kVolatile, depth, false, false}; } \
+#define PANOPTES_ROS2_TOPIC(Package, Type, topic_name, depth)                                              \
+  template <>                                                                                              \
+  struct TopicTraits<Package::msg::dds_::Type##_> {                                                        \
+    using PubSubType = Package::msg::dds_::Type##_PubSubType;                                              \
+    static TopicSpec spec() { return {topic_name, true, Durability::kVolatile, depth, false, false, 50}; } \
   };
 PANOPTES_ROS2_TOPIC(geometry_msgs, PoseStamped, "", 10)
 PANOPTES_ROS2_TOPIC(geometry_msgs, TwistStamped, "", 10)
@@ -508,6 +513,8 @@ std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos, const std::string& topic_na
     writer_qos.reliable_writer_qos().times.heartbeatPeriod =
         eprosima::fastrtps::Duration_t(0, kOfferedHeartbeatNs);
   }
+  writer_qos.reliable_writer_qos().times.nackSupressionDuration =
+      eprosima::fastrtps::Duration_t(0, static_cast<std::uint32_t>(spec.nack_suppression_ms) * 1'000'000U);
   // Evaluate the content filter of every matched reader (default: at most 32 readers per writer).
   writer_qos.writer_resource_limits().reader_filters_allocation =
       eprosima::fastrtps::ResourceLimitedContainerConfig(0, kMaxInstances, 1);

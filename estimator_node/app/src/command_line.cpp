@@ -54,6 +54,10 @@ struct SettingsFlags {
                         "distinct cameras that must see a new track before it is published")
              ->check(CLI::Range(2, 64)),
          [this](auto& c) { c.tracker.confirm_cameras = values.tracker.confirm_cameras; });
+    bind(app.add_flag("--ros2,!--no-ros2", values.ros2.enabled,
+                      "live: publish the ROS 2 topics (docs/ros2.md: rt/panoptes/<body>/pose, twist, rt/tf, "
+                      "rt/rigid_bodies, rt/markers)"),
+         [this](auto& c) { c.ros2.enabled = values.ros2.enabled; });
   }
 };
 

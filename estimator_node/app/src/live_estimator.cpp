@@ -18,6 +18,7 @@
 #include "panoptes/estimator_app/frame_messages.h"
 #include "panoptes/estimator_app/frame_periods.h"
 #include "panoptes/estimator_app/latency_probe_echoer.h"
+#include "panoptes/estimator_app/ros2_outputs.h"
 #include "panoptes/estimator_app/status.h"
 #include "panoptes/process.h"
 #include "panoptes/session/log.h"
@@ -68,6 +69,7 @@ class LiveEstimator {
       log("benchmark aid: echoing latency probes (rt/panoptes/latency_probe/...)");
     }
     outputs_.emplace(options_.out_tracks, options_.out_poses);
+    if (session.config().ros2.enabled) ros2_.emplace(*bus_, session.config().ros2);
     if (!options_.calibration_file.empty()) {
       for (const auto& camera : load_calibration(options_.calibration_file).cameras)
         from_file_.insert(camera.id);
@@ -120,6 +122,7 @@ class LiveEstimator {
   std::uint64_t descriptions_generation_ = 0;
   bool descriptions_published_ = false;
   std::optional<LatencyProbeEchoer> latency_probe_;
+  std::optional<Ros2Outputs> ros2_;  // docs/ros2.md
   std::optional<session::JsonlOutputs> outputs_;
   std::set<std::string> from_file_;
   FramePeriods periods_;
@@ -204,6 +207,7 @@ void LiveEstimator::finish(Processed& done) {
   message.publish_ns(wall_now_ns());
   track_writer_->write(message);
   publish_predictions(done.frame);
+  if (ros2_) ros2_->publish(done.output);
   outputs_->write_tracks(done.tracks);
   outputs_->write_poses(done.poses);
   if (latency_probe_) latency_probe_->trace(done.frame, done.stamps, message.publish_ns());

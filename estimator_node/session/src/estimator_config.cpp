@@ -9,6 +9,7 @@
 #include <limits>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
@@ -82,6 +83,16 @@ class FieldReader {
     value = reader_.get_bool(key, value);
   }
 
+  // `check` returns "" for an admissible value, else why not.
+  void text(const char* key, std::string& value, std::string (*check)(const std::string&),
+            const char* /*doc*/) {
+    keys_.emplace_back(key);
+    if (!reader_.has(key)) return;
+    std::string read = reader_.get_string(key);
+    if (const std::string reason = check(read); !reason.empty()) reader_.fail(key, reason);
+    value = std::move(read);
+  }
+
   template <class Visit>
   void section(const char* key, const char* /*doc*/, Visit&& visit) {
     keys_.emplace_back(key);
@@ -112,6 +123,12 @@ class FieldWriter {
   }
 
   void flag(const char* key, bool& value, const char* doc) { line(key, value ? "true" : "false", doc); }
+
+  void text(const char* key, std::string& value, std::string (*)(const std::string&), const char* doc) {
+    YAML::Emitter quoted;  // always quoted: "" and values such as "true" or "1" stay strings
+    quoted << YAML::DoubleQuoted << value;
+    line(key, quoted.c_str(), doc);
+  }
 
   template <class Visit>
   void section(const char* key, const char* doc, Visit&& visit) {
@@ -258,12 +275,35 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.section("bodies", "rigid bodies (docs/bodies.md)", [&](auto& s) { visit_bodies(s, o.bodies); });
 }
 
+// A tf2 frame id: not empty, no leading '/' (tf2 rejects it), no whitespace or control characters.
+std::string check_frame_id(const std::string& id) {
+  if (id.empty()) return "must not be empty";
+  if (id.front() == '/') return "must not start with '/' (tf2 frame ids are relative)";
+  for (const char c : id) {
+    if (static_cast<unsigned char>(c) <= ' ') return "must not contain spaces or control characters";
+  }
+  return "";
+}
+
+std::string check_frame_prefix(const std::string& prefix) {
+  return prefix.empty() ? "" : check_frame_id(prefix);
+}
+
+template <class Fields>
+void visit_ros2(Fields& f, Ros2Settings& o) {
+  f.flag("enabled", o.enabled, "live: publish the ROS 2 topics (estimator_node --ros2 / --no-ros2)");
+  f.text("frame_id", o.frame_id, check_frame_id, "header.frame_id: the world frame (tf parent)");
+  f.text("child_frame_prefix", o.child_frame_prefix, check_frame_prefix,
+         "tf child frame id = this + the body's name");
+}
+
 template <class Fields>
 void visit_config(Fields& f, EstimatorConfig& config) {
   f.section("node", "the session and the live node", [&](auto& s) { visit_node(s, config.node); });
   f.section("screen", "the gate for bad input", [&](auto& s) { visit_screen(s, config.screen); });
   f.section("tracker", "the multi-point tracker (docs/estimator.md)",
             [&](auto& s) { visit_tracker(s, config.tracker); });
+  f.section("ros2", "ROS 2 topics on the wire (docs/ros2.md)", [&](auto& s) { visit_ros2(s, config.ros2); });
 }
 
 }  // namespace

@@ -49,6 +49,9 @@ EstimatorConfig unusual_config() {
   config.tracker.bodies.identification.max_clique_steps = 5'000'000'000ULL;
   config.tracker.bodies.led_marker.retry_extra_cluster = false;
   config.tracker.bodies.led_marker.seed = 42;
+  config.ros2.enabled = false;
+  config.ros2.frame_id = "odom:#\"1\\'";    // YAML's special characters must survive the round trip
+  config.ros2.child_frame_prefix = "true";  // a string, not a boolean
   return config;
 }
 
@@ -69,6 +72,9 @@ TEST(EstimatorConfig, PrintedConfigurationLoadsBackEqual) {
   EXPECT_EQ(loaded.tracker.init.window_ns, 17'000'001);
   EXPECT_EQ(loaded.tracker.bodies.identification.max_clique_steps, 5'000'000'000ULL);
   EXPECT_FALSE(loaded.tracker.bodies.led_marker.retry_extra_cluster);
+  EXPECT_FALSE(loaded.ros2.enabled);
+  EXPECT_EQ(loaded.ros2.frame_id, "odom:#\"1\\'");
+  EXPECT_EQ(loaded.ros2.child_frame_prefix, "true");
   EXPECT_FALSE(loaded == EstimatorConfig{});
 }
 
@@ -107,6 +113,20 @@ TEST(EstimatorConfig, OutOfRangeValuesAreNamedWithTheirPath) {
       << error;
   error = load_error("nan.yaml", "tracker:\n  process_noise: .nan\n");
   EXPECT_NE(error.find("nan.yaml: tracker.process_noise:"), std::string::npos) << error;
+}
+
+TEST(EstimatorConfig, BadRos2FrameIdsAreNamedWithTheirPath) {
+  std::string error = load_error("ros2.yaml", "ros2:\n  frame_id: /world\n");
+  EXPECT_NE(error.find("ros2.yaml: ros2.frame_id: must not start with '/'"), std::string::npos) << error;
+  error = load_error("ros2_empty.yaml", "ros2:\n  frame_id: \"\"\n");
+  EXPECT_NE(error.find("ros2_empty.yaml: ros2.frame_id: must not be empty"), std::string::npos) << error;
+  error = load_error("ros2_space.yaml", "ros2:\n  child_frame_prefix: \"a b\"\n");
+  EXPECT_NE(error.find("ros2_space.yaml: ros2.child_frame_prefix: must not contain spaces"),
+            std::string::npos)
+      << error;
+  EXPECT_TRUE(
+      load_error("ros2_ok.yaml", "ros2:\n  enabled: false\n  frame_id: map\n  child_frame_prefix: \"\"\n")
+          .empty());
 }
 
 TEST(EstimatorConfig, WrongTypesAreNamedWithTheirPath) {

@@ -19,6 +19,13 @@ class YamlReader;
 
 namespace panoptes::session {
 
+// The ROS 2 topics the live node publishes (docs/ros2.md).
+struct Ros2Settings {
+  bool enabled = true;             // publish them (estimator_node --ros2 / --no-ros2)
+  std::string frame_id = "world";  // header.frame_id of every message: the world frame
+  std::string child_frame_prefix;  // tf child frame = prefix + body name (e.g. "mocap/")
+};
+
 // Settings of the session and the live node around the tracker.
 struct NodeSettings {
   std::size_t inbox_capacity = 4096;   // frames waiting to be ordered by stamp
@@ -34,6 +41,7 @@ struct EstimatorConfig {
   NodeSettings node;
   estimator::FrameScreenOptions screen;
   estimator::TrackerOptions tracker;
+  Ros2Settings ros2;
 };
 
 // Reads a configuration: keys left out keep their defaults. Throws ConfigError

@@ -1,0 +1,129 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# The ROS 2 topics live (issue 15, docs/ros2.md): estimator_node on the clients scene (two bodies,
+# two loose markers, six cameras) publishes rt/panoptes/<body>/pose and twist, rt/tf,
+# rt/rigid_bodies and rt/markers; panoptes_ros2_probe reads every topic with a best-effort (ROS 2
+# SensorDataQoS) and a reliable (ROS 2 default QoS) reader. Checks: both readers receive every topic;
+# stamps are the capture stamps of the estimator's own poses and its values bit for bit; frame ids,
+# tf child frames, marker names and id types, frame numbers; poses agree with the simulator's truth;
+# the ros2: configuration keys and --no-ros2 take effect.
+source "$(dirname "$0")/lib.sh"
+scene="$source_dir/deploy/scenes/clients.yaml"
+expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
+
+# run_live NAME SECONDS ESTIMATOR-ARGS...: estimator_node, the probe and six cameras for SECONDS.
+run_live() {
+  local name="$1" seconds="$2"
+  shift 2
+  epoch=$(( ($(date +%s) + 3) * 1000000000 ))
+  "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
+    --out-poses "$work/$name.poses.jsonl" --duration $((seconds + 5)) --quiet "$@" >"$work/$name.log" 2>&1 &
+  local estimator=$!
+  pids+=("$estimator")
+  "$bin/panoptes_ros2_probe" --out "$work/$name.ros2.jsonl" --body head --body tool --duration $((seconds + 5)) \
+    >"$work/$name.probe.log" 2>&1 &
+  local probe=$!
+  pids+=("$probe")
+  for camera in c0 c1 c2 c3 c4 c5; do
+    "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration "$seconds" \
+      --quiet >"$work/$name.$camera.log" 2>&1 &
+    pids+=("$!")
+  done
+  timeout $((seconds + 30)) tail --pid="$estimator" -f /dev/null
+  wait "$estimator"
+  local rc=$?
+  timeout 30 tail --pid="$probe" -f /dev/null
+  [ "$rc" -eq 0 ] && pass "$name: estimator exited cleanly" || { fail "$name: estimator exit $rc"; tail "$work/$name.log"; }
+}
+
+# --- default settings ---------------------------------------------------------------------------
+run_live default 12
+grep -q "ROS 2: body" "$work/default.log" && fail "valid body names were renamed" || pass "head and tool keep their names"
+python3 - "$work/default.ros2.jsonl" "$work/default.poses.jsonl" "$work/ros2_poses.jsonl" <<'EOF' &&
+import collections, json, sys
+ros2_file, poses_file, out_file = sys.argv[1:4]
+failures = []
+def check(ok, what):
+    print(("PASS: " if ok else "FAIL: ") + what)
+    if not ok: failures.append(what)
+def ns(header): return header["sec"] * 1_000_000_000 + header["nanosec"]
+
+own = {}
+for line in open(poses_file):
+    pose = json.loads(line)
+    own[(pose["body"], pose["stamp_ns"])] = pose
+samples = collections.defaultdict(list)
+for line in open(ros2_file):
+    sample = json.loads(line)
+    samples[(sample["topic"], sample["qos"])].append(sample)
+topics = ["rt/tf", "rt/rigid_bodies", "rt/markers"] + [f"rt/panoptes/{b}/{k}" for b in ("head", "tool") for k in ("pose", "twist")]
+frames = len(samples[("rt/rigid_bodies", "reliable")])
+print(f"rt/rigid_bodies frames received reliably: {frames}; own poses: {len(own)}")
+check(frames > 2000, "thousands of frames on rt/rigid_bodies")
+for topic in topics:
+    for qos in ("best_effort", "reliable"):
+        n = len(samples[(topic, qos)])
+        check(n >= 0.95 * len(samples[(topic, "reliable")]) and n > 1000, f"{topic} {qos}: {n} samples")
+
+# Poses: the estimator's own Pose JSONL, bit for bit, stamped with its capture stamp.
+matched = total = 0
+with open(out_file, "w") as out:
+    for body in ("head", "tool"):
+        for sample in samples[(f"rt/panoptes/{body}/pose", "reliable")]:
+            total += 1
+            pose = own.get((body, ns(sample["header"])))
+            matched += pose is not None and pose["p"] == sample["p"] and pose["q"] == sample["q"]
+            out.write(json.dumps({"stamp_ns": ns(sample["header"]), "body": body, "p": sample["p"], "q": sample["q"]}) + "\n")
+check(total > 0 and matched == total, f"pose samples equal the estimator's poses at their stamps: {matched}/{total}")
+twists = samples[("rt/panoptes/head/twist", "reliable")]
+check(all(own.get(("head", ns(t["header"]))) is not None and own[("head", ns(t["header"]))]["v"] == t["v"]
+          and own[("head", ns(t["header"]))]["w"] == t["w"] for t in twists), "twists carry the poses' velocities")
+
+every_header = [s["header"] for topic in topics for s in samples[(topic, "reliable")] if "header" in s]
+every_header += [t["header"] for s in samples[("rt/tf", "reliable")] for t in s["transforms"]]
+check(all(h["frame_id"] == "world" for h in every_header), "every header.frame_id is 'world'")
+check(all(0 <= h["nanosec"] < 1_000_000_000 for h in every_header), "nanosec in [0, 1e9)")
+children = {t["child_frame_id"] for s in samples[("rt/tf", "reliable")] for t in s["transforms"]}
+check(children == {"head", "tool"}, f"tf child frames {sorted(children)}")
+
+# RigidBodies and Markers: frame numbers rise; labelled markers by name and index, loose ones by index.
+for topic in ("rt/rigid_bodies", "rt/markers"):
+    numbers = [s["frame_number"] for s in samples[(topic, "reliable")]]
+    check(numbers == sorted(numbers) and len(set(numbers)) == len(numbers) and numbers[0] >= 1, f"{topic} frame numbers rise")
+bodies_markers = [(b["name"], m) for s in samples[("rt/rigid_bodies", "reliable")] for b in s["rigidbodies"] for m in b["markers"]]
+check(len(bodies_markers) > 0 and all(m["id_type"] == 2 and m["name"] == f"{name}/{m['index']}" for name, m in bodies_markers),
+      "rigid bodies carry their labelled markers as '<body>/<index>', USE_BOTH")
+markers = [m for s in samples[("rt/markers", "reliable")] for m in s["markers"]]
+labelled = [m for m in markers if m["id_type"] == 2]
+loose = [m for m in markers if m["id_type"] == 1]
+check(len(labelled) > 0 and len(loose) > 0 and len(labelled) + len(loose) == len(markers), f"markers: {len(labelled)} labelled, {len(loose)} unlabelled")
+check(all(m["name"] == "" and m["index"] > 0 for m in loose), "unlabelled markers by track id")
+sys.exit(1 if failures else 0)
+EOF
+  pass "ROS 2 samples checked" || fail "ROS 2 samples (see above)"
+expect_exit 0 "poses read from the ROS 2 topics agree with the truth (<= 2 mm, no wrong poses)" -- \
+  "$bin/panoptes_eval" --scene "$scene" --poses "$work/ros2_poses.jsonl" --epoch-ns "$epoch" --warmup 1 \
+  --require-pose-rmse-mm 2 --require-no-wrong-poses
+cat "$work/last.out"
+
+# --- the ros2: keys, and --no-ros2 ---------------------------------------------------------------
+printf 'ros2:\n  frame_id: map\n  child_frame_prefix: "mocap/"\n' >"$work/ros2.yaml"
+run_live configured 4 --config "$work/ros2.yaml"
+python3 - "$work/configured.ros2.jsonl" <<'EOF' && pass "frame_id and child_frame_prefix from the configuration" || fail "configured frame ids"
+import json, sys
+tf = [t for line in open(sys.argv[1]) for s in [json.loads(line)] if s["topic"] == "rt/tf" for t in s["transforms"]]
+poses = [s for line in open(sys.argv[1]) for s in [json.loads(line)] if s["topic"].endswith("/pose")]
+print(len(tf), "transforms,", len(poses), "poses")
+sys.exit(0 if tf and poses and all(t["header"]["frame_id"] == "map" and t["child_frame_id"] in ("mocap/head", "mocap/tool") for t in tf)
+         and all(p["header"]["frame_id"] == "map" for p in poses) else 1)
+EOF
+run_live disabled 4 --config "$work/ros2.yaml" --no-ros2
+[ -s "$work/disabled.poses.jsonl" ] && [ ! -s "$work/disabled.ros2.jsonl" ] && pass "--no-ros2: poses, but no ROS 2 topics" ||
+  fail "--no-ros2 still published ROS 2 topics (or no poses at all)"
+expect_exit 0 "--print-config shows the ros2 keys" -- "$bin/estimator_node" --config "$work/ros2.yaml" --no-ros2 --print-config
+grep -q 'enabled: false' "$work/last.out" && grep -q 'frame_id: "map"' "$work/last.out" &&
+  grep -q 'child_frame_prefix: "mocap/"' "$work/last.out" && pass "printed ros2 keys" || fail "printed ros2 keys"
+printf 'ros2:\n  frame_id: /world\n' >"$work/bad.yaml"
+expect_exit 2 "a bad ros2.frame_id is refused" -- "$bin/estimator_node" --config "$work/bad.yaml" --print-config
+expect_stderr_contains "ros2.frame_id" "the error names the key"
+finish

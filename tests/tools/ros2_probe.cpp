@@ -1,0 +1,181 @@
+// SPDX-License-Identifier: Apache-2.0
+// panoptes_ros2_probe: a ROS 2 application on the wire without ROS (integration/test_ros2_topics.sh).
+// Subscribes to the estimator's ROS 2 topics (docs/ros2.md) twice, as a ROS 2 SensorDataQoS
+// subscriber would (best effort) and as a default one (reliable), and records one JSON line per
+// sample received: the topic, the reader's QoS, header stamp and frame id, and the values a test
+// compares with the estimator's own Pose JSONL and the simulator's truth.
+#include <cstdio>
+#include <exception>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "panoptes/cli.h"
+#include "panoptes/dds/bus.h"
+#include "panoptes/process.h"
+#include "panoptes/time.h"
+#include "panoptes_msgs/ros2.h"
+
+namespace {
+
+namespace geometry = geometry_msgs::msg::dds_;
+namespace mocap = mocap4r2_msgs::msg::dds_;
+using nlohmann::json;
+
+json header_json(const std_msgs::msg::dds_::Header_& header) {
+  return {
+      {"sec", header.stamp().sec()}, {"nanosec", header.stamp().nanosec()}, {"frame_id", header.frame_id()}};
+}
+
+json marker_json(const mocap::Marker_& marker) {
+  return {{"id_type", marker.id_type()},
+          {"index", marker.marker_index()},
+          {"name", marker.marker_name()},
+          {"p", {marker.translation().x(), marker.translation().y(), marker.translation().z()}}};
+}
+
+json to_json(const geometry::PoseStamped_& m) {
+  const auto& p = m.pose().position();
+  const auto& q = m.pose().orientation();
+  return {
+      {"header", header_json(m.header())}, {"p", {p.x(), p.y(), p.z()}}, {"q", {q.x(), q.y(), q.z(), q.w()}}};
+}
+
+json to_json(const geometry::TwistStamped_& m) {
+  const auto& v = m.twist().linear();
+  const auto& w = m.twist().angular();
+  return {{"header", header_json(m.header())}, {"v", {v.x(), v.y(), v.z()}}, {"w", {w.x(), w.y(), w.z()}}};
+}
+
+json to_json(const tf2_msgs::msg::dds_::TFMessage_& m) {
+  json transforms = json::array();
+  for (const auto& t : m.transforms()) {
+    const auto& p = t.transform().translation();
+    const auto& q = t.transform().rotation();
+    transforms.push_back({{"header", header_json(t.header())},
+                          {"child_frame_id", t.child_frame_id()},
+                          {"p", {p.x(), p.y(), p.z()}},
+                          {"q", {q.x(), q.y(), q.z(), q.w()}}});
+  }
+  return {{"transforms", transforms}};
+}
+
+json to_json(const mocap::RigidBodies_& m) {
+  json bodies = json::array();
+  for (const auto& body : m.rigidbodies()) {
+    json markers = json::array();
+    for (const auto& marker : body.markers()) markers.push_back(marker_json(marker));
+    const auto& p = body.pose().position();
+    const auto& q = body.pose().orientation();
+    bodies.push_back({{"name", body.rigid_body_name()},
+                      {"markers", markers},
+                      {"p", {p.x(), p.y(), p.z()}},
+                      {"q", {q.x(), q.y(), q.z(), q.w()}}});
+  }
+  return {{"header", header_json(m.header())}, {"frame_number", m.frame_number()}, {"rigidbodies", bodies}};
+}
+
+json to_json(const mocap::Markers_& m) {
+  json markers = json::array();
+  for (const auto& marker : m.markers()) markers.push_back(marker_json(marker));
+  return {{"header", header_json(m.header())}, {"frame_number", m.frame_number()}, {"markers", markers}};
+}
+
+class Recorder {
+ public:
+  explicit Recorder(std::ofstream& out) : out_(out) {}
+
+  template <class T>
+  void subscribe(panoptes::dds::Bus& bus, const std::string& topic) {
+    for (const auto qos : {panoptes::dds::Qos::kBestEffort, panoptes::dds::Qos::kDefault}) {
+      const std::string qos_name = qos == panoptes::dds::Qos::kBestEffort ? "best_effort" : "reliable";
+      readers_.push_back(bus.make_reader<T>(
+          [this, topic, qos_name](T&& message) {
+            json line = to_json(message);
+            line["topic"] = topic;
+            line["qos"] = qos_name;
+            line["recv_ns"] = panoptes::wall_now_ns();
+            const std::string text = line.dump();
+            std::lock_guard lock(mutex_);
+            out_ << text << '\n';
+          },
+          qos, {}, topic));
+    }
+  }
+
+  void flush() {
+    std::lock_guard lock(mutex_);
+    out_.flush();
+  }
+
+ private:
+  std::ofstream& out_;
+  std::mutex mutex_;
+  std::vector<std::shared_ptr<void>> readers_;
+};
+
+int run(int argc, char** argv) {
+  std::string out_file;
+  std::string dds_profile;
+  double duration_s = 0;
+  std::vector<std::string> bodies;
+  CLI::App app{"panoptes_ros2_probe: records the estimator's ROS 2 topics (best-effort and reliable readers)",
+               "panoptes_ros2_probe"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("--out", out_file, "JSONL file to write")->required();
+  app.add_option("--body", bodies, "body name tokens whose pose and twist topics to read")->expected(0, -1);
+  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile")
+      ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
+  app.add_option("--duration", duration_s, "stop after this many seconds (0 = until SIGINT/SIGTERM)")
+      ->check(CLI::NonNegativeNumber);
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+  panoptes::install_stop_handlers();
+
+  std::ofstream out(out_file);
+  if (!out) {
+    std::fprintf(stderr, "panoptes_ros2_probe: cannot write %s\n", out_file.c_str());
+    return panoptes::kExitBadInput;
+  }
+  try {
+    panoptes::dds::BusOptions options;
+    options.profile_file = dds_profile;
+    options.participant_name = "panoptes_ros2_probe";
+    panoptes::dds::Bus bus(options);
+    Recorder recorder(out);
+    recorder.subscribe<tf2_msgs::msg::dds_::TFMessage_>(bus, "rt/tf");
+    recorder.subscribe<mocap::RigidBodies_>(bus, "rt/rigid_bodies");
+    recorder.subscribe<mocap::Markers_>(bus, "rt/markers");
+    for (const auto& body : bodies) {
+      recorder.subscribe<geometry::PoseStamped_>(bus, "rt/panoptes/" + body + "/pose");
+      recorder.subscribe<geometry::TwistStamped_>(bus, "rt/panoptes/" + body + "/twist");
+    }
+    std::fprintf(stderr, "panoptes_ros2_probe: recording to %s\n", out_file.c_str());
+    const panoptes::TimeNs end = panoptes::wall_now_ns() + panoptes::seconds_to_ns(duration_s);
+    while (!panoptes::stop_requested() && (duration_s <= 0 || panoptes::wall_now_ns() < end)) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      recorder.flush();
+    }
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_ros2_probe: %s\n", error.what());
+    return panoptes::kExitFailure;
+  }
+  return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
+    std::fprintf(stderr, "panoptes_ros2_probe: %s\n", error.what());
+    return 1;
+  }
+}
