@@ -211,7 +211,7 @@ Ros2Outputs::BodyWriters& Ros2Outputs::writers_of(const session::BodyOutput& bod
   try {
     writers.pose = bus_.make_writer<ros2::PoseStamped_>(dds::Qos::kDefault, prefix + "/pose");
     writers.twist = bus_.make_writer<ros2::TwistStamped_>(dds::Qos::kDefault, prefix + "/twist");
-  } catch (const dds::DdsError& error) {  // e.g. a name beyond DDS's 256 characters: this body only
+  } catch (const dds::DdsError& error) {  // a topic DDS refuses costs this body its topics only
     session::log("ROS 2: body '" + body.name + "' has no pose and twist topics: " + error.what());
     writers = {};
   }
