@@ -208,8 +208,13 @@ Ros2Outputs::BodyWriters& Ros2Outputs::writers_of(const session::BodyOutput& bod
   if (const auto it = body_writers_.find(body.name); it != body_writers_.end()) return it->second;
   const std::string prefix = "rt/panoptes/" + token_of(body);
   BodyWriters writers;
-  writers.pose = bus_.make_writer<ros2::PoseStamped_>(dds::Qos::kDefault, prefix + "/pose");
-  writers.twist = bus_.make_writer<ros2::TwistStamped_>(dds::Qos::kDefault, prefix + "/twist");
+  try {
+    writers.pose = bus_.make_writer<ros2::PoseStamped_>(dds::Qos::kDefault, prefix + "/pose");
+    writers.twist = bus_.make_writer<ros2::TwistStamped_>(dds::Qos::kDefault, prefix + "/twist");
+  } catch (const dds::DdsError& error) {  // a topic DDS refuses costs this body its topics only
+    session::log("ROS 2: body '" + body.name + "' has no pose and twist topics: " + error.what());
+    writers = {};
+  }
   return body_writers_.emplace(body.name, std::move(writers)).first->second;
 }
 
@@ -232,7 +237,7 @@ void Ros2Outputs::publish(const session::FrameOutput& frame) {
     const session::BodyOutput& body = frame.bodies[b];
     frame_tokens_[b] = token_of(body);
     BodyWriters& writers = writers_of(body);  // every defined body's topics exist, tracked or not
-    if (!body.tracking_valid) continue;
+    if (!body.tracking_valid || !writers.twist) continue;
     if (writers.pose->matched_readers() > 0) {
       messages_.pose(body, pose_message_);
       writers.pose->write(pose_message_);
