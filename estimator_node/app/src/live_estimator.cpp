@@ -119,8 +119,8 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::MocapFrame>> frame_writer_;
   std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
   session::FrameOutputBuilder frame_builder_;
-  std::uint64_t descriptions_generation_ = 0;
-  bool descriptions_published_ = false;
+  std::uint64_t descriptions_generation_ = 0;  // the bodies file's generation last published
+  std::uint64_t descriptions_sent_ = 0;        // BodyDescriptions.generation: 1, 2, ... per run
   std::optional<LatencyProbeEchoer> latency_probe_;
   std::optional<Ros2Outputs> ros2_;  // docs/ros2.md
   std::optional<session::JsonlOutputs> outputs_;
@@ -191,11 +191,10 @@ void LiveEstimator::update(FeatureFrame&& frame) {
 }
 
 void LiveEstimator::publish_descriptions_if_changed() {
-  if (descriptions_published_ && body_file_.generation() == descriptions_generation_) return;
+  if (descriptions_sent_ > 0 && body_file_.generation() == descriptions_generation_) return;
   descriptions_generation_ = body_file_.generation();
-  descriptions_published_ = true;
-  descriptions_writer_->write(to_descriptions_message(
-      tracker_.body_definitions(), descriptions_generation_ + 1, body_file_.path(), wall_now_ns()));
+  descriptions_writer_->write(to_descriptions_message(tracker_.body_definitions(), ++descriptions_sent_,
+                                                      body_file_.path(), wall_now_ns()));
 }
 
 void LiveEstimator::finish(Processed& done) {
