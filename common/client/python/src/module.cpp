@@ -160,7 +160,9 @@ void bind_frame(py::module_& m) {
 }
 
 void bind_descriptions_and_stats(py::module_& m) {
-  py::class_<client::BodyDescription>(m, "BodyDescription", "A body of the estimator's bodies file.")
+  py::class_<client::BodyDescription>(
+      m, "BodyDescription",
+      "A body of the estimator's bodies file: name, id, kind and marker layout (Client.body_descriptions()).")
       .def_readonly("name", &client::BodyDescription::name, "str")
       .def_readonly("id", &client::BodyDescription::id, "1-based position in the bodies file")
       .def_readonly("kind", &client::BodyDescription::kind, "'passive' or 'led7'")
