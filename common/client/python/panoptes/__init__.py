@@ -10,6 +10,8 @@
 Push instead of pull: ``client.add_callback(fn)`` calls ``fn(frame)`` on the library's receive
 thread. The C++ API is the same (panoptes/client/client.h); docs/clients.md has the guide.
 """
+import numpy  # noqa: F401  (imported now rather than at the first frame's first array)
+
 from panoptes._panoptes import (
     BodyDescription,
     Client,
