@@ -7,7 +7,8 @@
 # body names and descriptions are right; the estimator is killed (-9) and restarted and delivery
 # resumes within 2 s without restarting the client. The examples run headless: log_poses_csv.py
 # writes the estimator's poses to CSV exactly, plot_body.py a PNG; on an empty domain the client
-# returns None within the timeout and log_poses_csv.py exits 1 saying so.
+# returns None within the timeout and log_poses_csv.py exits 1 saying so. `cmake --install` gives a
+# package that imports from <prefix>/lib/python3/dist-packages and finds the installed library and profile.
 source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/clients.yaml"
 export PANOPTES_DOMAIN="${PANOPTES_DOMAIN:-0}"
@@ -42,6 +43,21 @@ expect_stderr_contains "--duration" "the error names the argument"
 expect_exit 1 "plot_body.py on an empty domain exits non-zero" -- "$python" "$source_dir/examples/plot_body.py" \
   --domain "$empty_domain" --timeout 1 --duration 2 --save "$work/empty.png"
 expect_stderr_contains "no data for 1.0 s" "it says 'no data for N s'"
+
+# --- installed: cmake --install puts the package in <prefix>/lib/python3/dist-packages --------------
+prefix="$work/prefix"
+expect_exit 0 "cmake --install into a prefix" -- cmake --install "$build_dir" --prefix "$prefix"
+expect_exit 0 "the installed package imports and finds libpanoptes_client.so and the installed profile" -- \
+  env -u PANOPTES_DDS_PROFILE PYTHONPATH="$prefix/lib/python3/dist-packages" "$python" -c "
+import panoptes, sys
+assert panoptes.__file__.startswith('$prefix/lib/python3/dist-packages/panoptes/'), panoptes.__file__
+with panoptes.Client(domain=$empty_domain) as c:
+    assert c.profile_file == '$prefix/share/panoptes/dds/loopback.xml', c.profile_file
+    assert c.wait_for_frame(0.2) is None"
+ldd "$prefix"/lib/python3/dist-packages/panoptes/_panoptes*.so | grep -q "libpanoptes_client.so.* => $prefix/lib/python3/dist-packages/panoptes/\.\./\.\./\.\./libpanoptes_client" &&
+  pass "the installed module loads the installed libpanoptes_client.so (RUNPATH \$ORIGIN)" ||
+  { fail "the installed module does not find the installed library"; ldd "$prefix"/lib/python3/dist-packages/panoptes/_panoptes*.so; }
+rm -rf "$prefix"
 
 # --- live: estimator, six cameras, the Python client; the estimator killed and restarted ------------
 expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
