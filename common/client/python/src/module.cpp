@@ -212,15 +212,17 @@ void bind_exceptions(py::module_& m) {
       py::make_tuple(client_error, py::handle(PyExc_KeyError)).release().ptr(), unknown_dict.release().ptr());
   m.attr("ClientError") = client_error;
   m.attr("UnknownBody") = unknown_body;
-  py::register_exception_translator([](std::exception_ptr error) {
-    try {
-      if (error) std::rethrow_exception(error);
-    } catch (const client::UnknownBody& e) {
-      PyErr_SetString(unknown_body.ptr(), e.what());
-    } catch (const client::ClientError& e) {
-      PyErr_SetString(client_error.ptr(), e.what());
-    }
-  });
+  // pybind11's translator type takes the exception_ptr by value.
+  py::register_exception_translator(
+      [](std::exception_ptr error) {  // NOLINT(performance-unnecessary-value-param)
+        try {
+          if (error) std::rethrow_exception(error);
+        } catch (const client::UnknownBody& e) {
+          PyErr_SetString(unknown_body.ptr(), e.what());
+        } catch (const client::ClientError& e) {
+          PyErr_SetString(client_error.ptr(), e.what());
+        }
+      });
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <limits>
 #include <set>
@@ -103,6 +104,14 @@ PyClient::PyClient(const std::optional<std::filesystem::path>& profile, std::opt
 }
 
 PyClient::~PyClient() {
+  try {
+    destroy();
+  } catch (const std::exception& error) {  // nothing else to do in a destructor; say it rather than abort
+    std::fprintf(stderr, "panoptes.Client: while closing: %s\n", error.what());
+  }
+}
+
+void PyClient::destroy() {
   open_clients().erase(this);
   state_->closed = true;
   // With the GIL held (pybind11 deallocates with it): no callback is inside Python code now, and one

@@ -55,6 +55,8 @@ class PyClient {
   static void close_all_at_exit();
 
  private:
+  void destroy();  // the destructor's work: close, drop the callables, destroy the library's client
+
   std::unique_ptr<client::Client> client_;
   std::shared_ptr<CallbackState> state_;
   std::map<int, int> handles_;  // the library's callback handle -> key in state_->functions
