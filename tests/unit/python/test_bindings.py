@@ -5,6 +5,7 @@ Run by ctest (python.bindings) as `python3 -m unittest discover -s tests/unit/py
 PYTHONPATH=build/python and PANOPTES_BIN_DIR=build/bin; the live tests read frames written by
 `bench_client --publish` on $PANOPTES_DOMAIN.
 """
+import copy
 import gc
 import math
 import os
@@ -50,6 +51,26 @@ class BadInput(unittest.TestCase):
                        dict(profile=42), dict(domain=2**40)):
             with self.subTest(kwargs=kwargs), self.assertRaises(TypeError):
                 panoptes.Client(**kwargs)
+
+    def test_objects_without_a_constructed_client_are_refused(self):
+        empty = panoptes.Client.__new__(panoptes.Client)
+        for call in (empty.close, empty.stats, empty.status_text, lambda: empty.wait_for_frame(0.1),
+                     lambda: empty.closed, lambda: repr(empty), lambda: empty.__exit__(None, None, None),
+                     lambda: panoptes.Client.close(42)):
+            with self.subTest(call=call), self.assertRaises(TypeError):
+                call()
+
+        class SkipsInit(panoptes.Client):
+            def __init__(self):  # pylint: disable=super-init-not-called
+                pass
+        with self.assertRaises(TypeError):
+            SkipsInit()
+        for cls in (panoptes.Frame, panoptes.RigidBody, panoptes.Marker, panoptes.Latency, panoptes.Stats,
+                    panoptes.BodyDescription):
+            with self.subTest(cls=cls.__name__), self.assertRaises(TypeError):
+                cls.__new__(cls)
+            with self.subTest(cls=cls.__name__), self.assertRaises(TypeError):
+                cls()
 
     def test_bad_environment_domain(self):
         os.environ["PANOPTES_DOMAIN"] = "lots"
@@ -178,6 +199,8 @@ class Live(unittest.TestCase):
         self.assertEqual(list(head.orientation), [0.0, 0.0, 0.0, 1.0])
         self.assertTrue(head.tracking_valid)
         self.assertEqual(sum(m.labelled for m in frame.markers), 8)
+        with self.assertRaises(TypeError):
+            copy.copy(frame)  # no empty frames, not even by copy
         bodies = frame.bodies
         del frame  # the bodies keep their frame alive
         gc.collect()

@@ -122,7 +122,8 @@ void bind_marker(py::module_& m) {
       .def_readonly("body", &client::Marker::body, "the body it belongs to, '' if unlabelled")
       .def_readonly("body_marker", &client::Marker::body_marker,
                     "index in the body's marker layout, -1 if unlabelled")
-      .def_property_readonly("labelled", &client::Marker::labelled, "it belongs to a body (bool)")
+      .def_property_readonly(
+          "labelled", [](const client::Marker& k) { return k.labelled(); }, "it belongs to a body (bool)")
       .def("__repr__", [](const client::Marker& k) {
         return "<panoptes.Marker " + std::to_string(k.id) + " " +
                (k.labelled() ? k.body + "[" + std::to_string(k.body_marker) + "]"
@@ -198,6 +199,17 @@ void bind_descriptions_and_stats(py::module_& m) {
       });
 }
 
+// Instances of the data classes come from the library only: `__new__` refuses to make an empty one
+// (pybind11 would hand out an object over unconstructed memory; copy.copy() would too). pybind11's
+// own instances are allocated with tp_alloc, not through __new__.
+void forbid_new(py::module_& m) {
+  const py::cpp_function refuse([](const py::args&, const py::kwargs&) {
+    throw py::type_error("panoptes frames, bodies, markers, descriptions and stats come from a Client");
+  });
+  for (const char* name : {"Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats"})
+    m.attr(name).attr("__new__") = py::staticmethod(refuse);
+}
+
 void bind_exceptions(py::module_& m) {
   // ClientError (a RuntimeError) and UnknownBody (a ClientError and a KeyError); str() of both is
   // the library's message (KeyError would quote it).
@@ -241,5 +253,6 @@ PYBIND11_MODULE(_panoptes, m) {
   bind_frame(m);
   bind_descriptions_and_stats(m);
   bind_client(m);
+  forbid_new(m);
   py::module_::import("atexit").attr("register")(py::cpp_function(&PyClient::close_all_at_exit));
 }

@@ -237,6 +237,34 @@ void PyClient::close_all_at_exit() {
 
 namespace panoptes::python {
 
+namespace {
+
+// The PyClient of `self`, refusing (TypeError) one whose C++ object was never constructed
+// (Client.__new__(Client), a subclass that skips __init__): pybind11 would call the method on it.
+PyClient& checked(py::handle self) {
+  if (!py::isinstance<PyClient>(self)) throw py::type_error("not a panoptes.Client");
+  auto* instance = reinterpret_cast<py::detail::instance*>(self.ptr());
+  const auto value_and_holder = instance->get_value_and_holder(py::detail::get_type_info(typeid(PyClient)));
+  if (!value_and_holder.holder_constructed())
+    throw py::type_error("panoptes.Client.__init__() was not called");
+  return *value_and_holder.value_ptr<PyClient>();
+}
+
+template <typename Result, typename... Args>
+auto bound(Result (PyClient::*method)(Args...)) {
+  return [method](py::handle self, Args... args) -> Result {
+    return (checked(self).*method)(std::forward<Args>(args)...);
+  };
+}
+template <typename Result, typename... Args>
+auto bound(Result (PyClient::*method)(Args...) const) {
+  return [method](py::handle self, Args... args) -> Result {
+    return (checked(self).*method)(std::forward<Args>(args)...);
+  };
+}
+
+}  // namespace
+
 void bind_client(py::module_& m) {
   using py::literals::operator""_a;
   py::class_<PyClient>(
@@ -265,50 +293,51 @@ Every method may be called from any thread. Clients still open when the interpre
                     bool>(),
            "profile"_a = py::none(), "domain"_a = py::none(), "stale_after"_a = 1.0, "queue_depth"_a = 1024,
            "reliable"_a = true)
-      .def("wait_for_frame", &PyClient::wait_for_frame, "timeout"_a,
+      .def("wait_for_frame", bound(&PyClient::wait_for_frame), "timeout"_a,
            R"doc(wait_for_frame(timeout) -> Frame or None
 
 The next frame not yet returned by wait_for_frame (in order, from a queue of queue_depth frames), waiting
 up to `timeout` seconds with the GIL released. None on timeout (status_text() says why) or when the client
 is closed. Ctrl-C interrupts the wait (KeyboardInterrupt).)doc")
-      .def("latest", &PyClient::latest,
+      .def("latest", bound(&PyClient::latest),
            "latest() -> Frame or None: the newest frame received (does not consume the wait_for_frame queue)")
-      .def("add_callback", &PyClient::add_callback, "callback"_a,
+      .def("add_callback", bound(&PyClient::add_callback), "callback"_a,
            R"doc(add_callback(callback) -> int handle
 
 callback(frame) runs on the library's receive thread for every frame, with the GIL held: keep it short.
 An exception it raises is caught and counted (stats().callback_errors, stats().last_error; the first
 one's traceback is printed). No callback runs after close() or remove_callback() returned.)doc")
-      .def("remove_callback", &PyClient::remove_callback, "handle"_a,
+      .def("remove_callback", bound(&PyClient::remove_callback), "handle"_a,
            "remove_callback(handle): after it returns that callback does not run (unknown handles are "
            "ignored)")
-      .def("body_descriptions", &PyClient::body_descriptions,
+      .def("body_descriptions", bound(&PyClient::body_descriptions),
            "body_descriptions() -> list of BodyDescription: the estimator's bodies (known to late joiners "
            "too)")
-      .def("body_description", &PyClient::body_description, "name"_a,
+      .def("body_description", bound(&PyClient::body_description), "name"_a,
            "body_description(name) -> BodyDescription; raises UnknownBody (a KeyError) naming the body")
-      .def("connected", &PyClient::connected, "connected() -> bool: a frame arrived within stale_after")
-      .def("status_text", &PyClient::status_text,
+      .def("connected", bound(&PyClient::connected),
+           "connected() -> bool: a frame arrived within stale_after")
+      .def("status_text", bound(&PyClient::status_text),
            "status_text() -> str: 'receiving (240 frames/s)', 'no data for 3.2 s (last frame 1234)', "
            "'closed', ...")
-      .def("stats", &PyClient::stats, "stats() -> Stats: counters since the client was opened")
-      .def_property_readonly("profile_file", &PyClient::profile_file,
+      .def("stats", bound(&PyClient::stats), "stats() -> Stats: counters since the client was opened")
+      .def_property_readonly("profile_file", bound(&PyClient::profile_file),
                              "the DDS profile file the client opened")
-      .def_property_readonly("domain_id", &PyClient::domain_id, "the DDS domain the client opened")
-      .def_property_readonly("closed", &PyClient::closed, "close() was called")
-      .def("close", &PyClient::close,
+      .def_property_readonly("domain_id", bound(&PyClient::domain_id), "the DDS domain the client opened")
+      .def_property_readonly("closed", bound(&PyClient::closed), "close() was called")
+      .def("close", bound(&PyClient::close),
            "close(): stops delivery and wakes wait_for_frame (None). Idempotent; allowed from a callback.")
-      .def(
-          "__enter__", [](PyClient& self) -> PyClient& { return self; }, py::return_value_policy::reference)
+      .def("__enter__", [](py::handle self) { return py::reinterpret_borrow<py::object>(self); })
       .def(
           "__exit__",
-          [](PyClient& self, const py::args&) {
-            self.close();
+          [](py::handle self, const py::args&) {
+            checked(self).close();
             return false;
           },
           "closes the client")
-      .def("__repr__", [](const PyClient& self) {
-        return "<panoptes.Client domain " + std::to_string(self.domain_id()) + ": " + self.status_text() +
+      .def("__repr__", [](py::handle self) {
+        const PyClient& client = checked(self);
+        return "<panoptes.Client domain " + std::to_string(client.domain_id()) + ": " + client.status_text() +
                ">";
       });
 }
