@@ -10,6 +10,7 @@ import gc
 import math
 import os
 import pathlib
+import signal
 import subprocess
 import sys
 import threading
@@ -152,6 +153,29 @@ class EmptyDomain(unittest.TestCase):
         self.assertFalse(waiter.is_alive())
         self.assertEqual(results, [None])
         self.assertLess(time.monotonic() - start, 1.0)
+
+    def test_frames_generator_ends_on_timeout(self):
+        start = time.monotonic()
+        self.assertEqual(list(panoptes.frames(self.client, 0.2)), [])
+        self.assertLess(time.monotonic() - start, 1.0)
+
+    def test_ctrl_c_interrupts_a_wait(self):
+        script = ("import panoptes\n"
+                  f"c = panoptes.Client(domain={EMPTY_DOMAIN})\n"
+                  "print('waiting', flush=True)\n"
+                  "try:\n"
+                  "    c.wait_for_frame(60.0)\n"
+                  "except KeyboardInterrupt:\n"
+                  "    print('interrupted', flush=True)\n")
+        child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+        self.assertEqual(child.stdout.readline().strip(), "waiting")
+        time.sleep(0.3)
+        start = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        output, _ = child.communicate(timeout=10)
+        self.assertEqual(output.strip(), "interrupted")
+        self.assertEqual(child.returncode, 0)
+        self.assertLess(time.monotonic() - start, 2.0)
 
     def test_non_callable_callback(self):
         with self.assertRaises(TypeError):
