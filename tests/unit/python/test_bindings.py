@@ -177,6 +177,21 @@ class EmptyDomain(unittest.TestCase):
         self.assertEqual(child.returncode, 0)
         self.assertLess(time.monotonic() - start, 2.0)
 
+    def test_exit_with_daemon_threads_inside_the_client(self):
+        # At exit Python ends daemon threads when they take the GIL back: no abort on the way out.
+        script = ("import panoptes, threading, time\n"
+                  f"c = panoptes.Client(domain={EMPTY_DOMAIN})\n"
+                  "def spin():\n"
+                  "    while True:\n"
+                  "        c.wait_for_frame(0.001)\n"
+                  "for _ in range(3):\n"
+                  "    threading.Thread(target=spin, daemon=True).start()\n"
+                  "threading.Thread(target=lambda: c.wait_for_frame(1e9), daemon=True).start()\n"
+                  "time.sleep(0.2)\n")
+        for _ in range(3):
+            result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=30)
+            self.assertEqual((result.returncode, result.stderr), (0, ""))
+
     def test_non_callable_callback(self):
         with self.assertRaises(TypeError):
             self.client.add_callback(42)

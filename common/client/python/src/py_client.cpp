@@ -10,6 +10,7 @@
 #include <set>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 #include <utility>
 
 #include <pybind11/stl.h>
@@ -56,6 +57,35 @@ client::ClientOptions make_options(const std::optional<std::filesystem::path>& p
   return options;
 }
 
+// Runs `work` with the GIL released. Not pybind11's gil_scoped_release: while the interpreter
+// finalizes, taking the GIL back ends a daemon thread by unwinding its stack (pthread_exit), and a
+// (noexcept) destructor taking it back would abort the process instead.
+template <typename Work>
+auto without_gil(Work&& work) {
+  using Result = decltype(work());
+  PyThreadState* const thread_state = PyEval_SaveThread();
+  std::exception_ptr failure;
+  if constexpr (std::is_void_v<Result>) {
+    try {
+      work();
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    PyEval_RestoreThread(thread_state);
+    if (failure) std::rethrow_exception(failure);
+  } else {
+    std::optional<Result> result;
+    try {
+      result.emplace(work());
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    PyEval_RestoreThread(thread_state);
+    if (failure) std::rethrow_exception(failure);
+    return std::move(*result);
+  }
+}
+
 // One line of a Python exception's text (pybind11 may append the traceback).
 std::string first_line(const std::string& text) {
   return text.substr(0, text.find('\n'));
@@ -96,10 +126,8 @@ PyClient::PyClient(const std::optional<std::filesystem::path>& profile, std::opt
                    double stale_after_s, long long queue_depth, bool reliable)
     : state_(std::make_shared<CallbackState>()) {
   const client::ClientOptions options = make_options(profile, domain, stale_after_s, queue_depth, reliable);
-  {
-    py::gil_scoped_release release;  // opening the bus takes milliseconds; other threads may run
-    client_ = std::make_unique<client::Client>(options);
-  }
+  // Opening the bus takes milliseconds: other threads may run meanwhile.
+  client_ = without_gil([&] { return std::make_unique<client::Client>(options); });
   open_clients().insert(this);
 }
 
@@ -129,8 +157,7 @@ void PyClient::destroy() {
     }
     return;
   }
-  py::gil_scoped_release release;
-  client_.reset();
+  without_gil([this] { client_.reset(); });
 }
 
 py::object PyClient::wait_for_frame(double timeout_s) {
@@ -142,12 +169,8 @@ py::object PyClient::wait_for_frame(double timeout_s) {
   for (;;) {
     const double elapsed_s = std::chrono::duration<double>(Clock::now() - start).count();
     const double slice_s = std::clamp(timeout_s - elapsed_s, 0.0, kSignalCheckS);
-    client::FrameResult result;
-    {
-      py::gil_scoped_release release;
-      result = client_->wait_for_frame(
-          std::chrono::milliseconds(static_cast<long long>(std::ceil(slice_s * 1000.0))));
-    }
+    const auto slice = std::chrono::milliseconds(static_cast<long long>(std::ceil(slice_s * 1000.0)));
+    client::FrameResult result = without_gil([&] { return client_->wait_for_frame(slice); });
     if (result.status == client::Status::kOk) return py::cast(std::move(result.frame));
     if (result.status == client::Status::kClosed) return py::none();
     if (PyErr_CheckSignals() != 0) throw py::error_already_set();
@@ -164,9 +187,10 @@ int PyClient::add_callback(const py::function& callback) {
   state_->functions.emplace(key, callback);
   int handle = 0;
   try {
-    py::gil_scoped_release release;
-    handle = client_->add_callback(
-        [state = state_, key](const client::Frame& frame) { run_python_callback(state, key, frame); });
+    handle = without_gil([&] {
+      return client_->add_callback(
+          [state = state_, key](const client::Frame& frame) { run_python_callback(state, key, frame); });
+    });
   } catch (...) {
     state_->functions.erase(key);
     throw;
@@ -180,10 +204,8 @@ void PyClient::remove_callback(int handle) {
   if (found == handles_.end()) return;  // unknown or already removed: nothing to do, as in C++
   const int key = found->second;
   handles_.erase(found);
-  {
-    py::gil_scoped_release release;  // waits for the callback if it is running on another thread
-    client_->remove_callback(handle);
-  }
+  // Waits for the callback if it is running on another thread (which needs the GIL to finish).
+  without_gil([&] { client_->remove_callback(handle); });
   state_->functions.erase(key);
 }
 
@@ -217,10 +239,7 @@ int PyClient::domain_id() const {
 
 void PyClient::close() {
   state_->closed = true;
-  {
-    py::gil_scoped_release release;  // a callback waiting for the GIL can finish
-    client_->close();
-  }
+  without_gil([this] { client_->close(); });  // a callback waiting for the GIL can finish
   state_->functions.clear();
   handles_.clear();
 }
