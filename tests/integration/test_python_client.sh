@@ -130,9 +130,17 @@ if len(runs) == 2:
     span_s = (frames[-1]["receive_ns"] - frames[0]["receive_ns"]) * 1e-9
     check(published2 > 0 and runs[1][-1]["frame"] == published2,
           f"the client has the restarted estimator's last frame ({runs[1][-1]['frame']} of {published2})")
-    check(span_s >= 20 and received >= 0.99 * published,
-          f"received {received} of {published} published frames ({100.0 * received / max(published, 1):.2f}%) over {span_s:.1f} s")
     first2 = runs[1][0]
+    # Frames the new estimator wrote before its writer matched this reader cannot reach any volatile
+    # subscriber (discovery: tens of ms on an idle loopback, up to a second on a busy host); they are
+    # left out here and bounded by the resume check below.
+    before_match = first2["frame"] - 1
+    matched = published - before_match
+    check(span_s >= 20 and received >= 0.99 * matched,
+          f"received {received} of {matched} frames published while matched ({100.0 * received / max(matched, 1):.2f}%) "
+          f"over {span_s:.1f} s; {published} published in all, {before_match} by the new estimator before discovery")
+    check(len(runs[0]) >= 0.99 * runs[0][-1]["frame"],
+          f"first run: {len(runs[0])} of {runs[0][-1]['frame']} frames ({100.0 * len(runs[0]) / runs[0][-1]['frame']:.2f}%)")
     resume_s = (first2["receive_ns"] - restart_ns) * 1e-9
     check(resume_s <= 2.0, f"delivery resumed {resume_s:.3f} s after the estimator was restarted "
           f"(first frame of the new run: {first2['frame']})")
