@@ -254,5 +254,8 @@ PYBIND11_MODULE(_panoptes, m) {
   bind_descriptions_and_stats(m);
   bind_client(m);
   forbid_new(m);
+  // Users meet these classes as panoptes.X (help(), repr of the types, pickling errors).
+  for (const char* name : {"Client", "Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats"})
+    m.attr(name).attr("__module__") = "panoptes";
   py::module_::import("atexit").attr("register")(py::cpp_function(&PyClient::close_all_at_exit));
 }
