@@ -104,7 +104,7 @@ cat "$work/probe.log"
 published2=$(sed -n 's/.*processed \([0-9]*\) frames.*/\1/p' "$work/estimator2.log")
 
 "$python" - "$work" "$restart_ns" "${published2:-0}" <<'PYTHON'
-import csv, json, sys, yaml
+import csv, json, sys
 work, restart_ns, published2 = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 failures = 0
 def check(ok, what):
@@ -178,7 +178,15 @@ check(all(f["unlabelled"] + f["labelled"] == f["markers"] for f in frames) and
       sum(f["unlabelled"] > 0 for f in frames) > 0.9 * len(frames) and sum(f["labelled"] > 0 for f in frames) > 0.9 * len(frames),
       "frames carry labelled and unlabelled markers")
 
-defined = yaml.safe_load(open(f"{work}/sim/bodies.yaml"))["bodies"]
+# The simulator's bodies.yaml, read without PyYAML (not a dependency): `- name: "x"` and `- [x, y, z]`.
+defined = []
+for line in open(f"{work}/sim/bodies.yaml"):
+    item = line.strip()
+    if item.startswith("- name:"):
+        defined.append({"name": item.split(":", 1)[1].strip().strip('"'), "markers": []})
+    elif item.startswith("- [") and defined:
+        defined[-1]["markers"].append(json.loads(item[2:]))
+check(len(defined) == 2 and all(len(b["markers"]) >= 4 for b in defined), f"bodies.yaml read: {defined}")
 descriptions = [l for l in lines if l["type"] == "descriptions"]
 check(len(descriptions) >= 1 and stats["descriptions_received"] >= 2,
       f"descriptions received {stats['descriptions_received']} times (once per estimator run)")
