@@ -10,6 +10,7 @@
 #   <prefix>/lib/libpanoptes_client.so*, <prefix>/include/panoptes/client: the client library, with
 #   <prefix>/lib/cmake/Panoptes (find_package(Panoptes) -> Panoptes::client) and
 #   <prefix>/lib/pkgconfig/panoptes-client.pc (docs/clients.md)
+#   <prefix>/lib/python3/dist-packages/panoptes: the Python package (common/client/python)
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
@@ -73,7 +74,7 @@ set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 # libpanoptes_client.so: a shlibs file and the ldconfig trigger.
 set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS ON)
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "fastdds-tools, aravis-tools")
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "fastdds-tools, aravis-tools, python3-numpy")  # python3-numpy: the panoptes Python package
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 # Staged with DESTDIR and the prefix /usr, so the units written at install time name /usr/bin/...
 set(CPACK_SET_DESTDIR ON)
