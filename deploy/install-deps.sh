@@ -12,7 +12,7 @@ packages=(
   libaravis-dev aravis-tools libusb-1.0-0-dev
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  clang-format clang-tidy
+  clang-format clang-tidy python3-yaml
   cyclonedds-dev cyclonedds-tools pybind11-dev python3-dev python3-numpy python3-matplotlib
   iproute2 procps nftables
 )
