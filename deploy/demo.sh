@@ -5,5 +5,5 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/deploy/build.sh"
-trap 'fastdds shm clean >/dev/null 2>&1 || true' EXIT
+trap 'bash "$root/deploy/dds-shm-clean.sh"' EXIT
 "$root/${PANOPTES_BUILD_DIR:-build}/bin/panoptes_demo" "$@"

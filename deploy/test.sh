@@ -6,5 +6,5 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/deploy/build.sh"
 cd "$root/${PANOPTES_BUILD_DIR:-build}"
-trap 'fastdds shm clean >/dev/null 2>&1 || true' EXIT
+trap 'bash "$root/deploy/dds-shm-clean.sh"' EXIT
 ctest --output-on-failure -j "$(nproc)" "$@"

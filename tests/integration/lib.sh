@@ -13,7 +13,7 @@ cleanup() {
   for pid in "${pids[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
   sleep 0.5
   for pid in "${pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
-  fastdds shm clean >/dev/null 2>&1 || true
+  bash "$source_dir/deploy/dds-shm-clean.sh"
   if [ "$failures" -eq 0 ] && [ -z "${PANOPTES_KEEP_WORK:-}" ]; then rm -rf "$work"; else echo "kept $work for inspection"; fi
 }
 trap cleanup EXIT
