@@ -35,6 +35,11 @@ expect_stderr_contains() {
   if grep -qF -- "$1" "$work/last.err"; then pass "$2"; else fail "$2: stderr lacks '$1'"; cat "$work/last.err"; fi
 }
 
+# expect_stderr_matches ERE DESCRIPTION: like expect_stderr_contains, for an extended regular expression.
+expect_stderr_matches() {
+  if grep -qE -- "$1" "$work/last.err"; then pass "$2"; else fail "$2: stderr does not match '$1'"; cat "$work/last.err"; fi
+}
+
 # require_shared_data PATH: data read from ../shared/data (not copied into tests/data) follows the
 # rule of tests/data/README.md: missing, it fails the test under CI and skips it (exit 77) elsewhere.
 # Checks that already failed are reported, never hidden by the skip.
@@ -52,4 +57,31 @@ finish() {
   if [ "$failures" -eq 0 ]; then echo "all checks passed"; exit 0; fi
   echo "$failures check(s) failed"
   exit 1
+}
+
+# replay_clients_scene_with_restart: the client tests' live run (test_client.sh,
+# test_python_client.sh). The simulated clients scene in $work/sim replayed by six camera_nodes
+# (24 s) into estimator_node (run 1, --out-poses $work/poses1.jsonl), which is killed (-9) after
+# 12 s and started again 1 s later (run 2, 14 s, $work/poses2.jsonl). Sets $restart_ns (when run 2
+# started) and $estimator (its pid). Start the client under test first.
+replay_clients_scene_with_restart() {
+  local epoch=$(( ($(date +%s) + 3) * 1000000000 ))
+  start_clients_estimator 1 30
+  for camera in c0 c1 c2 c3 c4 c5; do
+    "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration 24 --quiet \
+      >"$work/$camera.log" 2>&1 &
+    pids+=("$!")
+  done
+  sleep 12
+  kill -KILL "$estimator"
+  wait "$estimator" 2>/dev/null
+  sleep 1
+  restart_ns=$(date +%s%N)
+  start_clients_estimator 2 14
+}
+start_clients_estimator() {  # RUN DURATION
+  "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
+    --out-poses "$work/poses$1.jsonl" --duration "$2" --status-period 1 >"$work/estimator$1.log" 2>&1 &
+  estimator=$!
+  pids+=("$estimator")
 }

@@ -18,7 +18,7 @@ empty_domain=$(( (PANOPTES_DOMAIN + 117) % 233 ))
 start=$(date +%s%N)
 expect_exit 1 "sample_client on an empty domain exits non-zero" -- "$bin/sample_client" --domain "$empty_domain" --timeout-s 2
 elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))
-expect_stderr_contains "no data for 2.0 s" "it reports 'no data for N s'"
+expect_stderr_matches "no data for [0-9]+\\.[0-9] s" "it reports 'no data for N s'"
 [ "$elapsed_ms" -lt 5000 ] && pass "it gave up within the timeout ($elapsed_ms ms for --timeout-s 2)" ||
   fail "it took $elapsed_ms ms for --timeout-s 2"
 expect_exit 2 "sample_client rejects a bad argument" -- "$bin/sample_client" --frames many
@@ -29,25 +29,7 @@ expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --sce
 "$bin/panoptes_client_probe" --out "$work/client.jsonl" --duration 32 >"$work/probe.log" 2>&1 &
 probe=$!
 pids+=("$probe")
-epoch=$(( ($(date +%s) + 3) * 1000000000 ))
-run_estimator() {  # run_estimator RUN DURATION
-  "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
-    --out-poses "$work/poses$1.jsonl" --duration "$2" --status-period 1 >"$work/estimator$1.log" 2>&1 &
-  estimator=$!
-  pids+=("$estimator")
-}
-run_estimator 1 30
-for camera in c0 c1 c2 c3 c4 c5; do
-  "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration 24 --quiet \
-    >"$work/$camera.log" 2>&1 &
-  pids+=("$!")
-done
-sleep 12
-kill -KILL "$estimator"
-wait "$estimator" 2>/dev/null
-sleep 1
-restart_ns=$(date +%s%N)
-run_estimator 2 14
+replay_clients_scene_with_restart
 sleep 4
 expect_exit 0 "sample_client prints live frames" -- "$bin/sample_client" --frames 300 --timeout-s 5
 grep -q "body 1 head .*tracked" "$work/last.out" && grep -q "body 2 tool" "$work/last.out" &&

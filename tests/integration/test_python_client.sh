@@ -22,19 +22,19 @@ done
 # --- an empty domain ----------------------------------------------------------------------------
 empty_domain=$(( (PANOPTES_DOMAIN + 117) % 233 ))
 expect_exit 0 "wait_for_frame on an empty domain returns None within the timeout" -- "$python" -c "
-import time, panoptes
+import re, time, panoptes
 with panoptes.Client(domain=$empty_domain) as c:
     start = time.monotonic()
     frame = c.wait_for_frame(1.0)
     elapsed = time.monotonic() - start
     print(c.status_text())
     assert frame is None and 0.99 <= elapsed < 2.0, (frame, elapsed)
-    assert 'no data for 1.0 s' in c.status_text(), c.status_text()"
+    assert re.search(r'no data for [0-9]+[.][0-9] s', c.status_text()), c.status_text()"
 start=$(date +%s%N)
 expect_exit 1 "log_poses_csv.py on an empty domain exits non-zero" -- "$python" "$source_dir/examples/log_poses_csv.py" \
   --domain "$empty_domain" --timeout 2 --out "$work/empty.csv"
 elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))
-expect_stderr_contains "no data for 2.0 s" "it says 'no data for N s'"
+expect_stderr_matches "no data for [0-9]+\\.[0-9] s" "it says 'no data for N s'"
 expect_stderr_contains "is estimator_node running?" "it says what to check"
 [ "$elapsed_ms" -lt 6000 ] && pass "it gave up within the timeout ($elapsed_ms ms for --timeout 2, interpreter start included)" ||
   fail "it took $elapsed_ms ms for --timeout 2"
@@ -42,7 +42,7 @@ expect_exit 2 "log_poses_csv.py rejects a bad argument" -- "$python" "$source_di
 expect_stderr_contains "--duration" "the error names the argument"
 expect_exit 1 "plot_body.py on an empty domain exits non-zero" -- "$python" "$source_dir/examples/plot_body.py" \
   --domain "$empty_domain" --timeout 1 --duration 2 --save "$work/empty.png"
-expect_stderr_contains "no data for 1.0 s" "it says 'no data for N s'"
+expect_stderr_matches "no data for [0-9]+\\.[0-9] s" "it says 'no data for N s'"
 
 # --- installed: cmake --install puts the package in <prefix>/lib/python3/dist-packages --------------
 prefix="$work/prefix"
@@ -54,9 +54,11 @@ assert panoptes.__file__.startswith('$prefix/lib/python3/dist-packages/panoptes/
 with panoptes.Client(domain=$empty_domain) as c:
     assert c.profile_file == '$prefix/share/panoptes/dds/loopback.xml', c.profile_file
     assert c.wait_for_frame(0.2) is None"
-ldd "$prefix"/lib/python3/dist-packages/panoptes/_panoptes*.so | grep -q "libpanoptes_client.so.* => $prefix/lib/python3/dist-packages/panoptes/\.\./\.\./\.\./libpanoptes_client" &&
+# ldd's whole output first: grep -q would close the pipe early (SIGPIPE under pipefail).
+libraries=$(ldd "$prefix"/lib/python3/dist-packages/panoptes/_panoptes*.so)
+grep -q "libpanoptes_client.so.* => $prefix/lib/python3/dist-packages/panoptes/\.\./\.\./\.\./libpanoptes_client" <<<"$libraries" &&
   pass "the installed module loads the installed libpanoptes_client.so (RUNPATH \$ORIGIN)" ||
-  { fail "the installed module does not find the installed library"; ldd "$prefix"/lib/python3/dist-packages/panoptes/_panoptes*.so; }
+  { fail "the installed module does not find the installed library"; echo "$libraries"; }
 rm -rf "$prefix"
 
 # --- live: estimator, six cameras, the Python client; the estimator killed and restarted ------------
@@ -64,25 +66,7 @@ expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --sce
 "$python" "$source_dir/tests/tools/python_client_probe.py" --out "$work/client.jsonl" --duration 32 >"$work/probe.log" 2>&1 &
 probe=$!
 pids+=("$probe")
-epoch=$(( ($(date +%s) + 3) * 1000000000 ))
-run_estimator() {  # run_estimator RUN DURATION
-  "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
-    --out-poses "$work/poses$1.jsonl" --duration "$2" --status-period 1 >"$work/estimator$1.log" 2>&1 &
-  estimator=$!
-  pids+=("$estimator")
-}
-run_estimator 1 30
-for camera in c0 c1 c2 c3 c4 c5; do
-  "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration 24 --quiet \
-    >"$work/$camera.log" 2>&1 &
-  pids+=("$!")
-done
-sleep 12
-kill -KILL "$estimator"
-wait "$estimator" 2>/dev/null
-sleep 1
-restart_ns=$(date +%s%N)
-run_estimator 2 14
+replay_clients_scene_with_restart
 sleep 3
 "$python" "$source_dir/examples/plot_body.py" --body tool --duration 3 --save "$work/tool.png" >"$work/plot.out" 2>"$work/plot.err" &
 plot=$!
