@@ -25,6 +25,7 @@
 #include "panoptes/cli.h"
 #include "panoptes/estimator/tracker.h"
 #include "panoptes/simulator.h"
+#include "ring_scene.h"
 
 namespace {
 
@@ -33,76 +34,10 @@ using panoptes::Scene;
 using panoptes::TimeNs;
 namespace est = panoptes::estimator;
 
-constexpr TimeNs kEpoch = 1'700'000'000'000'000'000LL;
-
-struct Config {
-  int cameras = 32;
-  double rate_hz = 120;
-  int markers = 40;
-  double warmup_s = 1.0;
-  double seconds = 2.0;
-  int bodies = 0;  // rigid bodies of 4 markers each, besides the loose markers
-};
-
-// Cameras on a circle of radius 3 m (the walls of a 6 x 6 m room) at 2.3-2.9 m, looking at the
-// middle of the volume; random phases (the rig is not synchronised). Markers on Lissajous paths
-// with centres spread over the floor, |x|, |y| up to about 1.6 m, z 0.4-1.7 m, speeds up to
-// about 1.5 m/s.
-std::string scene_yaml(const Config& config, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  auto uniform = [&](double low, double high) {
-    return std::uniform_real_distribution<double>(low, high)(rng);
-  };
-  std::ostringstream yaml;
-  yaml.precision(9);
-  yaml << "seed: " << seed << "\nduration: " << config.warmup_s + config.seconds << "\n"
-       << "defaults: {width: 1280, height: 1024, K: [1000.0, 1000.0, 639.5, 511.5], rate: " << config.rate_hz
-       << ", centroid_noise: 0.1}\ncameras:\n";
-  for (int c = 0; c < config.cameras; ++c) {
-    const double angle = 2.0 * M_PI * c / config.cameras;
-    const double height = c % 2 == 0 ? 2.3 : 2.9;
-    yaml << "  - {id: cam" << c << ", look_at: {eye: [" << 3.0 * std::cos(angle) << ", "
-         << 3.0 * std::sin(angle) << ", " << height
-         << "], target: [0.0, 0.0, 1.0]}, phase: " << uniform(0.0, 1.0 / config.rate_hz) << "}\n";
-  }
-  yaml << "markers:\n";
-  for (int m = 0; m < config.markers; ++m) {
-    yaml << "  - {name: m" << m << ", path: {type: lissajous, center: [" << uniform(-0.5, 0.5) << ", "
-         << uniform(-0.5, 0.5) << ", " << uniform(0.9, 1.2) << "], amplitude: [" << uniform(0.5, 1.1) << ", "
-         << uniform(0.5, 1.1) << ", " << uniform(0.15, 0.45) << "], frequency: [" << uniform(0.08, 0.2)
-         << ", " << uniform(0.08, 0.2) << ", " << uniform(0.1, 0.3) << "], phase: [" << uniform(0, 2 * M_PI)
-         << ", " << uniform(0, 2 * M_PI) << ", " << uniform(0, 2 * M_PI) << "]}}\n";
-  }
-  if (config.bodies > 0) yaml << "bodies:\n";
-  for (int b = 0; b < config.bodies; ++b) {
-    // Random constellations of 4 markers within a 20 cm cube (distinct for identification).
-    yaml << "  - {name: body" << b << ", markers: [[0, 0, 0]";
-    for (int m = 1; m < 4; ++m)
-      yaml << ", [" << uniform(-0.1, 0.1) << ", " << uniform(-0.1, 0.1) << ", " << uniform(-0.1, 0.1) << "]";
-    yaml << "], path: {type: lissajous, center: [" << uniform(-0.5, 0.5) << ", " << uniform(-0.5, 0.5) << ", "
-         << uniform(0.9, 1.2) << "], amplitude: [" << uniform(0.5, 1.1) << ", " << uniform(0.5, 1.1) << ", "
-         << uniform(0.15, 0.45) << "], frequency: [" << uniform(0.08, 0.2) << ", " << uniform(0.08, 0.2)
-         << ", " << uniform(0.1, 0.3)
-         << "]}, rotation: {type: oscillate, amplitude: [0.5, 0.5, 1.0], frequency: [" << uniform(0.1, 0.3)
-         << ", " << uniform(0.1, 0.3) << ", " << uniform(0.1, 0.3) << "]}}\n";
-  }
-  return yaml.str();
-}
-
-std::vector<FeatureFrame> simulate(const Scene& scene) {
-  std::vector<FeatureFrame> frames;
-  for (const auto& camera : scene.cameras()) {
-    panoptes::CameraSimulator simulator(scene, camera.calibration.id);
-    for (std::int64_t k = 0; simulator.frame_time_ns(k) < scene.duration_ns(); ++k) {
-      frames.push_back(simulator.features(k));
-      frames.back().stamp_ns += kEpoch;
-    }
-  }
-  std::stable_sort(frames.begin(), frames.end(), [](const FeatureFrame& a, const FeatureFrame& b) {
-    return std::tie(a.stamp_ns, a.camera_id) < std::tie(b.stamp_ns, b.camera_id);
-  });
-  return frames;
-}
+using panoptes::bench::kEpoch;
+using panoptes::bench::RingConfig;
+using panoptes::bench::scene_yaml;
+using panoptes::bench::simulate;
 
 // Markers with a published track within 1 cm at the tracker's last stamp.
 int markers_tracked(const est::Tracker& tracker, const Scene& scene) {
@@ -139,7 +74,7 @@ double percentile(std::vector<double> values, double q) {
   return values[k];
 }
 
-Result run(const Config& config, std::uint64_t seed, bool track_bodies = false,
+Result run(const RingConfig& config, std::uint64_t seed, bool track_bodies = false,
            std::size_t* bodies_tracked = nullptr) {
   const Scene scene = Scene::from_yaml_string(scene_yaml(config, seed), ".", "bench_estimator scene");
   const auto frames = simulate(scene);
@@ -197,7 +132,7 @@ void print_row(const Result& r) {
 }
 
 int run_command_line(int argc, char** argv) {
-  Config config;
+  RingConfig config;
   bool json = false;
   std::vector<int> sweep = {10, 25, 50, 100, 200};
   std::uint64_t seed = 7;
@@ -236,7 +171,7 @@ int run_command_line(int argc, char** argv) {
   std::vector<Result> scaling;
   if (!sweep.empty()) std::printf("scaling (same rig):\n");
   for (int markers : sweep) {
-    Config c = config;
+    RingConfig c = config;
     c.markers = markers;
     scaling.push_back(run(c, seed));
     print_row(scaling.back());
@@ -251,7 +186,7 @@ int run_command_line(int argc, char** argv) {
   // definitions, side by side; the difference is what the bodies cost per camera frame.
   std::string bodies_json = "null";
   if (bodies > 0) {
-    Config c = config;
+    RingConfig c = config;
     c.bodies = bodies;
     std::size_t tracked = 0;
     const Result without = run(c, seed);

@@ -251,7 +251,7 @@ int run(int argc, char** argv) {
   std::string samples_file;
   double duration_s = 10;
   double warmup_s = 2;
-  double latency_window_ms = 0;
+  double latency_window_ms = -1;  // < 0: not passed, the estimator's default
   int domain = 100 + static_cast<int>(getpid() % 100);
   bool json_output = false;
   bool subscribe_tracks = true;
@@ -273,10 +273,10 @@ int run(int argc, char** argv) {
       ->check(CLI::Range(0.5, 60.0))
       ->capture_default_str();
   app.add_option("--latency-window-ms", latency_window_ms,
-                 "estimator_node --latency-window-ms (0: process frames as they arrive; the default "
-                 "estimator configuration waits 20 ms to put frames of all cameras in order)")
+                 "estimator_node --latency-window-ms (0: frames are processed as they arrive, late ones "
+                 "replayed; e.g. 20: frames wait 20 ms to be put in stamp order)")
       ->check(CLI::Range(0.0, 1000.0))
-      ->capture_default_str();
+      ->default_str("not passed: the estimator's default");
   app.add_flag("!--no-tracks", subscribe_tracks,
                "do not subscribe to rt/panoptes/tracks (the secondary TrackFrame row)");
   app.add_option("--domain", domain,
@@ -355,13 +355,22 @@ int run(int argc, char** argv) {
                  scene.cameras().size(), scene_file.c_str(), body.c_str(), domain, warmup_s, duration_s,
                  run_dir.c_str());
     std::vector<std::unique_ptr<panoptes::ChildProcess>> children;
-    children.push_back(std::make_unique<panoptes::ChildProcess>(
-        "estimator_node",
-        std::vector<std::string>{(bin_dir / "estimator_node").string(), "--calibration", calibration.string(),
-                                 "--bodies", bodies_file.string(), "--dds-profile", profile,
-                                 "--latency-window-ms", std::to_string(latency_window_ms), "--latency-probe",
-                                 "--duration", std::to_string(run_s + 2)},
-        run_dir / "estimator_node.log"));
+    std::vector<std::string> estimator_argv{(bin_dir / "estimator_node").string(),
+                                            "--calibration",
+                                            calibration.string(),
+                                            "--bodies",
+                                            bodies_file.string(),
+                                            "--dds-profile",
+                                            profile,
+                                            "--latency-probe",
+                                            "--duration",
+                                            std::to_string(run_s + 2)};
+    if (latency_window_ms >= 0) {
+      estimator_argv.push_back("--latency-window-ms");
+      estimator_argv.push_back(std::to_string(latency_window_ms));
+    }
+    children.push_back(std::make_unique<panoptes::ChildProcess>("estimator_node", std::move(estimator_argv),
+                                                                run_dir / "estimator_node.log"));
     const std::string source_prefix = "sim:" + scene_file + "#";
     for (const auto& camera : scene.cameras()) {
       const std::string& id = camera.calibration.id;
@@ -416,7 +425,8 @@ int run(int argc, char** argv) {
         {"rate_hz", rate},
         {"scene", scene_file},
         {"duration_s", duration_s},
-        {"estimator_latency_window_ms", latency_window_ms},
+        {"estimator_latency_window_ms",
+         latency_window_ms >= 0 ? nlohmann::json(latency_window_ms) : nlohmann::json("default")},
         {"output", "BodyPose '" + body + "' (rt/panoptes/bodies)"},
         {"poses_per_s", static_cast<double>(r.end_to_end.ms.size()) / duration_s},
         {"frames_traced", r.frames_traced},

@@ -240,10 +240,15 @@ TimeNs CameraSimulator::frame_stamp_ns(std::int64_t k) const {
 
 TimeNs CameraSimulator::frame_received_ns(std::int64_t k) const {
   sim::Rng rng(sim::hash_key(frame_key(*scene_, camera_index_, k), kDeliveryStream));
-  // Both drawn always, so the late decision and the delay never shift other draws.
+  // All drawn always, so the late decision and the delays never shift other draws.
   const double late_draw = rng.uniform();
   const double delay_draw = rng.uniform();
+  const double jitter_draw = rng.uniform();
   TimeNs received = frame_time_ns(k) + config_->exposure_ns / 2 + config_->latency_ns;
+  if (config_->latency_jitter_ns > 0) {
+    received += static_cast<TimeNs>(
+        std::llround(-std::log1p(-jitter_draw) * static_cast<double>(config_->latency_jitter_ns)));
+  }
   if (late_draw < config_->late_fraction) {
     const auto range = static_cast<double>(config_->late_delay_max_ns - config_->late_delay_min_ns);
     received += config_->late_delay_min_ns + static_cast<TimeNs>(std::llround(delay_draw * range));

@@ -97,7 +97,7 @@ class CameraKeys {
 #define PANOPTES_SIM_CAMERA_KEYS                                                                           \
   "width", "height", "K", "distortion", "T_world_cam", "look_at", "rate", "phase", "clock_offset",         \
       "exposure", "pixel_noise", "centroid_noise", "background", "blob_peak", "blob_min_sigma", "dropout", \
-      "bits", "false_blobs", "merge_distance", "latency", "late_fraction", "late_delay"
+      "bits", "false_blobs", "merge_distance", "latency", "latency_jitter", "late_fraction", "late_delay"
 
 RigidTransform read_pose(const YamlReader& camera, const std::optional<YamlReader>& defaults) {
   // The pose keys are one group: a camera's own pose replaces the defaults' whichever form it takes.
@@ -180,6 +180,8 @@ SimCameraConfig read_camera(const YamlReader& camera, const std::optional<YamlRe
     keys.source("false_blobs").fail("false_blobs", "must be at most 10000 per frame");
   config.merge_distance_px = keys.non_negative("merge_distance", config.merge_distance_px);
   config.latency_ns = seconds_to_ns(keys.non_negative("latency", ns_to_seconds(config.latency_ns)));
+  config.latency_jitter_ns =
+      seconds_to_ns(keys.non_negative("latency_jitter", ns_to_seconds(config.latency_jitter_ns)));
   config.late_fraction = keys.non_negative("late_fraction", config.late_fraction);
   if (config.late_fraction > 1.0)
     keys.source("late_fraction").fail("late_fraction", "must be a probability in [0, 1]");

@@ -26,10 +26,12 @@ struct SettingsFlags {
                         "publish body poses predicted this far ahead of the newest frame (seed 000 Ch. 5)")
              ->check(CLI::Range(0.0, 1000.0)),
          [this](auto& c) { c.node.prediction_horizon_ms = values.node.prediction_horizon_ms; });
-    bind(app.add_option("--latency-window-ms", node.latency_window_ms,
-                        "live: how long frames wait to be ordered by stamp")
-             ->check(CLI::Range(0.0, 10000.0)),
-         [this](auto& c) { c.node.latency_window_ms = values.node.latency_window_ms; });
+    bind(
+        app.add_option("--latency-window-ms", node.latency_window_ms,
+                       "live: how long frames wait to be ordered by stamp (0: not at all; frames that arrive "
+                       "out of order are replayed from a checkpoint, bursts in one replay)")
+            ->check(CLI::Range(0.0, 10000.0)),
+        [this](auto& c) { c.node.latency_window_ms = values.node.latency_window_ms; });
     bind(app.add_flag("!--no-predictions", node.predictions, "live: do not publish predicted windows"),
          [this](auto& c) { c.node.predictions = values.node.predictions; });
     bind(app.add_option("--prediction-margin-px", node.prediction_margin_px,

@@ -2,6 +2,7 @@
 #include "panoptes/estimator_app/live_estimator.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <mutex>
@@ -93,7 +94,10 @@ class LiveEstimator {
 
   void announce(const msg::CameraInfo& info);
   void apply_announced_cameras();
-  void update(FeatureFrame&& frame);
+  // Updates the tracker with frames taken from the inbox together (late ones in one replay).
+  void update(std::vector<FeatureFrame>& due);
+  // The outputs of one in-order frame right after its update (taken from the inbox at `dequeued_ns`).
+  void publish_update(FeatureFrame&& frame, TimeNs dequeued_ns);
   void finish(Processed& done);
   bool finish_processed(bool force);
   void publish_predictions(const FeatureFrame& frame);
@@ -127,6 +131,11 @@ class LiveEstimator {
   std::set<std::string> from_file_;
   FramePeriods periods_;
   std::vector<Processed> processed_;  // finished from the front; cleared (capacity kept) when all are
+  struct StatusPoint {
+    TimeNs wall_ns = 0;
+    std::uint64_t replays = 0, replayed_frames = 0;
+    double cpu_s = 0;
+  } last_status_;  // for the rates over the last status period
   std::size_t finished_ = 0;
 };
 
@@ -167,9 +176,15 @@ void LiveEstimator::publish_predictions(const FeatureFrame& frame) {
   prediction_writer_->write(message);
 }
 
-void LiveEstimator::update(FeatureFrame&& frame) {
-  const TimeNs dequeued_ns = wall_now_ns();
-  if (session_.process(frame) != est::FrameOutcome::kProcessed) return;
+void LiveEstimator::update(std::vector<FeatureFrame>& due) {
+  TimeNs dequeued_ns = wall_now_ns();
+  session_.process_due(due, [&](FeatureFrame& frame, est::FrameOutcome outcome) {
+    if (outcome == est::FrameOutcome::kProcessed) publish_update(std::move(frame), dequeued_ns);
+    dequeued_ns = wall_now_ns();  // the next frame's update starts now
+  });
+}
+
+void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {
   const TimeNs updated_ns = wall_now_ns();
   auto poses = session_.current_poses();
   // Stamped before writing, like every publish_ns: delivery may complete within write().
@@ -224,7 +239,16 @@ bool LiveEstimator::finish_processed(bool force) {
 }
 
 void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
-  const est::EstimatorUsage usage = session_.usage(now);
+  est::EstimatorUsage usage = session_.usage(now);
+  const double cpu_s = process_cpu_seconds();
+  if (const double period_s = ns_to_seconds(now - last_status_.wall_ns);
+      last_status_.wall_ns != 0 && period_s > 0) {
+    usage.replays_per_s = static_cast<double>(usage.replays - last_status_.replays) / period_s;
+    usage.replayed_frames_per_s =
+        static_cast<double>(usage.replayed_frames - last_status_.replayed_frames) / period_s;
+    usage.cpu_percent = 100.0 * (cpu_s - last_status_.cpu_s) / period_s;
+  }
+  last_status_ = {now, usage.replays, usage.replayed_frames, cpu_s};
   status_writer_->write(to_status_message(usage));
   if (options_.quiet) return;
   std::string line = "t=" + std::to_string(static_cast<int>(ns_to_seconds(now - start))) + "s";
@@ -238,7 +262,9 @@ void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
           (tracker_.body_count() ? " | bodies " + std::to_string(tracker_.current_poses().size()) + "/" +
                                        std::to_string(tracker_.body_count())
                                  : "") +
-          " | replays " + std::to_string(usage.replays) + " | time sync answered " +
+          " | replays " + std::to_string(usage.replays) + " (" +
+          std::to_string(std::lround(usage.replays_per_s)) + "/s) | cpu " +
+          std::to_string(std::lround(usage.cpu_percent)) + "% | time sync answered " +
           std::to_string(time_service_.answered());
   log(line);
 }
@@ -246,12 +272,13 @@ void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
 int LiveEstimator::run() {
   auto& inbox = session_.inbox();
   const TimeNs start = wall_now_ns();
+  last_status_ = {start, 0, 0, process_cpu_seconds()};
   TimeNs next_status = start + seconds_to_ns(node_.status_period_s);
   TimeNs next_body_poll = start + seconds_to_ns(node_.bodies_poll_s);
   while (!stop_requested()) {
     apply_announced_cameras();
     const TimeNs now = wall_now_ns();
-    for (auto& frame : inbox.pop_due(now)) update(std::move(frame));
+    if (auto due = inbox.pop_due(now); !due.empty()) update(due);
     if (!finish_processed(false)) continue;  // a frame is due: its update first
     if (latency_probe_) latency_probe_->flush(now, false);
     if (now >= next_body_poll) {
@@ -266,7 +293,7 @@ int LiveEstimator::run() {
     if (options_.duration_s > 0 && now - start >= seconds_to_ns(options_.duration_s)) break;
     inbox.wait(wall_now_ns(), std::chrono::milliseconds(1));  // wakes as frames arrive (issue 7)
   }
-  for (auto& frame : inbox.drain()) update(std::move(frame));
+  if (auto rest = inbox.drain(); !rest.empty()) update(rest);
   finish_processed(true);
   if (latency_probe_) latency_probe_->flush(wall_now_ns(), true);
   session_.print_summary(0);

@@ -11,6 +11,10 @@ msg::EstimatorStatus to_status_message(const estimator::EstimatorUsage& usage) {
   message.tracks_coasting(static_cast<uint32_t>(usage.tracks_coasting));
   message.frames(usage.frames);
   message.replays(usage.replays);
+  message.replayed_frames(usage.replayed_frames);
+  message.replays_per_s(usage.replays_per_s);
+  message.replayed_frames_per_s(usage.replayed_frames_per_s);
+  message.cpu_percent(usage.cpu_percent);
   message.update_p50_ms(usage.update_p50_ms);
   message.update_p99_ms(usage.update_p99_ms);
   message.latency_window_ms(usage.latency_window_ms);
@@ -21,6 +25,7 @@ msg::EstimatorStatus to_status_message(const estimator::EstimatorUsage& usage) {
     m.used(c.used);
     m.late(c.late);
     m.dropped(c.dropped);
+    m.too_late(c.too_late);
     m.blobs(c.blobs);
     m.blobs_associated(c.associated);
     m.utilisation(c.utilisation);

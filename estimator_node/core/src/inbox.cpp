@@ -56,6 +56,12 @@ bool FrameInbox::has_due(TimeNs now_ns) const {
   return !heap_.empty() && heap_.front().stamp_ns <= now_ns - window_ns_;
 }
 
+std::optional<TimeNs> FrameInbox::next_due_ns() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (heap_.empty()) return std::nullopt;
+  return heap_.front().stamp_ns + window_ns_;
+}
+
 std::vector<FeatureFrame> FrameInbox::drain() {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<FeatureFrame> all = std::move(heap_);

@@ -66,7 +66,8 @@ struct Core {
 };
 
 struct Checkpoint {
-  TimeNs stamp_ns;    // stamp of the first history frame the state does not include
+  TimeNs stamp_ns;    // stamp of the first history frame the state does not include (spacing)
+                      // (core.last_stamp_ns: of the last it includes, for rewinding)
   std::size_t index;  // absolute history index of that frame
   Core core;
 };
@@ -101,7 +102,13 @@ struct Tracker::Impl {
   Core core;
   std::deque<Entry> history;     // applied frames in stamp order, within the rewind horizon
   std::size_t history_base = 0;  // absolute index of history.front()
+  // Rewind points in stamp order: `checkpoints` every checkpoint_interval_ns over the rewind
+  // horizon, `recent` before every frame of the last dense_checkpoint_window_ns (most late frames
+  // are late by a few frames: rewinding to just before them replays only those). A recent
+  // checkpoint that ages out of the dense window moves to `checkpoints` or is recycled.
   std::deque<Checkpoint> checkpoints;
+  std::deque<Checkpoint> recent;
+  std::vector<Core> spare;  // recycled states: copying into them reuses their allocations
   TrackerStats stats;
   mutable TrackerStats merged_stats;
 
@@ -116,26 +123,100 @@ struct Tracker::Impl {
     core.associated_per_camera.resize(models.size(), 0);
     history.clear();
     checkpoints.clear();
+    recent.clear();
     history_base = 0;
   }
 
+  Checkpoint make_checkpoint(TimeNs stamp_ns, std::size_t absolute_index) {
+    if (spare.empty()) return {stamp_ns, absolute_index, core};
+    Checkpoint checkpoint{stamp_ns, absolute_index, std::move(spare.back())};
+    spare.pop_back();
+    checkpoint.core = core;
+    return checkpoint;
+  }
+
+  void recycle(Checkpoint&& checkpoint) {
+    if (spare.size() < 64) spare.push_back(std::move(checkpoint.core));
+  }
+
+  const Checkpoint* newest_checkpoint() const {
+    if (!recent.empty()) return &recent.back();
+    return checkpoints.empty() ? nullptr : &checkpoints.back();
+  }
+  const Checkpoint* oldest_checkpoint() const {
+    if (!checkpoints.empty()) return &checkpoints.front();
+    return recent.empty() ? nullptr : &recent.front();
+  }
+
+  // Before applying the frame at `absolute_index` (stamped `stamp_ns`).
   void maybe_checkpoint(TimeNs stamp_ns, std::size_t absolute_index) {
-    if (checkpoints.empty()) {
+    const Checkpoint* newest = newest_checkpoint();
+    if (newest == nullptr) {
       // The empty initial state comes before any frame, however old.
       const bool pristine = core.tracks.empty() && core.last_stamp_ns == std::numeric_limits<TimeNs>::min();
-      checkpoints.push_back({pristine ? std::numeric_limits<TimeNs>::min() : stamp_ns, absolute_index, core});
-    } else if (const TimeNs last = checkpoints.back().stamp_ns;
-               last == std::numeric_limits<TimeNs>::min() ||
-               stamp_ns - last >= options.checkpoint_interval_ns) {
-      checkpoints.push_back({stamp_ns, absolute_index, core});
+      checkpoints.push_back(
+          make_checkpoint(pristine ? std::numeric_limits<TimeNs>::min() : stamp_ns, absolute_index));
+      return;
     }
+    if (newest->index == absolute_index) return;
+    if (options.dense_checkpoint_window_ns > 0) {
+      recent.push_back(make_checkpoint(stamp_ns, absolute_index));
+      age_recent(stamp_ns - options.dense_checkpoint_window_ns);
+    } else if (newest->stamp_ns == std::numeric_limits<TimeNs>::min() ||
+               stamp_ns - newest->stamp_ns >= options.checkpoint_interval_ns) {
+      checkpoints.push_back(make_checkpoint(stamp_ns, absolute_index));
+    }
+  }
+
+  // Recent checkpoints older than `dense_from` keep one per checkpoint_interval_ns.
+  void age_recent(TimeNs dense_from) {
+    while (recent.size() > 1 && recent.front().stamp_ns < dense_from) {
+      const bool keep =
+          checkpoints.empty() || checkpoints.back().stamp_ns == std::numeric_limits<TimeNs>::min() ||
+          recent.front().stamp_ns - checkpoints.back().stamp_ns >= options.checkpoint_interval_ns;
+      if (keep) {
+        checkpoints.push_back(std::move(recent.front()));
+      } else {
+        recycle(std::move(recent.front()));
+      }
+      recent.pop_front();
+    }
+  }
+
+  // Restores the newest state that includes no frame stamped after `stamp_ns` and drops the
+  // checkpoints after it. Returns the absolute history index to replay from.
+  std::size_t rewind_to(TimeNs stamp_ns) {
+    // A state may be restored if every frame it includes is stamped at or before `stamp_ns`.
+    const auto after = [](TimeNs stamp, const Checkpoint& c) { return stamp < c.core.last_stamp_ns; };
+    std::deque<Checkpoint>* tier = &recent;
+    auto found = std::upper_bound(recent.begin(), recent.end(), stamp_ns, after);
+    if (found == recent.begin()) {
+      while (!recent.empty()) {
+        recycle(std::move(recent.back()));
+        recent.pop_back();
+      }
+      tier = &checkpoints;
+      found = std::upper_bound(checkpoints.begin(), checkpoints.end(), stamp_ns, after);
+    }
+    --found;  // exists: the caller checked the oldest checkpoint
+    core = found->core;
+    const std::size_t index = found->index;
+    while (tier->end() != found + 1) {
+      recycle(std::move(tier->back()));
+      tier->pop_back();
+    }
+    return index;
   }
 
   void trim() {
     const TimeNs oldest_kept = core.last_stamp_ns - options.rewind_horizon_ns;
-    while (checkpoints.size() >= 2 && checkpoints[1].stamp_ns <= oldest_kept) checkpoints.pop_front();
-    if (checkpoints.empty()) return;
-    while (history_base < checkpoints.front().index && !history.empty()) {
+    while (checkpoints.size() >= 2 && checkpoints[1].stamp_ns <= oldest_kept) {
+      recycle(std::move(checkpoints.front()));
+      checkpoints.pop_front();
+    }
+    const Checkpoint* oldest = oldest_checkpoint();
+    if (oldest == nullptr) return;
+    while (history_base < oldest->index && !history.empty()) {
       history.pop_front();
       ++history_base;
     }
@@ -164,7 +245,9 @@ struct Tracker::Impl {
                 const std::vector<char>& used);
   void prune(TimeNs now_ns);
   std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
-  void replay_with(const FeatureFrame& frame, int camera_index);
+  // Inserts `late` (in stamp order, each older than the newest applied frame, none older than the
+  // oldest checkpoint) into the history and replays from before the oldest of them: one rewind.
+  void replay_with(std::vector<Entry> late);
   TrackRecord to_record(const Track& track, TimeNs stamp_ns) const;
 };
 
@@ -389,18 +472,17 @@ void Tracker::Impl::prune(TimeNs now_ns) {
   std::erase_if(core.tracks, [&](const Track&) { return remove[k++] != 0; });
 }
 
-void Tracker::Impl::replay_with(const FeatureFrame& frame, int camera_index) {
-  // Latest checkpoint whose state holds only frames stamped at or before the late one.
-  auto checkpoint = std::upper_bound(checkpoints.begin(), checkpoints.end(), frame.stamp_ns,
-                                     [](TimeNs stamp, const Checkpoint& c) { return stamp < c.stamp_ns; });
-  --checkpoint;  // exists: the caller checked the front
-  const std::size_t start = checkpoint->index - history_base;
-  core = checkpoint->core;
-  checkpoints.erase(checkpoint + 1, checkpoints.end());
-  const auto position =
-      std::upper_bound(history.begin() + static_cast<std::ptrdiff_t>(start), history.end(), frame.stamp_ns,
-                       [](TimeNs stamp, const Entry& e) { return stamp < e.frame.stamp_ns; });
-  history.insert(position, Entry{camera_index, frame});
+void Tracker::Impl::replay_with(std::vector<Entry> late) {
+  const std::size_t start = rewind_to(late.front().frame.stamp_ns) - history_base;
+  // Merge: a late frame goes after the history's frames of the same stamp.
+  const auto by_stamp = [](const Entry& a, const Entry& b) { return a.frame.stamp_ns < b.frame.stamp_ns; };
+  std::vector<Entry> tail;
+  tail.reserve(history.size() - start + late.size());
+  std::merge(std::make_move_iterator(history.begin() + static_cast<std::ptrdiff_t>(start)),
+             std::make_move_iterator(history.end()), std::make_move_iterator(late.begin()),
+             std::make_move_iterator(late.end()), std::back_inserter(tail), by_stamp);
+  history.erase(history.begin() + static_cast<std::ptrdiff_t>(start), history.end());
+  for (auto& entry : tail) history.push_back(std::move(entry));
   for (std::size_t i = start; i < history.size(); ++i) {
     maybe_checkpoint(history[i].frame.stamp_ns, history_base + i);
     apply(history[i].frame, history[i].camera);
@@ -473,8 +555,9 @@ void Tracker::set_bodies(const std::vector<BodyDefinition>& bodies, const std::s
     throw ConfigError(file_for_errors, "bodies", error.what());
   }
   impl_->core.bodies.set_definitions(bodies, impl_->options.bodies);
-  for (auto& checkpoint : impl_->checkpoints)
-    checkpoint.core.bodies.set_definitions(bodies, impl_->options.bodies);
+  for (auto* tier : {&impl_->checkpoints, &impl_->recent}) {
+    for (auto& checkpoint : *tier) checkpoint.core.bodies.set_definitions(bodies, impl_->options.bodies);
+  }
 }
 
 std::vector<PoseRecord> Tracker::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) const {
@@ -505,25 +588,25 @@ CameraCounters& Tracker::counters_for(const std::string& camera_id) {
   return camera_counters_[camera_id];
 }
 
-FrameOutcome Tracker::process(const FeatureFrame& frame) {
-  auto& impl = *impl_;
-  auto& stats = impl.stats;
+int Tracker::admit(const FeatureFrame& frame, FrameOutcome& outcome) {
+  auto& stats = impl_->stats;
   ++stats.frames;
   CameraCounters& counters = counters_for(frame.camera_id);
   ++counters.frames;
-  const auto found = impl.camera_index.find(frame.camera_id);
-  if (found == impl.camera_index.end()) {
+  const auto found = impl_->camera_index.find(frame.camera_id);
+  if (found == impl_->camera_index.end()) {
     ++stats.frames_unknown_camera;
-    return FrameOutcome::kUnknownCamera;
+    outcome = FrameOutcome::kUnknownCamera;
+    return -1;
   }
-  const int camera = found->second;
   // Stamps this far from 1970 would overflow the time arithmetic (the node's screen rejects far
   // smaller errors); such a frame is counted as too late.
   constexpr TimeNs kStampLimit = TimeNs{1} << 62;
   if (frame.stamp_ns <= 0 || frame.stamp_ns > kStampLimit) {
     ++stats.frames_too_late;
     ++counters.too_late;
-    return FrameOutcome::kTooLate;
+    outcome = FrameOutcome::kTooLate;
+    return -1;
   }
   stats.blobs += frame.blobs.size();
   counters.blobs += frame.blobs.size();
@@ -531,31 +614,63 @@ FrameOutcome Tracker::process(const FeatureFrame& frame) {
     if (!std::isfinite(blob.x) || !std::isfinite(blob.y)) ++stats.blobs_non_finite;
   }
   counters.last_stamp_ns = std::max(counters.last_stamp_ns, frame.stamp_ns);
+  return found->second;
+}
 
-  FrameOutcome outcome = FrameOutcome::kProcessed;
-  if (frame.stamp_ns >= impl.core.last_stamp_ns) {
-    impl.maybe_checkpoint(frame.stamp_ns, impl.history_base + impl.history.size());
-    impl.apply(frame, camera);
-    impl.history.push_back(Entry{camera, frame});
-    counters.associated = impl.core.associated_per_camera[camera];
-  } else if (impl.checkpoints.empty() || frame.stamp_ns < impl.checkpoints.front().stamp_ns) {
-    ++stats.frames_too_late;
-    ++counters.too_late;
-    return FrameOutcome::kTooLate;
-  } else {
-    impl.replay_with(frame, camera);
-    ++stats.frames_late;
-    ++counters.late;
-    outcome = FrameOutcome::kLateReplayed;
+FrameOutcome Tracker::process(const FeatureFrame& frame) {
+  return process_batch({&frame, 1}).front();
+}
+
+std::vector<FrameOutcome> Tracker::process_batch(std::span<const FeatureFrame> frames) {
+  auto& impl = *impl_;
+  std::vector<FrameOutcome> outcomes(frames.size(), FrameOutcome::kProcessed);
+  std::vector<std::size_t> order(frames.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return frames[a].stamp_ns < frames[b].stamp_ns; });
+  const TimeNs newest = impl.core.last_stamp_ns;
+  const Checkpoint* oldest = impl.oldest_checkpoint();
+  std::vector<Entry> late;
+  std::vector<std::pair<std::size_t, int>> in_order;  // (frame, camera index)
+  for (const std::size_t i : order) {
+    const FeatureFrame& frame = frames[i];
+    const int camera = admit(frame, outcomes[i]);
+    if (camera < 0) continue;
+    CameraCounters& counters = counters_for(frame.camera_id);
+    if (frame.stamp_ns >= newest) {
+      in_order.emplace_back(i, camera);
+    } else if (oldest == nullptr || frame.stamp_ns < oldest->core.last_stamp_ns) {
+      ++impl.stats.frames_too_late;
+      ++counters.too_late;
+      outcomes[i] = FrameOutcome::kTooLate;
+    } else {
+      late.push_back(Entry{camera, frame});
+      ++impl.stats.frames_late;
+      ++counters.late;
+      ++counters.used;
+      outcomes[i] = FrameOutcome::kLateReplayed;
+    }
+  }
+  if (!late.empty()) {
+    impl.replay_with(std::move(late));
     // A replay may change what every camera's blobs were used for.
     for (std::size_t c = 0; c < impl.camera_ids.size(); ++c) {
       const auto entry = camera_counters_.find(impl.camera_ids[c]);
       if (entry != camera_counters_.end()) entry->second.associated = impl.core.associated_per_camera[c];
     }
+    impl.trim();
   }
-  impl.trim();
-  ++counters.used;
-  return outcome;
+  for (const auto& [i, camera] : in_order) {
+    const FeatureFrame& frame = frames[i];
+    impl.maybe_checkpoint(frame.stamp_ns, impl.history_base + impl.history.size());
+    impl.apply(frame, camera);
+    impl.history.push_back(Entry{camera, frame});
+    CameraCounters& counters = counters_for(frame.camera_id);
+    counters.associated = impl.core.associated_per_camera[camera];
+    ++counters.used;
+    impl.trim();
+  }
+  return outcomes;
 }
 
 const TrackerStats& Tracker::stats() const {

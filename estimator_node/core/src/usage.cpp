@@ -68,6 +68,7 @@ EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns,
   const auto& stats = tracker.stats();
   usage.frames = stats.frames;
   usage.replays = stats.replays;
+  usage.replayed_frames = stats.replayed_frames;
   usage.update_p50_ms = update_.quantile_ms(0.5);
   usage.update_p99_ms = update_.quantile_ms(0.99);
   usage.latency_window_ms = latency_window_ms;
@@ -94,6 +95,7 @@ EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns,
     u.frames = std::max(u.frames, counters.frames + u.dropped);
     u.used = counters.used;
     u.late = counters.late;
+    u.too_late = counters.too_late;
     u.dropped += counters.frames - counters.used;
     u.blobs = counters.blobs;
     u.associated = counters.associated;
@@ -119,6 +121,11 @@ std::vector<std::string> EstimatorUsage::lines() const {
         static_cast<unsigned long long>(c.dropped), c.utilisation, c.latency_p50_ms, c.latency_p99_ms);
     out.emplace_back(buffer);
   }
+  std::snprintf(buffer, sizeof buffer,
+                "replays %llu (%llu frames replayed), %.1f/s (%.0f frames/s), cpu %.1f%%",
+                static_cast<unsigned long long>(replays), static_cast<unsigned long long>(replayed_frames),
+                replays_per_s, replayed_frames_per_s, cpu_percent);
+  out.emplace_back(buffer);
   std::string reasons = "dropped by reason:";
   if (counters.empty()) reasons += " none";
   for (const auto& [reason, n] : counters) reasons += " " + reason + "=" + std::to_string(n);

@@ -33,16 +33,22 @@ bool Intake::admit(FeatureFrame& frame, TimeNs reference_ns, bool live) {
 }
 
 est::FrameOutcome Intake::process(const FeatureFrame& frame) {
+  return process_batch({&frame, 1}).front();
+}
+
+std::vector<est::FrameOutcome> Intake::process_batch(std::span<const FeatureFrame> frames) {
   const auto start = std::chrono::steady_clock::now();
-  const auto outcome = tracker_.process(frame);
+  auto outcomes = tracker_.process_batch(frames);
   const double elapsed_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   {
     std::lock_guard<std::mutex> lock(mutex_);
     monitor_.note_update_time(elapsed_ms);
   }
-  if (outcome == est::FrameOutcome::kUnknownCamera) warnings_.note(frame.camera_id);
-  return outcome;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    if (outcomes[i] == est::FrameOutcome::kUnknownCamera) warnings_.note(frames[i].camera_id);
+  }
+  return outcomes;
 }
 
 est::EstimatorUsage Intake::usage(TimeNs stamp_ns, std::uint64_t inbox_drops) const {

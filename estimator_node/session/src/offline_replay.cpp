@@ -52,6 +52,7 @@ void replay_frames(EstimatorSession& session, std::vector<FeatureFrame>& frames,
   const auto references = est::offline_reference_stamps(frames);
   const auto order = delivery_order(frames, options.by_arrival);
   const auto deliver = [&](const FeatureFrame& frame) { delivered(frame, session.process(frame)); };
+  const std::function<void(FeatureFrame&, est::FrameOutcome)> deliver_due = delivered;
   auto& inbox = session.inbox();
   const std::size_t progress_every = std::max<std::size_t>(frames.size() / 10, 1);
   for (std::size_t n = 0; n < order.size(); ++n) {
@@ -62,7 +63,8 @@ void replay_frames(EstimatorSession& session, std::vector<FeatureFrame>& frames,
       if (options.by_arrival) {
         const TimeNs now = frame.received_ns;
         inbox.push(std::move(frame));
-        for (const auto& due : inbox.pop_due(now)) deliver(due);
+        auto due = inbox.pop_due(now);
+        session.process_due(due, deliver_due);
       } else {
         deliver(frame);
       }
@@ -72,7 +74,8 @@ void replay_frames(EstimatorSession& session, std::vector<FeatureFrame>& frames,
                    (n + 1) * 100 / frames.size(), n + 1, frames.size(), session.tracker().live_track_count());
     }
   }
-  for (const auto& due : inbox.drain()) deliver(due);
+  auto rest = inbox.drain();
+  session.process_due(rest, deliver_due);
   if (options.show_progress && !frames.empty()) std::fprintf(stderr, "\n");
 }
 

@@ -74,7 +74,7 @@ TEST(LateData, TenPercentOfFramesFiveToThirtyMsLateAreAllUsedAndAccuracyHolds) {
   const Scene scene = Scene::load(std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/demo.yaml");
   const auto in_order = run(scene, simulate(scene, 0.0, 11), 5.0);
   const auto late_frames = simulate(scene, 0.10, 11);
-  for (double window_ms : {5.0, 20.0}) {
+  for (double window_ms : {0.0, 5.0, 20.0}) {
     const auto late = run(scene, late_frames, window_ms);
     std::uint64_t frames = 0;
     for (const auto& [camera, c] : late.counters) {
@@ -83,8 +83,8 @@ TEST(LateData, TenPercentOfFramesFiveToThirtyMsLateAreAllUsedAndAccuracyHolds) {
       frames += c.frames;
     }
     EXPECT_EQ(late.stats.frames_too_late, 0u);
-    // With a 5 ms window about 10% of frames come after it and are replayed.
-    if (window_ms == 5.0) {
+    // With a 5 ms window or none about 10% of frames come after it and are replayed.
+    if (window_ms <= 5.0) {
       EXPECT_GT(late.stats.frames_late, frames / 20);
     }
     std::printf(
@@ -100,32 +100,112 @@ TEST(LateData, TenPercentOfFramesFiveToThirtyMsLateAreAllUsedAndAccuracyHolds) {
   }
 }
 
-TEST(LateData, ReplayGivesTheSameStateAsInOrderProcessing) {
-  // The final state after a late frame equals the state of processing everything in order.
-  const Scene scene = Scene::load(std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/demo.yaml");
+// The demo scene's first 600 frames in stamp order.
+std::vector<FeatureFrame> first_frames(const Scene& scene, std::size_t n) {
   auto frames = simulate(scene, 0.0, 3);
   std::stable_sort(frames.begin(), frames.end(), [](const Delivered& a, const Delivered& b) {
     return a.frame.stamp_ns < b.frame.stamp_ns;
   });
-  frames.resize(600);
-  Tracker in_order, shuffled;
-  in_order.set_calibration(scene.calibration());
-  shuffled.set_calibration(scene.calibration());
-  for (const auto& d : frames) in_order.process(d.frame);
+  frames.resize(n);
+  std::vector<FeatureFrame> out;
+  for (auto& d : frames) out.push_back(std::move(d.frame));
+  return out;
+}
+
+void expect_same_tracks(const Tracker& a_tracker, const Tracker& b_tracker) {
+  const auto a = a_tracker.current_tracks();
+  const auto b = b_tracker.current_tracks();
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_FALSE(a.empty());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].id, b[i].id);
+    EXPECT_NEAR((a[i].p - b[i].p).norm(), 0.0, 1e-9);
+  }
+}
+
+// Parameter: the dense checkpoint window. Each test compares a tracker fed out of order with one
+// fed the same frames in order.
+class LateReplay : public ::testing::TestWithParam<TimeNs> {
+ protected:
+  void SetUp() override {
+    frames = first_frames(scene, 600);
+    TrackerOptions options;
+    options.dense_checkpoint_window_ns = GetParam();
+    in_order = Tracker(options);
+    tested = Tracker(options);
+    in_order.set_calibration(scene.calibration());
+    tested.set_calibration(scene.calibration());
+    for (const auto& frame : frames) in_order.process(frame);
+  }
+
+  const Scene scene = Scene::load(std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/demo.yaml");
+  std::vector<FeatureFrame> frames;
+  Tracker in_order, tested;
+};
+
+TEST_P(LateReplay, GivesTheSameStateAsInOrderProcessing) {
+  // The final state after late frames equals the state of processing everything in order,
+  // whatever the checkpoints' spacing.
+  Tracker& shuffled = tested;
   // Hold every 7th frame back by three frames.
   std::vector<std::size_t> order(frames.size());
   std::iota(order.begin(), order.end(), 0);
   for (std::size_t i = 7; i + 3 < order.size(); i += 7)
     std::rotate(order.begin() + i, order.begin() + i + 1, order.begin() + i + 4);
-  for (std::size_t i : order) shuffled.process(frames[i].frame);
+  for (std::size_t i : order) shuffled.process(frames[i]);
   EXPECT_GT(shuffled.stats().frames_late, 50u);
-  const auto a = in_order.current_tracks();
-  const auto b = shuffled.current_tracks();
-  ASSERT_EQ(a.size(), b.size());
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    EXPECT_EQ(a[i].id, b[i].id);
-    EXPECT_NEAR((a[i].p - b[i].p).norm(), 0.0, 1e-9);
+  expect_same_tracks(in_order, shuffled);
+  if (GetParam() > 0) {
+    // A checkpoint before each recent frame: a frame three frames late replays four.
+    EXPECT_EQ(shuffled.stats().replayed_frames, 4 * shuffled.stats().replays);
+  } else {
+    EXPECT_GT(shuffled.stats().replayed_frames, 4 * shuffled.stats().replays);
   }
+}
+
+TEST_P(LateReplay, ABurstOfLateFramesCostsOneReplay) {
+  Tracker& bursts = tested;
+  // Every 40 frames, five frames (of different cameras) arrive only after the five that follow
+  // them, together and shuffled, with one frame newer than all: one batch, one replay.
+  std::mt19937_64 random(5);
+  std::size_t i = 0, expected_late = 0, expected_replays = 0;
+  for (; i + 10 < frames.size(); i += 40) {
+    for (std::size_t k = i + 5; k < i + 10; ++k) bursts.process(frames[k]);
+    std::vector<FeatureFrame> burst(frames.begin() + static_cast<std::ptrdiff_t>(i),
+                                    frames.begin() + static_cast<std::ptrdiff_t>(i + 5));
+    std::shuffle(burst.begin(), burst.end(), random);
+    const std::size_t next = std::min(i + 40, frames.size());
+    for (std::size_t k = i + 10; k < next; ++k) burst.push_back(frames[k]);
+    const auto outcomes = bursts.process_batch(burst);
+    ASSERT_EQ(outcomes.size(), burst.size());
+    for (std::size_t k = 0; k < 5; ++k) EXPECT_EQ(outcomes[k], FrameOutcome::kLateReplayed);
+    for (std::size_t k = 5; k < burst.size(); ++k) EXPECT_EQ(outcomes[k], FrameOutcome::kProcessed);
+    expected_late += 5;
+    ++expected_replays;
+  }
+  for (; i < frames.size(); ++i) bursts.process(frames[i]);
+  EXPECT_EQ(bursts.stats().frames_late, expected_late);
+  EXPECT_EQ(bursts.stats().replays, expected_replays);
+  expect_same_tracks(in_order, bursts);
+}
+
+INSTANTIATE_TEST_SUITE_P(CheckpointSpacing, LateReplay, ::testing::Values(TimeNs{0}, TimeNs{50'000'000}),
+                         [](const auto& info) { return info.param == 0 ? "SparseOnly" : "Dense50ms"; });
+
+TEST(LateData, FramesBeyondTheRewindHorizonAreCountedPerCamera) {
+  const Scene scene = Scene::load(std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/demo.yaml");
+  auto frames = first_frames(scene, 600);
+  TrackerOptions options;
+  options.rewind_horizon_ns = 50'000'000;
+  Tracker tracker(options);
+  tracker.set_calibration(scene.calibration());
+  const FeatureFrame held = frames[10];
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    if (i != 10) tracker.process(frames[i]);
+  }
+  EXPECT_EQ(tracker.process(held), FrameOutcome::kTooLate);
+  EXPECT_EQ(tracker.stats().frames_too_late, 1u);
+  EXPECT_EQ(tracker.camera_counters().at(held.camera_id).too_late, 1u);
 }
 
 }  // namespace

@@ -91,6 +91,10 @@ TEST(StatusAssembly, CarriesEveryUsageValueIntoTheMessage) {
   usage.tracks_coasting = 1;
   usage.frames = 1000;
   usage.replays = 7;
+  usage.replayed_frames = 19;
+  usage.replays_per_s = 3.5;
+  usage.replayed_frames_per_s = 9.5;
+  usage.cpu_percent = 42.5;
   usage.update_p50_ms = 0.25;
   usage.update_p99_ms = 1.5;
   usage.latency_window_ms = 20;
@@ -100,6 +104,7 @@ TEST(StatusAssembly, CarriesEveryUsageValueIntoTheMessage) {
   camera.used = 490;
   camera.late = 4;
   camera.dropped = 10;
+  camera.too_late = 6;
   camera.blobs = 4000;
   camera.associated = 3900;
   camera.utilisation = 0.98;
@@ -117,6 +122,10 @@ TEST(StatusAssembly, CarriesEveryUsageValueIntoTheMessage) {
   EXPECT_EQ(message.tracks_coasting(), 1u);
   EXPECT_EQ(message.frames(), 1000u);
   EXPECT_EQ(message.replays(), 7u);
+  EXPECT_EQ(message.replayed_frames(), 19u);
+  EXPECT_DOUBLE_EQ(message.replays_per_s(), 3.5);
+  EXPECT_DOUBLE_EQ(message.replayed_frames_per_s(), 9.5);
+  EXPECT_DOUBLE_EQ(message.cpu_percent(), 42.5);
   EXPECT_DOUBLE_EQ(message.update_p50_ms(), 0.25);
   EXPECT_DOUBLE_EQ(message.update_p99_ms(), 1.5);
   EXPECT_DOUBLE_EQ(message.latency_window_ms(), 20);
@@ -127,6 +136,7 @@ TEST(StatusAssembly, CarriesEveryUsageValueIntoTheMessage) {
   EXPECT_EQ(m.used(), 490u);
   EXPECT_EQ(m.late(), 4u);
   EXPECT_EQ(m.dropped(), 10u);
+  EXPECT_EQ(m.too_late(), 6u);
   EXPECT_EQ(m.blobs(), 4000u);
   EXPECT_EQ(m.blobs_associated(), 3900u);
   EXPECT_DOUBLE_EQ(m.utilisation(), 0.98);
@@ -146,7 +156,7 @@ TEST(StatusAssembly, SessionUsageReachesTheMessage) {
   EXPECT_FALSE(session.admit(bad, kNow, false));
   const auto message = estimator_app::to_status_message(session.usage(kNow));
   EXPECT_EQ(message.stamp_ns(), kNow);
-  EXPECT_DOUBLE_EQ(message.latency_window_ms(), 20.0);
+  EXPECT_DOUBLE_EQ(message.latency_window_ms(), 0.0);  // the default: no frame waits
   ASSERT_EQ(message.cameras().size(), 1u);
   EXPECT_EQ(message.cameras()[0].dropped(), 1u);
   bool found = false;

@@ -15,6 +15,9 @@ void install_stop_handlers();
 bool stop_requested();
 void request_stop();
 
+// CPU time this process has used (all threads, user + system), seconds.
+double process_cpu_seconds();
+
 // A child process started with posix_spawn, stdout and stderr to `log_file`, stdin from
 // /dev/null; stopped (SIGINT, then SIGKILL after 5 s) when destroyed. Used by the demo and the
 // benchmarks that run the nodes.

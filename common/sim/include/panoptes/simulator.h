@@ -35,9 +35,12 @@ struct SimCameraConfig {
   int bits = 8;                      // 8, 10, 12 or 16
   double false_blobs = 0.0;          // mean number of spurious blobs per frame (Poisson)
   double merge_distance_px = 0.0;    // spots with centres closer than this form one blob; 0: off
-  // Delivery to the estimator: end of exposure + latency, plus a late delay for late_fraction of
-  // the frames (FeatureFrame::received_ns).
+  // Delivery to the estimator: end of exposure + latency + a jitter drawn per frame from an
+  // exponential distribution of mean latency_jitter_ns (network and scheduling; reorders frames
+  // of different cameras), plus a late delay for late_fraction of the frames
+  // (FeatureFrame::received_ns).
   TimeNs latency_ns = 2'000'000;
+  TimeNs latency_jitter_ns = 0;
   double late_fraction = 0.0;
   TimeNs late_delay_min_ns = 5'000'000;
   TimeNs late_delay_max_ns = 30'000'000;

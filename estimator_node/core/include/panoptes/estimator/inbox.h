@@ -7,6 +7,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "panoptes/records.h"
@@ -30,6 +31,9 @@ class FrameInbox {
   // Blocks until a frame is pushed, the oldest frame falls due (on the clock `now_ns` is read
   // from), or `max_wait` has passed: a live loop wakes as frames arrive instead of polling.
   void wait(TimeNs now_ns, std::chrono::nanoseconds max_wait);
+
+  // When the oldest waiting frame falls due (its stamp + the window); none when empty.
+  std::optional<TimeNs> next_due_ns() const;
 
   TimeNs latency_window_ns() const { return window_ns_; }
   std::uint64_t drops() const;

@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <ostream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -38,13 +39,14 @@ struct TrackerOptions {
   TimeNs coast_after_ns = 50'000'000;  // no update for this long: coasting
   TimeNs delete_after_ns = 300'000'000;
   TimeNs tentative_delete_after_ns = 100'000'000;
-  double merge_distance_m = 0.005;               // two tracks closer than this are one marker
-  TimeNs recent_camera_window_ns = 500'000'000;  // for TrackRecord::cameras
-  TimeNs rewind_horizon_ns = 500'000'000;        // late frames up to this much older are replayed
-  TimeNs checkpoint_interval_ns = 10'000'000;    // state snapshots for rewinding
-  double grid_cell_px = 32.0;                    // spatial index of a frame's blobs
-  std::size_t max_unmatched_per_frame = 256;     // unmatched blobs of one frame offered to initiation
-  BodyTrackerOptions bodies;                     // rigid bodies (set_bodies)
+  double merge_distance_m = 0.005;                // two tracks closer than this are one marker
+  TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
+  TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
+  TimeNs checkpoint_interval_ns = 10'000'000;     // state snapshots for rewinding ...
+  TimeNs dense_checkpoint_window_ns = 5'000'000;  // ... and one before every frame this recent (0: none)
+  double grid_cell_px = 32.0;                     // spatial index of a frame's blobs
+  std::size_t max_unmatched_per_frame = 256;      // unmatched blobs of one frame offered to initiation
+  BodyTrackerOptions bodies;                      // rigid bodies (set_bodies)
 
   void print(std::ostream& out) const;
 };
@@ -117,6 +119,10 @@ class Tracker {
   // Processes one camera frame. Frames normally come in stamp order; an older frame within the
   // rewind horizon is inserted into the history and the state replayed from before it.
   FrameOutcome process(const FeatureFrame& frame);
+  // Processes frames that arrived together, in any order: those older than the newest processed
+  // frame are inserted into the history with one rewind and replay (a burst of late frames costs
+  // one replay), then the others in stamp order. The outcomes are in the order of `frames`.
+  std::vector<FrameOutcome> process_batch(std::span<const FeatureFrame> frames);
 
   // Published tracks (confirmed or coasting), predicted to `stamp_ns`.
   std::vector<TrackRecord> tracks_at(TimeNs stamp_ns) const;
@@ -139,6 +145,8 @@ class Tracker {
  private:
   struct Impl;
   CameraCounters& counters_for(const std::string& camera_id);
+  // Counts a frame; its camera's index, or -1 (and `outcome`) when it cannot be used.
+  int admit(const FeatureFrame& frame, FrameOutcome& outcome);
 
   std::unique_ptr<Impl> impl_;
   std::map<std::string, CameraCounters> camera_counters_;

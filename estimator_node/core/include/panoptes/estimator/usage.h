@@ -34,7 +34,8 @@ struct CameraUsage {
   std::uint64_t frames = 0;  // received by the estimator
   std::uint64_t used = 0;
   std::uint64_t late = 0;
-  std::uint64_t dropped = 0;  // screened out, too late, uncalibrated or lost in the inbox
+  std::uint64_t dropped = 0;   // screened out, too late, uncalibrated or lost in the inbox
+  std::uint64_t too_late = 0;  // of those, older than the rewind horizon
   std::uint64_t blobs = 0;
   std::uint64_t associated = 0;
   double utilisation = 0;  // used / frames
@@ -47,7 +48,10 @@ struct EstimatorUsage {
   TimeNs stamp_ns = 0;
   std::size_t tracks_tentative = 0, tracks_confirmed = 0, tracks_coasting = 0;
   std::uint64_t frames = 0;
-  std::uint64_t replays = 0;
+  std::uint64_t replays = 0;          // rewinds (one per burst of late frames)
+  std::uint64_t replayed_frames = 0;  // frames applied again by them
+  // Rates over the last status period and the process's CPU, set by the live node (0 offline).
+  double replays_per_s = 0, replayed_frames_per_s = 0, cpu_percent = 0;
   double update_p50_ms = 0, update_p99_ms = 0;
   double latency_window_ms = 0;
   std::vector<CameraUsage> cameras;

@@ -29,7 +29,8 @@ struct Ros2Settings {
 // Settings of the session and the live node around the tracker.
 struct NodeSettings {
   std::size_t inbox_capacity = 4096;   // frames waiting to be ordered by stamp
-  double latency_window_ms = 20.0;     // how long frames wait in the inbox (live, --replay-arrival)
+  double latency_window_ms = 0.0;      // how long frames wait in the inbox (live, --replay-arrival);
+                                       // 0: none, late frames are replayed (docs/estimator.md)
   bool predictions = true;             // live: publish predicted windows
   double prediction_margin_px = 3.0;   // live: pixels added around each predicted gate
   double prediction_horizon_ms = 0.0;  // body poses are published this far ahead (seed 000 Ch. 5)

@@ -5,6 +5,9 @@
 // after each processed frame and writes to its sinks (JSONL here, DDS in the app).
 #pragma once
 
+#include <functional>
+#include <vector>
+
 #include <cstddef>
 #include <cstdint>
 
@@ -41,6 +44,12 @@ class EstimatorSession {
 
   // The owning thread: one tracker update.
   estimator::FrameOutcome process(const FeatureFrame& frame) { return intake_.process(frame); }
+  // The owning thread: frames taken from the inbox together (oldest first). Those older than the
+  // newest processed frame go to the tracker as one batch (one rewind and replay for the burst);
+  // then the others one at a time. `each` sees every frame right after its update, so the outputs
+  // of in-order frames follow their own update.
+  void process_due(std::vector<FeatureFrame>& due,
+                   const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each);
 
   estimator::EstimatorUsage usage(TimeNs stamp_ns) const { return intake_.usage(stamp_ns, inbox_.drops()); }
   void print_summary(std::size_t bad_lines) const { intake_.print_summary(inbox_.drops(), bad_lines); }

@@ -10,7 +10,9 @@
 #include <cstdint>
 #include <mutex>
 #include <set>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "panoptes/estimator/frame_screen.h"
 #include "panoptes/estimator/tracker.h"
@@ -39,6 +41,8 @@ class Intake {
 
   // Tracker update, timed. The tracker's thread only.
   estimator::FrameOutcome process(const FeatureFrame& frame);
+  // Tracker::process_batch, timed as one update. The tracker's thread only.
+  std::vector<estimator::FrameOutcome> process_batch(std::span<const FeatureFrame> frames);
 
   // Usage so far: the monitor's summary plus the screen's drop reasons and inbox overflows (the
   // tracker's thread only: reads the tracker).
