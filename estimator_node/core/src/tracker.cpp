@@ -441,7 +441,8 @@ bool Tracker::Impl::determined(const TrackRecord& record) const {
   const auto& c = record.position_covariance;
   Eigen::Matrix3d P;
   P << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
-  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P, Eigen::EigenvaluesOnly).eigenvalues()(2);
+  const double largest =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P, Eigen::EigenvaluesOnly).eigenvalues()(2);
   return largest <= options.publish_max_sigma_m * options.publish_max_sigma_m;
 }
 

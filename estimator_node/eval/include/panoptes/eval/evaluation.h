@@ -102,7 +102,8 @@ struct Evaluation {
     return trackable == 0 ? 1.0 : static_cast<double>(tracked_trackable) / static_cast<double>(trackable);
   }
   double edge_coverage() const {
-    return edge_trackable == 0 ? 1.0 : static_cast<double>(edge_tracked) / static_cast<double>(edge_trackable);
+    return edge_trackable == 0 ? 1.0
+                               : static_cast<double>(edge_tracked) / static_cast<double>(edge_trackable);
   }
   double false_record_fraction() const {
     return records == 0 ? 0.0 : static_cast<double>(false_records) / static_cast<double>(records);
