@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <tuple>
 
+#include <Eigen/Eigenvalues>
+
 #include "blob_grid.h"
 #include "panoptes/errors.h"
 #include "panoptes/estimator/assignment.h"
@@ -28,6 +30,7 @@ void TrackerOptions::print(std::ostream& out) const {
       << " updates from 2\n"
       << "  coast_after              " << ns_to_seconds(coast_after_ns) * 1e3 << " ms\n"
       << "  delete_after             " << ns_to_seconds(delete_after_ns) * 1e3 << " ms\n"
+      << "  publish_max_sigma        " << publish_max_sigma_m * 1e3 << " mm\n"
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
       << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n";
 }
@@ -249,6 +252,8 @@ struct Tracker::Impl {
   // oldest checkpoint) into the history and replays from before the oldest of them: one rewind.
   void replay_with(std::vector<Entry> late);
   TrackRecord to_record(const Track& track, TimeNs stamp_ns) const;
+  // Whether a record's position is known well enough to publish (publish_max_sigma_m).
+  bool determined(const TrackRecord& record) const;
 };
 
 void Tracker::Impl::apply(const FeatureFrame& frame, int camera_index) {
@@ -513,6 +518,16 @@ TrackRecord Tracker::Impl::to_record(const Track& track, TimeNs stamp_ns) const 
   return record;
 }
 
+bool Tracker::Impl::determined(const TrackRecord& record) const {
+  if (options.publish_max_sigma_m <= 0) return true;
+  const auto& c = record.position_covariance;
+  Eigen::Matrix3d P;
+  P << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+  const double largest =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P, Eigen::EigenvaluesOnly).eigenvalues()(2);
+  return largest <= options.publish_max_sigma_m * options.publish_max_sigma_m;
+}
+
 Tracker::Tracker(TrackerOptions options) : impl_(std::make_unique<Impl>(options)) {}
 Tracker::~Tracker() = default;
 Tracker::Tracker(Tracker&&) noexcept = default;
@@ -708,7 +723,9 @@ std::array<std::size_t, 3> Tracker::track_counts(TimeNs stamp_ns) const {
 std::vector<TrackRecord> Tracker::tracks_at(TimeNs stamp_ns) const {
   std::vector<TrackRecord> records;
   for (const auto& track : impl_->core.tracks) {
-    if (track.confirmed) records.push_back(impl_->to_record(track, stamp_ns));
+    if (!track.confirmed) continue;
+    TrackRecord record = impl_->to_record(track, stamp_ns);
+    if (impl_->determined(record)) records.push_back(std::move(record));
   }
   std::sort(records.begin(), records.end(),
             [](const TrackRecord& a, const TrackRecord& b) { return a.id < b.id; });

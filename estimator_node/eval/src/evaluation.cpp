@@ -166,11 +166,15 @@ Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
       if (!truth[m].valid) continue;
       auto& marker = result.markers[m];
       ++marker.steps;
-      const bool trackable = visibility.cameras_showing(m, scene_time, options.trackable_window_ns) >=
-                             options.trackable_min_cameras;
+      const int cameras = visibility.cameras_showing(m, scene_time, options.trackable_window_ns);
+      const bool trackable = cameras >= options.trackable_min_cameras;
       if (trackable) {
         ++marker.trackable;
         if (marker_taken[m]) ++marker.tracked_trackable;
+      }
+      if (cameras == options.trackable_min_cameras) {
+        ++result.edge_trackable;
+        if (marker_taken[m]) ++result.edge_tracked;
       }
       if (options.keep_series) {
         result.series.flags[m][instant] = static_cast<std::uint8_t>(
@@ -233,6 +237,9 @@ std::string Evaluation::to_json() const {
   j["tracked_trackable"] = tracked_trackable;
   j["coverage"] = coverage_or_null(trackable, coverage());
   j["min_coverage"] = coverage_or_null(trackable, min_coverage);
+  j["edge_trackable"] = edge_trackable;
+  j["edge_tracked"] = edge_tracked;
+  j["edge_coverage"] = coverage_or_null(edge_trackable, edge_coverage());
   j["id_switches"] = id_switch_count;
   j["records"] = records;
   j["false_records"] = false_records;
@@ -311,10 +318,11 @@ std::string Evaluation::summary() const {
     out << "  ... and " << switches.size() - kListedSwitches << " more ID switches\n";
   std::snprintf(line, sizeof line,
                 "  records %zu, false %zu (%.2f%%; %zu duplicates of tracked markers) from %zu track ids; "
-                "trackable marker-instants %zu, tracked %zu; longest silence %.1f ms\n",
+                "trackable marker-instants %zu, tracked %zu (shown by exactly %d cameras %zu, tracked %zu); "
+                "longest silence %.1f ms\n",
                 records, false_records, 100.0 * false_record_fraction(), duplicate_records,
-                false_record_ids.size(), trackable, tracked_trackable,
-                static_cast<double>(max_instant_gap_ns) * 1e-6);
+                false_record_ids.size(), trackable, tracked_trackable, options.trackable_min_cameras,
+                edge_trackable, edge_tracked, static_cast<double>(max_instant_gap_ns) * 1e-6);
   out << line;
   char coverage_text[48] = "-";
   if (trackable > 0) {

@@ -263,6 +263,8 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.integer("delete_after_ns", o.delete_after_ns, 0, kHourNs, "no update for this long: deleted");
   f.integer("tentative_delete_after_ns", o.tentative_delete_after_ns, 0, kHourNs,
             "... for a tentative track");
+  f.number("publish_max_sigma_m", o.publish_max_sigma_m, kNonNegative,
+           "confirmed tracks are published while their position 1-sigma is within this, m (0: always)");
   f.number("merge_distance_m", o.merge_distance_m, kNonNegative,
            "two tracks closer than this are one marker");
   f.integer("recent_camera_window_ns", o.recent_camera_window_ns, 0, kHourNs, "for a track record's cameras");

@@ -211,6 +211,10 @@ TEST(Evaluation, CoverageCountsOnlyMarkerTimeThatTwoCamerasSaw) {
   EXPECT_EQ(result.trackable, both.trackable + mover.trackable);
   EXPECT_EQ(result.tracked_trackable, both.tracked_trackable + mover.tracked_trackable);
   EXPECT_NEAR(result.min_coverage, both.coverage(), 1e-12);
+  // With two cameras every trackable instant is at the edge: seen by exactly two.
+  EXPECT_EQ(result.edge_trackable, result.trackable);
+  EXPECT_EQ(result.edge_tracked, result.tracked_trackable);
+  EXPECT_NEAR(result.edge_coverage(), result.coverage(), 1e-12);
   EXPECT_NEAR(result.coverage(),
               static_cast<double>(both.tracked_trackable + mover.tracked_trackable) /
                   static_cast<double>(both.trackable + mover.trackable),

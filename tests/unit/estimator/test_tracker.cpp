@@ -5,6 +5,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <type_traits>
 
 #include <gtest/gtest.h>
 
@@ -28,7 +29,8 @@ struct SyntheticRun {
   std::vector<FeatureFrame> frames;
 };
 
-// Four cameras at 100 Hz, phases 0/2.5/5/7.5 ms, 0.1 px noise; `visible(m, t)` hides markers.
+// Four cameras at 100 Hz, phases 0/2.5/5/7.5 ms, 0.1 px noise; `visible(m, t)` hides markers, or
+// `visible(m, t, camera)` hides them from some cameras only.
 template <class Visible>
 SyntheticRun make_run(double duration_s, Visible visible, std::uint64_t seed = 1) {
   SyntheticRun run;
@@ -45,7 +47,11 @@ SyntheticRun make_run(double duration_s, Visible visible, std::uint64_t seed = 1
       frame.frame = k;
       frame.stamp_ns = epoch + t;
       for (int m = 0; m < 3; ++m) {
-        if (!visible(m, ns_to_seconds(t))) continue;
+        if constexpr (std::is_invocable_v<Visible, int, double, int>) {
+          if (!visible(m, ns_to_seconds(t), static_cast<int>(c))) continue;
+        } else {
+          if (!visible(m, ns_to_seconds(t))) continue;
+        }
         const auto pixel = models[c].project(marker_position(m, ns_to_seconds(t)));
         if (!pixel || !models[c].in_image(*pixel)) continue;
         Blob blob;
@@ -131,7 +137,10 @@ TEST(Tracker, KeepsIdentityThroughShortOcclusionAndDeletesAfterTimeout) {
     return true;
   };
   const auto run = make_run(3.0, visible, 2);
-  Tracker tracker;
+  // Coasting tracks are published only with the uncertainty limit off (see the next test).
+  TrackerOptions options;
+  options.publish_max_sigma_m = 0;
+  Tracker tracker(options);
   tracker.set_calibration(SystemCalibration{run.cameras});
   std::int64_t id_before = 0;
   std::int64_t id_after = 0;
@@ -152,6 +161,44 @@ TEST(Tracker, KeepsIdentityThroughShortOcclusionAndDeletesAfterTimeout) {
   // Marker 2's track is gone 0.3 s after it disappeared; two remain.
   EXPECT_EQ(tracker.current_tracks().size(), 2u);
   EXPECT_GE(tracker.stats().tracks_deleted, 1u);
+}
+
+// Issue 16, edges of the volume: a marker that only one camera sees has no depth. Its track is
+// kept (same id when a second camera sees it again) but not published once its position is
+// uncertain, so no record drifts along the ray away from the marker.
+TEST(Tracker, WithholdsAMarkerOnlyOneCameraSeesAndKeepsItsId) {
+  auto visible = [](int m, double t, int camera) { return m != 1 || camera == 0 || t < 1.0 || t > 1.3; };
+  const auto run = make_run(2.0, visible, 3);
+  for (const double limit : {0.02, 0.0}) {
+    TrackerOptions options;
+    options.publish_max_sigma_m = limit;
+    Tracker tracker(options);
+    tracker.set_calibration(SystemCalibration{run.cameras});
+    std::int64_t id_before = 0, id_after = 0;
+    int published_alone = 0, far_records = 0;
+    for (const auto& frame : run.frames) {
+      tracker.process(frame);
+      const double t = ns_to_seconds(scene_time(frame.stamp_ns));
+      for (const auto& track : tracker.current_tracks()) {
+        double nearest = 1e9;
+        for (int m = 0; m < 3; ++m) nearest = std::min(nearest, (track.p - marker_position(m, t)).norm());
+        const double error = (track.p - marker_position(1, t)).norm();
+        if (t > 0.5 && nearest > 0.02) ++far_records;
+        if (t > 0.9 && t < 1.0 && error < 0.005) id_before = track.id;
+        if (t > 1.5 && error < 0.005) id_after = track.id;
+        if (t > 1.1 && t < 1.3 && track.id == id_before) ++published_alone;
+      }
+    }
+    SCOPED_TRACE("publish_max_sigma_m " + std::to_string(limit));
+    EXPECT_NE(id_before, 0);
+    EXPECT_EQ(id_before, id_after) << "marker 1 was given a new identity after 300 ms seen by one camera";
+    if (limit > 0) {
+      EXPECT_EQ(published_alone, 0) << "a track without depth was published";
+      EXPECT_EQ(far_records, 0) << "records more than 2 cm from every marker";
+    } else {
+      EXPECT_GT(published_alone, 0) << "with the limit off the track is published throughout";
+    }
+  }
 }
 
 TEST(Tracker, CountsFramesFromUncalibratedCamerasAndLateFrames) {

@@ -39,6 +39,11 @@ struct TrackerOptions {
   TimeNs coast_after_ns = 50'000'000;  // no update for this long: coasting
   TimeNs delete_after_ns = 300'000'000;
   TimeNs tentative_delete_after_ns = 100'000'000;
+  // A confirmed track is published only while its predicted position is known this well (1σ
+  // along its least determined direction, m; 0: always). A marker that only one camera sees has
+  // no depth, and one no camera sees is only predicted: either kind is kept (same id when seen
+  // again) but not reported once the filter's own uncertainty passes this.
+  double publish_max_sigma_m = 0.02;
   double merge_distance_m = 0.005;                // two tracks closer than this are one marker
   TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed

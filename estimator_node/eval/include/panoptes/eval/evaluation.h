@@ -82,6 +82,10 @@ struct Evaluation {
   std::size_t trackable = 0;
   std::size_t tracked_trackable = 0;
   double min_coverage = 1.0;  // over markers that were ever trackable
+  // Of those, the marker-instants at the edge of the trackable volume: shown by exactly
+  // trackable_min_cameras cameras (2 by default: the region a third camera no longer reaches).
+  std::size_t edge_trackable = 0;
+  std::size_t edge_tracked = 0;
 
   // Track records at the judged instants; a false one matched no marker (a ghost, or a second
   // track on a marker another track took: a duplicate).
@@ -96,6 +100,10 @@ struct Evaluation {
 
   double coverage() const {
     return trackable == 0 ? 1.0 : static_cast<double>(tracked_trackable) / static_cast<double>(trackable);
+  }
+  double edge_coverage() const {
+    return edge_trackable == 0 ? 1.0
+                               : static_cast<double>(edge_tracked) / static_cast<double>(edge_trackable);
   }
   double false_record_fraction() const {
     return records == 0 ? 0.0 : static_cast<double>(false_records) / static_cast<double>(records);
