@@ -8,7 +8,9 @@
 // same frames, one after the other in one process: tracker CPU time (this thread's), replays,
 // frames replayed, the latency a frame's output adds after its arrival (window wait + queueing +
 // update), and accuracy (loose-marker tracks and body positions against the truth).
-//   bench_reorder [--json] [--windows 20,2,0] [--dense-ms <ms>] [--seconds <s>] ...
+//   bench_reorder [--json] [--cases 20/0,20,2,0] [--dense-ms <ms>] [--seconds <s>] ...
+// A case is "window_ms" or "window_ms/dense_checkpoint_ms" (default --dense-ms); the first case is
+// the CPU reference: 20/0 is the estimator before issue 16 (20 ms window, sparse checkpoints).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -48,6 +50,7 @@ double percentile(std::vector<double> values, double q) {
 
 struct Result {
   double window_ms = 0;
+  double dense_ms = 0;
   std::size_t frames = 0, outputs = 0;  // measured frames; of those, in order (with an output)
   std::uint64_t late = 0, too_late = 0, replays = 0, replayed_frames = 0;
   double cpu_s = 0;  // this thread's CPU in the session's updates, measured part
@@ -171,12 +174,12 @@ Result run(const Scene& scene, const std::vector<FeatureFrame>& by_arrival, doub
 std::string to_json(const Result& r, double cpu_reference_s) {
   char buffer[768];
   std::snprintf(buffer, sizeof buffer,
-                "{\"window_ms\": %.3f, \"frames\": %zu, \"outputs\": %zu, \"late\": %llu, \"too_late\": %llu, "
+                "{\"window_ms\": %.3f, \"dense_ms\": %.3f, \"frames\": %zu, \"outputs\": %zu, \"late\": %llu, \"too_late\": %llu, "
                 "\"replays\": %llu, \"replayed_frames\": %llu, \"replays_per_s\": %.1f, "
                 "\"replayed_frames_per_s\": %.1f, \"cpu_s\": %.4f, \"cpu_percent_of_core\": %.2f, "
                 "\"cpu_ratio\": %.4f, \"added_latency_p50_ms\": %.4f, \"added_latency_p99_ms\": %.4f, "
                 "\"track_rmse_mm\": %.4f, \"track_coverage\": %.5f, \"body_rmse_mm\": %.4f}",
-                r.window_ms, r.frames, r.outputs, static_cast<unsigned long long>(r.late),
+                r.window_ms, r.dense_ms, r.frames, r.outputs, static_cast<unsigned long long>(r.late),
                 static_cast<unsigned long long>(r.too_late), static_cast<unsigned long long>(r.replays),
                 static_cast<unsigned long long>(r.replayed_frames), static_cast<double>(r.replays) / r.simulated_s,
                 static_cast<double>(r.replayed_frames) / r.simulated_s, r.cpu_s, 100.0 * r.cpu_s / r.simulated_s,
@@ -190,16 +193,16 @@ int run_command_line(int argc, char** argv) {
   config.bodies = 10;
   config.seconds = 3.0;
   config.network = {0.0003, 0.0012, 0.00015, 0.005, 0.002, 0.030};
-  std::vector<double> windows = {20, 2, 0};
+  std::vector<std::string> cases = {"20/0", "20", "2", "0"};
   double dense_ms = panoptes::ns_to_seconds(est::TrackerOptions{}.dense_checkpoint_window_ns) * 1e3;
   std::uint64_t seed = 7;
   bool json = false;
   CLI::App app{"bench_reorder: cost and latency of late frames, by latency window (issue 16)", "bench_reorder"};
   app.option_defaults()->always_capture_default();
   app.add_flag("--json", json, "print one JSON object on the last line");
-  app.add_option("--windows", windows, "latency windows to compare, ms (the first is the CPU reference)")
-      ->delimiter(',')
-      ->check(CLI::Range(0.0, 1000.0));
+  app.add_option("--cases", cases,
+                 "cases to compare: window_ms or window_ms/dense_checkpoint_ms (the first is the CPU reference)")
+      ->delimiter(',');
   app.add_option("--dense-ms", dense_ms, "tracker: a checkpoint before every frame this recent, ms (0: none)")
       ->check(CLI::Range(0.0, 1000.0));
   app.add_option("--seconds", config.seconds, "simulated seconds measured (after the warm-up)")
@@ -218,7 +221,23 @@ int run_command_line(int argc, char** argv) {
   app.add_option("--late-max", config.network.late_max_s, "a held-up frame's extra delay, highest, s");
   app.add_option("--seed", seed, "scene seed");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
-  if (windows.empty()) windows = {20, 0};
+  struct Case {
+    double window_ms, dense_ms;
+  };
+  std::vector<Case> parsed;
+  for (const auto& text : cases) {
+    const auto slash = text.find('/');
+    try {
+      const double window = std::stod(text.substr(0, slash));
+      const double dense = slash == std::string::npos ? dense_ms : std::stod(text.substr(slash + 1));
+      if (window < 0 || dense < 0) throw std::invalid_argument("negative");
+      parsed.push_back({window, dense});
+    } catch (const std::exception&) {
+      std::fprintf(stderr, "bench_reorder: --cases: '%s' is not window_ms or window_ms/dense_ms\n", text.c_str());
+      return 2;
+    }
+  }
+  if (parsed.empty()) parsed = {{20, 0}, {0, dense_ms}};
 
   const Scene scene =
       Scene::from_yaml_string(panoptes::bench::scene_yaml(config, seed), ".", "bench_reorder scene");
@@ -233,23 +252,25 @@ int run_command_line(int argc, char** argv) {
   }
   std::printf(
       "bench_reorder: %d cameras x %.0f Hz, %d markers + %d bodies; latency %.2f-%.2f ms per camera, jitter "
-      "%.2f ms, %.2f%% held up %.0f-%.0f ms: %.1f%% of %zu frames arrive after a newer one; dense checkpoints "
-      "%.1f ms; %.1f s measured after %.1f s\n",
+      "%.2f ms, %.2f%% held up %.0f-%.0f ms: %.1f%% of %zu frames arrive after a newer one; "
+      "%.1f s measured after %.1f s\n",
       config.cameras, config.rate_hz, config.markers, config.bodies, config.network.latency_min_s * 1e3,
       config.network.latency_max_s * 1e3, config.network.jitter_s * 1e3, config.network.late_fraction * 100,
       config.network.late_min_s * 1e3, config.network.late_max_s * 1e3,
-      100.0 * static_cast<double>(out_of_order) / static_cast<double>(frames.size()), frames.size(), dense_ms,
-      config.seconds, config.warmup_s);
-  std::printf("  %9s %8s %7s %8s %10s %8s %8s %9s %9s %9s %9s %8s\n", "window ms", "late", "replays",
+      100.0 * static_cast<double>(out_of_order) / static_cast<double>(frames.size()), frames.size(), config.seconds,
+      config.warmup_s);
+  std::printf("  %9s %8s %8s %7s %8s %10s %8s %8s %9s %9s %9s %9s %8s\n", "window ms", "dense ms", "late", "replays",
               "replay/s", "replayed/s", "cpu %", "cpu x", "added p50", "added p99", "track mm", "coverage",
               "body mm");
   std::vector<Result> results;
   std::string json_cases;
-  for (const double window : windows) {
-    results.push_back(run(scene, frames, window, dense_ms, config.warmup_s));
+  for (const Case& c : parsed) {
+    results.push_back(run(scene, frames, c.window_ms, c.dense_ms, config.warmup_s));
+    results.back().dense_ms = c.dense_ms;
     const Result& r = results.back();
     const double reference = results.front().cpu_s;
-    std::printf("  %9.1f %8llu %7llu %8.0f %10.0f %8.1f %8.3f %9.3f %9.3f %9.4f %9.4f %8.4f\n", r.window_ms,
+    std::printf("  %9.1f %8.1f %8llu %7llu %8.0f %10.0f %8.1f %8.3f %9.3f %9.3f %9.4f %9.4f %8.4f\n", r.window_ms,
+                r.dense_ms,
                 static_cast<unsigned long long>(r.late), static_cast<unsigned long long>(r.replays),
                 static_cast<double>(r.replays) / r.simulated_s, static_cast<double>(r.replayed_frames) / r.simulated_s,
                 100.0 * r.cpu_s / r.simulated_s, r.cpu_s / reference, r.added_p50_ms, r.added_p99_ms,
@@ -258,9 +279,9 @@ int run_command_line(int argc, char** argv) {
     json_cases += (json_cases.empty() ? "" : ", ") + to_json(r, reference);
   }
   if (json) {
-    std::printf("{\"cameras\": %d, \"rate_hz\": %.1f, \"markers\": %d, \"bodies\": %d, \"dense_ms\": %.3f, "
+    std::printf("{\"cameras\": %d, \"rate_hz\": %.1f, \"markers\": %d, \"bodies\": %d, "
                 "\"out_of_order_fraction\": %.5f, \"cases\": [%s]}\n",
-                config.cameras, config.rate_hz, config.markers, config.bodies, dense_ms,
+                config.cameras, config.rate_hz, config.markers, config.bodies,
                 static_cast<double>(out_of_order) / static_cast<double>(frames.size()), json_cases.c_str());
   }
   return 0;
