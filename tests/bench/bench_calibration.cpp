@@ -38,7 +38,9 @@ void line(const char* name, const Measured& m, double simulate_s) {
   std::fflush(stdout);
 }
 
-SceneSpec ring16() { return ring(16); }
+SceneSpec ring16() {
+  return ring(16);
+}
 
 // Two cameras 1.2 m apart; OpenCV stereoCalibrate (intrinsics fixed) on a 9x6 board of 60 mm squares
 // in 20 poses, with the same centroid noise; extrinsic errors compared with the wand's.

@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <map>
 #include <numeric>
 #include <set>
@@ -241,7 +240,10 @@ struct PairPose {
   std::size_t edge_index = 0;
 };
 
-enum class IntrinsicsRefinement { kNone, kFocalRadial, kAll };
+// kNominal: the focal length (fx and fy together) and k1, k2: a guess at the lens, the image
+// centre for the principal point. kSuspect: measured intrinsics that do not fit: fx, fy, cx, cy,
+// k1, k2 each. kAll: --refine-intrinsics.
+enum class IntrinsicsRefinement { kNone, kNominal, kSuspect, kAll };
 
 // The intrinsics block [fx, fy, cx, cy, k1, k2, p1, p2, k3] moved only along fixed directions:
 // x + B delta. The automatic refinement moves fx and fy together (their given ratio, square pixels
@@ -249,8 +251,7 @@ enum class IntrinsicsRefinement { kNone, kFocalRadial, kAll };
 class LinearManifold : public ceres::Manifold {
  public:
   explicit LinearManifold(Eigen::Matrix<double, 9, Eigen::Dynamic> basis)
-      : basis_(std::move(basis)),
-        inverse_((basis_.transpose() * basis_).inverse() * basis_.transpose()) {}
+      : basis_(std::move(basis)), inverse_((basis_.transpose() * basis_).inverse() * basis_.transpose()) {}
   int AmbientSize() const override { return 9; }
   int TangentSize() const override { return static_cast<int>(basis_.cols()); }
   bool Plus(const double* x, const double* delta, double* x_plus_delta) const override {
@@ -281,15 +282,17 @@ class LinearManifold : public ceres::Manifold {
   Eigen::Matrix<double, Eigen::Dynamic, 9> inverse_;
 };
 
-ceres::Manifold* focal_radial_manifold(const double* intrinsics, bool centre) {
-  Eigen::Matrix<double, 9, Eigen::Dynamic> basis = Eigen::Matrix<double, 9, Eigen::Dynamic>::Zero(9, centre ? 5 : 3);
-  basis(0, 0) = 1.0;
-  basis(1, 0) = intrinsics[1] / intrinsics[0];
-  basis(4, 1) = 1.0;
-  basis(5, 2) = 1.0;
-  if (centre) {
-    basis(2, 3) = 1.0;
-    basis(3, 4) = 1.0;
+ceres::Manifold* refinement_manifold(const double* intrinsics, IntrinsicsRefinement refinement) {
+  const bool nominal = refinement == IntrinsicsRefinement::kNominal;
+  Eigen::Matrix<double, 9, Eigen::Dynamic> basis =
+      Eigen::Matrix<double, 9, Eigen::Dynamic>::Zero(9, nominal ? 3 : 6);
+  if (nominal) {
+    basis(0, 0) = 1.0;
+    basis(1, 0) = intrinsics[1] / intrinsics[0];
+    basis(4, 1) = 1.0;
+    basis(5, 2) = 1.0;
+  } else {
+    for (int i = 0; i < 6; ++i) basis(i, i) = 1.0;
   }
   return new LinearManifold(basis);
 }
@@ -454,7 +457,8 @@ void Solver::build_samples() {
   bool synchronised = options_.sample_rate_hz <= 0 && step > 0;
   for (std::size_t c = 0; c < state_.size() && synchronised; ++c) {
     if (!state_[c].usable) continue;
-    for (const auto& frame : tracks_[c]->frames) synchronised = synchronised && (frame.stamp_ns - first) % step == 0;
+    for (const auto& frame : tracks_[c]->frames)
+      synchronised = synchronised && (frame.stamp_ns - first) % step == 0;
   }
   result_.synchronised = synchronised;
   // Otherwise start half a step in so that instants fall between frames of cameras running at that
@@ -821,10 +825,9 @@ double Solver::adjust(bool alternation, bool robust) {
     CameraState& camera = state_[c];
     if (c == reference_) problem.SetParameterBlockConstant(camera.pose);
     if (intrinsics_ == IntrinsicsRefinement::kNone) problem.SetParameterBlockConstant(camera.intrinsics);
-    // Automatic refinement: the focal length (fx and fy together), k1, k2 and optionally the
-    // principal point; the rest stays as given (docs/calibration.md, "Intrinsics").
-    if (intrinsics_ == IntrinsicsRefinement::kFocalRadial)
-      problem.SetManifold(camera.intrinsics, focal_radial_manifold(camera.intrinsics, options_.auto_principal_point));
+    // Automatic refinement: only along the directions the data determines (docs/calibration.md).
+    if (intrinsics_ == IntrinsicsRefinement::kNominal || intrinsics_ == IntrinsicsRefinement::kSuspect)
+      problem.SetManifold(camera.intrinsics, refinement_manifold(camera.intrinsics, intrinsics_));
     if (!options_.time_offsets || c == reference_) problem.SetParameterBlockConstant(&camera.offset);
   }
   ceres::Solver::Options solver_options;
@@ -837,17 +840,15 @@ double Solver::adjust(bool alternation, bool robust) {
   ceres::Solver::Summary summary;
   if (!alternation) {
     ceres::Solve(solver_options, &problem, &summary);
-    if (std::getenv("SELFCAL_TRACE"))  // EXPERIMENT
-      for (const auto& it : summary.iterations)
-        std::fprintf(stderr, "it %d cost %.6e change %.3e rel %.3e grad %.3e step %.3e tr %.3e lin %d ok %d\n", it.iteration, it.cost, it.cost_change, it.cost_change / std::max(1e-300, it.cost), it.gradient_max_norm, it.step_norm, it.trust_region_radius, it.linear_solver_iterations, it.step_is_successful);
     result_.iterations += static_cast<int>(summary.iterations.size());
     const bool converged = summary.termination_type == ceres::CONVERGENCE;
     ++passes_;
     if (!converged && result_.convergence.empty())
       result_.convergence = "pass " + std::to_string(passes_) + " did not converge after " +
-                            std::to_string(summary.iterations.size() - 1) + " iterations (" + summary.message +
-                            ")";
-    pass_iterations_ += (pass_iterations_.empty() ? "" : ", ") + std::to_string(summary.iterations.size() - 1);
+                            std::to_string(summary.iterations.size() - 1) + " iterations (" +
+                            summary.message + ")";
+    pass_iterations_ +=
+        (pass_iterations_.empty() ? "" : ", ") + std::to_string(summary.iterations.size() - 1);
     all_converged_ = all_converged_ && converged;
   } else {
     // Seed 003 §3.3.2: the reconstructed trace is a virtual calibration object; each camera is
@@ -1004,7 +1005,8 @@ ErrorStats error_stats(std::vector<double> errors) {
   stats.median_px = errors[half];
   if (errors.size() % 2 == 0)
     stats.median_px =
-        0.5 * (stats.median_px + *std::max_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(half)));
+        0.5 * (stats.median_px +
+               *std::max_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(half)));
   return stats;
 }
 
@@ -1046,9 +1048,10 @@ std::vector<std::vector<double>> Solver::raw_errors(const std::vector<CameraMode
                    h11 = tau3 - tau2;
       for (std::size_t m = 0; m < markers; ++m) {
         const auto point = [&](std::size_t k) { return Eigen::Vector3d(&points_[(k * markers + m) * 3]); };
-        const Eigen::Vector3d X = exact ? point(i)
-                                        : Eigen::Vector3d(h00 * point(i) + h10 * 0.5 * (point(i + 1) - point(i - 1)) +
-                                                          h01 * point(i + 1) + h11 * 0.5 * (point(i + 2) - point(i)));
+        const Eigen::Vector3d X =
+            exact ? point(i)
+                  : Eigen::Vector3d(h00 * point(i) + h10 * 0.5 * (point(i + 1) - point(i - 1)) +
+                                    h01 * point(i + 1) + h11 * 0.5 * (point(i + 2) - point(i)));
         const auto projected = models[c].project(X);
         if (!projected) continue;
         errors[c].push_back((*projected - frame.pixels[m]).norm());
@@ -1087,8 +1090,9 @@ std::vector<CameraModel> Solver::registered_models() const {
   return models;
 }
 
-// Intrinsics are refined when asked (all nine), when the cameras file marks them nominal, or when
-// the first adjustment leaves raw-frame errors far above any centroid noise (fx, fy, cx, cy, k1, k2).
+// Intrinsics are refined when asked (all nine), when the cameras file marks them nominal (focal
+// length, k1, k2), or when the first adjustment leaves raw-frame errors far above any centroid
+// noise (fx, fy, cx, cy, k1, k2).
 void Solver::decide_intrinsics(double rms) {
   if (options_.refine_intrinsics) {
     intrinsics_ = IntrinsicsRefinement::kAll;
@@ -1101,19 +1105,20 @@ void Solver::decide_intrinsics(double rms) {
     for (std::size_t c = 0; c < state_.size(); ++c)
       if (state_[c].registered && input_[c].nominal_intrinsics) nominal.push_back(input_[c].id);
     if (nominal.empty()) return;
-    intrinsics_ = IntrinsicsRefinement::kFocalRadial;
-    result_.intrinsics_refined = "nominal intrinsics (" + join(nominal) + ")";
+    intrinsics_ = IntrinsicsRefinement::kNominal;
+    result_.intrinsics_refined = "nominal intrinsics (" + join(nominal) + "): focal length, k1, k2";
     return;
   }
   std::vector<double> all;
-  for (const auto& errors : raw_errors(registered_models())) all.insert(all.end(), errors.begin(), errors.end());
+  for (const auto& errors : raw_errors(registered_models()))
+    all.insert(all.end(), errors.begin(), errors.end());
   const double median = error_stats(all).median_px;
   if (all.empty() || median <= options_.intrinsics_suspect_px) return;
-  intrinsics_ = IntrinsicsRefinement::kFocalRadial;
-  char why[160];
+  intrinsics_ = IntrinsicsRefinement::kSuspect;
+  char why[200];
   std::snprintf(why, sizeof(why),
                 "raw-frame error median %.2f px (2D) after the first adjustment, above %.2f px: the given "
-                "intrinsics do not fit",
+                "intrinsics do not fit; fx, fy, cx, cy, k1, k2",
                 median, options_.intrinsics_suspect_px);
   result_.intrinsics_refined = why;
 }
@@ -1159,7 +1164,8 @@ void Solver::adjust_passes() {
         }
       }
     }
-    progress("pass " + std::to_string(pass + 1) + ": " + std::to_string(removed) + " outlier observations removed");
+    progress("pass " + std::to_string(pass + 1) + ": " + std::to_string(removed) +
+             " outlier observations removed");
     rms = adjust(false, false);
   }
   result_.converged = all_converged_;
@@ -1179,11 +1185,12 @@ void Solver::check_focal_lengths() {
     const double factor = std::max({fx / given.fx, given.fx / fx, fy / given.fy, given.fy / fy});
     if (!(factor <= options_.max_focal_factor)) {
       char why[400];
-      std::snprintf(why, sizeof(why),
-                    "focal length %.0f x %.0f px fits the data, the cameras file gives %.0f x %.0f px (a factor "
-                    "%.2f, more than %.1f): check K (fx, fy = lens focal length / pixel pitch, in pixels of the "
-                    "%d x %d image) and the image size",
-                    fx, fy, given.fx, given.fy, factor, options_.max_focal_factor, given.width, given.height);
+      std::snprintf(
+          why, sizeof(why),
+          "focal length %.0f x %.0f px fits the data, the cameras file gives %.0f x %.0f px (a factor "
+          "%.2f, more than %.1f): check K (fx, fy = lens focal length / pixel pitch, in pixels of the "
+          "%d x %d image) and the image size",
+          fx, fy, given.fx, given.fy, factor, options_.max_focal_factor, given.width, given.height);
       fail(static_cast<int>(c), why);
       for (auto& sample : samples_)
         for (auto& observation : sample.observations)

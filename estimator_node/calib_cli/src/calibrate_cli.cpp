@@ -142,9 +142,10 @@ int run_intrinsics(int argc, char** argv) {
 int run_import_points(int argc, char** argv) {
   std::string points_file, resolutions_file, size, features_out, cameras_out, prefix = "cam";
   double focal = 0, rate = 100;
-  CLI::App app{"calibrate import-points: a single bright point seen by synchronised cameras (MultiCamSelfCal "
-               "points.dat: 3 rows x, y, 1 per camera, NaN where unseen, one column per frame)",
-               "estimator_node calibrate import-points"};
+  CLI::App app{
+      "calibrate import-points: a single bright point seen by synchronised cameras (MultiCamSelfCal "
+      "points.dat: 3 rows x, y, 1 per camera, NaN where unseen, one column per frame)",
+      "estimator_node calibrate import-points"};
   app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--points", points_file, "points.dat")->required();
   auto* res = app.add_option("--resolutions", resolutions_file, "Res.dat: 'width height' per camera");
@@ -179,8 +180,8 @@ int run_import_points(int argc, char** argv) {
     sizes.assign(table.cameras.size(), {width, height});
   }
   if (sizes.size() != table.cameras.size())
-    return bad_input(program, resolutions_file + ": " + std::to_string(sizes.size()) + " cameras, " + points_file +
-                                  " has " + std::to_string(table.cameras.size()));
+    return bad_input(program, resolutions_file + ": " + std::to_string(sizes.size()) + " cameras, " +
+                                  points_file + " has " + std::to_string(table.cameras.size()));
   SystemCalibration cameras;
   std::vector<std::string> ids;
   for (std::size_t c = 0; c < table.cameras.size(); ++c) {
@@ -193,10 +194,11 @@ int run_import_points(int argc, char** argv) {
   for (const auto& frame : frames) jsonl << to_json_line(frame) << "\n";
   jsonl.close();
   save_calibration(cameras, cameras_out);
-  std::printf("%zu cameras x %d frames; wrote %s and %s (nominal intrinsics, f = %.1f px)\n", table.cameras.size(),
-              table.frames, features_out.c_str(), cameras_out.c_str(), focal);
-  std::printf("next: estimator_node calibrate solve --cameras %s --in-features %s --wand 0 --out calibration.yaml\n",
-              cameras_out.c_str(), features_out.c_str());
+  std::printf("%zu cameras x %d frames; wrote %s and %s (nominal intrinsics, f = %.1f px)\n",
+              table.cameras.size(), table.frames, features_out.c_str(), cameras_out.c_str(), focal);
+  std::printf(
+      "next: estimator_node calibrate solve --cameras %s --in-features %s --wand 0 --out calibration.yaml\n",
+      cameras_out.c_str(), features_out.c_str());
   return kExitOk;
 }
 
@@ -216,11 +218,14 @@ int run_solve(int argc, char** argv) {
                  "marker positions along the wand, m, e.g. 0,0.18,0.5 (one value: a single LED)")
       ->required();
   app.add_option("--out", out, "calibration YAML to write; the report goes next to it")->required();
-  auto* refine = app.add_flag("--refine-intrinsics", options.refine_intrinsics,
-               "refine fx, fy, cx, cy and all five distortion terms (without it, fx, fy, cx, cy, k1, k2 are refined "
-               "automatically when the cameras file marks them nominal or the first adjustment shows they do not fit)");
+  auto* refine = app.add_flag(
+      "--refine-intrinsics", options.refine_intrinsics,
+      "refine fx, fy, cx, cy and all five distortion terms (without it, the focal length, k1 and k2 are "
+      "refined automatically when the cameras file marks them nominal, and fx, fy, cx, cy, k1, k2 when the "
+      "first adjustment shows they do not fit)");
   bool fixed_intrinsics = false;
-  app.add_flag("--fixed-intrinsics", fixed_intrinsics, "never refine the intrinsics (no automatic refinement)")
+  app.add_flag("--fixed-intrinsics", fixed_intrinsics,
+               "never refine the intrinsics (no automatic refinement)")
       ->excludes(refine);
   app.add_flag("--time-offsets", options.time_offsets, "estimate a clock offset per camera");
   app.add_option("--reference", reference, "camera whose pose fixes the gauge")

@@ -87,11 +87,13 @@ std::string report_summary(const SolveResult& result) {
     out << (result.converged ? "bundle adjustment: " : "WARNING: bundle adjustment did not converge: ")
         << result.convergence << "\n";
   if (!result.intrinsics_refined.empty()) {
-    out << "intrinsics refined" << (result.intrinsics_refined == "--refine-intrinsics" ? " (" : " automatically (")
+    out << "intrinsics refined"
+        << (result.intrinsics_refined == "--refine-intrinsics" ? " (" : " automatically (")
         << result.intrinsics_refined << "):";
     for (const auto& camera : result.cameras)
       if (camera.intrinsics_refined && camera.T_world_cam)
-        out << format(" %s f %.0f->%.1f px", camera.id.c_str(), 0.5 * (camera.given_intrinsics.fx + camera.given_intrinsics.fy),
+        out << format(" %s f %.0f->%.1f px", camera.id.c_str(),
+                      0.5 * (camera.given_intrinsics.fx + camera.given_intrinsics.fy),
                       0.5 * (camera.intrinsics.fx + camera.intrinsics.fy));
     out << "\n";
   }
@@ -190,7 +192,8 @@ nlohmann::json report_json(const SolveResult& result) {
   json["reference_camera"] = result.reference_camera;
   json["rms_px"] = result.rms_px;
   json["raw_rms_axis_px"] = result.raw_rms_axis_px;
-  json["raw_frame_error_2d_px"] = {{"all", stats_json(result.raw_all)}, {"inliers", stats_json(result.raw_inliers)}};
+  json["raw_frame_error_2d_px"] = {{"all", stats_json(result.raw_all)},
+                                   {"inliers", stats_json(result.raw_inliers)}};
   json["converged"] = result.converged;
   json["convergence"] = result.convergence;
   json["intrinsics_refined"] = result.intrinsics_refined;

@@ -177,7 +177,8 @@ inline SceneSpec corridor10() {
 }
 
 // `count` cameras on a 3 m circle 2.4-2.5 m high, all aimed at (0, 0, 0.9), frames phased 0.7 ms
-// apart (asynchronous; bench_calibration uses 16); the wand waved through the middle for 20 s (2000 frames per camera).
+// apart (asynchronous; bench_calibration uses 16); the wand waved through the middle for 20 s (2000 frames
+// per camera).
 inline SceneSpec ring(int count) {
   SceneSpec spec;
   for (int i = 0; i < count; ++i) {

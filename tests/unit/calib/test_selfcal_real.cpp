@@ -11,7 +11,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -25,7 +24,8 @@
 namespace panoptes::calib::testing {
 namespace {
 
-const std::filesystem::path kData = std::filesystem::path(PANOPTES_SOURCE_DIR) / ".." / "shared" / "data" / "selfcal_4cam";
+const std::filesystem::path kData =
+    std::filesystem::path(PANOPTES_SOURCE_DIR) / ".." / "shared" / "data" / "selfcal_4cam";
 const WandDefinition kPoint{{0.0}};
 
 // The focal length the data fits, rounded (the automatic refinement converges to 1007, 1026, 1016
@@ -59,10 +59,7 @@ SolveResult solve(const RealSet& set, double focal_px, const SolveOptions& optio
       if (frame.camera_id == camera.id) own.push_back(frame);
     tracks.push_back(extract_wand_track(camera.id, own, camera.intrinsics, kPoint));
   }
-  SolveOptions o = options;
-  if (std::getenv("SELFCAL_PP")) o.auto_principal_point = true;  // EXPERIMENT
-  if (std::getenv("SELFCAL_IT")) o.max_iterations = std::atoi(std::getenv("SELFCAL_IT"));  // EXPERIMENT
-  return solve_wand_calibration(cameras, tracks, kPoint, o);
+  return solve_wand_calibration(cameras, tracks, kPoint, options);
 }
 
 // The acceptance figure, computed outside the solver: every frame seen by >= 3 calibrated cameras
@@ -104,7 +101,8 @@ Reprojected reproject(const RealSet& set, const SolveResult& result) {
     within += e <= 5.0 ? 1 : 0;
   }
   out.within_5px = within / static_cast<double>(errors.size());
-  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2), errors.end());
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(errors.size() / 2),
+                   errors.end());
   out.median_px = errors[errors.size() / 2];
   return out;
 }
@@ -117,13 +115,15 @@ void print(const char* name, const SolveResult& result, const Reprojected& r) {
       r.frames, r.untriangulated, r.observations, r.mean_px, r.median_px, 100 * r.within_5px);
   for (const auto& camera : result.cameras) {
     const auto& k = camera.intrinsics;
-    std::printf("  %s: fx %.2f fy %.2f cx %.2f cy %.2f k1 %.4f k2 %.4f p1 %.5f p2 %.5f k3 %.4f\n", camera.id.c_str(),
-                k.fx, k.fy, k.cx, k.cy, k.distortion[0], k.distortion[1], k.distortion[2], k.distortion[3],
-                k.distortion[4]);
+    std::printf("  %s: fx %.2f fy %.2f cx %.2f cy %.2f k1 %.4f k2 %.4f p1 %.5f p2 %.5f k3 %.4f\n",
+                camera.id.c_str(), k.fx, k.fy, k.cx, k.cy, k.distortion[0], k.distortion[1], k.distortion[2],
+                k.distortion[3], k.distortion[4]);
   }
 }
 
-bool data_present() { return std::filesystem::exists(kData / "points.dat"); }
+bool data_present() {
+  return std::filesystem::exists(kData / "points.dat");
+}
 
 // No flags: the cameras file marks the intrinsics nominal (what `calibrate import-points` writes).
 TEST(SelfCalRealData, FourCamerasWithoutFlagsFromFocalThirtyPercentOff) {

@@ -21,22 +21,22 @@ namespace panoptes::calib {
 
 struct SolveOptions {
   bool refine_intrinsics = false;  // fx, fy, cx, cy and the five distortion terms per camera
-  // Without refine_intrinsics: refine fx, fy, cx, cy, k1 and k2 (tangential terms and k3 stay) of
-  // every camera automatically when a camera's intrinsics are nominal (`nominal: true`) or when,
-  // after the first adjustment, the raw-frame error is far above any centroid noise (median 2D
-  // error above intrinsics_suspect_px). docs/calibration.md, "Intrinsics".
+  // Without refine_intrinsics, intrinsics are refined automatically: when a camera's intrinsics
+  // are nominal (`nominal: true`) the focal length (fx, fy keeping their ratio), k1 and k2 of every
+  // camera; when, after the first adjustment, the raw-frame error is far above any centroid noise
+  // (median 2D error above intrinsics_suspect_px), fx, fy, cx, cy, k1 and k2. The tangential terms
+  // and k3 stay as given. docs/calibration.md, "Intrinsics: what is automatic".
   bool auto_intrinsics = true;
   double intrinsics_suspect_px = 0.5;
-  bool auto_principal_point = false;  // the automatic refinement also moves cx, cy
   // A refined focal length more than this factor from the given one fails the camera: the given
   // intrinsics were wrong (wrong pixel pitch, lens or image size), not just imprecise.
   double max_focal_factor = 2.0;
-  bool time_offsets = false;       // one clock offset per camera (the reference camera's is 0)
-  double sample_rate_hz = 0.0;     // instants at which the wand is estimated; 0: fastest camera
-  double max_gap_frames = 1.6;     // a track is interpolated only between frames this close
-  int min_camera_frames = 20;      // identified wand frames a camera needs
-  int min_pair_samples = 25;       // common samples for a pairwise relative pose
-  int max_pair_samples = 400;      // subsampled for the five-point RANSAC
+  bool time_offsets = false;    // one clock offset per camera (the reference camera's is 0)
+  double sample_rate_hz = 0.0;  // instants at which the wand is estimated; 0: fastest camera
+  double max_gap_frames = 1.6;  // a track is interpolated only between frames this close
+  int min_camera_frames = 20;   // identified wand frames a camera needs
+  int min_pair_samples = 25;    // common samples for a pairwise relative pose
+  int max_pair_samples = 400;   // subsampled for the five-point RANSAC
   double ransac_threshold_px = 1.0;
   double huber_px = 1.0;           // robust loss on reprojection residuals
   double length_sigma_m = 0.0005;  // weight of the wand-length residuals
@@ -62,8 +62,8 @@ struct PairEdge {
 struct ErrorStats {
   int count = 0;
   double mean_px = 0, median_px = 0;
-  double rms_axis_px = 0;      // RMS per image axis (comparable with a centroid noise sigma)
-  double within_5px = 0;       // share of the observations within 5 px
+  double rms_axis_px = 0;  // RMS per image axis (comparable with a centroid noise sigma)
+  double within_5px = 0;   // share of the observations within 5 px
 };
 
 // Raw frames are inliers within this 2D error of the solved path (px).
@@ -131,7 +131,7 @@ struct SolveResult {
   std::string convergence;
   // Samples are the cameras' own frames (synchronised cameras: the same stamps), not interpolated.
   bool synchronised = false;
-  LengthStats lengths;         // end-to-end length of the wand triangulated freely from the result
+  LengthStats lengths;  // end-to-end length of the wand triangulated freely from the result
   // False for a single light: positions are in units of the first pair's baseline until `calibrate
   // world --lframe <x>,<y>` scales them (docs/calibration.md, "Single LED").
   bool metric = true;
