@@ -244,6 +244,7 @@ struct PairPose {
 // centre for the principal point. kSuspect: measured intrinsics that do not fit: fx, fy, cx, cy,
 // k1, k2 each. kAll: --refine-intrinsics.
 enum class IntrinsicsRefinement { kNone, kNominal, kSuspect, kAll };
+constexpr long kMinCamerasForCentre = 8;
 
 // The intrinsics block [fx, fy, cx, cy, k1, k2, p1, p2, k3] moved only along fixed directions:
 // x + B delta. The automatic refinement moves fx and fy together (their given ratio, square pixels
@@ -1114,12 +1115,19 @@ void Solver::decide_intrinsics(double rms) {
     all.insert(all.end(), errors.begin(), errors.end());
   const double median = error_stats(all).median_px;
   if (all.empty() || median <= options_.intrinsics_suspect_px) return;
-  intrinsics_ = IntrinsicsRefinement::kSuspect;
-  char why[200];
+  // The principal point and the aspect ratio need many views: with fewer than
+  // kMinCamerasForCentre cameras only the focal length and k1, k2 move (on the real 4-camera set,
+  // freeing cx, cy, fx/fy too left the adjustment crawling to the iteration cap).
+  const auto cameras =
+      std::count_if(state_.begin(), state_.end(), [](const CameraState& c) { return c.registered; });
+  const bool centre = cameras >= kMinCamerasForCentre;
+  intrinsics_ = centre ? IntrinsicsRefinement::kSuspect : IntrinsicsRefinement::kNominal;
+  char why[240];
   std::snprintf(why, sizeof(why),
                 "raw-frame error median %.2f px (2D) after the first adjustment, above %.2f px: the given "
-                "intrinsics do not fit; fx, fy, cx, cy, k1, k2",
-                median, options_.intrinsics_suspect_px);
+                "intrinsics do not fit; %s",
+                median, options_.intrinsics_suspect_px,
+                centre ? "fx, fy, cx, cy, k1, k2" : "focal length, k1, k2 (fewer than 8 cameras)");
   result_.intrinsics_refined = why;
 }
 
