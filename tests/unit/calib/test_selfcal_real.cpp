@@ -13,6 +13,10 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <unistd.h>
 #include <string>
 #include <vector>
 
@@ -20,6 +24,7 @@
 #include "panoptes/calib/report.h"
 #include "panoptes/calib/wand.h"
 #include "panoptes/calib/wand_solver.h"
+#include "panoptes/calibration_file.h"
 
 namespace panoptes::calib::testing {
 namespace {
@@ -206,6 +211,45 @@ TEST(SelfCalRealData, FocalThreeTimesWrongFailsNamingTheCameras) {
   }
   EXPECT_GE(named, 1);
   EXPECT_LT(result.calibrated_count(), 4);
+}
+
+// The importer on small files: NaN is "not seen", a ragged or non-numeric file is named with its
+// row, and `nominal: true` survives a save and load of the cameras file.
+TEST(PointImport, ParsesNaNAndNamesMalformedRows) {
+  const auto dir = std::filesystem::temp_directory_path() / ("selfcal_import_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream(dir / "points.dat") << "1.5 NaN 3\n2.5 nan 4\n1 1 1\n";
+    std::ofstream(dir / "ragged.dat") << "1 2 3\n1 2\n1 1 1\n";
+    std::ofstream(dir / "text.dat") << "1 2 3\n1 x 3\n1 1 1\n";
+  }
+  const PointTable table = read_multicam_points(dir / "points.dat");
+  ASSERT_EQ(table.cameras.size(), 1u);
+  EXPECT_EQ(table.frames, 3);
+  EXPECT_TRUE(table.cameras[0][0].has_value());
+  EXPECT_FALSE(table.cameras[0][1].has_value());
+  EXPECT_DOUBLE_EQ(table.cameras[0][2]->y(), 4.0);
+  const auto frames = point_feature_frames(table, {"a"}, 100.0, 0);
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_TRUE(frames[1].blobs.empty());
+  EXPECT_EQ(frames[2].stamp_ns, 20'000'000);
+  const auto message = [](const std::filesystem::path& path) {
+    try {
+      read_multicam_points(path);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(message(dir / "ragged.dat").find("ragged.dat: row 2 has 2 columns"), std::string::npos);
+  EXPECT_NE(message(dir / "text.dat").find("text.dat: line 2: 'x' is not a number"), std::string::npos);
+  SystemCalibration cameras;
+  cameras.cameras.push_back(nominal_camera("a", 752, 480, 1300));
+  save_calibration(cameras, dir / "cameras.yaml");
+  const SystemCalibration loaded = load_calibration(dir / "cameras.yaml");
+  EXPECT_TRUE(loaded.cameras.at(0).nominal_intrinsics);
+  EXPECT_DOUBLE_EQ(loaded.cameras.at(0).intrinsics.cx, 375.5);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
