@@ -191,7 +191,9 @@ TEST(SelfCalRealData, FourCamerasWithRefineIntrinsicsFlag) {
   // All nine intrinsics of four cameras seeing one point are not all determined (p1, p2 trade
   // against cx, cy; k3 against k2): the adjustment crawls along those directions and stops at the
   // cap. It must say so rather than claim convergence.
-  if (!result.converged) EXPECT_NE(report_summary(result).find("did not converge"), std::string::npos);
+  if (!result.converged) {
+    EXPECT_NE(report_summary(result).find("did not converge"), std::string::npos);
+  }
 }
 
 // Bad input: nominal focal lengths three times too long. Not a silent bad calibration: every
