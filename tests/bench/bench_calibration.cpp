@@ -39,20 +39,7 @@ void line(const char* name, const Measured& m, double simulate_s) {
 }
 
 SceneSpec ring16() {
-  SceneSpec spec;
-  for (int i = 0; i < 16; ++i) {
-    const double angle = 2 * M_PI * i / 16;
-    CameraSpec camera;
-    camera.eye = Eigen::Vector3d(3.0 * std::cos(angle), 3.0 * std::sin(angle), 2.4 + 0.1 * (i % 2));
-    camera.target = Eigen::Vector3d(0, 0, 0.9);
-    camera.phase_s = 0.0007 * i;
-    spec.cameras.push_back(camera);
-  }
-  spec.duration_s = 20;  // 2000 frames per camera at 100 Hz
-  spec.wand_path =
-      "{type: lissajous, center: [0, 0, 1.15], amplitude: [1.6, 1.6, 0.75], frequency: [0.13, 0.171, 0.23]}";
-  spec.wand_rotation = "{type: oscillate, amplitude: [1.3, 1.1, 3.0], frequency: [0.29, 0.37, 0.083]}";
-  return spec;
+  return ring(16);
 }
 
 // Two cameras 1.2 m apart; OpenCV stereoCalibrate (intrinsics fixed) on a 9x6 board of 60 mm squares

@@ -9,7 +9,7 @@ en="$bin/estimator_node"
 
 # --- help and bad arguments ---------------------------------------------------------------------
 expect_exit 0 "calibrate --help" -- "$en" calibrate --help
-for sub in intrinsics solve world capture; do
+for sub in intrinsics solve world capture import-points; do
   expect_exit 0 "calibrate $sub --help" -- "$en" calibrate "$sub" --help
 done
 expect_exit 2 "unknown subcommand" -- "$en" calibrate bogus
@@ -191,5 +191,24 @@ grep -q "NOT CALIBRATED (no T_world_cam): cam3" "$work/partial.yaml" && pass "pa
 expect_exit 1 "wrong wand spacing" -- "$en" calibrate solve --cameras "$work/wand/calibration.yaml" \
   --in-features "$work"/wand/cam*.jsonl --wand 0,0.3,0.5 --out "$work/wrong.yaml"
 expect_stderr_contains "lengths never match" "the error says the lengths never match"
+
+# --- real single-point data (issue 16): no flags from a focal length 30% off; x3 is refused ----------
+selfcal="$source_dir/../shared/data/selfcal_4cam"
+require_shared_data "$selfcal/points.dat"
+expect_exit 0 "calibrate import-points" -- "$en" calibrate import-points --points "$selfcal/points.dat" \
+  --resolutions "$selfcal/Res.dat" --focal 1300 --out-features "$work/points.jsonl" --out-cameras "$work/points_cameras.yaml"
+grep -q "nominal: true" "$work/points_cameras.yaml" && pass "the imported cameras are marked nominal" ||
+  fail "points_cameras.yaml lacks nominal: true"
+expect_exit 0 "calibrate solve on the real set without flags" -- "$en" calibrate solve \
+  --cameras "$work/points_cameras.yaml" --in-features "$work/points.jsonl" --wand 0 --out "$work/real.yaml"
+expect_contains "intrinsics refined automatically" "$work/last.out" "the summary says the intrinsics were refined"
+expect_contains "converged in every pass" "$work/last.out" "the summary says the adjustment converged"
+expect_contains "raw-frame reprojection error, 2D, px" "$work/last.out" "the headline is the raw-frame 2D error"
+expect_exit 0 "import-points with focal x3" -- "$en" calibrate import-points --points "$selfcal/points.dat" \
+  --resolutions "$selfcal/Res.dat" --focal 3000 --out-features "$work/points3.jsonl" --out-cameras "$work/points_x3.yaml"
+expect_exit 1 "calibrate solve refuses a focal length 3x wrong" -- "$en" calibrate solve \
+  --cameras "$work/points_x3.yaml" --in-features "$work/points3.jsonl" --wand 0 --out "$work/x3.yaml"
+expect_stderr_contains "cam2: focal length" "the error names the camera"
+expect_stderr_contains "check K" "the error says what to check"
 
 finish

@@ -72,6 +72,7 @@ CameraCalibration read_camera(const YamlReader& reader) {
     std::copy(distortion.begin(), distortion.end(), camera.intrinsics.distortion.begin());
   }
   if (reader.has("T_world_cam")) camera.T_world_cam = read_transform(reader.child("T_world_cam"));
+  camera.nominal_intrinsics = reader.get_bool("nominal", false);
   return camera;
 }
 
@@ -129,6 +130,7 @@ std::string calibration_to_yaml(const SystemCalibration& calibration) {
     out << YAML::Key << "distortion" << YAML::Value;
     const auto& d = in.distortion;
     emit_numbers(out, {d[0], d[1], d[2], d[3], d[4]});
+    if (camera.nominal_intrinsics) out << YAML::Key << "nominal" << YAML::Value << true;
     if (camera.T_world_cam) {
       const RigidTransform& T = *camera.T_world_cam;
       out << YAML::Key << "T_world_cam" << YAML::Value << YAML::BeginMap;

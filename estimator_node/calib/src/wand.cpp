@@ -267,10 +267,20 @@ std::optional<TrackSegment> find_segment(const CameraWandTrack& track, TimeNs t_
                                 [](TimeNs t, const WandFrame& frame) { return t < frame.stamp_ns; });
   if (after == frames.begin()) return std::nullopt;
   std::size_t i = static_cast<std::size_t>(after - frames.begin()) - 1;
-  if (i + 1 >= frames.size()) return std::nullopt;
   const auto seconds = [&](std::size_t k) { return static_cast<double>(frames[k].stamp_ns - t_ns) * 1e-9; };
-  const double h = seconds(i + 1) - seconds(i);
-  if (!(h > 0) || h > max_gap_s) return std::nullopt;
+  const double h = i + 1 < frames.size() ? seconds(i + 1) - seconds(i) : 0.0;
+  if (!(h > 0) || h > max_gap_s) {
+    // A frame exactly at the instant (synchronised cameras) is its own observation even without a
+    // neighbour to interpolate towards: a constant segment.
+    if (frames[i].stamp_ns != t_ns || !(max_gap_s > 0)) return std::nullopt;
+    TrackSegment still;
+    still.t0_s = 0;
+    still.h_s = max_gap_s;
+    still.p0 = still.p1 = frames[i].pixels;
+    still.m0.assign(frames[i].pixels.size(), Eigen::Vector2d::Zero());
+    still.m1 = still.m0;
+    return still;
+  }
   TrackSegment segment;
   segment.t0_s = seconds(i);
   segment.h_s = h;

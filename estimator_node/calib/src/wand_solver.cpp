@@ -240,6 +240,64 @@ struct PairPose {
   std::size_t edge_index = 0;
 };
 
+// kNominal: the focal length (fx and fy together) and k1, k2: a guess at the lens, the image
+// centre for the principal point. kSuspect: measured intrinsics that do not fit: fx, fy, cx, cy,
+// k1, k2 each. kAll: --refine-intrinsics.
+enum class IntrinsicsRefinement { kNone, kNominal, kSuspect, kAll };
+constexpr long kMinCamerasForCentre = 8;
+
+// The intrinsics block [fx, fy, cx, cy, k1, k2, p1, p2, k3] moved only along fixed directions:
+// x + B delta. The automatic refinement moves fx and fy together (their given ratio, square pixels
+// for a nominal camera), k1 and k2, and, if asked, cx and cy; the rest stays as given.
+class LinearManifold : public ceres::Manifold {
+ public:
+  explicit LinearManifold(Eigen::Matrix<double, 9, Eigen::Dynamic> basis)
+      : basis_(std::move(basis)), inverse_((basis_.transpose() * basis_).inverse() * basis_.transpose()) {}
+  int AmbientSize() const override { return 9; }
+  int TangentSize() const override { return static_cast<int>(basis_.cols()); }
+  bool Plus(const double* x, const double* delta, double* x_plus_delta) const override {
+    using Vector9 = Eigen::Matrix<double, 9, 1>;
+    Eigen::Map<Vector9> out(x_plus_delta);
+    out = Eigen::Map<const Vector9>(x) + basis_ * Eigen::Map<const Eigen::VectorXd>(delta, basis_.cols());
+    return true;
+  }
+  bool PlusJacobian(const double* /*x*/, double* jacobian) const override {
+    Eigen::Map<Eigen::Matrix<double, 9, Eigen::Dynamic, Eigen::RowMajor>> out(jacobian, 9, basis_.cols());
+    out = basis_;
+    return true;
+  }
+  bool Minus(const double* y, const double* x, double* y_minus_x) const override {
+    using Vector9 = Eigen::Matrix<double, 9, 1>;
+    Eigen::Map<Eigen::VectorXd> out(y_minus_x, basis_.cols());
+    out = inverse_ * (Eigen::Map<const Vector9>(y) - Eigen::Map<const Vector9>(x));
+    return true;
+  }
+  bool MinusJacobian(const double* /*x*/, double* jacobian) const override {
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor>> out(jacobian, basis_.cols(), 9);
+    out = inverse_;
+    return true;
+  }
+
+ private:
+  Eigen::Matrix<double, 9, Eigen::Dynamic> basis_;
+  Eigen::Matrix<double, Eigen::Dynamic, 9> inverse_;
+};
+
+ceres::Manifold* refinement_manifold(const double* intrinsics, IntrinsicsRefinement refinement) {
+  const bool nominal = refinement == IntrinsicsRefinement::kNominal;
+  Eigen::Matrix<double, 9, Eigen::Dynamic> basis =
+      Eigen::Matrix<double, 9, Eigen::Dynamic>::Zero(9, nominal ? 3 : 6);
+  if (nominal) {
+    basis(0, 0) = 1.0;
+    basis(1, 0) = intrinsics[1] / intrinsics[0];
+    basis(4, 1) = 1.0;
+    basis(5, 2) = 1.0;
+  } else {
+    for (int i = 0; i < 6; ++i) basis(i, i) = 1.0;
+  }
+  return new LinearManifold(basis);
+}
+
 class Solver {
  public:
   Solver(const std::vector<CameraCalibration>& cameras, const std::vector<CameraWandTrack>& tracks,
@@ -269,9 +327,14 @@ class Solver {
   void pairwise();
   void unify();
   void triangulate_all();
-  double adjust(bool alternation);
+  double adjust(bool alternation, bool robust = true);
   void finish();
   void raw_residuals(const std::vector<CameraModel>& models);
+  std::vector<std::vector<double>> raw_errors(const std::vector<CameraModel>& models) const;
+  std::vector<CameraModel> registered_models() const;
+  void adjust_passes();
+  void decide_intrinsics(double rms);
+  void check_focal_lengths();
   CameraModel model_of(int camera) const {
     return CameraModel(to_intrinsics(state_[camera].intrinsics, input_[camera].intrinsics),
                        pose_to_T_world_cam(state_[camera].pose));
@@ -299,6 +362,10 @@ class Solver {
   std::vector<double> points_;  // samples x markers x 3
   std::vector<PairPose> pairs_;
   int reference_ = -1;
+  IntrinsicsRefinement intrinsics_ = IntrinsicsRefinement::kNone;
+  int passes_ = 0;
+  bool all_converged_ = true;
+  std::string pass_iterations_;  // iterations per pass, "12, 4, 3"
   Clock::time_point start_ = Clock::now();
 };
 
@@ -333,6 +400,7 @@ void Solver::check_cameras() {
     auto& camera = result_.cameras[c];
     camera.id = input_[c].id;
     camera.intrinsics = input_[c].intrinsics;
+    camera.given_intrinsics = input_[c].intrinsics;
     const auto& k = input_[c].intrinsics;
     const double values[9] = {
         k.fx,           k.fy, k.cx, k.cy, k.distortion[0], k.distortion[1], k.distortion[2], k.distortion[3],
@@ -385,9 +453,18 @@ void Solver::build_samples() {
   if (first >= last) return;
   const double rate = options_.sample_rate_hz > 0 ? options_.sample_rate_hz : 1.0 / period;
   const auto step = static_cast<TimeNs>(std::llround(1e9 / rate));
-  // Start half a step in so that instants fall between frames of cameras running at that rate,
-  // where interpolation is well conditioned on both sides.
-  for (TimeNs t = first + step / 2; t < last; t += step) {
+  // Synchronised cameras (every frame stamped on one grid of that period): the instants are the
+  // frames themselves, so every observation is a raw frame, not an interpolation.
+  bool synchronised = options_.sample_rate_hz <= 0 && step > 0;
+  for (std::size_t c = 0; c < state_.size() && synchronised; ++c) {
+    if (!state_[c].usable) continue;
+    for (const auto& frame : tracks_[c]->frames)
+      synchronised = synchronised && (frame.stamp_ns - first) % step == 0;
+  }
+  result_.synchronised = synchronised;
+  // Otherwise start half a step in so that instants fall between frames of cameras running at that
+  // rate, where interpolation is well conditioned on both sides.
+  for (TimeNs t = first + (synchronised ? 0 : step / 2); synchronised ? t <= last : t < last; t += step) {
     Sample sample;
     sample.t_ns = t;
     for (std::size_t c = 0; c < state_.size(); ++c) {
@@ -398,7 +475,8 @@ void Solver::build_samples() {
     }
     if (sample.observations.size() >= 2) samples_.push_back(std::move(sample));
   }
-  progress("wand samples: " + std::to_string(samples_.size()) + " instants seen by >= 2 cameras");
+  progress("wand samples: " + std::to_string(samples_.size()) + " instants seen by >= 2 cameras" +
+           (synchronised ? " (synchronised cameras: the frames themselves)" : " (interpolated)"));
 }
 
 void Solver::pairwise() {
@@ -689,12 +767,17 @@ void Solver::triangulate_all() {
 }
 
 // One bundle adjustment pass (or seed 003's alternation). Returns the reprojection RMS.
-double Solver::adjust(bool alternation) {
+// A robust pass (Huber loss) starts from the unified poses, with outliers still in: Ceres handles
+// the loss by reweighting, which converges only linearly near the minimum (each iteration gains a
+// fixed fraction), so it stops at Ceres's default relative cost change (1e-6): its result only
+// seeds the outlier test. After the outliers are gone the passes are plain least squares, which
+// converge quadratically to the tight tolerance.
+double Solver::adjust(bool alternation, bool robust) {
   const std::size_t markers = wand_.marker_count();
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  ceres::LossFunction* loss = new ceres::HuberLoss(options_.huber_px);
+  ceres::LossFunction* loss = robust ? new ceres::HuberLoss(options_.huber_px) : nullptr;
   std::vector<double*> point_blocks;
   std::set<int> cameras_in_problem;
   for (std::size_t s = 0; s < samples_.size(); ++s) {
@@ -742,22 +825,32 @@ double Solver::adjust(bool alternation) {
   for (int c : cameras_in_problem) {
     CameraState& camera = state_[c];
     if (c == reference_) problem.SetParameterBlockConstant(camera.pose);
-    if (!options_.refine_intrinsics) {
-      problem.SetParameterBlockConstant(camera.intrinsics);
-    }
+    if (intrinsics_ == IntrinsicsRefinement::kNone) problem.SetParameterBlockConstant(camera.intrinsics);
+    // Automatic refinement: only along the directions the data determines (docs/calibration.md).
+    if (intrinsics_ == IntrinsicsRefinement::kNominal || intrinsics_ == IntrinsicsRefinement::kSuspect)
+      problem.SetManifold(camera.intrinsics, refinement_manifold(camera.intrinsics, intrinsics_));
     if (!options_.time_offsets || c == reference_) problem.SetParameterBlockConstant(&camera.offset);
   }
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_SCHUR;
   solver_options.max_num_iterations = options_.max_iterations;
   solver_options.num_threads = options_.threads;
-  solver_options.function_tolerance = 1e-10;
+  solver_options.function_tolerance = robust ? 1e-6 : 1e-10;
   solver_options.parameter_tolerance = 1e-10;
   solver_options.gradient_tolerance = 1e-12;
   ceres::Solver::Summary summary;
   if (!alternation) {
     ceres::Solve(solver_options, &problem, &summary);
     result_.iterations += static_cast<int>(summary.iterations.size());
+    const bool converged = summary.termination_type == ceres::CONVERGENCE;
+    ++passes_;
+    if (!converged && result_.convergence.empty())
+      result_.convergence = "pass " + std::to_string(passes_) + " did not converge after " +
+                            std::to_string(summary.iterations.size() - 1) + " iterations (" +
+                            summary.message + ")";
+    pass_iterations_ +=
+        (pass_iterations_.empty() ? "" : ", ") + std::to_string(summary.iterations.size() - 1);
+    all_converged_ = all_converged_ && converged;
   } else {
     // Seed 003 §3.3.2: the reconstructed trace is a virtual calibration object; each camera is
     // re-calibrated against it, then the trace is rebuilt, and so on.
@@ -893,10 +986,37 @@ void Solver::finish() {
   }
 }
 
-// Every raw wand frame against the wand path interpolated (cubic Hermite over the samples) at
-// the frame's instant on the reference clock.
-void Solver::raw_residuals(const std::vector<CameraModel>& models) {
+ErrorStats error_stats(std::vector<double> errors) {
+  ErrorStats stats;
+  stats.count = static_cast<int>(errors.size());
+  if (errors.empty()) return stats;
+  double sum = 0, squared = 0;
+  int within = 0;
+  for (double e : errors) {
+    sum += e;
+    squared += e * e;
+    within += e <= 5.0 ? 1 : 0;
+  }
+  const auto n = static_cast<double>(errors.size());
+  stats.mean_px = sum / n;
+  stats.rms_axis_px = std::sqrt(squared / (2 * n));
+  stats.within_5px = within / n;
+  const std::size_t half = errors.size() / 2;
+  std::nth_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(half), errors.end());
+  stats.median_px = errors[half];
+  if (errors.size() % 2 == 0)
+    stats.median_px =
+        0.5 * (stats.median_px +
+               *std::max_element(errors.begin(), errors.begin() + static_cast<std::ptrdiff_t>(half)));
+  return stats;
+}
+
+// Every raw wand frame against the wand path at the frame's instant on the reference clock: the
+// sample itself where the frame is one (synchronised cameras), else interpolated (cubic Hermite
+// over the samples). 2D errors per camera, px, per marker observation.
+std::vector<std::vector<double>> Solver::raw_errors(const std::vector<CameraModel>& models) const {
   const std::size_t markers = wand_.marker_count();
+  std::vector<std::vector<double>> errors(state_.size());
   std::vector<TimeNs> times;
   std::vector<bool> valid;
   for (const auto& sample : samples_) {
@@ -905,45 +1025,186 @@ void Solver::raw_residuals(const std::vector<CameraModel>& models) {
     times.push_back(sample.t_ns);
     valid.push_back(active >= 2);
   }
-  if (times.size() < 4) return;
+  if (times.size() < 4) return errors;
   const TimeNs step = times[1] - times[0];
-  double total = 0;
-  int total_count = 0;
   for (std::size_t c = 0; c < state_.size(); ++c) {
     if (!state_[c].registered || tracks_[c] == nullptr) continue;
-    double squared = 0;
-    int count = 0;
     for (const auto& frame : tracks_[c]->frames) {
       const TimeNs t = frame.stamp_ns - static_cast<TimeNs>(std::llround(state_[c].offset * 1e9));
       const auto after = std::upper_bound(times.begin(), times.end(), t);
-      if (after - times.begin() < 2 || times.end() - after < 2) continue;
+      if (after == times.begin()) continue;
       const std::size_t i = static_cast<std::size_t>(after - times.begin()) - 1;
-      bool usable = true;
-      for (std::size_t k = i - 1; k <= i + 2; ++k) usable = usable && valid[k];
-      for (std::size_t k = i - 1; k < i + 2; ++k) usable = usable && times[k + 1] - times[k] == step;
-      if (!usable) continue;
+      const bool exact = times[i] == t;
+      if (exact && !valid[i]) continue;
+      if (!exact) {
+        if (i < 1 || i + 2 >= times.size()) continue;
+        bool usable = true;
+        for (std::size_t k = i - 1; k <= i + 2; ++k) usable = usable && valid[k];
+        for (std::size_t k = i - 1; k < i + 2; ++k) usable = usable && times[k + 1] - times[k] == step;
+        if (!usable) continue;
+      }
       const double tau = static_cast<double>(t - times[i]) / static_cast<double>(step);
       const double tau2 = tau * tau, tau3 = tau2 * tau;
       const double h00 = 2 * tau3 - 3 * tau2 + 1, h10 = tau3 - 2 * tau2 + tau, h01 = -2 * tau3 + 3 * tau2,
                    h11 = tau3 - tau2;
       for (std::size_t m = 0; m < markers; ++m) {
         const auto point = [&](std::size_t k) { return Eigen::Vector3d(&points_[(k * markers + m) * 3]); };
-        const Eigen::Vector3d X = h00 * point(i) + h10 * 0.5 * (point(i + 1) - point(i - 1)) +
-                                  h01 * point(i + 1) + h11 * 0.5 * (point(i + 2) - point(i));
+        const Eigen::Vector3d X =
+            exact ? point(i)
+                  : Eigen::Vector3d(h00 * point(i) + h10 * 0.5 * (point(i + 1) - point(i - 1)) +
+                                    h01 * point(i + 1) + h11 * 0.5 * (point(i + 2) - point(i)));
         const auto projected = models[c].project(X);
         if (!projected) continue;
-        const double e2 = (*projected - frame.pixels[m]).squaredNorm();
-        if (std::sqrt(e2) > 5.0 * options_.huber_px) continue;  // an outlier the adjustment dropped too
-        squared += e2;
-        count += 2;
+        errors[c].push_back((*projected - frame.pixels[m]).norm());
       }
     }
-    result_.cameras[c].raw_observations = count / 2;
-    result_.cameras[c].raw_rms_axis_px = count > 0 ? std::sqrt(squared / count) : 0.0;
-    total += squared;
-    total_count += count;
   }
-  result_.raw_rms_axis_px = total_count > 0 ? std::sqrt(total / total_count) : 0.0;
+  return errors;
+}
+
+// Raw-frame statistics per camera and overall: every frame, and the inliers (kRawInlierPx).
+void Solver::raw_residuals(const std::vector<CameraModel>& models) {
+  const auto errors = raw_errors(models);
+  std::vector<double> all, inliers;
+  for (std::size_t c = 0; c < errors.size(); ++c) {
+    if (!state_[c].registered) continue;
+    std::vector<double> camera_inliers;
+    for (double e : errors[c])
+      if (e <= kRawInlierPx) camera_inliers.push_back(e);
+    auto& camera = result_.cameras[c];
+    camera.raw_all = error_stats(errors[c]);
+    camera.raw_inliers = error_stats(camera_inliers);
+    camera.raw_observations = camera.raw_inliers.count;
+    camera.raw_rms_axis_px = camera.raw_inliers.rms_axis_px;
+    all.insert(all.end(), errors[c].begin(), errors[c].end());
+    inliers.insert(inliers.end(), camera_inliers.begin(), camera_inliers.end());
+  }
+  result_.raw_all = error_stats(std::move(all));
+  result_.raw_inliers = error_stats(std::move(inliers));
+  result_.raw_rms_axis_px = result_.raw_inliers.rms_axis_px;
+}
+
+std::vector<CameraModel> Solver::registered_models() const {
+  std::vector<CameraModel> models(state_.size());
+  for (std::size_t c = 0; c < state_.size(); ++c)
+    if (state_[c].registered) models[c] = model_of(static_cast<int>(c));
+  return models;
+}
+
+// Intrinsics are refined when asked (all nine), when the cameras file marks them nominal (focal
+// length, k1, k2), or when the first adjustment leaves raw-frame errors far above any centroid
+// noise (fx, fy, cx, cy, k1, k2).
+void Solver::decide_intrinsics(double rms) {
+  if (options_.refine_intrinsics) {
+    intrinsics_ = IntrinsicsRefinement::kAll;
+    result_.intrinsics_refined = "--refine-intrinsics";
+    return;
+  }
+  if (!options_.auto_intrinsics || intrinsics_ != IntrinsicsRefinement::kNone) return;
+  if (rms < 0) {  // before the first adjustment
+    std::vector<std::string> nominal;
+    for (std::size_t c = 0; c < state_.size(); ++c)
+      if (state_[c].registered && input_[c].nominal_intrinsics) nominal.push_back(input_[c].id);
+    if (nominal.empty()) return;
+    intrinsics_ = IntrinsicsRefinement::kNominal;
+    result_.intrinsics_refined = "nominal intrinsics (" + join(nominal) + "): focal length, k1, k2";
+    return;
+  }
+  std::vector<double> all;
+  for (const auto& errors : raw_errors(registered_models()))
+    all.insert(all.end(), errors.begin(), errors.end());
+  const double median = error_stats(all).median_px;
+  if (all.empty() || median <= options_.intrinsics_suspect_px) return;
+  // The principal point and the aspect ratio need many views: with fewer than
+  // kMinCamerasForCentre cameras only the focal length and k1, k2 move (on the real 4-camera set,
+  // freeing cx, cy, fx/fy too left the adjustment crawling to the iteration cap).
+  const auto cameras =
+      std::count_if(state_.begin(), state_.end(), [](const CameraState& c) { return c.registered; });
+  const bool centre = cameras >= kMinCamerasForCentre;
+  intrinsics_ = centre ? IntrinsicsRefinement::kSuspect : IntrinsicsRefinement::kNominal;
+  char why[240];
+  std::snprintf(why, sizeof(why),
+                "raw-frame error median %.2f px (2D) after the first adjustment, above %.2f px: the given "
+                "intrinsics do not fit; %s",
+                median, options_.intrinsics_suspect_px,
+                centre ? "fx, fy, cx, cy, k1, k2" : "focal length, k1, k2 (fewer than 8 cameras)");
+  result_.intrinsics_refined = why;
+}
+
+// Pass 1 from the unified start; then outliers (mislabelled frames, reflections) go, and with
+// clock offsets the tracks are looked up again at the shifted instants. Intrinsics suspected after
+// pass 1 are refined in an extra pass before any outlier is judged.
+void Solver::adjust_passes() {
+  decide_intrinsics(-1);
+  double rms = adjust(false);
+  if (intrinsics_ == IntrinsicsRefinement::kNone) {
+    decide_intrinsics(rms);
+    if (intrinsics_ != IntrinsicsRefinement::kNone) {
+      progress("refining intrinsics: " + result_.intrinsics_refined);
+      rms = adjust(false);
+    }
+  }
+  const int passes = options_.time_offsets ? 3 : 2;
+  const std::size_t markers = wand_.marker_count();
+  for (int pass = 1; pass < passes; ++pass) {
+    const double limit = std::max(5.0 * rms, 3.0 * options_.huber_px);
+    int removed = 0;
+    for (std::size_t s = 0; s < samples_.size(); ++s) {
+      for (auto& observation : samples_[s].observations) {
+        if (!observation.active) continue;
+        const CameraModel model = model_of(observation.camera);
+        for (std::size_t m = 0; m < markers; ++m) {
+          const auto projected = model.project(Eigen::Vector3d(&points_[(s * markers + m) * 3]));
+          if (!projected || (*projected - observed(observation, m)).norm() > limit) {
+            observation.active = false;
+            ++removed;
+            break;
+          }
+        }
+        if (options_.time_offsets && observation.active) {
+          const double offset = state_[observation.camera].offset;
+          const TimeNs shift = static_cast<TimeNs>(std::llround(offset * 1e9));
+          const double max_gap = options_.max_gap_frames * tracks_[observation.camera]->frame_period_s;
+          if (auto segment = find_segment(*tracks_[observation.camera], samples_[s].t_ns + shift, max_gap)) {
+            observation.segment = std::move(*segment);
+            observation.shift_s = static_cast<double>(shift) * 1e-9;
+          }
+        }
+      }
+    }
+    progress("pass " + std::to_string(pass + 1) + ": " + std::to_string(removed) +
+             " outlier observations removed");
+    rms = adjust(false, false);
+  }
+  result_.converged = all_converged_;
+  if (all_converged_) result_.convergence = "converged in every pass";
+  result_.convergence += " (iterations per pass: " + pass_iterations_ + ")";
+}
+
+// Refined focal lengths far from the given ones mean the given intrinsics were wrong, not just
+// imprecise: such a camera is not calibrated, and the message says what to check.
+void Solver::check_focal_lengths() {
+  if (intrinsics_ == IntrinsicsRefinement::kNone) return;
+  for (std::size_t c = 0; c < state_.size(); ++c) {
+    if (!state_[c].registered) continue;
+    result_.cameras[c].intrinsics_refined = true;
+    const auto& given = input_[c].intrinsics;
+    const double fx = state_[c].intrinsics[0], fy = state_[c].intrinsics[1];
+    const double factor = std::max({fx / given.fx, given.fx / fx, fy / given.fy, given.fy / fy});
+    if (!(factor <= options_.max_focal_factor)) {
+      char why[400];
+      std::snprintf(
+          why, sizeof(why),
+          "focal length %.0f x %.0f px fits the data, the cameras file gives %.0f x %.0f px (a factor "
+          "%.2f, more than %.1f): check K (fx, fy = lens focal length / pixel pitch, in pixels of the "
+          "%d x %d image) and the image size",
+          fx, fy, given.fx, given.fy, factor, options_.max_focal_factor, given.width, given.height);
+      fail(static_cast<int>(c), why);
+      for (auto& sample : samples_)
+        for (auto& observation : sample.observations)
+          if (observation.camera == static_cast<int>(c)) observation.active = false;
+    }
+  }
 }
 
 SolveResult Solver::run() {
@@ -963,42 +1224,8 @@ SolveResult Solver::run() {
     if (options_.alternation_iterations > 0) {
       adjust(true);
     } else {
-      // Pass 1 from the unified start; then outliers (mislabelled frames, reflections) go, and
-      // with clock offsets the tracks are looked up again at the shifted instants.
-      double rms = adjust(false);
-      const int passes = options_.time_offsets ? 3 : 2;
-      for (int pass = 1; pass < passes; ++pass) {
-        const double limit = std::max(5.0 * rms, 3.0 * options_.huber_px);
-        int removed = 0;
-        const std::size_t markers = wand_.marker_count();
-        for (std::size_t s = 0; s < samples_.size(); ++s) {
-          for (auto& observation : samples_[s].observations) {
-            if (!observation.active) continue;
-            const CameraModel model = model_of(observation.camera);
-            for (std::size_t m = 0; m < markers; ++m) {
-              const auto projected = model.project(Eigen::Vector3d(&points_[(s * markers + m) * 3]));
-              if (!projected || (*projected - observed(observation, m)).norm() > limit) {
-                observation.active = false;
-                ++removed;
-                break;
-              }
-            }
-            if (options_.time_offsets && observation.active) {
-              const double offset = state_[observation.camera].offset;
-              const TimeNs shift = static_cast<TimeNs>(std::llround(offset * 1e9));
-              const double max_gap = options_.max_gap_frames * tracks_[observation.camera]->frame_period_s;
-              if (auto segment =
-                      find_segment(*tracks_[observation.camera], samples_[s].t_ns + shift, max_gap)) {
-                observation.segment = std::move(*segment);
-                observation.shift_s = static_cast<double>(shift) * 1e-9;
-              }
-            }
-          }
-        }
-        progress("pass " + std::to_string(pass + 1) + ": " + std::to_string(removed) +
-                 " outlier observations removed");
-        rms = adjust(false);
-      }
+      adjust_passes();
+      check_focal_lengths();
     }
     finish();
     // Provisional world frame: z up from the cameras' layout (docs/calibration.md); `calibrate

@@ -16,6 +16,7 @@
 
 #include "calibrate_marker_cli.h"
 #include "panoptes/calib/intrinsics.h"
+#include "panoptes/calib/point_import.h"
 #include "panoptes/calib/report.h"
 #include "panoptes/calib/wand.h"
 #include "panoptes/calib/wand_solver.h"
@@ -41,6 +42,8 @@ constexpr const char* kUsage =
     "  intrinsics  one camera's intrinsics from chessboard images (OpenCV)\n"
     "  solve       extrinsics (and optionally intrinsics, clock offsets) from wand features\n"
     "  world       set the world frame from an L-frame, markers on the floor, or the wand on the floor\n"
+    "  import-points  a single-point recording of synchronised cameras (MultiCamSelfCal points.dat) as\n"
+    "              features and nominal cameras for `solve --wand 0`\n"
     "  marker      self-calibration of a 7-LED marker (seed 004 §3)\n"
     "\n"
     "Each subcommand answers --help.\n";
@@ -134,6 +137,71 @@ int run_intrinsics(int argc, char** argv) {
   return kExitOk;
 }
 
+// `calibrate import-points`: MultiCamSelfCal's points.dat (and Res.dat) as FeatureFrames and a
+// cameras file with nominal intrinsics, for `calibrate solve --wand 0`.
+int run_import_points(int argc, char** argv) {
+  std::string points_file, resolutions_file, size, features_out, cameras_out, prefix = "cam";
+  double focal = 0, rate = 100;
+  CLI::App app{
+      "calibrate import-points: a single bright point seen by synchronised cameras (MultiCamSelfCal "
+      "points.dat: 3 rows x, y, 1 per camera, NaN where unseen, one column per frame)",
+      "estimator_node calibrate import-points"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.add_option("--points", points_file, "points.dat")->required();
+  auto* res = app.add_option("--resolutions", resolutions_file, "Res.dat: 'width height' per camera");
+  auto* size_option = app.add_option("--size", size, "image size of every camera, <width>x<height>");
+  res->excludes(size_option);
+  app.add_option("--focal", focal, "nominal focal length, px (lens focal length / pixel pitch)")->required();
+  app.add_option("--rate", rate, "frame rate of the recording, Hz (stamps only)")->capture_default_str();
+  app.add_option("--id-prefix", prefix, "camera ids are <prefix>0, <prefix>1, ...")->capture_default_str();
+  app.add_option("--out-features", features_out, "FeatureFrame JSONL to write")->required();
+  app.add_option("--out-cameras", cameras_out, "cameras YAML to write (intrinsics marked nominal: true)")
+      ->required();
+  if (auto exit = parse_command_line(app, argc, argv, [&] {
+        if (resolutions_file.empty() && size.empty())
+          throw CLI::ValidationError("--resolutions or --size", "one of them is required");
+      }))
+    return *exit;
+  const std::string program = app.get_name();
+  if (!(focal > 0)) return bad_input(program, "--focal: must be positive");
+  if (!(rate > 0)) return bad_input(program, "--rate: must be positive");
+  PointTable table;
+  std::vector<std::pair<int, int>> sizes;
+  try {
+    table = read_multicam_points(points_file);
+    if (!resolutions_file.empty()) sizes = read_multicam_resolutions(resolutions_file);
+  } catch (const std::exception& e) {
+    return bad_input(program, e.what());
+  }
+  if (!size.empty()) {
+    int width = 0, height = 0;
+    if (std::sscanf(size.c_str(), "%dx%d", &width, &height) != 2 || width <= 0 || height <= 0)
+      return bad_input(program, "--size: expected <width>x<height>, got '" + size + "'");
+    sizes.assign(table.cameras.size(), {width, height});
+  }
+  if (sizes.size() != table.cameras.size())
+    return bad_input(program, resolutions_file + ": " + std::to_string(sizes.size()) + " cameras, " +
+                                  points_file + " has " + std::to_string(table.cameras.size()));
+  SystemCalibration cameras;
+  std::vector<std::string> ids;
+  for (std::size_t c = 0; c < table.cameras.size(); ++c) {
+    ids.push_back(prefix + std::to_string(c));
+    cameras.cameras.push_back(nominal_camera(ids.back(), sizes[c].first, sizes[c].second, focal));
+  }
+  const auto frames = point_feature_frames(table, ids, rate, 0);
+  std::ofstream jsonl(features_out);
+  if (!jsonl) return bad_input(program, features_out + ": cannot write");
+  for (const auto& frame : frames) jsonl << to_json_line(frame) << "\n";
+  jsonl.close();
+  save_calibration(cameras, cameras_out);
+  std::printf("%zu cameras x %d frames; wrote %s and %s (nominal intrinsics, f = %.1f px)\n",
+              table.cameras.size(), table.frames, features_out.c_str(), cameras_out.c_str(), focal);
+  std::printf(
+      "next: estimator_node calibrate solve --cameras %s --in-features %s --wand 0 --out calibration.yaml\n",
+      cameras_out.c_str(), features_out.c_str());
+  return kExitOk;
+}
+
 int run_solve(int argc, char** argv) {
   std::string cameras_file, wand_text, out, reference;
   std::vector<std::string> feature_files;
@@ -150,7 +218,15 @@ int run_solve(int argc, char** argv) {
                  "marker positions along the wand, m, e.g. 0,0.18,0.5 (one value: a single LED)")
       ->required();
   app.add_option("--out", out, "calibration YAML to write; the report goes next to it")->required();
-  app.add_flag("--refine-intrinsics", options.refine_intrinsics, "also refine fx, fy, cx, cy and distortion");
+  auto* refine = app.add_flag(
+      "--refine-intrinsics", options.refine_intrinsics,
+      "refine fx, fy, cx, cy and all five distortion terms (without it, the focal length, k1 and k2 are "
+      "refined automatically when the cameras file marks them nominal, and fx, fy, cx, cy, k1, k2 when the "
+      "first adjustment shows they do not fit)");
+  bool fixed_intrinsics = false;
+  app.add_flag("--fixed-intrinsics", fixed_intrinsics,
+               "never refine the intrinsics (no automatic refinement)")
+      ->excludes(refine);
   app.add_flag("--time-offsets", options.time_offsets, "estimate a clock offset per camera");
   app.add_option("--reference", reference, "camera whose pose fixes the gauge")
       ->default_str("best connected");
@@ -167,6 +243,7 @@ int run_solve(int argc, char** argv) {
   if (auto exit = parse_command_line(app, argc, argv)) return *exit;
   const std::string program = app.get_name();
   options.reference_camera = reference;
+  options.auto_intrinsics = !fixed_intrinsics;
   WandDefinition wand;
   try {
     wand = parse_wand(wand_text);
@@ -391,6 +468,7 @@ int run_calibrate(int argc, char** argv) {
   try {
     if (sub == "intrinsics") return run_intrinsics(argc - 1, argv + 1);
     if (sub == "solve") return run_solve(argc - 1, argv + 1);
+    if (sub == "import-points") return run_import_points(argc - 1, argv + 1);
     if (sub == "world") return run_world(argc - 1, argv + 1);
     if (sub == "capture") return run_calibrate_capture(argc - 1, argv + 1);
     if (sub == "marker") return panoptes::estimator::run_calibrate_marker(argc - 1, argv + 1);

@@ -64,21 +64,54 @@ double image_coverage(const SolveResult& result, int camera) {
   return count / 64.0;
 }
 
+namespace {
+
+std::string raw_error_line(const char* name, const ErrorStats& all, const ErrorStats& inliers) {
+  return format(
+      "%s: all %d observations mean %.3f median %.3f (%.1f%% within 5 px); inliers (<= %.0f px) %d "
+      "observations mean %.3f median %.3f\n",
+      name, all.count, all.mean_px, all.median_px, 100 * all.within_5px, kRawInlierPx, inliers.count,
+      inliers.mean_px, inliers.median_px);
+}
+
+}  // namespace
+
 std::string report_summary(const SolveResult& result) {
   std::ostringstream out;
   out << format("calibrated %d of %zu cameras (reference %s) in %.1f s, %d iterations\n",
                 result.calibrated_count(), result.cameras.size(), result.reference_camera.c_str(),
                 result.seconds, result.iterations);
-  out << "camera        state        obs   rms px  max px  raw rms px/axis  offset ms  coverage\n";
+  // The headline: raw frames, 2D, the figure other tools report.
+  out << raw_error_line("raw-frame reprojection error, 2D, px", result.raw_all, result.raw_inliers);
+  if (!result.convergence.empty())
+    out << (result.converged ? "bundle adjustment: " : "WARNING: bundle adjustment did not converge: ")
+        << result.convergence << "\n";
+  if (!result.intrinsics_refined.empty()) {
+    out << "intrinsics refined"
+        << (result.intrinsics_refined == "--refine-intrinsics" ? " (" : " automatically (")
+        << result.intrinsics_refined << "):";
+    for (const auto& camera : result.cameras)
+      if (camera.intrinsics_refined && camera.T_world_cam)
+        out << format(" %s f %.0f->%.1f px", camera.id.c_str(),
+                      0.5 * (camera.given_intrinsics.fx + camera.given_intrinsics.fy),
+                      0.5 * (camera.intrinsics.fx + camera.intrinsics.fy));
+    out << "\n";
+  }
+  out << "camera        state       raw obs  raw mean px  raw median px  within 5 px  raw rms px/axis  "
+         "sample rms px  max px  offset ms  coverage\n";
   for (std::size_t c = 0; c < result.cameras.size(); ++c) {
     const auto& camera = result.cameras[c];
-    out << format("%-12s  %-10s  %6d  %6.3f  %6.2f  %15.3f  %9.3f  %7.0f%%\n", camera.id.c_str(),
-                  camera.T_world_cam ? "calibrated" : "FAILED", camera.observations, camera.rms_px,
-                  camera.max_px, camera.raw_rms_axis_px, camera.time_offset_s * 1e3,
+    out << format("%-12s  %-10s  %7d  %11.3f  %13.3f  %10.1f%%  %15.3f  %13.3f  %6.2f  %9.3f  %7.0f%%\n",
+                  camera.id.c_str(), camera.T_world_cam ? "calibrated" : "FAILED", camera.raw_all.count,
+                  camera.raw_all.mean_px, camera.raw_all.median_px, 100 * camera.raw_all.within_5px,
+                  camera.raw_rms_axis_px, camera.rms_px, camera.max_px, camera.time_offset_s * 1e3,
                   100 * image_coverage(result, static_cast<int>(c)));
   }
-  out << format("reprojection RMS %.3f px (2D, interpolated observations), raw frames %.3f px per axis\n",
-                result.rms_px, result.raw_rms_axis_px);
+  out << format(
+      "also: raw frames %.3f px RMS per axis over the inliers (compare with the centroid noise); the "
+      "adjustment's samples (%s) %.3f px RMS 2D\n",
+      result.raw_rms_axis_px, result.synchronised ? "the frames themselves" : "interpolated between frames",
+      result.rms_px);
   if (result.lengths.count > 0)
     out << format(
         "wand length (triangulated without the length constraint, %d samples): error mean %+.3f mm, "
@@ -109,7 +142,7 @@ std::string calibration_yaml(const SolveResult& result) {
               "baseline.\n# Set the scale with `estimator_node calibrate world --lframe <x arm m>,<y arm m>` "
               "(docs/calibration.md, \"Single LED\").\n";
   for (const auto& camera : result.cameras) {
-    calibration.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam});
+    calibration.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam, false});
     if (!camera.T_world_cam)
       header << "# NOT CALIBRATED (no T_world_cam): " << camera.id << ": " << camera.failure << "\n";
   }
@@ -145,12 +178,26 @@ void write_text_report(const SolveResult& result, const std::filesystem::path& o
   written.push_back(text_path);
 }
 
+nlohmann::json stats_json(const ErrorStats& stats) {
+  return {{"count", stats.count},
+          {"mean_px", stats.mean_px},
+          {"median_px", stats.median_px},
+          {"rms_axis_px", stats.rms_axis_px},
+          {"within_5px", stats.within_5px}};
+}
+
 // Everything a script may want to check, machine-readable.
 nlohmann::json report_json(const SolveResult& result) {
   nlohmann::json json;
   json["reference_camera"] = result.reference_camera;
   json["rms_px"] = result.rms_px;
   json["raw_rms_axis_px"] = result.raw_rms_axis_px;
+  json["raw_frame_error_2d_px"] = {{"all", stats_json(result.raw_all)},
+                                   {"inliers", stats_json(result.raw_inliers)}};
+  json["converged"] = result.converged;
+  json["convergence"] = result.convergence;
+  json["intrinsics_refined"] = result.intrinsics_refined;
+  json["synchronised"] = result.synchronised;
   json["seconds"] = result.seconds;
   json["iterations"] = result.iterations;
   json["wand_length"] = {{"samples", result.lengths.count},
@@ -180,6 +227,9 @@ nlohmann::json report_json(const SolveResult& result) {
                         {"rms_px", camera.rms_px},
                         {"max_px", camera.max_px},
                         {"raw_rms_axis_px", camera.raw_rms_axis_px},
+                        {"raw_frame_error_2d_px",
+                         {{"all", stats_json(camera.raw_all)}, {"inliers", stats_json(camera.raw_inliers)}}},
+                        {"intrinsics_refined", camera.intrinsics_refined},
                         {"time_offset_ms", camera.time_offset_s * 1e3},
                         {"coverage", image_coverage(result, static_cast<int>(c))},
                         {"fx", camera.intrinsics.fx},

@@ -176,6 +176,26 @@ inline SceneSpec corridor10() {
   return spec;
 }
 
+// `count` cameras on a 3 m circle 2.4-2.5 m high, all aimed at (0, 0, 0.9), frames phased 0.7 ms
+// apart (asynchronous; bench_calibration uses 16); the wand waved through the middle for 20 s (2000 frames
+// per camera).
+inline SceneSpec ring(int count) {
+  SceneSpec spec;
+  for (int i = 0; i < count; ++i) {
+    const double angle = 2 * M_PI * i / count;
+    CameraSpec camera;
+    camera.eye = Eigen::Vector3d(3.0 * std::cos(angle), 3.0 * std::sin(angle), 2.4 + 0.1 * (i % 2));
+    camera.target = Eigen::Vector3d(0, 0, 0.9);
+    camera.phase_s = 0.0007 * i;
+    spec.cameras.push_back(camera);
+  }
+  spec.duration_s = 20;
+  spec.wand_path =
+      "{type: lissajous, center: [0, 0, 1.15], amplitude: [1.6, 1.6, 0.75], frequency: [0.13, 0.171, 0.23]}";
+  spec.wand_rotation = "{type: oscillate, amplitude: [1.3, 1.1, 3.0], frequency: [0.29, 0.37, 0.083]}";
+  return spec;
+}
+
 struct Measured {
   SolveResult result;
   double max_position_error_mm = 0;

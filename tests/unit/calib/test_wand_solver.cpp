@@ -104,7 +104,7 @@ TEST(WandSolver, SingleLedIsScaledByAnLFrame) {
   SystemCalibration solved;
   Eigen::Vector3d up_hint = Eigen::Vector3d::Zero();
   for (const auto& camera : m.result.cameras) {
-    solved.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam});
+    solved.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam, false});
     up_hint += camera.T_world_cam->t / static_cast<double>(m.result.cameras.size());
   }
   // The L-frame lies at the true origin, x arm 0.5 m along x, y arm 0.3 m along y.
@@ -149,6 +149,44 @@ TEST(WandSolver, SingleLedIsScaledByAnLFrame) {
   EXPECT_LE(position_mm, 1.0);
   EXPECT_LE(rotation_deg, 0.02);
   EXPECT_LE(direct_mm, 1.0);  // also in the frame the L-frame sets (it rests on three static markers)
+}
+
+// Issue 16: a large rig must converge (Ceres CONVERGENCE in every pass), not stop at the
+// iteration cap. 24 asynchronous cameras, 8 s of wand (800 frames each), clock offsets estimated.
+TEST(WandSolver, TwentyFourCameraRingConverges) {
+  SceneSpec spec = ring(24);
+  spec.duration_s = 8;
+  const Scene scene = Scene::from_yaml_string(scene_yaml(spec));
+  SolveOptions options;
+  options.time_offsets = true;
+  const Measured m = solve_and_measure(scene, kWand, options);
+  print("ring24 async, offsets estimated", m);
+  std::printf("  %s\n", m.result.convergence.c_str());
+  ASSERT_TRUE(m.result.ok());
+  EXPECT_EQ(m.result.calibrated_count(), 24);
+  EXPECT_TRUE(m.result.converged) << m.result.convergence;
+  EXPECT_TRUE(m.result.intrinsics_refined.empty()) << "exact intrinsics need no refinement";
+  EXPECT_LE(m.result.raw_inliers.median_px, 0.2);
+  EXPECT_LE(m.max_position_error_mm, 1.0);
+  EXPECT_LE(m.max_rotation_error_deg, 0.02);
+}
+
+// The same rig with every camera's intrinsics 5% off and no flag: the first adjustment's raw-frame
+// error gives them away, they are refined automatically, and the adjustment still converges.
+TEST(WandSolver, TwentyFourCameraRingRefinesSuspectIntrinsicsAutomatically) {
+  SceneSpec spec = ring(24);
+  spec.duration_s = 6;
+  const Scene scene = Scene::from_yaml_string(scene_yaml(spec));
+  const Measured m = solve_and_measure(scene, kWand, SolveOptions{}, 0.05);
+  print("ring24 intrinsics 5% off, no flags", m);
+  std::printf("  intrinsics: %s\n  %s\n", m.result.intrinsics_refined.c_str(), m.result.convergence.c_str());
+  ASSERT_TRUE(m.result.ok());
+  EXPECT_EQ(m.result.calibrated_count(), 24);
+  EXPECT_NE(m.result.intrinsics_refined.find("raw-frame error"), std::string::npos);
+  EXPECT_TRUE(m.result.converged) << m.result.convergence;
+  EXPECT_LE(m.result.raw_inliers.median_px, 0.2);
+  EXPECT_LE(m.max_focal_error_rel, 0.002);
+  EXPECT_LE(m.max_position_error_mm, 2.0);
 }
 
 }  // namespace

@@ -17,6 +17,9 @@ struct CameraCalibration {
   std::string id;
   CameraIntrinsics intrinsics;
   std::optional<RigidTransform> T_world_cam;  // absent: intrinsics only
+  // YAML `nominal: true`: the intrinsics are a guess (focal length / pixel pitch, image centre,
+  // no distortion), not a chessboard calibration; `calibrate solve` then refines them.
+  bool nominal_intrinsics = false;
 
   // Requires T_world_cam.
   CameraModel model() const;

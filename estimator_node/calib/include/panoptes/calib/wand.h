@@ -105,7 +105,8 @@ struct TrackSegment {
 };
 
 // The segment of `track` containing stamp `t_ns` (relative times use `t_ns` as origin), if its
-// frames are at most `max_gap_s` apart. nullopt outside the track or across a gap.
+// frames are at most `max_gap_s` apart. nullopt outside the track or across a gap, except that a
+// frame stamped exactly `t_ns` gives a constant segment at its pixels (synchronised cameras).
 std::optional<TrackSegment> find_segment(const CameraWandTrack& track, TimeNs t_ns, double max_gap_s);
 
 // Cubic Hermite interpolation on a segment that starts at t0_s and lasts h_s, from value p0 with

@@ -21,12 +21,22 @@ namespace panoptes::calib {
 
 struct SolveOptions {
   bool refine_intrinsics = false;  // fx, fy, cx, cy and the five distortion terms per camera
-  bool time_offsets = false;       // one clock offset per camera (the reference camera's is 0)
-  double sample_rate_hz = 0.0;     // instants at which the wand is estimated; 0: fastest camera
-  double max_gap_frames = 1.6;     // a track is interpolated only between frames this close
-  int min_camera_frames = 20;      // identified wand frames a camera needs
-  int min_pair_samples = 25;       // common samples for a pairwise relative pose
-  int max_pair_samples = 400;      // subsampled for the five-point RANSAC
+  // Without refine_intrinsics, intrinsics are refined automatically: when a camera's intrinsics
+  // are nominal (`nominal: true`) the focal length (fx, fy keeping their ratio), k1 and k2 of every
+  // camera; when, after the first adjustment, the raw-frame error is far above any centroid noise
+  // (median 2D error above intrinsics_suspect_px), fx, fy, cx, cy, k1 and k2. The tangential terms
+  // and k3 stay as given. docs/calibration.md, "Intrinsics: what is automatic".
+  bool auto_intrinsics = true;
+  double intrinsics_suspect_px = 0.5;
+  // A refined focal length more than this factor from the given one fails the camera: the given
+  // intrinsics were wrong (wrong pixel pitch, lens or image size), not just imprecise.
+  double max_focal_factor = 2.0;
+  bool time_offsets = false;    // one clock offset per camera (the reference camera's is 0)
+  double sample_rate_hz = 0.0;  // instants at which the wand is estimated; 0: fastest camera
+  double max_gap_frames = 1.6;  // a track is interpolated only between frames this close
+  int min_camera_frames = 20;   // identified wand frames a camera needs
+  int min_pair_samples = 25;    // common samples for a pairwise relative pose
+  int max_pair_samples = 400;   // subsampled for the five-point RANSAC
   double ransac_threshold_px = 1.0;
   double huber_px = 1.0;           // robust loss on reprojection residuals
   double length_sigma_m = 0.0005;  // weight of the wand-length residuals
@@ -48,6 +58,17 @@ struct PairEdge {
   bool used = false;       // became part of the spanning unification
 };
 
+// Statistics of reprojection errors (2D norm, pixels).
+struct ErrorStats {
+  int count = 0;
+  double mean_px = 0, median_px = 0;
+  double rms_axis_px = 0;  // RMS per image axis (comparable with a centroid noise sigma)
+  double within_5px = 0;   // share of the observations within 5 px
+};
+
+// Raw frames are inliers within this 2D error of the solved path (px).
+inline constexpr double kRawInlierPx = 5.0;
+
 struct CameraResult {
   std::string id;
   CameraIntrinsics intrinsics;                // refined if asked
@@ -62,6 +83,10 @@ struct CameraResult {
   // per image axis: comparable with the centroid noise of the camera.
   int raw_observations = 0;
   double raw_rms_axis_px = 0;
+  // The same raw frames as 2D errors: every frame, and the inliers (within kRawInlierPx).
+  ErrorStats raw_all, raw_inliers;
+  bool intrinsics_refined = false;
+  CameraIntrinsics given_intrinsics;  // as the cameras file gave them
   IdentifyCounters counters;
 };
 
@@ -94,7 +119,19 @@ struct SolveResult {
   std::string reference_camera;
   double rms_px = 0;           // all cameras, 2D norm
   double raw_rms_axis_px = 0;  // all cameras, raw frames, per axis
-  LengthStats lengths;         // end-to-end length of the wand triangulated freely from the result
+  // The headline: raw frames (not interpolated) against the solved path at their own instants,
+  // 2D error in pixels, over every raw frame and over the inliers (within kRawInlierPx).
+  ErrorStats raw_all, raw_inliers;
+  // Whether intrinsics were refined and why ("" if not): "--refine-intrinsics", "nominal
+  // intrinsics (cam0, cam1)" or "raw-frame error ... after the first adjustment".
+  std::string intrinsics_refined;
+  // Whether every bundle-adjustment pass converged (Ceres CONVERGENCE), not stopped at the
+  // iteration cap; `convergence` says which pass stopped and why.
+  bool converged = false;
+  std::string convergence;
+  // Samples are the cameras' own frames (synchronised cameras: the same stamps), not interpolated.
+  bool synchronised = false;
+  LengthStats lengths;  // end-to-end length of the wand triangulated freely from the result
   // False for a single light: positions are in units of the first pair's baseline until `calibrate
   // world --lframe <x>,<y>` scales them (docs/calibration.md, "Single LED").
   bool metric = true;
