@@ -93,22 +93,32 @@ RigidTransform extrapolate_pose(const BodyState& state, double h) {
   return pose;
 }
 
-std::optional<MarkerProjection> project_marker(const BodyState& state, const Eigen::Vector3d& marker,
-                                               const CameraModel& camera, double measurement_sigma_px,
-                                               double min_depth_m) {
-  const Eigen::Matrix3d R = state.q.toRotationMatrix();
-  const Eigen::Vector3d offset = R * marker;
-  const Eigen::Vector3d p_world = state.p + offset;
+std::optional<MarkerPixel> marker_pixel(const RigidTransform& pose, const Eigen::Vector3d& marker,
+                                        const CameraModel& camera, double min_depth_m) {
+  const Eigen::Matrix3d R = pose.q.toRotationMatrix();
+  const Eigen::Vector3d p_world = pose.t + R * marker;
   const Eigen::Vector3d p_cam = camera.T_cam_world().apply(p_world);
   if (p_cam.z() < min_depth_m) return std::nullopt;
   Eigen::Matrix<double, 2, 3> J;
   const auto pixel = camera.project(p_world, &J);
   if (!pixel) return std::nullopt;
-  Eigen::Matrix<double, 2, 15> H = Eigen::Matrix<double, 2, 15>::Zero();
-  H.block<2, 3>(0, kBodyP) = J;
+  MarkerPixel out;
+  out.pixel = *pixel;
+  out.J.leftCols<3>() = J;
   // p_world = p + R exp(δθ) m ≈ p + R m − R [m]× δθ  (seed 003 eq. A.29 linearised about δθ = 0).
-  H.block<2, 3>(0, kBodyTheta) = -J * R * skew(marker);
-  return state.P.pixel_measurement(*pixel, H, measurement_sigma_px);
+  out.J.rightCols<3>() = -J * R * skew(marker);
+  return out;
+}
+
+std::optional<MarkerProjection> project_marker(const BodyState& state, const Eigen::Vector3d& marker,
+                                               const CameraModel& camera, double measurement_sigma_px,
+                                               double min_depth_m) {
+  const auto projected = marker_pixel(state.pose(), marker, camera, min_depth_m);
+  if (!projected) return std::nullopt;
+  Eigen::Matrix<double, 2, 15> H = Eigen::Matrix<double, 2, 15>::Zero();
+  H.block<2, 3>(0, kBodyP) = projected->J.leftCols<3>();
+  H.block<2, 3>(0, kBodyTheta) = projected->J.rightCols<3>();
+  return state.P.pixel_measurement(projected->pixel, H, measurement_sigma_px);
 }
 
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,

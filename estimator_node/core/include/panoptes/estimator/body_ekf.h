@@ -61,6 +61,17 @@ BodyState predicted(const BodyState& state, TimeNs stamp_ns, const BodyMotionNoi
 // p + v h + a h²/2 and q ⊗ exp(ω h). No covariance (cheap; for publishing predictions).
 RigidTransform extrapolate_pose(const BodyState& state, double horizon_s);
 
+// A marker's pixel in a camera and its 2×6 Jacobian with respect to the pose's position (columns
+// 0-2) and its body-frame rotation error δθ (columns 3-5), with p_world = p + R exp(δθ) m (seed 003
+// eq. A.29). Shared by the filter and the synchronous snapshot solve (body_snapshot.h). Nullopt
+// when the marker is closer than `min_depth_m` to the camera or does not project.
+struct MarkerPixel {
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
+  Eigen::Matrix<double, 2, 6> J = Eigen::Matrix<double, 2, 6>::Zero();
+};
+std::optional<MarkerPixel> marker_pixel(const RigidTransform& pose, const Eigen::Vector3d& marker,
+                                        const CameraModel& camera, double min_depth_m = 0.05);
+
 // Projection of one marker (body-frame position `marker`) into a camera.
 using MarkerProjection = PixelMeasurement<15>;
 
