@@ -15,7 +15,8 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 // Sum of squared reprojection errors at `pose`, and (when asked) the normal equations JᵀJ, Jᵀr.
-std::optional<double> cost(const std::vector<Eigen::Vector3d>& markers, const std::vector<CameraModel>& cameras,
+std::optional<double> cost(const std::vector<Eigen::Vector3d>& markers,
+                           const std::vector<CameraModel>& cameras,
                            const std::vector<SnapshotObservation>& observations, const RigidTransform& pose,
                            Matrix6d* JtJ = nullptr, Vector6d* Jtr = nullptr) {
   double sum = 0.0;
@@ -41,7 +42,8 @@ RigidTransform moved(const RigidTransform& pose, const Vector6d& step) {
 std::optional<SnapshotPose> solve_snapshot_pose(const std::vector<Eigen::Vector3d>& markers,
                                                 const std::vector<CameraModel>& cameras,
                                                 const std::vector<SnapshotObservation>& observations,
-                                                const RigidTransform& initial, const SnapshotOptions& options) {
+                                                const RigidTransform& initial,
+                                                const SnapshotOptions& options) {
   if (observations.size() < options.min_observations) return std::nullopt;
   SnapshotPose result;
   result.T_world_body = initial;

@@ -35,7 +35,7 @@ TEST(BodyEkf, MeasurementJacobianMatchesFiniteDifferences) {
   BodyState state;
   state.p = Eigen::Vector3d(0.2, -0.1, 1.1);
   state.q = rotation_vector_to_quaternion(Eigen::Vector3d(0.3, -0.5, 1.0));
-  state.P = FilterCovariance<15>(Matrix15d::Identity() * 1e-4);
+  state.P = FilterCovariance<kBodyStateSize>(BodyMatrix::Identity() * 1e-4);
   const Eigen::Vector3d marker(0.08, -0.03, 0.05);
   const auto projection = project_marker(state, marker, cameras[0], 0.3);
   ASSERT_TRUE(projection);
@@ -56,6 +56,7 @@ TEST(BodyEkf, MeasurementJacobianMatchesFiniteDifferences) {
   }
   EXPECT_TRUE(projection->H.middleCols<3>(kBodyV).isZero());
   EXPECT_TRUE(projection->H.middleCols<3>(kBodyW).isZero());
+  EXPECT_TRUE(projection->H.middleCols<3>(kBodyAlpha).isZero());
 }
 
 TEST(BodyEkf, PredictionFollowsConstantAccelerationAndAngularVelocity) {
@@ -90,7 +91,7 @@ TEST(BodyEkf, ASingleCameraObservingFourMarkersRecoversThePose) {
   state.stamp_ns = kEpoch;
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0.0, 0.05);
-  BodyMotionNoise quiet{1e-6, 1e-6};
+  BodyMotionNoise quiet{1e-6, 1e-6, 1e-6};
   for (int k = 1; k <= 200; ++k) {
     predict(state, kEpoch + k * 10'000'000LL, quiet);
     for (const auto& marker : markers) {
@@ -250,11 +251,14 @@ SceneRun run_scene(const Scene& scene, double warmup_s, const FrameFilter& filte
     const double t = ns_to_seconds(scene_time);
     if (t < warmup_s || t < window_start_s || t > window_end_s) continue;
     const auto poses = tracker.current_poses(horizon_ns);
-    for (const BodyTruth& truth : scene.bodies_at(scene_time + horizon_ns)) {
+    // With smoothing, poses are stamped behind the newest frame: each is judged at its own stamp.
+    const TimeNs lag_ns = options.bodies.smoothing_ns;
+    for (const BodyTruth& truth : scene.bodies_at(scene_time - lag_ns + horizon_ns)) {
       BodyErrors& errors = run.bodies[truth.name];
       ++errors.samples;
       for (const PoseRecord& pose : poses) {
         if (pose.body != truth.name) continue;
+        EXPECT_EQ(pose.stamp_ns, frame.stamp_ns - lag_ns);
         ++errors.published;
         const Eigen::Quaterniond q(pose.q.w(), pose.q.x(), pose.q.y(), pose.q.z());
         errors.judge({q, pose.p}, truth.T_world_body);
@@ -444,7 +448,8 @@ TEST(BodySnapshot, IsExactWithoutNoiseFromAFarStartAndRefusesTooFewObservations)
   const auto cameras = make_ring_cameras(6, 3.0, 2.0, true);
   const std::vector<Eigen::Vector3d> markers = {
       {0.035, 0.033, 0.001}, {-0.015, 0.03, 0.002}, {0.0, -0.035, 0.01}, {-0.021, -0.029, -0.011}};
-  const RigidTransform truth{rotation_vector_to_quaternion(Eigen::Vector3d(0.4, -0.7, 1.2)), {0.1, -0.2, 1.1}};
+  const RigidTransform truth{rotation_vector_to_quaternion(Eigen::Vector3d(0.4, -0.7, 1.2)),
+                             {0.1, -0.2, 1.1}};
   std::vector<SnapshotObservation> observations;
   for (std::size_t c = 0; c < cameras.size(); ++c) {
     for (std::size_t m = 0; m < markers.size(); ++m) {
@@ -494,8 +499,8 @@ cameras:
   const int rates[] = {90, 100, 110, 120, 95, 105};
   const char* phases[] = {"0.0", "0.0031", "0.0057", "0.0013", "0.0079", "0.0042"};
   for (int c = 0; c < 6; ++c) {
-    yaml += "  - {id: c" + std::to_string(c) + ", look_at: {eye: " + eyes[c] + ", target: [0, 0, 1.0]}, rate: " +
-            (synchronous ? std::string("100") : std::to_string(rates[c])) +
+    yaml += "  - {id: c" + std::to_string(c) + ", look_at: {eye: " + eyes[c] +
+            ", target: [0, 0, 1.0]}, rate: " + (synchronous ? std::string("100") : std::to_string(rates[c])) +
             ", phase: " + (synchronous ? "0.0" : phases[c]) + "}\n";
   }
   yaml += R"(
@@ -555,7 +560,8 @@ std::map<std::string, BodyErrors> run_snapshot(const Scene& scene, double warmup
       for (std::size_t i = 0; i < visible.size(); ++i) {
         const auto [body, marker] = owner[static_cast<std::size_t>(visible[i])];
         if (body >= 0)
-          observations[static_cast<std::size_t>(body)].push_back({c, marker, {frame.blobs[i].x, frame.blobs[i].y}});
+          observations[static_cast<std::size_t>(body)].push_back(
+              {c, marker, {frame.blobs[i].x, frame.blobs[i].y}});
       }
     }
     const auto truths = scene.bodies_at(t);
@@ -563,9 +569,10 @@ std::map<std::string, BodyErrors> run_snapshot(const Scene& scene, double warmup
       EXPECT_EQ(truths[b].name, definitions[b].name);
       const RigidTransform& truth = truths[b].T_world_body;
       const RigidTransform start =
-          previous[b] ? *previous[b]
-                      : RigidTransform{truth.q * rotation_vector_to_quaternion(Eigen::Vector3d(0.03, -0.03, 0.03)),
-                                       truth.t + Eigen::Vector3d(0.003, -0.003, 0.003)};
+          previous[b]
+              ? *previous[b]
+              : RigidTransform{truth.q * rotation_vector_to_quaternion(Eigen::Vector3d(0.03, -0.03, 0.03)),
+                               truth.t + Eigen::Vector3d(0.003, -0.003, 0.003)};
       const auto solved = solve_snapshot_pose(definitions[b].markers, cameras, observations[b], start);
       previous[b] = solved ? std::optional(solved->T_world_body) : std::nullopt;
       if (ns_to_seconds(t) < warmup_s) continue;
@@ -600,25 +607,44 @@ TEST(BodyScenes, SmallFastBodiesFilterBeatsTheSynchronousSnapshotSolve) {
   const Scene async_scene = Scene::from_yaml_string(small_fast_bodies_scene(false));
   const Scene sync_scene = Scene::from_yaml_string(small_fast_bodies_scene(true));
   ASSERT_TRUE(distinguishability_warnings(async_scene.body_definitions()).empty());
-  const SceneRun filter = run_scene(async_scene, 0.5);
   const auto snapshot = run_snapshot(sync_scene, 0.5);
-  print("small fast bodies, filter", filter);
-  std::printf("body  | peak a m/s² | peak w rad/s | filter: tracked wrong pos mm deg | snapshot: solved wrong pos mm "
-              "deg | ratio pos deg\n");
-  ASSERT_EQ(filter.bodies.size(), 3u);
   ASSERT_EQ(snapshot.size(), 3u);
-  for (const auto& [name, f] : filter.bodies) {
-    const BodyErrors& s = snapshot.at(name);
-    const auto [accel, rate] = peak_motion(async_scene, name);
-    const double ratio_p = f.rmse_mm() / s.rmse_mm(), ratio_a = f.rmse_deg() / s.rmse_deg();
-    std::printf("%-5s | %11.1f | %12.2f | %6.2f%% %zu %.4f %.4f | %6.2f%% %zu %.4f %.4f | %.3f %.3f\n", name.c_str(),
-                accel, rate, 100.0 * f.tracked(), f.wrong, f.rmse_mm(), f.rmse_deg(), 100.0 * s.tracked(), s.wrong,
-                s.rmse_mm(), s.rmse_deg(), ratio_p, ratio_a);
-    EXPECT_GE(s.tracked(), 0.98) << name;  // the reference really runs
-    EXPECT_GE(f.tracked(), 0.98) << name;
-    EXPECT_EQ(f.wrong, 0u) << name;
-    EXPECT_LE(ratio_p, 0.75) << name;
-    EXPECT_LE(ratio_a, 0.6) << name;
+  // Defaults except the jerk noise, raised for bodies accelerating at up to 20 m/s² (docs/bodies.md).
+  TrackerOptions options;
+  options.bodies.noise.jerk = 150.0;
+  std::printf(
+      "smoothing | body  | peak a m/s² | peak w rad/s | filter: tracked wrong mm deg | snapshot: solved "
+      "wrong "
+      "mm deg | ratio mm deg\n");
+  for (const int smoothing_ms : {0, 5, 20}) {
+    options.bodies.smoothing_ns = smoothing_ms * kNsPerMillisecond;
+    const SceneRun filter = run_scene(async_scene, 0.5, {}, 0, 0, 1e9, options);
+    ASSERT_EQ(filter.bodies.size(), 3u);
+    for (const auto& [name, f] : filter.bodies) {
+      const BodyErrors& s = snapshot.at(name);
+      const auto [accel, rate] = peak_motion(async_scene, name);
+      const double ratio_p = f.rmse_mm() / s.rmse_mm(), ratio_a = f.rmse_deg() / s.rmse_deg();
+      std::printf(
+          "%6d ms | %-5s | %11.1f | %12.2f | %6.2f%% %zu %.4f %.4f | %6.2f%% %zu %.4f %.4f | %.3f %.3f\n",
+          smoothing_ms, name.c_str(), accel, rate, 100.0 * f.tracked(), f.wrong, f.rmse_mm(), f.rmse_deg(),
+          100.0 * s.tracked(), s.wrong, s.rmse_mm(), s.rmse_deg(), ratio_p, ratio_a);
+      EXPECT_GE(s.tracked(), 0.98) << name;  // the reference really runs
+      EXPECT_EQ(s.wrong, 0u) << name;
+      EXPECT_GE(f.tracked(), 0.98) << name << " " << smoothing_ms;
+      EXPECT_EQ(f.wrong, 0u) << name << " " << smoothing_ms;
+      EXPECT_LE(accel, 21.0) << name;  // the scene is what it says
+      EXPECT_LE(rate, 2.1) << name;
+      if (smoothing_ms == 20) {  // issue 16's acceptance
+        EXPECT_LE(ratio_p, 0.75) << name;
+        EXPECT_LE(ratio_a, 0.6) << name;
+      } else if (smoothing_ms == 0) {  // the filter alone, as measured (docs/benchmarks.md)
+        EXPECT_LE(ratio_a, 0.8) << name;
+      }
+    }
+    print(smoothing_ms == 0   ? "small fast bodies, 0 ms"
+          : smoothing_ms == 5 ? "... 5 ms"
+                              : "... 20 ms",
+          filter);
   }
 }
 

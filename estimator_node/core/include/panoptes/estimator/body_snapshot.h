@@ -45,6 +45,7 @@ struct SnapshotPose {
 std::optional<SnapshotPose> solve_snapshot_pose(const std::vector<Eigen::Vector3d>& markers,
                                                 const std::vector<CameraModel>& cameras,
                                                 const std::vector<SnapshotObservation>& observations,
-                                                const RigidTransform& initial, const SnapshotOptions& options = {});
+                                                const RigidTransform& initial,
+                                                const SnapshotOptions& options = {});
 
 }  // namespace panoptes::estimator
