@@ -412,14 +412,14 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
   }
 }
 
-std::vector<PoseRecord> BodySet::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) const {
+std::vector<PoseRecord> BodySet::poses_at(TimeNs stamp_ns, TimeNs horizon_ns, bool smoothed) const {
   const BodyTrackerOptions& o = shared_->options;
   std::vector<PoseRecord> poses;
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     const Body& body = bodies_[b];
     if (!body.tracked) continue;
-    const TimeNs at = stamp_ns - o.smoothing_ns;
-    const BodyState state = predicted(body.reported_state(at), at, o.noise);
+    const TimeNs at = smoothed ? stamp_ns - o.smoothing_ns : stamp_ns;
+    const BodyState state = predicted(smoothed ? body.reported_state(at) : body.state, at, o.noise);
     const RigidTransform pose = extrapolate_pose(state, ns_to_seconds(horizon_ns));
     PoseRecord record;
     record.stamp_ns = at;

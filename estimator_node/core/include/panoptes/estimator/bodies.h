@@ -92,8 +92,9 @@ class BodySet {
   bool wants_points(TimeNs stamp_ns) const;
 
   // Poses of the tracked bodies at `stamp_ns` (at `stamp_ns` − smoothing_ns when smoothing, the
-  // record's stamp says which), extrapolated `horizon_ns` further (seed 000 Ch. 5).
-  std::vector<PoseRecord> poses_at(TimeNs stamp_ns, TimeNs horizon_ns = 0) const;
+  // record's stamp says which), extrapolated `horizon_ns` further (seed 000 Ch. 5). `smoothed`
+  // false: the filter's poses at `stamp_ns` whatever smoothing_ns (e.g. to label markers).
+  std::vector<PoseRecord> poses_at(TimeNs stamp_ns, TimeNs horizon_ns = 0, bool smoothed = true) const;
   std::size_t tracked_count() const;
   const BodyStats& stats() const;
 
