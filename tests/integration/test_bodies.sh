@@ -25,6 +25,13 @@ grep -q '"horizon_ns":50000000' "$work/poses50.jsonl" && pass "horizon_ns record
 expect_exit 0 "predicted poses are judged at stamp + horizon" -- "$bin/panoptes_eval" --scene "$scene" \
   --poses "$work/poses50.jsonl" --warmup 0.5 --require-pose-tracked 0.98
 cat "$work/last.out"
+expect_exit 0 "poses smoothed 20 ms behind the newest frame (--smoothing-ms 20)" -- "$bin/estimator_node" \
+  --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" --in-features "$work"/sim/c*.jsonl \
+  --no-dds --out-poses "$work/poses_smoothed.jsonl" --smoothing-ms 20 --quiet
+expect_exit 0 "smoothed poses are judged at their own stamps and meet the acceptance figures" -- \
+  "$bin/panoptes_eval" --scene "$scene" --poses "$work/poses_smoothed.jsonl" --warmup 0.5 \
+  --require-pose-rmse-mm 0.3 --require-pose-rmse-deg 0.1 --require-pose-tracked 0.98 --require-no-wrong-poses
+cat "$work/last.out"
 
 # --- bad body files -----------------------------------------------------------------------------
 run_bad() {  # run_bad DESCRIPTION FILE EXPECTED-TEXT

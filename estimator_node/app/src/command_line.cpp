@@ -14,6 +14,7 @@ namespace {
 struct SettingsFlags {
   session::EstimatorConfig values;
   double rewind_horizon_ms = ns_to_seconds(values.tracker.rewind_horizon_ns) * 1e3;
+  double smoothing_ms = ns_to_seconds(values.tracker.bodies.smoothing_ns) * 1e3;
   std::vector<std::pair<CLI::Option*, std::function<void(session::EstimatorConfig&)>>> options;
 
   void add(CLI::App& app) {
@@ -26,6 +27,12 @@ struct SettingsFlags {
                         "publish body poses predicted this far ahead of the newest frame (seed 000 Ch. 5)")
              ->check(CLI::Range(0.0, 1000.0)),
          [this](auto& c) { c.node.prediction_horizon_ms = values.node.prediction_horizon_ms; });
+    bind(app.add_option(
+                "--smoothing-ms", smoothing_ms,
+                "report body poses this far behind the newest frame, smoothed with the frames after them "
+                "(fixed-lag; 0: off)")
+             ->check(CLI::Range(0.0, 1000.0)),
+         [this](auto& c) { c.tracker.bodies.smoothing_ns = seconds_to_ns(smoothing_ms * 1e-3); });
     bind(
         app.add_option("--latency-window-ms", node.latency_window_ms,
                        "live: how long frames wait to be ordered by stamp (0: not at all; frames that arrive "

@@ -9,7 +9,8 @@ namespace panoptes::estimator_app {
 
 namespace {
 
-msg::FrameBody to_body_message(const session::BodyOutput& body) {
+// `frame_stamp_ns`: the MocapFrame's stamp; a smoothed pose (stamped before it) gets a negative horizon.
+msg::FrameBody to_body_message(const session::BodyOutput& body, TimeNs frame_stamp_ns) {
   msg::FrameBody out;
   out.name(body.name);
   out.id(body.id);
@@ -22,7 +23,7 @@ msg::FrameBody to_body_message(const session::BodyOutput& body) {
     out.angular_velocity({pose.w.x(), pose.w.y(), pose.w.z()});
     out.sigma(pose.sigma);
     out.quality(static_cast<float>(pose.quality));
-    out.prediction_horizon_ns(pose.horizon_ns);
+    out.prediction_horizon_ns(pose.stamp_ns + pose.horizon_ns - frame_stamp_ns);
     out.cameras(static_cast<std::uint16_t>(std::clamp(pose.cameras, 0, 65535)));
   } else {
     out.pose().orientation({0.0, 0.0, 0.0, 1.0});
@@ -48,7 +49,7 @@ msg::MocapFrame to_frame_message(const session::FrameOutput& frame, TimeNs publi
   stages.dequeued_ns(frame.stages.dequeued_ns);
   stages.updated_ns(frame.stages.updated_ns);
   message.bodies().reserve(frame.bodies.size());
-  for (const auto& body : frame.bodies) message.bodies().push_back(to_body_message(body));
+  for (const auto& body : frame.bodies) message.bodies().push_back(to_body_message(body, frame.stamp_ns));
   message.markers().reserve(frame.markers.size());
   for (const auto& marker : frame.markers) {
     msg::FrameMarker m;

@@ -13,6 +13,15 @@
 
 namespace panoptes::estimator {
 
+namespace {
+
+// α is estimated only when angular jerk drives it; otherwise it stays zero (constant ω).
+double initial_angular_accel_sigma(const BodyTrackerOptions& o) {
+  return o.noise.angular_jerk > 0 ? o.init_angular_accel_sigma : 0.0;
+}
+
+}  // namespace
+
 struct BodySet::Shared {
   std::vector<BodyDefinition> definitions;
   std::vector<double> span;  // largest marker distance per body
@@ -31,6 +40,7 @@ struct BodySet::Body {
   std::uint64_t updates = 0;
   std::vector<TimeNs> marker_last_seen;    // by marker
   std::vector<TimeNs> camera_last_update;  // by camera index
+  std::vector<BodyFilterStep> history;     // the last smoothing_ns of filter steps (when smoothing)
 
   // (Re)starts tracking from an initial state (identification or a monocular detection) with fresh
   // consistency statistics.
@@ -41,6 +51,26 @@ struct BodySet::Body {
     last_update_ns = stamp_ns;
     nis_average = 0;
     nis_updates = 0;
+    history.clear();
+  }
+
+  // The state to report at `at`: without smoothing history the filter's newest state, else the
+  // smoothed state of the newest step not after `at` (the oldest step if all are after it).
+  BodyState reported_state(TimeNs at) const {
+    if (history.size() < 2) return state;
+    std::size_t index = 0;
+    while (index + 1 < history.size() && history[index + 1].filtered.stamp_ns <= at) ++index;
+    return smoothed_state(history, index);
+  }
+
+  // Keeps the step of a camera frame for smoothing, and the steps back to the first one at least
+  // `lag_ns` older than it.
+  void record_step(BodyFilterStep step, TimeNs lag_ns) {
+    history.push_back(std::move(step));
+    const TimeNs oldest = history.back().filtered.stamp_ns - lag_ns;
+    std::size_t keep_from = 0;
+    while (keep_from + 1 < history.size() && history[keep_from + 1].filtered.stamp_ns <= oldest) ++keep_from;
+    history.erase(history.begin(), history.begin() + static_cast<std::ptrdiff_t>(keep_from));
   }
 };
 
@@ -116,9 +146,14 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
   std::vector<Row> rows;
   std::vector<GatedPair> gated;  // (row, blob, d²)
   std::vector<BodyState> predicted_states(bodies_.size());
+  std::vector<BodyFilterStep> steps(o.smoothing_ns > 0 ? bodies_.size() : 0);
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     if (!bodies_[b].tracked) continue;
     predicted_states[b] = predicted(bodies_[b].state, stamp_ns, o.noise);
+    if (!steps.empty()) {
+      steps[b].predicted = predicted_states[b];
+      steps[b].A = body_transition(bodies_[b].state, ns_to_seconds(stamp_ns - bodies_[b].state.stamp_ns));
+    }
     const auto& markers = shared_->definitions[b].markers;
     for (std::size_t m = 0; m < markers.size(); ++m) {
       const auto projection = project_marker(predicted_states[b], markers[m], camera, o.measurement_noise_px);
@@ -164,6 +199,10 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
       if (!body_updated[b]) continue;
       Body& body = bodies_[b];
       body.state = predicted_states[b];
+      if (!steps.empty()) {
+        steps[b].filtered = body.state;
+        body.record_step(std::move(steps[b]), o.smoothing_ns);
+      }
       body.last_update_ns = std::max(body.last_update_ns, stamp_ns);
       if (body.camera_last_update.size() <= static_cast<std::size_t>(camera_index))
         body.camera_last_update.resize(static_cast<std::size_t>(camera_index) + 1, 0);
@@ -212,8 +251,8 @@ void BodySet::acquire_monocular(int camera_index, const CameraModel& camera, Tim
     const double depth = detection.T_cam_marker.t.z();
     const double size = std::max(1e-3, shared_->span[b]);
     const double sigma_depth = depth * depth * o.measurement_noise_px / (focal * size) * 3.0;
-    state.P =
-        body_prior({std::max(o.init_position_sigma_m, sigma_depth), 1.0, o.init_accel_sigma_mps2, 0.05, 3.0});
+    state.P = body_prior({std::max(o.init_position_sigma_m, sigma_depth), 1.0, o.init_accel_sigma_mps2, 0.05,
+                          3.0, initial_angular_accel_sigma(o)});
     body.start(state, stamp_ns);
     // The detection's blobs update the new state at once.
     const auto& markers = shared_->definitions[b].markers;
@@ -313,7 +352,8 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
     state.w = state.q.conjugate() * w_world;
     state.P = body_prior({std::max(o.init_position_sigma_m, match.rms_m),
                           have_velocity ? o.init_velocity_sigma_mps : 2.0, o.init_accel_sigma_mps2,
-                          o.init_angle_sigma_rad, have_velocity ? o.init_angular_velocity_sigma : 5.0});
+                          o.init_angle_sigma_rad, have_velocity ? o.init_angular_velocity_sigma : 5.0,
+                          initial_angular_accel_sigma(o)});
     body.start(state, stamp_ns);
     for (const auto& pair : match.pairs)
       body.marker_last_seen[static_cast<std::size_t>(pair.second)] = stamp_ns;
@@ -372,21 +412,22 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
   }
 }
 
-std::vector<PoseRecord> BodySet::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) const {
+std::vector<PoseRecord> BodySet::poses_at(TimeNs stamp_ns, TimeNs horizon_ns, bool smoothed) const {
   const BodyTrackerOptions& o = shared_->options;
   std::vector<PoseRecord> poses;
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     const Body& body = bodies_[b];
     if (!body.tracked) continue;
-    const BodyState state = predicted(body.state, stamp_ns, o.noise);
+    const TimeNs at = smoothed ? stamp_ns - o.smoothing_ns : stamp_ns;
+    const BodyState state = predicted(smoothed ? body.reported_state(at) : body.state, at, o.noise);
     const RigidTransform pose = extrapolate_pose(state, ns_to_seconds(horizon_ns));
     PoseRecord record;
-    record.stamp_ns = stamp_ns;
+    record.stamp_ns = at;
     record.body = shared_->definitions[b].name;
     record.p = pose.t;
     record.q = Eigen::Vector4d(pose.q.x(), pose.q.y(), pose.q.z(), pose.q.w());
     record.v = state.v + ns_to_seconds(horizon_ns) * state.a;
-    record.w = pose.q * state.w;
+    record.w = pose.q * (state.w + ns_to_seconds(horizon_ns) * state.alpha);
     record.horizon_ns = horizon_ns;
     int seen = 0;
     for (TimeNs t : body.marker_last_seen) seen += (t != 0 && stamp_ns - t <= o.quality_window_ns) ? 1 : 0;

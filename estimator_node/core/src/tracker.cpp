@@ -575,8 +575,8 @@ void Tracker::set_bodies(const std::vector<BodyDefinition>& bodies, const std::s
   }
 }
 
-std::vector<PoseRecord> Tracker::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) const {
-  return impl_->core.bodies.poses_at(stamp_ns, horizon_ns);
+std::vector<PoseRecord> Tracker::poses_at(TimeNs stamp_ns, TimeNs horizon_ns, bool smoothed) const {
+  return impl_->core.bodies.poses_at(stamp_ns, horizon_ns, smoothed);
 }
 
 const BodyStats& Tracker::body_stats() const {

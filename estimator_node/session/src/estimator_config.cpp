@@ -217,6 +217,8 @@ void visit_bodies(Fields& f, estimator::BodyTrackerOptions& o) {
     s.number("jerk", o.noise.jerk, kPositive, "sigma^2 of white jerk, m^2/s^5");
     s.number("angular_accel", o.noise.angular_accel, kPositive,
              "sigma^2 of white angular acceleration, rad^2/s^3");
+    s.number("angular_jerk", o.noise.angular_jerk, kNonNegative,
+             "sigma^2 of white angular jerk, rad^2/s^5 (0: constant angular velocity)");
   });
   f.number("measurement_noise_px", o.measurement_noise_px, kPositive, "sigma of a marker's centroid, px");
   f.number("gate_chi2", o.gate_chi2, kPositive, "chi^2_2 gate for a marker's blob");
@@ -236,8 +238,11 @@ void visit_bodies(Fields& f, estimator::BodyTrackerOptions& o) {
   f.number("init_accel_sigma_mps2", o.init_accel_sigma_mps2, kPositive, "m/s^2");
   f.number("init_angle_sigma_rad", o.init_angle_sigma_rad, kPositive, "rad");
   f.number("init_angular_velocity_sigma", o.init_angular_velocity_sigma, kPositive, "rad/s");
+  f.number("init_angular_accel_sigma", o.init_angular_accel_sigma, kPositive, "rad/s^2");
   f.integer("quality_window_ns", o.quality_window_ns, 0, kHourNs,
             "BodyPose quality: markers seen in this window");
+  f.integer("smoothing_ns", o.smoothing_ns, 0, kNsPerSecond,
+            "poses reported this far behind the newest frame, fixed-lag smoothed (0: off)");
   f.section("led_marker", "7-LED markers (seed 004)", [&](auto& s) { visit_led_marker(s, o.led_marker); });
 }
 

@@ -20,10 +20,12 @@ FrameOutput FrameOutputBuilder::build(const estimator::Tracker& tracker, const F
   out.stages = stages;
 
   const std::vector<BodyDefinition>& definitions = tracker.body_definitions();
-  const bool predicted =
-      std::any_of(poses.begin(), poses.end(), [](const PoseRecord& p) { return p.horizon_ns != 0; });
+  // Markers are labelled with the bodies' filter poses at this frame, not predicted or smoothed ones.
+  const bool elsewhere = std::any_of(poses.begin(), poses.end(), [&](const PoseRecord& p) {
+    return p.horizon_ns != 0 || p.stamp_ns != frame.stamp_ns;
+  });
   const estimator::MarkerLabelling labelling = estimator::label_markers(
-      tracks, predicted ? tracker.poses_at(frame.stamp_ns) : poses, definitions, label_distance_m_);
+      tracks, elsewhere ? tracker.poses_at(frame.stamp_ns, 0, false) : poses, definitions, label_distance_m_);
 
   std::map<std::string, const PoseRecord*> pose_of;
   for (const auto& pose : poses) pose_of.emplace(pose.body, &pose);

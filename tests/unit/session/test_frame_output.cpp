@@ -4,6 +4,7 @@
 // body markers are labelled with small mean errors.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -75,6 +76,41 @@ TEST(FrameOutput, ListsEveryBodyAndLabelsBodyMarkersInARealRun) {
   EXPECT_GT(unlabelled_share, 0.12);
   EXPECT_LT(unlabelled_share, 0.25);
   EXPECT_LT(worst_error, 0.005) << "mean marker error of a tracked body, m";
+}
+
+// With smoothing the published poses lag the frame; markers are still labelled with the filter's
+// poses at the frame (issue 16).
+TEST(FrameOutput, SmoothedPosesLagTheFrameAndMarkersAreStillLabelled) {
+  const Scene scene = Scene::load(std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/clients.yaml");
+  const std::vector<FeatureFrame> frames = simulate(scene, 2.0);
+  double share[2] = {0, 0};
+  for (int smoothed = 0; smoothed < 2; ++smoothed) {
+    EstimatorConfig config;
+    const TimeNs lag_ns = smoothed ? 20'000'000 : 0;
+    config.tracker.bodies.smoothing_ns = lag_ns;
+    EstimatorSession session(config);
+    session.tracker().set_calibration(scene.calibration());
+    session.tracker().set_bodies(scene.body_definitions());
+    FrameOutputBuilder builder;
+    std::size_t labelled = 0, markers = 0, poses_seen = 0;
+    for (const FeatureFrame& frame : frames) {
+      if (session.process(frame) != estimator::FrameOutcome::kProcessed) continue;
+      const auto poses = session.current_poses();
+      const auto out = builder.build(session.tracker(), frame, {}, poses, session.tracker().current_tracks());
+      for (const auto& pose : poses) EXPECT_EQ(pose.stamp_ns, frame.stamp_ns - lag_ns);
+      poses_seen += poses.size();
+      if (frame.stamp_ns - frames.front().stamp_ns < 1'000'000'000) continue;  // warm-up
+      for (const auto& marker : out.markers) {
+        ++markers;
+        labelled += marker.body.empty() ? 0 : 1;
+      }
+    }
+    ASSERT_GT(poses_seen, 100u);
+    share[smoothed] = static_cast<double>(labelled) / static_cast<double>(markers);
+  }
+  std::printf("labelled share: %.4f without smoothing, %.4f with 20 ms\n", share[0], share[1]);
+  EXPECT_GT(share[0], 0.7);
+  EXPECT_GE(share[1], share[0] - 0.005);
 }
 
 }  // namespace

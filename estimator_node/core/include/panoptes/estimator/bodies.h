@@ -18,6 +18,7 @@
 #include "panoptes/camera_model.h"
 #include "panoptes/estimator/body_ekf.h"
 #include "panoptes/estimator/body_identification.h"
+#include "panoptes/estimator/body_smoother.h"
 #include "panoptes/estimator/led_marker.h"
 #include "panoptes/records.h"
 #include "panoptes/time.h"
@@ -40,7 +41,11 @@ struct BodyTrackerOptions {
   double init_accel_sigma_mps2 = 5.0;
   double init_angle_sigma_rad = 0.02;
   double init_angular_velocity_sigma = 1.0;  // rad/s
+  double init_angular_accel_sigma = 10.0;    // rad/s² (used only when noise.angular_jerk > 0)
   TimeNs quality_window_ns = 100'000'000;    // BodyPose quality: markers seen in this window
+  // > 0: poses are reported this far behind the newest frame, smoothed with the frames that came
+  // after them (fixed-lag RTS, body_smoother.h); 0: the filter's pose at the newest frame.
+  TimeNs smoothing_ns = 0;
   // 7-LED marker detection; centroid_sigma and max_rms are derived from measurement_noise_px and
   // each camera's focal length, so their values here are not used.
   LedMarkerOptions led_marker;
@@ -86,8 +91,10 @@ class BodySet {
   void identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points);
   bool wants_points(TimeNs stamp_ns) const;
 
-  // Poses of the tracked bodies at `stamp_ns`, extrapolated `horizon_ns` further (seed 000 Ch. 5).
-  std::vector<PoseRecord> poses_at(TimeNs stamp_ns, TimeNs horizon_ns = 0) const;
+  // Poses of the tracked bodies at `stamp_ns` (at `stamp_ns` − smoothing_ns when smoothing, the
+  // record's stamp says which), extrapolated `horizon_ns` further (seed 000 Ch. 5). `smoothed`
+  // false: the filter's poses at `stamp_ns` whatever smoothing_ns (e.g. to label markers).
+  std::vector<PoseRecord> poses_at(TimeNs stamp_ns, TimeNs horizon_ns = 0, bool smoothed = true) const;
   std::size_t tracked_count() const;
   const BodyStats& stats() const;
 

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // Rigid-body EKF maths: an error-state filter with the orientation kept as an external quaternion
-// (seed 003 Appendix A.3.1, eqs. A.25–A.30) and a constant-acceleration / constant-angular-velocity
-// motion model whose prediction follows seed 000 Ch. 5 (the W, V, A kinematics, state eq. 5.35).
+// (seed 003 Appendix A.3.1, eqs. A.25–A.30) and a constant-acceleration motion model whose
+// prediction follows seed 000 Ch. 5 (the W, V, A kinematics, state eq. 5.35), for the rotation too.
 // The filter state is
-//   x = (p, v, a, δθ, ω)          15 elements, world frame for p, v, a; body frame for δθ, ω
+//   x = (p, v, a, δθ, ω, α)       18 elements, world frame for p, v, a; body frame for δθ, ω, α
 // with the orientation R_world_body = q ⊗ exp(δθ); after each update δθ is folded into q and
 // zeroed (seed 003 eq. A.41). Each update takes one marker's 2D projection in one camera.
 #pragma once
@@ -20,15 +20,23 @@
 
 namespace panoptes::estimator {
 
-using Vector15d = Eigen::Matrix<double, 15, 1>;
-using Matrix15d = Eigen::Matrix<double, 15, 15>;
+inline constexpr int kBodyStateSize = 18;
+using BodyVector = Eigen::Matrix<double, kBodyStateSize, 1>;
+using BodyMatrix = Eigen::Matrix<double, kBodyStateSize, kBodyStateSize>;
 
 // Indices of the state blocks.
-inline constexpr int kBodyP = 0, kBodyV = 3, kBodyA = 6, kBodyTheta = 9, kBodyW = 12;
+inline constexpr int kBodyP = 0, kBodyV = 3, kBodyA = 6, kBodyTheta = 9, kBodyW = 12, kBodyAlpha = 15;
 
+// The rotation has two noise terms: white angular acceleration drives ω directly (a constant
+// angular velocity model when alone) and white angular jerk drives α (constant angular
+// acceleration). With angular_jerk = 0 and no prior on α, α stays zero: the constant angular
+// velocity model.
+// Defaults from sweeps on issue 5's acceptance scene and issue 16's small fast bodies
+// (docs/benchmarks.md); bodies accelerating at 10-20 m/s² want jerk ≈ 150.
 struct BodyMotionNoise {
-  double jerk = 50.0;          // σ² of white jerk, m²/s⁵ (drives a; with it v and p)
-  double angular_accel = 2.0;  // σ² of white angular acceleration, rad²/s³ (drives ω)
+  double jerk = 50.0;           // σ² of white jerk, m²/s⁵ (drives a; with it v and p)
+  double angular_accel = 0.1;   // σ² of white angular acceleration, rad²/s³ (drives ω)
+  double angular_jerk = 100.0;  // σ² of white angular jerk, rad²/s⁵ (drives α; with it ω and δθ)
 };
 
 struct BodyState {
@@ -37,7 +45,8 @@ struct BodyState {
   Eigen::Vector3d a = Eigen::Vector3d::Zero();            // m/s²
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  // R_world_body
   Eigen::Vector3d w = Eigen::Vector3d::Zero();            // angular velocity, body frame, rad/s
-  FilterCovariance<15> P;                                 // covariance of (p, v, a, δθ, ω)
+  Eigen::Vector3d alpha = Eigen::Vector3d::Zero();        // angular acceleration, body frame, rad/s²
+  FilterCovariance<kBodyStateSize> P;                     // covariance of (p, v, a, δθ, ω, α)
   TimeNs stamp_ns = 0;
 
   RigidTransform pose() const { return {q, p}; }
@@ -50,19 +59,34 @@ struct BodyPriorSigmas {
   double acceleration_mps2 = 0.0;
   double angle_rad = 0.0;
   double angular_velocity_radps = 0.0;
+  double angular_acceleration_radps2 = 0.0;
 };
-FilterCovariance<15> body_prior(const BodyPriorSigmas& sigmas);
+FilterCovariance<kBodyStateSize> body_prior(const BodyPriorSigmas& sigmas);
+
+// The error state's transition matrix over `dt` seconds from `state` (linearised about its ω, α).
+BodyMatrix body_transition(const BodyState& state, double dt);
 
 // Moves the state to `stamp_ns` (forward or, for look-ups only, backward).
 void predict(BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise);
 BodyState predicted(const BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise);
 
 // The pose extrapolated `horizon_s` ahead with the W, V, A kinematics of seed 000 Ch. 5:
-// p + v h + a h²/2 and q ⊗ exp(ω h). No covariance (cheap; for publishing predictions).
+// p + v h + a h²/2 and q ⊗ exp(ω h + α h²/2). No covariance (cheap; for publishing predictions).
 RigidTransform extrapolate_pose(const BodyState& state, double horizon_s);
 
+// A marker's pixel in a camera and its 2×6 Jacobian with respect to the pose's position (columns
+// 0-2) and its body-frame rotation error δθ (columns 3-5), with p_world = p + R exp(δθ) m (seed 003
+// eq. A.29). Shared by the filter and the synchronous snapshot solve (body_snapshot.h). Nullopt
+// when the marker is closer than `min_depth_m` to the camera or does not project.
+struct MarkerPixel {
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
+  Eigen::Matrix<double, 2, 6> J = Eigen::Matrix<double, 2, 6>::Zero();
+};
+std::optional<MarkerPixel> marker_pixel(const RigidTransform& pose, const Eigen::Vector3d& marker,
+                                        const CameraModel& camera, double min_depth_m = 0.05);
+
 // Projection of one marker (body-frame position `marker`) into a camera.
-using MarkerProjection = PixelMeasurement<15>;
+using MarkerProjection = PixelMeasurement<kBodyStateSize>;
 
 std::optional<MarkerProjection> project_marker(const BodyState& state, const Eigen::Vector3d& marker,
                                                const CameraModel& camera, double measurement_sigma_px,
@@ -72,6 +96,11 @@ std::optional<MarkerProjection> project_marker(const BodyState& state, const Eig
 // state δx; it is injected into the nominal state and δθ reset into q (eq. A.41).
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px);
+
+// The error-state difference `to` ⊖ `from` (p, v, a, ω, α subtracted; δθ = log(q_from⁻¹ q_to), in
+// the body frame as the filter's δθ), and its inverse `state` ⊕ δx (the update's injection).
+BodyVector body_difference(const BodyState& to, const BodyState& from);
+void inject(BodyState& state, const BodyVector& dx);
 
 // Rotation vector -> quaternion (exp map) and back.
 Eigen::Quaterniond rotation_vector_to_quaternion(const Eigen::Vector3d& r);

@@ -112,7 +112,8 @@ class Tracker {
   // definition is unchanged keep their state.
   void set_bodies(const std::vector<BodyDefinition>& bodies, const std::string& file_for_errors = "bodies");
   // Poses of the tracked bodies at `stamp_ns`, predicted `horizon_ns` further (seed 000 Ch. 5).
-  std::vector<PoseRecord> poses_at(TimeNs stamp_ns, TimeNs horizon_ns = 0) const;
+  // `smoothed` false: the filter's poses at `stamp_ns` even when bodies.smoothing_ns > 0.
+  std::vector<PoseRecord> poses_at(TimeNs stamp_ns, TimeNs horizon_ns = 0, bool smoothed = true) const;
   std::vector<PoseRecord> current_poses(TimeNs horizon_ns = 0) const {
     return poses_at(last_stamp_ns(), horizon_ns);
   }

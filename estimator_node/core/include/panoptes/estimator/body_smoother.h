@@ -1,0 +1,28 @@
+// SPDX-License-Identifier: Apache-2.0
+// Fixed-lag smoothing of a body filter (issue 16; docs/bodies.md, "Smoothing"): the filter keeps,
+// for each camera frame that updated the body, the state before and after that frame's updates;
+// the pose reported `lag` behind the newest frame is the Rauch–Tung–Striebel smoothed state,
+// which also uses the frames that came after it. Only the mean is smoothed; the covariance stays
+// the filter's (an upper bound of the smoothed one).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "panoptes/estimator/body_ekf.h"
+
+namespace panoptes::estimator {
+
+// One camera frame's step of a body filter.
+struct BodyFilterStep {
+  BodyState predicted;  // before the frame's marker updates (P: A P Aᵀ + Q from the previous step)
+  BodyState filtered;   // after them
+  BodyMatrix A;         // error-state transition from the previous step's `filtered` to `predicted`
+};
+
+// The RTS backward pass from the newest step down to `index`:
+//   C_k = P_k|k A_{k+1}ᵀ P_{k+1|k}⁻¹,  x_k|n = x_k|k ⊕ C_k (x_{k+1|n} ⊖ x_{k+1|k}).
+// Returns the filtered state of `index` with the smoothed mean. `steps` is in stamp order.
+BodyState smoothed_state(const std::vector<BodyFilterStep>& steps, std::size_t index);
+
+}  // namespace panoptes::estimator
