@@ -121,11 +121,14 @@ std::vector<std::string> EstimatorUsage::lines() const {
         static_cast<unsigned long long>(c.dropped), c.utilisation, c.latency_p50_ms, c.latency_p99_ms);
     out.emplace_back(buffer);
   }
-  std::snprintf(buffer, sizeof buffer,
-                "replays %llu (%llu frames replayed), %.1f/s (%.0f frames/s), cpu %.1f%%",
-                static_cast<unsigned long long>(replays), static_cast<unsigned long long>(replayed_frames),
-                replays_per_s, replayed_frames_per_s, cpu_percent);
+  std::snprintf(buffer, sizeof buffer, "replays %llu (%llu frames replayed)",
+                static_cast<unsigned long long>(replays), static_cast<unsigned long long>(replayed_frames));
   out.emplace_back(buffer);
+  if (cpu_percent > 0) {  // rates over the last status period: live only
+    std::snprintf(buffer, sizeof buffer, ", %.1f/s (%.0f frames/s), cpu %.1f%%", replays_per_s,
+                  replayed_frames_per_s, cpu_percent);
+    out.back() += buffer;
+  }
   std::string reasons = "dropped by reason:";
   if (counters.empty()) reasons += " none";
   for (const auto& [reason, n] : counters) reasons += " " + reason + "=" + std::to_string(n);
