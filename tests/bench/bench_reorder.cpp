@@ -91,7 +91,8 @@ class Accuracy {
     }
   }
   void fill(Result& r) const {
-    r.track_rmse_mm = markers_tracked_ ? std::sqrt(track_sum_ / static_cast<double>(markers_tracked_)) * 1e3 : 0;
+    r.track_rmse_mm =
+        markers_tracked_ ? std::sqrt(track_sum_ / static_cast<double>(markers_tracked_)) * 1e3 : 0;
     r.body_rmse_mm = body_checks_ ? std::sqrt(body_sum_ / static_cast<double>(body_checks_)) * 1e3 : 0;
     r.track_coverage =
         marker_checks_ ? static_cast<double>(markers_tracked_) / static_cast<double>(marker_checks_) : 0;
@@ -133,7 +134,8 @@ Result run(const Scene& scene, const std::vector<FeatureFrame>& by_arrival, doub
     auto due = inbox.pop_due(now);
     if (due.empty()) {
       // Idle until the next arrival or until the oldest waiting frame falls due.
-      TimeNs wake = next < by_arrival.size() ? by_arrival[next].received_ns : std::numeric_limits<TimeNs>::max();
+      TimeNs wake =
+          next < by_arrival.size() ? by_arrival[next].received_ns : std::numeric_limits<TimeNs>::max();
       if (const auto oldest = inbox.next_due_ns()) wake = std::min(wake, *oldest);
       if (wake == std::numeric_limits<TimeNs>::max()) break;
       now = std::max(now + 1, wake);
@@ -174,17 +176,19 @@ Result run(const Scene& scene, const std::vector<FeatureFrame>& by_arrival, doub
 std::string to_json(const Result& r, double cpu_reference_s) {
   char buffer[768];
   std::snprintf(buffer, sizeof buffer,
-                "{\"window_ms\": %.3f, \"dense_ms\": %.3f, \"frames\": %zu, \"outputs\": %zu, \"late\": %llu, \"too_late\": %llu, "
+                "{\"window_ms\": %.3f, \"dense_ms\": %.3f, \"frames\": %zu, \"outputs\": %zu, \"late\": "
+                "%llu, \"too_late\": %llu, "
                 "\"replays\": %llu, \"replayed_frames\": %llu, \"replays_per_s\": %.1f, "
                 "\"replayed_frames_per_s\": %.1f, \"cpu_s\": %.4f, \"cpu_percent_of_core\": %.2f, "
                 "\"cpu_ratio\": %.4f, \"added_latency_p50_ms\": %.4f, \"added_latency_p99_ms\": %.4f, "
                 "\"track_rmse_mm\": %.4f, \"track_coverage\": %.5f, \"body_rmse_mm\": %.4f}",
                 r.window_ms, r.dense_ms, r.frames, r.outputs, static_cast<unsigned long long>(r.late),
                 static_cast<unsigned long long>(r.too_late), static_cast<unsigned long long>(r.replays),
-                static_cast<unsigned long long>(r.replayed_frames), static_cast<double>(r.replays) / r.simulated_s,
-                static_cast<double>(r.replayed_frames) / r.simulated_s, r.cpu_s, 100.0 * r.cpu_s / r.simulated_s,
-                cpu_reference_s > 0 ? r.cpu_s / cpu_reference_s : 0, r.added_p50_ms, r.added_p99_ms,
-                r.track_rmse_mm, r.track_coverage, r.body_rmse_mm);
+                static_cast<unsigned long long>(r.replayed_frames),
+                static_cast<double>(r.replays) / r.simulated_s,
+                static_cast<double>(r.replayed_frames) / r.simulated_s, r.cpu_s,
+                100.0 * r.cpu_s / r.simulated_s, cpu_reference_s > 0 ? r.cpu_s / cpu_reference_s : 0,
+                r.added_p50_ms, r.added_p99_ms, r.track_rmse_mm, r.track_coverage, r.body_rmse_mm);
   return buffer;
 }
 
@@ -197,11 +201,13 @@ int run_command_line(int argc, char** argv) {
   double dense_ms = panoptes::ns_to_seconds(est::TrackerOptions{}.dense_checkpoint_window_ns) * 1e3;
   std::uint64_t seed = 7;
   bool json = false;
-  CLI::App app{"bench_reorder: cost and latency of late frames, by latency window (issue 16)", "bench_reorder"};
+  CLI::App app{"bench_reorder: cost and latency of late frames, by latency window (issue 16)",
+               "bench_reorder"};
   app.option_defaults()->always_capture_default();
   app.add_flag("--json", json, "print one JSON object on the last line");
-  app.add_option("--cases", cases,
-                 "cases to compare: window_ms or window_ms/dense_checkpoint_ms (the first is the CPU reference)")
+  app.add_option(
+         "--cases", cases,
+         "cases to compare: window_ms or window_ms/dense_checkpoint_ms (the first is the CPU reference)")
       ->delimiter(',');
   app.add_option("--dense-ms", dense_ms, "tracker: a checkpoint before every frame this recent, ms (0: none)")
       ->check(CLI::Range(0.0, 1000.0));
@@ -233,7 +239,8 @@ int run_command_line(int argc, char** argv) {
       if (window < 0 || dense < 0) throw std::invalid_argument("negative");
       parsed.push_back({window, dense});
     } catch (const std::exception&) {
-      std::fprintf(stderr, "bench_reorder: --cases: '%s' is not window_ms or window_ms/dense_ms\n", text.c_str());
+      std::fprintf(stderr, "bench_reorder: --cases: '%s' is not window_ms or window_ms/dense_ms\n",
+                   text.c_str());
       return 2;
     }
   }
@@ -242,8 +249,9 @@ int run_command_line(int argc, char** argv) {
   const Scene scene =
       Scene::from_yaml_string(panoptes::bench::scene_yaml(config, seed), ".", "bench_reorder scene");
   auto frames = panoptes::bench::simulate(scene);
-  std::stable_sort(frames.begin(), frames.end(),
-                   [](const FeatureFrame& a, const FeatureFrame& b) { return a.received_ns < b.received_ns; });
+  std::stable_sort(frames.begin(), frames.end(), [](const FeatureFrame& a, const FeatureFrame& b) {
+    return a.received_ns < b.received_ns;
+  });
   std::size_t out_of_order = 0;
   TimeNs newest = 0;
   for (const auto& f : frames) {
@@ -257,11 +265,11 @@ int run_command_line(int argc, char** argv) {
       config.cameras, config.rate_hz, config.markers, config.bodies, config.network.latency_min_s * 1e3,
       config.network.latency_max_s * 1e3, config.network.jitter_s * 1e3, config.network.late_fraction * 100,
       config.network.late_min_s * 1e3, config.network.late_max_s * 1e3,
-      100.0 * static_cast<double>(out_of_order) / static_cast<double>(frames.size()), frames.size(), config.seconds,
-      config.warmup_s);
-  std::printf("  %9s %8s %8s %7s %8s %10s %8s %8s %9s %9s %9s %9s %8s\n", "window ms", "dense ms", "late", "replays",
-              "replay/s", "replayed/s", "cpu %", "cpu x", "added p50", "added p99", "track mm", "coverage",
-              "body mm");
+      100.0 * static_cast<double>(out_of_order) / static_cast<double>(frames.size()), frames.size(),
+      config.seconds, config.warmup_s);
+  std::printf("  %9s %8s %8s %7s %8s %10s %8s %8s %9s %9s %9s %9s %8s\n", "window ms", "dense ms", "late",
+              "replays", "replay/s", "replayed/s", "cpu %", "cpu x", "added p50", "added p99", "track mm",
+              "coverage", "body mm");
   std::vector<Result> results;
   std::string json_cases;
   for (const Case& c : parsed) {
@@ -269,20 +277,21 @@ int run_command_line(int argc, char** argv) {
     results.back().dense_ms = c.dense_ms;
     const Result& r = results.back();
     const double reference = results.front().cpu_s;
-    std::printf("  %9.1f %8.1f %8llu %7llu %8.0f %10.0f %8.1f %8.3f %9.3f %9.3f %9.4f %9.4f %8.4f\n", r.window_ms,
-                r.dense_ms,
-                static_cast<unsigned long long>(r.late), static_cast<unsigned long long>(r.replays),
-                static_cast<double>(r.replays) / r.simulated_s, static_cast<double>(r.replayed_frames) / r.simulated_s,
-                100.0 * r.cpu_s / r.simulated_s, r.cpu_s / reference, r.added_p50_ms, r.added_p99_ms,
-                r.track_rmse_mm, r.track_coverage, r.body_rmse_mm);
+    std::printf("  %9.1f %8.1f %8llu %7llu %8.0f %10.0f %8.1f %8.3f %9.3f %9.3f %9.4f %9.4f %8.4f\n",
+                r.window_ms, r.dense_ms, static_cast<unsigned long long>(r.late),
+                static_cast<unsigned long long>(r.replays), static_cast<double>(r.replays) / r.simulated_s,
+                static_cast<double>(r.replayed_frames) / r.simulated_s, 100.0 * r.cpu_s / r.simulated_s,
+                r.cpu_s / reference, r.added_p50_ms, r.added_p99_ms, r.track_rmse_mm, r.track_coverage,
+                r.body_rmse_mm);
     std::fflush(stdout);
     json_cases += (json_cases.empty() ? "" : ", ") + to_json(r, reference);
   }
   if (json) {
-    std::printf("{\"cameras\": %d, \"rate_hz\": %.1f, \"markers\": %d, \"bodies\": %d, "
-                "\"out_of_order_fraction\": %.5f, \"cases\": [%s]}\n",
-                config.cameras, config.rate_hz, config.markers, config.bodies,
-                static_cast<double>(out_of_order) / static_cast<double>(frames.size()), json_cases.c_str());
+    std::printf(
+        "{\"cameras\": %d, \"rate_hz\": %.1f, \"markers\": %d, \"bodies\": %d, "
+        "\"out_of_order_fraction\": %.5f, \"cases\": [%s]}\n",
+        config.cameras, config.rate_hz, config.markers, config.bodies,
+        static_cast<double>(out_of_order) / static_cast<double>(frames.size()), json_cases.c_str());
   }
   return 0;
 }

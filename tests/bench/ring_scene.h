@@ -56,8 +56,9 @@ inline std::string scene_yaml(const RingConfig& config, std::uint64_t seed) {
   yaml.precision(9);
   yaml << "seed: " << seed << "\nduration: " << config.warmup_s + config.seconds << "\n"
        << "defaults: {width: 1280, height: 1024, K: [1000.0, 1000.0, 639.5, 511.5], rate: " << config.rate_hz
-       << ", centroid_noise: 0.1, latency_jitter: " << net.jitter_s << ", late_fraction: " << net.late_fraction
-       << ", late_delay: [" << net.late_min_s << ", " << net.late_max_s << "]}\ncameras:\n";
+       << ", centroid_noise: 0.1, latency_jitter: " << net.jitter_s
+       << ", late_fraction: " << net.late_fraction << ", late_delay: [" << net.late_min_s << ", "
+       << net.late_max_s << "]}\ncameras:\n";
   for (int c = 0; c < config.cameras; ++c) {
     const double angle = 2.0 * M_PI * c / config.cameras;
     const double height = c % 2 == 0 ? 2.3 : 2.9;

@@ -35,6 +35,13 @@ expect_stderr_contains() {
   if grep -qF -- "$1" "$work/last.err"; then pass "$2"; else fail "$2: stderr lacks '$1'"; cat "$work/last.err"; fi
 }
 
+# frames_published ESTIMATOR_LOG: how many frames produced output (a MocapFrame each): the frames the
+# tracker processed less those replayed late, too late or from uncalibrated cameras (the summary line).
+frames_published() {
+  sed -n 's/.*processed \([0-9]*\) frames (\([0-9]*\) late and replayed, \([0-9]*\) too late, \([0-9]*\) from uncalibrated.*/\1 \2 \3 \4/p' "$1" |
+    awk '{print $1 - $2 - $3 - $4}'
+}
+
 # expect_stderr_matches ERE DESCRIPTION: like expect_stderr_contains, for an extended regular expression.
 expect_stderr_matches() {
   if grep -qE -- "$1" "$work/last.err"; then pass "$2"; else fail "$2: stderr does not match '$1'"; cat "$work/last.err"; fi

@@ -42,7 +42,7 @@ rc=$?
 timeout 30 tail --pid="$probe" -f /dev/null
 wait "$probe" || fail "panoptes_client_probe exit $?"
 cat "$work/probe.log"
-published2=$(sed -n 's/.*processed \([0-9]*\) frames.*/\1/p' "$work/estimator2.log")
+published2=$(frames_published "$work/estimator2.log")
 
 python3 - "$work" "$restart_ns" "${published2:-0}" <<'PYTHON'
 import json, sys, yaml
