@@ -29,7 +29,6 @@
 
 namespace {
 
-using panoptes::FeatureFrame;
 using panoptes::Scene;
 using panoptes::TimeNs;
 namespace est = panoptes::estimator;
