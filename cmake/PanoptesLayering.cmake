@@ -19,6 +19,7 @@ set(PANOPTES_LAYERING_RULES
   "panoptes_core|${_panoptes_pure_links}|opencv|Ceres|${_panoptes_pure_sources}|the core holds types and maths only"
   "panoptes_estimator|${_panoptes_pure_links}|opencv|Ceres|${_panoptes_pure_sources}|the estimator core runs identically live, offline and in tests: no DDS, simulator, CLI or file I/O"
   "panoptes_calib|${_panoptes_pure_links}|${_panoptes_pure_sources}|calibration maths: no DDS, simulator, CLI or file I/O"
+  "panoptes_planner|${_panoptes_pure_links}|opencv|Ceres|${_panoptes_pure_sources}|placement maths: no DDS, simulator, CLI or file I/O"
   "panoptes_io|${_panoptes_dds_links}||only panoptes_dds knows DDS"
   "panoptes_sim|${_panoptes_dds_links}||only panoptes_dds knows DDS"
   "panoptes_camera|${_panoptes_dds_links}||the camera pipeline runs without DDS (offline mode, tests)"

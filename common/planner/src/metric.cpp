@@ -1,0 +1,261 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/planner/metric.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+namespace panoptes::planner {
+
+namespace {
+
+using Mask = std::uint64_t;
+constexpr std::size_t kMaxCameras = 64;
+
+// What one camera contributes at one point, when it sees it through the static scene.
+struct CameraAtPoint {
+  Eigen::Vector3d to_camera;  // unit vector from the point to the camera centre
+  double width_m = 0;         // the pyramid's half-width at the point: sigma · depth / f
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // JᵀJ / sigma²
+};
+
+// A point's figures: its uncertainty over occluder planes, with static occlusion only, and the
+// number of cameras that see it under each plane.
+struct PointResult {
+  double uncertainty = 0;
+  double resolution_only = 0;
+  double p_k = 0;
+  std::vector<double> histogram;
+};
+
+class PointEvaluator {
+ public:
+  PointEvaluator(std::span<const PlannedCamera> cameras, const SampleSet& samples,
+                 std::span<const Box> obstacles, const MetricOptions& options)
+      : cameras_(cameras), samples_(samples), obstacles_(obstacles), options_(options) {
+    at_.resize(cameras.size());
+  }
+
+  PointResult evaluate(const Eigen::Vector3d& p) {
+    const Mask seen = static_visibility(p);
+    cache_.clear();
+    PointResult result;
+    result.histogram.assign(cameras_.size() + 1, 0.0);
+    result.resolution_only = uncertainty(seen);
+    if (samples_.normals.empty()) {
+      result.uncertainty = result.resolution_only;
+      const int n = std::popcount(seen);
+      result.histogram[static_cast<std::size_t>(n)] = 1.0;
+      result.p_k = n >= options_.k_cameras ? 1.0 : 0.0;
+      return result;
+    }
+    per_plane_.clear();
+    const double share = 1.0 / static_cast<double>(samples_.normals.size());
+    for (const Eigen::Vector3d& normal : samples_.normals) {
+      Mask mask = 0;
+      for (Mask rest = seen; rest != 0; rest &= rest - 1) {
+        const auto c = static_cast<std::size_t>(std::countr_zero(rest));
+        if (normal.dot(at_[c].to_camera) > 0.0) mask |= Mask{1} << c;
+      }
+      per_plane_.push_back(uncertainty(mask));
+      const int n = std::popcount(mask);
+      result.histogram[static_cast<std::size_t>(n)] += share;
+      if (n >= options_.k_cameras) result.p_k += share;
+    }
+    result.uncertainty = aggregate(per_plane_, {}, options_.over_planes);
+    return result;
+  }
+
+ private:
+  Mask static_visibility(const Eigen::Vector3d& p) {
+    Mask seen = 0;
+    const double sigma = options_.pixel_sigma;
+    for (std::size_t c = 0; c < cameras_.size(); ++c) {
+      const PlannedCamera& camera = cameras_[c];
+      const Eigen::Vector3d p_cam = camera.model.T_cam_world().apply(p);
+      const double distance = p_cam.norm();
+      if (p_cam.z() <= 0.0 || distance < camera.min_depth_m || distance > camera.max_depth_m) continue;
+      Eigen::Matrix<double, 2, 3> J;
+      const auto pixel = camera.model.project(p, &J);
+      if (!pixel || !camera.model.in_image(*pixel)) continue;
+      const Eigen::Vector3d centre = camera.model.center_world();
+      if (std::any_of(obstacles_.begin(), obstacles_.end(),
+                      [&](const Box& box) { return box.blocks(p, centre); }))
+        continue;
+      const auto& K = camera.model.intrinsics();
+      CameraAtPoint& at = at_[c];
+      at.to_camera = (centre - p) / distance;
+      at.width_m = sigma * p_cam.z() / (0.5 * (K.fx + K.fy));
+      at.information = J.transpose() * J / (sigma * sigma);
+      seen |= Mask{1} << c;
+    }
+    return seen;
+  }
+
+  // U_res(P, plane) for the cameras in `mask`, cached: a point's planes share few subsets.
+  double uncertainty(Mask mask) {
+    for (const auto& [m, u] : cache_)
+      if (m == mask) return u;
+    const double u = options_.resolution == ResolutionModel::kPyramid ? pyramid(mask) : covariance(mask);
+    cache_.emplace_back(mask, u);
+    return u;
+  }
+
+  // Eq. 4.2: in each direction the shortest extent of any camera's ray pyramid, then norm_k.
+  double pyramid(Mask mask) {
+    const double huge = options_.unseen_m;
+    lengths_.assign(samples_.directions.size(), huge);
+    for (Mask rest = mask; rest != 0; rest &= rest - 1) {
+      const CameraAtPoint& at = at_[static_cast<std::size_t>(std::countr_zero(rest))];
+      for (std::size_t k = 0; k < samples_.directions.size(); ++k) {
+        const double cosine = samples_.directions[k].dot(at.to_camera);
+        const double sine = std::sqrt(std::max(0.0, 1.0 - cosine * cosine));
+        const double length = sine * huge > at.width_m ? at.width_m / sine : huge;
+        lengths_[k] = std::min(lengths_[k], length);
+      }
+    }
+    return aggregate(lengths_, {}, options_.over_directions);
+  }
+
+  // The triangulation covariance of the cameras in `mask` with a prior of `unseen_m` in every
+  // direction (so that an unconstrained direction reads "huge", as in the pyramid model).
+  double covariance(Mask mask) {
+    const double huge = options_.unseen_m;
+    Eigen::Matrix3d information = Eigen::Matrix3d::Identity() / (huge * huge);
+    for (Mask rest = mask; rest != 0; rest &= rest - 1)
+      information += at_[static_cast<std::size_t>(std::countr_zero(rest))].information;
+    const Eigen::Matrix3d covariance = information.inverse();
+    switch (options_.over_directions) {
+      case Norm::kRms:  // the mean of dᵀΣd over the sphere is trace/3
+        return std::sqrt(std::max(0.0, covariance.trace() / 3.0));
+      case Norm::kMax:
+        return std::sqrt(
+            std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)
+                              .eigenvalues()
+                              .maxCoeff()));
+      case Norm::kMean:
+        break;
+    }
+    lengths_.clear();
+    for (const Eigen::Vector3d& d : samples_.directions) lengths_.push_back(std::sqrt(d.dot(covariance * d)));
+    return aggregate(lengths_, {}, Norm::kMean);
+  }
+
+  std::span<const PlannedCamera> cameras_;
+  const SampleSet& samples_;
+  std::span<const Box> obstacles_;
+  const MetricOptions& options_;
+  std::vector<CameraAtPoint> at_;
+  std::vector<std::pair<Mask, double>> cache_;
+  std::vector<double> per_plane_;
+  std::vector<double> lengths_;
+};
+
+// Unit vectors uniform within `max_angle` of `axis`.
+Eigen::Vector3d random_normal(std::mt19937_64& rng, const Eigen::Vector3d& axis, double max_angle_rad) {
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double cos_max = std::cos(std::min(max_angle_rad, std::numbers::pi));
+  const double z = 1.0 - uniform(rng) * (1.0 - cos_max);  // uniform in area over the cap
+  const double phi = 2.0 * std::numbers::pi * uniform(rng);
+  const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+  const Eigen::Vector3d local(r * std::cos(phi), r * std::sin(phi), z);
+  return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axis.normalized()) * local;
+}
+
+Eigen::Vector3d uniform_in(std::mt19937_64& rng, const Box& box) {
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  return box.min + Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).cwiseProduct(box.max - box.min);
+}
+
+}  // namespace
+
+double aggregate(std::span<const double> values, std::span<const double> weights, Norm norm) {
+  if (values.empty()) return 0.0;
+  if (norm == Norm::kMax) return *std::max_element(values.begin(), values.end());
+  double sum = 0.0, total = 0.0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const double w = weights.empty() ? 1.0 : weights[i];
+    sum += w * (norm == Norm::kRms ? values[i] * values[i] : values[i]);
+    total += w;
+  }
+  const double mean = total > 0.0 ? sum / total : 0.0;
+  return norm == Norm::kRms ? std::sqrt(mean) : mean;
+}
+
+SampleSet draw_samples(const Room& room, const OccluderModel& occluders, int points, int directions,
+                       std::uint64_t seed) {
+  if (points <= 0) throw std::invalid_argument("planner: the number of sample points must be > 0");
+  std::mt19937_64 rng(seed);
+  SampleSet samples;
+  std::vector<Region> regions = room.regions;
+  if (regions.empty()) regions.push_back({room.volume, 1.0});
+  std::vector<double> mass;
+  for (const Region& region : regions) mass.push_back(std::max(0.0, region.weight));
+  std::discrete_distribution<std::size_t> pick(mass.begin(), mass.end());
+  for (int i = 0; i < points; ++i) samples.points.push_back(uniform_in(rng, regions[pick(rng)].box));
+  samples.weights.assign(samples.points.size(), 1.0 / static_cast<double>(samples.points.size()));
+  for (int i = 0; i < occluders.planes; ++i)
+    samples.normals.push_back(
+        random_normal(rng, occluders.axis, occluders.max_angle_deg * std::numbers::pi / 180.0));
+  // Directions: a Fibonacci lattice over the upper hemisphere (a direction and its opposite give
+  // the same extent), deterministic and even.
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  for (int k = 0; k < directions; ++k) {
+    const double z = (static_cast<double>(k) + 0.5) / static_cast<double>(directions);
+    const double r = std::sqrt(1.0 - z * z);
+    const double phi = golden * static_cast<double>(k);
+    samples.directions.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
+  }
+  return samples;
+}
+
+Evaluation evaluate(std::span<const PlannedCamera> cameras, const SampleSet& samples,
+                    std::span<const Box> obstacles, const MetricOptions& options) {
+  if (cameras.size() > kMaxCameras)
+    throw std::invalid_argument("planner: at most " + std::to_string(kMaxCameras) +
+                                " cameras per evaluation");
+  const std::size_t n = samples.points.size();
+  Evaluation result;
+  result.point_uncertainty.assign(n, 0.0);
+  result.point_p_k.assign(n, 0.0);
+  std::vector<double> resolution(n, 0.0);
+  std::vector<std::vector<double>> histograms(n);
+  const auto run = [&](std::size_t begin, std::size_t end) {
+    PointEvaluator evaluator(cameras, samples, obstacles, options);
+    for (std::size_t i = begin; i < end; ++i) {
+      PointResult point = evaluator.evaluate(samples.points[i]);
+      result.point_uncertainty[i] = point.uncertainty;
+      result.point_p_k[i] = point.p_k;
+      resolution[i] = point.resolution_only;
+      histograms[i] = std::move(point.histogram);
+    }
+  };
+  const auto threads = static_cast<std::size_t>(std::clamp(options.threads, 1, 64));
+  if (threads == 1 || n < 256) {
+    run(0, n);
+  } else {
+    std::vector<std::thread> workers;
+    for (std::size_t t = 0; t < threads; ++t)
+      workers.emplace_back(run, n * t / threads, n * (t + 1) / threads);
+    for (auto& worker : workers) worker.join();
+  }
+  result.quality = aggregate(result.point_uncertainty, samples.weights, options.over_points);
+  result.resolution_only = aggregate(resolution, samples.weights, options.over_points);
+  result.p_at_least_k = aggregate(result.point_p_k, samples.weights, Norm::kMean);
+  result.visible_histogram.assign(cameras.size() + 1, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t k = 0; k < histograms[i].size(); ++k)
+      result.visible_histogram[k] += samples.weights[i] * histograms[i][k];
+  return result;
+}
+
+}  // namespace panoptes::planner
