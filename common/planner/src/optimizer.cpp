@@ -116,6 +116,7 @@ class Search {
         improved = false;
         for (std::size_t i = 0; i < genes.size() && !out_of_budget(); ++i) {
           for (const double sign : {1.0, -1.0}) {
+            if (out_of_budget()) break;
             std::vector<double> trial = genes;
             trial[i] = std::clamp(trial[i] + sign * step, 0.0, 1.0);
             if (trial[i] == genes[i]) continue;
