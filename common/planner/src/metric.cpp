@@ -199,6 +199,7 @@ SampleSet draw_samples(const Room& room, const OccluderModel& occluders, int poi
   std::vector<Region> regions = room.regions;
   if (regions.empty()) regions.push_back({room.volume, 1.0});
   std::vector<double> mass;
+  mass.reserve(regions.size());
   for (const Region& region : regions) mass.push_back(std::max(0.0, region.weight));
   std::discrete_distribution<std::size_t> pick(mass.begin(), mass.end());
   for (int i = 0; i < points; ++i) samples.points.push_back(uniform_in(rng, regions[pick(rng)].box));

@@ -1,0 +1,224 @@
+// SPDX-License-Identifier: Apache-2.0
+// panoptes_plan: camera placement for a studio (seed 003 Ch. 4; docs/planner.md). Places cameras
+// on a room's mounting surfaces to minimise the occlusion-aware quality metric, or evaluates an
+// existing calibration, and writes a calibration file of the plan plus a report.
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "panoptes/calibration.h"
+#include "panoptes/calibration_file.h"
+#include "panoptes/cli.h"
+#include "panoptes/errors.h"
+#include "panoptes/planner/optimizer.h"
+#include "plan_report.h"
+#include "room_file.h"
+
+namespace fs = std::filesystem;
+using namespace panoptes;
+using namespace panoptes::planner;
+
+namespace {
+
+struct Arguments {
+  fs::path room;
+  int cameras = 0;
+  fs::path existing;  // --existing / --evaluate
+  bool evaluate_only = false;
+  bool remove_one = false;
+  fs::path out;
+  fs::path report;
+  int evaluations = 4000;
+  double seconds = 60.0;
+  int starts = 3;
+  std::uint64_t seed = 1;
+  int threads = 1;
+  bool quiet = false;
+};
+
+std::vector<PlannedCamera> load_existing(const fs::path& path, const Room& room) {
+  const SystemCalibration calibration = load_calibration(path);
+  std::vector<PlannedCamera> cameras;
+  for (const auto& camera : calibration.cameras) {
+    if (!camera.T_world_cam)
+      throw ConfigError(path.string(), "cameras." + camera.id,
+                        "has no pose (T_world_cam): cannot be planned around");
+    PlannedCamera planned;
+    planned.id = camera.id;
+    planned.model = camera.model();
+    planned.lens = "existing";
+    planned.min_depth_m = room.lenses.front().min_depth_m;  // documented: the first lens's depth range
+    planned.max_depth_m = room.lenses.front().max_depth_m;
+    cameras.push_back(planned);
+  }
+  if (cameras.empty()) throw ConfigError(path.string(), "cameras", "lists no camera");
+  return cameras;
+}
+
+void save_plan(const std::vector<PlannedCamera>& cameras, const fs::path& path) {
+  SystemCalibration calibration;
+  for (const auto& camera : cameras) {
+    CameraCalibration c;
+    c.id = camera.id;
+    c.intrinsics = camera.model.intrinsics();
+    c.T_world_cam = camera.model.T_world_cam();
+    c.nominal_intrinsics = true;  // a plan's lens, not a chessboard calibration
+    calibration.cameras.push_back(c);
+  }
+  save_calibration(calibration, path);
+}
+
+void print_evaluation(const Evaluation& e, const MetricOptions& metric, std::size_t cameras) {
+  std::printf("quality %.6g m (resolution only %.6g m), P(at least %d of %zu cameras see a point) %.4f\n",
+              e.quality, e.resolution_only, metric.k_cameras, cameras, e.p_at_least_k);
+  std::printf("cameras seeing a point:");
+  for (std::size_t n = 0; n < e.visible_histogram.size(); ++n)
+    std::printf(" %zu: %.3f", n, e.visible_histogram[n]);
+  std::printf("\n");
+}
+
+int run(const Arguments& args) {
+  RoomFile file = load_room(args.room);
+  file.metric.threads = args.threads;
+  const SampleSet samples =
+      draw_samples(file.room, file.occluders, file.sample_points, file.sample_directions, file.sample_seed);
+  std::vector<PlannedCamera> fixed;
+  if (!args.existing.empty()) fixed = load_existing(args.existing, file.room);
+
+  ReportInput report;
+  report.room = &file.room;
+  report.samples = &samples;
+  report.metric = file.metric;
+  if (args.evaluate_only || args.remove_one) {
+    report.title = "Camera layout: " + args.existing.filename().string();
+    report.cameras = fixed;
+    report.evaluation = evaluate(fixed, samples, file.room.obstacles, file.metric);
+  } else {
+    PlanOptions options;
+    options.cameras = args.cameras;
+    options.fixed = fixed;
+    options.evaluations = args.evaluations;
+    options.seconds = args.seconds;
+    options.starts = args.starts;
+    options.seed = args.seed;
+    if (!args.quiet)
+      options.progress = [&args](const PlanProgress& p) {
+        const std::string phase =
+            p.start < args.starts ? "start " + std::to_string(p.start + 1) + "/" + std::to_string(args.starts)
+                                  : "refining";
+        std::fprintf(stderr, "\rplan: %d/%d evaluations, %s, best %.6g m, %.1f s   ", p.evaluations,
+                     args.evaluations, phase.c_str(), p.best, p.seconds);
+      };
+    const PlanResult result = plan(file.room, samples, file.metric, options);
+    if (!args.quiet) std::fprintf(stderr, "\n");
+    std::printf("placed %d camera(s)%s in %d evaluations, %.1f s%s\n", args.cameras,
+                fixed.empty() ? "" : (" beside " + std::to_string(fixed.size()) + " existing").c_str(),
+                result.evaluations, result.seconds,
+                result.stopped_by_time ? " (stopped by --seconds: not reproducible)" : "");
+    report.title = "Camera plan: " + std::to_string(result.cameras.size()) + " cameras";
+    report.cameras = result.cameras;
+    report.evaluation = result.evaluation;
+    report.history = result.history;
+    char notes[200];
+    std::snprintf(notes, sizeof notes, "%d evaluations, %d starts, seed %llu, %.1f s.", result.evaluations,
+                  args.starts, static_cast<unsigned long long>(args.seed), result.seconds);
+    report.notes = notes;
+    if (!args.out.empty()) {
+      save_plan(result.cameras, args.out);
+      std::printf("wrote %s\n", args.out.string().c_str());
+    }
+  }
+  print_evaluation(report.evaluation, file.metric, report.cameras.size());
+  if (args.remove_one || !args.report.empty()) {
+    report.removal_costs = removal_costs(report.cameras, samples, file.room.obstacles, file.metric);
+  }
+  if (args.remove_one) {
+    std::vector<std::size_t> order(report.cameras.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(),
+              [&](auto a, auto b) { return report.removal_costs[a] < report.removal_costs[b]; });
+    std::printf("quality without each camera (cheapest to remove first):\n");
+    for (const std::size_t c : order)
+      std::printf("  %-12s %.6g m (%+.1f%%)\n", report.cameras[c].id.c_str(), report.removal_costs[c],
+                  100.0 * (report.removal_costs[c] / report.evaluation.quality - 1.0));
+  }
+  if (!args.report.empty()) {
+    write_report(report, args.report);
+    std::printf("wrote %s\n", (args.report / "report.html").string().c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+static int run_command_line(int argc, char** argv) {
+  CLI::App app{"panoptes_plan: camera placement for a studio, seed 003 Ch. 4 (docs/planner.md)"};
+  app.get_formatter()->column_width(34);
+  Arguments args;
+  app.add_option("--room", args.room,
+                 "room file: volume, mounts, obstacles, lenses, metric (docs/planner.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--cameras", args.cameras, "cameras to place")->check(CLI::Range(1, 64));
+  app.add_option("--existing", args.existing, "calibration file of a rig to add --cameras to")
+      ->check(CLI::ExistingFile);
+  app.add_option("--evaluate", args.existing, "calibration file to evaluate instead of planning")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--remove-one", args.remove_one,
+               "with --evaluate: the quality without each camera, cheapest first");
+  app.add_option("--out", args.out,
+                 "calibration file of the plan (panoptes_sim, the demo and calibrate read it)");
+  app.add_option("--report", args.report, "directory for report.html, top.png, side.png, history.png");
+  app.add_option("--evaluations", args.evaluations, "metric evaluations the search may spend")
+      ->capture_default_str()
+      ->check(CLI::Range(10, 100000000));
+  app.add_option("--seconds", args.seconds, "time cap; a run it cuts is not reproducible")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 1e6));
+  app.add_option("--starts", args.starts, "independent evolution strategies before the refinement")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
+  app.add_option("--seed", args.seed, "search seed (the samples have their own, in the room file)")
+      ->capture_default_str();
+  app.add_option("--threads", args.threads, "threads evaluating the metric")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
+  app.add_flag("--quiet", args.quiet, "no progress line");
+  if (const auto code = parse_command_line(app, argc, argv, [&] {
+        args.evaluate_only = app.count("--evaluate") > 0;
+        if (args.evaluate_only && (app.count("--existing") > 0 || app.count("--cameras") > 0))
+          throw CLI::ValidationError("--evaluate", "takes no --existing or --cameras");
+        if (args.remove_one && !args.evaluate_only)
+          throw CLI::ValidationError("--remove-one", "needs --evaluate");
+        if (!args.evaluate_only && args.cameras == 0)
+          throw CLI::ValidationError("--cameras", "required unless --evaluate is given");
+      }))
+    return *code;
+  try {
+    return run(args);
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "panoptes_plan: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "panoptes_plan: %s: %s\n", args.room.string().c_str(), e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "panoptes_plan: %s\n", e.what());
+    return kExitFailure;
+  }
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run_command_line(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_plan: %s\n", error.what());
+    return 1;
+  }
+}

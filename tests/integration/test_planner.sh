@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# panoptes_plan (docs/planner.md): a small plan end to end (calibration file, report), the plan
+# evaluated again from its file gives the same figures, and the errors a user gets for bad rooms.
+source "$(dirname "$0")/lib.sh"
+room="$source_dir/deploy/planner/studio6x6.yaml"
+plan="$bin/panoptes_plan"
+
+# A fast room: the studio with fewer samples.
+sed 's/^samples: .*/samples: {points: 400, directions: 16, seed: 3}/' "$room" >"$work/room.yaml"
+expect_exit 0 "plan 4 cameras" -- "$plan" --room "$work/room.yaml" --cameras 4 --evaluations 600 --out "$work/plan.yaml" \
+  --report "$work/report" --quiet
+cat "$work/last.out"
+for f in report.html top.png side.png history.png; do
+  [ -s "$work/report/$f" ] && pass "report has $f" || fail "report lacks $f"
+done
+grep -q "data:image/png;base64," "$work/report/report.html" && pass "the HTML report embeds its images" ||
+  fail "the HTML report does not embed its images"
+[ "$(grep -c "^  - id:" "$work/plan.yaml")" -eq 4 ] && pass "the plan's calibration file lists 4 cameras" ||
+  { fail "the plan's calibration file"; head -20 "$work/plan.yaml"; }
+planned=$(sed -n 's/^quality \([0-9.e-]*\) m.*/\1/p' "$work/last.out")
+expect_exit 0 "evaluate the planned file" -- "$plan" --room "$work/room.yaml" --evaluate "$work/plan.yaml" --remove-one
+evaluated=$(sed -n 's/^quality \([0-9.e-]*\) m.*/\1/p' "$work/last.out")
+[ -n "$planned" ] && [ "$planned" = "$evaluated" ] && pass "the file evaluates to the planned quality ($planned m)" ||
+  fail "planned quality '$planned' but the file evaluates to '$evaluated'"
+grep -q "cheapest to remove first" "$work/last.out" && pass "removal costs listed" || fail "no removal costs"
+# The same seed and budget give the same plan.
+"$plan" --room "$work/room.yaml" --cameras 4 --evaluations 600 --out "$work/plan2.yaml" --quiet >/dev/null
+cmp -s "$work/plan.yaml" "$work/plan2.yaml" && pass "same seed, same plan" || fail "two runs with one seed differ"
+
+# --- bad input ---------------------------------------------------------------------------------
+expect_exit 0 "--help" -- "$plan" --help
+grep -q "evaluations.*4000" "$work/last.out" && pass "--help shows defaults" || fail "--help lacks defaults"
+expect_exit 2 "no --cameras" -- "$plan" --room "$work/room.yaml"
+expect_exit 2 "zero cameras" -- "$plan" --room "$work/room.yaml" --cameras 0
+bad() {  # NAME SED-EXPRESSION EXPECTED-STDERR
+  sed "$2" "$work/room.yaml" >"$work/$1.yaml"
+  expect_exit 2 "$1" -- "$plan" --room "$work/$1.yaml" --cameras 2 --evaluations 50 --quiet
+  expect_stderr_contains "$3" "$1: the message names the file and key"
+}
+bad no_mounts '/^mounts:/,/^lenses:/{/^mounts:/!{/^lenses:/!d}}' "no_mounts.yaml: mounts"
+bad inverted_box 's/^volume: .*/volume: {min: [2, -2, 0], max: [-2, 2, 2]}/' "inverted_box.yaml: volume.max"
+bad unknown_key 's/^occlusion: {planes: 64}/occlusion: {plains: 64}/' "unknown_key.yaml: occlusion.plains"
+bad bad_norm 's/over_planes: rms/over_planes: median/' "bad_norm.yaml: metric.over_planes"
+bad no_focal 's/focal_mm: 4.5, pixel_um: 5.3, //' "no_focal.yaml: lenses[0].focal_px"
+bad negative_planes 's/^occlusion: {planes: 64}/occlusion: {planes: -3}/' "negative_planes.yaml: occlusion.planes"
+# A volume no mount position can see: the lenses reach 0.5 m only.
+sed 's/max_depth_m: 1[04]/max_depth_m: 0.5/g' "$work/room.yaml" >"$work/blind.yaml"
+expect_exit 2 "a volume no camera can see" -- "$plan" --room "$work/blind.yaml" --cameras 2 --evaluations 50 --quiet
+expect_stderr_contains "infeasible plan" "the infeasible constraint is named"
+finish
