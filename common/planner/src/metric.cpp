@@ -32,6 +32,8 @@ struct CameraAtPoint {
 // number of cameras that see it under each plane.
 struct PointResult {
   double uncertainty = 0;
+  double seen_sum2 = 0;  // sum of U_res² over the planes under which at least k cameras see it
+  double seen_share = 0;
   double resolution_only = 0;
   double p_k = 0;
   std::vector<double> histogram;
@@ -43,10 +45,12 @@ class PointEvaluator {
                  std::span<const Box> obstacles, const MetricOptions& options)
       : cameras_(cameras), samples_(samples), obstacles_(obstacles), options_(options) {
     at_.resize(cameras.size());
+    min_angle_cos_ =
+        std::cos(std::clamp(options.min_triangulation_deg, 0.0, 180.0) * std::numbers::pi / 180.0);
   }
 
   PointResult evaluate(const Eigen::Vector3d& p) {
-    const Mask seen = static_visibility(p);
+    const Mask seen = effective(static_visibility(p));
     cache_.clear();
     PointResult result;
     result.histogram.assign(cameras_.size() + 1, 0.0);
@@ -56,6 +60,8 @@ class PointEvaluator {
       const int n = std::popcount(seen);
       result.histogram[static_cast<std::size_t>(n)] = 1.0;
       result.p_k = n >= options_.k_cameras ? 1.0 : 0.0;
+      result.seen_sum2 = result.p_k * result.resolution_only * result.resolution_only;
+      result.seen_share = result.p_k;
       return result;
     }
     per_plane_.clear();
@@ -64,18 +70,36 @@ class PointEvaluator {
       Mask mask = 0;
       for (Mask rest = seen; rest != 0; rest &= rest - 1) {
         const auto c = static_cast<std::size_t>(std::countr_zero(rest));
-        if (normal.dot(at_[c].to_camera) > 0.0) mask |= Mask{1} << c;
+        if (normal.dot(at_[c].to_camera) > samples_.facing_cos) mask |= Mask{1} << c;
       }
-      per_plane_.push_back(uncertainty(mask));
+      mask = effective(mask);
+      const double u = uncertainty(mask);
+      per_plane_.push_back(u);
       const int n = std::popcount(mask);
       result.histogram[static_cast<std::size_t>(n)] += share;
-      if (n >= options_.k_cameras) result.p_k += share;
+      if (n >= options_.k_cameras) {
+        result.p_k += share;
+        result.seen_sum2 += share * u * u;
+        result.seen_share += share;
+      }
     }
     result.uncertainty = aggregate(per_plane_, {}, options_.over_planes);
     return result;
   }
 
  private:
+  // `mask`, or only its first camera when no two of its rays are min_triangulation_deg apart.
+  Mask effective(Mask mask) const {
+    if (std::popcount(mask) < 2 || options_.min_triangulation_deg <= 0.0) return mask;
+    for (Mask a = mask; a != 0; a &= a - 1) {
+      const Eigen::Vector3d& ray = at_[static_cast<std::size_t>(std::countr_zero(a))].to_camera;
+      for (Mask b = a & (a - 1); b != 0; b &= b - 1)
+        if (ray.dot(at_[static_cast<std::size_t>(std::countr_zero(b))].to_camera) <= min_angle_cos_)
+          return mask;
+    }
+    return mask & (~mask + 1);
+  }
+
   Mask static_visibility(const Eigen::Vector3d& p) {
     Mask seen = 0;
     const double sigma = options_.pixel_sigma;
@@ -158,13 +182,16 @@ class PointEvaluator {
   std::vector<std::pair<Mask, double>> cache_;
   std::vector<double> per_plane_;
   std::vector<double> lengths_;
+  double min_angle_cos_ = 1.0;
 };
 
-// Unit vectors uniform within `max_angle` of `axis`.
-Eigen::Vector3d random_normal(std::mt19937_64& rng, const Eigen::Vector3d& axis, double max_angle_rad) {
+// Unit vectors uniform over the band between `min_angle` and `max_angle` from `axis`.
+Eigen::Vector3d random_normal(std::mt19937_64& rng, const Eigen::Vector3d& axis, double min_angle_rad,
+                              double max_angle_rad) {
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  const double cos_max = std::cos(std::min(max_angle_rad, std::numbers::pi));
-  const double z = 1.0 - uniform(rng) * (1.0 - cos_max);  // uniform in area over the cap
+  const double cos_min = std::cos(std::clamp(min_angle_rad, 0.0, std::numbers::pi));
+  const double cos_max = std::cos(std::clamp(max_angle_rad, 0.0, std::numbers::pi));
+  const double z = cos_min - uniform(rng) * (cos_min - cos_max);  // uniform in area over the band
   const double phi = 2.0 * std::numbers::pi * uniform(rng);
   const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
   const Eigen::Vector3d local(r * std::cos(phi), r * std::sin(phi), z);
@@ -196,6 +223,8 @@ SampleSet draw_samples(const Room& room, const OccluderModel& occluders, int poi
   if (points <= 0) throw std::invalid_argument("planner: the number of sample points must be > 0");
   std::mt19937_64 rng(seed);
   SampleSet samples;
+  samples.facing_cos =
+      std::cos(std::clamp(occluders.facing_angle_deg, 0.0, 180.0) * std::numbers::pi / 180.0);
   std::vector<Region> regions = room.regions;
   if (regions.empty()) regions.push_back({room.volume, 1.0});
   std::vector<double> mass;
@@ -205,8 +234,9 @@ SampleSet draw_samples(const Room& room, const OccluderModel& occluders, int poi
   for (int i = 0; i < points; ++i) samples.points.push_back(uniform_in(rng, regions[pick(rng)].box));
   samples.weights.assign(samples.points.size(), 1.0 / static_cast<double>(samples.points.size()));
   for (int i = 0; i < occluders.planes; ++i)
-    samples.normals.push_back(
-        random_normal(rng, occluders.axis, occluders.max_angle_deg * std::numbers::pi / 180.0));
+    samples.normals.push_back(random_normal(rng, occluders.axis,
+                                            occluders.min_angle_deg * std::numbers::pi / 180.0,
+                                            occluders.max_angle_deg * std::numbers::pi / 180.0));
   // Directions: a Fibonacci lattice over the upper hemisphere (a direction and its opposite give
   // the same extent), deterministic and even.
   const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
@@ -228,7 +258,7 @@ Evaluation evaluate(std::span<const PlannedCamera> cameras, const SampleSet& sam
   Evaluation result;
   result.point_uncertainty.assign(n, 0.0);
   result.point_p_k.assign(n, 0.0);
-  std::vector<double> resolution(n, 0.0);
+  std::vector<double> resolution(n, 0.0), seen_sum2(n, 0.0), seen_share(n, 0.0);
   std::vector<std::vector<double>> histograms(n);
   const auto run = [&](std::size_t begin, std::size_t end) {
     PointEvaluator evaluator(cameras, samples, obstacles, options);
@@ -237,6 +267,8 @@ Evaluation evaluate(std::span<const PlannedCamera> cameras, const SampleSet& sam
       result.point_uncertainty[i] = point.uncertainty;
       result.point_p_k[i] = point.p_k;
       resolution[i] = point.resolution_only;
+      seen_sum2[i] = point.seen_sum2;
+      seen_share[i] = point.seen_share;
       histograms[i] = std::move(point.histogram);
     }
   };
@@ -252,6 +284,12 @@ Evaluation evaluate(std::span<const PlannedCamera> cameras, const SampleSet& sam
   result.quality = aggregate(result.point_uncertainty, samples.weights, options.over_points);
   result.resolution_only = aggregate(resolution, samples.weights, options.over_points);
   result.p_at_least_k = aggregate(result.point_p_k, samples.weights, Norm::kMean);
+  double sum2 = 0.0, share = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sum2 += samples.weights[i] * seen_sum2[i];
+    share += samples.weights[i] * seen_share[i];
+  }
+  result.seen_uncertainty = share > 0.0 ? std::sqrt(sum2 / share) : options.unseen_m;
   result.visible_histogram.assign(cameras.size() + 1, 0.0);
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t k = 0; k < histograms[i].size(); ++k)

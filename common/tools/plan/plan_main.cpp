@@ -6,15 +6,19 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <numeric>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
 #include <CLI/CLI.hpp>
 
 #include "panoptes/calibration.h"
 #include "panoptes/calibration_file.h"
 #include "panoptes/cli.h"
+#include "panoptes/config.h"
 #include "panoptes/errors.h"
 #include "panoptes/planner/optimizer.h"
 #include "plan_report.h"
@@ -34,6 +38,8 @@ struct Arguments {
   bool remove_one = false;
   fs::path out;
   fs::path report;
+  fs::path scene_template;
+  fs::path scene_out;
   int evaluations = 4000;
   double seconds = 60.0;
   int starts = 3;
@@ -74,9 +80,52 @@ void save_plan(const std::vector<PlannedCamera>& cameras, const fs::path& path) 
   save_calibration(calibration, path);
 }
 
+// The template scene (docs/simulator.md) with its cameras replaced by `cameras`: the planned studio
+// as panoptes_sim runs it. Rates and the other camera keys come from the template's first camera;
+// phases are spread over one frame period; a relative trc.file is made absolute.
+void save_scene(const std::vector<PlannedCamera>& cameras, const fs::path& template_path,
+                const fs::path& path) {
+  YAML::Node scene = YAML::Clone(load_yaml_file(template_path));
+  YAML::Node first;
+  if (scene["cameras"] && scene["cameras"].IsSequence() && scene["cameras"].size() > 0)
+    first = scene["cameras"][0];
+  const double rate = first && first["rate"] ? first["rate"].as<double>() : 100.0;
+  YAML::Node list(YAML::NodeType::Sequence);
+  for (std::size_t c = 0; c < cameras.size(); ++c) {
+    const auto& K = cameras[c].model.intrinsics();
+    const RigidTransform& T = cameras[c].model.T_world_cam();
+    YAML::Node camera;
+    if (first)
+      for (const auto& key : first)
+        if (key.first.as<std::string>() != "look_at" && key.first.as<std::string>() != "T_world_cam")
+          camera[key.first.as<std::string>()] = YAML::Clone(key.second);
+    camera["id"] = cameras[c].id;
+    camera["width"] = K.width;
+    camera["height"] = K.height;
+    camera["K"] = std::vector<double>{K.fx, K.fy, K.cx, K.cy};
+    camera["T_world_cam"]["q"] = std::vector<double>{T.q.x(), T.q.y(), T.q.z(), T.q.w()};
+    camera["T_world_cam"]["t"] = std::vector<double>{T.t.x(), T.t.y(), T.t.z()};
+    camera["rate"] = rate;
+    camera["phase"] = static_cast<double>(c) / (rate * static_cast<double>(cameras.size()));
+    list.push_back(camera);
+  }
+  scene["cameras"] = list;
+  if (scene["trc"] && scene["trc"]["file"]) {
+    const fs::path trc = scene["trc"]["file"].as<std::string>();
+    if (trc.is_relative())
+      scene["trc"]["file"] = fs::absolute(template_path.parent_path() / trc).lexically_normal().string();
+  }
+  std::ofstream out(path, std::ios::trunc);
+  out << "# Written by panoptes_plan from " << template_path.string() << " (docs/planner.md)\n"
+      << scene << "\n";
+  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+}
+
 void print_evaluation(const Evaluation& e, const MetricOptions& metric, std::size_t cameras) {
   std::printf("quality %.6g m (resolution only %.6g m), P(at least %d of %zu cameras see a point) %.4f\n",
               e.quality, e.resolution_only, metric.k_cameras, cameras, e.p_at_least_k);
+  std::printf("uncertainty where at least %d cameras see a point %.6g m\n", metric.k_cameras,
+              e.seen_uncertainty);
   std::printf("cameras seeing a point:");
   for (std::size_t n = 0; n < e.visible_histogram.size(); ++n)
     std::printf(" %zu: %.3f", n, e.visible_histogram[n]);
@@ -148,6 +197,10 @@ int run(const Arguments& args) {
       std::printf("  %-12s %.6g m (%+.1f%%)\n", report.cameras[c].id.c_str(), report.removal_costs[c],
                   100.0 * (report.removal_costs[c] / report.evaluation.quality - 1.0));
   }
+  if (!args.scene_out.empty()) {
+    save_scene(report.cameras, args.scene_template, args.scene_out);
+    std::printf("wrote %s\n", args.scene_out.string().c_str());
+  }
   if (!args.report.empty()) {
     write_report(report, args.report);
     std::printf("wrote %s\n", (args.report / "report.html").string().c_str());
@@ -174,6 +227,11 @@ static int run_command_line(int argc, char** argv) {
                "with --evaluate: the quality without each camera, cheapest first");
   app.add_option("--out", args.out,
                  "calibration file of the plan (panoptes_sim, the demo and calibrate read it)");
+  app.add_option("--scene-template", args.scene_template,
+                 "a simulator scene whose cameras --scene-out replaces")
+      ->check(CLI::ExistingFile);
+  app.add_option("--scene-out", args.scene_out,
+                 "the template scene with the plan's cameras (panoptes_sim runs it)");
   app.add_option("--report", args.report, "directory for report.html, top.png, side.png, history.png");
   app.add_option("--evaluations", args.evaluations, "metric evaluations the search may spend")
       ->capture_default_str()
@@ -196,6 +254,8 @@ static int run_command_line(int argc, char** argv) {
           throw CLI::ValidationError("--evaluate", "takes no --existing or --cameras");
         if (args.remove_one && !args.evaluate_only)
           throw CLI::ValidationError("--remove-one", "needs --evaluate");
+        if (app.count("--scene-out") != app.count("--scene-template"))
+          throw CLI::ValidationError("--scene-out", "and --scene-template go together");
         if (!args.evaluate_only && args.cameras == 0)
           throw CLI::ValidationError("--cameras", "required unless --evaluate is given");
       }))

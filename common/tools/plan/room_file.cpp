@@ -100,10 +100,13 @@ void read_metric(const YamlReader& reader, MetricOptions& metric) {
   const long long k = reader.get_int("k_cameras", metric.k_cameras);
   if (k < 1 || k > 64) reader.fail("k_cameras", "must be 1..64");
   metric.k_cameras = static_cast<int>(k);
+  metric.min_triangulation_deg = reader.get_double("min_triangulation_deg", metric.min_triangulation_deg);
+  if (!(metric.min_triangulation_deg >= 0.0 && metric.min_triangulation_deg < 90.0))
+    reader.fail("min_triangulation_deg", "must be in [0, 90)");
 }
 
 void read_occlusion(const YamlReader& reader, OccluderModel& occluders) {
-  reader.expect_only({"planes", "axis", "max_angle_deg"});
+  reader.expect_only({"planes", "axis", "min_angle_deg", "max_angle_deg", "facing_angle_deg"});
   const long long planes = reader.get_int("planes", occluders.planes);
   if (planes < 0 || planes > 4096) reader.fail("planes", "must be 0..4096 (0: no dynamic occlusion)");
   occluders.planes = static_cast<int>(planes);
@@ -112,6 +115,12 @@ void read_occlusion(const YamlReader& reader, OccluderModel& occluders) {
   occluders.max_angle_deg = reader.get_double("max_angle_deg", occluders.max_angle_deg);
   if (!(occluders.max_angle_deg > 0.0 && occluders.max_angle_deg <= 180.0))
     reader.fail("max_angle_deg", "must be in (0, 180]");
+  occluders.min_angle_deg = reader.get_double("min_angle_deg", occluders.min_angle_deg);
+  if (!(occluders.min_angle_deg >= 0.0 && occluders.min_angle_deg < occluders.max_angle_deg))
+    reader.fail("min_angle_deg", "must be in [0, max_angle_deg)");
+  occluders.facing_angle_deg = reader.get_double("facing_angle_deg", occluders.facing_angle_deg);
+  if (!(occluders.facing_angle_deg > 0.0 && occluders.facing_angle_deg < 180.0))
+    reader.fail("facing_angle_deg", "must be in (0, 180)");
 }
 
 }  // namespace

@@ -25,12 +25,18 @@ enum class Norm { kMax, kMean, kRms };
 //            summed, as the tracker's filter does), evaluated in each direction.
 enum class ResolutionModel { kPyramid, kCovariance };
 
-// Occluder planes through each point; normals uniform within `max_angle_deg` of `axis` (180:
-// any orientation; e.g. 60 about +z for a head marker that never faces down). planes = 0: none.
+// Occluder planes through each point; normals uniform over the directions between `min_angle_deg`
+// and `max_angle_deg` from `axis` (0-180: any orientation; 0-60 about +z: a head marker that never
+// faces down; 45-135: markers on a standing body, facing mostly sideways). planes = 0: none.
 struct OccluderModel {
   int planes = 64;
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
   double max_angle_deg = 180.0;
+  double min_angle_deg = 0.0;
+  // A camera sees the point when its direction is within this angle of the normal: 90 is the
+  // seed's plane; a marker on a convex body is seen a little beyond it (the simulator's
+  // trc.occlusion.facing_angle is the same quantity).
+  double facing_angle_deg = 90.0;
 };
 
 struct MetricOptions {
@@ -41,12 +47,17 @@ struct MetricOptions {
   double pixel_sigma = 0.1;           // centroid noise, pixels
   double unseen_m = 1.0;              // the "huge" extent of a direction no camera constrains
   int k_cameras = 2;                  // second figure: P(at least k cameras see a point)
-  int threads = 1;                    // points are split over this many threads
+  // Cameras whose rays to a point are all within this angle of each other see it from one
+  // direction: they count as one camera (a tracker cannot triangulate, nor tell ghosts apart, on
+  // such a short baseline). 0 disables the rule (the seed's metric).
+  double min_triangulation_deg = 10.0;
+  int threads = 1;  // points are split over this many threads
 };
 
 // The random parts of the metric, drawn once so that every configuration of an optimisation is
 // judged on the same samples.
 struct SampleSet {
+  double facing_cos = 0.0;  // cos(facing angle): a camera sees P when n·(C − P)/|C − P| > it
   std::vector<Eigen::Vector3d> points;
   std::vector<double> weights;              // by point, sum 1
   std::vector<Eigen::Vector3d> normals;     // occluder plane normals (may be empty)
@@ -57,9 +68,12 @@ SampleSet draw_samples(const Room& room, const OccluderModel& occluders, int poi
                        std::uint64_t seed);
 
 struct Evaluation {
-  double quality = 0;                     // eq. 4.8, metres (lower is better)
-  double resolution_only = 0;             // eq. 4.2 + 4.6 with static occlusion only, metres
-  double p_at_least_k = 0;                // over points and occluder planes, weighted
+  double quality = 0;          // eq. 4.8, metres (lower is better)
+  double resolution_only = 0;  // eq. 4.2 + 4.6 with static occlusion only, metres
+  double p_at_least_k = 0;     // over points and occluder planes, weighted
+  // RMS of U_res over the (point, plane) samples that at least k cameras see: the error of what a
+  // tracker reports (it reports only what it sees); compare with a tracker's RMSE.
+  double seen_uncertainty = 0;
   std::vector<double> visible_histogram;  // P(n cameras see a point), n = 0..cameras
   std::vector<double> point_uncertainty;  // U(P) by sample point (eq. 4.5)
   std::vector<double> point_p_k;          // P(at least k see P) by sample point
