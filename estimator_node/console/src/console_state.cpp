@@ -159,17 +159,23 @@ void ConsoleState::on_command_sent(PendingCommand command) {
   pending_.push_back(std::move(command));
 }
 
-// Called with the lock held. A status counts every command applied or rejected so far; the oldest
-// pending command of that camera takes the first change (commands are applied in order).
+// Called with the lock held. A status counts every command applied or rejected so far; pending
+// commands of that camera take those counts in the order they were sent (the camera applies them
+// in order), each count going to one command only.
 void ConsoleState::resolve_pending(const std::string& camera, const CameraStatusRecord& status) {
+  std::map<std::string, std::uint64_t> applied_taken;
+  std::uint64_t rejected_taken = 0;
   for (auto it = pending_.begin(); it != pending_.end();) {
     if (it->camera != camera) {
       ++it;
       continue;
     }
-    if (counter(status, "command_" + it->command) > it->applied_before) {
+    const std::string name = "command_" + it->command;
+    if (counter(status, name) > it->applied_before + applied_taken[name]) {
+      ++applied_taken[name];
       outcomes_.push_back({it->client, it->request, "applied", ""});
-    } else if (counter(status, "bad_command") > it->rejected_before) {
+    } else if (counter(status, "bad_command") > it->rejected_before + rejected_taken) {
+      ++rejected_taken;
       outcomes_.push_back({it->client, it->request, "rejected", status.last_error});
     } else {
       ++it;
