@@ -146,6 +146,9 @@ function updateCard(camera) {
   if (camera.usage) card.usage = camera.usage;
   const status = card.status || {};
   const usage = card.usage || {};
+  const now = performance.now();
+  if (card.figuresAt && now - card.figuresAt < 500) { finishCard(card, camera); return; }
+  card.figuresAt = now;
   card.querySelector('.figures').textContent =
     `${fixed(status.fps, 1)} fps (received ${fixed(camera.rx_fps, 1)}) · drops ${status.drops_queue ?? '—'}+${status.drops_source ?? '—'}` +
     ` · detect p99 ${fixed(status.detect_p99_ms, 2)} ms · latency ${fixed(camera.latency_ms, 1)} ms` +
@@ -153,6 +156,10 @@ function updateCard(camera) {
     ` · used ${usage.utilisation === undefined ? '—' : (100 * usage.utilisation).toFixed(0) + '%'}` +
     ` (p99 ${fixed(usage.latency_p99_ms, 1)} ms) · threshold ${status.threshold ?? '—'}` +
     (status.last_error ? ` · last error: ${status.last_error}` : '');
+  finishCard(card, camera);
+}
+
+function finishCard(card, camera) {
   card.dataset.blobs = String(camera.blobs.length);
   page.blobCounts[camera.id] = camera.blobs.length;
   drawBlobs(card, camera.blobs);
@@ -174,7 +181,7 @@ function drawBlobs(card, blobs) {
   }
   context.fillStyle = '#7fffd4';
   for (const [x, y, area] of blobs) {
-    const radius = Math.max(3 * scale, Math.sqrt(area / Math.PI));
+    const radius = Math.max(5 * scale, Math.sqrt(area / Math.PI));
     context.beginPath();
     context.arc(x, y, radius, 0, 2 * Math.PI);
     context.fill();
@@ -184,12 +191,12 @@ function drawBlobs(card, blobs) {
 // ---------------------------------------------------------------------------------------------
 // 3D view: z up, metres.
 const canvas3d = document.getElementById('view3d');
-const renderer = new THREE.WebGLRenderer({ canvas: canvas3d, antialias: true, preserveDrawingBuffer: true });
+const renderer = new THREE.WebGLRenderer({ canvas: canvas3d, antialias: false, preserveDrawingBuffer: true });
 const scene = new THREE.Scene();
 scene.background = new THREE.Color(0x0b0d10);
 const camera3d = new THREE.PerspectiveCamera(50, 1, 0.01, 100);
 camera3d.up.set(0, 0, 1);
-camera3d.position.set(6, -6, 5);
+camera3d.position.set(8, -10, 8);
 const controls = new OrbitControls(camera3d, canvas3d);
 controls.target.set(0, 0, 1);
 controls.update();
@@ -198,16 +205,30 @@ grid.rotation.x = Math.PI / 2;  // the floor is z = 0
 scene.add(grid);
 scene.add(new THREE.AxesHelper(0.5));  // the world frame
 
+// Names and ids are drawn on a 2D canvas over the WebGL one (one fillText each, no textures).
+const overlay = document.getElementById('overlay');
+const labels = new Set();
 function label(text, color = '#dde3ea') {
-  const canvas = document.createElement('canvas');
-  canvas.width = 128; canvas.height = 32;
-  const context = canvas.getContext('2d');
-  context.font = '22px sans-serif';
-  context.fillStyle = color;
-  context.fillText(text, 2, 24);
-  const sprite = new THREE.Sprite(new THREE.SpriteMaterial({ map: new THREE.CanvasTexture(canvas), depthTest: false }));
-  sprite.scale.set(0.4, 0.1, 1);
-  return sprite;
+  const object = new THREE.Object3D();
+  object.userData.label = { text, color };
+  labels.add(object);
+  return object;
+}
+function dropLabel(object) { labels.delete(object); }
+const projected = new THREE.Vector3();
+function drawLabels() {
+  const width = overlay.clientWidth, height = overlay.clientHeight;
+  if (overlay.width !== width || overlay.height !== height) { overlay.width = width; overlay.height = height; }
+  const context = overlay.getContext('2d');
+  context.clearRect(0, 0, width, height);
+  context.font = '12px sans-serif';
+  for (const object of labels) {
+    if (!object.parent) continue;
+    object.getWorldPosition(projected).project(camera3d);
+    if (projected.z > 1 || Math.abs(projected.x) > 1 || Math.abs(projected.y) > 1) continue;
+    context.fillStyle = object.userData.label.color;
+    context.fillText(object.userData.label.text, (projected.x + 1) * width / 2 + 4, (1 - projected.y) * height / 2 - 4);
+  }
 }
 
 const frusta = new Map();
@@ -217,7 +238,7 @@ function updateFrustum(camera) {
   const key = JSON.stringify(g);
   const existing = frusta.get(camera.id);
   if (existing && existing.key === key) return;
-  if (existing) scene.remove(existing.group);
+  if (existing) { scene.remove(existing.group); existing.group.traverse(dropLabel); }
   const [fx, fy, cx, cy] = g.K;
   const depth = 0.6;
   const corner = (u, v) => new THREE.Vector3((u - cx) / fx * depth, (v - cy) / fy * depth, depth);
@@ -241,10 +262,12 @@ function updateFrustum(camera) {
 const trailLength = 20;
 const trails = new Map();  // id -> { points: [Vector3], label, seen }
 const trackGeometry = new THREE.BufferGeometry();
-const trackPoints = new THREE.Points(trackGeometry, new THREE.PointsMaterial({ color: 0xffd166, size: 0.05 }));
+const trackPoints = new THREE.Points(trackGeometry, new THREE.PointsMaterial({ color: 0xffd166, size: 0.06 }));
+trackPoints.frustumCulled = false;  // changes every update: no bounding sphere to keep
 scene.add(trackPoints);
 const trailGeometry = new THREE.BufferGeometry();
 const trailLines = new THREE.LineSegments(trailGeometry, new THREE.LineBasicMaterial({ color: 0x8a6d1f }));
+trailLines.frustumCulled = false;
 scene.add(trailLines);
 
 function updateTracks(tracks) {
@@ -264,14 +287,20 @@ function updateTracks(tracks) {
     trail.label.position.set(x, y, z + 0.08);
   });
   for (const [id, trail] of trails) {
-    if (!seen.has(id)) { scene.remove(trail.label); trail.label.material.map.dispose(); trails.delete(id); }
+    if (!seen.has(id)) { scene.remove(trail.label); dropLabel(trail.label); trails.delete(id); }
   }
   trackGeometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
-  const segments = [];
+  let segments = 0;
+  for (const trail of trails.values()) segments += Math.max(0, trail.points.length - 1);
+  const lines = new Float32Array(segments * 6);
+  let k = 0;
   for (const trail of trails.values()) {
-    for (let i = 1; i < trail.points.length; ++i) segments.push(trail.points[i - 1], trail.points[i]);
+    for (let i = 1; i < trail.points.length; ++i) {
+      const a = trail.points[i - 1], b = trail.points[i];
+      lines[k++] = a.x; lines[k++] = a.y; lines[k++] = a.z; lines[k++] = b.x; lines[k++] = b.y; lines[k++] = b.z;
+    }
   }
-  trailGeometry.setFromPoints(segments);
+  trailGeometry.setAttribute('position', new THREE.BufferAttribute(lines, 3));
 }
 
 const bodies = new Map();
@@ -293,7 +322,7 @@ function updateBodies(list) {
     const [x, y, z, w] = body.pose.q;
     object.quaternion.set(x, y, z, w);
   }
-  for (const [name, object] of bodies) if (!seen.has(name)) { scene.remove(object); bodies.delete(name); }
+  for (const [name, object] of bodies) if (!seen.has(name)) { scene.remove(object); object.traverse(dropLabel); bodies.delete(name); }
 }
 
 function onState(state) {
@@ -328,6 +357,7 @@ function syntheticTracks(time) {
   return tracks;
 }
 
+let syntheticAt = 0;
 let fpsFrames = 0;
 let fpsStart = performance.now();
 function render(now) {
@@ -337,8 +367,10 @@ function render(now) {
     camera3d.aspect = width / Math.max(1, height);
     camera3d.updateProjectionMatrix();
   }
-  if (synthetic) updateTracks(syntheticTracks(now / 1000));
+  // Synthetic tracks change at the rate live ones arrive (the console's 30 Hz snapshots).
+  if (synthetic && now - syntheticAt >= 1000 / 30) { syntheticAt = now; updateTracks(syntheticTracks(now / 1000)); }
   renderer.render(scene, camera3d);
+  drawLabels();
   page.frames += 1;
   fpsFrames += 1;
   if (now - fpsStart >= 1000) { page.fps = (fpsFrames * 1000) / (now - fpsStart); fpsFrames = 0; fpsStart = now; }
