@@ -7,8 +7,11 @@ import { OrbitControls } from 'three/addons/OrbitControls.js';
 const params = new URLSearchParams(location.search);
 const token = params.get('token') || '';
 // For tests and benchmarks: the page state, reachable from the browser's console.
-const page = { connected: false, state: null, blobCounts: {}, results: [], fps: 0, frames: 0, connects: 0 };
+const page = { connected: false, state: null, blobCounts: {}, results: [], fps: 0, frames: 0, connects: 0,
+  timing: { tracks: 0, render: 0, labels: 0 } };  // ms spent, for the benchmark
 window.panoptes = page;
+// ?view=3d: the 3D view alone (a wall screen; the 3D benchmark).
+if (params.get('view') === '3d') document.body.classList.add('only3d');
 
 // ---------------------------------------------------------------------------------------------
 // Connection: reconnects by itself, so a restarted console is picked up without reloading.
@@ -200,6 +203,7 @@ camera3d.position.set(8, -10, 8);
 const controls = new OrbitControls(camera3d, canvas3d);
 controls.target.set(0, 0, 1);
 controls.update();
+controls.addEventListener('change', () => { labelsDirty = true; });
 const grid = new THREE.GridHelper(8, 16, 0x3b4552, 0x262c35);
 grid.rotation.x = Math.PI / 2;  // the floor is z = 0
 scene.add(grid);
@@ -208,6 +212,7 @@ scene.add(new THREE.AxesHelper(0.5));  // the world frame
 // Names and ids are drawn on a 2D canvas over the WebGL one (one fillText each, no textures).
 const overlay = document.getElementById('overlay');
 const labels = new Set();
+let labelsDirty = true;  // redrawn when something moved, not every frame
 function label(text, color = '#dde3ea') {
   const object = new THREE.Object3D();
   object.userData.label = { text, color };
@@ -217,6 +222,8 @@ function label(text, color = '#dde3ea') {
 function dropLabel(object) { labels.delete(object); }
 const projected = new THREE.Vector3();
 function drawLabels() {
+  if (!labelsDirty) return;
+  labelsDirty = false;
   const width = overlay.clientWidth, height = overlay.clientHeight;
   if (overlay.width !== width || overlay.height !== height) { overlay.width = width; overlay.height = height; }
   const context = overlay.getContext('2d');
@@ -271,6 +278,7 @@ trailLines.frustumCulled = false;
 scene.add(trailLines);
 
 function updateTracks(tracks) {
+  labelsDirty = true;
   const seen = new Set();
   const positions = new Float32Array(tracks.length * 3);
   tracks.forEach(([id, x, y, z], i) => {
@@ -305,6 +313,7 @@ function updateTracks(tracks) {
 
 const bodies = new Map();
 function updateBodies(list) {
+  labelsDirty = true;
   const seen = new Set();
   for (const body of list) {
     seen.add(body.name);
@@ -364,13 +373,20 @@ function render(now) {
   const width = canvas3d.clientWidth, height = canvas3d.clientHeight;
   if (canvas3d.width !== width || canvas3d.height !== height) {
     renderer.setSize(width, height, false);
+    labelsDirty = true;
     camera3d.aspect = width / Math.max(1, height);
     camera3d.updateProjectionMatrix();
   }
   // Synthetic tracks change at the rate live ones arrive (the console's 30 Hz snapshots).
+  const t0 = performance.now();
   if (synthetic && now - syntheticAt >= 1000 / 30) { syntheticAt = now; updateTracks(syntheticTracks(now / 1000)); }
+  const t1 = performance.now();
   renderer.render(scene, camera3d);
+  const t2 = performance.now();
   drawLabels();
+  page.timing.tracks += t1 - t0;
+  page.timing.render += t2 - t1;
+  page.timing.labels += performance.now() - t2;
   page.frames += 1;
   fpsFrames += 1;
   if (now - fpsStart >= 1000) { page.fps = (fpsFrames * 1000) / (now - fpsStart); fpsFrames = 0; fpsStart = now; }

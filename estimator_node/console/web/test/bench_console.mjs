@@ -2,7 +2,8 @@
 // Console benchmark (docs/benchmarks.md, issue 18): one chromium page on the console for
 // --seconds; prints one JSON line: the console's CPU (% of one core, from /proc/<pid>/stat), the
 // WebSocket bytes and messages per second it sent (its /api/stats), snapshots skipped, the page's
-// 3D frame rate, and the frame rate of a second page drawing --synthetic-tracks tracks.
+// 3D frame rate, and the frame rate of a second page showing the 3D view alone (?view=3d) with
+// --synthetic-tracks tracks generated in the page, and the page's own milliseconds per frame.
 //   node bench_console.mjs --url <console URL> --console-pid <pid> --seconds 10 [--synthetic-tracks 200]
 import { chromium } from 'playwright-core';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
@@ -55,7 +56,7 @@ try {
   await page.close();
   if (args['synthetic-tracks']) {
     const synthetic = await context.newPage();
-    await synthetic.goto(`${args.url}&synthetic_tracks=${args['synthetic-tracks']}`);
+    await synthetic.goto(`${args.url}&view=3d&synthetic_tracks=${args['synthetic-tracks']}`);
     await sleep(2000);
     const f0 = await synthetic.evaluate(() => window.panoptes.frames);
     const s0 = Date.now();
@@ -63,6 +64,9 @@ try {
     const f1 = await synthetic.evaluate(() => window.panoptes.frames);
     out.synthetic_tracks = Number(args['synthetic-tracks']);
     out.synthetic_fps = Number(((f1 - f0) / ((Date.now() - s0) / 1000)).toFixed(1));
+    const timing = await synthetic.evaluate(() => window.panoptes.timing);
+    const frames = await synthetic.evaluate(() => window.panoptes.frames);
+    out.synthetic_ms_per_frame = Object.fromEntries(Object.entries(timing).map(([k, v]) => [k, Number((v / frames).toFixed(2))]));
   }
 } finally {
   await context.close();
