@@ -13,7 +13,7 @@ rate="${4:-120}"
 blobs="${5:-3}"
 seconds="${6:-10}"
 synthetic="${7:-0}"
-"$bin/panoptes_feature_flood" --cameras "$cameras" --rate "$rate" --blobs "$blobs" --duration $((seconds + 25)) \
+"$bin/panoptes_feature_flood" --cameras "$cameras" --rate "$rate" --blobs "$blobs" --duration $((seconds + 90)) \
   >"$work/flood.log" 2>&1 &
 flood=$!
 pids+=("$flood")

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "panoptes/dds/convert.h"
 #include "panoptes/time.h"
 #include "panoptes_msgs/panoptes.h"
 
@@ -19,6 +20,7 @@ Pose pose_of(const msg::Pose3& pose) {
   return out;
 }
 
+// The geometry through the one decoding of a CameraInfo's calibration (dds/convert.h).
 CameraInfoRecord info_of(const msg::CameraInfo& info) {
   CameraInfoRecord out;
   out.model = info.model();
@@ -26,9 +28,16 @@ CameraInfoRecord info_of(const msg::CameraInfo& info) {
   out.nominal_rate_hz = info.nominal_rate_hz();
   out.geometry.width = static_cast<int>(info.width());
   out.geometry.height = static_cast<int>(info.height());
-  std::copy(info.K().begin(), info.K().end(), out.geometry.K.begin());
-  out.geometry.has_pose = info.has_pose();
-  out.geometry.T_world_cam = pose_of(info.T_world_cam());
+  const std::optional<CameraCalibration> calibration = dds::calibration_from(info);
+  if (!calibration) return out;
+  const CameraIntrinsics& K = calibration->intrinsics;
+  out.geometry.K = {K.fx, K.fy, K.cx, K.cy};
+  if (calibration->T_world_cam) {
+    const RigidTransform& T = *calibration->T_world_cam;
+    out.geometry.has_pose = true;
+    out.geometry.T_world_cam.position = {T.t.x(), T.t.y(), T.t.z()};
+    out.geometry.T_world_cam.orientation = {T.q.x(), T.q.y(), T.q.z(), T.q.w()};
+  }
   return out;
 }
 
