@@ -7,7 +7,7 @@ import { OrbitControls } from 'three/addons/OrbitControls.js';
 const params = new URLSearchParams(location.search);
 const token = params.get('token') || '';
 // For tests and benchmarks: the page state, reachable from the browser's console.
-const page = { connected: false, state: null, blobCounts: {}, results: [], fps: 0, frames: 0, connects: 0,
+const page = { connected: false, state: null, blobCounts: {}, results: [], sent: [], fps: 0, frames: 0, connects: 0,
   timing: { tracks: 0, render: 0, labels: 0 } };  // ms spent, for the benchmark
 window.panoptes = page;
 // ?view=3d: the 3D view alone (a wall screen; the 3D benchmark).
@@ -48,6 +48,7 @@ function send(card, command, args = []) {
   const id = nextRequest++;
   pending.set(id, card);
   socket.send(JSON.stringify({ type: 'command', id, camera: card.dataset.camera, command, args }));
+  page.sent.push({ id, camera: card.dataset.camera, command, args, at: Date.now() });
   showResult(card, 'sending', `${command} ${args.join(' ')}`);
 }
 
