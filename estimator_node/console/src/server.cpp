@@ -178,9 +178,10 @@ class WebSocketSession : public std::enable_shared_from_this<WebSocketSession> {
         limiter_(server.options.commands_per_s, server.options.command_burst) {}
 
   void start(http::request<http::string_body> request) {
+    request_ = std::move(request);  // kept until the handshake completes
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(server_.options.max_frame_bytes);
-    ws_.async_accept(request, [self = shared_from_this()](beast::error_code error) {
+    ws_.async_accept(request_, [self = shared_from_this()](beast::error_code error) {
       if (error) return;
       self->server_.sessions.insert(self);
       ++self->server_.counters.clients_connected;
@@ -277,6 +278,7 @@ class WebSocketSession : public std::enable_shared_from_this<WebSocketSession> {
   }
 
   websocket::stream<beast::tcp_stream> ws_;
+  http::request<http::string_body> request_;
   ConsoleServer::Impl& server_;
   std::uint64_t id_;
   RateLimiter limiter_;
