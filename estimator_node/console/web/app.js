@@ -321,7 +321,7 @@ function updateBodies(list) {
     let object = bodies.get(body.name);
     if (!object) {
       object = new THREE.Group();
-      object.add(new THREE.AxesHelper(0.25));
+      object.add(new THREE.AxesHelper(0.4));
       const name = label(body.name, '#ffffff');
       name.position.set(0, 0, 0.2);
       object.add(name);
@@ -393,6 +393,12 @@ function render(now) {
   if (now - fpsStart >= 1000) { page.fps = (fpsFrames * 1000) / (now - fpsStart); fpsFrames = 0; fpsStart = now; }
   requestAnimationFrame(render);
 }
+
+// Where a world point appears on the 3D canvas, in canvas pixels (the browser test).
+page.project = (point) => {
+  const v = new THREE.Vector3(...point).project(camera3d);
+  return [(v.x + 1) / 2 * canvas3d.width, (1 - v.y) / 2 * canvas3d.height];
+};
 
 connect();
 requestAnimationFrame(render);
