@@ -29,8 +29,7 @@ using nlohmann::json;
 const std::string kToken = "unit-test-token-0123456789";
 
 std::filesystem::path make_web_root() {
-  const auto root =
-      std::filesystem::temp_directory_path() / ("panoptes_console_web_" + std::to_string(::getpid()));
+  auto root = std::filesystem::temp_directory_path() / ("panoptes_console_web_" + std::to_string(::getpid()));
   for (const char* file : {"index.html", "app.js", "style.css", "node_modules/three/build/three.module.js",
                            "node_modules/three/examples/jsm/controls/OrbitControls.js"}) {
     std::filesystem::create_directories((root / file).parent_path());
