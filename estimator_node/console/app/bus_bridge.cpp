@@ -1,0 +1,140 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "bus_bridge.h"
+
+#include <algorithm>
+
+#include "panoptes/dds/convert.h"
+#include "panoptes/time.h"
+#include "panoptes_msgs/panoptes.h"
+
+namespace panoptes::console {
+
+namespace {
+
+namespace msg = panoptes::msg;
+
+Pose pose_of(const msg::Pose3& pose) {
+  Pose out;
+  std::copy(pose.position().begin(), pose.position().end(), out.position.begin());
+  std::copy(pose.orientation().begin(), pose.orientation().end(), out.orientation.begin());
+  return out;
+}
+
+// The geometry through the one decoding of a CameraInfo's calibration (dds/convert.h).
+CameraInfoRecord info_of(const msg::CameraInfo& info) {
+  CameraInfoRecord out;
+  out.model = info.model();
+  out.backend = info.backend();
+  out.nominal_rate_hz = info.nominal_rate_hz();
+  out.geometry.width = static_cast<int>(info.width());
+  out.geometry.height = static_cast<int>(info.height());
+  const std::optional<CameraCalibration> calibration = dds::calibration_from(info);
+  if (!calibration) return out;
+  const CameraIntrinsics& K = calibration->intrinsics;
+  out.geometry.K = {K.fx, K.fy, K.cx, K.cy};
+  if (calibration->T_world_cam) {
+    const RigidTransform& T = *calibration->T_world_cam;
+    out.geometry.has_pose = true;
+    out.geometry.T_world_cam.position = {T.t.x(), T.t.y(), T.t.z()};
+    out.geometry.T_world_cam.orientation = {T.q.x(), T.q.y(), T.q.z(), T.q.w()};
+  }
+  return out;
+}
+
+CameraStatusRecord status_of(const msg::CameraStatus& status) {
+  CameraStatusRecord out;
+  out.fps = status.fps();
+  out.frames = status.frames();
+  out.drops_queue = status.drops_queue();
+  out.drops_source = status.drops_source();
+  out.detect_p99_ms = status.detect_p99_ms();
+  out.threshold = status.threshold();
+  out.exposure_us = status.exposure_us();
+  out.gain_db = status.gain_db();
+  out.clock_offset_ns = status.clock_offset_ns();
+  out.clock_drift_ppm = status.clock_drift_ppm();
+  out.last_error = status.last_error();
+  for (const msg::Counter& counter : status.counters()) out.counters[counter.name()] = counter.value();
+  return out;
+}
+
+EstimatorRecord estimator_of(const msg::EstimatorStatus& status) {
+  EstimatorRecord out;
+  out.tracks_confirmed = status.tracks_confirmed();
+  out.tracks_tentative = status.tracks_tentative();
+  out.cpu_percent = status.cpu_percent();
+  out.update_p99_ms = status.update_p99_ms();
+  for (const msg::CameraUsage& usage : status.cameras())
+    out.cameras[usage.camera_id()] = {usage.utilisation(), usage.latency_p99_ms()};
+  return out;
+}
+
+}  // namespace
+
+struct BusBridge::Impl {
+  std::unique_ptr<dds::Writer<msg::CameraCommand>> commands;
+  std::unique_ptr<dds::Reader<msg::CameraInfo>> info;
+  std::unique_ptr<dds::Reader<msg::CameraStatus>> status;
+  std::unique_ptr<dds::Reader<msg::FeatureFrame>> features;
+  std::unique_ptr<dds::Reader<msg::SystemCalibration>> calibration;
+  std::unique_ptr<dds::Reader<msg::EstimatorStatus>> estimator;
+  std::unique_ptr<dds::Reader<msg::TrackFrame>> tracks;
+  std::unique_ptr<dds::Reader<msg::BodyPose>> bodies;
+};
+
+// Listener callbacks copy only what the page shows and return: the state's lock is the only wait.
+BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_unique<Impl>()) {
+  impl_->commands = bus.make_writer<msg::CameraCommand>();
+  impl_->info = bus.make_reader<msg::CameraInfo>(
+      [&state](msg::CameraInfo&& info) { state.on_info(info.camera_id(), info_of(info), wall_now_ns()); });
+  impl_->status = bus.make_reader<msg::CameraStatus>([&state](msg::CameraStatus&& status) {
+    state.on_status(status.camera_id(), status_of(status), wall_now_ns());
+  });
+  impl_->features = bus.make_reader<msg::FeatureFrame>([&state](msg::FeatureFrame&& frame) {
+    FeatureRecord record{frame.frame(), frame.stamp_ns(), {}};
+    record.blobs.reserve(frame.blobs().size());
+    for (const msg::Blob& blob : frame.blobs()) record.blobs.push_back({blob.x(), blob.y(), blob.area()});
+    state.on_features(frame.camera_id(), std::move(record), wall_now_ns());
+  });
+  impl_->calibration =
+      bus.make_reader<msg::SystemCalibration>([&state](msg::SystemCalibration&& calibration) {
+        std::map<std::string, CameraGeometry> cameras;
+        for (const msg::CameraCalibration& camera : calibration.cameras()) {
+          CameraGeometry geometry;
+          geometry.width = static_cast<int>(camera.width());
+          geometry.height = static_cast<int>(camera.height());
+          std::copy(camera.K().begin(), camera.K().end(), geometry.K.begin());
+          geometry.has_pose = camera.has_pose();
+          geometry.T_world_cam = pose_of(camera.T_world_cam());
+          cameras[camera.camera_id()] = geometry;
+        }
+        state.on_calibration(cameras);
+      });
+  impl_->estimator = bus.make_reader<msg::EstimatorStatus>(
+      [&state](msg::EstimatorStatus&& status) { state.on_estimator(estimator_of(status), wall_now_ns()); });
+  impl_->tracks = bus.make_reader<msg::TrackFrame>([&state](msg::TrackFrame&& frame) {
+    std::vector<TrackPoint> tracks;
+    tracks.reserve(frame.tracks().size());
+    for (const msg::Track& track : frame.tracks())
+      tracks.push_back(
+          {track.id(), {track.position()[0], track.position()[1], track.position()[2]}, track.status()});
+    state.on_tracks(std::move(tracks), wall_now_ns());
+  });
+  impl_->bodies = bus.make_reader<msg::BodyPose>([&state](msg::BodyPose&& pose) {
+    state.on_body({pose.name(), pose_of(pose.pose()), pose.quality()}, wall_now_ns());
+  });
+}
+
+BusBridge::~BusBridge() = default;
+
+bool BusBridge::send(const CameraCommandRequest& command) {
+  if (impl_->commands->matched_readers() == 0) return false;
+  msg::CameraCommand message;
+  message.target(command.camera);
+  message.seq(static_cast<unsigned long long>(wall_now_ns()));
+  message.command(command.command);
+  message.arguments(command.arguments);
+  return impl_->commands->write(message);
+}
+
+}  // namespace panoptes::console

@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: Apache-2.0
+// panoptes_console: the operator console. Joins the bus, serves the page and streams the cameras,
+// tracks and bodies to browsers over a WebSocket; forwards checked commands (docs/console.md).
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "bus_bridge.h"
+#include "panoptes/cli.h"
+#include "panoptes/console/server.h"
+#include "panoptes/process.h"
+
+namespace {
+
+constexpr std::size_t kMinTokenLength = 16;
+
+std::string generate_token() {
+  std::random_device device;
+  std::ostringstream out;
+  for (int i = 0; i < 4; ++i) {
+    char buffer[9];
+    std::snprintf(buffer, sizeof buffer, "%08x", device());
+    out << buffer;
+  }
+  return out.str();
+}
+
+// The first line of the file, without surrounding white space; throws naming the file.
+std::string read_token(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw std::invalid_argument(path + ": cannot read the token file");
+  std::string token;
+  std::getline(file, token);
+  const auto first = token.find_first_not_of(" \t\r");
+  const auto last = token.find_last_not_of(" \t\r");
+  token = first == std::string::npos ? "" : token.substr(first, last - first + 1);
+  if (token.size() < kMinTokenLength)
+    throw std::invalid_argument(path + ": the token must be at least " + std::to_string(kMinTokenLength) +
+                                " characters");
+  for (const char c : token) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_')
+      throw std::invalid_argument(path + ": the token may hold letters, digits, '-' and '_' only");
+  }
+  return token;
+}
+
+int run(int argc, char** argv) {
+  panoptes::console::ServerOptions options;
+  options.web_root = PANOPTES_CONSOLE_WEB_DIR;
+  std::string bind = "127.0.0.1:8080";
+  std::string token_file;
+  std::string dds_profile;
+  std::string url_file;
+  CLI::App app{"panoptes_console: the operator console in the browser (Panoptes, docs/console.md)",
+               "panoptes_console"};
+  app.option_defaults()->always_capture_default();
+  app.add_option("--bind", bind, "address:port to serve on (0.0.0.0:8080 opens it on the LAN)");
+  app.add_option("--token-file", token_file, "read the access token from this file")
+      ->default_str("a new random token, printed at start");
+  app.add_option("--web-root", options.web_root, "the page's files (index.html, app.js, node_modules/three)");
+  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile")
+      ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
+  app.add_option("--update-rate", options.update_hz, "snapshots per second sent to each browser")
+      ->check(CLI::Range(1.0, 120.0));
+  app.add_option("--command-rate", options.commands_per_s, "commands per second allowed per browser")
+      ->check(CLI::Range(0.1, 1000.0));
+  app.add_option("--url-file", url_file, "also write the URL (with the token) to this file");
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+
+  const auto colon = bind.rfind(':');
+  int port = -1;
+  try {
+    if (colon != std::string::npos) port = std::stoi(bind.substr(colon + 1));
+  } catch (const std::exception&) {
+  }
+  if (colon == std::string::npos || port < 0 || port > 65535) {
+    std::fprintf(stderr, "panoptes_console: --bind: expected <address>:<port>, got '%s'\n", bind.c_str());
+    return panoptes::kExitBadInput;
+  }
+  options.bind_address = bind.substr(0, colon);
+  options.port = static_cast<unsigned short>(port);
+  try {
+    options.token = token_file.empty() ? generate_token() : read_token(token_file);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_console: --token-file %s\n", error.what());
+    return panoptes::kExitBadInput;
+  }
+
+  panoptes::install_stop_handlers();
+  panoptes::console::ConsoleState state;
+  panoptes::dds::BusOptions bus_options;
+  bus_options.profile_file = dds_profile;
+  bus_options.participant_name = "panoptes_console";
+  panoptes::dds::Bus bus(bus_options);
+  panoptes::console::BusBridge bridge(bus, state);
+  std::unique_ptr<panoptes::console::ConsoleServer> server;
+  try {
+    server = std::make_unique<panoptes::console::ConsoleServer>(
+        options, state,
+        [&bridge](const panoptes::console::CameraCommandRequest& command) { return bridge.send(command); });
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_console: cannot serve on %s: %s\n", bind.c_str(), error.what());
+    return panoptes::kExitFailure;
+  }
+  const std::string host = options.bind_address == "0.0.0.0" ? "<this host>" : options.bind_address;
+  const std::string url =
+      "http://" + host + ":" + std::to_string(server->port()) + "/?token=" + options.token;
+  std::printf("panoptes_console: open %s\n", url.c_str());
+  std::fflush(stdout);
+  if (!url_file.empty()) std::ofstream(url_file) << url << "\n";
+
+  std::thread watcher([&server] {
+    while (!panoptes::stop_requested()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    server->stop();
+  });
+  server->run();
+  panoptes::request_stop();
+  watcher.join();
+  std::printf("panoptes_console: stopped; %s\n", server->counters().dump().c_str());
+  return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_console: %s\n", error.what());
+    return panoptes::kExitFailure;
+  }
+}

@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: Apache-2.0
+// The gate every browser command passes before it becomes a camera_command: the message's shape,
+// the command name, its arguments and their ranges, the camera (seen on the bus, and the mask
+// inside its image) and a per-client rate limit. A command that fails any check is rejected with
+// a reason and a counter name, and never forwarded (docs/console.md, "Commands").
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "panoptes/time.h"
+
+namespace panoptes::console {
+
+class ConsoleState;
+
+struct CameraCommandRequest {
+  std::int64_t request = 0;  // the browser's id for the reply
+  std::string camera;
+  std::string command;
+  std::vector<std::string> arguments;  // as camera_node parses them (docs/camera_node.md)
+};
+
+struct Rejection {
+  std::int64_t request = 0;
+  std::string counter;  // bad_message | unknown_command | bad_arguments | out_of_range | unknown_camera |
+                        // rate_limited | oversized
+  std::string reason;
+};
+
+using GateResult = std::variant<CameraCommandRequest, Rejection>;
+
+// The commands the console forwards, with their argument rules.
+const std::vector<std::string>& console_commands();
+
+// Checks a decoded {"type":"command", "id", "camera", "command", "args"} message. `image_size`
+// bounds masks when the camera's resolution is known.
+GateResult check_command(const nlohmann::json& message, bool camera_known,
+                         const std::optional<std::pair<int, int>>& image_size);
+
+// Token bucket: `rate` commands per second on average, at most `burst` at once.
+class RateLimiter {
+ public:
+  RateLimiter(double rate_per_s, double burst) : rate_(rate_per_s), burst_(burst), tokens_(burst) {}
+  bool allow(TimeNs now);
+
+ private:
+  double rate_;
+  double burst_;
+  double tokens_;
+  TimeNs last_ns_ = 0;
+};
+
+}  // namespace panoptes::console

@@ -1,0 +1,197 @@
+// SPDX-License-Identifier: Apache-2.0
+// What panoptes_console knows about the bus: the latest record of every camera, the estimator's
+// tracks, bodies and status, and the commands waiting for an acknowledgement. DDS listener threads
+// write it; the server thread reads it ~30 times a second into one JSON snapshot shared by every
+// browser (docs/console.md). Plain types only: no DDS, so the server is tested without a bus.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "panoptes/time.h"
+
+namespace panoptes::console {
+
+struct Pose {
+  std::array<double, 3> position{};
+  std::array<double, 4> orientation{0, 0, 0, 1};  // x, y, z, w
+};
+
+// From camera_info, replaced by rt/panoptes/calibration when that names the camera.
+struct CameraGeometry {
+  int width = 0;
+  int height = 0;
+  std::array<double, 4> K{};  // fx, fy, cx, cy
+  bool has_pose = false;
+  Pose T_world_cam;
+};
+
+struct CameraInfoRecord {
+  std::string model;
+  std::string backend;
+  double nominal_rate_hz = 0;
+  CameraGeometry geometry;
+};
+
+struct CameraStatusRecord {
+  double fps = 0;
+  std::uint64_t frames = 0;
+  std::uint64_t drops_queue = 0;
+  std::uint64_t drops_source = 0;
+  double detect_p99_ms = 0;
+  long threshold = 0;
+  double exposure_us = 0;
+  double gain_db = 0;
+  std::int64_t clock_offset_ns = 0;
+  double clock_drift_ppm = 0;
+  std::string last_error;
+  std::map<std::string, std::uint64_t> counters;
+};
+
+struct BlobPoint {
+  float x = 0;
+  float y = 0;
+  float area = 0;
+};
+
+struct FeatureRecord {
+  std::int64_t frame = 0;
+  TimeNs stamp_ns = 0;
+  std::vector<BlobPoint> blobs;
+};
+
+struct CameraUsageRecord {
+  double utilisation = 0;
+  double latency_p99_ms = 0;
+};
+
+struct EstimatorRecord {
+  unsigned tracks_confirmed = 0;
+  unsigned tracks_tentative = 0;
+  double cpu_percent = 0;
+  double update_p99_ms = 0;
+  std::map<std::string, CameraUsageRecord> cameras;
+};
+
+struct TrackPoint {
+  std::int64_t id = 0;
+  std::array<double, 3> position{};
+  int status = 0;  // 0 tentative, 1 confirmed, 2 coasting
+};
+
+struct BodyRecord {
+  std::string name;
+  Pose pose;
+  float quality = 0;
+};
+
+// A light per camera, with the reason a person can act on.
+struct Health {
+  std::string light;  // green | amber | red
+  std::string reason;
+};
+
+// A command forwarded to a camera, waiting for the camera's status to count it (applied) or to
+// count a bad_command (rejected, with the camera's last_error).
+struct PendingCommand {
+  std::uint64_t client = 0;
+  std::int64_t request = 0;
+  std::string camera;
+  std::string command;
+  std::uint64_t applied_before = 0;
+  std::uint64_t rejected_before = 0;
+  TimeNs sent_ns = 0;
+};
+
+struct CommandOutcome {
+  std::uint64_t client = 0;
+  std::int64_t request = 0;
+  std::string result;  // applied | rejected | no_ack
+  std::string reason;
+};
+
+struct StateOptions {
+  TimeNs feature_timeout_ns = kNsPerSecond;     // no frame for this long: red
+  TimeNs status_timeout_ns = 3 * kNsPerSecond;  // no status for this long: red
+  TimeNs ack_timeout_ns = 3 * kNsPerSecond;     // a command not counted by then: no_ack
+  TimeNs body_timeout_ns = kNsPerSecond / 2;    // a body not updated for this long is dropped
+  TimeNs track_timeout_ns = kNsPerSecond / 2;   // tracks older than this are not shown
+};
+
+class ConsoleState {
+ public:
+  explicit ConsoleState(StateOptions options = {}) : options_(options) {}
+
+  void on_info(const std::string& camera, CameraInfoRecord info, TimeNs now);
+  void on_status(const std::string& camera, CameraStatusRecord status, TimeNs now);
+  void on_features(const std::string& camera, FeatureRecord features, TimeNs now);
+  void on_calibration(const std::map<std::string, CameraGeometry>& cameras);
+  void on_estimator(EstimatorRecord status, TimeNs now);
+  void on_tracks(std::vector<TrackPoint> tracks, TimeNs now);
+  void on_body(BodyRecord body, TimeNs now);
+
+  bool knows_camera(const std::string& camera) const;
+  // Image size of a camera, if its camera_info was seen.
+  std::optional<std::pair<int, int>> image_size(const std::string& camera) const;
+  // Records a forwarded command; its outcome comes from take_outcomes().
+  void on_command_sent(PendingCommand command);
+  std::vector<CommandOutcome> take_outcomes(TimeNs now);
+
+  // The state as JSON (docs/console.md, "Protocol"): cameras with blobs, health and, when `full`,
+  // their info, geometry and status; tracks; bodies; estimator status.
+  nlohmann::json snapshot(TimeNs now, bool full) const;
+
+ private:
+  struct Camera {
+    std::optional<CameraInfoRecord> info;
+    std::optional<CameraGeometry> calibrated;
+    std::optional<CameraStatusRecord> status;
+    TimeNs status_ns = 0;
+    std::uint64_t drops_last_period = 0;  // drops between the last two statuses
+    FeatureRecord features;
+    TimeNs features_ns = 0;
+    std::uint64_t frames_received = 0;
+    double latency_ms = 0;  // receive time minus stamp, smoothed
+    // Frames received per second, over the last whole second.
+    TimeNs rate_window_start_ns = 0;
+    std::uint64_t rate_window_frames = 0;
+    double received_fps = 0;
+  };
+
+  Health health_of(const std::string& id, const Camera& camera, TimeNs now) const;
+  void resolve_pending(const std::string& camera, const CameraStatusRecord& status);
+
+  StateOptions options_;
+  mutable std::mutex mutex_;
+  std::map<std::string, Camera> cameras_;
+  std::optional<EstimatorRecord> estimator_;
+  TimeNs estimator_ns_ = 0;
+  std::vector<TrackPoint> tracks_;
+  TimeNs tracks_ns_ = 0;
+  std::map<std::string, std::pair<BodyRecord, TimeNs>> bodies_;
+  std::vector<PendingCommand> pending_;
+  std::vector<CommandOutcome> outcomes_;
+};
+
+// The health light of one camera from what the console knows (pure, tested).
+struct HealthInputs {
+  bool has_status = false;
+  TimeNs since_status_ns = 0;
+  bool has_frames = false;
+  TimeNs since_frame_ns = 0;
+  double camera_fps = 0;       // from the camera's status
+  double nominal_rate_hz = 0;  // from camera_info; 0 unknown
+  std::uint64_t drops_last_period = 0;
+  double detect_p99_ms = 0;
+  std::string last_error;
+};
+Health camera_health(const HealthInputs& inputs, const StateOptions& options);
+
+}  // namespace panoptes::console

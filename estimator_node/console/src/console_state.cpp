@@ -1,0 +1,283 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/console/console_state.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <nlohmann/json.hpp>
+
+namespace panoptes::console {
+
+namespace {
+
+using nlohmann::json;
+
+// Rounded to `decimals` so that the JSON carries short numbers (x * 10^d / 10^d prints shortest).
+double round_to(double value, int decimals) {
+  const double scale = std::pow(10.0, decimals);
+  return std::round(value * scale) / scale;
+}
+
+json pose_json(const Pose& pose) {
+  return {{"p", pose.position}, {"q", pose.orientation}};
+}
+
+json geometry_json(const CameraGeometry& geometry) {
+  json out = {{"width", geometry.width},
+              {"height", geometry.height},
+              {"K", geometry.K},
+              {"has_pose", geometry.has_pose}};
+  if (geometry.has_pose) out["T_world_cam"] = pose_json(geometry.T_world_cam);
+  return out;
+}
+
+json status_json(const CameraStatusRecord& status) {
+  return {{"fps", round_to(status.fps, 1)},
+          {"frames", status.frames},
+          {"drops_queue", status.drops_queue},
+          {"drops_source", status.drops_source},
+          {"detect_p99_ms", round_to(status.detect_p99_ms, 3)},
+          {"threshold", status.threshold},
+          {"exposure_us", status.exposure_us},
+          {"gain_db", status.gain_db},
+          {"clock_offset_ms", round_to(static_cast<double>(status.clock_offset_ns) * 1e-6, 3)},
+          {"clock_drift_ppm", round_to(status.clock_drift_ppm, 2)},
+          {"last_error", status.last_error}};
+}
+
+std::uint64_t counter(const CameraStatusRecord& status, const std::string& name) {
+  const auto found = status.counters.find(name);
+  return found == status.counters.end() ? 0 : found->second;
+}
+
+std::string format_reason(const char* format, double a, double b = 0) {
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, format, a, b);
+  return buffer;
+}
+
+}  // namespace
+
+Health camera_health(const HealthInputs& in, const StateOptions& options) {
+  if (!in.has_frames) return {"red", "no frames received"};
+  if (in.since_frame_ns > options.feature_timeout_ns)
+    return {"red", format_reason("no frames for %.1f s", static_cast<double>(in.since_frame_ns) * 1e-9)};
+  if (!in.has_status) return {"amber", "no camera_status yet"};
+  if (in.since_status_ns > options.status_timeout_ns)
+    return {"red",
+            format_reason("no camera_status for %.1f s", static_cast<double>(in.since_status_ns) * 1e-9)};
+  if (!in.last_error.empty()) return {"amber", "last error: " + in.last_error};
+  if (in.drops_last_period > 0)
+    return {"amber", format_reason("%.0f frames dropped in the last second",
+                                   static_cast<double>(in.drops_last_period))};
+  if (in.nominal_rate_hz > 0 && in.camera_fps < 0.9 * in.nominal_rate_hz)
+    return {"amber", format_reason("%.1f fps, nominal %.1f", in.camera_fps, in.nominal_rate_hz)};
+  if (in.nominal_rate_hz > 0 && in.detect_p99_ms > 0.5e3 / in.nominal_rate_hz)
+    return {"amber", format_reason("detection p99 %.2f ms is over half the frame period (%.2f ms)",
+                                   in.detect_p99_ms, 0.5e3 / in.nominal_rate_hz)};
+  return {"green", "ok"};
+}
+
+void ConsoleState::on_info(const std::string& camera, CameraInfoRecord info, TimeNs /*now*/) {
+  std::lock_guard lock(mutex_);
+  cameras_[camera].info = std::move(info);
+}
+
+void ConsoleState::on_status(const std::string& camera, CameraStatusRecord status, TimeNs now) {
+  std::lock_guard lock(mutex_);
+  Camera& entry = cameras_[camera];
+  const std::uint64_t drops = status.drops_queue + status.drops_source;
+  const std::uint64_t drops_before =
+      entry.status ? entry.status->drops_queue + entry.status->drops_source : drops;
+  entry.drops_last_period = drops >= drops_before ? drops - drops_before : 0;
+  resolve_pending(camera, status);
+  entry.status = std::move(status);
+  entry.status_ns = now;
+}
+
+void ConsoleState::on_features(const std::string& camera, FeatureRecord features, TimeNs now) {
+  std::lock_guard lock(mutex_);
+  Camera& entry = cameras_[camera];
+  const double latency_ms = static_cast<double>(now - features.stamp_ns) * 1e-6;
+  entry.latency_ms = entry.frames_received == 0 ? latency_ms : 0.9 * entry.latency_ms + 0.1 * latency_ms;
+  entry.features = std::move(features);
+  entry.features_ns = now;
+  ++entry.frames_received;
+  if (entry.rate_window_start_ns == 0) entry.rate_window_start_ns = now;
+  ++entry.rate_window_frames;
+  if (const TimeNs elapsed = now - entry.rate_window_start_ns; elapsed >= kNsPerSecond) {
+    entry.received_fps = static_cast<double>(entry.rate_window_frames) * 1e9 / static_cast<double>(elapsed);
+    entry.rate_window_start_ns = now;
+    entry.rate_window_frames = 0;
+  }
+}
+
+void ConsoleState::on_calibration(const std::map<std::string, CameraGeometry>& cameras) {
+  std::lock_guard lock(mutex_);
+  for (const auto& [id, geometry] : cameras) cameras_[id].calibrated = geometry;
+}
+
+void ConsoleState::on_estimator(EstimatorRecord status, TimeNs now) {
+  std::lock_guard lock(mutex_);
+  estimator_ = std::move(status);
+  estimator_ns_ = now;
+}
+
+void ConsoleState::on_tracks(std::vector<TrackPoint> tracks, TimeNs now) {
+  std::lock_guard lock(mutex_);
+  tracks_ = std::move(tracks);
+  tracks_ns_ = now;
+}
+
+void ConsoleState::on_body(BodyRecord body, TimeNs now) {
+  std::lock_guard lock(mutex_);
+  std::string name = body.name;
+  bodies_[std::move(name)] = {std::move(body), now};
+}
+
+bool ConsoleState::knows_camera(const std::string& camera) const {
+  std::lock_guard lock(mutex_);
+  return cameras_.count(camera) > 0;
+}
+
+std::optional<std::pair<int, int>> ConsoleState::image_size(const std::string& camera) const {
+  std::lock_guard lock(mutex_);
+  const auto found = cameras_.find(camera);
+  if (found == cameras_.end() || !found->second.info) return std::nullopt;
+  const CameraGeometry& geometry = found->second.info->geometry;
+  if (geometry.width <= 0 || geometry.height <= 0) return std::nullopt;
+  return std::make_pair(geometry.width, geometry.height);
+}
+
+void ConsoleState::on_command_sent(PendingCommand command) {
+  std::lock_guard lock(mutex_);
+  if (const auto found = cameras_.find(command.camera); found != cameras_.end() && found->second.status) {
+    command.applied_before = counter(*found->second.status, "command_" + command.command);
+    command.rejected_before = counter(*found->second.status, "bad_command");
+  }
+  pending_.push_back(std::move(command));
+}
+
+// Called with the lock held. A status counts every command applied or rejected so far; pending
+// commands of that camera take those counts in the order they were sent (the camera applies them
+// in order), each count going to one command only.
+void ConsoleState::resolve_pending(const std::string& camera, const CameraStatusRecord& status) {
+  std::map<std::string, std::uint64_t> applied_taken;
+  std::uint64_t rejected_taken = 0;
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    if (it->camera != camera) {
+      ++it;
+      continue;
+    }
+    const std::string name = "command_" + it->command;
+    if (counter(status, name) > it->applied_before + applied_taken[name]) {
+      ++applied_taken[name];
+      outcomes_.push_back({it->client, it->request, "applied", ""});
+    } else if (counter(status, "bad_command") > it->rejected_before + rejected_taken) {
+      ++rejected_taken;
+      outcomes_.push_back({it->client, it->request, "rejected", status.last_error});
+    } else {
+      ++it;
+      continue;
+    }
+    it = pending_.erase(it);
+  }
+}
+
+std::vector<CommandOutcome> ConsoleState::take_outcomes(TimeNs now) {
+  std::lock_guard lock(mutex_);
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    if (now - it->sent_ns <= options_.ack_timeout_ns) {
+      ++it;
+      continue;
+    }
+    outcomes_.push_back({it->client, it->request, "no_ack", "the camera's status did not count the command"});
+    it = pending_.erase(it);
+  }
+  std::vector<CommandOutcome> out;
+  out.swap(outcomes_);
+  return out;
+}
+
+Health ConsoleState::health_of(const std::string& /*id*/, const Camera& camera, TimeNs now) const {
+  HealthInputs in;
+  in.has_status = camera.status.has_value();
+  in.since_status_ns = now - camera.status_ns;
+  in.has_frames = camera.frames_received > 0;
+  in.since_frame_ns = now - camera.features_ns;
+  in.nominal_rate_hz = camera.info ? camera.info->nominal_rate_hz : 0;
+  in.drops_last_period = camera.drops_last_period;
+  if (camera.status) {
+    in.camera_fps = camera.status->fps;
+    in.detect_p99_ms = camera.status->detect_p99_ms;
+    in.last_error = camera.status->last_error;
+  }
+  return camera_health(in, options_);
+}
+
+nlohmann::json ConsoleState::snapshot(TimeNs now, bool full) const {
+  std::lock_guard lock(mutex_);
+  json cameras = json::array();
+  for (const auto& [id, camera] : cameras_) {
+    json blobs = json::array();
+    const bool fresh = now - camera.features_ns <= options_.feature_timeout_ns;
+    if (fresh) {
+      for (const BlobPoint& blob : camera.features.blobs)
+        blobs.push_back({round_to(blob.x, 2), round_to(blob.y, 2), round_to(blob.area, 1)});
+    }
+    const Health health = health_of(id, camera, now);
+    json entry = {{"id", id},
+                  {"frame", camera.features.frame},
+                  {"blobs", std::move(blobs)},
+                  {"rx_fps", round_to(camera.received_fps, 1)},
+                  {"latency_ms", round_to(camera.latency_ms, 2)},
+                  {"health", {{"light", health.light}, {"reason", health.reason}}}};
+    if (full) {
+      if (camera.info) {
+        entry["info"] = {{"model", camera.info->model},
+                         {"backend", camera.info->backend},
+                         {"nominal_rate_hz", camera.info->nominal_rate_hz}};
+      }
+      const CameraGeometry* geometry = camera.calibrated ? &*camera.calibrated
+                                       : camera.info     ? &camera.info->geometry
+                                                         : nullptr;
+      if (geometry) entry["geometry"] = geometry_json(*geometry);
+      if (camera.status) entry["status"] = status_json(*camera.status);
+      if (estimator_) {
+        if (const auto usage = estimator_->cameras.find(id); usage != estimator_->cameras.end()) {
+          entry["usage"] = {{"utilisation", round_to(usage->second.utilisation, 3)},
+                            {"latency_p99_ms", round_to(usage->second.latency_p99_ms, 2)}};
+        }
+      }
+    }
+    cameras.push_back(std::move(entry));
+  }
+  json tracks = json::array();
+  if (now - tracks_ns_ <= options_.track_timeout_ns) {
+    for (const TrackPoint& track : tracks_) {
+      tracks.push_back({track.id, round_to(track.position[0], 4), round_to(track.position[1], 4),
+                        round_to(track.position[2], 4), track.status});
+    }
+  }
+  json bodies = json::array();
+  for (const auto& [name, body] : bodies_) {
+    if (now - body.second > options_.body_timeout_ns) continue;
+    bodies.push_back({{"name", name}, {"pose", pose_json(body.first.pose)}, {"quality", body.first.quality}});
+  }
+  json out = {{"type", "state"},
+              {"full", full},
+              {"cameras", std::move(cameras)},
+              {"tracks", std::move(tracks)},
+              {"bodies", std::move(bodies)}};
+  if (full && estimator_) {
+    out["estimator"] = {{"tracks_confirmed", estimator_->tracks_confirmed},
+                        {"tracks_tentative", estimator_->tracks_tentative},
+                        {"cpu_percent", round_to(estimator_->cpu_percent, 1)},
+                        {"update_p99_ms", round_to(estimator_->update_p99_ms, 3)},
+                        {"age_s", round_to(static_cast<double>(now - estimator_ns_) * 1e-9, 1)}};
+  }
+  return out;
+}
+
+}  // namespace panoptes::console

@@ -1,0 +1,543 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/console/server.h"
+
+#include <atomic>
+#include <deque>
+#include <fstream>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+#include <nlohmann/json.hpp>
+
+#include "panoptes/time.h"
+
+namespace panoptes::console {
+
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+namespace net = boost::asio;
+using tcp = net::ip::tcp;
+using nlohmann::json;
+
+namespace {
+
+constexpr std::size_t kMaxQueuedReplies = 64;
+constexpr std::size_t kMaxRequestBytes = 8192;
+constexpr const char* kCookieName = "panoptes_token";
+
+struct Snapshot {
+  std::uint64_t seq = 0;
+  std::string text;
+};
+
+// Constant-time comparison: the time taken does not tell how much of a guess was right.
+bool same_token(const std::string& given, const std::string& expected) {
+  if (given.size() != expected.size() || expected.empty()) return false;
+  unsigned char difference = 0;
+  for (std::size_t i = 0; i < given.size(); ++i)
+    difference |= static_cast<unsigned char>(given[i] ^ expected[i]);
+  return difference == 0;
+}
+
+std::string query_value(std::string_view target, std::string_view key) {
+  const auto question = target.find('?');
+  if (question == std::string_view::npos) return {};
+  std::string_view query = target.substr(question + 1);
+  while (!query.empty()) {
+    const auto amp = query.find('&');
+    const std::string_view pair = query.substr(0, amp);
+    if (pair.size() > key.size() && pair.substr(0, key.size()) == key && pair[key.size()] == '=')
+      return std::string(pair.substr(key.size() + 1));
+    if (amp == std::string_view::npos) break;
+    query = query.substr(amp + 1);
+  }
+  return {};
+}
+
+std::string cookie_value(std::string_view cookies, std::string_view key) {
+  while (!cookies.empty()) {
+    const auto semicolon = cookies.find(';');
+    std::string_view pair = cookies.substr(0, semicolon);
+    while (!pair.empty() && pair.front() == ' ') pair.remove_prefix(1);
+    if (pair.size() > key.size() && pair.substr(0, key.size()) == key && pair[key.size()] == '=')
+      return std::string(pair.substr(key.size() + 1));
+    if (semicolon == std::string_view::npos) break;
+    cookies = cookies.substr(semicolon + 1);
+  }
+  return {};
+}
+
+std::string_view view_of(beast::string_view text) {
+  return {text.data(), text.size()};
+}
+
+std::string request_token(const http::request<http::string_body>& request) {
+  std::string token = query_value(view_of(request.target()), "token");
+  if (token.empty()) token = cookie_value(view_of(request[http::field::cookie]), kCookieName);
+  return token;
+}
+
+std::string path_of(std::string_view target) {
+  return std::string(target.substr(0, target.find('?')));
+}
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file)
+    throw std::runtime_error("cannot read " + path.string() + " (the console's web files; --web-root)");
+  std::ostringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+std::map<std::string, std::pair<std::string, std::string>> load_web_files(const std::filesystem::path& root) {
+  const std::string js = "text/javascript; charset=utf-8";
+  const std::map<std::string, std::pair<std::filesystem::path, std::string>> files = {
+      {"/", {"index.html", "text/html; charset=utf-8"}},
+      {"/app.js", {"app.js", js}},
+      {"/style.css", {"style.css", "text/css; charset=utf-8"}},
+      {"/vendor/three.module.js", {"node_modules/three/build/three.module.js", js}},
+      {"/vendor/OrbitControls.js", {"node_modules/three/examples/jsm/controls/OrbitControls.js", js}},
+  };
+  std::map<std::string, std::pair<std::string, std::string>> out;
+  for (const auto& [path, file] : files) out[path] = {read_file(root / file.first), file.second};
+  return out;
+}
+
+struct Counters {
+  std::atomic<std::uint64_t> clients_connected{0};
+  std::atomic<std::uint64_t> clients_total{0};
+  std::atomic<std::uint64_t> clients_refused{0};
+  std::atomic<std::uint64_t> http_unauthorized{0};
+  std::atomic<std::uint64_t> http_requests{0};
+  std::atomic<std::uint64_t> snapshots_built{0};
+  std::atomic<std::uint64_t> messages_sent{0};
+  std::atomic<std::uint64_t> bytes_sent{0};
+  std::atomic<std::uint64_t> snapshots_skipped{0};
+  std::atomic<std::uint64_t> replies_dropped{0};
+  std::atomic<std::uint64_t> commands_received{0};
+  std::atomic<std::uint64_t> commands_forwarded{0};
+  mutable std::mutex rejected_mutex;
+  std::map<std::string, std::uint64_t> rejected;
+};
+
+class WebSocketSession;
+
+struct ConsoleServer::Impl {
+  Impl(ServerOptions options_in, ConsoleState& state_in, CommandSink sink_in)
+      : options(std::move(options_in)),
+        state(state_in),
+        sink(std::move(sink_in)),
+        files(load_web_files(options.web_root)),
+        acceptor(io),
+        timer(io) {}
+
+  void listen();
+  void accept();
+  void tick();
+  void count_rejection(const std::string& counter) {
+    std::lock_guard lock(counters.rejected_mutex);
+    ++counters.rejected[counter];
+  }
+  void handle_client_message(WebSocketSession& session, std::string_view text);
+  static json stats_of(const Impl& impl);
+
+  ServerOptions options;
+  ConsoleState& state;
+  CommandSink sink;
+  std::map<std::string, std::pair<std::string, std::string>> files;
+  net::io_context io;
+  tcp::acceptor acceptor;
+  net::steady_timer timer;
+  std::uint64_t ticks = 0;
+  std::uint64_t next_client = 1;
+  std::set<std::shared_ptr<WebSocketSession>> sessions;
+  std::shared_ptr<const Snapshot> latest_full;
+  std::shared_ptr<const Snapshot> latest_live;
+  Counters counters;
+};
+
+// One browser. Writes go out one at a time: replies (bounded), then the latest full and live
+// snapshots only; anything older is replaced and counted as skipped.
+class WebSocketSession : public std::enable_shared_from_this<WebSocketSession> {
+ public:
+  WebSocketSession(tcp::socket socket, ConsoleServer::Impl& server, std::uint64_t id)
+      : ws_(std::move(socket)),
+        server_(server),
+        id_(id),
+        limiter_(server.options.commands_per_s, server.options.command_burst) {}
+
+  void start(http::request<http::string_body> request) {
+    request_ = std::move(request);  // kept until the handshake completes
+    ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+    ws_.read_message_max(server_.options.max_frame_bytes);
+    ws_.async_accept(request_, [self = shared_from_this()](beast::error_code error) {
+      if (error) return;
+      self->server_.sessions.insert(self);
+      ++self->server_.counters.clients_connected;
+      ++self->server_.counters.clients_total;
+      self->reply(json{{"type", "hello"},
+                       {"client", self->id_},
+                       {"commands", console_commands()},
+                       {"max_message_bytes", self->server_.options.max_message_bytes},
+                       {"update_hz", self->server_.options.update_hz}});
+      auto first = std::make_shared<Snapshot>();
+      first->text = self->server_.state.snapshot(wall_now_ns(), true).dump();
+      self->offer(first, true, false);
+      self->read();
+    });
+  }
+
+  std::uint64_t id() const { return id_; }
+  RateLimiter& limiter() { return limiter_; }
+
+  void reply(const json& message) {
+    if (replies_.size() >= kMaxQueuedReplies) {
+      replies_.pop_front();
+      ++server_.counters.replies_dropped;
+    }
+    replies_.push_back(std::make_shared<const std::string>(message.dump()));
+    write_next();
+  }
+
+  void offer(std::shared_ptr<const Snapshot> snapshot, bool full, bool count_skip = true) {
+    auto& slot = full ? pending_full_ : pending_live_;
+    if (slot && count_skip) ++server_.counters.snapshots_skipped;
+    slot = std::move(snapshot);
+    write_next();
+  }
+
+  void close() {
+    closed_ = true;
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws_).socket().close(ignored);
+  }
+
+ private:
+  void read() {
+    ws_.async_read(buffer_, [self = shared_from_this()](beast::error_code error, std::size_t bytes) {
+      if (error) {
+        if (error == websocket::error::message_too_big) self->server_.count_rejection("oversized");
+        self->finish();
+        return;
+      }
+      const std::string text = beast::buffers_to_string(self->buffer_.data());
+      self->buffer_.consume(bytes);
+      self->server_.handle_client_message(*self, text);
+      if (!self->closed_) self->read();
+    });
+  }
+
+  void write_next() {
+    if (writing_ || closed_) return;
+    std::shared_ptr<const std::string> next;
+    if (!replies_.empty()) {
+      next = replies_.front();
+      replies_.pop_front();
+    } else if (pending_full_) {
+      if (pending_live_ && pending_live_->seq <= pending_full_->seq) {
+        pending_live_.reset();
+        ++server_.counters.snapshots_skipped;
+      }
+      next = std::shared_ptr<const std::string>(pending_full_, &pending_full_->text);
+      pending_full_.reset();
+    } else if (pending_live_) {
+      next = std::shared_ptr<const std::string>(pending_live_, &pending_live_->text);
+      pending_live_.reset();
+    } else {
+      return;
+    }
+    writing_ = true;
+    ws_.text(true);
+    ws_.async_write(net::buffer(*next),
+                    [self = shared_from_this(), next](beast::error_code error, std::size_t bytes) {
+                      self->writing_ = false;
+                      if (error) {
+                        self->finish();
+                        return;
+                      }
+                      ++self->server_.counters.messages_sent;
+                      self->server_.counters.bytes_sent += bytes;
+                      self->write_next();
+                    });
+  }
+
+  void finish() {
+    if (server_.sessions.erase(shared_from_this()) > 0) --server_.counters.clients_connected;
+    closed_ = true;
+  }
+
+  websocket::stream<beast::tcp_stream> ws_;
+  http::request<http::string_body> request_;
+  ConsoleServer::Impl& server_;
+  std::uint64_t id_;
+  RateLimiter limiter_;
+  beast::flat_buffer buffer_;
+  std::deque<std::shared_ptr<const std::string>> replies_;
+  std::shared_ptr<const Snapshot> pending_full_;
+  std::shared_ptr<const Snapshot> pending_live_;
+  bool writing_ = false;
+  bool closed_ = false;
+};
+
+void ConsoleServer::Impl::handle_client_message(WebSocketSession& session, std::string_view text) {
+  const auto reject = [&](std::int64_t request, const std::string& counter, const std::string& reason) {
+    count_rejection(counter);
+    session.reply(json{{"type", "command_result"},
+                       {"id", request},
+                       {"result", "rejected"},
+                       {"counter", counter},
+                       {"reason", reason}});
+  };
+  if (text.size() > options.max_message_bytes) {
+    reject(0, "oversized",
+           "message of " + std::to_string(text.size()) + " bytes exceeds " +
+               std::to_string(options.max_message_bytes));
+    return;
+  }
+  const json message = json::parse(text, nullptr, false);
+  if (message.is_discarded() || !message.is_object()) {
+    reject(0, "bad_message", "not a JSON object");
+    return;
+  }
+  const auto type = message.find("type");
+  if (type == message.end() || !type->is_string() || *type != "command") {
+    reject(0, "bad_message", "unknown message type (expected \"command\")");
+    return;
+  }
+  ++counters.commands_received;
+  const TimeNs now = wall_now_ns();
+  std::string camera;
+  if (const auto field = message.find("camera"); field != message.end() && field->is_string())
+    camera = *field;
+  GateResult result = check_command(message, state.knows_camera(camera), state.image_size(camera));
+  if (const auto* rejection = std::get_if<Rejection>(&result)) {
+    reject(rejection->request, rejection->counter, rejection->reason);
+    return;
+  }
+  const auto& command = std::get<CameraCommandRequest>(result);
+  // The rate limit counts only valid commands, so a flood of them cannot starve the limit of others.
+  if (!session.limiter().allow(now)) {
+    reject(command.request, "rate_limited",
+           "more than " + std::to_string(static_cast<int>(options.commands_per_s)) + " commands per second");
+    return;
+  }
+  if (!sink(command)) {
+    reject(command.request, "not_sent", "no camera node is listening for commands");
+    return;
+  }
+  ++counters.commands_forwarded;
+  state.on_command_sent({session.id(), command.request, command.camera, command.command, 0, 0, now});
+  session.reply(json{{"type", "command_result"},
+                     {"id", command.request},
+                     {"result", "sent"},
+                     {"camera", command.camera},
+                     {"command", command.command},
+                     {"args", command.arguments}});
+}
+
+// A plain HTTP connection: the page's files, /api/state, /api/stats, or the upgrade to /ws.
+class HttpSession : public std::enable_shared_from_this<HttpSession> {
+ public:
+  HttpSession(tcp::socket socket, ConsoleServer::Impl& server)
+      : stream_(std::move(socket)), server_(server) {}
+
+  void read() {
+    parser_.emplace();
+    parser_->body_limit(kMaxRequestBytes);
+    parser_->header_limit(kMaxRequestBytes);
+    stream_.expires_after(std::chrono::seconds(30));
+    http::async_read(stream_, buffer_, *parser_,
+                     [self = shared_from_this()](beast::error_code error, std::size_t) {
+                       if (error) return;
+                       self->handle(self->parser_->release());
+                     });
+  }
+
+ private:
+  void handle(http::request<http::string_body> request) {
+    ++server_.counters.http_requests;
+    const std::string path = path_of(view_of(request.target()));
+    const bool authorised = same_token(request_token(request), server_.options.token);
+    if (websocket::is_upgrade(request)) {
+      if (!authorised || path != "/ws" || server_.sessions.size() >= server_.options.max_clients) {
+        ++server_.counters.clients_refused;
+        respond(request, http::status::unauthorized, "text/plain",
+                authorised ? "too many clients or wrong path\n" : "token required\n", false);
+        return;
+      }
+      stream_.expires_never();
+      std::make_shared<WebSocketSession>(stream_.release_socket(), server_, server_.next_client++)
+          ->start(std::move(request));
+      return;
+    }
+    if (!authorised) {
+      ++server_.counters.http_unauthorized;
+      respond(request, http::status::unauthorized, "text/plain",
+              "token required: open the URL panoptes_console printed\n", false);
+      return;
+    }
+    if (request.method() != http::verb::get) {
+      respond(request, http::status::method_not_allowed, "text/plain", "GET only\n", false);
+      return;
+    }
+    if (path == "/api/state") {
+      respond(request, http::status::ok, "application/json",
+              server_.state.snapshot(wall_now_ns(), true).dump(), false);
+    } else if (path == "/api/stats") {
+      respond(request, http::status::ok, "application/json", ConsoleServer::Impl::stats_of(server_).dump(),
+              false);
+    } else if (const auto file = server_.files.find(path); file != server_.files.end()) {
+      respond(request, http::status::ok, file->second.second, file->second.first, path == "/");
+    } else {
+      respond(request, http::status::not_found, "text/plain", "not found\n", false);
+    }
+  }
+
+  void respond(const http::request<http::string_body>& request, http::status status, const std::string& type,
+               std::string body, bool set_cookie) {
+    auto response = std::make_shared<http::response<http::string_body>>(status, request.version());
+    response->set(http::field::server, "panoptes_console");
+    response->set(http::field::content_type, type);
+    response->set(http::field::cache_control, "no-store");
+    if (set_cookie)
+      response->set(http::field::set_cookie, std::string(kCookieName) + "=" + server_.options.token +
+                                                 "; Path=/; HttpOnly; SameSite=Strict");
+    response->keep_alive(request.keep_alive() && status == http::status::ok);
+    response->body() = std::move(body);
+    response->prepare_payload();
+    http::async_write(stream_, *response,
+                      [self = shared_from_this(), response](beast::error_code error, std::size_t) {
+                        if (error) return;
+                        if (response->keep_alive()) {
+                          self->read();
+                        } else {
+                          beast::error_code ignored;
+                          self->stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+                        }
+                      });
+  }
+
+  beast::tcp_stream stream_;
+  ConsoleServer::Impl& server_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+};
+
+void ConsoleServer::Impl::listen() {
+  const tcp::endpoint endpoint(net::ip::make_address(options.bind_address), options.port);
+  acceptor.open(endpoint.protocol());
+  acceptor.set_option(net::socket_base::reuse_address(true));
+  acceptor.bind(endpoint);
+  acceptor.listen(net::socket_base::max_listen_connections);
+}
+
+void ConsoleServer::Impl::accept() {
+  acceptor.async_accept([this](beast::error_code error, tcp::socket socket) {
+    if (error) return;  // the acceptor was closed
+    std::make_shared<HttpSession>(std::move(socket), *this)->read();
+    accept();
+  });
+}
+
+// Builds one snapshot for every client and hands over the command outcomes.
+void ConsoleServer::Impl::tick() {
+  timer.expires_after(std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / options.update_hz)));
+  timer.async_wait([this](beast::error_code error) {
+    if (error) return;
+    const TimeNs now = wall_now_ns();
+    for (const CommandOutcome& outcome : state.take_outcomes(now)) {
+      for (const auto& session : sessions) {
+        if (session->id() != outcome.client) continue;
+        session->reply(json{{"type", "command_result"},
+                            {"id", outcome.request},
+                            {"result", outcome.result},
+                            {"reason", outcome.reason}});
+      }
+    }
+    ++ticks;
+    if (!sessions.empty()) {
+      const bool full =
+          options.full_every <= 1 || ticks % static_cast<std::uint64_t>(options.full_every) == 0;
+      auto snapshot = std::make_shared<Snapshot>();
+      snapshot->seq = ticks;
+      json state_json = state.snapshot(now, full);
+      state_json["console"] = stats_of(*this);
+      snapshot->text = state_json.dump();
+      ++counters.snapshots_built;
+      (full ? latest_full : latest_live) = snapshot;
+      // Copy: a failed write inside offer() removes its session from the set.
+      const auto clients = sessions;
+      for (const auto& session : clients) session->offer(snapshot, full);
+    }
+    tick();
+  });
+}
+
+json ConsoleServer::Impl::stats_of(const Impl& impl) {
+  const Counters& c = impl.counters;
+  json rejected = json::object();
+  {
+    std::lock_guard lock(c.rejected_mutex);
+    for (const auto& [name, count] : c.rejected) rejected[name] = count;
+  }
+  return {{"clients", c.clients_connected.load()},
+          {"clients_total", c.clients_total.load()},
+          {"clients_refused", c.clients_refused.load()},
+          {"http_unauthorized", c.http_unauthorized.load()},
+          {"snapshots", c.snapshots_built.load()},
+          {"messages_sent", c.messages_sent.load()},
+          {"bytes_sent", c.bytes_sent.load()},
+          {"snapshots_skipped", c.snapshots_skipped.load()},
+          {"replies_dropped", c.replies_dropped.load()},
+          {"commands_received", c.commands_received.load()},
+          {"commands_forwarded", c.commands_forwarded.load()},
+          {"rejected", rejected}};
+}
+
+ConsoleServer::ConsoleServer(ServerOptions options, ConsoleState& state, CommandSink sink)
+    : impl_(std::make_unique<Impl>(std::move(options), state, std::move(sink))) {
+  if (impl_->options.token.empty()) throw std::invalid_argument("the console needs an access token");
+  if (!(impl_->options.update_hz > 0 && impl_->options.update_hz <= 240))
+    throw std::invalid_argument("update rate must be in (0, 240] Hz");
+  impl_->listen();
+}
+
+ConsoleServer::~ConsoleServer() = default;
+
+unsigned short ConsoleServer::port() const {
+  return impl_->acceptor.local_endpoint().port();
+}
+
+void ConsoleServer::run() {
+  impl_->accept();
+  impl_->tick();
+  impl_->io.run();
+}
+
+void ConsoleServer::stop() {
+  net::post(impl_->io, [impl = impl_.get()] {
+    beast::error_code ignored;
+    impl->acceptor.close(ignored);
+    impl->timer.cancel();
+    for (const auto& session : impl->sessions) session->close();
+    impl->sessions.clear();
+    impl->io.stop();
+  });
+}
+
+json ConsoleServer::counters() const {
+  return Impl::stats_of(*impl_);
+}
+
+}  // namespace panoptes::console

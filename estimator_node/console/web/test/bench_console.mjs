@@ -1,0 +1,75 @@
+// SPDX-License-Identifier: Apache-2.0
+// Console benchmark (docs/benchmarks.md, issue 18): one chromium page on the console for
+// --seconds; prints one JSON line: the console's CPU (% of one core, from /proc/<pid>/stat), the
+// WebSocket bytes and messages per second it sent (its /api/stats), snapshots skipped, the page's
+// 3D frame rate, and the frame rate of a second page showing the 3D view alone (?view=3d) with
+// --synthetic-tracks tracks generated in the page, and the page's own milliseconds per frame.
+//   node bench_console.mjs --url <console URL> --console-pid <pid> --seconds 10 [--synthetic-tracks 200]
+import { chromium } from 'playwright-core';
+import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+
+const args = Object.fromEntries(process.argv.slice(2).reduce((pairs, value, i, all) =>
+  (i % 2 === 0 ? [...pairs, [value.replace(/^--/, ''), all[i + 1]]] : pairs), []));
+const seconds = Number(args.seconds || 10);
+const url = new URL(args.url);
+const statsUrl = `${url.protocol}//${url.host}/api/stats?token=${url.searchParams.get('token')}`;
+const ticksPerSecond = 100;  // USER_HZ on Linux
+const cpuTicks = (pid) => {
+  const fields = readFileSync(`/proc/${pid}/stat`, 'utf8').split(') ')[1].split(' ');
+  return Number(fields[11]) + Number(fields[12]);  // utime + stime
+};
+const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+
+const profile = mkdtempSync(join(tmpdir(), 'panoptes-chromium-'));
+const context = await chromium.launchPersistentContext(profile, {
+  executablePath: '/usr/bin/chromium', headless: true, viewport: { width: 1600, height: 1000 },
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
+});
+const out = {};
+try {
+  const page = context.pages()[0] || await context.newPage();
+  await page.goto(args.url);
+  await page.waitForFunction(() => window.panoptes.state && window.panoptes.state.cameras.length > 0, null, { timeout: 20000 });
+  await sleep(2000);
+  const stats0 = await (await fetch(statsUrl)).json();
+  const ticks0 = cpuTicks(args['console-pid']);
+  const frames0 = await page.evaluate(() => window.panoptes.frames);
+  const t0 = Date.now();
+  await sleep(seconds * 1000);
+  const elapsed = (Date.now() - t0) / 1000;
+  const stats1 = await (await fetch(statsUrl)).json();
+  const ticks1 = cpuTicks(args['console-pid']);
+  const frames1 = await page.evaluate(() => window.panoptes.frames);
+  const state = await page.evaluate(() => window.panoptes.state);
+  out.cameras = state.cameras.length;
+  out.blobs_per_snapshot = state.cameras.reduce((sum, c) => sum + c.blobs.length, 0);
+  out.tracks = state.tracks.length;
+  out.seconds = Number(elapsed.toFixed(1));
+  out.console_cpu_percent = Number((100 * (ticks1 - ticks0) / ticksPerSecond / elapsed).toFixed(1));
+  out.websocket_bytes_per_s = Math.round((stats1.bytes_sent - stats0.bytes_sent) / elapsed);
+  out.websocket_messages_per_s = Number(((stats1.messages_sent - stats0.messages_sent) / elapsed).toFixed(1));
+  out.snapshots_skipped = stats1.snapshots_skipped - stats0.snapshots_skipped;
+  out.page_fps = Number(((frames1 - frames0) / elapsed).toFixed(1));
+  await page.close();
+  if (args['synthetic-tracks']) {
+    const synthetic = await context.newPage();
+    await synthetic.goto(`${args.url}&view=3d&synthetic_tracks=${args['synthetic-tracks']}`);
+    await sleep(2000);
+    const f0 = await synthetic.evaluate(() => window.panoptes.frames);
+    const s0 = Date.now();
+    await sleep(5000);
+    const f1 = await synthetic.evaluate(() => window.panoptes.frames);
+    out.synthetic_tracks = Number(args['synthetic-tracks']);
+    out.synthetic_fps = Number(((f1 - f0) / ((Date.now() - s0) / 1000)).toFixed(1));
+    const timing = await synthetic.evaluate(() => window.panoptes.timing);
+    const frames = await synthetic.evaluate(() => window.panoptes.frames);
+    out.synthetic_ms_per_frame = Object.fromEntries(Object.entries(timing).map(([k, v]) => [k, Number((v / frames).toFixed(2))]));
+  }
+} finally {
+  await context.close();
+  rmSync(profile, { recursive: true, force: true });
+}
+console.log(JSON.stringify(out));

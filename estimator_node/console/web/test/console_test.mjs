@@ -1,0 +1,253 @@
+// SPDX-License-Identifier: Apache-2.0
+// The operator console in a real browser (Debian's chromium driven by playwright-core), against a
+// live simulated system started by tests/integration/test_console.sh. Prints PASS/FAIL lines and
+// writes what the page showed (frames and blobs per camera, command times) to --out for the shell
+// to check against what each camera published.
+//   node console_test.mjs --url <console URL with token> --out <results.json> --shots <dir>
+//        --console-pid <pid> --restart <shell command that starts the console again, echoing its pid>
+import { chromium } from 'playwright-core';
+import { spawn } from 'node:child_process';
+import http from 'node:http';
+import { mkdtempSync, writeFileSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+
+const args = Object.fromEntries(process.argv.slice(2).reduce((pairs, value, i, all) =>
+  (i % 2 === 0 ? [...pairs, [value.replace(/^--/, ''), all[i + 1]]] : pairs), []));
+const results = { samples: [], commands: {}, checks: [] };
+let failures = 0;
+const pass = (what) => { console.log(`PASS: ${what}`); results.checks.push({ what, ok: true }); };
+const fail = (what) => { console.log(`FAIL: ${what}`); results.checks.push({ what, ok: false }); failures += 1; };
+const check = (ok, what) => (ok ? pass(what) : fail(what));
+const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+
+async function waitFor(page, predicate, arg, timeoutMs) {
+  try {
+    await page.waitForFunction(predicate, arg, { timeout: timeoutMs, polling: 20 });
+    return true;
+  } catch {
+    return false;
+  }
+}
+
+const url = new URL(args.url);
+const base = `${url.protocol}//${url.host}`;
+const token = url.searchParams.get('token');
+
+// --- token: refused without it -----------------------------------------------------------------
+for (const [path, what] of [['/', 'page'], ['/api/state', 'state'], ['/app.js', 'script'], [`/?token=${token}x`, 'page with a wrong token']]) {
+  // fetch sends no cookie: each of these carries no token or a wrong one.
+  const response = await fetch(base + path);
+  check(response.status === 401, `${what}: HTTP ${response.status} (401 expected)`);
+}
+
+const profile = mkdtempSync(join(tmpdir(), 'panoptes-chromium-'));
+const context = await chromium.launchPersistentContext(profile, {
+  executablePath: '/usr/bin/chromium',
+  headless: true,
+  viewport: { width: 1600, height: 1000 },
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
+});
+const consoleErrors = [];
+try {
+  const page = context.pages()[0] || await context.newPage();
+  page.on('console', (message) => { if (message.type() === 'error') consoleErrors.push(message.text()); });
+  page.on('pageerror', (error) => consoleErrors.push(String(error)));
+  const started = Date.now();
+  await page.goto(args.url);
+
+  // --- cameras and blobs ---------------------------------------------------------------------
+  const cameras = ['cam0', 'cam1', 'cam2', 'cam3'];
+  const allCards = await waitFor(page, (ids) => ids.every((id) => {
+    const card = document.querySelector(`.card[data-camera="${id}"]`);
+    return card && Number(card.dataset.blobs) > 0;
+  }), cameras, 15000);
+  check(allCards, `a card with blobs for each of ${cameras.join(', ')} (${Date.now() - started} ms after loading)`);
+  // The page's view of each camera (frame number and blobs), sampled for the shell to compare with
+  // the cameras' own records; the card's blob count must match what it drew from.
+  for (let i = 0; i < 10; ++i) {
+    const sample = await page.evaluate(() => window.panoptes.state.cameras.map((camera) => ({
+      id: camera.id, frame: camera.frame, blobs: camera.blobs,
+      shown: Number(document.querySelector(`.card[data-camera="${camera.id}"]`).dataset.blobs) })));
+    results.samples.push(sample);
+    await sleep(100);
+  }
+  check(results.samples.every((sample) => sample.every((camera) => camera.shown === camera.blobs.length)),
+        'each card shows the blob count of the frame it drew');
+  const health = await page.evaluate(() => window.panoptes.state.cameras.map((c) => `${c.id} ${c.health.light} (${c.health.reason})`));
+  check(health.every((light) => !light.includes(' red ')), `health lights: ${health.join(', ')}`);
+
+  // --- 3D view ------------------------------------------------------------------------------
+  const ready3d = await waitFor(page, () => window.panoptes.state && window.panoptes.state.bodies.length > 0 &&
+                                window.panoptes.state.tracks.length > 0, null, 10000);
+  check(ready3d, '3D view has tracks and bodies');
+  // One task reads the canvas and places each body with the page's fixed view: pixels of the
+  // body's axes (pure red, green or blue; grid, tracks and frusta have other colours) must lie
+  // within 8 px of where its position projects.
+  const { litPixels, bodies } = await page.evaluate(() => {
+    const source = document.getElementById('view3d');
+    const copy = document.createElement('canvas');
+    copy.width = source.width; copy.height = source.height;
+    const context2d = copy.getContext('2d');
+    context2d.drawImage(source, 0, 0);
+    const pixels = context2d.getImageData(0, 0, copy.width, copy.height).data;
+    const isLit = (i) => pixels[i] + pixels[i + 1] + pixels[i + 2] > 60;
+    const isAxis = (i) => {
+      const [r, g, b] = [pixels[i], pixels[i + 1], pixels[i + 2]];
+      return (r > 150 && g < 90 && b < 90) || (g > 150 && r < 90 && b < 90) || (b > 150 && r < 90 && g < 90);
+    };
+    let lit = 0;
+    for (let i = 0; i < pixels.length; i += 4) if (isLit(i)) lit += 1;
+    const near = window.panoptes.state.bodies.map((body) => {
+      const [u, v] = window.panoptes.project(body.pose.p);
+      let count = 0;
+      for (let y = Math.round(v) - 8; y <= Math.round(v) + 8; ++y) {
+        for (let x = Math.round(u) - 8; x <= Math.round(u) + 8; ++x) {
+          if (x >= 0 && y >= 0 && x < copy.width && y < copy.height && isAxis(4 * (y * copy.width + x))) count += 1;
+        }
+      }
+      return { name: body.name, u: Math.round(u), v: Math.round(v), lit: count };
+    });
+    return { litPixels: lit / (pixels.length / 4), bodies: near };
+  });
+  check(bodies.length > 0 && bodies.every((b) => b.lit >= 3),
+        `each body drawn where its pose projects: ${bodies.map((b) => `${b.name} at (${b.u}, ${b.v}) ${b.lit} axis px`).join(', ')}`);
+  check(litPixels > 0.002, `3D canvas is not blank (${(100 * litPixels).toFixed(2)}% of pixels lit)`);
+  check(consoleErrors.length === 0, `page loaded with no console errors (${consoleErrors.join(' | ') || 'none'})`);
+  await page.screenshot({ path: join(args.shots, 'console_overview.png') });
+  await page.locator('#view3d-panel').screenshot({ path: join(args.shots, 'console_3d.png') });
+
+  // --- threshold to maximum and back -----------------------------------------------------------
+  const card0 = page.locator('.card[data-camera="cam0"]');
+  // Times are taken in the page when it sends a command and when it sees the change (one machine,
+  // one wall clock): a slow CDP round trip on a loaded machine does not count against the console.
+  const sentAt = (command, first) => page.evaluate(([c, a]) =>
+    window.panoptes.sent.filter((s) => s.command === c && (a === null || String(s.args[0]) === a)).at(-1).at, [command, first]);
+  const blobsOf = (camera, condition) => waitFor(page, ([id, zero]) => {
+    const n = Number(document.querySelector(`.card[data-camera="${id}"]`).dataset.blobs);
+    if (zero ? n !== 0 : n === 0) return false;
+    window.panoptes.seenAt = Date.now();
+    return true;
+  }, [camera, condition === 'none'], 3000);
+  await card0.locator('input.threshold').fill('255');
+  results.commands.threshold_max_ms = await sentAt('set_threshold', '255');
+  const gone = await blobsOf('cam0', 'none');
+  const goneMs = gone ? await page.evaluate(() => window.panoptes.seenAt) - results.commands.threshold_max_ms : Infinity;
+  check(goneMs < 1000, `threshold 255: cam0's blobs gone in the page ${goneMs} ms after the command was sent`);
+  const applied = await waitFor(page, () => document.querySelector('.card[data-camera="cam0"] .result').classList.contains('applied'), null, 6000);
+  check(applied, `the card shows the camera's acknowledgement: "${await card0.locator('.result').textContent()}"`);
+  await card0.screenshot({ path: join(args.shots, 'console_threshold.png') });
+  await sleep(Math.max(0, results.commands.threshold_max_ms + 1500 - Date.now()));  // 1.5 s at the maximum
+  await card0.locator('input.threshold').fill('64');
+  results.commands.threshold_restore_ms = await sentAt('set_threshold', '64');
+  const back = await blobsOf('cam0', 'some');
+  const backMs = back ? await page.evaluate(() => window.panoptes.seenAt) - results.commands.threshold_restore_ms : Infinity;
+  check(backMs < 1000, `threshold 64: cam0's blobs back in the page ${backMs} ms after the command was sent`);
+
+  // --- mask: drag a rectangle over the left half of cam1's image ------------------------------
+  const card1 = page.locator('.card[data-camera="cam1"]');
+  await card1.locator('button.mask').click();
+  const box = await card1.locator('canvas').boundingBox();
+  await page.mouse.move(box.x + 1, box.y + 1);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width * 0.4, box.y + box.height * 0.6, { steps: 5 });
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height - 1, { steps: 5 });
+  await card1.screenshot({ path: join(args.shots, 'console_mask.png') });
+  await page.mouse.up();
+  const maskArgs = await waitFor(page, () => window.panoptes.results.some((r) => r.command === 'add_mask'), null, 5000)
+    ? await page.evaluate(() => window.panoptes.results.find((r) => r.command === 'add_mask').args) : null;
+  results.commands.mask_args = maskArgs;
+  if (maskArgs) results.commands.mask_ms = await sentAt('add_mask', null);
+  check(maskArgs && maskArgs[0] === 'rect', `mask sent as add_mask ${maskArgs ? maskArgs.join(' ') : '(none)'}`);
+  await sleep(600);
+  // The page has centroids only: a spot on the mask's edge keeps its outside pixels and its
+  // centroid may lie a pixel or two inside; count those deeper than 3 px.
+  let inside = 0;
+  for (let i = 0; i < 10; ++i) {
+    inside += await page.evaluate((mask) => {
+      const camera = window.panoptes.state.cameras.find((c) => c.id === 'cam1');
+      const [, x, y, w, h] = mask.map(Number);
+      return camera.blobs.filter(([bx, by]) => bx >= x + 3 && bx < x + w - 3 && by >= y + 3 && by < y + h - 3).length;
+    }, maskArgs);
+    await sleep(50);
+  }
+  check(inside === 0, `no blob of cam1 inside the mask in the page (${inside} seen over 0.5 s)`);
+  await card1.locator('button.clear_masks').click();
+  results.commands.clear_masks_ms = await sentAt('clear_masks', null);
+
+  // --- a command the camera rejects: its reason is shown ---------------------------------------
+  const card2 = page.locator('.card[data-camera="cam2"]');
+  await card2.locator('input.gain').fill('6');
+  const rejected = await waitFor(page, () => document.querySelector('.card[data-camera="cam2"] .result').classList.contains('rejected'), null, 6000);
+  check(rejected, `a gain the simulated camera lacks is shown rejected: "${await card2.locator('.result').textContent()}"`);
+
+  // --- bad input over a second WebSocket -----------------------------------------------------
+  const bad = await page.evaluate(async (wsUrl) => {
+    const replies = [];
+    const socket = new WebSocket(wsUrl);
+    await new Promise((resolve) => { socket.onopen = resolve; });
+    socket.onmessage = (event) => { const m = JSON.parse(event.data); if (m.type === 'command_result') replies.push(m); };
+    socket.send('this is not JSON');
+    socket.send(JSON.stringify({ type: 'command', id: 1, camera: 'cam0', command: 'set_threshold', args: ['x'.repeat(20000)] }));
+    socket.send(JSON.stringify({ type: 'command', id: 2, camera: 'cam0', command: 'format_disk' }));
+    socket.send(JSON.stringify({ type: 'command', id: 3, camera: 'cam0', command: 'set_threshold', args: [70000] }));
+    socket.send(JSON.stringify({ type: 'command', id: 4, camera: 'nocam', command: 'set_threshold', args: [10] }));
+    socket.send(JSON.stringify({ type: 'command', id: 5, camera: 'cam3', command: 'add_mask', args: ['rect', 600, 400, 100, 100] }));
+    for (let i = 0; i < 40; ++i) socket.send(JSON.stringify({ type: 'command', id: 100 + i, camera: 'cam3', command: 'set_threshold', args: [0] }));
+    await new Promise((resolve) => setTimeout(resolve, 800));
+    socket.close();
+    return replies;
+  }, `${base.replace('http', 'ws')}/ws?token=${token}`);
+  const reason = (counter) => bad.filter((r) => r.counter === counter).length;
+  check(reason('bad_message') === 1, `malformed message rejected (${reason('bad_message')})`);
+  check(reason('oversized') === 1, `oversized message rejected (${reason('oversized')})`);
+  check(reason('unknown_command') === 1, `unknown command rejected (${reason('unknown_command')})`);
+  check(reason('out_of_range') === 2, `out-of-range threshold and a mask outside the image rejected (${reason('out_of_range')})`);
+  check(reason('unknown_camera') === 1, `unknown camera rejected (${reason('unknown_camera')})`);
+  const sent = bad.filter((r) => r.result === 'sent').length;
+  check(reason('rate_limited') >= 15 && sent <= 25, `command flood rate-limited (${sent} sent, ${reason('rate_limited')} refused)`);
+  results.commands.flood_sent = sent;
+  // The page's own cookie would carry the token: the refusal is checked with a bare handshake.
+  const refusedStatus = await new Promise((resolve) => {
+    const request = http.request({ host: url.hostname, port: url.port, path: '/ws', headers: {
+      Connection: 'Upgrade', Upgrade: 'websocket', 'Sec-WebSocket-Version': '13',
+      'Sec-WebSocket-Key': 'cGFub3B0ZXMtY29uc29sZQ==' } });
+    request.on('upgrade', () => resolve(101));
+    request.on('response', (response) => resolve(response.statusCode));
+    request.on('error', () => resolve(0));
+    request.end();
+  });
+  check(refusedStatus === 401, `WebSocket handshake without the token: HTTP ${refusedStatus} (401 expected)`);
+
+  // --- the console killed and started again: the page recovers without a reload ----------------
+  const connectsBefore = await page.evaluate(() => window.panoptes.connects);
+  process.kill(Number(args['console-pid']), 'SIGKILL');
+  const down = await waitFor(page, () => !window.panoptes.connected, null, 3000);
+  check(down, 'the page notices the console is gone');
+  const restarted = spawn('bash', ['-c', args.restart], { stdio: ['ignore', 'pipe', 'inherit'] });
+  let newPid = '';
+  restarted.stdout.on('data', (data) => { newPid += data; });
+  await new Promise((resolve) => restarted.on('exit', resolve));
+  results.restarted_pid = Number(newPid.trim());
+  const t0 = Date.now();
+  const recovered = await waitFor(page, (before) => window.panoptes.connected && window.panoptes.connects > before &&
+    window.panoptes.state.cameras.length === 4 && window.panoptes.state.cameras.every((c) => c.frame > 0),
+  connectsBefore, 15000);
+  check(recovered, `the page reconnected without a reload (${Date.now() - t0} ms after the restart)`);
+  const frames0 = await page.evaluate(() => window.panoptes.state.cameras.map((c) => c.frame));
+  const streaming = await waitFor(page, (before) => window.panoptes.state.cameras.every((c, i) => c.frame > before[i]),
+                                  frames0, 3000);
+  check(streaming, 'blobs keep streaming after the restart (every camera\'s frame number advances)');
+  await page.screenshot({ path: join(args.shots, 'console_after_restart.png') });
+  check(consoleErrors.filter((e) => !e.includes('WebSocket')).length === 0,
+        `no console errors in the page (${consoleErrors.length ? consoleErrors.join(' | ') : 'none'})`);
+  results.console_errors = consoleErrors;
+} catch (error) {
+  fail(`browser test aborted: ${error.stack || error}`);
+} finally {
+  await context.close();
+  rmSync(profile, { recursive: true, force: true });
+  writeFileSync(args.out, JSON.stringify(results, null, 1));
+}
+process.exit(failures === 0 ? 0 : 1);

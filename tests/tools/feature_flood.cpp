@@ -1,0 +1,134 @@
+// SPDX-License-Identifier: Apache-2.0
+// panoptes_feature_flood: one process that publishes, for N cameras at R Hz each, FeatureFrames with
+// B blobs moving on circles, plus each camera's CameraInfo and a CameraStatus once a second; and a
+// TrackFrame with T tracks at R Hz. A controlled bus load for the console benchmark
+// (tests/bench/bench_console.sh) that does not need N camera processes.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "panoptes/cli.h"
+#include "panoptes/dds/bus.h"
+#include "panoptes/process.h"
+#include "panoptes/time.h"
+#include "panoptes_msgs/panoptes.h"
+
+namespace {
+
+namespace msg = panoptes::msg;
+
+msg::CameraInfo info_of(const std::string& id, double rate_hz) {
+  msg::CameraInfo info;
+  info.camera_id(id);
+  info.model("flood");
+  info.backend("features");
+  info.width(640);
+  info.height(480);
+  info.nominal_rate_hz(rate_hz);
+  info.K({600, 600, 319.5, 239.5});
+  return info;
+}
+
+int run(int argc, char** argv) {
+  int cameras = 32;
+  double rate_hz = 120;
+  int blobs = 3;
+  int tracks = 3;
+  double duration_s = 20;
+  std::string dds_profile;
+  CLI::App app{"panoptes_feature_flood: publishes N cameras' features at R Hz (console benchmark)",
+               "panoptes_feature_flood"};
+  app.option_defaults()->always_capture_default();
+  app.add_option("--cameras", cameras, "cameras")->check(CLI::Range(1, 256));
+  app.add_option("--rate", rate_hz, "frames per second per camera")->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--blobs", blobs, "blobs per frame")->check(CLI::Range(0, 1000));
+  app.add_option("--tracks", tracks, "tracks per TrackFrame")->check(CLI::Range(0, 1000));
+  app.add_option("--duration", duration_s, "seconds")->check(CLI::PositiveNumber);
+  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile");
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+  panoptes::install_stop_handlers();
+
+  panoptes::dds::BusOptions bus_options;
+  bus_options.profile_file = dds_profile;
+  bus_options.participant_name = "panoptes_feature_flood";
+  panoptes::dds::Bus bus(bus_options);
+  auto info_writer = bus.make_writer<msg::CameraInfo>();
+  auto feature_writer = bus.make_writer<msg::FeatureFrame>();
+  auto status_writer = bus.make_writer<msg::CameraStatus>();
+  auto track_writer = bus.make_writer<msg::TrackFrame>();
+  for (int c = 0; c < cameras; ++c) info_writer->write(info_of("cam" + std::to_string(c), rate_hz));
+
+  // Cameras take turns: one tick per camera frame, spread evenly over the period.
+  const auto tick = std::chrono::nanoseconds(static_cast<long long>(1e9 / (rate_hz * cameras)));
+  const auto start = std::chrono::steady_clock::now();
+  const auto end =
+      start + std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(duration_s));
+  long long frame = 0;
+  std::uint64_t written = 0;
+  auto next = start;
+  for (long long step = 0; next < end && !panoptes::stop_requested(); ++step, next += tick) {
+    std::this_thread::sleep_until(next);
+    const int camera = static_cast<int>(step % cameras);
+    if (camera == 0) ++frame;
+    const double t = static_cast<double>(frame) / rate_hz;
+    const panoptes::TimeNs now = panoptes::wall_now_ns();
+    msg::FeatureFrame features;
+    features.camera_id("cam" + std::to_string(camera));
+    features.frame(frame);
+    features.stamp_ns(now);
+    features.publish_ns(now);
+    std::vector<msg::Blob> list(static_cast<std::size_t>(blobs));
+    for (int b = 0; b < blobs; ++b) {
+      const double angle = t + 2.0 * M_PI * b / std::max(1, blobs) + camera;
+      list[b].x(static_cast<float>(320 + 150 * std::cos(angle)));
+      list[b].y(static_cast<float>(240 + 150 * std::sin(angle)));
+      list[b].area(12.5F);
+    }
+    features.blobs(std::move(list));
+    feature_writer->write(features);
+    ++written;
+    if (camera == 0 && tracks > 0) {
+      msg::TrackFrame frame_message;
+      frame_message.stamp_ns(now);
+      std::vector<msg::Track> list_tracks(static_cast<std::size_t>(tracks));
+      for (int k = 0; k < tracks; ++k) {
+        list_tracks[k].id(k + 1);
+        list_tracks[k].position({std::cos(t + k), std::sin(t + k), 1.0});
+        list_tracks[k].status(1);
+      }
+      frame_message.tracks(std::move(list_tracks));
+      track_writer->write(frame_message);
+    }
+    if (camera == 0 && frame % static_cast<long long>(rate_hz) == 0) {
+      for (int c = 0; c < cameras; ++c) {
+        msg::CameraStatus status;
+        status.camera_id("cam" + std::to_string(c));
+        status.stamp_ns(now);
+        status.fps(rate_hz);
+        status.frames(static_cast<unsigned long long>(frame));
+        status_writer->write(status);
+      }
+    }
+  }
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("panoptes_feature_flood: %llu FeatureFrames in %.1f s (%.0f/s, target %.0f/s)\n",
+              static_cast<unsigned long long>(written), elapsed, static_cast<double>(written) / elapsed,
+              cameras * rate_hz);
+  return panoptes::kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "panoptes_feature_flood: %s\n", error.what());
+    return panoptes::kExitFailure;
+  }
+}

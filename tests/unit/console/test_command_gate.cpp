@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: Apache-2.0
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "panoptes/console/command_gate.h"
+
+namespace panoptes::console {
+namespace {
+
+using nlohmann::json;
+const std::optional<std::pair<int, int>> kVga = std::make_pair(640, 480);
+
+Rejection rejected(const json& message, bool known = true) {
+  const GateResult result = check_command(message, known, kVga);
+  EXPECT_TRUE(std::holds_alternative<Rejection>(result)) << message.dump();
+  return std::holds_alternative<Rejection>(result) ? std::get<Rejection>(result) : Rejection{};
+}
+
+CameraCommandRequest accepted(const json& message) {
+  const GateResult result = check_command(message, true, kVga);
+  EXPECT_TRUE(std::holds_alternative<CameraCommandRequest>(result))
+      << message.dump() << ": "
+      << (std::holds_alternative<Rejection>(result) ? std::get<Rejection>(result).reason : "");
+  return std::holds_alternative<CameraCommandRequest>(result) ? std::get<CameraCommandRequest>(result)
+                                                              : CameraCommandRequest{};
+}
+
+TEST(CommandGate, ForwardsValidCommandsWithCanonicalArguments) {
+  const auto threshold =
+      accepted({{"id", 7}, {"camera", "cam0"}, {"command", "set_threshold"}, {"args", {"255"}}});
+  EXPECT_EQ(threshold.request, 7);
+  EXPECT_EQ(threshold.camera, "cam0");
+  EXPECT_EQ(threshold.arguments, std::vector<std::string>({"255"}));
+  EXPECT_EQ(accepted({{"camera", "cam0"}, {"command", "set_exposure"}, {"args", {1500.5}}}).arguments,
+            std::vector<std::string>({"1500.5"}));
+  EXPECT_EQ(
+      accepted({{"camera", "cam0"}, {"command", "add_mask"}, {"args", {"rect", 0, 0, 320.4, 480}}}).arguments,
+      std::vector<std::string>({"rect", "0", "0", "320", "480"}));
+  EXPECT_TRUE(accepted({{"camera", "cam0"}, {"command", "clear_masks"}}).arguments.empty());
+  EXPECT_EQ(accepted({{"camera", "cam0"}, {"command", "add_mask"}, {"args", {"poly", 0, 0, 10, 0, 5, 9}}})
+                .arguments.size(),
+            7u);
+}
+
+TEST(CommandGate, RejectsWithAReasonAndACounter) {
+  EXPECT_EQ(rejected({{"camera", "cam0"}}).counter, "bad_message");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "set_threshold"}, {"args", "12"}}).counter,
+            "bad_message");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "format_disk"}}).counter, "unknown_command");
+  EXPECT_EQ(rejected({{"camera", "cam9"}, {"command", "restart"}}, false).counter, "unknown_camera");
+  const Rejection range = rejected({{"camera", "cam0"}, {"command", "set_threshold"}, {"args", {70000}}});
+  EXPECT_EQ(range.counter, "out_of_range");
+  EXPECT_NE(range.reason.find("70000"), std::string::npos) << range.reason;
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "set_threshold"}, {"args", {12.5}}}).counter,
+            "bad_arguments");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "set_threshold"}, {"args", {"12; rm"}}}).counter,
+            "bad_arguments");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "set_threshold"}}).counter, "bad_arguments");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "set_gain"}, {"args", {-1}}}).counter, "out_of_range");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "restart"}, {"args", {1}}}).counter, "bad_arguments");
+  EXPECT_EQ(
+      rejected({{"camera", "cam0"}, {"command", "add_mask"}, {"args", {"rect", 600, 400, 100, 100}}}).counter,
+      "out_of_range");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "add_mask"}, {"args", {"circle", 1, 2}}}).counter,
+            "bad_arguments");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "add_mask"}, {"args", {"poly", 0, 0, 1, 1}}}).counter,
+            "bad_arguments");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "set_exposure"}, {"args", {"nan"}}}).counter,
+            "bad_arguments");
+}
+
+TEST(RateLimiter, AllowsTheBurstThenTheRate) {
+  RateLimiter limiter(10, 20);
+  const TimeNs start = 1'000'000'000;
+  int allowed = 0;
+  for (int i = 0; i < 40; ++i) allowed += limiter.allow(start) ? 1 : 0;
+  EXPECT_EQ(allowed, 20);
+  // One second later: ten more tokens.
+  allowed = 0;
+  for (int i = 0; i < 40; ++i) allowed += limiter.allow(start + kNsPerSecond) ? 1 : 0;
+  EXPECT_EQ(allowed, 10);
+}
+
+}  // namespace
+}  // namespace panoptes::console

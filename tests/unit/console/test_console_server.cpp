@@ -1,0 +1,181 @@
+// SPDX-License-Identifier: Apache-2.0
+// The console's server over real sockets on 127.0.0.1: the token, commands through the gate, and
+// back-pressure (a client that stops reading costs skipped snapshots, not a slower server).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <boost/asio.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+#include <nlohmann/json.hpp>
+
+#include "panoptes/console/server.h"
+
+namespace panoptes::console {
+namespace {
+
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+namespace net = boost::asio;
+using tcp = net::ip::tcp;
+using nlohmann::json;
+
+const std::string kToken = "unit-test-token-0123456789";
+
+std::filesystem::path make_web_root() {
+  auto root = std::filesystem::temp_directory_path() / ("panoptes_console_web_" + std::to_string(::getpid()));
+  for (const char* file : {"index.html", "app.js", "style.css", "node_modules/three/build/three.module.js",
+                           "node_modules/three/examples/jsm/controls/OrbitControls.js"}) {
+    std::filesystem::create_directories((root / file).parent_path());
+    std::ofstream(root / file) << "// " << file << "\n";
+  }
+  return root;
+}
+
+class ConsoleServerTest : public ::testing::Test {
+ protected:
+  void start(double update_hz = 30) {
+    ServerOptions options;
+    options.port = 0;
+    options.token = kToken;
+    options.web_root = web_root_;
+    options.update_hz = update_hz;
+    server_ = std::make_unique<ConsoleServer>(options, state_, [this](const CameraCommandRequest& command) {
+      forwarded_.push_back(command);
+      return true;
+    });
+    thread_ = std::thread([this] { server_->run(); });
+  }
+  void TearDown() override {
+    if (server_) server_->stop();
+    if (thread_.joinable()) thread_.join();
+    std::filesystem::remove_all(web_root_);
+  }
+
+  http::response<http::string_body> get(const std::string& target) {
+    net::io_context io;
+    beast::tcp_stream stream(io);
+    stream.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server_->port()));
+    http::request<http::string_body> request(http::verb::get, target, 11);
+    request.set(http::field::host, "127.0.0.1");
+    http::write(stream, request);
+    beast::flat_buffer buffer;
+    http::response<http::string_body> response;
+    http::read(stream, buffer, response);
+    return response;
+  }
+
+  std::unique_ptr<websocket::stream<tcp::socket>> open_socket(net::io_context& io,
+                                                              const std::string& target) {
+    auto ws = std::make_unique<websocket::stream<tcp::socket>>(io);
+    ws->next_layer().connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server_->port()));
+    ws->handshake("127.0.0.1", target);
+    return ws;
+  }
+
+  static json read_json(websocket::stream<tcp::socket>& ws) {
+    beast::flat_buffer buffer;
+    ws.read(buffer);
+    return json::parse(beast::buffers_to_string(buffer.data()));
+  }
+
+  // The next message of `type`, skipping state snapshots.
+  static json read_until(websocket::stream<tcp::socket>& ws, const std::string& type) {
+    for (int i = 0; i < 200; ++i) {
+      json message = read_json(ws);
+      if (message["type"] == type) return message;
+    }
+    return {};
+  }
+
+  std::filesystem::path web_root_ = make_web_root();
+  ConsoleState state_;
+  std::vector<CameraCommandRequest> forwarded_;
+  std::unique_ptr<ConsoleServer> server_;
+  std::thread thread_;
+};
+
+TEST_F(ConsoleServerTest, EveryRequestNeedsTheToken) {
+  start();
+  EXPECT_EQ(get("/").result(), http::status::unauthorized);
+  EXPECT_EQ(get("/api/state").result(), http::status::unauthorized);
+  EXPECT_EQ(get("/?token=" + kToken + "x").result(), http::status::unauthorized);
+  const auto page = get("/?token=" + kToken);
+  EXPECT_EQ(page.result(), http::status::ok);
+  EXPECT_NE(std::string(page[http::field::set_cookie]).find(kToken), std::string::npos);
+  EXPECT_EQ(get("/app.js?token=" + kToken).body(), "// app.js\n");
+  EXPECT_EQ(get("/../../etc/passwd?token=" + kToken).result(), http::status::not_found);
+  EXPECT_EQ(json::parse(get("/api/state?token=" + kToken).body())["type"], "state");
+
+  net::io_context io;
+  EXPECT_THROW(open_socket(io, "/ws"), beast::system_error);
+  EXPECT_THROW(open_socket(io, "/ws?token=wrong"), beast::system_error);
+  auto ws = open_socket(io, "/ws?token=" + kToken);
+  EXPECT_EQ(read_json(*ws)["type"], "hello");
+  EXPECT_GE(server_->counters()["clients_refused"].get<int>(), 2);
+}
+
+TEST_F(ConsoleServerTest, CommandsPassTheGateOrAreRejectedAndCounted) {
+  state_.on_info("cam0", {"sim", "sim", 60, {640, 480, {}, false, {}}}, wall_now_ns());
+  start();
+  net::io_context io;
+  auto ws = open_socket(io, "/ws?token=" + kToken);
+  ws->write(net::buffer(std::string("{not json")));
+  EXPECT_EQ(read_until(*ws, "command_result")["counter"], "bad_message");
+  ws->write(net::buffer(std::string(20000, ' ')));
+  EXPECT_EQ(read_until(*ws, "command_result")["counter"], "oversized");
+  ws->write(net::buffer(
+      json{{"type", "command"}, {"id", 3}, {"camera", "cam0"}, {"command", "set_threshold"}, {"args", {-5}}}
+          .dump()));
+  const json range = read_until(*ws, "command_result");
+  EXPECT_EQ(range["id"], 3);
+  EXPECT_EQ(range["counter"], "out_of_range");
+  ws->write(net::buffer(
+      json{{"type", "command"}, {"id", 4}, {"camera", "cam0"}, {"command", "set_threshold"}, {"args", {200}}}
+          .dump()));
+  const json sent = read_until(*ws, "command_result");
+  EXPECT_EQ(sent["result"], "sent");
+  ASSERT_EQ(forwarded_.size(), 1u);  // only the valid command reached the sink
+  EXPECT_EQ(forwarded_[0].arguments, std::vector<std::string>({"200"}));
+  const json counters = server_->counters();
+  EXPECT_EQ(counters["rejected"]["bad_message"], 1);
+  EXPECT_EQ(counters["rejected"]["oversized"], 1);
+  EXPECT_EQ(counters["rejected"]["out_of_range"], 1);
+  EXPECT_EQ(counters["commands_forwarded"], 1);
+}
+
+// Large snapshots at 60 Hz and a client that never reads: its socket fills, the server keeps only
+// the latest snapshot for it (counted as skipped), and a second client still gets every tick.
+TEST_F(ConsoleServerTest, ASlowClientSkipsSnapshotsAndDoesNotSlowOthers) {
+  const TimeNs now = wall_now_ns();
+  for (int camera = 0; camera < 40; ++camera) {
+    FeatureRecord features{1, now, std::vector<BlobPoint>(400, BlobPoint{123.45F, 234.56F, 12.3F})};
+    state_.on_features("cam" + std::to_string(camera), features, now);
+  }
+  start(60);
+  net::io_context io;
+  auto slow = open_socket(io, "/ws?token=" + kToken);  // never read again
+  auto fast = open_socket(io, "/ws?token=" + kToken);
+  const auto start_time = std::chrono::steady_clock::now();
+  const int built_before = server_->counters()["snapshots"].get<int>();
+  int states = 0;
+  while (std::chrono::steady_clock::now() - start_time < std::chrono::seconds(2)) {
+    if (read_json(*fast)["type"] == "state") ++states;
+  }
+  const json counters = server_->counters();
+  EXPECT_GT(counters["snapshots_skipped"].get<int>(), 20) << counters.dump();
+  // The fast client received (nearly) every snapshot built meanwhile, however busy the machine.
+  const int built = counters["snapshots"].get<int>() - built_before;
+  EXPECT_GT(built, 30);
+  EXPECT_GE(states, built - 3) << "the fast client got " << states << " of " << built << " snapshots";
+  EXPECT_EQ(counters["clients"], 2);
+}
+
+}  // namespace
+}  // namespace panoptes::console
