@@ -8,6 +8,7 @@
 #include "panoptes/estimator/frame_screen.h"
 #include "panoptes/estimator/point_ekf.h"
 #include "panoptes/session/estimator_session.h"
+#include "panoptes/simulator.h"
 
 namespace panoptes::tune {
 
@@ -53,14 +54,29 @@ std::vector<TrackRecord> run_tracks(const session::EstimatorConfig& config, cons
   return tracks;
 }
 
-TruthScore score_truth(const est::Evaluation& evaluation, const TruthCriterionOptions& options) {
+TruthScore score_truth(const est::Evaluation& evaluation, std::size_t judged_frames,
+                       const TruthCriterionOptions& options) {
   TruthScore score;
   score.rmse_mm = evaluation.rmse_m * 1e3;
   score.id_switches = evaluation.id_switch_count;
-  score.coverage = evaluation.coverage();
+  const double published = judged_frames == 0 ? 1.0
+                                              : std::min(1.0, static_cast<double>(evaluation.instants) /
+                                                                  static_cast<double>(judged_frames));
+  score.coverage = evaluation.instants == 0 ? 0.0 : evaluation.coverage() * published;
   score.cost = score.rmse_mm + options.id_switch_penalty_mm * static_cast<double>(score.id_switches) +
                options.lost_coverage_penalty_mm * (1.0 - score.coverage);
   return score;
+}
+
+TruthScore truth_score(const session::EstimatorConfig& config, const TuneInput& input, const Scene& scene,
+                       const TruthCriterionOptions& options) {
+  const TimeNs begin = options.evaluation.epoch_ns + options.evaluation.warmup_ns;
+  const TimeNs end = options.evaluation.epoch_ns + scene.duration_ns();
+  const auto judged = std::count_if(input.frames.begin(), input.frames.end(), [&](const FeatureFrame& frame) {
+    return frame.stamp_ns >= begin && frame.stamp_ns < end;
+  });
+  return score_truth(est::evaluate(scene, run_tracks(config, input), options.evaluation),
+                     static_cast<std::size_t>(judged), options);
 }
 
 HeldOutScorer::HeldOutScorer(const HeldOutCriterionOptions& options, double measurement_noise_px)
@@ -87,12 +103,15 @@ void HeldOutScorer::add_frame(const FeatureFrame& frame, const std::vector<Track
     const Eigen::Vector2d z(blob.x, blob.y);
     if (!z.allFinite()) continue;
     double best_density = 0.0, best_d2 = std::numeric_limits<double>::infinity();
+    double residual2 = options_.residual_cap_px * options_.residual_cap_px;
     for (const auto& prediction : predictions) {
+      residual2 = std::min(residual2, (z - prediction.pixel).squaredNorm());
       const double d2 = est::mahalanobis2(prediction, z);
       const double density =
           std::exp(-0.5 * d2) / (2.0 * std::numbers::pi * std::sqrt(std::max(prediction.S.determinant(), 1e-300)));
       if (density > best_density) best_density = density, best_d2 = d2;
     }
+    residual_sum_ += residual2;
     nll_sum_ -= std::log(clutter + (1.0 - options_.clutter_weight) * best_density);
     ++blobs_;
     if (best_d2 < options_.nis_gate) nis_sum_ += best_d2, ++nis_samples_;
@@ -110,21 +129,30 @@ HeldOutScore HeldOutScorer::score() const {
     score.cost = std::numeric_limits<double>::infinity();
     return score;
   }
+  const double mean_residual2 = residual_sum_ / static_cast<double>(blobs_);
+  score.rms_residual_px = std::sqrt(mean_residual2);
   score.nll_per_blob = nll_sum_ / static_cast<double>(blobs_);
   score.mean_nis = nis_samples_ == 0 ? options_.nis_gate : nis_sum_ / static_cast<double>(nis_samples_);
   const double log_ratio = std::log(score.mean_nis / score.expected_nis);
-  score.cost = score.nll_per_blob + options_.nis_weight * log_ratio * log_ratio;
+  const double fit = options_.score == HeldOutCriterionOptions::Score::kResidual
+                         ? std::log(std::max(mean_residual2, 1e-12))
+                         : score.nll_per_blob;
+  score.cost = fit + options_.nis_weight * log_ratio * log_ratio;
   return score;
 }
 
 HeldOutScore held_out_score(const session::EstimatorConfig& config, const TuneInput& input,
                             const HeldOutCriterionOptions& options) {
   HeldOutScorer scorer(options, config.tracker.measurement_noise_px);
+  // Every confirmed track predicts, also one the node would not publish (publish_max_sigma_m):
+  // the criterion judges the filter's predictions, not the publishing policy.
+  session::EstimatorConfig predicting = config;
+  predicting.tracker.publish_max_sigma_m = 0.0;
   for (const auto& camera_id : cameras_with_frames(input)) {
     const auto calibration = std::find_if(input.calibration.cameras.begin(), input.calibration.cameras.end(),
                                           [&](const auto& camera) { return camera.id == camera_id; });
     const CameraModel model = calibration->model();
-    replay_with_held_out(config, input, camera_id, {}, [&](const FeatureFrame& frame, const est::Tracker& tracker) {
+    replay_with_held_out(predicting, input, camera_id, {}, [&](const FeatureFrame& frame, const est::Tracker& tracker) {
       scorer.add_frame(frame, tracker.tracks_at(frame.stamp_ns), model);
     });
   }

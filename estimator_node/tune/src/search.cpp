@@ -12,6 +12,8 @@ namespace panoptes::tune {
 
 namespace {
 
+constexpr int kMaxExtensions = 40;  // grid steps beyond the span when the minimum is at its end
+
 class Searcher {
  public:
   Searcher(const session::EstimatorConfig& start, const SearchOptions& options, const CostFunction& cost,
@@ -19,6 +21,7 @@ class Searcher {
       : options_(options), cost_(cost), progress_(progress) {
     result_.best = start;
     for (const auto& name : options_.parameters) current_.push_back(parameter_value(start, name));
+    start_ = current_;
   }
 
   SearchResult run() {
@@ -28,7 +31,10 @@ class Searcher {
       for (std::size_t p = 0; p < options_.parameters.size(); ++p) line_search(p, sweep, span);
       span = std::sqrt(span);
     }
-    result_.best = configure(result_.best_sample.values);
+    // The last line searches' point: as good as the best sample (each line search starts from
+    // the previous point), and nearest the start among equals.
+    result_.best_sample = result_.samples[cache_.at(current_).index];
+    result_.best = configure(current_);
     return std::move(result_);
   }
 
@@ -41,12 +47,12 @@ class Searcher {
 
   // The cost at `values` (evaluated once; later calls hit the cache).
   double evaluate(const std::vector<double>& values, int sweep, const std::string& varied) {
-    if (const auto hit = cache_.find(values); hit != cache_.end()) return hit->second;
+    if (const auto hit = cache_.find(values); hit != cache_.end()) return hit->second.cost;
     const CostResult cost = cost_(configure(values));
     SearchSample sample{result_.samples.size(), sweep, varied, values, cost.cost, cost.extras};
     if (result_.samples.empty() || sample.cost < result_.best_sample.cost) result_.best_sample = sample;
     result_.samples.push_back(sample);
-    cache_[values] = cost.cost;
+    cache_[values] = {sample.index, cost.cost};
     if (progress_) progress_(sample, result_.best_sample);
     return cost.cost;
   }
@@ -67,12 +73,28 @@ class Searcher {
     const ParameterInfo& info = parameter_info(options_.parameters[p]);
     const double lo = std::max(std::log(current_[p] / span), std::log(info.lower));
     const double hi = std::min(std::log(current_[p] * span), std::log(info.upper));
-    const int n = std::max(options_.grid_points, 2);
-    std::vector<double> grid(n), costs(n);
-    for (int i = 0; i < n; ++i) {
-      grid[i] = lo + (hi - lo) * i / (n - 1);
-      costs[i] = cost_at_log(p, grid[i], sweep);
+    const int points = std::max(options_.grid_points, 2);
+    const double step = (hi - lo) / (points - 1);
+    std::vector<double> grid, costs;
+    for (int i = 0; i < points; ++i) {
+      grid.push_back(lo + step * i);
+      costs.push_back(cost_at_log(p, grid.back(), sweep));
     }
+    // A minimum at an end of the grid is not bracketed: step on outwards (same step) until the
+    // cost rises or the limit is reached.
+    for (int extra = 0; extra < kMaxExtensions; ++extra) {
+      const auto at = std::min_element(costs.begin(), costs.end()) - costs.begin();
+      if (at == 0 && grid.front() - step >= std::log(info.lower) - 1e-12) {
+        grid.insert(grid.begin(), grid.front() - step);
+        costs.insert(costs.begin(), cost_at_log(p, grid.front(), sweep));
+      } else if (at + 1 == static_cast<long>(grid.size()) && grid.back() + step <= std::log(info.upper) + 1e-12) {
+        grid.push_back(grid.back() + step);
+        costs.push_back(cost_at_log(p, grid.back(), sweep));
+      } else {
+        break;
+      }
+    }
+    const int n = static_cast<int>(grid.size());
     const auto best = static_cast<int>(std::min_element(costs.begin(), costs.end()) - costs.begin());
     double a = grid[std::max(best - 1, 0)], b = grid[std::min(best + 1, n - 1)];
     const double ratio = (std::sqrt(5.0) - 1.0) / 2.0;
@@ -89,23 +111,36 @@ class Searcher {
         fd = cost_at_log(p, d, sweep);
       }
     }
-    // The best point of this line (the other parameters fixed) wherever it was found.
-    double best_cost = std::numeric_limits<double>::infinity();
+    // The best point of this line (the other parameters fixed) wherever it was found; among equal
+    // costs (a flat criterion, e.g. a gate nothing reaches) the one nearest the start value.
+    std::vector<const SearchSample*> line;
     for (const auto& sample : result_.samples) {
       bool on_line = true;
       for (std::size_t q = 0; q < current_.size(); ++q)
         if (q != p && sample.values[q] != current_[q]) on_line = false;
-      if (on_line && sample.cost < best_cost) best_cost = sample.cost, best_value_ = sample.values[p];
+      if (on_line) line.push_back(&sample);
     }
-    current_[p] = best_value_;
+    const double best_cost =
+        (*std::min_element(line.begin(), line.end(), [](auto* a, auto* b) { return a->cost < b->cost; }))->cost;
+    const double tie = 1e-9 * std::abs(best_cost) + 1e-12;
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (const SearchSample* sample : line) {
+      const double distance = std::abs(std::log(sample->values[p] / start_[p]));
+      if (sample->cost <= best_cost + tie && distance < best_distance)
+        best_distance = distance, current_[p] = sample->values[p];
+    }
   }
 
   SearchOptions options_;
   const CostFunction& cost_;
   const SearchProgress& progress_;
+  std::vector<double> start_;
   std::vector<double> current_;
-  double best_value_ = 0;
-  std::map<std::vector<double>, double> cache_;
+  struct Cached {
+    std::size_t index;
+    double cost;
+  };
+  std::map<std::vector<double>, Cached> cache_;
   SearchResult result_;
 };
 

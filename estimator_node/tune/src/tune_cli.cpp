@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -64,6 +65,16 @@ void add_options(CLI::App& app, TuneArgs& a) {
       ->check(CLI::Range(0, 100));
   app.add_option("--sweeps", a.search.sweeps, "coordinate-descent sweeps (each searches √ of the last span)")
       ->check(CLI::Range(1, 20));
+  app.add_option("--heldout-score", a.held_out.score,
+                 "heldout: residual (capped squared prediction error) or nll (negative log-likelihood)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, HeldOutCriterionOptions::Score>{{"residual", HeldOutCriterionOptions::Score::kResidual},
+                                                                {"nll", HeldOutCriterionOptions::Score::kNll}},
+          CLI::ignore_case))
+      ->default_str("residual");
+  app.add_option("--residual-cap-px", a.held_out.residual_cap_px,
+                 "heldout: squared residuals are capped at this² (a blob no track explains costs the cap)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--nis-weight", a.held_out.nis_weight, "heldout: weight of ln(mean NIS / expected)²")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--clutter-weight", a.held_out.clutter_weight, "heldout: ε, share of blobs no track explains")
@@ -106,8 +117,7 @@ struct Criterion {
 Criterion make_criterion(const TuneArgs& args, const TuneInput& input, const Scene* scene) {
   const auto truth_extras = [&args, &input, scene](const session::EstimatorConfig& config,
                                                    std::vector<double>& extras) {
-    const auto evaluation = estimator::evaluate(*scene, run_tracks(config, input), args.truth.evaluation);
-    const TruthScore score = score_truth(evaluation, args.truth);
+    const TruthScore score = truth_score(config, input, *scene, args.truth);
     extras.insert(extras.end(), {score.rmse_mm, static_cast<double>(score.id_switches), score.coverage});
     return score.cost;
   };
@@ -122,12 +132,14 @@ Criterion make_criterion(const TuneArgs& args, const TuneInput& input, const Sce
   }
   Criterion criterion{[&args, &input, scene, truth_extras](const session::EstimatorConfig& config) {
                         const HeldOutScore score = held_out_score(config, input, args.held_out);
-                        CostResult result{score.cost, {score.nll_per_blob, score.mean_nis}};
+                        CostResult result{score.cost, {score.rms_residual_px, score.nll_per_blob, score.mean_nis}};
                         if (scene) truth_extras(config, result.extras);
                         return result;
                       },
-                      {"nll_per_blob", "mean_nis"},
-                      "held-out NLL + NIS term"};
+                      {"rms_residual_px", "nll_per_blob", "mean_nis"},
+                      args.held_out.score == HeldOutCriterionOptions::Score::kResidual
+                          ? "held-out ln(mean r² / px²) + NIS term"
+                          : "held-out NLL + NIS term"};
   if (scene) criterion.extra_names.insert(criterion.extra_names.end(), truth_names.begin(), truth_names.end());
   return criterion;
 }

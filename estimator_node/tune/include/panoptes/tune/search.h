@@ -2,7 +2,8 @@
 // The deterministic search (docs/recording.md, "Tune the filter"): coordinate descent in log
 // space. Each sweep takes the parameters in the order given; for each, a log-spaced grid of
 // `grid_points` values over [x / span, x · span] (clamped to the parameter's limits) around the
-// current value x, then `golden_iterations` golden-section steps between the best grid point's
+// current value x, stepped on outwards while the best point is at an end of the grid (up to 40
+// steps, never past the limits), then `golden_iterations` golden-section steps between the best grid point's
 // neighbours; the best value seen is kept. Each later sweep searches √ of the previous span.
 // Identical settings are evaluated once (a cache), so the result depends only on the input.
 #pragma once
@@ -21,7 +22,7 @@ struct SearchOptions {
   double span = 8.0;  // first sweep: factor either side of the start value
   int grid_points = 7;
   int golden_iterations = 4;
-  int sweeps = 2;
+  int sweeps = 3;
 };
 
 // One evaluation of the criterion.
