@@ -30,7 +30,7 @@ struct TuneArgs {
   std::string scene_file;
   long long epoch_ns = 1'700'000'000'000'000'000LL;
   std::string config_file;
-  std::string params = "process_noise,measurement_noise_px,gate_chi2";
+  std::string params = "measurement_noise_px,process_noise,gate_chi2";
   SearchOptions search;
   HeldOutCriterionOptions held_out;
   TruthCriterionOptions truth;

@@ -18,7 +18,7 @@
 namespace panoptes::tune {
 
 struct SearchOptions {
-  std::vector<std::string> parameters = {"process_noise", "measurement_noise_px", "gate_chi2"};
+  std::vector<std::string> parameters = {"measurement_noise_px", "process_noise", "gate_chi2"};
   double span = 8.0;  // first sweep: factor either side of the start value
   int grid_points = 7;
   int golden_iterations = 4;
