@@ -36,7 +36,8 @@ void replay_with_held_out(const session::EstimatorConfig& config, const TuneInpu
     for (; next_held < held.size() && held[next_held]->stamp_ns < used[i].stamp_ns; ++next_held)
       if (held_out) held_out(*held[next_held], estimator.tracker());
     if (!estimator.admit(used[i], references[i], false)) continue;
-    if (estimator.process(used[i]) == est::FrameOutcome::kProcessed && processed) processed(estimator.tracker());
+    if (estimator.process(used[i]) == est::FrameOutcome::kProcessed && processed)
+      processed(estimator.tracker());
   }
   for (; next_held < held.size(); ++next_held)
     if (held_out) held_out(*held[next_held], estimator.tracker());
@@ -44,13 +45,12 @@ void replay_with_held_out(const session::EstimatorConfig& config, const TuneInpu
 
 std::vector<TrackRecord> run_tracks(const session::EstimatorConfig& config, const TuneInput& input) {
   std::vector<TrackRecord> tracks;
-  replay_with_held_out(
-      config, input, "",
-      [&](const est::Tracker& tracker) {
-        auto current = tracker.current_tracks();
-        tracks.insert(tracks.end(), current.begin(), current.end());
-      },
-      {});
+  replay_with_held_out(config, input, "",
+                       [&](const est::Tracker& tracker) {
+                         auto current = tracker.current_tracks();
+                         tracks.insert(tracks.end(), current.begin(), current.end());
+                       },
+                       {});
   return tracks;
 }
 
@@ -59,9 +59,10 @@ TruthScore score_truth(const est::Evaluation& evaluation, std::size_t judged_fra
   TruthScore score;
   score.rmse_mm = evaluation.rmse_m * 1e3;
   score.id_switches = evaluation.id_switch_count;
-  const double published = judged_frames == 0 ? 1.0
-                                              : std::min(1.0, static_cast<double>(evaluation.instants) /
-                                                                  static_cast<double>(judged_frames));
+  const double published =
+      judged_frames == 0
+          ? 1.0
+          : std::min(1.0, static_cast<double>(evaluation.instants) / static_cast<double>(judged_frames));
   score.coverage = evaluation.instants == 0 ? 0.0 : evaluation.coverage() * published;
   score.cost = score.rmse_mm + options.id_switch_penalty_mm * static_cast<double>(score.id_switches) +
                options.lost_coverage_penalty_mm * (1.0 - score.coverage);
@@ -107,8 +108,8 @@ void HeldOutScorer::add_frame(const FeatureFrame& frame, const std::vector<Track
     for (const auto& prediction : predictions) {
       residual2 = std::min(residual2, (z - prediction.pixel).squaredNorm());
       const double d2 = est::mahalanobis2(prediction, z);
-      const double density =
-          std::exp(-0.5 * d2) / (2.0 * std::numbers::pi * std::sqrt(std::max(prediction.S.determinant(), 1e-300)));
+      const double density = std::exp(-0.5 * d2) / (2.0 * std::numbers::pi *
+                                                    std::sqrt(std::max(prediction.S.determinant(), 1e-300)));
       if (density > best_density) best_density = density, best_d2 = d2;
     }
     residual_sum_ += residual2;
@@ -152,9 +153,10 @@ HeldOutScore held_out_score(const session::EstimatorConfig& config, const TuneIn
     const auto calibration = std::find_if(input.calibration.cameras.begin(), input.calibration.cameras.end(),
                                           [&](const auto& camera) { return camera.id == camera_id; });
     const CameraModel model = calibration->model();
-    replay_with_held_out(predicting, input, camera_id, {}, [&](const FeatureFrame& frame, const est::Tracker& tracker) {
-      scorer.add_frame(frame, tracker.tracks_at(frame.stamp_ns), model);
-    });
+    replay_with_held_out(predicting, input, camera_id, {},
+                         [&](const FeatureFrame& frame, const est::Tracker& tracker) {
+                           scorer.add_frame(frame, tracker.tracks_at(frame.stamp_ns), model);
+                         });
   }
   return scorer.score();
 }

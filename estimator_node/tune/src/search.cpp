@@ -41,7 +41,8 @@ class Searcher {
  private:
   session::EstimatorConfig configure(const std::vector<double>& values) const {
     session::EstimatorConfig config = result_.best;
-    for (std::size_t p = 0; p < values.size(); ++p) set_parameter_value(config, options_.parameters[p], values[p]);
+    for (std::size_t p = 0; p < values.size(); ++p)
+      set_parameter_value(config, options_.parameters[p], values[p]);
     return config;
   }
 
@@ -87,7 +88,8 @@ class Searcher {
       if (at == 0 && grid.front() - step >= std::log(info.lower) - 1e-12) {
         grid.insert(grid.begin(), grid.front() - step);
         costs.insert(costs.begin(), cost_at_log(p, grid.front(), sweep));
-      } else if (at + 1 == static_cast<long>(grid.size()) && grid.back() + step <= std::log(info.upper) + 1e-12) {
+      } else if (at + 1 == static_cast<long>(grid.size()) &&
+                 grid.back() + step <= std::log(info.upper) + 1e-12) {
         grid.push_back(grid.back() + step);
         costs.push_back(cost_at_log(p, grid.back(), sweep));
       } else {
@@ -120,8 +122,9 @@ class Searcher {
         if (q != p && sample.values[q] != current_[q]) on_line = false;
       if (on_line) line.push_back(&sample);
     }
-    const double best_cost =
-        (*std::min_element(line.begin(), line.end(), [](auto* a, auto* b) { return a->cost < b->cost; }))->cost;
+    const double best_cost = (*std::min_element(line.begin(), line.end(), [](auto* a, auto* b) {
+                               return a->cost < b->cost;
+                             }))->cost;
     const double tie = 1e-9 * std::abs(best_cost) + 1e-12;
     double best_distance = std::numeric_limits<double>::infinity();
     for (const SearchSample* sample : line) {

@@ -42,8 +42,10 @@ struct TuneArgs {
 
 void add_options(CLI::App& app, TuneArgs& a) {
   app.option_defaults()->always_capture_default();
-  app.add_option("--calibration", a.calibration_file, "calibration YAML (cameras with T_world_cam)")->required();
-  app.add_option("--in-features", a.in_features, "FeatureFrame JSONL files (one per camera), as the offline mode")
+  app.add_option("--calibration", a.calibration_file, "calibration YAML (cameras with T_world_cam)")
+      ->required();
+  app.add_option("--in-features", a.in_features,
+                 "FeatureFrame JSONL files (one per camera), as the offline mode")
       ->required()
       ->expected(1, -1);
   app.add_option("--criterion", a.criterion,
@@ -55,12 +57,14 @@ void add_options(CLI::App& app, TuneArgs& a) {
                  "every sample's ground-truth RMSE is also reported (curve file and plot)");
   app.add_option("--epoch-ns", a.epoch_ns, "absolute stamp of scene time 0 (panoptes_sim's default)");
   app.add_option("--config", a.config_file, "start settings YAML (docs/estimator.md); default: the defaults");
-  app.add_option("--params", a.params, "comma-separated settings to search (tracker.<key>): process_noise, "
-                                       "measurement_noise_px, gate_chi2, init.epipolar_px, init.reprojection_px, "
-                                       "init.link_radius_px");
+  app.add_option("--params", a.params,
+                 "comma-separated settings to search (tracker.<key>): process_noise, "
+                 "measurement_noise_px, gate_chi2, init.epipolar_px, init.reprojection_px, "
+                 "init.link_radius_px");
   app.add_option("--span", a.search.span, "first sweep searches start value / span .. × span (log space)")
       ->check(CLI::Range(1.01, 1e6));
-  app.add_option("--grid", a.search.grid_points, "log-spaced grid points per line search")->check(CLI::Range(2, 100));
+  app.add_option("--grid", a.search.grid_points, "log-spaced grid points per line search")
+      ->check(CLI::Range(2, 100));
   app.add_option("--golden", a.search.golden_iterations, "golden-section steps after the grid")
       ->check(CLI::Range(0, 100));
   app.add_option("--sweeps", a.search.sweeps, "coordinate-descent sweeps (each searches √ of the last span)")
@@ -68,8 +72,9 @@ void add_options(CLI::App& app, TuneArgs& a) {
   app.add_option("--heldout-score", a.held_out.score,
                  "heldout: residual (capped squared prediction error) or nll (negative log-likelihood)")
       ->transform(CLI::CheckedTransformer(
-          std::map<std::string, HeldOutCriterionOptions::Score>{{"residual", HeldOutCriterionOptions::Score::kResidual},
-                                                                {"nll", HeldOutCriterionOptions::Score::kNll}},
+          std::map<std::string, HeldOutCriterionOptions::Score>{
+              {"residual", HeldOutCriterionOptions::Score::kResidual},
+              {"nll", HeldOutCriterionOptions::Score::kNll}},
           CLI::ignore_case))
       ->default_str("residual");
   app.add_option("--residual-cap-px", a.held_out.residual_cap_px,
@@ -77,14 +82,16 @@ void add_options(CLI::App& app, TuneArgs& a) {
       ->check(CLI::PositiveNumber);
   app.add_option("--nis-weight", a.held_out.nis_weight, "heldout: weight of ln(mean NIS / expected)²")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--clutter-weight", a.held_out.clutter_weight, "heldout: ε, share of blobs no track explains")
+  app.add_option("--clutter-weight", a.held_out.clutter_weight,
+                 "heldout: ε, share of blobs no track explains")
       ->check(CLI::Range(1e-6, 0.5));
   app.add_option("--switch-penalty-mm", a.truth.id_switch_penalty_mm, "truth: mm added per ID switch")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--coverage-penalty-mm", a.truth.lost_coverage_penalty_mm,
                  "truth: mm added × (1 − coverage of trackable marker-time)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--out-config", a.out_config, "write the tuned settings here (loadable by --config)")->required();
+  app.add_option("--out-config", a.out_config, "write the tuned settings here (loadable by --config)")
+      ->required();
   app.add_option("--out-curve", a.out_curve, "write every evaluation as CSV (default: <out-config>.csv)");
   app.add_option("--plot", a.plot, "write a PNG of the criterion against each parameter (/usr/bin/python3)");
   app.add_flag("--quiet", a.quiet, "no progress output");
@@ -130,23 +137,26 @@ Criterion make_criterion(const TuneArgs& args, const TuneInput& input, const Sce
             },
             truth_names, "RMSE + penalties, mm"};
   }
-  Criterion criterion{[&args, &input, scene, truth_extras](const session::EstimatorConfig& config) {
-                        const HeldOutScore score = held_out_score(config, input, args.held_out);
-                        CostResult result{score.cost, {score.rms_residual_px, score.nll_per_blob, score.mean_nis}};
-                        if (scene) truth_extras(config, result.extras);
-                        return result;
-                      },
-                      {"rms_residual_px", "nll_per_blob", "mean_nis"},
-                      args.held_out.score == HeldOutCriterionOptions::Score::kResidual
-                          ? "held-out ln(mean r² / px²) + NIS term"
-                          : "held-out NLL + NIS term"};
-  if (scene) criterion.extra_names.insert(criterion.extra_names.end(), truth_names.begin(), truth_names.end());
+  Criterion criterion{
+      [&args, &input, scene, truth_extras](const session::EstimatorConfig& config) {
+        const HeldOutScore score = held_out_score(config, input, args.held_out);
+        CostResult result{score.cost, {score.rms_residual_px, score.nll_per_blob, score.mean_nis}};
+        if (scene) truth_extras(config, result.extras);
+        return result;
+      },
+      {"rms_residual_px", "nll_per_blob", "mean_nis"},
+      args.held_out.score == HeldOutCriterionOptions::Score::kResidual
+          ? "held-out ln(mean r² / px²) + NIS term"
+          : "held-out NLL + NIS term"};
+  if (scene)
+    criterion.extra_names.insert(criterion.extra_names.end(), truth_names.begin(), truth_names.end());
   return criterion;
 }
 
 int tune(const TuneArgs& args) {
-  session::EstimatorConfig start =
-      args.config_file.empty() ? session::EstimatorConfig{} : session::load_estimator_config(args.config_file);
+  session::EstimatorConfig start = args.config_file.empty()
+                                       ? session::EstimatorConfig{}
+                                       : session::load_estimator_config(args.config_file);
   SearchOptions search = args.search;
   search.parameters = split_params(args.params);
   std::optional<Scene> scene;
@@ -170,16 +180,16 @@ int tune(const TuneArgs& args) {
                  std::to_string(cameras_with_frames(input).size()) + " cameras, criterion " + args.criterion);
   }
   const Criterion criterion = make_criterion(effective, input, scene ? &*scene : nullptr);
-  const SearchResult result =
-      coordinate_search(start, search, criterion.cost, [&](const SearchSample& sample, const SearchSample& best) {
+  const SearchResult result = coordinate_search(
+      start, search, criterion.cost, [&](const SearchSample& sample, const SearchSample& best) {
         if (!args.quiet)
           std::fprintf(stderr, "%s (best %.6g)\n", sample_line(sample, search.parameters).c_str(), best.cost);
       });
 
   std::ofstream out(args.out_config);
   if (!out) throw std::runtime_error(args.out_config + ": cannot write");
-  out << "# estimator_node tune --criterion " << args.criterion << ": cost " << result.best_sample.cost << " after "
-      << result.samples.size() << " evaluations\n"
+  out << "# estimator_node tune --criterion " << args.criterion << ": cost " << result.best_sample.cost
+      << " after " << result.samples.size() << " evaluations\n"
       << session::estimator_config_to_yaml(result.best);
   if (!out.flush()) throw std::runtime_error(args.out_config + ": write failed");
   const std::string curve = args.out_curve.empty() ? args.out_config + ".csv" : args.out_curve;
@@ -188,17 +198,18 @@ int tune(const TuneArgs& args) {
     write_curve_png(curve, args.plot, "estimator_node tune --criterion " + args.criterion, criterion.label,
                     scene && args.criterion == "heldout" ? "rmse_mm" : "");
   }
-  session::log(sample_line(result.best_sample, search.parameters) + ": wrote " + args.out_config + ", " + curve +
-               (args.plot.empty() ? "" : ", " + args.plot));
+  session::log(sample_line(result.best_sample, search.parameters) + ": wrote " + args.out_config + ", " +
+               curve + (args.plot.empty() ? "" : ", " + args.plot));
   return kExitOk;
 }
 
 }  // namespace
 
 int run_tune(int argc, char** argv) {
-  CLI::App app{"estimator_node tune: searches process noise, measurement noise and gates over a recording "
-               "(seed 003 A.3.2; docs/recording.md)",
-               "estimator_node tune"};
+  CLI::App app{
+      "estimator_node tune: searches process noise, measurement noise and gates over a recording "
+      "(seed 003 A.3.2; docs/recording.md)",
+      "estimator_node tune"};
   TuneArgs args;
   add_options(app, args);
   if (const auto exit_code = parse_command_line(app, argc, argv, [] {})) return *exit_code;

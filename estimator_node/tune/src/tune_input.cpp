@@ -9,7 +9,8 @@
 
 namespace panoptes::tune {
 
-TuneInput load_feature_input(const std::string& calibration_file, const std::vector<std::string>& feature_files) {
+TuneInput load_feature_input(const std::string& calibration_file,
+                             const std::vector<std::string>& feature_files) {
   TuneInput input;
   input.calibration = load_calibration(calibration_file);
   session::FeatureFiles files = session::read_feature_files(feature_files);

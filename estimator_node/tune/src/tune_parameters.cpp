@@ -26,7 +26,8 @@ const std::vector<ParameterInfo>& tunable_parameters() {
       {"gate_chi2", 2.0, 1000.0, "χ²₂ verify region of a track (seed 003 §2.2.3.2)"},
       {"init.epipolar_px", 0.1, 100.0, "initiation: distance to the epipolar line, px"},
       {"init.reprojection_px", 0.1, 100.0, "initiation: reprojection of every supporting view, px"},
-      {"init.link_radius_px", 1.0, 500.0, "initiation: a blob continues its camera's tracklet within this, px"},
+      {"init.link_radius_px", 1.0, 500.0,
+       "initiation: a blob continues its camera's tracklet within this, px"},
   };
   return parameters;
 }

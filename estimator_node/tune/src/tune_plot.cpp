@@ -59,7 +59,8 @@ fig.savefig(png, dpi=100)
 }  // namespace
 
 void write_curve_csv(const std::filesystem::path& csv, const SearchResult& result,
-                     const std::vector<std::string>& parameters, const std::vector<std::string>& extra_names) {
+                     const std::vector<std::string>& parameters,
+                     const std::vector<std::string>& extra_names) {
   std::ofstream out(csv);
   if (!out) throw std::runtime_error(csv.string() + ": cannot write");
   out << "index,sweep,varied";
@@ -77,12 +78,14 @@ void write_curve_csv(const std::filesystem::path& csv, const SearchResult& resul
   if (!out) throw std::runtime_error(csv.string() + ": write failed");
 }
 
-void write_curve_png(const std::filesystem::path& csv, const std::filesystem::path& png, const std::string& title,
-                     const std::string& cost_label, const std::string& right_axis_column) {
+void write_curve_png(const std::filesystem::path& csv, const std::filesystem::path& png,
+                     const std::string& title, const std::string& cost_label,
+                     const std::string& right_axis_column) {
   const std::filesystem::path log = png.string() + ".log";
   std::filesystem::remove(png);
-  ChildProcess python("python3", {"/usr/bin/python3", "-c", kPlotScript, csv.string(), png.string(), title,
-                                  cost_label, right_axis_column},
+  ChildProcess python("python3",
+                      {"/usr/bin/python3", "-c", kPlotScript, csv.string(), png.string(), title, cost_label,
+                       right_axis_column},
                       log);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (python.running() && std::chrono::steady_clock::now() < deadline)

@@ -45,20 +45,23 @@ TEST(TuneAcceptance, HeldOutCameraPickIsWithinFivePercentOfTheGroundTruthBest) {
   const SearchResult held_out = coordinate_search(start, search, [&](const session::EstimatorConfig& config) {
     return CostResult{held_out_score(config, input, {}).cost, {}};
   });
-  const SearchResult with_truth = coordinate_search(start, search, [&](const session::EstimatorConfig& config) {
-    return CostResult{truth_score(config, input, scene, truth).cost, {}};
-  });
+  const SearchResult with_truth =
+      coordinate_search(start, search, [&](const session::EstimatorConfig& config) {
+        return CostResult{truth_score(config, input, scene, truth).cost, {}};
+      });
   const TruthScore defaults = truth_score(start, input, scene, truth);
   const TruthScore picked = truth_score(held_out.best, input, scene, truth);
   const TruthScore best = truth_score(with_truth.best, input, scene, truth);
   std::printf("defaults: RMSE %.3f mm, %zu switches, coverage %.3f\n", defaults.rmse_mm, defaults.id_switches,
               defaults.coverage);
-  std::printf("held-out pick (q %.4g, sigma %.4g px, %zu evaluations): RMSE %.3f mm, %zu switches, coverage %.3f\n",
-              held_out.best.tracker.process_noise, held_out.best.tracker.measurement_noise_px,
-              held_out.samples.size(), picked.rmse_mm, picked.id_switches, picked.coverage);
-  std::printf("truth best (q %.4g, sigma %.4g px, %zu evaluations): RMSE %.3f mm, %zu switches, coverage %.3f\n",
-              with_truth.best.tracker.process_noise, with_truth.best.tracker.measurement_noise_px,
-              with_truth.samples.size(), best.rmse_mm, best.id_switches, best.coverage);
+  std::printf(
+      "held-out pick (q %.4g, sigma %.4g px, %zu evaluations): RMSE %.3f mm, %zu switches, coverage %.3f\n",
+      held_out.best.tracker.process_noise, held_out.best.tracker.measurement_noise_px,
+      held_out.samples.size(), picked.rmse_mm, picked.id_switches, picked.coverage);
+  std::printf(
+      "truth best (q %.4g, sigma %.4g px, %zu evaluations): RMSE %.3f mm, %zu switches, coverage %.3f\n",
+      with_truth.best.tracker.process_noise, with_truth.best.tracker.measurement_noise_px,
+      with_truth.samples.size(), best.rmse_mm, best.id_switches, best.coverage);
 
   EXPECT_LE(picked.rmse_mm, 1.05 * best.rmse_mm);
   EXPECT_GE(picked.coverage, best.coverage - 0.01);  // not bought by tracking less

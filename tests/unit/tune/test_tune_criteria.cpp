@@ -16,7 +16,8 @@ namespace {
 // Blobs drawn around the projection of a point whose position error has `sigma_m` per axis, plus
 // `pixel_sigma` of centroid noise; scored against a track claiming `claimed_sigma_m` and a filter
 // claiming `claimed_pixel_sigma`.
-HeldOutScore score_draws(double sigma_m, double pixel_sigma, double claimed_sigma_m, double claimed_pixel_sigma) {
+HeldOutScore score_draws(double sigma_m, double pixel_sigma, double claimed_sigma_m,
+                         double claimed_pixel_sigma) {
   const auto camera = estimator::make_ring_cameras(1, 4.0, 2.0)[0];
   HeldOutScorer scorer({}, claimed_pixel_sigma);
   std::mt19937 random(7);

@@ -35,7 +35,8 @@ TEST(TuneSearch, FindsTheMinimumOfALogSpaceBowlFromFourTimesOff) {
   for (const auto& sample : result.samples) EXPECT_TRUE(seen.insert(sample.values).second);
   const SearchResult again = coordinate_search(start, options, bowl);
   ASSERT_EQ(again.samples.size(), result.samples.size());
-  for (std::size_t i = 0; i < result.samples.size(); ++i) EXPECT_EQ(again.samples[i].values, result.samples[i].values);
+  for (std::size_t i = 0; i < result.samples.size(); ++i)
+    EXPECT_EQ(again.samples[i].values, result.samples[i].values);
 }
 
 TEST(TuneSearch, StaysWithinTheParameterLimits) {

@@ -39,16 +39,16 @@ namespace panoptes::tune {
 // Runs an EstimatorSession with `config` over `input` in stamp order, without the frames of
 // `held_out_camera` ("": none). `held_out(frame, tracker)` sees each held-out frame before any
 // later frame is processed; `processed(tracker)` follows every processed frame.
-void replay_with_held_out(const session::EstimatorConfig& config, const TuneInput& input,
-                          const std::string& held_out_camera,
-                          const std::function<void(const estimator::Tracker&)>& processed,
-                          const std::function<void(const FeatureFrame&, const estimator::Tracker&)>& held_out);
+void replay_with_held_out(
+    const session::EstimatorConfig& config, const TuneInput& input, const std::string& held_out_camera,
+    const std::function<void(const estimator::Tracker&)>& processed,
+    const std::function<void(const FeatureFrame&, const estimator::Tracker&)>& held_out);
 
 // Every track record the offline estimator would write (--out-tracks) for `config`.
 std::vector<TrackRecord> run_tracks(const session::EstimatorConfig& config, const TuneInput& input);
 
 struct TruthCriterionOptions {
-  double id_switch_penalty_mm = 1.0;    // added to the RMSE per ID switch
+  double id_switch_penalty_mm = 1.0;     // added to the RMSE per ID switch
   double lost_coverage_penalty_mm = 20;  // × (1 − coverage of trackable marker-time)
   estimator::EvaluationOptions evaluation;
 };
@@ -80,8 +80,8 @@ struct HeldOutCriterionOptions {
 struct HeldOutScore {
   double rms_residual_px = 0;  // √ of the mean capped squared residual
   double nll_per_blob = 0;     // mean −ln p(z), z in px
-  double mean_nis = 0;      // mean d² inside the gate
-  double expected_nis = 0;  // of a consistent filter, truncated at the gate
+  double mean_nis = 0;         // mean d² inside the gate
+  double expected_nis = 0;     // of a consistent filter, truncated at the gate
   std::size_t blobs = 0;
   std::size_t nis_samples = 0;
   double cost = 0;
@@ -92,7 +92,8 @@ class HeldOutScorer {
  public:
   HeldOutScorer(const HeldOutCriterionOptions& options, double measurement_noise_px);
   // Scores `frame`'s blobs against `tracks` (predicted to its stamp) seen by `camera`.
-  void add_frame(const FeatureFrame& frame, const std::vector<TrackRecord>& tracks, const CameraModel& camera);
+  void add_frame(const FeatureFrame& frame, const std::vector<TrackRecord>& tracks,
+                 const CameraModel& camera);
   HeldOutScore score() const;
 
  private:

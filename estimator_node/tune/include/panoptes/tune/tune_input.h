@@ -25,7 +25,8 @@ struct TuneInput {
 
 // Reads `calibration_file` and the FeatureFrame JSONL `feature_files` (as estimator_node
 // --in-features). Throws ConfigError / std::runtime_error naming the file.
-TuneInput load_feature_input(const std::string& calibration_file, const std::vector<std::string>& feature_files);
+TuneInput load_feature_input(const std::string& calibration_file,
+                             const std::vector<std::string>& feature_files);
 
 // Every camera's frames of a simulated scene (mid-exposure in [0, duration)), stamped from
 // `epoch_ns` as panoptes_sim features writes them, with the scene's calibration: a recording made

@@ -18,7 +18,8 @@ void write_curve_csv(const std::filesystem::path& csv, const SearchResult& resul
 
 // Runs the embedded matplotlib script on `csv`; throws std::runtime_error with its log on failure.
 // `right_axis_column`: a column of the CSV drawn on the second axis ("": none).
-void write_curve_png(const std::filesystem::path& csv, const std::filesystem::path& png, const std::string& title,
-                     const std::string& cost_label, const std::string& right_axis_column);
+void write_curve_png(const std::filesystem::path& csv, const std::filesystem::path& png,
+                     const std::string& title, const std::string& cost_label,
+                     const std::string& right_axis_column);
 
 }  // namespace panoptes::tune
