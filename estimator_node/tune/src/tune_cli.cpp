@@ -48,9 +48,10 @@ void add_options(CLI::App& app, TuneArgs& a) {
                  "FeatureFrame JSONL files (one per camera), as the offline mode")
       ->required()
       ->expected(1, -1);
-  app.add_option("--criterion", a.criterion,
-                 "heldout: leave-one-camera-out prediction NLL + NIS consistency (no ground truth needed); "
-                 "truth: RMSE + ID-switch and coverage penalties against --scene")
+  app.add_option(
+         "--criterion", a.criterion,
+         "heldout: leave-one-camera-out prediction error (or NLL) + NIS consistency (no ground truth); "
+         "truth: RMSE + ID-switch and coverage penalties against --scene")
       ->check(CLI::IsMember({"heldout", "truth"}));
   app.add_option("--scene", a.scene_file,
                  "simulator scene that produced the features: needed by --criterion truth; with heldout, "
