@@ -51,4 +51,11 @@ expect_stderr_contains "none.jsonl" "the missing features file is named"
 expect_exit 2 "held-out criterion with two cameras" -- "$bin/estimator_node" tune --calibration "$work/rec/calibration.yaml" \
   --in-features "$work/rec/cam0.jsonl" "$work/rec/cam1.jsonl" --out-config "$work/x.yaml"
 expect_stderr_contains "at least 3" "the reason is given"
+# Malformed feature lines are counted, skipped and named; the tuning still runs.
+{ head -200 "$work/rec/cam0.jsonl"; echo 'not json'; echo '{"camera_id": "cam0"}'; } >"$work/mangled.jsonl"
+expect_exit 0 "malformed feature lines are skipped" -- "$bin/estimator_node" tune --calibration "$work/rec/calibration.yaml" \
+  --in-features "$work/mangled.jsonl" "$work"/rec/cam[123].jsonl --params measurement_noise_px --grid 2 --golden 0 \
+  --sweeps 1 --out-config "$work/x.yaml"
+expect_stderr_contains "mangled.jsonl:201" "the first malformed line is named with file and line"
+expect_stderr_contains "2 malformed lines skipped" "the malformed lines are counted"
 finish

@@ -178,7 +178,8 @@ int tune(const TuneArgs& args) {
     throw ConfigError(args.calibration_file, "cameras", "heldout needs frames of at least 3 posed cameras");
   if (!args.quiet) {
     session::log("tune: " + std::to_string(input.frames.size()) + " frames of " +
-                 std::to_string(cameras_with_frames(input).size()) + " cameras, criterion " + args.criterion);
+                 std::to_string(cameras_with_frames(input).size()) + " cameras (" +
+                 std::to_string(input.bad_lines) + " malformed lines skipped), criterion " + args.criterion);
   }
   const Criterion criterion = make_criterion(effective, input, scene ? &*scene : nullptr);
   const SearchResult result = coordinate_search(
