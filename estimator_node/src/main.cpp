@@ -4,6 +4,7 @@
 //            predictions and estimator_status, and serves rt/panoptes/time_sync
 //   offline: --no-dds --in-features <files...> --out-tracks <file>   (architecture.md, Contracts)
 //   --print-config: the effective settings as YAML (--config loads them)
+//   tune:    searches filter settings over recorded features (docs/recording.md, "Tune the filter")
 // The work is in libraries: session/ (EstimatorSession, offline replay, settings YAML) and app/
 // (command line, live DDS loop).
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "panoptes/session/estimator_session.h"
 #include "panoptes/session/log.h"
 #include "panoptes/session/offline_replay.h"
+#include "panoptes/tune/tune_cli.h"
 
 namespace {
 
@@ -72,6 +74,7 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
 int main(int argc, char** argv) {
   if (argc >= 2 && std::string_view(argv[1]) == "calibrate")
     return panoptes::calib::run_calibrate(argc - 1, argv + 1);
+  if (argc >= 2 && std::string_view(argv[1]) == "tune") return panoptes::tune::run_tune(argc - 1, argv + 1);
   app::NodeCommandLine command_line;
   if (const auto exit_code = app::parse_node_command_line(argc, argv, command_line)) return *exit_code;
 
