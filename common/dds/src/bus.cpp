@@ -91,6 +91,8 @@ PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::k
 PANOPTES_TOPIC(MocapFrame, "rt/panoptes/frames", false, Durability::kVolatile, 8, true, false)
 PANOPTES_TOPIC(BodyDescriptions, "rt/panoptes/body_descriptions", true, Durability::kTransientLocal, 1, false,
                false)
+PANOPTES_TOPIC(RecorderCommand, "rt/panoptes/recorder_command", true, Durability::kVolatile, 32, false, false)
+PANOPTES_TOPIC(RecorderStatus, "rt/panoptes/recorder_status", false, Durability::kVolatile, 1, false, true)
 // Off by default: camera_node and estimator_node --latency-probe (docs/protocol.md, "Latency probes").
 PANOPTES_TOPIC(LatencyTraces, "rt/panoptes/latency_probe/trace", false, Durability::kVolatile, 8, false,
                false)
@@ -588,6 +590,8 @@ PANOPTES_INSTANTIATE(LatencyProbeEcho)
 PANOPTES_INSTANTIATE(LatencyTraces)
 PANOPTES_INSTANTIATE(MocapFrame)
 PANOPTES_INSTANTIATE(BodyDescriptions)
+PANOPTES_INSTANTIATE(RecorderCommand)
+PANOPTES_INSTANTIATE(RecorderStatus)
 PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::PoseStamped_)
 PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::TwistStamped_)
 PANOPTES_INSTANTIATE_TYPE(tf2_msgs::msg::dds_::TFMessage_)

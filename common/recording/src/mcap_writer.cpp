@@ -307,11 +307,6 @@ void McapWriter::write(std::uint16_t channel_id, std::uint32_t sequence, std::ui
   if (s.chunk_messages == 0 || log_time < s.chunk_start) s.chunk_start = log_time;
   if (s.chunk_messages == 0 || log_time > s.chunk_end) s.chunk_end = log_time;
   ++s.chunk_messages;
-  Statistics& st = s.statistics;
-  if (st.message_count == 0 || log_time < st.message_start_time) st.message_start_time = log_time;
-  if (st.message_count == 0 || log_time > st.message_end_time) st.message_end_time = log_time;
-  ++st.message_count;
-  ++st.channel_message_counts[channel_id];
   ++stats_.messages;
   stats_.message_bytes += data.size();
   ++stats_.per_channel[channel_id];
@@ -356,10 +351,20 @@ void McapWriter::flush() {
     o.finish_record(r);
   }
   entry.message_index_length = out.size() - entry.chunk_length;
+  // The summary's statistics count the messages of the chunks in the file only.
+  std::map<std::uint16_t, std::uint64_t> chunk_counts;
+  for (const auto& [channel, entries] : s.index) chunk_counts[channel] = entries.size();
   s.records.clear();
   s.index.clear();
+  const std::size_t messages = s.chunk_messages;
   s.chunk_messages = 0;
   commit(out, "a chunk");
+  Statistics& st = s.statistics;
+  if (st.message_count == 0 || entry.start_time < st.message_start_time)
+    st.message_start_time = entry.start_time;
+  if (st.message_count == 0 || entry.end_time > st.message_end_time) st.message_end_time = entry.end_time;
+  st.message_count += messages;
+  for (const auto& [channel, count] : chunk_counts) st.channel_message_counts[channel] += count;
   if (options_.fsync_chunks) ::fdatasync(s.fd);
   s.chunk_indexes.push_back(std::move(entry));
   ++stats_.chunks;

@@ -223,6 +223,8 @@ TEST(McapWriter, AWriteErrorStopsWithAClearErrorAndAValidFile) {
   EXPECT_LT(fs::file_size(path), 60'000u);
   const auto back = read_recording(path);
   EXPECT_TRUE(back.report.summary) << error;
+  ASSERT_TRUE(back.report.statistics.has_value());
+  EXPECT_EQ(back.report.statistics->message_count, back.report.messages);  // the lost chunk not counted
   EXPECT_EQ(back.report.chunks_skipped, 0u);
   EXPECT_GT(back.report.messages, 0u);
   EXPECT_LE(back.report.messages, accepted);
