@@ -24,6 +24,7 @@ set(PANOPTES_LAYERING_RULES
   "panoptes_camera|${_panoptes_dds_links}||the camera pipeline runs without DDS (offline mode, tests)"
   "panoptes_evaluation|${_panoptes_dds_links}||only panoptes_dds knows DDS"
   "panoptes_session|${_panoptes_dds_links}||the estimator session runs without DDS (offline mode, tests)"
+  "panoptes_recording|${_panoptes_dds_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](fastdds/|fastrtps/|fastcdr/|panoptes_msgs/|panoptes/dds/|CLI/)|MCAP files are read and written without DDS (offline tools, estimator_node --in-recording)"
   "panoptes_client|${_panoptes_io_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](CLI/|yaml-cpp/|nlohmann/|spdlog/|fstream|opencv2/|panoptes/jsonl\\.h|panoptes/config\\.h)|the client library applications link: the bus and its messages, no file formats, simulator or CLI"
   "panoptes_python|${_panoptes_io_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](fastdds/|fastrtps/|fastcdr/|panoptes_msgs/|panoptes/dds/|CLI/|yaml-cpp/|nlohmann/)|the Python binding uses the public client API only")
 

@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
   namespace rec = panoptes::recorder;
   std::string input;
   rec::ReplayOptions options;
-  double discovery_s = 1.0;
+  double discovery_s = 5.0;
   std::string dds_profile;
   CLI::App app{"panoptes_replay: publishes an MCAP recording back onto the bus at the recorded pace"};
   app.add_option("recording", input, "MCAP file written by panoptes_record")->required();
@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
   app.add_option("--late-ms", options.late_ms, "a message this far behind its schedule counts as late")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app.add_option("--discovery", discovery_s, "seconds given to readers to match before publishing")
+  app.add_option("--discovery", discovery_s, "wait at most this long for every topic to match a reader before publishing, s")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--dds-profile", dds_profile, "DDS XML profile (default: deploy/dds/loopback.xml)");

@@ -41,11 +41,16 @@ bool shift_feature_frame_times(std::vector<std::uint8_t>& cdr, std::int64_t offs
   frame.stamp_ns(frame.stamp_ns() + offset_ns);
   if (frame.arrival_ns() != 0) frame.arrival_ns(frame.arrival_ns() + offset_ns);
   if (frame.publish_ns() != 0) frame.publish_ns(frame.publish_ns() + offset_ns);
+  cdr = encode_cdr(frame);
+  return !cdr.empty();
+}
+
+std::vector<std::uint8_t> encode_cdr(const msg::FeatureFrame& frame) {
   msg::FeatureFramePubSubType type;
-  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&frame)());
-  if (!type.serialize(&frame, &payload)) return false;
-  cdr.assign(payload.data, payload.data + payload.length);
-  return true;
+  auto& sample = const_cast<msg::FeatureFrame&>(frame);  // serialize() takes void*; it only reads
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&sample)());
+  if (!type.serialize(&sample, &payload)) return {};
+  return {payload.data, payload.data + payload.length};
 }
 
 }  // namespace panoptes::dds

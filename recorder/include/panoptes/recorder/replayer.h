@@ -54,8 +54,8 @@ class Replayer {
   // listed in problems()). Throws std::invalid_argument for a --topics name it does not hold.
   Replayer(const std::filesystem::path& path, ReplayOptions options);
 
-  // Publishes until done (or `stop` returns true); writers are created on `bus` first and given
-  // `discovery_s` to match their readers.
+  // Publishes until done (or `stop` returns true); writers are created on `bus` first and wait
+  // until each has matched a reader, at most `discovery_s`.
   ReplayReport run(dds::Bus& bus, double discovery_s, const std::function<bool()>& stop);
 
   const std::vector<std::string>& topics() const { return topics_; }

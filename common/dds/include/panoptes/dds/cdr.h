@@ -14,6 +14,8 @@ namespace panoptes::dds {
 // True and `out` filled if `cdr` decodes; false for malformed data (never throws).
 bool decode_cdr(std::span<const std::uint8_t> cdr, msg::FeatureFrame& out);
 bool decode_cdr(std::span<const std::uint8_t> cdr, msg::CameraInfo& out);
+// The CDR of a FeatureFrame as a writer sends it (encapsulation header included).
+std::vector<std::uint8_t> encode_cdr(const msg::FeatureFrame& frame);
 
 // Moves a serialized FeatureFrame's times (stamp_ns, arrival_ns, publish_ns) by `offset_ns`, so a
 // replayed frame carries times of the live clock (panoptes_replay). False if it does not decode.
