@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <deque>
+#include <exception>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -227,9 +228,7 @@ int send_command(const Options& options, dds::Bus& bus) {
   return panoptes::kExitFailure;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   Options options;
   CLI::App app{
       "panoptes_record: records every Panoptes topic into an MCAP file (ros2 profile, CDR as received)"};
@@ -285,5 +284,16 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "panoptes_record: %s\n", e.what());
     return panoptes::kExitFailure;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "%s: %s\n", "panoptes_record", error.what());
+    return 1;
   }
 }

@@ -2,6 +2,7 @@
 // panoptes_replay: publishes an MCAP recording back onto the bus at the recorded pace
 // (docs/recording.md); says whether it kept up.
 #include <cstdio>
+#include <exception>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,7 +13,9 @@
 #include "panoptes/recorder/replayer.h"
 #include "panoptes/recording/mcap_types.h"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   namespace rec = panoptes::recorder;
   std::string input;
   rec::ReplayOptions options;
@@ -34,7 +37,8 @@ int main(int argc, char** argv) {
   app.add_option("--late-ms", options.late_ms, "a message this far behind its schedule counts as late")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app.add_option("--discovery", discovery_s, "wait at most this long for every topic to match a reader before publishing, s")
+  app.add_option("--discovery", discovery_s,
+                 "wait at most this long for every topic to match a reader before publishing, s")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--dds-profile", dds_profile, "DDS XML profile (default: deploy/dds/loopback.xml)");
@@ -87,5 +91,16 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "panoptes_replay: %s\n", e.what());
     return panoptes::kExitFailure;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "%s: %s\n", "panoptes_replay", error.what());
+    return 1;
   }
 }

@@ -73,14 +73,16 @@ ReplayReport Replayer::run(dds::Bus& bus, double discovery_s, const std::functio
   std::vector<std::unique_ptr<dds::RawWriter>> writers;
   for (const auto& topic : topics_) writers.push_back(bus.make_raw_writer(topic));
   // Until every writer has matched a reader, or discovery_s has passed (a topic nobody reads).
-  const auto discovery_end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                                std::chrono::duration<double>(discovery_s));
+  const auto discovery_end =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(discovery_s));
   const auto all_matched = [&] {
-    return std::all_of(writers.begin(), writers.end(), [](const auto& w) { return w->matched_readers() > 0; });
+    return std::all_of(writers.begin(), writers.end(),
+                       [](const auto& w) { return w->matched_readers() > 0; });
   };
   while (Clock::now() < discovery_end && !all_matched() && !stop())
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  if (all_matched()) std::this_thread::sleep_for(std::chrono::milliseconds(200));  // let the match settle both ways
+  if (all_matched())
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // let the match settle both ways
   ReplayReport report;
   if (messages_.empty()) return report;
   const std::uint64_t first = messages_.front().log_time;

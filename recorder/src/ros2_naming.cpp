@@ -85,6 +85,7 @@ std::string ros2idl_schema(const std::string& ros_type) {
     }
   }
   std::vector<const Definition*> ordered;
+  ordered.reserve(needed.size());
   for (const auto& each : needed) ordered.push_back(&structs.at(each));
   std::sort(ordered.begin(), ordered.end(), [](const auto* a, const auto* b) { return a->order < b->order; });
   std::string text = "module panoptes {\nmodule msg {\n\n";

@@ -5,11 +5,13 @@
 // data does). Two measurements, one after the other in this thread:
 //   throughput: every payload written as fast as possible (messages/s, MB/s, multiple of the load);
 //   1x load:    the payloads paced at 32 x 120 Hz for --seconds, the thread's CPU time / wall time.
-//   bench_recorder [--cameras 32] [--rate 120] [--markers 40] [--seconds 5] [--compression zstd] [--keep f.mcap]
+//   bench_recorder [--cameras 32] [--rate 120] [--markers 40] [--seconds 5] [--compression zstd] [--keep
+//   f.mcap]
 #include <time.h>
 
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -90,8 +92,9 @@ Run write(const std::filesystem::path& path, const rec::McapWriterOptions& optio
   const std::uint64_t t0 = 1'700'000'000'000'000'000ULL;
   const double period_ns = 1e9 / static_cast<double>(payloads.size());
   for (std::uint64_t i = 0; i < total; ++i) {
-    if (per_second > 0) std::this_thread::sleep_until(start + std::chrono::nanoseconds(static_cast<std::int64_t>(
-                                                                  static_cast<double>(i) * 1e9 / per_second)));
+    if (per_second > 0)
+      std::this_thread::sleep_until(start + std::chrono::nanoseconds(static_cast<std::int64_t>(
+                                                static_cast<double>(i) * 1e9 / per_second)));
     const auto log_time = t0 + static_cast<std::uint64_t>(static_cast<double>(i) * period_ns);
     writer.write(channel, static_cast<std::uint32_t>(i), log_time, log_time, payloads[i % payloads.size()]);
   }
@@ -110,9 +113,7 @@ Run write(const std::filesystem::path& path, const rec::McapWriterOptions& optio
   return run;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   int cameras = 32;
   int rate = 120;
   int markers = 40;
@@ -120,11 +121,18 @@ int main(int argc, char** argv) {
   double fast_seconds = 20;
   std::string compression = "zstd";
   std::string dir = std::filesystem::temp_directory_path().string();
-  CLI::App app{"bench_recorder: MCAP writer throughput and CPU share at the reference load", "bench_recorder"};
+  CLI::App app{"bench_recorder: MCAP writer throughput and CPU share at the reference load",
+               "bench_recorder"};
   app.add_option("--cameras", cameras, "cameras")->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_option("--rate", rate, "frames per second per camera")->check(CLI::PositiveNumber)->capture_default_str();
-  app.add_option("--markers", markers, "blobs per frame")->check(CLI::NonNegativeNumber)->capture_default_str();
-  app.add_option("--seconds", seconds, "seconds of the paced 1x run")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--rate", rate, "frames per second per camera")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--markers", markers, "blobs per frame")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--seconds", seconds, "seconds of the paced 1x run")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--fast-seconds", fast_seconds, "seconds of load written as fast as possible")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -133,9 +141,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--dir", dir, "where the (deleted) test files go")->capture_default_str();
   std::string keep;
-  app.add_option("--keep", keep,
-                 "keep the throughput run's file here: --fast-seconds of the load at its pace, for panoptes_replay "
-                 "into a live panoptes_record (docs/benchmarks.md)");
+  app.add_option(
+      "--keep", keep,
+      "keep the throughput run's file here: --fast-seconds of the load at its pace, for panoptes_replay "
+      "into a live panoptes_record (docs/benchmarks.md)");
   if (const auto code = panoptes::parse_command_line(app, argc, argv)) return *code;
 
   const auto payloads = make_payloads(cameras, rate, markers);
@@ -151,11 +160,24 @@ int main(int argc, char** argv) {
   const double rate_fast = static_cast<double>(fast.messages) / fast.cpu_s;
   std::printf("load: %d cameras x %d Hz x %d markers = %.0f messages/s, payload %.0f bytes (%.2f MB/s), %s\n",
               cameras, rate, markers, load, payload_avg, load * payload_avg / 1e6, compression.c_str());
-  std::printf("throughput (one core, CPU time): %.0f messages/s, %.1f MB/s payload = %.1fx the load; "
-              "file %.1f%% of payload\n",
-              rate_fast, rate_fast * payload_avg / 1e6, rate_fast / load,
-              100.0 * static_cast<double>(fast.file_bytes) / static_cast<double>(fast.payload_bytes));
+  std::printf(
+      "throughput (one core, CPU time): %.0f messages/s, %.1f MB/s payload = %.1fx the load; "
+      "file %.1f%% of payload\n",
+      rate_fast, rate_fast * payload_avg / 1e6, rate_fast / load,
+      100.0 * static_cast<double>(fast.file_bytes) / static_cast<double>(fast.payload_bytes));
   std::printf("1x load for %.1f s: %.2f%% of one core (%.3f s CPU, %llu messages)\n", paced.wall_s,
-              100.0 * paced.cpu_s / paced.wall_s, paced.cpu_s, static_cast<unsigned long long>(paced.messages));
+              100.0 * paced.cpu_s / paced.wall_s, paced.cpu_s,
+              static_cast<unsigned long long>(paced.messages));
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "%s: %s\n", "bench_recorder", error.what());
+    return 1;
+  }
 }

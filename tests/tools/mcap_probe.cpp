@@ -5,6 +5,7 @@
 // topic have a log time <= T. With --features-jsonl FILE it also writes the recording's
 // FeatureFrames as the JSONL that estimator_node --in-features reads (the offline JSONL path).
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <map>
 #include <string>
@@ -17,7 +18,9 @@
 #include "panoptes/jsonl.h"
 #include "panoptes/recording/mcap_reader.h"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   std::string input;
   std::string features_jsonl;
   std::uint64_t until_ns = 0;
@@ -57,5 +60,16 @@ int main(int argc, char** argv) {
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_mcap_probe: %s\n", error.what());
     return 2;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "%s: %s\n", "panoptes_mcap_probe", error.what());
+    return 1;
   }
 }
