@@ -138,7 +138,7 @@ class RecordLoop {
     for (auto& command : commands_.take()) {
       if (!command.target().empty() && command.target() != "*" && command.target() != options_.id) continue;
       if (command.command() == "start") {
-        start(command.path().empty() ? options_.out : command.path());
+        if (!recorder_.recording()) start(command.path().empty() ? options_.out : command.path());
       } else if (command.command() == "stop") {
         stop();
       } else if (command.command() == "quit") {
@@ -204,18 +204,25 @@ int send_command(const Options& options, dds::Bus& bus) {
     std::fprintf(stderr, "panoptes_record: no recorder on the bus (domain $PANOPTES_DOMAIN) after 5 s\n");
     return panoptes::kExitFailure;
   }
+  // Sent again every second until a status confirms it (a reader may match a moment after the
+  // writer does); the commands are idempotent: a start while recording is ignored.
   msg::RecorderCommand command;
   command.target(options.target);
-  command.seq(1);
   command.command(options.send);
   command.path(options.out_given ? options.out : std::string());
-  writer->write(command);
   const bool want_recording = options.send == "start";
   const auto deadline = Clock::now() + std::chrono::seconds(5);
+  auto next_send = Clock::now();
+  std::uint64_t seq = 0;
   while (Clock::now() < deadline) {
+    if (Clock::now() >= next_send) {
+      command.seq(++seq);
+      writer->write(command);
+      next_send += std::chrono::seconds(1);
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     const std::lock_guard<std::mutex> lock(mutex);
-    if (options.send == "quit" || (seen && last.recording() == want_recording)) {
+    if ((options.send == "quit" && seq >= 2) || (seen && last.recording() == want_recording)) {
       if (seen)
         std::fprintf(stderr, "panoptes_record: %s: %s %s\n", last.recorder_id().c_str(),
                      last.recording() ? "recording" : "stopped", last.path().c_str());
