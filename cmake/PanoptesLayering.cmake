@@ -27,6 +27,7 @@ set(PANOPTES_LAYERING_RULES
   "panoptes_session|${_panoptes_dds_links}||the estimator session runs without DDS (offline mode, tests)"
   "panoptes_console_server|${_panoptes_dds_links}|panoptes_sim|CLI11|#include [<\"](fastdds/|fastrtps/|panoptes_msgs/|panoptes/dds/|CLI/)|the console's state and server run without DDS (tests), panoptes_console adapts the bus"
   "panoptes_tune|${_panoptes_dds_links}||filter tuning replays recordings offline: no DDS"
+  "panoptes_recording|${_panoptes_dds_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](fastdds/|fastrtps/|fastcdr/|panoptes_msgs/|panoptes/dds/|CLI/)|MCAP files are read and written without DDS (offline tools, estimator_node --in-recording)"
   "panoptes_client|${_panoptes_io_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](CLI/|yaml-cpp/|nlohmann/|spdlog/|fstream|opencv2/|panoptes/jsonl\\.h|panoptes/config\\.h)|the client library applications link: the bus and its messages, no file formats, simulator or CLI"
   "panoptes_python|${_panoptes_io_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](fastdds/|fastrtps/|fastcdr/|panoptes_msgs/|panoptes/dds/|CLI/|yaml-cpp/|nlohmann/)|the Python binding uses the public client API only")
 

@@ -3,6 +3,7 @@
 //   live:    subscribes to rt/panoptes/features and camera_info, publishes rt/panoptes/tracks,
 //            predictions and estimator_status, and serves rt/panoptes/time_sync
 //   offline: --no-dds --in-features <files...> --out-tracks <file>   (architecture.md, Contracts)
+//            --in-recording <file.mcap> --out-tracks <file>: the same from a recording (docs/recording.md)
 //   --print-config: the effective settings as YAML (--config loads them)
 //   tune:    searches filter settings over recorded features (docs/recording.md, "Tune the filter")
 // The work is in libraries: session/ (EstimatorSession, offline replay, settings YAML) and app/
@@ -19,6 +20,7 @@
 #include "panoptes/config.h"
 #include "panoptes/estimator_app/command_line.h"
 #include "panoptes/estimator_app/live_estimator.h"
+#include "panoptes/estimator_app/recording_input.h"
 #include "panoptes/process.h"
 #include "panoptes/session/body_file.h"
 #include "panoptes/session/estimator_session.h"
@@ -53,6 +55,18 @@ void prepare(const app::NodeCommandLine& command_line, session::EstimatorSession
 
 int run(const app::NodeCommandLine& command_line, session::EstimatorSession& estimator,
         session::BodyFile& body_file) {
+  if (!command_line.in_recording.empty()) {
+    const session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
+    session::FeatureFiles input;
+    try {
+      input = app::read_recording_features(command_line.in_recording);
+    } catch (const std::exception& error) {
+      session::log(error.what());
+      return panoptes::kExitBadInput;
+    }
+    return session::run_offline(estimator, std::move(input), replay, command_line.out_tracks,
+                                command_line.out_poses);
+  }
   if (command_line.no_dds) {
     const session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
     return session::run_offline(estimator, command_line.in_features, replay, command_line.out_tracks,

@@ -6,6 +6,8 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <cstring>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -89,6 +91,8 @@ PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::k
 PANOPTES_TOPIC(MocapFrame, "rt/panoptes/frames", false, Durability::kVolatile, 8, true, false)
 PANOPTES_TOPIC(BodyDescriptions, "rt/panoptes/body_descriptions", true, Durability::kTransientLocal, 1, false,
                false)
+PANOPTES_TOPIC(RecorderCommand, "rt/panoptes/recorder_command", true, Durability::kVolatile, 32, false, false)
+PANOPTES_TOPIC(RecorderStatus, "rt/panoptes/recorder_status", false, Durability::kVolatile, 1, false, true)
 // Off by default: camera_node and estimator_node --latency-probe (docs/protocol.md, "Latency probes").
 PANOPTES_TOPIC(LatencyTraces, "rt/panoptes/latency_probe/trace", false, Durability::kVolatile, 8, false,
                false)
@@ -210,6 +214,26 @@ void apply_spec(Qos& qos, const TopicSpec& spec, panoptes::dds::Qos override_qos
   qos.resource_limits().max_samples = kMaxInstances * qos.history().depth;
 }
 
+// The writer QoS of a topic (docs/protocol.md), for typed and raw writers alike.
+fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos) {
+  fdds::DataWriterQos writer_qos = fdds::DATAWRITER_QOS_DEFAULT;
+  apply_spec(writer_qos, spec, qos);
+  if (spec.offer_reliable && !spec.reliable && qos == Qos::kDefault) {
+    writer_qos.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+    writer_qos.history().depth = kOfferedReliableDepth;
+    writer_qos.resource_limits().max_samples_per_instance = kOfferedReliableDepth;
+    writer_qos.resource_limits().max_samples = kMaxInstances * kOfferedReliableDepth;
+    writer_qos.reliable_writer_qos().times.heartbeatPeriod =
+        eprosima::fastrtps::Duration_t(0, kOfferedHeartbeatNs);
+  }
+  writer_qos.reliable_writer_qos().times.nackSupressionDuration =
+      eprosima::fastrtps::Duration_t(0, static_cast<std::uint32_t>(spec.nack_suppression_ms) * 1'000'000U);
+  // Evaluate the content filter of every matched reader (default: at most 32 readers per writer).
+  writer_qos.writer_resource_limits().reader_filters_allocation =
+      eprosima::fastrtps::ResourceLimitedContainerConfig(0, kMaxInstances, 1);
+  return writer_qos;
+}
+
 std::filesystem::path executable_dir() {
   std::vector<char> buffer(4096);
   const ssize_t n = readlink("/proc/self/exe", buffer.data(), buffer.size() - 1);
@@ -299,9 +323,14 @@ class BusCore {
 
   template <class T>
   fdds::Topic* topic(const std::string& name) {
+    return topic_of_type(name, [] { return fdds::TypeSupport(new typename TopicTraits<T>::PubSubType()); });
+  }
+
+  // The topic `name`, created with the type `make_type` returns the first time.
+  fdds::Topic* topic_of_type(const std::string& name, const std::function<fdds::TypeSupport()>& make_type) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (auto it = topics_.find(name); it != topics_.end()) return it->second;
-    fdds::TypeSupport type(new typename TopicTraits<T>::PubSubType());
+    fdds::TypeSupport type = make_type();
     if (type.register_type(participant_) != return_code_ok()) {
       throw DdsError("cannot register DDS type for " + name);
     }
@@ -502,23 +531,8 @@ std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos, const std::string& topic_na
   impl->core = core_;
   const std::string name = topic_name_for<T>(topic_name);
   fdds::Topic* topic = core_->topic<T>(name);
-  fdds::DataWriterQos writer_qos = fdds::DATAWRITER_QOS_DEFAULT;
-  const TopicSpec spec = TopicTraits<T>::spec();
-  apply_spec(writer_qos, spec, qos);
-  if (spec.offer_reliable && !spec.reliable && qos == Qos::kDefault) {
-    writer_qos.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
-    writer_qos.history().depth = kOfferedReliableDepth;
-    writer_qos.resource_limits().max_samples_per_instance = kOfferedReliableDepth;
-    writer_qos.resource_limits().max_samples = kMaxInstances * kOfferedReliableDepth;
-    writer_qos.reliable_writer_qos().times.heartbeatPeriod =
-        eprosima::fastrtps::Duration_t(0, kOfferedHeartbeatNs);
-  }
-  writer_qos.reliable_writer_qos().times.nackSupressionDuration =
-      eprosima::fastrtps::Duration_t(0, static_cast<std::uint32_t>(spec.nack_suppression_ms) * 1'000'000U);
-  // Evaluate the content filter of every matched reader (default: at most 32 readers per writer).
-  writer_qos.writer_resource_limits().reader_filters_allocation =
-      eprosima::fastrtps::ResourceLimitedContainerConfig(0, kMaxInstances, 1);
-  impl->writer = core_->publisher()->create_datawriter(topic, writer_qos, &impl->listener);
+  impl->writer = core_->publisher()->create_datawriter(topic, writer_qos_for(TopicTraits<T>::spec(), qos),
+                                                       &impl->listener);
   if (impl->writer == nullptr) {
     throw DdsError("cannot create DDS writer on " + name);
   }
@@ -576,6 +590,8 @@ PANOPTES_INSTANTIATE(LatencyProbeEcho)
 PANOPTES_INSTANTIATE(LatencyTraces)
 PANOPTES_INSTANTIATE(MocapFrame)
 PANOPTES_INSTANTIATE(BodyDescriptions)
+PANOPTES_INSTANTIATE(RecorderCommand)
+PANOPTES_INSTANTIATE(RecorderStatus)
 PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::PoseStamped_)
 PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::TwistStamped_)
 PANOPTES_INSTANTIATE_TYPE(tf2_msgs::msg::dds_::TFMessage_)
@@ -584,5 +600,214 @@ PANOPTES_INSTANTIATE_TYPE(mocap4r2_msgs::msg::dds_::Markers_)
 #undef PANOPTES_INSTANTIATE
 #undef PANOPTES_INSTANTIATE_TYPE
 // NOLINTEND(bugprone-macro-parentheses)
+
+// ---------------------------------------------------------------------------------------------
+// Raw (serialized) samples: panoptes_record and panoptes_replay
+
+namespace {
+
+// Keeps the serialized payload as it is. It bears the real type's name, size bound and key flag,
+// so it matches the typed writers and readers; the key of a sample to write is computed by the
+// real type from the decoded sample.
+class RawPubSubType final : public fdds::TopicDataType {
+ public:
+  explicit RawPubSubType(std::unique_ptr<fdds::TopicDataType> real) : real_(std::move(real)) {
+    setName(real_->getName());
+    m_typeSize = real_->m_typeSize;
+    m_isGetKeyDefined = real_->m_isGetKeyDefined;
+  }
+  bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override {
+    const auto& cdr = static_cast<RawSample*>(data)->cdr;
+    if (cdr.size() < 4 || cdr.size() > payload->max_size) return false;
+    std::memcpy(payload->data, cdr.data(), cdr.size());
+    payload->length = static_cast<std::uint32_t>(cdr.size());
+    payload->encapsulation = (cdr[1] & 1) != 0 ? CDR_LE : CDR_BE;
+    return true;
+  }
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
+    auto& cdr = static_cast<RawSample*>(data)->cdr;
+    cdr.assign(payload->data, payload->data + payload->length);
+    return true;
+  }
+  std::function<std::uint32_t()> getSerializedSizeProvider(void* data) override {
+    const auto size = static_cast<std::uint32_t>(static_cast<RawSample*>(data)->cdr.size());
+    return [size] { return size; };
+  }
+  void* createData() override { return new RawSample(); }
+  void deleteData(void* data) override { delete static_cast<RawSample*>(data); }
+  bool getKey(void* data, eprosima::fastrtps::rtps::InstanceHandle_t* handle, bool force_md5) override {
+    if (!m_isGetKeyDefined) return false;
+    const auto& cdr = static_cast<RawSample*>(data)->cdr;
+    eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(cdr.size()));
+    std::memcpy(payload.data, cdr.data(), cdr.size());
+    payload.length = static_cast<std::uint32_t>(cdr.size());
+    void* typed = real_->createData();
+    const bool ok = real_->deserialize(&payload, typed) && real_->getKey(typed, handle, force_md5);
+    real_->deleteData(typed);
+    return ok;
+  }
+
+ private:
+  std::unique_ptr<fdds::TopicDataType> real_;
+};
+
+struct RawTopicEntry {
+  RawTopic topic;
+  TopicSpec spec;
+  std::function<fdds::TopicDataType*()> make_real;
+};
+
+template <class T>
+RawTopicEntry raw_entry(const char* ros_type) {
+  const TopicSpec spec = TopicTraits<T>::spec();
+  typename TopicTraits<T>::PubSubType real;
+  return {{spec.name, real.getName(), ros_type, spec.durability == Durability::kTransientLocal}, spec, [] {
+            return new typename TopicTraits<T>::PubSubType();
+          }};
+}
+
+const std::vector<RawTopicEntry>& raw_entries() {
+  static const std::vector<RawTopicEntry> entries = {
+      raw_entry<msg::CameraInfo>("panoptes/msg/CameraInfo"),
+      raw_entry<msg::FeatureFrame>("panoptes/msg/FeatureFrame"),
+      raw_entry<msg::CameraStatus>("panoptes/msg/CameraStatus"),
+      raw_entry<msg::CameraCommand>("panoptes/msg/CameraCommand"),
+      raw_entry<msg::CameraPreview>("panoptes/msg/CameraPreview"),
+      raw_entry<msg::Predictions>("panoptes/msg/Predictions"),
+      raw_entry<msg::TimeSync>("panoptes/msg/TimeSync"),
+      raw_entry<msg::EstimatorStatus>("panoptes/msg/EstimatorStatus"),
+      raw_entry<msg::TrackFrame>("panoptes/msg/TrackFrame"),
+      raw_entry<msg::BodyPose>("panoptes/msg/BodyPose"),
+      raw_entry<msg::SystemCalibration>("panoptes/msg/SystemCalibration"),
+      raw_entry<msg::MocapFrame>("panoptes/msg/MocapFrame"),
+      raw_entry<msg::BodyDescriptions>("panoptes/msg/BodyDescriptions"),
+  };
+  return entries;
+}
+
+const RawTopicEntry& raw_entry_named(const std::string& topic) {
+  for (const auto& entry : raw_entries()) {
+    if (entry.topic.topic == topic) return entry;
+  }
+  throw DdsError("'" + topic + "' is not a Panoptes topic (docs/protocol.md)");
+}
+
+class RawReaderListener : public fdds::DataReaderListener {
+ public:
+  explicit RawReaderListener(RawReader::Callback callback) : callback_(std::move(callback)) {}
+  void on_data_available(fdds::DataReader* reader) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!active_) return;
+    RawSample sample;
+    fdds::SampleInfo info;
+    while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      received.fetch_add(1);
+      sample.source_timestamp_ns = info.source_timestamp.to_ns();
+      callback_(std::move(sample));
+      sample = RawSample();
+    }
+  }
+  void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& status) override {
+    matched.store(status.current_count);
+  }
+  void deactivate() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    active_ = false;
+  }
+  std::atomic<int> matched{0};
+  std::atomic<std::uint64_t> received{0};
+
+ private:
+  RawReader::Callback callback_;
+  std::mutex mutex_;
+  bool active_ = true;
+};
+
+}  // namespace
+
+std::vector<RawTopic> panoptes_raw_topics() {
+  std::vector<RawTopic> topics;
+  for (const auto& entry : raw_entries()) topics.push_back(entry.topic);
+  return topics;
+}
+
+struct RawReader::Impl {
+  std::shared_ptr<BusCore> core;
+  fdds::DataReader* reader = nullptr;
+  std::unique_ptr<RawReaderListener> listener;
+};
+
+RawReader::RawReader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+RawReader::~RawReader() {
+  if (!impl_) return;
+  impl_->listener->deactivate();
+  if (impl_->reader != nullptr) {
+    impl_->reader->set_listener(nullptr);
+    impl_->core->subscriber()->delete_datareader(impl_->reader);
+  }
+}
+int RawReader::matched_writers() const {
+  return impl_->listener->matched.load();
+}
+std::uint64_t RawReader::received() const {
+  return impl_->listener->received.load();
+}
+
+struct RawWriter::Impl {
+  std::shared_ptr<BusCore> core;
+  fdds::DataWriter* writer = nullptr;
+  WriterListener listener;
+};
+
+RawWriter::RawWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+RawWriter::~RawWriter() {
+  if (impl_ && impl_->writer != nullptr) {
+    impl_->writer->set_listener(nullptr);
+    impl_->core->publisher()->delete_datawriter(impl_->writer);
+  }
+}
+bool RawWriter::write(const std::vector<std::uint8_t>& cdr) {
+  RawSample sample;
+  sample.cdr = cdr;
+  return impl_->writer->write(&sample);
+}
+int RawWriter::matched_readers() const {
+  return impl_->listener.matched.load();
+}
+
+namespace {
+
+fdds::Topic* raw_topic(BusCore& core, const RawTopicEntry& entry) {
+  return core.topic_of_type(entry.topic.topic, [&entry] {
+    return fdds::TypeSupport(new RawPubSubType(std::unique_ptr<fdds::TopicDataType>(entry.make_real())));
+  });
+}
+
+}  // namespace
+
+std::unique_ptr<RawReader> Bus::make_raw_reader(const std::string& topic, RawReader::Callback on_sample) {
+  const RawTopicEntry& entry = raw_entry_named(topic);
+  auto impl = std::make_unique<RawReader::Impl>();
+  impl->core = core_;
+  impl->listener = std::make_unique<RawReaderListener>(std::move(on_sample));
+  fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
+  const bool offered = entry.spec.reliable || entry.spec.offer_reliable;
+  apply_spec(reader_qos, entry.spec, offered ? Qos::kReliable : Qos::kDefault);
+  impl->reader =
+      core_->subscriber()->create_datareader(raw_topic(*core_, entry), reader_qos, impl->listener.get());
+  if (impl->reader == nullptr) throw DdsError("cannot create DDS reader on " + topic);
+  return std::make_unique<RawReader>(std::move(impl));
+}
+
+std::unique_ptr<RawWriter> Bus::make_raw_writer(const std::string& topic) {
+  const RawTopicEntry& entry = raw_entry_named(topic);
+  auto impl = std::make_unique<RawWriter::Impl>();
+  impl->core = core_;
+  impl->writer = core_->publisher()->create_datawriter(
+      raw_topic(*core_, entry), writer_qos_for(entry.spec, Qos::kDefault), &impl->listener);
+  if (impl->writer == nullptr) throw DdsError("cannot create DDS writer on " + topic);
+  return std::make_unique<RawWriter>(std::move(impl));
+}
 
 }  // namespace panoptes::dds

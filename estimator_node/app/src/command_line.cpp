@@ -81,7 +81,10 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
                  "rigid-body definitions YAML (docs/bodies.md); live, reloaded when the file changes");
   app.add_option("--in-features", c.in_features, "offline: FeatureFrame JSONL files (one per camera)")
       ->expected(1, -1);
-  app.add_flag("--no-dds", c.no_dds, "offline: do not use DDS; requires --in-features");
+  app.add_option(
+      "--in-recording", c.in_recording,
+      "offline (no DDS): the FeatureFrames of an MCAP recording (panoptes_record, docs/recording.md)");
+  app.add_flag("--no-dds", c.no_dds, "offline: do not use DDS; requires --in-features or --in-recording");
   app.add_option("--out-tracks", c.out_tracks, "write every published TrackFrame as Track JSONL");
   app.add_option("--out-poses", c.out_poses, "write body poses as Pose JSONL (needs --bodies)");
   app.add_option("--dds-profile", c.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
@@ -98,12 +101,16 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
 
 void validate(const NodeCommandLine& c) {
   if (c.print_config) return;  // prints and exits: no mode needed
-  if (c.no_dds && c.in_features.empty()) throw CLI::ValidationError("--no-dds needs --in-features");
+  if (!c.in_recording.empty() && !c.in_features.empty())
+    throw CLI::ValidationError("--in-recording and --in-features: give one of them");
+  if (c.no_dds && c.in_features.empty() && c.in_recording.empty())
+    throw CLI::ValidationError("--no-dds needs --in-features or --in-recording");
   if (!c.in_features.empty() && !c.no_dds) {
     throw CLI::ValidationError(
         "--in-features runs offline: add --no-dds (replaying onto DDS is camera_node's job)");
   }
-  if (c.no_dds && c.calibration_file.empty()) throw CLI::ValidationError("offline mode needs --calibration");
+  if ((c.no_dds || !c.in_recording.empty()) && c.calibration_file.empty())
+    throw CLI::ValidationError("offline mode needs --calibration");
   if (!c.out_poses.empty() && c.bodies_file.empty()) throw CLI::ValidationError("--out-poses needs --bodies");
 }
 

@@ -89,6 +89,11 @@ int run_offline(EstimatorSession& session, const std::vector<std::string>& featu
     log(error.what());
     return kExitBadInput;
   }
+  return run_offline(session, std::move(input), options, out_tracks, out_poses);
+}
+
+int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineReplayOptions& options,
+                const std::string& out_tracks, const std::string& out_poses) {
   sort_by_stamp(input.frames);
   JsonlOutputs outputs(out_tracks, out_poses);
   const est::Tracker& tracker = session.tracker();

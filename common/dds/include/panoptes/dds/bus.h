@@ -11,6 +11,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace panoptes::dds {
 
@@ -41,6 +42,52 @@ enum class Qos {
 };
 
 class BusCore;
+
+// A Panoptes topic seen as serialized CDR, without decoding: what panoptes_record records and
+// panoptes_replay publishes.
+struct RawTopic {
+  std::string topic;      // DDS name, "rt/panoptes/features"
+  std::string type_name;  // DDS type name, "panoptes::msg::FeatureFrame"
+  std::string ros_type;   // "panoptes/msg/FeatureFrame" (ROS 2 naming: rosbag2 schemas)
+  bool transient_local = false;
+};
+// Every Panoptes topic of docs/protocol.md, in a fixed order (the latency probes are left out).
+std::vector<RawTopic> panoptes_raw_topics();
+
+// One serialized sample: the CDR payload as on the wire, its 4-byte encapsulation header included.
+struct RawSample {
+  std::vector<std::uint8_t> cdr;
+  std::int64_t source_timestamp_ns = 0;  // the writer's
+};
+
+class RawReader {
+ public:
+  using Callback = std::function<void(RawSample&&)>;
+  ~RawReader();
+  RawReader(const RawReader&) = delete;
+  RawReader& operator=(const RawReader&) = delete;
+  int matched_writers() const;
+  std::uint64_t received() const;
+  struct Impl;
+  explicit RawReader(std::unique_ptr<Impl> impl);
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+class RawWriter {
+ public:
+  ~RawWriter();
+  RawWriter(const RawWriter&) = delete;
+  RawWriter& operator=(const RawWriter&) = delete;
+  bool write(const std::vector<std::uint8_t>& cdr);
+  int matched_readers() const;
+  struct Impl;
+  explicit RawWriter(std::unique_ptr<Impl> impl);
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
 
 template <class T>
 class Writer {
@@ -102,6 +149,12 @@ class Bus {
   template <class T>
   std::unique_ptr<Reader<T>> make_reader(typename Reader<T>::Callback on_sample, Qos qos = Qos::kDefault,
                                          const std::string& only_id = {}, const std::string& topic_name = {});
+
+  // Serialized samples of one of panoptes_raw_topics(). The reader asks for reliability where the
+  // topic's writers offer it (so a recorder gets repairs) and for the history of transient-local
+  // topics; the writer has the QoS of make_writer. DdsError for a topic that is not a Panoptes topic.
+  std::unique_ptr<RawReader> make_raw_reader(const std::string& topic, RawReader::Callback on_sample);
+  std::unique_ptr<RawWriter> make_raw_writer(const std::string& topic);
 
   const std::filesystem::path& profile_file() const;
 

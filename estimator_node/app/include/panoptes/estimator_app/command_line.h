@@ -18,6 +18,7 @@ struct NodeCommandLine {
   std::string config_file;
   bool print_config = false;
   std::vector<std::string> in_features;
+  std::string in_recording;  // offline from an MCAP recording (implies no DDS)
   bool no_dds = false;
   std::string out_tracks;
   std::string out_poses;

@@ -49,5 +49,8 @@ void replay_frames(EstimatorSession& session, std::vector<FeatureFrame>& frames,
 int run_offline(EstimatorSession& session, const std::vector<std::string>& feature_files,
                 const OfflineReplayOptions& options, const std::string& out_tracks,
                 const std::string& out_poses);
+// The same run over frames already read (estimator_node --in-recording reads them from MCAP).
+int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineReplayOptions& options,
+                const std::string& out_tracks, const std::string& out_poses);
 
 }  // namespace panoptes::session
