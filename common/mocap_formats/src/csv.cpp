@@ -1,22 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 // CSV writers (formats in csv.h).
-#include <charconv>
 #include <fstream>
 #include <string>
 
 #include "panoptes/errors.h"
+#include "number_format.h"
 #include "panoptes/formats/csv.h"
 
 namespace panoptes {
 
 namespace {
-
-// Metres with 7 decimals (0.1 µm); quaternion components with 9.
-void append_number(std::string& out, double value, int decimals) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed, decimals);
-  out.append(buffer, result.ptr);
-}
 
 void write_text(const std::filesystem::path& path, const std::string& text) {
   std::ofstream stream(path, std::ios::binary | std::ios::trunc);
@@ -37,6 +30,7 @@ std::string csv_field(const std::string& name) {
   return quoted + "\"";
 }
 
+// Metres with 7 decimals (0.1 µm); quaternion components with 9.
 constexpr int kMetreDecimals = 7;
 constexpr int kQuaternionDecimals = 9;
 
@@ -58,12 +52,12 @@ void write_markers_csv(const std::filesystem::path& path, const MarkerTrajectori
   for (std::size_t f = 0; f < frames; ++f) {
     out += std::to_string(f + 1);
     out += ',';
-    append_number(out, data.times_s[f], 6);
+    formats::append_fixed(out, data.times_s[f], 6);
     for (std::size_t m = 0; m < markers; ++m) {
       const bool valid = data.is_valid(f, m);
       for (int axis = 0; axis < 3; ++axis) {
         out += ',';
-        if (valid) append_number(out, data.position(f, m)[axis], kMetreDecimals);
+        if (valid) formats::append_fixed(out, data.position(f, m)[axis], kMetreDecimals);
       }
     }
     out += '\n';
@@ -80,16 +74,16 @@ void write_bodies_csv(const std::filesystem::path& path, const BodyTrajectories&
       if (data.valid[sample] == 0) continue;
       out += std::to_string(f + 1);
       out += ',';
-      append_number(out, data.times_s[f], 6);
+      formats::append_fixed(out, data.times_s[f], 6);
       out += ',';
       out += csv_field(data.body_names[b]);
       for (int axis = 0; axis < 3; ++axis) {
         out += ',';
-        append_number(out, data.positions[sample][axis], kMetreDecimals);
+        formats::append_fixed(out, data.positions[sample][axis], kMetreDecimals);
       }
       for (int i = 0; i < 4; ++i) {
         out += ',';
-        append_number(out, data.quaternions[sample][i], kQuaternionDecimals);
+        formats::append_fixed(out, data.quaternions[sample][i], kQuaternionDecimals);
       }
       out += '\n';
     }

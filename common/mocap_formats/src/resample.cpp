@@ -52,28 +52,46 @@ class BracketWalker {
   std::size_t next_ = 0;
 };
 
-template <class Record>
-void sort_by_stamp(std::vector<const Record*>& records) {
-  // Stable: of several updates with one stamp the last written wins (see dedupe below).
-  std::stable_sort(records.begin(), records.end(),
-                   [](const Record* a, const Record* b) { return a->stamp_ns < b->stamp_ns; });
-  std::vector<const Record*> unique;
-  for (const Record* record : records) {
-    if (!unique.empty() && unique.back()->stamp_ns == record->stamp_ns) {
-      unique.back() = record;
+// What the export needs of a track update, compact (records are large and interleaved by id).
+struct TrackUpdate {
+  TimeNs stamp_ns;
+  Eigen::Vector3d p;
+  float residual_m;
+  std::uint8_t camera_mask;
+};
+TimeNs stamp_of(const TrackUpdate& update) { return update.stamp_ns; }
+TimeNs stamp_of(const PoseRecord* pose) { return pose->stamp_ns; }
+
+// Orders one object's updates by stamp; of several updates with one stamp the last one read wins.
+template <class Update>
+void sort_by_stamp(std::vector<Update>& updates) {
+  auto earlier = [](const Update& a, const Update& b) { return stamp_of(a) < stamp_of(b); };
+  if (!std::is_sorted(updates.begin(), updates.end(), earlier)) {
+    std::stable_sort(updates.begin(), updates.end(), earlier);
+  }
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < updates.size(); ++i) {
+    if (kept > 0 && stamp_of(updates[kept - 1]) == stamp_of(updates[i])) {
+      updates[kept - 1] = updates[i];
     } else {
-      unique.push_back(record);
+      updates[kept++] = updates[i];
     }
   }
-  records.swap(unique);
+  updates.resize(kept);
 }
 
-template <class Record>
-std::vector<TimeNs> stamps_of(const std::vector<const Record*>& records) {
+template <class Update>
+std::vector<TimeNs> stamps_of(const std::vector<Update>& updates) {
   std::vector<TimeNs> stamps;
-  stamps.reserve(records.size());
-  for (const Record* record : records) stamps.push_back(record->stamp_ns);
+  stamps.reserve(updates.size());
+  for (const Update& update : updates) stamps.push_back(stamp_of(update));
   return stamps;
+}
+
+std::vector<TimeNs> grid_times_ns(const SampleGrid& grid) {
+  std::vector<TimeNs> times(grid.count);
+  for (std::size_t k = 0; k < grid.count; ++k) times[k] = grid.time_ns(k);
+  return times;
 }
 
 std::vector<double> grid_times_s(const SampleGrid& grid) {
@@ -130,10 +148,10 @@ SampleGrid make_grid(const std::vector<TrackRecord>& tracks, const std::vector<P
 
 MarkerTrajectories resample_tracks(const std::vector<TrackRecord>& tracks, const SampleGrid& grid,
                                    const ResampleOptions& options) {
-  std::map<std::int64_t, std::vector<const TrackRecord*>> by_id;
+  std::map<std::int64_t, std::vector<TrackUpdate>> by_id;
   for (const TrackRecord& track : tracks) {
     if (track.status == TrackStatus::kTentative && !options.include_tentative) continue;
-    by_id[track.id].push_back(&track);
+    by_id[track.id].push_back({track.stamp_ns, track.p, residual_of(track), camera_mask_of(track)});
   }
   MarkerTrajectories out;
   out.data_rate_hz = grid.rate_hz;
@@ -145,24 +163,31 @@ MarkerTrajectories resample_tracks(const std::vector<TrackRecord>& tracks, const
   out.valid.assign(grid.count * markers, 0);
   out.residuals_m.assign(grid.count * markers, -1.0F);
   out.camera_masks.assign(grid.count * markers, 0);
-  std::size_t marker = 0;
-  for (auto& [id, records] : by_id) {
-    sort_by_stamp(records);
-    const std::vector<TimeNs> stamps = stamps_of(records);
-    BracketWalker walker(stamps, options.max_gap_ns);
-    for (std::size_t k = 0; k < grid.count; ++k) {
-      const Bracket b = walker.at(grid.time_ns(k));
+  const std::vector<TimeNs> times = grid_times_ns(grid);
+  // Frame-major output: walk all markers at each sample time (one bracket walker per marker).
+  std::vector<std::vector<TrackUpdate>*> updates_of;
+  std::vector<std::vector<TimeNs>> stamps;
+  for (auto& [id, updates] : by_id) {
+    sort_by_stamp(updates);
+    updates_of.push_back(&updates);
+    stamps.push_back(stamps_of(updates));
+  }
+  std::vector<BracketWalker> walkers;
+  walkers.reserve(markers);
+  for (const std::vector<TimeNs>& marker_stamps : stamps) walkers.emplace_back(marker_stamps, options.max_gap_ns);
+  for (std::size_t k = 0; k < grid.count; ++k) {
+    for (std::size_t marker = 0; marker < markers; ++marker) {
+      const Bracket b = walkers[marker].at(times[k]);
       if (!b.valid) continue;
-      const TrackRecord& before = *records[b.before];
-      const TrackRecord& after = *records[b.after];
+      const TrackUpdate& before = (*updates_of[marker])[b.before];
+      const TrackUpdate& after = (*updates_of[marker])[b.after];
       const std::size_t sample = k * markers + marker;
       out.positions[sample] = (1.0 - b.s) * before.p + b.s * after.p;
       out.valid[sample] = 1;
-      const TrackRecord& nearer = b.s < 0.5 ? before : after;
-      out.residuals_m[sample] = residual_of(nearer);
-      out.camera_masks[sample] = camera_mask_of(nearer);
+      const TrackUpdate& nearer = b.s < 0.5 ? before : after;
+      out.residuals_m[sample] = nearer.residual_m;
+      out.camera_masks[sample] = nearer.camera_mask;
     }
-    ++marker;
   }
   return out;
 }
@@ -179,13 +204,14 @@ BodyTrajectories resample_poses(const std::vector<PoseRecord>& poses, const Samp
   out.positions.assign(grid.count * bodies, Eigen::Vector3d::Zero());
   out.quaternions.assign(grid.count * bodies, Eigen::Vector4d(0, 0, 0, 1));
   out.valid.assign(grid.count * bodies, 0);
+  const std::vector<TimeNs> times = grid_times_ns(grid);
   std::size_t body = 0;
   for (auto& [name, records] : by_body) {
     sort_by_stamp(records);
     const std::vector<TimeNs> stamps = stamps_of(records);
     BracketWalker walker(stamps, options.max_gap_ns);
     for (std::size_t k = 0; k < grid.count; ++k) {
-      const Bracket b = walker.at(grid.time_ns(k));
+      const Bracket b = walker.at(times[k]);
       if (!b.valid) continue;
       const PoseRecord& before = *records[b.before];
       const PoseRecord& after = *records[b.after];

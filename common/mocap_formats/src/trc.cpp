@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "panoptes/errors.h"
+#include "number_format.h"
 #include "panoptes/formats/trc.h"
 
 namespace panoptes {
@@ -162,12 +163,7 @@ MarkerTrajectories load_trc(const std::filesystem::path& path) {
 
 namespace {
 
-// Appends `value` with six decimals (fast path of the writers; no locale).
-void append_fixed(std::string& out, double value) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed, 6);
-  out.append(buffer, result.ptr);
-}
+constexpr int kTrcDecimals = 6;
 
 }  // namespace
 
@@ -187,7 +183,7 @@ void write_trc(const std::filesystem::path& path, const MarkerTrajectories& data
   out += path.filename().string();
   out += "\nDataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames\n";
   std::string rate;
-  append_fixed(rate, data.data_rate_hz);
+  formats::append_fixed(rate, data.data_rate_hz, kTrcDecimals);
   out += rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) + "\t" + units +
          "\t" + rate + "\t1\t" + std::to_string(frames) + "\nFrame#\tTime";
   for (const std::string& name : data.marker_names) out += "\t" + name + "\t\t";
@@ -200,12 +196,12 @@ void write_trc(const std::filesystem::path& path, const MarkerTrajectories& data
   for (std::size_t f = 0; f < frames; ++f) {
     out += std::to_string(f + 1);
     out += '\t';
-    append_fixed(out, data.times_s[f]);
+    formats::append_fixed(out, data.times_s[f], kTrcDecimals);
     for (std::size_t m = 0; m < markers; ++m) {
       const bool valid = data.is_valid(f, m);
       for (int axis = 0; axis < 3; ++axis) {
         out += '\t';
-        if (valid) append_fixed(out, data.position(f, m)[axis] * units_per_metre);
+        if (valid) formats::append_fixed(out, data.position(f, m)[axis] * units_per_metre, kTrcDecimals);
       }
     }
     out += '\n';
