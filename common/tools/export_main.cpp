@@ -78,7 +78,8 @@ int run(const Options& options) {
   const auto start = std::chrono::steady_clock::now();
   Exported data;
   if (!options.markers.empty()) {
-    data.markers = has_extension(options.markers, ".c3d") ? load_c3d(options.markers) : load_trc(options.markers);
+    data.markers =
+        has_extension(options.markers, ".c3d") ? load_c3d(options.markers) : load_trc(options.markers);
   } else {
     data = from_records(options);
   }
@@ -88,23 +89,26 @@ int run(const Options& options) {
     throw ConfigError(options.tracks.empty() ? options.poses : options.tracks, "",
                       "no confirmed tracks or bodies to write as markers");
   }
-  if (!options.c3d.empty()) write_c3d(options.c3d, data.markers, C3dWriteOptions{options.units, "panoptes_export"});
+  if (!options.c3d.empty())
+    write_c3d(options.c3d, data.markers, C3dWriteOptions{options.units, "panoptes_export"});
   if (!options.trc.empty()) write_trc(options.trc, data.markers);
   if (!options.csv.empty()) write_markers_csv(options.csv, data.markers);
   if (!options.bodies_csv.empty()) write_bodies_csv(options.bodies_csv, data.bodies);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("{\"frames\": %zu, \"markers\": %zu, \"bodies\": %zu, \"rate_hz\": %.6g, \"skipped_records\": %zu, "
-              "\"seconds\": %.3f}\n",
-              data.markers.frame_count(), data.markers.marker_count(), data.bodies.body_count(),
-              data.markers.data_rate_hz, data.skipped, seconds);
+  std::printf(
+      "{\"frames\": %zu, \"markers\": %zu, \"bodies\": %zu, \"rate_hz\": %.6g, \"skipped_records\": %zu, "
+      "\"seconds\": %.3f}\n",
+      data.markers.frame_count(), data.markers.marker_count(), data.bodies.body_count(),
+      data.markers.data_rate_hz, data.skipped, seconds);
   return kExitOk;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"panoptes_export: tracks and body poses to C3D, TRC and CSV at a fixed rate (docs/recording.md)",
-               "panoptes_export"};
+  CLI::App app{
+      "panoptes_export: tracks and body poses to C3D, TRC and CSV at a fixed rate (docs/recording.md)",
+      "panoptes_export"};
   Options options;
   app.add_option("--tracks", options.tracks, "tracks JSON Lines file (estimator_node --out-tracks)")
       ->check(CLI::ExistingFile);
@@ -116,15 +120,19 @@ int main(int argc, char** argv) {
   app.add_option("--trc", options.trc, "write markers as TRC");
   app.add_option("--csv", options.csv, "write markers as CSV (metres)");
   app.add_option("--bodies-csv", options.bodies_csv, "write body poses as CSV with quaternions");
-  app.add_option("--rate", options.rate_hz, "output rate, Hz")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--max-gap-ms", options.max_gap_ms, "updates further apart leave the samples between invalid, ms")
+  app.add_option("--rate", options.rate_hz, "output rate, Hz")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-gap-ms", options.max_gap_ms,
+                 "updates further apart leave the samples between invalid, ms")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--units", options.units, "units of the C3D and TRC files")
       ->capture_default_str()
       ->check(CLI::IsMember({"mm", "cm", "m"}));
   app.add_flag("--include-tentative", options.include_tentative, "export tentative tracks too");
-  app.add_flag("--no-body-points", options.no_body_points, "leave the bodies' origins out of the marker files");
+  app.add_flag("--no-body-points", options.no_body_points,
+               "leave the bodies' origins out of the marker files");
   const auto exit = parse_command_line(app, argc, argv, [&] {
     const bool records = !options.tracks.empty() || !options.poses.empty();
     if (records == !options.markers.empty()) {

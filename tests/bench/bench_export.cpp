@@ -8,8 +8,8 @@
 //   bench_export [--minutes 10] [--rate 100] [--dir /tmp] [--repeat 3]
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -123,17 +123,19 @@ int main(int argc, char** argv) {
     std::fclose(file);
   });
   for (const char* extension : {".c3d", ".trc", ".csv", ".raw"}) fs::remove(base.string() + extension);
-  std::printf("{\"frames\": %zu, \"markers\": %zu, \"records\": %zu, ", markers.frame_count(), markers.marker_count(),
-              records.size());
+  std::printf("{\"frames\": %zu, \"markers\": %zu, \"records\": %zu, ", markers.frame_count(),
+              markers.marker_count(), records.size());
   print_timing("resample", resample);
   print_timing("c3d", c3d);
   print_timing("trc", trc);
   print_timing("csv", csv);
   print_timing("c3d_fwrite_floor", floor);
-  std::printf("\"total_wall_s\": %.3f, \"total_cpu_s\": %.3f, \"c3d_over_floor_wall\": %.2f, \"c3d_bytes\": %ju, "
-              "\"trc_bytes\": %ju, \"csv_bytes\": %ju}\n",
-              resample.wall_s + c3d.wall_s + trc.wall_s + csv.wall_s, resample.cpu_s + c3d.cpu_s + trc.cpu_s + csv.cpu_s,
-              c3d.wall_s / floor.wall_s, static_cast<std::uintmax_t>(c3d_bytes), static_cast<std::uintmax_t>(trc_bytes),
-              static_cast<std::uintmax_t>(csv_bytes));
+  std::printf(
+      "\"total_wall_s\": %.3f, \"total_cpu_s\": %.3f, \"c3d_over_floor_wall\": %.2f, \"c3d_bytes\": %ju, "
+      "\"trc_bytes\": %ju, \"csv_bytes\": %ju}\n",
+      resample.wall_s + c3d.wall_s + trc.wall_s + csv.wall_s,
+      resample.cpu_s + c3d.cpu_s + trc.cpu_s + csv.cpu_s, c3d.wall_s / floor.wall_s,
+      static_cast<std::uintmax_t>(c3d_bytes), static_cast<std::uintmax_t>(trc_bytes),
+      static_cast<std::uintmax_t>(csv_bytes));
   return 0;
 }

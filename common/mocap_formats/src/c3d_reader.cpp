@@ -38,12 +38,16 @@ class ByteReader {
     need(offset, 1, what);
     return bytes_[offset];
   }
-  std::int8_t i8(std::size_t offset, const char* what) const { return static_cast<std::int8_t>(u8(offset, what)); }
+  std::int8_t i8(std::size_t offset, const char* what) const {
+    return static_cast<std::int8_t>(u8(offset, what));
+  }
   std::uint16_t u16(std::size_t offset, const char* what) const {
     need(offset, 2, what);
     return c3d::to_u16(&bytes_[offset], processor);
   }
-  std::int16_t i16(std::size_t offset, const char* what) const { return static_cast<std::int16_t>(u16(offset, what)); }
+  std::int16_t i16(std::size_t offset, const char* what) const {
+    return static_cast<std::int16_t>(u16(offset, what));
+  }
   float f32(std::size_t offset, const char* what) const {
     need(offset, 4, what);
     return c3d::to_float(&bytes_[offset], processor);
@@ -92,7 +96,8 @@ void read_values(const ByteReader& in, std::size_t offset, C3dParameter& paramet
   in.need(offset, count * element, "a parameter's values");
   if (type == -1) {
     // Char arrays: the first dimension is the length of each string.
-    const std::size_t length = parameter.dimensions.empty() ? count : static_cast<std::size_t>(parameter.dimensions[0]);
+    const std::size_t length =
+        parameter.dimensions.empty() ? count : static_cast<std::size_t>(parameter.dimensions[0]);
     if (length == 0) return;
     for (std::size_t start = 0; start + length <= count; start += length) {
       parameter.strings.push_back(trimmed(in.text(offset + start, length, "a parameter's text")));
@@ -142,10 +147,12 @@ void read_parameters(const ByteReader& in, std::size_t section, C3dFile& file) {
       const int dimension_count = in.u8(at + 1, "a parameter record");
       constexpr int kMaxDimensions = 7;
       if (dimension_count > kMaxDimensions) {
-        in.fail(at + 1, "parameter '" + name + "' has " + std::to_string(dimension_count) + " dimensions (at most 7)");
+        in.fail(at + 1, "parameter '" + name + "' has " + std::to_string(dimension_count) +
+                            " dimensions (at most 7)");
       }
       at += 2;
-      for (int d = 0; d < dimension_count; ++d) parameter.dimensions.push_back(in.u8(at + d, "a parameter's dimensions"));
+      for (int d = 0; d < dimension_count; ++d)
+        parameter.dimensions.push_back(in.u8(at + d, "a parameter's dimensions"));
       at += static_cast<std::size_t>(dimension_count);
       read_values(in, at, parameter);
       pending.push_back({id, std::move(parameter)});
@@ -179,7 +186,8 @@ double first_number(const C3dFile& file, const char* group, const char* name, do
 std::vector<std::string> point_labels(const C3dFile& file, std::size_t count) {
   std::vector<std::string> labels;
   for (int index = 1; labels.size() < count; ++index) {
-    const C3dParameter* parameter = file.find("POINT", index == 1 ? "LABELS" : "LABELS" + std::to_string(index));
+    const C3dParameter* parameter =
+        file.find("POINT", index == 1 ? "LABELS" : "LABELS" + std::to_string(index));
     if (parameter == nullptr) break;
     if (parameter->strings.empty()) break;
     for (const std::string& label : parameter->strings) labels.push_back(label);
@@ -201,8 +209,8 @@ std::size_t frame_count(const C3dFile& file, int header_first, int header_last) 
     const auto high = static_cast<std::uint32_t>(static_cast<std::uint16_t>(p->numbers[1]));
     return static_cast<std::int64_t>(low | (high << 16));
   };
-  if (start != nullptr && end != nullptr && start->type == 2 && end->type == 2 && start->numbers.size() >= 2 &&
-      end->numbers.size() >= 2) {
+  if (start != nullptr && end != nullptr && start->type == 2 && end->type == 2 &&
+      start->numbers.size() >= 2 && end->numbers.size() >= 2) {
     const std::int64_t first = word_pair(start);
     const std::int64_t last = word_pair(end);
     if (last >= first && first >= 1) return static_cast<std::size_t>(last - first + 1);
@@ -219,9 +227,10 @@ void read_points(const ByteReader& in, std::size_t data_start, std::size_t frame
   if (data_start > in.size() || needed > in.size() - data_start) {
     const std::size_t available = in.size() > data_start ? in.size() - data_start : 0;
     in.fail(data_start + available / frame_bytes * frame_bytes,
-            "data section truncated: " + std::to_string(frames) + " frames of " + std::to_string(frame_bytes) +
-                " bytes need " + std::to_string(needed) + " bytes from offset " + std::to_string(data_start) +
-                ", the file has " + std::to_string(available));
+            "data section truncated: " + std::to_string(frames) + " frames of " +
+                std::to_string(frame_bytes) + " bytes need " + std::to_string(needed) +
+                " bytes from offset " + std::to_string(data_start) + ", the file has " +
+                std::to_string(available));
   }
   const double to_metres = metres_per_unit(points.units);
   const double scale = std::abs(file.point_scale);
@@ -269,9 +278,11 @@ C3dFile parse_c3d(std::span<const std::uint8_t> bytes, const std::string& name_f
   in.need(0, kBlockBytes, "the header block (a C3D file starts with a 512-byte header)");
   const std::size_t parameter_block = in.u8(0, "the header");
   if (in.u8(1, "the header") != c3d::kParameterKey) {
-    in.fail(1, "not a C3D file: byte 2 is " + std::to_string(in.u8(1, "the header")) + ", expected 80 (0x50)");
+    in.fail(1,
+            "not a C3D file: byte 2 is " + std::to_string(in.u8(1, "the header")) + ", expected 80 (0x50)");
   }
-  if (parameter_block < 2) in.fail(0, "parameter section at block " + std::to_string(parameter_block) + " (must be 2 or later)");
+  if (parameter_block < 2)
+    in.fail(0, "parameter section at block " + std::to_string(parameter_block) + " (must be 2 or later)");
   const std::size_t section = (parameter_block - 1) * kBlockBytes;
   const int processor = in.u8(section + 3, "the parameter section's header");
   if (processor < c3d::kProcessorBase + 1 || processor > c3d::kProcessorBase + 3) {
@@ -289,7 +300,8 @@ C3dFile parse_c3d(std::span<const std::uint8_t> bytes, const std::string& name_f
   const double header_rate = in.f32(20, "the header");
 
   read_parameters(in, section, file);
-  const bool has_point_group = std::find(file.groups.begin(), file.groups.end(), "POINT") != file.groups.end();
+  const bool has_point_group =
+      std::find(file.groups.begin(), file.groups.end(), "POINT") != file.groups.end();
   if (!has_point_group) in.fail(section, "no POINT group in the parameter section");
   const C3dParameter* used = file.find("POINT", "USED");
   if (used == nullptr || used->numbers.empty()) in.fail(section, "POINT group has no USED parameter");
@@ -308,16 +320,20 @@ C3dFile parse_c3d(std::span<const std::uint8_t> bytes, const std::string& name_f
   }
   const C3dParameter* units = file.find("POINT", "UNITS");
   points.units = units != nullptr && !units->strings.empty() ? units->strings.front() : "mm";
-  if (metres_per_unit(points.units) == 0.0) in.fail(section, "POINT:UNITS '" + points.units + "' (expected mm, cm or m)");
+  if (metres_per_unit(points.units) == 0.0)
+    in.fail(section, "POINT:UNITS '" + points.units + "' (expected mm, cm or m)");
   points.marker_names = point_labels(file, marker_count);
   file.first_frame = std::max(1, header_first);
   const double data_block = first_number(file, "POINT", "DATA_START", static_cast<double>(header_data_block));
   const auto data_start_block = static_cast<std::size_t>(static_cast<std::uint16_t>(data_block));
   if (data_start_block < parameter_block + 1) {
-    in.fail(16, "data section at block " + std::to_string(data_start_block) + ", before the end of the parameters");
+    in.fail(16, "data section at block " + std::to_string(data_start_block) +
+                    ", before the end of the parameters");
   }
   const std::size_t frames = frame_count(file, header_first, header_last);
-  if (frames == 0) in.fail(8, "no frames (last frame " + std::to_string(header_last) + " < first " + std::to_string(header_first) + ")");
+  if (frames == 0)
+    in.fail(8, "no frames (last frame " + std::to_string(header_last) + " < first " +
+                   std::to_string(header_first) + ")");
   read_points(in, (data_start_block - 1) * kBlockBytes, frames, file);
   return file;
 }
@@ -325,10 +341,13 @@ C3dFile parse_c3d(std::span<const std::uint8_t> bytes, const std::string& name_f
 C3dFile read_c3d(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path.string(), "", "cannot open C3D file");
-  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                        std::istreambuf_iterator<char>());
   return parse_c3d(bytes, path.string());
 }
 
-MarkerTrajectories load_c3d(const std::filesystem::path& path) { return read_c3d(path).points; }
+MarkerTrajectories load_c3d(const std::filesystem::path& path) {
+  return read_c3d(path).points;
+}
 
 }  // namespace panoptes

@@ -110,7 +110,8 @@ void check_input(const MarkerTrajectories& data, const C3dWriteOptions& options,
   if (data.marker_count() > kMaxPoints) fail("more than 32767 markers");
   if (!(std::isfinite(data.data_rate_hz) && data.data_rate_hz > 0.0)) fail("the rate must be positive");
   if (data.frame_count() == 0) fail("no frames to write");
-  if (data.positions.size() != data.frame_count() * data.marker_count() || data.valid.size() != data.positions.size()) {
+  if (data.positions.size() != data.frame_count() * data.marker_count() ||
+      data.valid.size() != data.positions.size()) {
     fail("positions and validity do not match frames x markers");
   }
   if (metres_per_unit(options.units) == 0.0) fail("units '" + options.units + "' (expected mm, cm or m)");
@@ -127,8 +128,8 @@ float point_scale(const MarkerTrajectories& data, double units_per_metre) {
   return scale > 0.0 ? static_cast<float>(scale) : 1.0F;
 }
 
-std::vector<std::uint8_t> parameters(const MarkerTrajectories& data, const C3dWriteOptions& options, float scale,
-                                     std::size_t& blocks) {
+std::vector<std::uint8_t> parameters(const MarkerTrajectories& data, const C3dWriteOptions& options,
+                                     float scale, std::size_t& blocks) {
   ParameterSection section;
   const std::size_t frames = data.frame_count();
   const std::size_t points = data.marker_count();
@@ -140,7 +141,8 @@ std::vector<std::uint8_t> parameters(const MarkerTrajectories& data, const C3dWr
   section.integers(kPoint, "FRAMES", {static_cast<int>(std::min(frames, kMaxHeaderFrames))}, true);
   section.text(kPoint, "UNITS", options.units);
   std::size_t width = 1;
-  for (const std::string& label : data.marker_names) width = std::max(width, std::min(label.size(), kMaxLabelLength));
+  for (const std::string& label : data.marker_names)
+    width = std::max(width, std::min(label.size(), kMaxLabelLength));
   for (std::size_t first = 0, index = 1; first < points; first += kMaxPointsPerLabelParameter, ++index) {
     const std::size_t last = std::min(points, first + kMaxPointsPerLabelParameter);
     const std::vector<std::string> labels(data.marker_names.begin() + static_cast<std::ptrdiff_t>(first),
@@ -156,7 +158,8 @@ std::vector<std::uint8_t> parameters(const MarkerTrajectories& data, const C3dWr
   section.group(kTrial, "TRIAL", "trial parameters");
   const auto last_frame = static_cast<std::uint32_t>(frames);
   section.integers(kTrial, "ACTUAL_START_FIELD", {1, 0});
-  section.integers(kTrial, "ACTUAL_END_FIELD", {static_cast<int>(last_frame & 0xffff), static_cast<int>(last_frame >> 16)});
+  section.integers(kTrial, "ACTUAL_END_FIELD",
+                   {static_cast<int>(last_frame & 0xffff), static_cast<int>(last_frame >> 16)});
   section.real(kTrial, "CAMERA_RATE", static_cast<float>(data.data_rate_hz));
   section.group(kManufacturer, "MANUFACTURER", "the writer");
   section.text(kManufacturer, "COMPANY", "Panoptes");
@@ -176,7 +179,8 @@ void patch_data_start(std::vector<std::uint8_t>& section, std::uint16_t block) {
   }
 }
 
-void write_header(std::uint8_t* header, const MarkerTrajectories& data, float scale, std::uint16_t data_block) {
+void write_header(std::uint8_t* header, const MarkerTrajectories& data, float scale,
+                  std::uint16_t data_block) {
   header[0] = 2;  // the parameter section starts at block 2
   header[1] = c3d::kParameterKey;
   c3d::put_u16(header + 2, static_cast<std::uint16_t>(data.marker_count()));
@@ -213,7 +217,8 @@ std::vector<std::uint8_t> encode_c3d(const MarkerTrajectories& data, const C3dWr
   const float scale = point_scale(data, units_per_metre);
   std::size_t parameter_blocks = 0;
   std::vector<std::uint8_t> section = parameters(data, options, scale, parameter_blocks);
-  if (parameter_blocks > 255) throw ConfigError(name_for_errors, "", "too many labels for the parameter section");
+  if (parameter_blocks > 255)
+    throw ConfigError(name_for_errors, "", "too many labels for the parameter section");
   const auto data_block = static_cast<std::uint16_t>(2 + parameter_blocks);
   patch_data_start(section, data_block);
 
@@ -233,7 +238,8 @@ std::vector<std::uint8_t> encode_c3d(const MarkerTrajectories& data, const C3dWr
   return bytes;
 }
 
-void write_c3d(const std::filesystem::path& path, const MarkerTrajectories& data, const C3dWriteOptions& options) {
+void write_c3d(const std::filesystem::path& path, const MarkerTrajectories& data,
+               const C3dWriteOptions& options) {
   const std::vector<std::uint8_t> bytes = encode_c3d(data, options, path.string());
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) throw ConfigError(path.string(), "", "cannot open for writing");

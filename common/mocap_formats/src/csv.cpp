@@ -3,8 +3,8 @@
 #include <fstream>
 #include <string>
 
-#include "panoptes/errors.h"
 #include "number_format.h"
+#include "panoptes/errors.h"
 #include "panoptes/formats/csv.h"
 
 namespace panoptes {

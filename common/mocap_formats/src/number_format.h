@@ -12,12 +12,14 @@
 namespace panoptes::formats {
 
 inline void append_fixed(std::string& out, double value, int decimals) {
-  static constexpr std::int64_t kPowers[] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000, 1000000000};
+  static constexpr std::int64_t kPowers[] = {1,      10,      100,      1000,      10000,
+                                             100000, 1000000, 10000000, 100000000, 1000000000};
   const std::int64_t scale = kPowers[decimals];
   // Beyond 9e9 units the scaled value could overflow: fall back to the library.
   if (!(std::abs(value) < 9e9)) {
     char buffer[400];
-    const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed, decimals);
+    const auto result =
+        std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed, decimals);
     out.append(buffer, result.ptr);
     return;
   }

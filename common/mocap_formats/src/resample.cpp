@@ -24,7 +24,8 @@ struct Bracket {
 
 class BracketWalker {
  public:
-  BracketWalker(const std::vector<TimeNs>& stamps, TimeNs max_gap_ns) : stamps_(stamps), max_gap_ns_(max_gap_ns) {}
+  BracketWalker(const std::vector<TimeNs>& stamps, TimeNs max_gap_ns)
+      : stamps_(stamps), max_gap_ns_(max_gap_ns) {}
 
   // Grid times must be non-decreasing from call to call.
   Bracket at(TimeNs t) {
@@ -59,8 +60,12 @@ struct TrackUpdate {
   float residual_m;
   std::uint8_t camera_mask;
 };
-TimeNs stamp_of(const TrackUpdate& update) { return update.stamp_ns; }
-TimeNs stamp_of(const PoseRecord* pose) { return pose->stamp_ns; }
+TimeNs stamp_of(const TrackUpdate& update) {
+  return update.stamp_ns;
+}
+TimeNs stamp_of(const PoseRecord* pose) {
+  return pose->stamp_ns;
+}
 
 // Orders one object's updates by stamp; of several updates with one stamp the last one read wins.
 template <class Update>
@@ -157,7 +162,8 @@ MarkerTrajectories resample_tracks(const std::vector<TrackRecord>& tracks, const
   out.data_rate_hz = grid.rate_hz;
   out.units.assign(1, 'm');  // (a string literal here trips a GCC 12 -Wrestrict false positive)
   out.times_s = grid_times_s(grid);
-  for (const auto& [id, unused] : by_id) out.marker_names.push_back(std::string("track_").append(std::to_string(id)));
+  for (const auto& [id, unused] : by_id)
+    out.marker_names.push_back(std::string("track_").append(std::to_string(id)));
   const std::size_t markers = by_id.size();
   out.positions.assign(grid.count * markers, Eigen::Vector3d::Zero());
   out.valid.assign(grid.count * markers, 0);
@@ -174,7 +180,8 @@ MarkerTrajectories resample_tracks(const std::vector<TrackRecord>& tracks, const
   }
   std::vector<BracketWalker> walkers;
   walkers.reserve(markers);
-  for (const std::vector<TimeNs>& marker_stamps : stamps) walkers.emplace_back(marker_stamps, options.max_gap_ns);
+  for (const std::vector<TimeNs>& marker_stamps : stamps)
+    walkers.emplace_back(marker_stamps, options.max_gap_ns);
   for (std::size_t k = 0; k < grid.count; ++k) {
     for (std::size_t marker = 0; marker < markers; ++marker) {
       const Bracket b = walkers[marker].at(times[k]);

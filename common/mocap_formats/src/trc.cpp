@@ -16,8 +16,8 @@
 #include <string_view>
 #include <vector>
 
-#include "panoptes/errors.h"
 #include "number_format.h"
+#include "panoptes/errors.h"
 #include "panoptes/formats/trc.h"
 
 namespace panoptes {
@@ -181,7 +181,9 @@ void write_trc(const std::filesystem::path& path, const MarkerTrajectories& data
   out.reserve(64 + frames * (16 + markers * 3 * 14));
   out += "PathFileType\t4\t(X/Y/Z)\t";
   out += path.filename().string();
-  out += "\nDataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames\n";
+  out +=
+      "\nDataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames"
+      "\n";
   std::string rate;
   formats::append_fixed(rate, data.data_rate_hz, kTrcDecimals);
   out += rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) + "\t" + units +

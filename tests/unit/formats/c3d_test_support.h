@@ -20,12 +20,12 @@ namespace fs = std::filesystem;
 inline fs::path shared_c3d(const std::string& name) {
   return fs::path(PANOPTES_SOURCE_DIR) / ".." / "shared" / "data" / "c3d" / name;
 }
-#define PANOPTES_REQUIRE_SHARED(path)                                                       \
-  do {                                                                                      \
-    if (!std::filesystem::exists(path)) {                                                   \
-      if (std::getenv("CI")) FAIL() << (path) << " is missing";                             \
-      GTEST_SKIP() << (path) << " is missing (../shared/data)";                             \
-    }                                                                                       \
+#define PANOPTES_REQUIRE_SHARED(path)                           \
+  do {                                                          \
+    if (!std::filesystem::exists(path)) {                       \
+      if (std::getenv("CI")) FAIL() << (path) << " is missing"; \
+      GTEST_SKIP() << (path) << " is missing (../shared/data)"; \
+    }                                                           \
   } while (0)
 
 struct HandBuiltC3d {
@@ -55,7 +55,8 @@ struct HandBuiltC3d {
       // VAX F_floating: the IEEE bits of 4x the value with the 16-bit halves swapped.
       const auto bits = std::bit_cast<std::uint32_t>(value * 4.0F);
       const std::uint8_t ieee[4] = {static_cast<std::uint8_t>(bits), static_cast<std::uint8_t>(bits >> 8),
-                                    static_cast<std::uint8_t>(bits >> 16), static_cast<std::uint8_t>(bits >> 24)};
+                                    static_cast<std::uint8_t>(bits >> 16),
+                                    static_cast<std::uint8_t>(bits >> 24)};
       out[at] = ieee[2];
       out[at + 1] = ieee[3];
       out[at + 2] = ieee[0];

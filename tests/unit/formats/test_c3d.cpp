@@ -35,10 +35,36 @@ struct SampleFile {
 // label, the other counts and the frame counts from the independent JavaScript reader
 // tests/c3d/read_c3d.js (`node tests/c3d/read_c3d.js <file>`), not from the reader under test.
 const std::vector<SampleFile> kSamples = {
-    {"Sample_Jump2.c3d", 51, 120, 264, {"THEA", "FHEA", "RHEA", "RSHO", "ROFF", "RELB", "RWRI", "LSHO", "LELB", "LWRI", "RASI", "LASI", "VSAC", "RTHI", "RKNE", "RKNE", "RSHA", "RANK", "RANK", "RHEE", "R.TO", "LTHI", "LKNE", "LKNE", "LSHA", "LANK", "LANK", "LHEE", "L.TO", "VMID", "VPEL", "VRHI", "VLHI", "VRKN", "VLKN", "VRAN", "VLAN", "VRKN", "VLKN", "VRAN", "VLAN", "VMID", "VMID", "VRHA", "VLHA", "VRTO", "VLTO", "VRTO", "VLTO", "VRAN", "VRHE"}},
-    {"Walk1.c3d", 49, 60, 151, {"THEA", "FHEA", "RHEA", "RSHO", "ROFF", "RELB", "RWRI", "LSHO", "LELB", "LWRI", "RASI", "LASI", "VSAC", "RTHI", "RKNE", "RSHA", "RANK", "RHEE", "R.TO", "LTHI", "LKNE", "LSHA", "LANK", "LHEE", "L.TO", "RKNE", "RANK", "LKNE", "LANK", "VMID", "VPEL", "VRHI", "VLHI", "VRKN", "VLKN", "VRAN", "VLAN", "VRKN", "VLKN", "VRAN", "VLAN", "VMID", "VMID", "VRHA", "VLHA", "VRTO", "VLTO", "VRTO", "VLTO"}},
-    {"vicon_zerowire.c3d", 55, 100, 306, {"LKNE", "LWRB", "LFIN", "LWRA", "LTHI", "RWRA", "RFIN", "RFRM", "RWRB", "RUPA", "LTOE", "RSHO", "RELB", "LANK", "LASI", "LTIB", "LBHD", "RBAK", "RBHD", "LFRM", "C7", "RKNE", "RTHI", "LSHO", "T10", "LUPA", "RPSI", "LELB", "RASI", "RTIB", "LPSI", "RFHD", "RTOE", "CLAV", "STRN", "RANK", "LHEE", "RHEE", "LFHD", "*39", "*40", "*41", "*42", "*43", "*44", "*45", "*46", "*47", "*48", "*49", "*50", "*51", "*52", "*53", "*54"}},
-    {"Facial-Sing.c3d", 38, 100, 3000, {"root-1", "root-2", "root-3", "root-4", "root-5", "root-6", "section1-1", "section1-2", "section2-1", "section2-2", "section3-1", "section3-2", "section4-1", "section4-2", "section5-1", "section5-2", "section6-1", "section6-2", "section7-1", "section7-2", "section8-1", "section8-2", "section9-1", "section9-2", "section10-1", "section10-2", "section10-3", "section11-1", "section11-2", "section12-1", "section12-2", "section13-1", "section13-2", "section13-3", "section14-1", "section14-2", "section14-3", "Unlabeled1"}},
+    {"Sample_Jump2.c3d", 51, 120, 264, {"THEA", "FHEA", "RHEA", "RSHO", "ROFF", "RELB", "RWRI", "LSHO",
+                                        "LELB", "LWRI", "RASI", "LASI", "VSAC", "RTHI", "RKNE", "RKNE",
+                                        "RSHA", "RANK", "RANK", "RHEE", "R.TO", "LTHI", "LKNE", "LKNE",
+                                        "LSHA", "LANK", "LANK", "LHEE", "L.TO", "VMID", "VPEL", "VRHI",
+                                        "VLHI", "VRKN", "VLKN", "VRAN", "VLAN", "VRKN", "VLKN", "VRAN",
+                                        "VLAN", "VMID", "VMID", "VRHA", "VLHA", "VRTO", "VLTO", "VRTO",
+                                        "VLTO", "VRAN", "VRHE"}},
+    {"Walk1.c3d", 49, 60, 151, {"THEA", "FHEA", "RHEA", "RSHO", "ROFF", "RELB", "RWRI", "LSHO", "LELB",
+                                "LWRI", "RASI", "LASI", "VSAC", "RTHI", "RKNE", "RSHA", "RANK", "RHEE",
+                                "R.TO", "LTHI", "LKNE", "LSHA", "LANK", "LHEE", "L.TO", "RKNE", "RANK",
+                                "LKNE", "LANK", "VMID", "VPEL", "VRHI", "VLHI", "VRKN", "VLKN", "VRAN",
+                                "VLAN", "VRKN", "VLKN", "VRAN", "VLAN", "VMID", "VMID", "VRHA", "VLHA",
+                                "VRTO", "VLTO", "VRTO", "VLTO"}},
+    {"vicon_zerowire.c3d", 55, 100, 306, {"LKNE", "LWRB", "LFIN", "LWRA", "LTHI", "RWRA", "RFIN", "RFRM",
+                                          "RWRB", "RUPA", "LTOE", "RSHO", "RELB", "LANK", "LASI", "LTIB",
+                                          "LBHD", "RBAK", "RBHD", "LFRM", "C7",   "RKNE", "RTHI", "LSHO",
+                                          "T10",  "LUPA", "RPSI", "LELB", "RASI", "RTIB", "LPSI", "RFHD",
+                                          "RTOE", "CLAV", "STRN", "RANK", "LHEE", "RHEE", "LFHD", "*39",
+                                          "*40",  "*41",  "*42",  "*43",  "*44",  "*45",  "*46",  "*47",
+                                          "*48",  "*49",  "*50",  "*51",  "*52",  "*53",  "*54"}},
+    {"Facial-Sing.c3d",
+     38,
+     100,
+     3000,
+     {"root-1",      "root-2",      "root-3",      "root-4",      "root-5",      "root-6",      "section1-1",
+      "section1-2",  "section2-1",  "section2-2",  "section3-1",  "section3-2",  "section4-1",  "section4-2",
+      "section5-1",  "section5-2",  "section6-1",  "section6-2",  "section7-1",  "section7-2",  "section8-1",
+      "section8-2",  "section9-1",  "section9-2",  "section10-1", "section10-2", "section10-3", "section11-1",
+      "section11-2", "section12-1", "section12-2", "section13-1", "section13-2", "section13-3", "section14-1",
+      "section14-2", "section14-3", "Unlabeled1"}},
 };
 
 TEST(C3dSamples, MarkerCountsLabelsAndRatesMatchTheIndependentReader) {
@@ -71,7 +97,8 @@ TEST(C3dSamples, ViconLabelsThirtyNineMarkersAndFacialSingHasNoAnalogGroup) {
   PANOPTES_REQUIRE_SHARED(facial);
   const C3dFile file = read_c3d(vicon);
   const auto& names = file.points.marker_names;
-  EXPECT_EQ(std::count_if(names.begin(), names.end(), [](const std::string& n) { return n.front() != '*'; }), 39);
+  EXPECT_EQ(std::count_if(names.begin(), names.end(), [](const std::string& n) { return n.front() != '*'; }),
+            39);
   EXPECT_GT(file.analog_per_frame, 0);  // its analog samples sit between the frames' points
   const C3dFile sing = read_c3d(facial);
   EXPECT_EQ(std::count(sing.groups.begin(), sing.groups.end(), "ANALOG"), 0);
@@ -126,7 +153,8 @@ TEST(C3dRoundTrip, ResidualsCameraMasksGapsAndManyLabels) {
   data.units = "m";
   const std::size_t points = 300;
   const std::size_t frames = 5;
-  for (std::size_t m = 0; m < points; ++m) data.marker_names.push_back("marker_with_a_long_name_" + std::to_string(m));
+  for (std::size_t m = 0; m < points; ++m)
+    data.marker_names.push_back("marker_with_a_long_name_" + std::to_string(m));
   for (std::size_t f = 0; f < frames; ++f) {
     data.times_s.push_back(static_cast<double>(f) / data.data_rate_hz);
     for (std::size_t m = 0; m < points; ++m) {
@@ -236,7 +264,8 @@ TEST(C3dBadInput, EachDefectIsNamedWithFileAndOffset) {
   std::vector<std::uint8_t> processor = good.build();
   processor[512 + 3] = 0x41;
   EXPECT_EQ(error_of(processor),
-            "bad.c3d: offset 515: unknown processor type 65 (84 Intel, 85 DEC, 86 MIPS): cannot tell the byte order");
+            "bad.c3d: offset 515: unknown processor type 65 (84 Intel, 85 DEC, 86 MIPS): cannot tell the "
+            "byte order");
 
   std::vector<std::uint8_t> key = good.build();
   key[1] = 0x51;
@@ -245,12 +274,14 @@ TEST(C3dBadInput, EachDefectIsNamedWithFileAndOffset) {
   // 3 frames of 2 points x 16 bytes from offset 1024; cut inside the third frame.
   std::vector<std::uint8_t> truncated = good.build();
   truncated.resize(1024 + 2 * 32 + 10);
-  EXPECT_EQ(error_of(truncated),
-            "bad.c3d: offset 1088: data section truncated: 3 frames of 32 bytes need 96 bytes from offset 1024, "
-            "the file has 74");
+  EXPECT_EQ(
+      error_of(truncated),
+      "bad.c3d: offset 1088: data section truncated: 3 frames of 32 bytes need 96 bytes from offset 1024, "
+      "the file has 74");
 
-  EXPECT_EQ(error_of({}), "bad.c3d: offset 0: file ends inside the header block (a C3D file starts with a 512-byte "
-                          "header) (0 bytes, 512 needed here)");
+  EXPECT_EQ(error_of({}),
+            "bad.c3d: offset 0: file ends inside the header block (a C3D file starts with a 512-byte "
+            "header) (0 bytes, 512 needed here)");
   EXPECT_THROW(read_c3d("/nonexistent/missing.c3d"), ConfigError);
 }
 

@@ -34,7 +34,8 @@ struct FuzzCounts {
 
 // Damages `original` `rounds` times: half truncations (anywhere, biased to the header and
 // parameters), half 1-8 bit flips (half of them inside the first 2 KiB, where the structure is).
-FuzzCounts fuzz(const std::vector<std::uint8_t>& original, const std::string& name, std::uint32_t seed, int rounds) {
+FuzzCounts fuzz(const std::vector<std::uint8_t>& original, const std::string& name, std::uint32_t seed,
+                int rounds) {
   std::mt19937 rng(seed);
   FuzzCounts counts;
   for (int round = 0; round < rounds; ++round) {

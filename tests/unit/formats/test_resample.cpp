@@ -5,8 +5,8 @@
 #include <numbers>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "panoptes/formats/resample.h"
 
@@ -16,7 +16,8 @@ namespace {
 constexpr TimeNs kMs = kNsPerMillisecond;
 constexpr TimeNs kEpoch = 1'700'000'000'000'000'000;
 
-TrackRecord track(std::int64_t id, TimeNs t, const Eigen::Vector3d& p, TrackStatus status = TrackStatus::kConfirmed) {
+TrackRecord track(std::int64_t id, TimeNs t, const Eigen::Vector3d& p,
+                  TrackStatus status = TrackStatus::kConfirmed) {
   TrackRecord record;
   record.id = id;
   record.stamp_ns = kEpoch + t;
@@ -43,9 +44,9 @@ TEST(Resample, GridCoversEveryStampAtTheRate) {
 
 TEST(Resample, LinearBetweenBracketingUpdatesAndInvalidAcrossLongGaps) {
   // Updates at 0, 7, 30 ms (asynchronous: no update on the 10 ms grid) and after a 200 ms gap.
-  const std::vector<TrackRecord> tracks = {
-      track(5, 30 * kMs, {3, 0, 0}), track(5, 0, {0, 0, 0}), track(5, 7 * kMs, {0.7, 0.7, 0}),
-      track(5, 230 * kMs, {3, 2, 0}), track(9, 100 * kMs, {0, 0, 1}), track(9, 120 * kMs, {0, 0, 3})};
+  const std::vector<TrackRecord> tracks = {track(5, 30 * kMs, {3, 0, 0}),    track(5, 0, {0, 0, 0}),
+                                           track(5, 7 * kMs, {0.7, 0.7, 0}), track(5, 230 * kMs, {3, 2, 0}),
+                                           track(9, 100 * kMs, {0, 0, 1}),   track(9, 120 * kMs, {0, 0, 3})};
   ResampleOptions options;
   options.rate_hz = 100.0;
   options.max_gap_ns = 50 * kMs;
@@ -55,7 +56,8 @@ TEST(Resample, LinearBetweenBracketingUpdatesAndInvalidAcrossLongGaps) {
   ASSERT_EQ(out.frame_count(), 24U);  // 0 .. 230 ms
   EXPECT_DOUBLE_EQ(out.times_s[3], 0.03);
   // t = 10 ms lies between 7 ms (0.7, 0.7) and 30 ms (3, 0): weight 3/23 on the later one.
-  const Eigen::Vector3d expected = (20.0 / 23.0) * Eigen::Vector3d(0.7, 0.7, 0) + (3.0 / 23.0) * Eigen::Vector3d(3, 0, 0);
+  const Eigen::Vector3d expected =
+      (20.0 / 23.0) * Eigen::Vector3d(0.7, 0.7, 0) + (3.0 / 23.0) * Eigen::Vector3d(3, 0, 0);
   EXPECT_TRUE(out.is_valid(1, 0));
   EXPECT_LT((out.position(1, 0) - expected).norm(), 1e-12);
   EXPECT_LT((out.position(3, 0) - Eigen::Vector3d(3, 0, 0)).norm(), 1e-12);  // exactly on an update

@@ -33,10 +33,10 @@ struct C3dFile {
   bool float_storage = false;  // POINT:SCALE < 0
   double point_scale = 0.0;    // POINT:SCALE as stored
   int first_frame = 1;
-  int analog_per_frame = 0;    // analog samples stored after the points of each frame
+  int analog_per_frame = 0;  // analog samples stored after the points of each frame
   std::vector<std::string> groups;
   std::vector<C3dParameter> parameters;
-  MarkerTrajectories points;   // metres; times_s start at (first_frame - 1) / rate
+  MarkerTrajectories points;  // metres; times_s start at (first_frame - 1) / rate
 
   const C3dParameter* find(const std::string& group, const std::string& name) const;
 };

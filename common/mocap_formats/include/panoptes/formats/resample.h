@@ -52,10 +52,10 @@ MarkerTrajectories resample_tracks(const std::vector<TrackRecord>& tracks, const
 
 struct BodyTrajectories {
   double data_rate_hz = 0.0;
-  std::vector<std::string> body_names;      // sorted
-  std::vector<double> times_s;              // relative to the grid start
-  std::vector<Eigen::Vector3d> positions;   // frame-major [frame * body_count() + body], metres
-  std::vector<Eigen::Vector4d> quaternions; // x, y, z, w; same layout
+  std::vector<std::string> body_names;       // sorted
+  std::vector<double> times_s;               // relative to the grid start
+  std::vector<Eigen::Vector3d> positions;    // frame-major [frame * body_count() + body], metres
+  std::vector<Eigen::Vector4d> quaternions;  // x, y, z, w; same layout
   std::vector<std::uint8_t> valid;
 
   std::size_t frame_count() const { return times_s.size(); }
