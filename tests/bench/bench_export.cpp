@@ -5,7 +5,9 @@
 // its own, in one process: re-sampling the records to --rate, then writing C3D, TRC and CSV
 // (encode + write to --dir), and as the reference the same bytes written by one fwrite of a
 // ready buffer (the disk's floor). Prints JSON.
-//   bench_export [--minutes 10] [--rate 100] [--dir /tmp] [--repeat 3]
+// --write-tracks FILE also writes the records as JSON Lines (estimator_node --out-tracks), to time
+// the whole program: panoptes_export --tracks FILE --c3d ... (docs/benchmarks.md).
+//   bench_export [--minutes 10] [--rate 100] [--dir /tmp] [--repeat 3] [--write-tracks FILE]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -21,6 +23,7 @@
 #include "panoptes/formats/csv.h"
 #include "panoptes/formats/resample.h"
 #include "panoptes/formats/trc.h"
+#include "panoptes/jsonl.h"
 
 namespace fs = std::filesystem;
 using namespace panoptes;
@@ -94,11 +97,19 @@ int main(int argc, char** argv) {
   app.add_option("--rate", rate_hz, "output rate, Hz")->capture_default_str();
   app.add_option("--dir", dir, "where the files are written (and removed)")->capture_default_str();
   app.add_option("--repeat", repeat, "runs of each step; the best is reported")->capture_default_str();
+  std::string write_tracks;
+  app.add_option("--write-tracks", write_tracks, "also write the track records as JSON Lines here");
   if (const auto exit = parse_command_line(app, argc, argv)) return *exit;
 
   const MarkerTrajectories walk =
       load_trc(fs::path(PANOPTES_SOURCE_DIR) / "tests" / "data" / "walk_41markers_100hz.trc");
   const std::vector<TrackRecord> records = looped_walk(walk, minutes);
+  if (!write_tracks.empty()) {
+    fs::remove(write_tracks);
+    JsonlWriter writer(write_tracks);
+    for (const TrackRecord& record : records) writer.write(record);
+    writer.flush();
+  }
   ResampleOptions options;
   options.rate_hz = rate_hz;
   MarkerTrajectories markers;
