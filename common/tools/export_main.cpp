@@ -105,7 +105,7 @@ int run(const Options& options) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+static int run_main(int argc, char** argv) {
   CLI::App app{
       "panoptes_export: tracks and body poses to C3D, TRC and CSV at a fixed rate (docs/recording.md)",
       "panoptes_export"};
@@ -157,5 +157,14 @@ int main(int argc, char** argv) {
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_export: %s\n", error.what());
     return kExitFailure;
+  }
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run_main(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
+    std::fprintf(stderr, "%s: %s\n", "panoptes_export", error.what());
+    return 1;
   }
 }

@@ -87,7 +87,7 @@ std::vector<TrackRecord> looped_walk(const MarkerTrajectories& walk, double minu
 
 }  // namespace
 
-int main(int argc, char** argv) {
+static int run_main(int argc, char** argv) {
   CLI::App app{"bench_export: re-sample and write 10 min of 41 markers as C3D, TRC and CSV", "bench_export"};
   double minutes = 10.0;
   double rate_hz = 100.0;
@@ -149,4 +149,13 @@ int main(int argc, char** argv) {
       static_cast<std::uintmax_t>(c3d_bytes), static_cast<std::uintmax_t>(trc_bytes),
       static_cast<std::uintmax_t>(csv_bytes));
   return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run_main(argc, argv);
+  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
+    std::fprintf(stderr, "%s: %s\n", "bench_export", error.what());
+    return 1;
+  }
 }

@@ -125,7 +125,7 @@ void read_parameters(const ByteReader& in, std::size_t section, C3dFile& file) {
   std::size_t position = section + 4;
   constexpr int kMaxRecords = 100000;
   for (int record = 0; record < kMaxRecords; ++record) {
-    const std::int8_t name_length = in.i8(position, "the parameter section");
+    const int name_length = in.i8(position, "the parameter section");
     if (name_length == 0) break;
     const int id = in.i8(position + 1, "the parameter section");
     const std::size_t length = static_cast<std::size_t>(std::abs(name_length));
@@ -247,11 +247,14 @@ void read_points(const ByteReader& in, std::size_t data_start, std::size_t frame
       Eigen::Vector3d p;
       std::int32_t fourth = 0;
       if (file.float_storage) {
-        for (int axis = 0; axis < 3; ++axis) p[axis] = in.f32(at + 4 * axis, "point data");
+        for (std::size_t axis = 0; axis < 3; ++axis)
+          p[static_cast<Eigen::Index>(axis)] = in.f32(at + 4 * axis, "point data");
         const float stored = in.f32(at + 12, "point data");
         fourth = std::isfinite(stored) && std::abs(stored) < 2.1e9F ? static_cast<std::int32_t>(stored) : -1;
       } else {
-        for (int axis = 0; axis < 3; ++axis) p[axis] = in.i16(at + 2 * axis, "point data") * scale;
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          p[static_cast<Eigen::Index>(axis)] = in.i16(at + 2 * axis, "point data") * scale;
+        }
         fourth = in.i16(at + 6, "point data");
       }
       const std::size_t sample = f * markers + m;

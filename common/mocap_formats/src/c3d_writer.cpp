@@ -229,8 +229,9 @@ std::vector<std::uint8_t> encode_c3d(const MarkerTrajectories& data, const C3dWr
   std::uint8_t* out = bytes.data() + kBlockBytes + section.size();
   for (std::size_t sample = 0; sample < samples; ++sample, out += 16) {
     const bool valid = data.valid[sample] != 0;
-    for (int axis = 0; axis < 3; ++axis) {
-      const double value = valid ? data.positions[sample][axis] * units_per_metre : 0.0;
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const double value =
+          valid ? data.positions[sample][static_cast<Eigen::Index>(axis)] * units_per_metre : 0.0;
       c3d::put_float(out + 4 * axis, static_cast<float>(value));
     }
     c3d::put_float(out + 12, residual_word(data, sample, units_per_metre, scale));

@@ -55,10 +55,10 @@ class BracketWalker {
 
 // What the export needs of a track update, compact (records are large and interleaved by id).
 struct TrackUpdate {
-  TimeNs stamp_ns;
-  Eigen::Vector3d p;
-  float residual_m;
-  std::uint8_t camera_mask;
+  TimeNs stamp_ns = 0;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  float residual_m = 0.0F;
+  std::uint8_t camera_mask = 0;
 };
 TimeNs stamp_of(const TrackUpdate& update) {
   return update.stamp_ns;

@@ -188,11 +188,18 @@ void write_trc(const std::filesystem::path& path, const MarkerTrajectories& data
   formats::append_fixed(rate, data.data_rate_hz, kTrcDecimals);
   out += rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) + "\t" + units +
          "\t" + rate + "\t1\t" + std::to_string(frames) + "\nFrame#\tTime";
-  for (const std::string& name : data.marker_names) out += "\t" + name + "\t\t";
+  for (const std::string& name : data.marker_names) {
+    out += '\t';
+    out += name;
+    out += "\t\t";
+  }
   out += "\n\t";
   for (std::size_t m = 1; m <= markers; ++m) {
     const std::string index = std::to_string(m);
-    out += "\tX" + index + "\tY" + index + "\tZ" + index;
+    for (const char* axis : {"\tX", "\tY", "\tZ"}) {
+      out += axis;
+      out += index;
+    }
   }
   out += "\n\n";
   for (std::size_t f = 0; f < frames; ++f) {
