@@ -122,11 +122,11 @@ static int run_main(int argc, char** argv) {
   app.add_option("--bodies-csv", options.bodies_csv, "write body poses as CSV with quaternions");
   app.add_option("--rate", options.rate_hz, "output rate, Hz")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   app.add_option("--max-gap-ms", options.max_gap_ms,
                  "updates further apart leave the samples between invalid, ms")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   app.add_option("--units", options.units, "units of the C3D and TRC files")
       ->capture_default_str()
       ->check(CLI::IsMember({"mm", "cm", "m"}));
