@@ -38,8 +38,10 @@ class ByteReader {
     need(offset, 1, what);
     return bytes_[offset];
   }
-  std::int8_t i8(std::size_t offset, const char* what) const {
-    return static_cast<std::int8_t>(u8(offset, what));
+  // A signed byte (two's complement), widened without a signed-char conversion.
+  int i8(std::size_t offset, const char* what) const {
+    const int value = u8(offset, what);
+    return value < 128 ? value : value - 256;
   }
   std::uint16_t u16(std::size_t offset, const char* what) const {
     need(offset, 2, what);
