@@ -14,7 +14,7 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-install(TARGETS camera_node estimator_node panoptes_ctl panoptes_sim_tool panoptes_plan panoptes_eval panoptes_demo
+install(TARGETS camera_node estimator_node panoptes_ctl panoptes_sim_tool panoptes_plan panoptes_export panoptes_record panoptes_replay panoptes_eval panoptes_demo
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
 # The client library and its CMake and pkg-config packages.

@@ -22,6 +22,7 @@ set(PANOPTES_LAYERING_RULES
   "panoptes_planner|${_panoptes_pure_links}|opencv|Ceres|${_panoptes_pure_sources}|placement maths: no DDS, simulator, CLI or file I/O"
   "panoptes_io|${_panoptes_dds_links}||only panoptes_dds knows DDS"
   "panoptes_sim|${_panoptes_dds_links}||only panoptes_dds knows DDS"
+  "panoptes_mocap_formats|${_panoptes_dds_links}|panoptes_sim|panoptes_evaluation|CLI11|#include [<\"](fastdds/|fastrtps/|fastcdr/|panoptes_msgs/|panoptes/dds/|CLI/|panoptes/simulator\\.h)|file formats: files only, no DDS, simulator or CLI"
   "panoptes_camera|${_panoptes_dds_links}||the camera pipeline runs without DDS (offline mode, tests)"
   "panoptes_evaluation|${_panoptes_dds_links}||only panoptes_dds knows DDS"
   "panoptes_session|${_panoptes_dds_links}||the estimator session runs without DDS (offline mode, tests)"

@@ -15,6 +15,7 @@
 
 #include "panoptes/calibration.h"
 #include "panoptes/calibration_file.h"
+#include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/jsonl.h"
 #include "panoptes/records.h"
@@ -82,20 +83,6 @@ nlohmann::json truth_line(const Scene& scene, TimeNs scene_time_ns, TimeNs epoch
   }
   line["bodies"] = std::move(bodies);
   return line;
-}
-
-// CLI11's own PositiveNumber prints the whole double range in its message.
-CLI::Validator positive_number() {
-  return CLI::Validator(
-      [](std::string& text) {
-        try {
-          std::size_t used = 0;
-          if (std::stod(text, &used) > 0.0 && used == text.size()) return std::string();
-        } catch (const std::exception&) {
-        }
-        return "expected a positive number, got '" + text + "'";
-      },
-      "POSITIVE");
 }
 
 struct Options {

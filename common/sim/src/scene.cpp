@@ -13,6 +13,7 @@
 #include "motion.h"
 #include "panoptes/calibration_file.h"
 #include "panoptes/config.h"
+#include "panoptes/formats/c3d.h"
 #include "panoptes/geometry.h"
 #include "panoptes/simulator.h"
 
@@ -241,9 +242,13 @@ TrcSource read_trc(const YamlReader& reader, const std::filesystem::path& base_d
   if (file.is_relative()) file = base_dir / file;
   std::error_code error;
   if (!std::filesystem::is_regular_file(file, error)) {
-    reader.fail("file", "TRC file '" + file.lexically_normal().string() + "' not found");
+    reader.fail("file", "marker file '" + file.lexically_normal().string() + "' not found");
   }
-  source.data = load_trc(file);
+  // The same playback for C3D files (docs/simulator.md, "Marker files"); units follow POINT:UNITS.
+  std::string extension = file.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  source.data = extension == ".c3d" ? load_c3d(file) : load_trc(file);
   source.offset = read_vector3(reader, "offset", Eigen::Vector3d::Zero());
   const std::string up_axis = reader.get_string("up_axis", "y");
   if (up_axis == "y") {

@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// TRC motion-capture files: parsing, unit and axis conversion, interpolation, gaps and looping.
+// TRC motion-capture files: parsing, unit and axis conversion, interpolation, gaps and looping;
+// C3D files played back the same way.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -7,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "panoptes/config.h"
+#include "panoptes/formats/c3d.h"
 #include "panoptes/simulator.h"
 
 namespace panoptes {
@@ -250,6 +253,53 @@ TEST(Trc, MalformedFilesNameTheFileAndLine) {
     ADD_FAILURE();
   } catch (const ConfigError& error) {
     EXPECT_EQ(error.key(), "trc.markers[1]");
+  }
+}
+
+// The walk played from a C3D file (docs/simulator.md, "TRC and C3D playback").
+const std::string kC3dScene = kCamera + R"(trc:
+  offset: [0.5, 0, 0]
+  loop: wrap
+  file: )";
+
+TEST(C3dPlayback, WalkFromC3dMovesLikeWalkFromTrc) {
+  const TempDir temp;
+  const fs::path& dir = temp.path();
+  MarkerTrajectories walk = load_trc(kWalk);
+  // A gap, to see that C3D's invalid points stay invalid in the scene.
+  walk.valid[10 * walk.marker_count() + 3] = 0;
+  write_c3d(dir / "walk.c3d", walk);
+  write_trc(dir / "walk.trc", walk);
+  const Scene from_c3d = Scene::from_yaml_string(kC3dScene + (dir / "walk.c3d").string(), dir, "c3d.yaml");
+  const Scene from_trc = Scene::from_yaml_string(kC3dScene + (dir / "walk.trc").string(), dir, "trc.yaml");
+  ASSERT_EQ(from_c3d.marker_names(), from_trc.marker_names());
+  ASSERT_EQ(from_c3d.marker_names().size(), 41U);
+  double worst = 0.0;
+  int compared = 0;
+  for (TimeNs t = 0; t < 5 * kNsPerSecond; t += 3'333'333) {  // off the file's grid: interpolated
+    const auto a = from_c3d.markers_at(t);
+    const auto b = from_trc.markers_at(t);
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a[i].valid, b[i].valid) << i << " at " << t;
+      if (!a[i].valid) continue;
+      worst = std::max(worst, (a[i].p - b[i].p).norm());
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 30000);
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_FALSE(from_c3d.markers_at(100 * kNsPerMillisecond)[3].valid);  // the gap, frame 10
+}
+
+TEST(C3dPlayback, ABadC3dFileIsAConfigErrorNamingIt) {
+  const TempDir temp;
+  const fs::path& dir = temp.path();
+  temp.write("bad.c3d", "not a c3d file");
+  try {
+    Scene::from_yaml_string(kC3dScene + (dir / "bad.c3d").string(), dir, "bad.yaml");
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find("bad.c3d: offset 0"), std::string::npos) << error.what();
   }
 }
 

@@ -7,6 +7,7 @@
 #include <functional>
 #include <iostream>
 #include <optional>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -29,6 +30,20 @@ inline std::optional<int> parse_command_line(CLI::App& app, int argc, char** arg
     return kExitBadInput;
   }
   return std::nullopt;
+}
+
+// CLI11's own PositiveNumber prints the whole double range in its message.
+inline CLI::Validator positive_number() {
+  return CLI::Validator(
+      [](std::string& text) {
+        try {
+          std::size_t used = 0;
+          if (std::stod(text, &used) > 0.0 && used == text.size()) return std::string();
+        } catch (const std::exception&) {
+        }
+        return "expected a positive number, got '" + text + "'";
+      },
+      "POSITIVE");
 }
 
 }  // namespace panoptes

@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "panoptes/calibration.h"
+#include "panoptes/formats/trc.h"
 #include "panoptes/image.h"
 #include "panoptes/records.h"
 #include "panoptes/time.h"
@@ -61,28 +62,8 @@ struct BodyTruth {
   RigidTransform T_world_body;
 };
 
-// A motion-capture marker file in the TRC text format (OpenSim, Motion Analysis). Positions are
-// converted to metres from the file's Units; axes stay as in the file (scenes convert them).
-struct TrcData {
-  double data_rate_hz = 0.0;
-  std::string units;  // as written in the file ("mm", "cm", "m")
-  std::vector<std::string> marker_names;
-  std::vector<double> times_s;             // the Time column, one entry per frame, strictly increasing
-  std::vector<Eigen::Vector3d> positions;  // frame-major: [frame * marker_count() + marker]
-  std::vector<std::uint8_t> valid;         // same layout; 0 where the file leaves a value empty
-
-  std::size_t frame_count() const { return times_s.size(); }
-  std::size_t marker_count() const { return marker_names.size(); }
-  const Eigen::Vector3d& position(std::size_t frame, std::size_t marker) const {
-    return positions[frame * marker_count() + marker];
-  }
-  bool is_valid(std::size_t frame, std::size_t marker) const {
-    return valid[frame * marker_count() + marker] != 0;
-  }
-};
-
-// Throws ConfigError naming the file and the line ("line 7") on any problem.
-TrcData load_trc(const std::filesystem::path& path);
+// TRC playback reads marker files through the formats library (C3D too: docs/simulator.md).
+using TrcData = MarkerTrajectories;
 
 class Scene {
  public:

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// TRC reader. Layout (OpenSim's and Motion Analysis' writers agree on it):
+// TRC reader and writer. Layout (OpenSim's and Motion Analysis' writers agree on it):
 //   1  PathFileType  4  (X/Y/Z)  <path>
 //   2  DataRate CameraRate NumFrames NumMarkers Units OrigDataRate ...   (keys)
 //   3  values for line 2
@@ -16,8 +16,9 @@
 #include <string_view>
 #include <vector>
 
-#include "panoptes/config.h"
-#include "panoptes/simulator.h"
+#include "number_format.h"
+#include "panoptes/errors.h"
+#include "panoptes/formats/trc.h"
 
 namespace panoptes {
 
@@ -63,16 +64,9 @@ bool parse_number(std::string_view text, double& value) {
   return result.ec == std::errc() && result.ptr == text.data() + text.size() && std::isfinite(value);
 }
 
-double unit_scale(std::string_view units) {
-  if (units == "mm") return 1e-3;
-  if (units == "cm") return 1e-2;
-  if (units == "m") return 1.0;
-  return 0.0;
-}
-
 }  // namespace
 
-TrcData load_trc(const std::filesystem::path& path) {
+MarkerTrajectories load_trc(const std::filesystem::path& path) {
   const std::string file = path.string();
   std::ifstream in(path);
   if (!in) throw ConfigError(file, "", "cannot open TRC file");
@@ -102,12 +96,12 @@ TrcData load_trc(const std::filesystem::path& path) {
     return it->second;
   };
 
-  TrcData data;
+  MarkerTrajectories data;
   if (!parse_number(header_value("DataRate"), data.data_rate_hz) || data.data_rate_hz <= 0.0) {
     throw ConfigError(file, line_key(2), "DataRate must be a positive number");
   }
   data.units = header_value("Units");
-  const double scale = unit_scale(data.units);
+  const double scale = metres_per_unit(data.units);
   if (scale == 0.0)
     throw ConfigError(file, line_key(2), "unsupported Units '" + data.units + "' (mm, cm or m)");
   double declared_markers = 0.0;
@@ -165,6 +159,67 @@ TrcData load_trc(const std::filesystem::path& path) {
   }
   if (data.times_s.empty()) throw ConfigError(file, "", "no data rows");
   return data;
+}
+
+namespace {
+
+constexpr int kTrcDecimals = 6;
+
+}  // namespace
+
+void write_trc(const std::filesystem::path& path, const MarkerTrajectories& data) {
+  const std::string file = path.string();
+  const std::string units = data.units.empty() ? "mm" : data.units;
+  const double per_metre = metres_per_unit(units);
+  if (per_metre == 0.0) throw ConfigError(file, "", "unsupported units '" + units + "' (mm, cm or m)");
+  if (data.marker_count() == 0) throw ConfigError(file, "", "no markers to write");
+  if (!(data.data_rate_hz > 0.0)) throw ConfigError(file, "", "the rate must be positive");
+  const double units_per_metre = 1.0 / per_metre;
+  const std::size_t markers = data.marker_count();
+  const std::size_t frames = data.frame_count();
+  std::string out;
+  out.reserve(64 + frames * (16 + markers * 3 * 14));
+  out += "PathFileType\t4\t(X/Y/Z)\t";
+  out += path.filename().string();
+  out +=
+      "\nDataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames"
+      "\n";
+  std::string rate;
+  formats::append_fixed(rate, data.data_rate_hz, kTrcDecimals);
+  out += rate + "\t" + rate + "\t" + std::to_string(frames) + "\t" + std::to_string(markers) + "\t" + units +
+         "\t" + rate + "\t1\t" + std::to_string(frames) + "\nFrame#\tTime";
+  for (const std::string& name : data.marker_names) {
+    out += '\t';
+    out += name;
+    out += "\t\t";
+  }
+  out += "\n\t";
+  for (std::size_t m = 1; m <= markers; ++m) {
+    const std::string index = std::to_string(m);
+    for (const char* axis : {"\tX", "\tY", "\tZ"}) {
+      out += axis;
+      out += index;
+    }
+  }
+  out += "\n\n";
+  for (std::size_t f = 0; f < frames; ++f) {
+    out += std::to_string(f + 1);
+    out += '\t';
+    formats::append_fixed(out, data.times_s[f], kTrcDecimals);
+    for (std::size_t m = 0; m < markers; ++m) {
+      const bool valid = data.is_valid(f, m);
+      for (int axis = 0; axis < 3; ++axis) {
+        out += '\t';
+        if (valid) formats::append_fixed(out, data.position(f, m)[axis] * units_per_metre, kTrcDecimals);
+      }
+    }
+    out += '\n';
+  }
+  std::ofstream stream(path, std::ios::binary | std::ios::trunc);
+  if (!stream) throw ConfigError(file, "", "cannot open for writing");
+  stream.write(out.data(), static_cast<std::streamsize>(out.size()));
+  stream.close();
+  if (!stream) throw ConfigError(file, "", "write failed (disk full?)");
 }
 
 }  // namespace panoptes

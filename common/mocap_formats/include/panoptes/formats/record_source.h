@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: Apache-2.0
+// Where an export reads the estimator's records from. Today: the offline JSON Lines outputs
+// (estimator_node --out-tracks / --out-poses); a recording reader implements the same interface.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "panoptes/records.h"
+
+namespace panoptes {
+
+struct ExportRecords {
+  std::vector<TrackRecord> tracks;
+  std::vector<PoseRecord> poses;
+  // Records that could not be read, skipped and counted: "<file>:<line or offset>: <reason>".
+  std::vector<std::string> skipped;
+};
+
+class RecordSource {
+ public:
+  virtual ~RecordSource() = default;
+  // Throws ConfigError (or std::runtime_error) naming the file when it cannot be read at all.
+  virtual ExportRecords read() = 0;
+  virtual std::string describe() const = 0;
+};
+
+class JsonlRecordSource final : public RecordSource {
+ public:
+  JsonlRecordSource(std::optional<std::filesystem::path> tracks, std::optional<std::filesystem::path> poses);
+  ExportRecords read() override;
+  std::string describe() const override;
+
+ private:
+  std::optional<std::filesystem::path> tracks_;
+  std::optional<std::filesystem::path> poses_;
+};
+
+}  // namespace panoptes

@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# panoptes_export (docs/recording.md, "Export"): the walking data to C3D and TRC re-read by a
+# second, independent C3D reader (tests/c3d/read_c3d.js, node) within 1e-6 m; a simulated session's
+# offline tracks and poses exported at a fixed rate; bad input named with file and offset.
+source "$(dirname "$0")/lib.sh"
+walk="$source_dir/tests/data/walk_41markers_100hz.trc"
+reader="$source_dir/tests/c3d/read_c3d.js"
+command -v node >/dev/null || { fail "node is missing (deploy/install-deps.sh installs it)"; finish; }
+
+# --- the walking data: C3D and TRC, read back by the other implementation -----------------------
+expect_exit 0 "export the walking data to C3D, TRC and CSV" -- "$bin/panoptes_export" --markers "$walk" \
+  --c3d "$work/walk.c3d" --trc "$work/walk.trc" --csv "$work/walk.csv"
+node "$reader" "$work/walk.c3d" --trc "$walk" >"$work/walk.json" 2>"$work/node.err" || { fail "node reader failed"; cat "$work/node.err"; }
+/usr/bin/python3 - "$work/walk.json" <<'PY' && pass "independent reader: 41 labelled points, 100 Hz, 238 frames, within 1e-6 m of the TRC" || fail "independent reader disagrees: $(cat "$work/walk.json")"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["processor"] == 84 and d["points"] == 41 and d["rate"] == 100 and d["frames"] == 238, d
+assert d["labels"][0] == "R.Shoulder" and d["labels"][-1] == "L.Toe" and d["complete"], d
+assert d["mismatched_validity"] == 0 and d["compared"] == 41 * 238, d  # the file has no gaps
+assert d["max_error_m"] <= 1e-6, d
+print("max_error_m", d["max_error_m"])
+PY
+cat "$work/walk.json" | head -c 200; echo
+# Our TRC, converted by our C3D writer and read by node, still matches the original file.
+expect_exit 0 "re-export our TRC as C3D" -- "$bin/panoptes_export" --markers "$work/walk.trc" --c3d "$work/walk2.c3d"
+node "$reader" "$work/walk2.c3d" --trc "$walk" >"$work/walk2.json" 2>&1
+/usr/bin/python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if d["max_error_m"] <= 1e-6 and d["mismatched_validity"] == 0 else 1)' \
+  "$work/walk2.json" && pass "TRC -> C3D -> independent reader within 1e-6 m" || fail "TRC round trip: $(cat "$work/walk2.json")"
+[ "$(head -1 "$work/walk.csv" | tr ',' '\n' | wc -l)" -eq $((2 + 41 * 3)) ] && pass "CSV has frame, time and 41 x 3 columns" \
+  || fail "CSV header: $(head -c 200 "$work/walk.csv")"
+
+# --- a simulated session's offline outputs -------------------------------------------------------
+scene="$source_dir/deploy/scenes/bodies.yaml"
+expect_exit 0 "simulate 3 s of features" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim" --duration 3
+expect_exit 0 "offline estimator writes tracks and poses" -- "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" \
+  --bodies "$work/sim/bodies.yaml" --in-features "$work"/sim/c*.jsonl --no-dds --out-tracks "$work/tracks.jsonl" \
+  --out-poses "$work/poses.jsonl" --quiet
+expect_exit 0 "export tracks and poses at 100 Hz" -- "$bin/panoptes_export" --tracks "$work/tracks.jsonl" \
+  --poses "$work/poses.jsonl" --rate 100 --c3d "$work/session.c3d" --trc "$work/session.trc" --csv "$work/session.csv" \
+  --bodies-csv "$work/bodies.csv"
+cat "$work/last.out"
+node "$reader" "$work/session.c3d" --trc "$work/session.trc" >"$work/session.json" 2>&1
+/usr/bin/python3 - "$work/session.json" "$work/last.out" "$work/bodies.csv" <<'PY' && pass "session C3D: independent reader agrees with our TRC; bodies CSV has quaternions" || fail "session export: $(head -c 300 "$work/session.json")"
+import json, sys, csv
+d = json.load(open(sys.argv[1]))
+summary = json.loads(open(sys.argv[2]).read())
+assert d["rate"] == 100 and d["points"] == summary["markers"] > 0 and d["frames"] == summary["frames"], (d, summary)
+assert 290 <= d["frames"] <= 301, d  # 3 s at 100 Hz
+assert d["mismatched_validity"] == 0 and d["compared"] > 0 and d["max_error_m"] <= 1e-6, d
+rows = list(csv.DictReader(open(sys.argv[3])))
+assert rows and set(["qx", "qy", "qz", "qw"]) <= set(rows[0]), rows[:1]
+for r in rows:
+    n = sum(float(r[k]) ** 2 for k in ("qx", "qy", "qz", "qw"))
+    assert abs(n - 1) < 1e-6, r
+PY
+
+# --- bad input ----------------------------------------------------------------------------------
+expect_exit 2 "no input" -- "$bin/panoptes_export" --c3d "$work/x.c3d"
+expect_exit 2 "no output" -- "$bin/panoptes_export" --markers "$walk"
+head -c 700 "$work/walk.c3d" >"$work/cut.c3d"
+expect_exit 2 "truncated C3D" -- "$bin/panoptes_export" --markers "$work/cut.c3d" --trc "$work/x.trc"
+expect_stderr_contains "cut.c3d: offset " "the error names the file and the offset"
+printf 'not json\n' >"$work/bad.jsonl"
+expect_exit 2 "tracks file without a record" -- "$bin/panoptes_export" --tracks "$work/bad.jsonl" --c3d "$work/x.c3d"
+expect_stderr_contains "bad.jsonl:1:" "the skipped line is named with file and line"
+expect_exit 0 "--help" -- "$bin/panoptes_export" --help
+finish
