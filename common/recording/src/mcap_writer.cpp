@@ -49,6 +49,7 @@ struct McapWriter::State {
   std::vector<std::uint8_t> compressed;
   std::vector<std::uint8_t> out;
   std::vector<ChunkIndexEntry> chunk_indexes;
+  std::vector<std::map<std::uint16_t, std::uint64_t>> chunk_counts;  // by chunk: messages per channel
   Statistics statistics;
   bool closed = false;
 };
@@ -219,19 +220,44 @@ bool McapWriter::close_after_error() {
   State& s = *state_;
   s.closed = true;
   bool saved = false;
-  if (::ftruncate(s.fd, static_cast<off_t>(s.committed)) == 0 &&
-      ::lseek(s.fd, static_cast<off_t>(s.committed), SEEK_SET) >= 0) {
+  // The summary goes after the last complete chunk; where it does not fit (a file size limit),
+  // the newest chunks are given up one by one until it does: a valid file beats one more chunk.
+  while (!saved && ::ftruncate(s.fd, static_cast<off_t>(s.committed)) == 0 &&
+         ::lseek(s.fd, static_cast<off_t>(s.committed), SEEK_SET) >= 0) {
     std::vector<std::uint8_t> tail;
     append_data_end_and_summary(tail);
     if (!write_all(s.fd, tail)) {
       saved = true;
-    } else if (::ftruncate(s.fd, static_cast<off_t>(s.committed)) != 0) {
-      saved = false;  // the partial summary stays; the reader ignores it and recovers the chunks
+    } else if (!drop_last_chunk()) {
+      (void)::ftruncate(s.fd, static_cast<off_t>(s.committed));  // the reader recovers the chunks
+      break;
     }
   }
   ::close(s.fd);
   s.fd = -1;
   return saved;
+}
+
+bool McapWriter::drop_last_chunk() {
+  State& s = *state_;
+  if (s.chunk_indexes.empty()) return false;
+  s.committed = s.chunk_indexes.back().chunk_offset;
+  Statistics& st = s.statistics;
+  for (const auto& [channel, count] : s.chunk_counts.back()) {
+    st.channel_message_counts[channel] -= count;
+    st.message_count -= count;
+  }
+  s.chunk_indexes.pop_back();
+  s.chunk_counts.pop_back();
+  --stats_.chunks;
+  st.message_start_time = st.message_end_time = 0;
+  for (std::size_t i = 0; i < s.chunk_indexes.size(); ++i) {
+    st.message_start_time = i == 0 ? s.chunk_indexes[i].start_time
+                                   : std::min(st.message_start_time, s.chunk_indexes[i].start_time);
+    st.message_end_time = std::max(st.message_end_time, s.chunk_indexes[i].end_time);
+  }
+  stats_.file_bytes = s.committed;
+  return true;
 }
 
 void McapWriter::append_data_end_and_summary(std::vector<std::uint8_t>& out) const {
@@ -367,6 +393,7 @@ void McapWriter::flush() {
   for (const auto& [channel, count] : chunk_counts) st.channel_message_counts[channel] += count;
   if (options_.fsync_chunks) ::fdatasync(s.fd);
   s.chunk_indexes.push_back(std::move(entry));
+  s.chunk_counts.push_back(std::move(chunk_counts));
   ++stats_.chunks;
 }
 

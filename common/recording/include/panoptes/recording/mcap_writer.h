@@ -73,6 +73,7 @@ class McapWriter {
   struct State;
   void commit(std::span<const std::uint8_t> bytes, const char* what);
   bool close_after_error();
+  bool drop_last_chunk();  // forgets the newest complete chunk (false: none left)
   void append_data_end_and_summary(std::vector<std::uint8_t>& out) const;
   std::filesystem::path path_;
   McapWriterOptions options_;
