@@ -53,6 +53,7 @@ using Child = panoptes::ChildProcess;
 std::vector<std::unique_ptr<Child>> start_processes(const fs::path& bin_dir, const panoptes::Scene& scene,
                                                     const std::string& scene_file,
                                                     const fs::path& calibration_file,
+                                                    const fs::path& bodies_file,
                                                     const std::string& dds_profile, const fs::path& run_dir,
                                                     TimeNs epoch, double duration_s) {
   std::vector<std::string> common_dds;
@@ -61,6 +62,12 @@ std::vector<std::unique_ptr<Child>> start_processes(const fs::path& bin_dir, con
   std::vector<std::string> estimator_args = {(bin_dir / "estimator_node").string(), "--calibration",
                                              calibration_file.string(), "--out-tracks",
                                              (run_dir / "tracks.jsonl").string()};
+  if (!bodies_file.empty()) {
+    // The scene's rigid bodies: the estimator tracks them and writes their poses beside the tracks.
+    for (const std::string& arg : {std::string("--bodies"), bodies_file.string(), std::string("--out-poses"),
+                                   (run_dir / "poses.jsonl").string()})
+      estimator_args.push_back(arg);
+  }
   estimator_args.insert(estimator_args.end(), common_dds.begin(), common_dds.end());
   children.push_back(
       std::make_unique<Child>("estimator_node", estimator_args, run_dir / "estimator_node.log"));
@@ -192,6 +199,11 @@ int run(int argc, char** argv) {
   fs::create_directories(run_dir);
   const fs::path calibration_file = run_dir / "calibration.yaml";
   panoptes::save_calibration(scene->calibration(), calibration_file);
+  fs::path bodies_file;
+  if (!scene->body_definitions().empty()) {
+    bodies_file = run_dir / "bodies.yaml";
+    panoptes::save_bodies(scene->body_definitions(), bodies_file);
+  }
 
   // Scene time 0 a little in the future, so that every process has started and discovered the
   // others before the first frame.
@@ -204,8 +216,8 @@ int run(int argc, char** argv) {
 
   std::vector<std::unique_ptr<Child>> children;
   try {
-    children = start_processes(bin_dir, *scene, scene_file, calibration_file, dds_profile, run_dir, epoch,
-                               duration_s);
+    children = start_processes(bin_dir, *scene, scene_file, calibration_file, bodies_file, dds_profile,
+                               run_dir, epoch, duration_s);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
     return panoptes::kExitFailure;
