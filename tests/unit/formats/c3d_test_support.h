@@ -71,7 +71,7 @@ struct HandBuiltC3d {
   }
 
   std::vector<std::uint8_t> build() const {
-    std::vector<std::uint8_t> out(2 * 512, 0);  // header, one parameter block; data from block 3
+    std::vector<std::uint8_t> out(std::size_t{2} * 512, 0);  // header, one parameter block; data from block 3
     out[0] = 2;
     out[1] = 0x50;
     put16(out, 2, static_cast<std::int16_t>(points));
@@ -125,9 +125,10 @@ struct HandBuiltC3d {
         for (int axis = 0; axis < 3; ++axis) {
           const double v = coordinate(f, m, axis);
           if (float_storage) {
-            putf(point, 4 * axis, static_cast<float>(v));
+            putf(point, std::size_t{4} * static_cast<std::size_t>(axis), static_cast<float>(v));
           } else {
-            put16(point, 2 * axis, static_cast<std::int16_t>(std::lround(v / scale)));
+            put16(point, std::size_t{2} * static_cast<std::size_t>(axis),
+                  static_cast<std::int16_t>(std::lround(v / scale)));
           }
         }
         // Camera mask 0b101, residual 3 steps.
