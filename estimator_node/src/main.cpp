@@ -88,7 +88,8 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
 int main(int argc, char** argv) {
   if (argc >= 2 && std::string_view(argv[1]) == "calibrate")
     return panoptes::calib::run_calibrate(argc - 1, argv + 1);
-  if (argc >= 2 && std::string_view(argv[1]) == "tune") return panoptes::tune::run_tune(argc - 1, argv + 1);
+  if (argc >= 2 && std::string_view(argv[1]) == "tune")
+    return panoptes::tune::run_tune(argc - 1, argv + 1, panoptes::estimator_app::read_recording_features);
   app::NodeCommandLine command_line;
   if (const auto exit_code = app::parse_node_command_line(argc, argv, command_line)) return *exit_code;
 

@@ -86,6 +86,15 @@ else
   fail "--in-recording tracks differ from the JSONL path"; tail -3 "$work/est_rec.log"
 fi
 
+# The filter tuner reads the recording directly (docs/recording.md, "Tune the filter").
+if "$bin/estimator_node" tune --calibration "$work/logs/calibration.yaml" --in-recording "$work/A.mcap" \
+  --params measurement_noise_px --sweeps 1 --out-config "$work/tuned.yaml" >"$work/tune.out" 2>&1 &&
+  "$bin/estimator_node" --config "$work/tuned.yaml" --print-config >/dev/null 2>&1; then
+  pass "estimator_node tune --in-recording wrote a config that loads: $(grep -o 'measurement_noise_px: [0-9.e-]*' "$work/tuned.yaml" | head -1)"
+else
+  fail "estimator_node tune --in-recording"; tail -3 "$work/tune.out"
+fi
+
 # B (SIGKILL): every complete chunk recovered, by our reader and by @mcap/core.
 "$bin/panoptes_mcap_probe" "$work/B.mcap" >"$work/B.json"
 check_mcap "$work/B.mcap" --allow-truncated >"$work/B_ref.json" || { fail "@mcap/core on B"; cat "$work/B_ref.json"; }

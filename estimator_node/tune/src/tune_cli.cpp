@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "panoptes/calibration_file.h"
 #include "panoptes/cli.h"
 #include "panoptes/errors.h"
 #include "panoptes/process.h"
@@ -26,6 +27,7 @@ namespace {
 struct TuneArgs {
   std::string calibration_file;
   std::vector<std::string> in_features;
+  std::string in_recording;
   std::string criterion = "heldout";
   std::string scene_file;
   long long epoch_ns = 1'700'000'000'000'000'000LL;
@@ -44,10 +46,12 @@ void add_options(CLI::App& app, TuneArgs& a) {
   app.option_defaults()->always_capture_default();
   app.add_option("--calibration", a.calibration_file, "calibration YAML (cameras with T_world_cam)")
       ->required();
-  app.add_option("--in-features", a.in_features,
-                 "FeatureFrame JSONL files (one per camera), as the offline mode")
-      ->required()
-      ->expected(1, -1);
+  auto* features = app.add_option("--in-features", a.in_features,
+                                  "FeatureFrame JSONL files (one per camera), as the offline mode")
+                       ->expected(1, -1);
+  auto* recording = app.add_option("--in-recording", a.in_recording,
+                                   "an MCAP recording (panoptes_record), instead of --in-features");
+  features->excludes(recording);
   app.add_option(
          "--criterion", a.criterion,
          "heldout: leave-one-camera-out prediction error (or NLL) + NIS consistency (no ground truth); "
@@ -154,7 +158,7 @@ Criterion make_criterion(const TuneArgs& args, const TuneInput& input, const Sce
   return criterion;
 }
 
-int tune(const TuneArgs& args) {
+int tune(const TuneArgs& args, const RecordingReader& read_recording) {
   session::EstimatorConfig start = args.config_file.empty()
                                        ? session::EstimatorConfig{}
                                        : session::load_estimator_config(args.config_file);
@@ -169,10 +173,24 @@ int tune(const TuneArgs& args) {
   effective.truth = truth;
 
   TuneInput input;
-  try {
-    input = load_feature_input(args.calibration_file, args.in_features);
-  } catch (const std::runtime_error& error) {  // an unreadable file: bad input, not a failure
-    throw ConfigError(args.in_features.front(), "--in-features", error.what());
+  if (!args.in_recording.empty()) {
+    if (!read_recording)
+      throw ConfigError(args.in_recording, "--in-recording", "recordings are not readable here");
+    try {
+      input.calibration = load_calibration(args.calibration_file);
+      session::FeatureFiles files = read_recording(args.in_recording);
+      input.frames = std::move(files.frames);
+      input.bad_lines = files.bad_lines;
+      session::sort_by_stamp(input.frames);
+    } catch (const std::runtime_error& error) {
+      throw ConfigError(args.in_recording, "--in-recording", error.what());
+    }
+  } else {
+    try {
+      input = load_feature_input(args.calibration_file, args.in_features);
+    } catch (const std::runtime_error& error) {  // an unreadable file: bad input, not a failure
+      throw ConfigError(args.in_features.front(), "--in-features", error.what());
+    }
   }
   if (cameras_with_frames(input).size() < 3 && args.criterion == "heldout")
     throw ConfigError(args.calibration_file, "cameras", "heldout needs frames of at least 3 posed cameras");
@@ -207,16 +225,20 @@ int tune(const TuneArgs& args) {
 
 }  // namespace
 
-int run_tune(int argc, char** argv) {
+int run_tune(int argc, char** argv, const RecordingReader& read_recording) {
   CLI::App app{
       "estimator_node tune: searches process noise, measurement noise and gates over a recording "
       "(seed 003 A.3.2; docs/recording.md)",
       "estimator_node tune"};
   TuneArgs args;
   add_options(app, args);
-  if (const auto exit_code = parse_command_line(app, argc, argv, [] {})) return *exit_code;
+  if (const auto exit_code = parse_command_line(app, argc, argv, [&] {
+        if (args.in_features.empty() && args.in_recording.empty())
+          throw CLI::ValidationError("--in-features", "give --in-features files or --in-recording");
+      }))
+    return *exit_code;
   try {
-    return tune(args);
+    return tune(args, read_recording);
   } catch (const ConfigError& error) {
     session::log(error.what());
     return kExitBadInput;
