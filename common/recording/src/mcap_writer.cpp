@@ -105,6 +105,26 @@ McapWriter::~McapWriter() {
 
 namespace {
 
+// One Schema or Channel record; the data section and the summary repeat them alike.
+void append_schema(fmt::Out& o, const Schema& schema) {
+  const std::size_t r = o.begin_record(fmt::kSchema);
+  o.u16(schema.id);
+  o.str(schema.name);
+  o.str(schema.encoding);
+  o.str(schema.data);
+  o.finish_record(r);
+}
+
+void append_channel(fmt::Out& o, const Channel& channel) {
+  const std::size_t r = o.begin_record(fmt::kChannel);
+  o.u16(channel.id);
+  o.u16(channel.schema_id);
+  o.str(channel.topic);
+  o.str(channel.message_encoding);
+  o.map(channel.metadata);
+  o.finish_record(r);
+}
+
 void append_summary(std::vector<std::uint8_t>& out, std::uint64_t summary_start,
                     const std::vector<Schema>& schemas, const std::vector<Channel>& channels,
                     const Statistics& statistics, const std::vector<ChunkIndexEntry>& chunk_indexes) {
@@ -119,25 +139,10 @@ void append_summary(std::vector<std::uint8_t>& out, std::uint64_t summary_start,
     if (out.size() > begin) groups.push_back({op, summary_start + begin, out.size() - begin});
   };
   std::size_t begin = out.size();
-  for (const auto& schema : schemas) {
-    const std::size_t r = o.begin_record(fmt::kSchema);
-    o.u16(schema.id);
-    o.str(schema.name);
-    o.str(schema.encoding);
-    o.str(schema.data);
-    o.finish_record(r);
-  }
+  for (const auto& schema : schemas) append_schema(o, schema);
   group(fmt::kSchema, begin);
   begin = out.size();
-  for (const auto& channel : channels) {
-    const std::size_t r = o.begin_record(fmt::kChannel);
-    o.u16(channel.id);
-    o.u16(channel.schema_id);
-    o.str(channel.topic);
-    o.str(channel.message_encoding);
-    o.map(channel.metadata);
-    o.finish_record(r);
-  }
+  for (const auto& channel : channels) append_channel(o, channel);
   group(fmt::kChannel, begin);
   begin = out.size();
   {
@@ -276,12 +281,7 @@ std::uint16_t McapWriter::add_schema(const std::string& name, const std::string&
   Schema schema{static_cast<std::uint16_t>(state_->schemas.size() + 1), name, encoding, data};
   std::vector<std::uint8_t> bytes;
   fmt::Out o(bytes);
-  const std::size_t r = o.begin_record(fmt::kSchema);
-  o.u16(schema.id);
-  o.str(schema.name);
-  o.str(schema.encoding);
-  o.str(schema.data);
-  o.finish_record(r);
+  append_schema(o, schema);
   commit(bytes, "a schema");
   state_->schemas.push_back(std::move(schema));
   state_->statistics.schema_count = static_cast<std::uint16_t>(state_->schemas.size());
@@ -298,13 +298,7 @@ std::uint16_t McapWriter::add_channel(std::uint16_t schema_id, const std::string
                   metadata};
   std::vector<std::uint8_t> bytes;
   fmt::Out o(bytes);
-  const std::size_t r = o.begin_record(fmt::kChannel);
-  o.u16(channel.id);
-  o.u16(channel.schema_id);
-  o.str(channel.topic);
-  o.str(channel.message_encoding);
-  o.map(channel.metadata);
-  o.finish_record(r);
+  append_channel(o, channel);
   commit(bytes, "a channel");
   state_->channels.push_back(std::move(channel));
   return state_->channels.back().id;
