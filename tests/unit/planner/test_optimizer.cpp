@@ -164,6 +164,55 @@ TEST(Optimizer, InfeasiblePlansNameTheConstraint) {
   }
 }
 
+// A lens of `fov_deg` across a 1280 × 1024 sensor.
+Lens lens_with_fov(const std::string& name, double fov_deg) {
+  Lens lens = ceiling_lens();
+  lens.name = name;
+  lens.intrinsics.fx = lens.intrinsics.fy = 640.0 / std::tan(fov_deg / 2 * std::numbers::pi / 180.0);
+  return lens;
+}
+
+// Lens choice (issue 19 item 2): the optimiser picks per camera from the room's lenses. A camera
+// 2.5 m above a 4 × 4 m floor needs a wide lens to see all of it; a 0.4 m cube 8 m away is seen
+// whole by either lens, and the long lens resolves it 4× better. The plan must pick the right one
+// in both rooms, from a list in which the right lens is not the first.
+TEST(Optimizer, PicksTheLensTheVolumeNeeds) {
+  const Lens wide = lens_with_fov("wide", 100.0), tele = lens_with_fov("tele", 28.0);
+  PlanOptions options;
+  options.cameras = 2;
+  options.evaluations = 800;
+  options.seed = 11;
+
+  Room low_ceiling = floor_room();
+  low_ceiling.mounts[0].corner.z() = 2.5;
+  low_ceiling.lenses = {tele, wide};
+  const SampleSet floor = draw_samples(low_ceiling, {16}, 150, 16, 5);
+  const PlanResult near = plan(low_ceiling, floor, {}, options);
+
+  Room far_target;
+  far_target.volume = {Eigen::Vector3d(-0.2, -0.2, 0.8), Eigen::Vector3d(0.2, 0.2, 1.2)};
+  far_target.mounts.push_back(
+      {"wall", Eigen::Vector3d(-4, -8, 0.5), Eigen::Vector3d(8, 0, 0), Eigen::Vector3d(0, 0, 2)});
+  far_target.lenses = {wide, tele};
+  const SampleSet target = draw_samples(far_target, {16}, 150, 16, 6);
+  const PlanResult far = plan(far_target, target, {}, options);
+
+  for (const auto* result : {&near, &far})
+    for (const auto& camera : result->cameras)
+      std::printf("  %s: %s lens\n", camera.id.c_str(), camera.lens.c_str());
+  for (const auto& camera : near.cameras) EXPECT_EQ(camera.lens, "wide");
+  for (const auto& camera : far.cameras) EXPECT_EQ(camera.lens, "tele");
+  // The choice matters: the same layouts with the other lens are worse.
+  auto with_lens = [](std::vector<PlannedCamera> cameras, const Lens& lens) {
+    for (auto& camera : cameras)
+      camera = make_camera(camera.id, lens, camera.model.center_world(),
+                           camera.model.center_world() + camera.model.T_world_cam().rotation().col(2));
+    return cameras;
+  };
+  EXPECT_LT(near.evaluation.quality, evaluate(with_lens(near.cameras, tele), floor, {}, {}).quality);
+  EXPECT_LT(far.evaluation.quality, evaluate(with_lens(far.cameras, wide), target, {}, {}).quality);
+}
+
 TEST(Metric, StaticObstacleHidesWhatIsBehindIt) {
   Room room = floor_room();
   const auto camera = make_camera("c", room.lenses[0], {0, 0, 3}, {0, 0, 0});
