@@ -46,7 +46,7 @@ class PointEvaluator {
       : cameras_(cameras), samples_(samples), obstacles_(obstacles), options_(options) {
     at_.resize(cameras.size());
     min_angle_cos_ =
-        std::cos(std::clamp(options.min_triangulation_deg, 0.0, 180.0) * std::numbers::pi / 180.0);
+        std::cos(std::clamp(options.min_triangulation_deg, 0.0, 90.0) * std::numbers::pi / 180.0);
   }
 
   PointResult evaluate(const Eigen::Vector3d& p) {
@@ -88,13 +88,15 @@ class PointEvaluator {
   }
 
  private:
-  // `mask`, or only its first camera when no two of its rays are min_triangulation_deg apart.
+  // `mask`, or only its first camera when no two of its rays are min_triangulation_deg apart as
+  // lines: rays from opposite sides (cameras facing each other across P) are as useless for
+  // triangulation as rays from one side.
   Mask effective(Mask mask) const {
     if (std::popcount(mask) < 2 || options_.min_triangulation_deg <= 0.0) return mask;
     for (Mask a = mask; a != 0; a &= a - 1) {
       const Eigen::Vector3d& ray = at_[static_cast<std::size_t>(std::countr_zero(a))].to_camera;
       for (Mask b = a & (a - 1); b != 0; b &= b - 1)
-        if (ray.dot(at_[static_cast<std::size_t>(std::countr_zero(b))].to_camera) <= min_angle_cos_)
+        if (std::abs(ray.dot(at_[static_cast<std::size_t>(std::countr_zero(b))].to_camera)) <= min_angle_cos_)
           return mask;
     }
     return mask & (~mask + 1);

@@ -57,6 +57,7 @@ MetricOptions seed_metric(ResolutionModel model) {
   MetricOptions options;
   options.resolution = model;  // 2-norm everywhere, as in the seed's examples
   options.pixel_sigma = 0.5;
+  options.min_triangulation_deg = 0;  // the seed's metric has no short-baseline rule
   return options;
 }
 
