@@ -127,10 +127,15 @@ std::optional<MarkerProjection> project_marker(const BodyState& state, const Eig
                                                double min_depth_m) {
   const auto projected = marker_pixel(state.pose(), marker, camera, min_depth_m);
   if (!projected) return std::nullopt;
+  return pose_measurement(state, *projected, measurement_sigma_px);
+}
+
+MarkerProjection pose_measurement(const BodyState& state, const MarkerPixel& projected,
+                                  double measurement_sigma_px) {
   Eigen::Matrix<double, 2, kBodyStateSize> H = Eigen::Matrix<double, 2, kBodyStateSize>::Zero();
-  H.block<2, 3>(0, kBodyP) = projected->J.leftCols<3>();
-  H.block<2, 3>(0, kBodyTheta) = projected->J.rightCols<3>();
-  return state.P.pixel_measurement(projected->pixel, H, measurement_sigma_px);
+  H.block<2, 3>(0, kBodyP) = projected.J.leftCols<3>();
+  H.block<2, 3>(0, kBodyTheta) = projected.J.rightCols<3>();
+  return state.P.pixel_measurement(projected.pixel, H, measurement_sigma_px);
 }
 
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,

@@ -91,6 +91,11 @@ using MarkerProjection = PixelMeasurement<kBodyStateSize>;
 std::optional<MarkerProjection> project_marker(const BodyState& state, const Eigen::Vector3d& marker,
                                                const CameraModel& camera, double measurement_sigma_px,
                                                double min_depth_m = 0.05);
+// The filter's measurement for a pixel whose Jacobian is taken with respect to the pose (position,
+// body-frame δθ): a marker on the body (above) or a landmark seen by a camera on the body
+// (inside_out.h).
+MarkerProjection pose_measurement(const BodyState& state, const MarkerPixel& projected,
+                                  double measurement_sigma_px);
 
 // EKF update with one marker measurement through the filter layer (ekf.h), which returns the error
 // state δx; it is injected into the nominal state and δθ reset into q (eq. A.41).
