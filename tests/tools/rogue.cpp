@@ -157,6 +157,11 @@ std::map<std::string, std::vector<std::pair<std::string, Bytes>>> hostile_sample
   add_valid(features, "stamp_hour_behind", feature_frame("rogue-behind", now - kHourNs, {plausible_blob(0)}));
   add_valid(features, "unknown_camera", feature_frame("rogue-unknown", now, {plausible_blob(0)}));
   add_valid(features, "bad_camera_id", feature_frame(std::string("rogue\x01\x02", 7), now, {}));
+  // Above the estimator's max_blobs (4096): rejected whole. (The 10^6-blob frames of
+  // --million-blob-frames are 40 MB: a best-effort reader usually loses some of their fragments.)
+  std::vector<msg::Blob> many;
+  for (int i = 0; i < 5000; ++i) many.push_back(plausible_blob(i));
+  add_valid(features, "too_many_blobs", feature_frame("rogue-many", now, std::move(many)));
 
   auto& info = by_topic["rt/panoptes/camera_info"];
   msg::CameraInfo camera_info;
