@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# Builds the libFuzzer targets with clang into BUILD_DIR and runs each for SECONDS (ctest fuzz.messages;
-# docs/hostile_input.md, "Fuzzing"). Exit 0: no finding; 1: a finding or a build failure (the crashing
+# Runs each libFuzzer target in BUILD_DIR for SECONDS (ctest fuzz.messages; docs/hostile_input.md,
+# "Fuzzing"). The main build builds them (tests/CMakeLists.txt); if BUILD_DIR holds none yet, this
+# configures and builds them with clang first. Exit 0: no finding; 1: a finding or a build failure (the crashing
 # input is kept in BUILD_DIR/findings); 77: no clang with libFuzzer on this machine (skipped).
 # Usage: run.sh BUILD_DIR SECONDS
 set -uo pipefail
