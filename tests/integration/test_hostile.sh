@@ -5,7 +5,7 @@
 # while panoptes_rogue publishes malformed samples on every Panoptes topic. Asserts: no process
 # crashed, the demo's accuracy targets hold and its RMSE stays near the clean run's, and every kind
 # of malformed sample that a node reads shows up under its reason in camera_status or
-# estimator_status. About 40 s.
+# estimator_status. About 30 s.
 source "$(dirname "$0")/lib.sh"
 
 run_demo() {  # NAME: runs the 8 s demo, its summary in $work/NAME.json
