@@ -69,7 +69,7 @@ expect_estimator = ["cdr_truncated", "cdr_bad_encapsulation", "cdr_unterminated_
                     "stamp_out_of_range", "uncalibrated_camera", "bad_camera_id",
                     "too_many_blobs", "camera_info_non_finite_calibration"]
 expect_camera = ["cdr_truncated", "cdr_bad_encapsulation", "cdr_unterminated_string", "bad_command",
-                 "command_too_large", "prediction_non_finite"]
+                 "command_too_large", "prediction_non_finite", "sync_unmatched_reply"]
 bad = 0
 if "" in estimator:
     print("FAIL: estimator_status has a counter without a name"); bad += 1

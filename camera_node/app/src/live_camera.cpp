@@ -218,6 +218,7 @@ void LiveCamera::publish_status(TimeNs wall_now_ns) {
     sync.hold_overflow = sink_.hold().hold_overflow();
     sync.lost = sync_status.lost;
     sync.rejected = sync_status.rejected;
+    sync.unmatched = sync_status.unmatched;
     sync.resets = sync_status.resets;
     inputs.clock_sync = sync;
     // A simulated skew is a test: its truth is known, so the error is logged every second.
