@@ -2,8 +2,10 @@
 #include "panoptes/camera_app/live_camera.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <functional>
+#include <string_view>
 #include <utility>
 
 #include "clock_sync_report.h"
@@ -33,14 +35,46 @@ std::unique_ptr<dds::TimeSyncClient> make_time_sync(dds::Bus& bus, const LiveOpt
   return std::make_unique<dds::TimeSyncClient>(bus, std::move(sync_options));
 }
 
+// Why predicted windows cannot be used ("" if they can): the detector turns them into pixel
+// ranges, so NaN, infinite or absurd sizes are dropped here.
+std::string_view predictions_problem(const msg::Predictions& message) {
+  constexpr std::size_t kMaxWindows = 4096;
+  constexpr float kMaxPx = 1e5F;
+  if (message.windows().size() > kMaxWindows) return "prediction_too_many_windows";
+  for (const msg::PredictedWindow& w : message.windows()) {
+    for (const float v : {w.x(), w.y(), w.half_width(), w.half_height()}) {
+      if (!std::isfinite(v)) return "prediction_non_finite";
+      if (std::fabs(v) > kMaxPx) return "prediction_out_of_range";
+    }
+    if (w.half_width() < 0 || w.half_height() < 0) return "prediction_out_of_range";
+  }
+  return {};
+}
+
+// Why a command is dropped before it is queued ("" if it is not): sizes no real command has, which
+// would let a command storm hold much memory in the queue. Its meaning is judged when applied.
+std::string_view command_problem(const msg::CameraCommand& message) {
+  constexpr std::size_t kMaxArguments = 256;
+  constexpr std::size_t kMaxTextBytes = 65536;
+  if (message.arguments().size() > kMaxArguments) return "command_too_large";
+  std::size_t text = message.target().size() + message.command().size();
+  for (const std::string& argument : message.arguments()) text += argument.size();
+  return text > kMaxTextBytes ? "command_too_large" : "";
+}
+
 std::unique_ptr<dds::Reader<msg::Predictions>> make_prediction_reader(dds::Bus& bus,
                                                                       camera::PredictionBox& predictions,
+                                                                      dds::ReceiveCounters& rejections,
                                                                       const std::string& camera_id) {
   // Only this camera's predictions: the estimator's writer filters, so per-camera traffic does not
   // grow with the number of cameras.
   return bus.make_reader<msg::Predictions>(
-      [&predictions, &camera_id](msg::Predictions&& message) {
+      [&predictions, &rejections, &camera_id](msg::Predictions&& message) {
         if (message.camera_id() != camera_id) return;
+        if (const std::string_view problem = predictions_problem(message); !problem.empty()) {
+          rejections.note(problem);
+          return;
+        }
         std::vector<camera::SearchWindow> windows;
         windows.reserve(message.windows().size());
         for (const msg::PredictedWindow& w : message.windows()) {
@@ -79,11 +113,15 @@ LiveCamera::LiveCamera(LiveOptions options, camera::FrameSource& source, camera:
       status_writer_(bus_.make_writer<msg::CameraStatus>()),
       preview_writer_(bus_.make_writer<msg::CameraPreview>()),
       command_reader_(bus_.make_reader<msg::CameraCommand>([this](msg::CameraCommand&& message) {
+        if (const std::string_view problem = command_problem(message); !problem.empty()) {
+          rejections_.note(problem);
+          return;
+        }
         camera::Command command{message.target(), message.seq(), message.command(), {}};
         command.arguments.assign(message.arguments().begin(), message.arguments().end());
         commands_.push(std::move(command));
       })),
-      prediction_reader_(make_prediction_reader(bus_, predictions_, camera_id_)),
+      prediction_reader_(make_prediction_reader(bus_, predictions_, rejections_, camera_id_)),
       out_(options_.out_features.empty() ? nullptr : std::make_unique<JsonlWriter>(options_.out_features)),
       sink_(stamps_, *feature_writer_, out_.get(), log_),
       pipeline_(pipeline_options(options_, camera_id_), source_, detector_, stamps_, sink_, log_) {
@@ -158,6 +196,11 @@ void LiveCamera::publish_status(TimeNs wall_now_ns) {
   inputs.period_s = ns_to_seconds(wall_now_ns - next_status_) + 1.0;
   inputs.source_counters = source_.counters();
   inputs.node_counters = pipeline_.counters().counts();
+  // Samples dropped on receipt (docs/hostile_input.md).
+  for (const auto& [reason, n] : bus_.receive_rejections()) inputs.node_counters[reason] += n;
+  for (const auto& [reason, n] : rejections_.snapshot()) inputs.node_counters[reason] += n;
+  if (const std::uint64_t overflow = commands_.dropped())
+    inputs.node_counters["command_overflow"] += overflow;
   inputs.command_counters = pipeline_.command_counters();
   inputs.queue_drops = pipeline_.queue_drops();
   inputs.guided_frames = pipeline_.guided_frames();
@@ -175,6 +218,7 @@ void LiveCamera::publish_status(TimeNs wall_now_ns) {
     sync.hold_overflow = sink_.hold().hold_overflow();
     sync.lost = sync_status.lost;
     sync.rejected = sync_status.rejected;
+    sync.unmatched = sync_status.unmatched;
     sync.resets = sync_status.resets;
     inputs.clock_sync = sync;
     // A simulated skew is a test: its truth is known, so the error is logged every second.

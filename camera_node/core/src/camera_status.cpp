@@ -42,6 +42,7 @@ CameraStatusReport assemble_status(const StatusInputs& inputs) {
     all["sync_rejected"] = sync.rejected;
     all["sync_resets"] = sync.resets;
     if (sync.hold_overflow > 0) all["sync_hold_overflow"] = sync.hold_overflow;
+    if (sync.unmatched > 0) all["sync_unmatched_reply"] = sync.unmatched;
   }
   report.camera_id = inputs.camera_id;
   report.stamp_ns = inputs.stamp_ns;

@@ -184,7 +184,14 @@ void CameraPipeline::apply_commands() {
       awaiting_frame_.push_back("command " + command.command + " #" + std::to_string(command.seq));
     } else {
       counters_.set_last_error(error);
-      log_("command #" + std::to_string(command.seq) + " rejected: " + error);
+      // A flood of bad commands must not flood the log: the first few, then one in 1000.
+      constexpr std::uint64_t kLoggedInFull = 20;
+      constexpr std::uint64_t kLogEvery = 1000;
+      ++commands_rejected_;
+      if (commands_rejected_ <= kLoggedInFull || commands_rejected_ % kLogEvery == 0) {
+        log_("command #" + std::to_string(command.seq) + " rejected: " + error + " (" +
+             std::to_string(commands_rejected_) + " rejected so far)");
+      }
     }
   }
 }

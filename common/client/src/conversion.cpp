@@ -94,9 +94,12 @@ const std::string* duplicate_name(const std::vector<RigidBody>& bodies) {
   return nullptr;
 }
 
-// b - a when both stamps are known (non-zero), else 0.
+// b - a when both stamps are known (non-zero), else 0; 0 too when garbage stamps make the difference
+// overflow (found by tests/fuzz/fuzz_messages.cpp).
 std::int64_t span(std::int64_t a, std::int64_t b) {
-  return a != 0 && b != 0 ? b - a : 0;
+  std::int64_t difference = 0;
+  if (a == 0 || b == 0 || __builtin_sub_overflow(b, a, &difference)) return 0;
+  return difference;
 }
 
 }  // namespace

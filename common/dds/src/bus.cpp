@@ -32,6 +32,7 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include "panoptes/dds/decode.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/panoptesPubSubTypes.h"
 #include "panoptes_msgs/ros2.h"
@@ -197,6 +198,54 @@ LeadingIdFilterFactory& leading_id_filter_factory() {
   return factory;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Received samples are decoded by decode_sample (decode.h), never by the generated code directly:
+// that lets a bad encapsulation header or std::bad_alloc escape into Fast DDS's threads, and
+// accepts strings without a terminator. A sample that fails is counted under its reason in the
+// Bus's ReceiveCounters and dropped (docs/hostile_input.md).
+
+// Set by GuardedPubSubType::deserialize on the thread that takes the sample: the reader's listener
+// skips it. (Fast DDS 2.9 ignores deserialize's result when a reader takes a sample.)
+thread_local bool t_last_decode_failed = false;
+
+template <class PubSubType, class T>
+class GuardedPubSubType final : public fdds::TopicDataType {
+ public:
+  explicit GuardedPubSubType(ReceiveCounters& counters) : counters_(counters) {
+    setName(real_.getName());
+    m_typeSize = real_.m_typeSize;
+    m_isGetKeyDefined = real_.m_isGetKeyDefined;
+  }
+  bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override {
+    return real_.serialize(data, payload);
+  }
+  // Also decodes the samples whose key Fast DDS must compute on receipt.
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
+    T& message = *static_cast<T*>(data);
+    const DecodeError error = decode_sample(payload->data, payload->length, message);
+    t_last_decode_failed = error != DecodeError::kNone;
+    if (t_last_decode_failed) {
+      counters_.note(decode_error_name(error));
+      message = T();
+      return false;
+    }
+    payload->encapsulation = (payload->data[1] & 1) != 0 ? CDR_LE : CDR_BE;
+    return true;
+  }
+  std::function<std::uint32_t()> getSerializedSizeProvider(void* data) override {
+    return real_.getSerializedSizeProvider(data);
+  }
+  void* createData() override { return real_.createData(); }
+  void deleteData(void* data) override { real_.deleteData(data); }
+  bool getKey(void* data, eprosima::fastrtps::rtps::InstanceHandle_t* handle, bool force_md5) override {
+    return real_.getKey(data, handle, force_md5);
+  }
+
+ private:
+  PubSubType real_;
+  ReceiveCounters& counters_;
+};
+
 template <class Qos>
 void apply_spec(Qos& qos, const TopicSpec& spec, panoptes::dds::Qos override_qos) {
   const bool reliable = override_qos == panoptes::dds::Qos::kReliable ||
@@ -323,7 +372,10 @@ class BusCore {
 
   template <class T>
   fdds::Topic* topic(const std::string& name) {
-    return topic_of_type(name, [] { return fdds::TypeSupport(new typename TopicTraits<T>::PubSubType()); });
+    return topic_of_type(name, [this] {
+      return fdds::TypeSupport(
+          new GuardedPubSubType<typename TopicTraits<T>::PubSubType, T>(receive_counters_));
+    });
   }
 
   // The topic `name`, created with the type `make_type` returns the first time.
@@ -357,6 +409,7 @@ class BusCore {
   fdds::Publisher* publisher() const { return publisher_; }
   fdds::Subscriber* subscriber() const { return subscriber_; }
   const std::filesystem::path& profile_file() const { return profile_file_; }
+  ReceiveCounters& receive_counters() { return receive_counters_; }
 
  private:
   void teardown() {
@@ -367,6 +420,7 @@ class BusCore {
   }
 
   std::filesystem::path profile_file_;
+  ReceiveCounters receive_counters_;  // outlives the participant: its types refer to it
   fdds::DomainParticipant* participant_ = nullptr;
   fdds::Publisher* publisher_ = nullptr;
   fdds::Subscriber* subscriber_ = nullptr;
@@ -438,17 +492,26 @@ bool Writer<T>::wait_for_readers(int count, std::chrono::milliseconds timeout) c
 template <class T>
 class ReaderListener : public fdds::DataReaderListener {
  public:
-  explicit ReaderListener(typename Reader<T>::Callback callback) : callback_(std::move(callback)) {}
+  ReaderListener(typename Reader<T>::Callback callback, ReceiveCounters& counters)
+      : callback_(std::move(callback)), counters_(counters) {}
 
   void on_data_available(fdds::DataReader* reader) override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!active_) return;
     T sample;
     fdds::SampleInfo info;
+    t_last_decode_failed = false;
     while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
-      if (!info.valid_data) continue;
+      const bool decoded = !t_last_decode_failed;
+      t_last_decode_failed = false;
+      if (!info.valid_data || !decoded) continue;  // a failed decode is counted by its type
       received.fetch_add(1);
-      callback_(std::move(sample));
+      // Runs on a Fast DDS thread: whatever a sample makes the handler throw is counted, not fatal.
+      try {
+        callback_(std::move(sample));
+      } catch (const std::exception&) {
+        counters_.note("handler_error");
+      }
       sample = T();
     }
   }
@@ -466,6 +529,7 @@ class ReaderListener : public fdds::DataReaderListener {
 
  private:
   typename Reader<T>::Callback callback_;
+  ReceiveCounters& counters_;
   std::mutex mutex_;
   bool active_ = true;
 };
@@ -512,6 +576,10 @@ const std::filesystem::path& Bus::profile_file() const {
   return core_->profile_file();
 }
 
+std::map<std::string, std::uint64_t> Bus::receive_rejections() const {
+  return core_->receive_counters().snapshot();
+}
+
 namespace {
 
 // The topic's name: `requested` if given, else the type's own; DdsError if neither.
@@ -546,7 +614,7 @@ std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_samp
   const std::string name = topic_name_for<T>(topic_name);
   auto impl = std::make_unique<typename Reader<T>::Impl>();
   impl->core = core_;
-  impl->listener = std::make_unique<ReaderListener<T>>(std::move(on_sample));
+  impl->listener = std::make_unique<ReaderListener<T>>(std::move(on_sample), core_->receive_counters());
   fdds::TopicDescription* topic = core_->topic<T>(name);
   if (!only_id.empty()) {
     if (!spec.leading_id) throw DdsError("cannot filter " + name + " by id: it has no leading id");
@@ -642,9 +710,20 @@ class RawPubSubType final : public fdds::TopicDataType {
     std::memcpy(payload.data, cdr.data(), cdr.size());
     payload.length = static_cast<std::uint32_t>(cdr.size());
     void* typed = real_->createData();
-    const bool ok = real_->deserialize(&payload, typed) && real_->getKey(typed, handle, force_md5);
+    bool ok = false;
+    try {
+      ok = real_->deserialize(&payload, typed) && real_->getKey(typed, handle, force_md5);
+    } catch (const std::exception&) {
+      ok = false;
+    }
     real_->deleteData(typed);
-    return ok;
+    if (!ok) {
+      // A sample that does not decode (panoptes_rogue writes such on purpose) joins one instance of
+      // its own, so the writer still sends it.
+      *handle = eprosima::fastrtps::rtps::InstanceHandle_t();
+      handle->value[15] = 1;
+    }
+    return true;
   }
 
  private:
@@ -685,9 +764,20 @@ const std::vector<RawTopicEntry>& raw_entries() {
   return entries;
 }
 
+// Topics a raw writer may write although panoptes_record does not record them (panoptes_rogue).
+const std::vector<RawTopicEntry>& unrecorded_raw_entries() {
+  static const std::vector<RawTopicEntry> entries = {
+      raw_entry<msg::RecorderCommand>("panoptes/msg/RecorderCommand"),
+      raw_entry<msg::RecorderStatus>("panoptes/msg/RecorderStatus"),
+  };
+  return entries;
+}
+
 const RawTopicEntry& raw_entry_named(const std::string& topic) {
-  for (const auto& entry : raw_entries()) {
-    if (entry.topic.topic == topic) return entry;
+  for (const auto* entries : {&raw_entries(), &unrecorded_raw_entries()}) {
+    for (const auto& entry : *entries) {
+      if (entry.topic.topic == topic) return entry;
+    }
   }
   throw DdsError("'" + topic + "' is not a Panoptes topic (docs/protocol.md)");
 }

@@ -4,35 +4,18 @@
 #include <cstring>
 #include <exception>
 
+#include "panoptes/dds/decode.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/panoptesPubSubTypes.h"
 
 namespace panoptes::dds {
 
-namespace {
-
-template <class PubSubType, class T>
-bool decode_with(std::span<const std::uint8_t> cdr, T& out) {
-  if (cdr.size() < 4 || cdr.size() > UINT32_MAX) return false;
-  try {
-    eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(cdr.size()));
-    std::memcpy(payload.data, cdr.data(), cdr.size());
-    payload.length = static_cast<std::uint32_t>(cdr.size());
-    PubSubType type;
-    return type.deserialize(&payload, &out);
-  } catch (const std::exception&) {  // a corrupted length asking for more memory than exists
-    return false;
-  }
-}
-
-}  // namespace
-
 bool decode_cdr(std::span<const std::uint8_t> cdr, msg::FeatureFrame& out) {
-  return decode_with<msg::FeatureFramePubSubType>(cdr, out);
+  return decode_sample(cdr.data(), cdr.size(), out) == DecodeError::kNone;
 }
 
 bool decode_cdr(std::span<const std::uint8_t> cdr, msg::CameraInfo& out) {
-  return decode_with<msg::CameraInfoPubSubType>(cdr, out);
+  return decode_sample(cdr.data(), cdr.size(), out) == DecodeError::kNone;
 }
 
 bool shift_feature_frame_times(std::vector<std::uint8_t>& cdr, std::int64_t offset_ns) {

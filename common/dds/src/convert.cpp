@@ -103,7 +103,40 @@ msg::CameraInfo to_camera_info(const std::string& camera_id, const CameraIntrins
   return info;
 }
 
+namespace {
+
+constexpr std::size_t kMaxIdLength = 256;
+constexpr std::uint32_t kMaxImageSide = 65536;
+
+template <std::size_t N>
+bool all_finite(const std::array<double, N>& values) {
+  return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+}
+
+}  // namespace
+
+bool plausible_id(const std::string& id) {
+  return !id.empty() && id.size() <= kMaxIdLength && std::none_of(id.begin(), id.end(), [](char c) {
+    return static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
+  });
+}
+
+std::string_view camera_info_problem(const msg::CameraInfo& info) {
+  if (!plausible_id(info.camera_id())) return "bad_camera_id";
+  if (info.width() > kMaxImageSide || info.height() > kMaxImageSide) return "image_size_out_of_range";
+  if (!all_finite(info.K()) || !all_finite(info.distortion()) || !std::isfinite(info.nominal_rate_hz()))
+    return "non_finite_calibration";
+  if (info.has_pose()) {
+    const auto& pose = info.T_world_cam();
+    if (!all_finite(pose.position()) || !all_finite(pose.orientation())) return "non_finite_calibration";
+    const auto& q = pose.orientation();
+    if (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] < 1e-12) return "zero_quaternion";
+  }
+  return {};
+}
+
 std::optional<CameraCalibration> calibration_from(const msg::CameraInfo& info) {
+  if (!camera_info_problem(info).empty()) return std::nullopt;
   if (info.K()[0] <= 0.0 || info.K()[1] <= 0.0 || info.width() == 0 || info.height() == 0)
     return std::nullopt;
   CameraCalibration calibration;

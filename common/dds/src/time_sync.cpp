@@ -127,7 +127,10 @@ struct TimeSyncClient::Impl {
       std::lock_guard lock(mutex);
       const auto request = pending.find(message.seq());
       // The echoed t1 must be ours too: a reply to an earlier process with the same id is not.
-      if (request == pending.end() || request->second != message.t1_ns()) return;
+      if (request == pending.end() || request->second != message.t1_ns()) {
+        ++counts.unmatched;
+        return;
+      }
       pending.erase(request);
       const ClockExchange exchange{message.t1_ns(), message.t2_ns(), message.t3_ns(), t4};
       ++counts.replies;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -113,7 +114,8 @@ class LiveEstimator {
   // The common time base is this process's clock: camera nodes synchronise to it (architecture.md "Time").
   dds::TimeSyncServer time_service_;
   std::mutex info_mutex_;
-  std::vector<CameraCalibration> announced_;  // from CameraInfo, applied on the estimator thread
+  std::vector<CameraCalibration> announced_;              // from CameraInfo, applied on the estimator thread
+  std::map<std::string, std::uint64_t> info_rejections_;  // CameraInfo dropped, by reason
   std::unique_ptr<dds::Reader<msg::CameraInfo>> info_reader_;
   std::unique_ptr<dds::Reader<msg::FeatureFrame>> feature_reader_;
   std::unique_ptr<dds::Writer<msg::TrackFrame>> track_writer_;
@@ -140,6 +142,11 @@ class LiveEstimator {
 };
 
 void LiveEstimator::announce(const msg::CameraInfo& info) {
+  if (const std::string_view problem = dds::camera_info_problem(info); !problem.empty()) {
+    std::lock_guard<std::mutex> lock(info_mutex_);
+    ++info_rejections_["camera_info_" + std::string(problem)];
+    return;
+  }
   if (auto calibration = dds::calibration_from(info); calibration && calibration->T_world_cam) {
     std::lock_guard<std::mutex> lock(info_mutex_);
     announced_.push_back(*calibration);
@@ -240,6 +247,12 @@ bool LiveEstimator::finish_processed(bool force) {
 
 void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
   est::EstimatorUsage usage = session_.usage(now);
+  // Samples dropped before they reached the session (docs/hostile_input.md).
+  for (const auto& [reason, n] : bus_->receive_rejections()) usage.counters[reason] += n;
+  {
+    std::lock_guard<std::mutex> lock(info_mutex_);
+    for (const auto& [reason, n] : info_rejections_) usage.counters[reason] += n;
+  }
   const double cpu_s = process_cpu_seconds();
   if (const double period_s = ns_to_seconds(now - last_status_.wall_ns);
       last_status_.wall_ns != 0 && period_s > 0) {

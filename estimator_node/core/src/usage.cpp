@@ -50,7 +50,7 @@ void UsageMonitor::note_received(const std::string& camera_id, double latency_ms
 void UsageMonitor::note_dropped(const std::string& camera_id, const std::string& reason,
                                 std::uint64_t frames) {
   camera(camera_id).dropped_before_tracker += frames;
-  reasons_[reason] += frames;
+  if (!reason.empty()) reasons_[reason] += frames;  // "": the caller counts the reason itself
 }
 
 void UsageMonitor::note_reason(const std::string& reason, std::uint64_t n) {

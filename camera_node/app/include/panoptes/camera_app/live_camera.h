@@ -19,6 +19,7 @@
 #include "panoptes/camera_app/dds_feature_sink.h"
 #include "panoptes/camera_app/latency_probe_sender.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/decode.h"
 #include "panoptes/dds/time_sync.h"
 #include "panoptes/jsonl.h"
 #include "panoptes_msgs/panoptes.h"
@@ -80,6 +81,7 @@ class LiveCamera final : public camera::PipelineObserver {
   std::unique_ptr<dds::Writer<msg::CameraPreview>> preview_writer_;
   camera::Mailbox<camera::Command> commands_;
   camera::PredictionBox predictions_;
+  dds::ReceiveCounters rejections_;  // decoded samples dropped by this node, by reason
   std::unique_ptr<dds::Reader<msg::CameraCommand>> command_reader_;
   std::unique_ptr<dds::Reader<msg::Predictions>> prediction_reader_;
   std::unique_ptr<JsonlWriter> out_;  // --out-features

@@ -39,6 +39,7 @@ struct ClockSyncFigures {
   std::uint64_t hold_overflow = 0;   // held frames dropped because the hold was full
   std::uint64_t lost = 0;            // time-sync requests unanswered
   std::uint64_t rejected = 0;
+  std::uint64_t unmatched = 0;  // replies echoing no pending request (late, or forged)
   std::uint64_t resets = 0;
 };
 

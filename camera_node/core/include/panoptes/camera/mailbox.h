@@ -24,8 +24,16 @@ class Mailbox {
 
   void push(T value) {
     std::lock_guard lock(mutex_);
-    if (items_.size() >= kCapacity) items_.pop_front();
+    if (items_.size() >= kCapacity) {
+      items_.pop_front();
+      ++dropped_;
+    }
     items_.push_back(std::move(value));
+  }
+  // Items dropped because the mailbox was full.
+  std::uint64_t dropped() {
+    std::lock_guard lock(mutex_);
+    return dropped_;
   }
   std::deque<T> take_all() {
     std::lock_guard lock(mutex_);
@@ -35,6 +43,7 @@ class Mailbox {
  private:
   std::mutex mutex_;
   std::deque<T> items_;
+  std::uint64_t dropped_ = 0;
 };
 
 // Predicted windows for this camera, written by the DDS listener, read by the detection loop.

@@ -145,6 +145,7 @@ class CameraPipeline {
   std::vector<std::string> awaiting_frame_;  // commands applied, logged with the first frame they govern
   std::uint64_t frames_ = 0;
   std::uint64_t guided_frames_ = 0;
+  std::uint64_t commands_rejected_ = 0;
   Percentiles detect_ms_;
 };
 

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -157,6 +158,11 @@ class Bus {
   std::unique_ptr<RawWriter> make_raw_writer(const std::string& topic);
 
   const std::filesystem::path& profile_file() const;
+
+  // Received samples this Bus's readers dropped, by reason: the decode failures of decode.h
+  // ("cdr_truncated", ...) and "handler_error" (a reader's callback threw). Reported in the nodes'
+  // status counters (docs/hostile_input.md).
+  std::map<std::string, std::uint64_t> receive_rejections() const;
 
  private:
   std::shared_ptr<BusCore> core_;

@@ -2,6 +2,9 @@
 // Conversions between the core records and the DDS message types.
 #pragma once
 
+#include <string>
+#include <string_view>
+
 #include "panoptes/calibration.h"
 #include "panoptes/records.h"
 #include "panoptes_msgs/panoptes.h"
@@ -20,7 +23,12 @@ PoseRecord from_message(const msg::BodyPose& message);
 
 msg::CameraInfo to_camera_info(const std::string& camera_id, const CameraIntrinsics& intrinsics,
                                const std::optional<RigidTransform>& T_world_cam);
-// Calibration carried by a CameraInfo; nullopt if it has no intrinsics (fx == 0).
+// A camera or client id worth keeping: 1..256 characters, none of them a control character.
+bool plausible_id(const std::string& id);
+// Why a CameraInfo cannot be trusted ("bad_camera_id", "image_size_out_of_range",
+// "non_finite_calibration", "zero_quaternion"); "" if it can.
+std::string_view camera_info_problem(const msg::CameraInfo& info);
+// Calibration carried by a CameraInfo; nullopt if it has no intrinsics (fx == 0) or a problem.
 std::optional<CameraCalibration> calibration_from(const msg::CameraInfo& info);
 
 }  // namespace panoptes::dds

@@ -59,6 +59,7 @@ struct TimeSyncClientStatus {
   std::uint64_t lost = 0;            // unanswered within reply_timeout_ns
   std::uint64_t kept = 0;            // replies kept by the estimator's interval filter
   std::uint64_t rejected = 0;        // invalid, too slow or contradicting the fit
+  std::uint64_t unmatched = 0;       // replies to us that echo no pending request (seq and t1)
   std::uint64_t resets = 0;          // estimate restarted after a confirmed clock step
   TimeNs first_reply_local_ns = 0;   // 0 before the first reply
   TimeNs synchronised_local_ns = 0;  // local time of the first synchronised estimate (0: not yet)

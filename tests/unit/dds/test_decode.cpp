@@ -1,0 +1,171 @@
+// SPDX-License-Identifier: Apache-2.0
+// decode_sample (every typed reader's decoder) and the Bus's counting of malformed samples
+// (docs/hostile_input.md).
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "panoptes/dds/bus.h"
+#include "panoptes/dds/convert.h"
+#include "panoptes/dds/decode.h"
+#include "panoptes_msgs/panoptes.h"
+
+namespace panoptes::dds {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+msg::FeatureFrame frame_with_id(const std::string& id, int blobs) {
+  msg::FeatureFrame frame;
+  frame.camera_id(id);
+  frame.frame(7);
+  frame.stamp_ns(123456789);
+  for (int i = 0; i < blobs; ++i) {
+    msg::Blob blob;
+    blob.x(static_cast<float>(i));
+    frame.blobs().push_back(blob);
+  }
+  return frame;
+}
+
+void put_u32(Bytes& cdr, std::size_t offset, std::uint32_t value) {
+  for (int i = 0; i < 4; ++i) cdr[offset + i] = static_cast<std::uint8_t>(value >> (8 * i));
+}
+
+TEST(Decode, EveryValidSampleDecodesWhateverItsStringLengths) {
+  // Strings of every length modulo the alignment, so padding after them takes every size: the
+  // unterminated-string checks must never reject a genuine sample.
+  for (int length = 0; length < 20; ++length) {
+    const std::string id(static_cast<std::size_t>(length), 'c');
+    for (int blobs : {0, 1, 3}) {
+      const msg::FeatureFrame frame = frame_with_id(id, blobs);
+      msg::FeatureFrame decoded;
+      const Bytes cdr = encode_sample(frame);
+      ASSERT_EQ(decode_sample(cdr.data(), cdr.size(), decoded), DecodeError::kNone) << length << " " << blobs;
+      EXPECT_EQ(decoded, frame);
+    }
+    msg::CameraCommand command;
+    command.target(id);
+    command.command("set_threshold");
+    command.arguments({id, "x"});
+    msg::CameraCommand decoded_command;
+    const Bytes cdr = encode_sample(command);
+    ASSERT_EQ(decode_sample(cdr.data(), cdr.size(), decoded_command), DecodeError::kNone) << length;
+    EXPECT_EQ(decoded_command, command);
+    msg::TimeSync sync;
+    sync.client_id(id);
+    msg::TimeSync decoded_sync;
+    const Bytes sync_cdr = encode_sample(sync);
+    EXPECT_EQ(decode_sample(sync_cdr.data(), sync_cdr.size(), decoded_sync), DecodeError::kNone) << length;
+  }
+}
+
+TEST(Decode, NamesEachKindOfMalformedSample) {
+  const Bytes cdr = encode_sample(frame_with_id("rogue-id-11", 0));
+  msg::FeatureFrame out;
+  EXPECT_EQ(decode_sample(cdr.data(), cdr.size() / 2, out), DecodeError::kTruncated);
+  EXPECT_EQ(decode_sample(cdr.data(), 3, out), DecodeError::kTruncated);
+  EXPECT_EQ(decode_sample(nullptr, 0, out), DecodeError::kTruncated);
+
+  Bytes bad_header = cdr;
+  bad_header[0] = 0xff;
+  EXPECT_EQ(decode_sample(bad_header.data(), bad_header.size(), out), DecodeError::kBadEncapsulation);
+
+  Bytes absurd_sequence = cdr;  // the empty blob sequence is the last member
+  put_u32(absurd_sequence, cdr.size() - 4, 0x7ffffff0U);
+  EXPECT_EQ(decode_sample(absurd_sequence.data(), absurd_sequence.size(), out), DecodeError::kTruncated);
+  Bytes absurd_string = cdr;
+  put_u32(absurd_string, 4, 0xfffffff0U);
+  EXPECT_EQ(decode_sample(absurd_string.data(), absurd_string.size(), out), DecodeError::kTruncated);
+
+  // 11 characters: the padding after the id absorbs the missing NUL, the rest still decodes.
+  Bytes unterminated = cdr;
+  put_u32(unterminated, 4, 11);
+  unterminated[8 + 11] = 'X';
+  EXPECT_EQ(decode_sample(unterminated.data(), unterminated.size(), out), DecodeError::kUnterminatedString);
+
+  // A command whose last argument lacks its NUL: the sample is one byte short.
+  msg::CameraCommand command;
+  command.target("*");
+  command.arguments({"abc"});
+  Bytes short_command = encode_sample(command);
+  ASSERT_EQ(short_command.back(), 0);
+  short_command.pop_back();
+  put_u32(short_command, short_command.size() - 4 - 3, 3);  // the argument's length field
+  msg::CameraCommand decoded;
+  EXPECT_EQ(decode_sample(short_command.data(), short_command.size(), decoded),
+            DecodeError::kUnterminatedString);
+  EXPECT_EQ(decode_error_name(DecodeError::kUnterminatedString), "cdr_unterminated_string");
+}
+
+TEST(Decode, CameraInfoWithNonFiniteCalibrationIsRejected) {
+  msg::CameraInfo info = to_camera_info("cam0", CameraIntrinsics{}, std::nullopt);
+  info.width(640);
+  info.height(480);
+  info.K({600, 600, 320, 240});
+  EXPECT_EQ(camera_info_problem(info), "");
+  EXPECT_TRUE(calibration_from(info).has_value());
+  info.K({std::numeric_limits<double>::quiet_NaN(), 600, 320, 240});
+  EXPECT_EQ(camera_info_problem(info), "non_finite_calibration");
+  EXPECT_FALSE(calibration_from(info).has_value());
+  info.K({600, 600, 320, 240});
+  info.camera_id(std::string("cam\x01", 4));
+  EXPECT_EQ(camera_info_problem(info), "bad_camera_id");
+}
+
+// A reader on the bus: malformed samples from a raw writer are counted by reason and never reach
+// the callback; a genuine sample after them still does.
+TEST(Decode, BusCountsMalformedSamplesAndKeepsReceiving) {
+  BusOptions options;
+  options.domain_id = 100 + static_cast<int>(getpid() % 100);
+  options.participant_name = "decode_reader";
+  Bus reader_bus(options);
+  options.participant_name = "decode_rogue";
+  Bus rogue_bus(options);
+  std::atomic<int> delivered{0};
+  std::atomic<bool> genuine{false};
+  auto reader = reader_bus.make_reader<msg::CameraCommand>([&](msg::CameraCommand&& command) {
+    ++delivered;
+    if (command.command() == "genuine") genuine = true;
+  });
+  auto writer = rogue_bus.make_raw_writer("rt/panoptes/camera_command");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (writer->matched_readers() < 1 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_GE(writer->matched_readers(), 1);
+
+  msg::CameraCommand command;
+  command.target("rogue-id-11");
+  const Bytes cdr = encode_sample(command);
+  Bytes bad_header = cdr;
+  bad_header[0] = 0xff;
+  Bytes unterminated = cdr;
+  put_u32(unterminated, 4, 11);
+  unterminated[8 + 11] = 'X';
+  EXPECT_TRUE(writer->write(Bytes(cdr.begin(), cdr.begin() + 6)));
+  EXPECT_TRUE(writer->write(bad_header));
+  EXPECT_TRUE(writer->write(unterminated));
+  command.target("*");
+  command.command("genuine");
+  EXPECT_TRUE(writer->write(encode_sample(command)));
+
+  while (!genuine && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_TRUE(genuine);
+  EXPECT_EQ(delivered.load(), 1);
+  const auto counts = reader_bus.receive_rejections();
+  EXPECT_EQ(counts.count("cdr_truncated") ? counts.at("cdr_truncated") : 0, 1U);
+  EXPECT_EQ(counts.count("cdr_bad_encapsulation") ? counts.at("cdr_bad_encapsulation") : 0, 1U);
+  EXPECT_EQ(counts.count("cdr_unterminated_string") ? counts.at("cdr_unterminated_string") : 0, 1U);
+}
+
+}  // namespace
+}  // namespace panoptes::dds
