@@ -96,6 +96,7 @@ struct Gating {
   std::vector<GatedPair> gated;                     // (track, blob, d²)
   std::vector<std::optional<Projected>> projected;  // by track; set when a blob came near it
   std::vector<char> in_view;                        // by track: predicted inside the image
+  std::vector<char> near;                           // by blob: within some track's search radius
 };
 
 }  // namespace
@@ -321,6 +322,7 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
   auto& gated = gating.gated;
   auto& projected = gating.projected;
   projected.resize(core.tracks.size());
+  gating.near.assign(pixels.size(), 0);
   gating.in_view.assign(core.tracks.size(), 0);
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
@@ -343,6 +345,7 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
     grid.for_each_near(*pixel, radius, [&](std::size_t j) {
       if (used[j]) return;
       if ((pixels[j] - *pixel).squaredNorm() > radius * radius) return;
+      gating.near[j] = 1;
       if (!projected[i]) {
         Projected full;
         full.state = predicted(track.state, stamp, options.process_noise);
@@ -456,7 +459,6 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
   const TimeNs stamp = entry.frame.stamp_ns;
   entry.associations.clear();
   entry.tracks_digest = digest;
-  entry.associated = true;
   const Gating gating = gate(*models[camera_index], stamp, pixels, used);
   const auto& gated = gating.gated;
   const auto& projected = gating.projected;
@@ -482,6 +484,12 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
     }
   }
   count_misses(track_done, in_view);
+  // Kept for replays only when nothing competed: every gated pair was taken and no blob left over
+  // came within a track's search radius (a circle well beyond the gate). A replay's small change
+  // of the states then cannot bring another pair into play; a contested frame is associated again.
+  bool contested = entry.associations.size() != gated.size();
+  for (std::size_t j = 0; j < pixels.size() && !contested; ++j) contested = gating.near[j] && !used[j];
+  entry.associated = !contested;
 }
 
 void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
