@@ -9,8 +9,10 @@
 // frames replayed, the latency a frame's output adds after its arrival (window wait + queueing +
 // update), and accuracy (loose-marker tracks and body positions against the truth).
 //   bench_reorder [--json] [--cases 20/0,20,2,0] [--dense-ms <ms>] [--seconds <s>] ...
-// A case is "window_ms" or "window_ms/dense_checkpoint_ms" (default --dense-ms); the first case is
-// the CPU reference: 20/0 is the estimator before issue 16 (20 ms window, sparse checkpoints).
+// A case is "window_ms" or "window_ms/dense_checkpoint_ms" (default --dense-ms), with ":full" when
+// replayed frames are associated from scratch (tracker reuse_replay_associations off); the first
+// case is the CPU reference: 20/0 is the estimator before issue 16 (20 ms window, sparse
+// checkpoints).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -51,8 +53,9 @@ double percentile(std::vector<double> values, double q) {
 struct Result {
   double window_ms = 0;
   double dense_ms = 0;
+  bool full_replay = false;             // replayed frames associated from scratch
   std::size_t frames = 0, outputs = 0;  // measured frames; of those, in order (with an output)
-  std::uint64_t late = 0, too_late = 0, replays = 0, replayed_frames = 0;
+  std::uint64_t late = 0, too_late = 0, replays = 0, replayed_frames = 0, reassociated = 0;
   double cpu_s = 0;  // this thread's CPU in the session's updates, measured part
   double simulated_s = 0;
   double added_p50_ms = 0, added_p99_ms = 0;  // output time minus arrival
@@ -107,11 +110,12 @@ class Accuracy {
 // Runs the frames (sorted by arrival) through a session with the given latency window on a
 // virtual clock that advances by the measured wall time of each update.
 Result run(const Scene& scene, const std::vector<FeatureFrame>& by_arrival, double window_ms, double dense_ms,
-           double warmup_s) {
+           bool full_replay, double warmup_s) {
   panoptes::session::EstimatorConfig config;
   config.node.latency_window_ms = window_ms;
   config.node.inbox_capacity = 1 << 16;
   config.tracker.dense_checkpoint_window_ns = panoptes::seconds_to_ns(dense_ms * 1e-3);
+  config.tracker.reuse_replay_associations = !full_replay;
   panoptes::session::EstimatorSession session(config);
   est::Tracker& tracker = session.tracker();
   tracker.set_calibration(scene.calibration());
@@ -166,6 +170,7 @@ Result run(const Scene& scene, const std::vector<FeatureFrame>& by_arrival, doub
   result.too_late = end.frames_too_late - at_start.frames_too_late;
   result.replays = end.replays - at_start.replays;
   result.replayed_frames = end.replayed_frames - at_start.replayed_frames;
+  result.reassociated = end.replayed_reassociated - at_start.replayed_reassociated;
   result.simulated_s = panoptes::ns_to_seconds(scene.duration_ns()) - warmup_s;
   result.added_p50_ms = percentile(added_ms, 0.5);
   result.added_p99_ms = percentile(added_ms, 0.99);
@@ -175,20 +180,22 @@ Result run(const Scene& scene, const std::vector<FeatureFrame>& by_arrival, doub
 
 std::string to_json(const Result& r, double cpu_reference_s) {
   char buffer[768];
-  std::snprintf(buffer, sizeof buffer,
-                "{\"window_ms\": %.3f, \"dense_ms\": %.3f, \"frames\": %zu, \"outputs\": %zu, \"late\": "
-                "%llu, \"too_late\": %llu, "
-                "\"replays\": %llu, \"replayed_frames\": %llu, \"replays_per_s\": %.1f, "
-                "\"replayed_frames_per_s\": %.1f, \"cpu_s\": %.4f, \"cpu_percent_of_core\": %.2f, "
-                "\"cpu_ratio\": %.4f, \"added_latency_p50_ms\": %.4f, \"added_latency_p99_ms\": %.4f, "
-                "\"track_rmse_mm\": %.4f, \"track_coverage\": %.5f, \"body_rmse_mm\": %.4f}",
-                r.window_ms, r.dense_ms, r.frames, r.outputs, static_cast<unsigned long long>(r.late),
-                static_cast<unsigned long long>(r.too_late), static_cast<unsigned long long>(r.replays),
-                static_cast<unsigned long long>(r.replayed_frames),
-                static_cast<double>(r.replays) / r.simulated_s,
-                static_cast<double>(r.replayed_frames) / r.simulated_s, r.cpu_s,
-                100.0 * r.cpu_s / r.simulated_s, cpu_reference_s > 0 ? r.cpu_s / cpu_reference_s : 0,
-                r.added_p50_ms, r.added_p99_ms, r.track_rmse_mm, r.track_coverage, r.body_rmse_mm);
+  std::snprintf(
+      buffer, sizeof buffer,
+      "{\"window_ms\": %.3f, \"dense_ms\": %.3f, \"full_replay\": %s, \"frames\": %zu, \"outputs\": %zu, "
+      "\"late\": "
+      "%llu, \"too_late\": %llu, "
+      "\"replays\": %llu, \"replayed_frames\": %llu, \"reassociated\": %llu, \"replays_per_s\": %.1f, "
+      "\"replayed_frames_per_s\": %.1f, \"cpu_s\": %.4f, \"cpu_percent_of_core\": %.2f, "
+      "\"cpu_ratio\": %.4f, \"added_latency_p50_ms\": %.4f, \"added_latency_p99_ms\": %.4f, "
+      "\"track_rmse_mm\": %.4f, \"track_coverage\": %.5f, \"body_rmse_mm\": %.4f}",
+      r.window_ms, r.dense_ms, r.full_replay ? "true" : "false", r.frames, r.outputs,
+      static_cast<unsigned long long>(r.late), static_cast<unsigned long long>(r.too_late),
+      static_cast<unsigned long long>(r.replays), static_cast<unsigned long long>(r.replayed_frames),
+      static_cast<unsigned long long>(r.reassociated), static_cast<double>(r.replays) / r.simulated_s,
+      static_cast<double>(r.replayed_frames) / r.simulated_s, r.cpu_s, 100.0 * r.cpu_s / r.simulated_s,
+      cpu_reference_s > 0 ? r.cpu_s / cpu_reference_s : 0, r.added_p50_ms, r.added_p99_ms, r.track_rmse_mm,
+      r.track_coverage, r.body_rmse_mm);
   return buffer;
 }
 
@@ -207,7 +214,8 @@ int run_command_line(int argc, char** argv) {
   app.add_flag("--json", json, "print one JSON object on the last line");
   app.add_option(
          "--cases", cases,
-         "cases to compare: window_ms or window_ms/dense_checkpoint_ms (the first is the CPU reference)")
+         "cases to compare: window_ms or window_ms/dense_checkpoint_ms, :full to associate replayed frames "
+         "from scratch (the first is the CPU reference)")
       ->delimiter(',');
   app.add_option("--dense-ms", dense_ms, "tracker: a checkpoint before every frame this recent, ms (0: none)")
       ->check(CLI::Range(0.0, 1000.0));
@@ -229,22 +237,26 @@ int run_command_line(int argc, char** argv) {
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   struct Case {
     double window_ms, dense_ms;
+    bool full_replay;
   };
   std::vector<Case> parsed;
-  for (const auto& text : cases) {
+  for (const auto& spec : cases) {
+    const auto colon = spec.find(':');
+    const std::string text = spec.substr(0, colon);
+    const std::string suffix = colon == std::string::npos ? "" : spec.substr(colon + 1);
     const auto slash = text.find('/');
     try {
       const double window = std::stod(text.substr(0, slash));
       const double dense = slash == std::string::npos ? dense_ms : std::stod(text.substr(slash + 1));
       if (window < 0 || dense < 0) throw std::invalid_argument("negative");
-      parsed.push_back({window, dense});
+      if (!suffix.empty() && suffix != "full") throw std::invalid_argument("suffix");
+      parsed.push_back({window, dense, suffix == "full"});
     } catch (const std::exception&) {
-      std::fprintf(stderr, "bench_reorder: --cases: '%s' is not window_ms or window_ms/dense_ms\n",
-                   text.c_str());
+      std::fprintf(stderr, "bench_reorder: --cases: '%s' is not window_ms[/dense_ms][:full]\n", spec.c_str());
       return 2;
     }
   }
-  if (parsed.empty()) parsed = {{20, 0}, {0, dense_ms}};
+  if (parsed.empty()) parsed = {{20, 0, false}, {0, dense_ms, false}};
 
   const Scene scene =
       Scene::from_yaml_string(panoptes::bench::scene_yaml(config, seed), ".", "bench_reorder scene");
@@ -267,22 +279,25 @@ int run_command_line(int argc, char** argv) {
       config.network.late_min_s * 1e3, config.network.late_max_s * 1e3,
       100.0 * static_cast<double>(out_of_order) / static_cast<double>(frames.size()), frames.size(),
       config.seconds, config.warmup_s);
-  std::printf("  %9s %8s %8s %7s %8s %10s %8s %8s %9s %9s %9s %9s %8s\n", "window ms", "dense ms", "late",
-              "replays", "replay/s", "replayed/s", "cpu %", "cpu x", "added p50", "added p99", "track mm",
-              "coverage", "body mm");
+  std::printf("  %9s %8s %7s %8s %7s %8s %10s %9s %8s %8s %9s %9s %9s %9s %8s\n", "window ms", "dense ms",
+              "replay", "late", "replays", "replay/s", "replayed/s", "reused/s", "cpu %", "cpu x",
+              "added p50", "added p99", "track mm", "coverage", "body mm");
   std::vector<Result> results;
   std::string json_cases;
   for (const Case& c : parsed) {
-    results.push_back(run(scene, frames, c.window_ms, c.dense_ms, config.warmup_s));
+    results.push_back(run(scene, frames, c.window_ms, c.dense_ms, c.full_replay, config.warmup_s));
     results.back().dense_ms = c.dense_ms;
+    results.back().full_replay = c.full_replay;
     const Result& r = results.back();
     const double reference = results.front().cpu_s;
-    std::printf("  %9.1f %8.1f %8llu %7llu %8.0f %10.0f %8.1f %8.3f %9.3f %9.3f %9.4f %9.4f %8.4f\n",
-                r.window_ms, r.dense_ms, static_cast<unsigned long long>(r.late),
-                static_cast<unsigned long long>(r.replays), static_cast<double>(r.replays) / r.simulated_s,
-                static_cast<double>(r.replayed_frames) / r.simulated_s, 100.0 * r.cpu_s / r.simulated_s,
-                r.cpu_s / reference, r.added_p50_ms, r.added_p99_ms, r.track_rmse_mm, r.track_coverage,
-                r.body_rmse_mm);
+    std::printf(
+        "  %9.1f %8.1f %7s %8llu %7llu %8.0f %10.0f %9.0f %8.1f %8.3f %9.3f %9.3f %9.4f %9.4f %8.4f\n",
+        r.window_ms, r.dense_ms, r.full_replay ? "full" : "reuse", static_cast<unsigned long long>(r.late),
+        static_cast<unsigned long long>(r.replays), static_cast<double>(r.replays) / r.simulated_s,
+        static_cast<double>(r.replayed_frames) / r.simulated_s,
+        static_cast<double>(r.reassociated) / r.simulated_s, 100.0 * r.cpu_s / r.simulated_s,
+        r.cpu_s / reference, r.added_p50_ms, r.added_p99_ms, r.track_rmse_mm, r.track_coverage,
+        r.body_rmse_mm);
     std::fflush(stdout);
     json_cases += (json_cases.empty() ? "" : ", ") + to_json(r, reference);
   }

@@ -32,9 +32,8 @@ Matrix6d process_noise(double dt_s, double sigma2) {
 void predict(PointState& state, TimeNs stamp_ns, double sigma2) {
   const double dt = ns_to_seconds(stamp_ns - state.stamp_ns);
   if (dt != 0.0) {
-    const Matrix6d A = transition_matrix(dt);
-    state.x = A * state.x;                            // eq. A.31
-    state.P.propagate(A, process_noise(dt, sigma2));  // eq. A.32
+    state.x.head<3>() += dt * state.x.tail<3>();                         // eq. A.31
+    state.P.propagate_constant_velocity(dt, process_noise(dt, sigma2));  // eq. A.32
   }
   state.stamp_ns = stamp_ns;
 }

@@ -78,6 +78,11 @@ struct Checkpoint {
 struct Entry {
   int camera;
   FeatureFrame frame;
+  // The association the frame's last application chose, (track id, blob), and a digest of the
+  // tracks (ids and confirmation) it chose among: a replay tries it first (reassociate).
+  std::vector<std::pair<std::int64_t, std::size_t>> associations;
+  std::uint64_t tracks_digest = 0;
+  bool associated = false;
 };
 
 // A track predicted to a frame's stamp and projected into its camera.
@@ -91,6 +96,7 @@ struct Gating {
   std::vector<GatedPair> gated;                     // (track, blob, d²)
   std::vector<std::optional<Projected>> projected;  // by track; set when a blob came near it
   std::vector<char> in_view;                        // by track: predicted inside the image
+  std::vector<char> near;                           // by blob: within some track's search radius
 };
 
 }  // namespace
@@ -239,9 +245,19 @@ struct Tracker::Impl {
     }
   }
 
-  void apply(const FeatureFrame& frame, int camera_index);
-  void associate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
-                 std::vector<char>& used);
+  // Applies a history entry's frame; `replaying`: the entry was applied before (rewind).
+  void apply(Entry& entry, bool replaying);
+  void associate(Entry& entry, const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used,
+                 bool replaying);
+  // A replayed frame's previous association, checked against today's states: every pair must
+  // still pass its gate. Then applied (true); otherwise nothing changes (false).
+  bool reassociate(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used);
+  // Updates track `t` with blob `blob` through its prediction to the frame's stamp.
+  void commit_pair(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel, std::size_t blob,
+                   int camera_index, TimeNs stamp, std::vector<char>& used);
+  // Tentative tracks inside the image that took no blob were not seen.
+  void count_misses(const std::vector<char>& track_done, const std::vector<char>& in_view);
+  std::uint64_t tracks_digest() const;
   Gating gate(const CameraModel& camera, TimeNs stamp, const std::vector<Eigen::Vector2d>& pixels,
               const std::vector<char>& used) const;
   void initiate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
@@ -256,7 +272,9 @@ struct Tracker::Impl {
   bool determined(const TrackRecord& record) const;
 };
 
-void Tracker::Impl::apply(const FeatureFrame& frame, int camera_index) {
+void Tracker::Impl::apply(Entry& entry, bool replaying) {
+  const FeatureFrame& frame = entry.frame;
+  const int camera_index = entry.camera;
   core.last_stamp_ns = std::max(core.last_stamp_ns, frame.stamp_ns);
   std::vector<Eigen::Vector2d> pixels;
   pixels.reserve(frame.blobs.size());
@@ -268,7 +286,7 @@ void Tracker::Impl::apply(const FeatureFrame& frame, int camera_index) {
   // Bodies and point tracks use the same blobs: the point tracks of body markers feed
   // identification, and the poses stay independent of the point tracks' lifecycle.
   const std::vector<char> excluded = used;
-  associate(frame, camera_index, pixels, used);
+  associate(entry, pixels, used, replaying);
   initiate(frame, camera_index, pixels, used);
   prune(frame.stamp_ns);
   if (!core.bodies.empty()) {
@@ -304,6 +322,7 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
   auto& gated = gating.gated;
   auto& projected = gating.projected;
   projected.resize(core.tracks.size());
+  gating.near.assign(pixels.size(), 0);
   gating.in_view.assign(core.tracks.size(), 0);
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
@@ -326,6 +345,7 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
     grid.for_each_near(*pixel, radius, [&](std::size_t j) {
       if (used[j]) return;
       if ((pixels[j] - *pixel).squaredNorm() > radius * radius) return;
+      gating.near[j] = 1;
       if (!projected[i]) {
         Projected full;
         full.state = predicted(track.state, stamp, options.process_noise);
@@ -341,9 +361,104 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
   return gating;
 }
 
-void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
-                              const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used) {
-  const TimeNs stamp = frame.stamp_ns;
+std::uint64_t Tracker::Impl::tracks_digest() const {
+  std::uint64_t digest = 0xcbf29ce484222325ULL;
+  for (const Track& track : core.tracks) {
+    digest ^= static_cast<std::uint64_t>(track.id) * 2 + (track.confirmed ? 1 : 0);
+    digest *= 0x100000001b3ULL;
+  }
+  return digest;
+}
+
+void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
+                                std::size_t blob, int camera_index, TimeNs stamp, std::vector<char>& used) {
+  Track& track = core.tracks[t];
+  // Track quality: a real marker's d² follows χ²₂ (mean 2, less while R is generous); blobs
+  // of clutter that happen to fall in a wide gate land anywhere in it (mean ~χ²/2).
+  const double d2 = mahalanobis2(projected.projection, pixel);
+  track.nis_average = track.nis_updates == 0 ? d2 : 0.8 * track.nis_average + 0.2 * d2;
+  ++track.nis_updates;
+  track.state = projected.state;
+  update(track.state, projected.projection, pixel, options.measurement_noise_px);
+  note_update(track, camera_index, stamp);
+  used[blob] = 1;
+  ++core.blobs_associated;
+  ++core.associated_per_camera[camera_index];
+}
+
+void Tracker::Impl::count_misses(const std::vector<char>& track_done, const std::vector<char>& in_view) {
+  // A tentative track inside this image that took no blob was not seen: ghosts of wrong pairings
+  // are seen by no further camera (seed 000 §4.5 suppresses them the same way, by a third view).
+  for (std::size_t i = 0; i < core.tracks.size(); ++i) {
+    Track& track = core.tracks[i];
+    if (track.confirmed || track_done[i] || !in_view[i]) continue;
+    ++track.misses;
+  }
+}
+
+// A replay applies frames again to states that differ from their first application only by the
+// late frames' updates, far less than a gate: the association chosen then almost always still
+// holds. Re-checking each chosen pair's gate costs only the predictions the updates need anyway;
+// gating every track against the blob grid and solving the assignment again is skipped. When the
+// tracks differ (created, deleted, confirmed since) or a pair left its gate, the caller associates
+// from scratch. What this cannot see: a blob left unmatched then that would now enter a gate, or
+// a different assignment now cheaper; both need a state change comparable to the gate.
+bool Tracker::Impl::reassociate(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels,
+                                std::vector<char>& used) {
+  const CameraModel& camera = *models[entry.camera];
+  const TimeNs stamp = entry.frame.stamp_ns;
+  struct Chosen {
+    std::size_t track;
+    std::size_t blob;
+    Projected projected;
+  };
+  std::vector<Chosen> chosen;
+  chosen.reserve(entry.associations.size());
+  for (const auto& [id, blob] : entry.associations) {
+    // Tracks stay in id order: created with increasing ids, removed in place.
+    const auto found = std::lower_bound(core.tracks.begin(), core.tracks.end(), id,
+                                        [](const Track& track, std::int64_t key) { return track.id < key; });
+    if (found == core.tracks.end() || found->id != id || blob >= pixels.size() || used[blob]) return false;
+    Projected full;
+    full.state = predicted(found->state, stamp, options.process_noise);
+    if (camera.T_cam_world().apply(full.state.position()).z() < options.init.min_depth_m) return false;
+    const auto projection = project_point(full.state, camera, options.measurement_noise_px);
+    if (!projection) return false;
+    full.projection = *projection;
+    if (!inside_gate(mahalanobis2(full.projection, pixels[blob]), options.gate_chi2)) return false;
+    chosen.push_back({static_cast<std::size_t>(found - core.tracks.begin()), blob, std::move(full)});
+  }
+  std::vector<char> track_done(core.tracks.size(), 0);
+  for (const Chosen& pair : chosen) {
+    commit_pair(pair.track, pair.projected, pixels[pair.blob], pair.blob, entry.camera, stamp, used);
+    track_done[pair.track] = 1;
+  }
+  std::vector<char> in_view(core.tracks.size(), 0);
+  for (std::size_t i = 0; i < core.tracks.size(); ++i) {
+    const Track& track = core.tracks[i];
+    if (track.confirmed || track_done[i]) continue;
+    // As gate() decides it: in front of the camera and projected inside the image.
+    const Eigen::Vector3d p_cam = camera.T_cam_world().apply(track.position_at(stamp));
+    if (p_cam.z() < options.init.min_depth_m) continue;
+    const auto pixel = camera.project_camera_point(p_cam);
+    in_view[i] = pixel && camera.in_image(*pixel, 0.0);
+  }
+  count_misses(track_done, in_view);
+  return true;
+}
+
+void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& pixels,
+                              std::vector<char>& used, bool replaying) {
+  const std::uint64_t digest = tracks_digest();
+  if (replaying && options.reuse_replay_associations && entry.associated && entry.tracks_digest == digest &&
+      reassociate(entry, pixels, used)) {
+    ++stats.replayed_reassociated;
+    return;
+  }
+  const int camera_index = entry.camera;
+  const TimeNs stamp = entry.frame.stamp_ns;
+  entry.associations.clear();
+  entry.tracks_digest = digest;
   const Gating gating = gate(*models[camera_index], stamp, pixels, used);
   const auto& gated = gating.gated;
   const auto& projected = gating.projected;
@@ -363,29 +478,18 @@ void Tracker::Impl::associate(const FeatureFrame& frame, int camera_index,
     if (pairs.empty()) continue;
     // Leaving a track and a blob both unmatched costs the gate: any gated pair is preferred.
     for (const auto& [t, b] : assign_gated(pairs, 0.5 * options.gate_chi2)) {
-      Track& track = core.tracks[t];
-      // Track quality: a real marker's d² follows χ²₂ (mean 2, less while R is generous); blobs
-      // of clutter that happen to fall in a wide gate land anywhere in it (mean ~χ²/2).
-      const double d2 = mahalanobis2(projected[t]->projection, pixels[b]);
-      track.nis_average = track.nis_updates == 0 ? d2 : 0.8 * track.nis_average + 0.2 * d2;
-      ++track.nis_updates;
-      track.state = projected[t]->state;
-      update(track.state, projected[t]->projection, pixels[b], options.measurement_noise_px);
-      note_update(track, camera_index, stamp);
+      commit_pair(t, *projected[t], pixels[b], b, camera_index, stamp, used);
       track_done[t] = 1;
-      used[b] = 1;
-      ++core.blobs_associated;
-      ++core.associated_per_camera[camera_index];
+      entry.associations.emplace_back(core.tracks[t].id, b);
     }
   }
-
-  // A tentative track inside this image that took no blob was not seen: ghosts of wrong pairings
-  // are seen by no further camera (seed 000 §4.5 suppresses them the same way, by a third view).
-  for (std::size_t i = 0; i < core.tracks.size(); ++i) {
-    Track& track = core.tracks[i];
-    if (track.confirmed || track_done[i] || !in_view[i]) continue;
-    ++track.misses;
-  }
+  count_misses(track_done, in_view);
+  // Kept for replays only when nothing competed: every gated pair was taken and no blob left over
+  // came within a track's search radius (a circle well beyond the gate). A replay's small change
+  // of the states then cannot bring another pair into play; a contested frame is associated again.
+  bool contested = entry.associations.size() != gated.size();
+  for (std::size_t j = 0; j < pixels.size() && !contested; ++j) contested = gating.near[j] && !used[j];
+  entry.associated = !contested;
 }
 
 void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
@@ -490,7 +594,7 @@ void Tracker::Impl::replay_with(std::vector<Entry> late) {
   for (auto& entry : tail) history.push_back(std::move(entry));
   for (std::size_t i = start; i < history.size(); ++i) {
     maybe_checkpoint(history[i].frame.stamp_ns, history_base + i);
-    apply(history[i].frame, history[i].camera);
+    apply(history[i], true);
   }
   ++stats.replays;
   stats.replayed_frames += history.size() - start;
@@ -659,7 +763,7 @@ std::vector<FrameOutcome> Tracker::process_batch(std::span<const FeatureFrame> f
       ++counters.too_late;
       outcomes[i] = FrameOutcome::kTooLate;
     } else {
-      late.push_back(Entry{camera, frame});
+      late.push_back(Entry{camera, frame, {}, 0, false});
       ++impl.stats.frames_late;
       ++counters.late;
       ++counters.used;
@@ -678,8 +782,8 @@ std::vector<FrameOutcome> Tracker::process_batch(std::span<const FeatureFrame> f
   for (const auto& [i, camera] : in_order) {
     const FeatureFrame& frame = frames[i];
     impl.maybe_checkpoint(frame.stamp_ns, impl.history_base + impl.history.size());
-    impl.apply(frame, camera);
-    impl.history.push_back(Entry{camera, frame});
+    impl.history.push_back(Entry{camera, frame, {}, 0, false});
+    impl.apply(impl.history.back(), false);
     CameraCounters& counters = counters_for(frame.camera_id);
     counters.associated = impl.core.associated_per_camera[camera];
     ++counters.used;

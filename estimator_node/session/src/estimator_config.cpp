@@ -278,6 +278,8 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.integer("checkpoint_interval_ns", o.checkpoint_interval_ns, 0, kHourNs, "state snapshots for rewinding");
   f.integer("dense_checkpoint_window_ns", o.dense_checkpoint_window_ns, 0, 1'000'000'000LL,
             "a snapshot before every frame this recent (cheap replays of slightly late frames)");
+  f.flag("reuse_replay_associations", o.reuse_replay_associations,
+         "a replayed frame keeps its first association while every pair still gates");
   f.number("grid_cell_px", o.grid_cell_px, kPositive, "spatial index of a frame's blobs");
   f.integer("max_unmatched_per_frame", o.max_unmatched_per_frame, 0, 1 << 20,
             "unmatched blobs of one frame offered to initiation");

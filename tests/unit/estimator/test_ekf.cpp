@@ -60,6 +60,21 @@ TEST(FilterLayer, PropagateIsAPAtPlusQ) {
   EXPECT_LT((P.matrix() - expected).norm(), 1e-15);
 }
 
+TEST(FilterLayer, ConstantVelocityPropagationIsAPAtPlusQ) {
+  std::mt19937 rng(11);
+  for (const double dt : {0.0003, 0.008, -0.004, 0.25}) {
+    const Eigen::Matrix<double, 6, 6> prior = random_spd<6>(rng, 1e-4);
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Identity();
+    A.block<3, 3>(0, 3) = dt * Eigen::Matrix3d::Identity();
+    const Eigen::Matrix<double, 6, 6> Q = random_spd<6>(rng, 1e-6);
+    FilterCovariance<6> general(prior), closed_form(prior);
+    general.propagate(A, Q);
+    closed_form.propagate_constant_velocity(dt, Q);
+    EXPECT_LT((general.matrix() - closed_form.matrix()).norm(), 1e-12 * general.matrix().norm()) << dt;
+    EXPECT_EQ(closed_form.matrix(), closed_form.matrix().transpose());
+  }
+}
+
 TEST(FilterLayer, AssignedPriorIsSymmetrised) {
   Eigen::Matrix2d lopsided;
   lopsided << 1, 0.2, 0.4, 1;

@@ -153,8 +153,11 @@ TEST_P(LateReplay, GivesTheSameStateAsInOrderProcessing) {
   for (std::size_t i = 7; i + 3 < order.size(); i += 7)
     std::rotate(order.begin() + i, order.begin() + i + 1, order.begin() + i + 4);
   for (std::size_t i : order) shuffled.process(frames[i]);
-  EXPECT_GT(shuffled.stats().frames_late, 50u);
+  const TrackerStats& stats = shuffled.stats();
+  EXPECT_GT(stats.frames_late, 50u);
   expect_same_tracks(in_order, shuffled);
+  // The frames replayed after a late one kept their first association (re-gated only).
+  EXPECT_GT(stats.replayed_reassociated, (stats.replayed_frames - stats.frames_late) / 2);
   if (GetParam() > 0) {
     // A checkpoint before each recent frame: a frame three frames late replays four.
     EXPECT_EQ(shuffled.stats().replayed_frames, 4 * shuffled.stats().replays);
@@ -187,6 +190,38 @@ TEST_P(LateReplay, ABurstOfLateFramesCostsOneReplay) {
   EXPECT_EQ(bursts.stats().frames_late, expected_late);
   EXPECT_EQ(bursts.stats().replays, expected_replays);
   expect_same_tracks(in_order, bursts);
+}
+
+TEST_P(LateReplay, FramesReplayedWhileTracksAreBornAreAssociatedFromScratch) {
+  // The second frame arrives after 38 newer ones, while the first tracks are being initiated:
+  // replayed frames whose tracks have changed since (created, confirmed) cannot keep their first
+  // association; they are associated again, and the state is still that of in-order processing.
+  std::vector<std::size_t> order(frames.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::rotate(order.begin() + 1, order.begin() + 2, order.begin() + 40);
+  for (std::size_t i : order) tested.process(frames[i]);
+  const TrackerStats& stats = tested.stats();
+  EXPECT_EQ(stats.frames_late, 1u);
+  EXPECT_EQ(stats.replayed_frames, 39u);
+  EXPECT_LT(stats.replayed_reassociated, 38u);
+  expect_same_tracks(in_order, tested);
+}
+
+TEST_P(LateReplay, AssociatingReplaysFromScratchGivesTheSameState) {
+  // The shortcut off: every replayed frame is gated and assigned again, with the same result.
+  TrackerOptions options = tested.options();
+  options.reuse_replay_associations = false;
+  Tracker full(options);
+  full.set_calibration(scene.calibration());
+  // Hold every 9th frame back by two frames.
+  std::vector<std::size_t> order(frames.size());
+  std::iota(order.begin(), order.end(), 0);
+  for (std::size_t i = 4; i + 2 < order.size(); i += 9)
+    std::rotate(order.begin() + i, order.begin() + i + 1, order.begin() + i + 3);
+  for (std::size_t i : order) full.process(frames[i]);
+  EXPECT_GT(full.stats().frames_late, 50u);
+  EXPECT_EQ(full.stats().replayed_reassociated, 0u);
+  expect_same_tracks(in_order, full);
 }
 
 INSTANTIATE_TEST_SUITE_P(CheckpointSpacing, LateReplay, ::testing::Values(TimeNs{0}, TimeNs{50'000'000}),

@@ -64,6 +64,23 @@ class FilterCovariance {
     symmetrise();
   }
 
+  // The same prediction for A = [[I, Δt I], [0, I]] (constant velocity: 3 positions, 3
+  // velocities) in closed form, P_pp + Δt (P_pv + P_vp) + Δt² P_vv, P_pv + Δt P_vv, P_vv: the
+  // point tracks' most frequent operation without the two 6 x 6 products.
+  void propagate_constant_velocity(double dt, const Matrix& Q) requires(N == 6) {
+    const Eigen::Matrix3d P_pv = P_.template block<3, 3>(0, 3);
+    const Eigen::Matrix3d P_vv = P_.template block<3, 3>(3, 3);
+    const Eigen::Matrix3d cross = P_pv + dt * P_vv;
+    Matrix predicted;
+    predicted.template block<3, 3>(0, 0) =
+        P_.template block<3, 3>(0, 0) + dt * (P_pv + P_pv.transpose()) + (dt * dt) * P_vv;
+    predicted.template block<3, 3>(0, 3) = cross;
+    predicted.template block<3, 3>(3, 0) = cross.transpose();
+    predicted.template block<3, 3>(3, 3) = P_vv;
+    P_ = predicted + Q;
+    symmetrise();
+  }
+
   // Innovation covariance S = H P Hᵀ + R of a measurement model H (M x N) with noise R.
   template <int M>
   Eigen::Matrix<double, M, M> innovation_covariance(const Eigen::Matrix<double, M, N>& H,

@@ -49,6 +49,7 @@ struct TrackerOptions {
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
   TimeNs checkpoint_interval_ns = 10'000'000;     // state snapshots for rewinding ...
   TimeNs dense_checkpoint_window_ns = 5'000'000;  // ... and one before every frame this recent (0: none)
+  bool reuse_replay_associations = true;          // a replayed frame keeps its association while it gates
   double grid_cell_px = 32.0;                     // spatial index of a frame's blobs
   std::size_t max_unmatched_per_frame = 256;      // unmatched blobs of one frame offered to initiation
   BodyTrackerOptions bodies;                      // rigid bodies (set_bodies)
@@ -63,6 +64,7 @@ struct TrackerStats {
   std::uint64_t frames_too_late = 0;        // older than the rewind horizon: dropped
   std::uint64_t replays = 0;                // rewinds
   std::uint64_t replayed_frames = 0;        // frames applied again by rewinds
+  std::uint64_t replayed_reassociated = 0;  // of those, kept their association (re-gated only)
   std::uint64_t blobs = 0;
   std::uint64_t blobs_non_finite = 0;  // NaN/inf coordinates: ignored
   std::uint64_t blobs_associated = 0;
