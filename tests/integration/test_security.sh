@@ -169,7 +169,7 @@ kill -INT "${pids[0]}" 2>/dev/null || true
 
 # --- what each side saw ----------------------------------------------------------------------------
 # At most one re-acquisition per marker: on a machine loaded 15 deep (2 cores) one run lost each of
-# the 3 markers once; idle, the runs had none.
+# the 3 markers once; the other runs here (load 9-10) had none.
 if "$bin/panoptes_eval" --scene "$scene" --tracks "$work/tracks.jsonl" --epoch-ns "$epoch" \
   --require-rmse-mm 2 --require-tracked 0.95 --require-max-id-switches 3 >"$work/eval.txt" 2>&1; then
   pass "the secured system tracks across hosts (RMSE < 2 mm, >= 95% tracked, <= 3 ID switches)"
