@@ -102,6 +102,7 @@ expect_stderr_contains "$studio/identities/stale/cert.pem" "... naming the certi
 refused 2 "camera_node: an identity that does not exist is refused" -- \
   netns_exec "$camera_host" "$bin/camera_node" --source "sim:$source_dir/deploy/scenes/demo.yaml#cam0" \
   --duration 1 --quiet $(secure_args "$studio" nobody)
+expect_stderr_contains "$studio/identities/nobody: identity: no such directory" "... naming the directory"
 
 # --- the secured system, and the intruders --------------------------------------------------------
 scene="$work/scene.yaml"

@@ -112,6 +112,10 @@ std::optional<SecurityFiles> resolve_security_files(const SecurityOptions& optio
 }
 
 void check_security_files(const SecurityFiles& files) {
+  if (const std::filesystem::path node = files.certificate.parent_path();
+      !std::filesystem::is_directory(node))
+    throw SecurityError(node.string(), "",
+                        "identity: no such directory (panoptes-security issue <dir> <role> <name>)");
   check_pem(files.identity_ca, "identity CA certificate", {"CERTIFICATE"});
   check_pem(files.permissions_ca, "permissions CA certificate", {"CERTIFICATE"});
   if (!files.identity_crl.empty()) check_pem(files.identity_crl, "identity revocation list", {"X509 CRL"});

@@ -121,6 +121,18 @@ TEST_F(SecurityFilesTest, EachBadFileIsNamedWithItsReason) {
   EXPECT_NE(check_error().find("permissions.p7s: permissions: not a regular file"), std::string::npos);
 }
 
+TEST_F(SecurityFilesTest, AnIdentityWithoutItsDirectoryIsNamed) {
+  const SecurityFiles other = *resolve_security_files({dir_, "cam9"});
+  try {
+    check_security_files(other);
+    FAIL() << "an identity without a directory passed";
+  } catch (const SecurityError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              (dir_ / "identities" / "cam9").string() +
+                  ": identity: no such directory (panoptes-security issue <dir> <role> <name>)");
+  }
+}
+
 TEST_F(SecurityFilesTest, AnUnreadableFileIsNamed) {
   if (geteuid() == 0) GTEST_SKIP() << "root reads every file";
   fs::permissions(node() / "key.pem", fs::perms::none);
