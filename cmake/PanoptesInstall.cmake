@@ -36,6 +36,8 @@ install(FILES ${CMAKE_BINARY_DIR}/panoptes-client.pc DESTINATION ${CMAKE_INSTALL
 
 set(PANOPTES_DATA_DIR ${CMAKE_INSTALL_DATADIR}/panoptes)
 install(DIRECTORY ${PANOPTES_SOURCE_DIR}/deploy/dds/ DESTINATION ${PANOPTES_DATA_DIR}/dds FILES_MATCHING PATTERN "*.xml")
+# DDS Security: the studio CA, identities and signed documents (docs/security.md).
+install(PROGRAMS ${PANOPTES_SOURCE_DIR}/deploy/security/panoptes-security DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY ${PANOPTES_SOURCE_DIR}/deploy/scenes/ DESTINATION ${PANOPTES_DATA_DIR}/scenes
   FILES_MATCHING PATTERN "*.yaml" PATTERN "*.trc")
 install(DIRECTORY ${PANOPTES_SOURCE_DIR}/deploy/examples/ DESTINATION ${PANOPTES_DATA_DIR}/examples)

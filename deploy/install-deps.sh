@@ -16,7 +16,7 @@ packages=(
   clang-format clang-tidy python3-yaml
   clang  # libFuzzer targets (tests/fuzz, docs/hostile_input.md)
   cyclonedds-dev cyclonedds-tools pybind11-dev python3-dev python3-numpy python3-matplotlib
-  iproute2 procps nftables
+  iproute2 procps nftables tcpdump openssl libtinyxml2-dev
   libzstd-dev liblz4-dev libboost-dev chromium
 )
 # Node.js and npm run the browser tests and the independent file-format checks. A machine that

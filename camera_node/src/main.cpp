@@ -22,6 +22,7 @@
 #include "panoptes/camera_app/live_camera.h"
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
+#include "panoptes/dds/security_options.h"
 #include "panoptes/process.h"
 
 namespace {
@@ -57,6 +58,7 @@ void add_options(CLI::App& app, Options& options) {
   app.add_option("--out-features", options.out_features, "write every FeatureFrame to this JSONL file");
   app.add_option("--dds-profile", live.dds_profile,
                  "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  panoptes::dds::add_security_options(app, live.security);
   app.add_option("--sim-epoch-ns", options.sim_epoch_ns,
                  "sim: wall-clock ns of scene time 0 (default: now, rounded up to a whole second); features: "
                  "wall-clock ns of the recording's epoch (its first stamp rounded down to a second), so "
@@ -165,6 +167,9 @@ int run_camera_node(int argc, char** argv) {
     }
     panoptes::camera_app::LiveCamera live(options.live, *source, detector, camera_id, log);
     return live.run();
+  } catch (const panoptes::ConfigError& error) {  // e.g. DDS Security files: refused before joining
+    log(error.what());
+    return panoptes::kExitBadInput;
   } catch (const std::exception& error) {
     log(error.what());
     return panoptes::kExitFailure;

@@ -22,6 +22,7 @@
 
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/security_options.h"
 #include "panoptes/process.h"
 #include "panoptes/time.h"
 #include "panoptes_msgs/panoptes.h"
@@ -33,6 +34,7 @@ using Clock = std::chrono::steady_clock;
 
 struct Options {
   std::string dds_profile;
+  panoptes::dds::SecurityOptions security;
   double timeout_s = 10;
   // command
   std::string target;
@@ -51,6 +53,7 @@ struct Options {
 panoptes::dds::Bus open_bus(const Options& options, const std::string& name) {
   panoptes::dds::BusOptions bus_options;
   bus_options.profile_file = options.dds_profile;
+  bus_options.security = options.security;
   bus_options.participant_name = "panoptes_ctl/" + name;
   return panoptes::dds::Bus(bus_options);
 }
@@ -263,6 +266,7 @@ int run(int argc, char** argv) {
   app.option_defaults()->always_capture_default();  // --help shows every default
   app.add_option("--dds-profile", options.dds_profile, "Fast DDS XML profile")
       ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
+  panoptes::dds::add_security_options(app, options.security);
   app.add_option("--timeout", options.timeout_s, "seconds to wait for nodes and replies")
       ->check(CLI::PositiveNumber);
 
@@ -305,6 +309,9 @@ int run(int argc, char** argv) {
     if (*status) return show_status(options);
     if (*preview) return get_preview(options);
     return publish_predictions(options);
+  } catch (const panoptes::ConfigError& error) {  // e.g. DDS Security files: refused before joining
+    std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
+    return panoptes::kExitBadInput;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
     return panoptes::kExitFailure;

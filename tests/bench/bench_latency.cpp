@@ -249,6 +249,7 @@ int run(int argc, char** argv) {
   std::string profile = std::string(PANOPTES_SOURCE_DIR) + "/deploy/dds/loopback.xml";
   std::string log_dir;
   std::string samples_file;
+  std::string security_dir;
   double duration_s = 10;
   double warmup_s = 2;
   double latency_window_ms = -1;  // < 0: not passed, the estimator's default
@@ -291,8 +292,19 @@ int run(int argc, char** argv) {
   app.add_option(
       "--samples", samples_file,
       "write every measured frame's stamps (camera_node, estimator_node, here) to this JSONL file");
+  app.add_option("--security-dir", security_dir,
+                 "DDS Security for every process (docs/security.md): a studio of "
+                 "deploy/security/panoptes-security with the identities 'estimator', 'console' (this "
+                 "process) and one camera identity per camera id of the scene")
+      ->check(CLI::ExistingDirectory);
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
+  // The security options of a child with `identity`; none for a plain run.
+  const auto security_argv = [&](const std::string& identity) {
+    return security_dir.empty()
+               ? std::vector<std::string>{}
+               : std::vector<std::string>{"--security-dir", security_dir, "--security-identity", identity};
+  };
 
   try {
     const panoptes::Scene scene = panoptes::Scene::load(scene_file);
@@ -316,6 +328,7 @@ int run(int argc, char** argv) {
     panoptes::dds::BusOptions options;
     options.profile_file = profile;
     options.participant_name = "bench_latency";
+    if (!security_dir.empty()) options.security = {security_dir, "console"};
     options.domain_id = domain;
     setenv("PANOPTES_DOMAIN", std::to_string(domain).c_str(), 1);  // for the nodes
     panoptes::dds::Bus bus(options);
@@ -369,17 +382,26 @@ int run(int argc, char** argv) {
       estimator_argv.push_back("--latency-window-ms");
       estimator_argv.push_back(std::to_string(latency_window_ms));
     }
+    for (std::string& argument : security_argv("estimator")) estimator_argv.push_back(std::move(argument));
     children.push_back(std::make_unique<panoptes::ChildProcess>("estimator_node", std::move(estimator_argv),
                                                                 run_dir / "estimator_node.log"));
     const std::string source_prefix = "sim:" + scene_file + "#";
     for (const auto& camera : scene.cameras()) {
       const std::string& id = camera.calibration.id;
+      std::vector<std::string> camera_argv{(bin_dir / "camera_node").string(),
+                                           "--source",
+                                           source_prefix + id,
+                                           "--sim-epoch-ns",
+                                           std::to_string(epoch),
+                                           "--dds-profile",
+                                           profile,
+                                           "--latency-probe",
+                                           "--duration",
+                                           std::to_string(run_s),
+                                           "--quiet"};
+      for (std::string& argument : security_argv(id)) camera_argv.push_back(std::move(argument));
       children.push_back(std::make_unique<panoptes::ChildProcess>(
-          "camera_node[" + id + "]",
-          std::vector<std::string>{(bin_dir / "camera_node").string(), "--source", source_prefix + id,
-                                   "--sim-epoch-ns", std::to_string(epoch), "--dds-profile", profile,
-                                   "--latency-probe", "--duration", std::to_string(run_s), "--quiet"},
-          run_dir / (id + ".log")));
+          "camera_node[" + id + "]", std::move(camera_argv), run_dir / (id + ".log")));
     }
     TimeNs next_progress = epoch;
     std::optional<CpuSample> cpu_from, cpu_to;
@@ -452,6 +474,7 @@ int run(int argc, char** argv) {
         {"ratio_vs_dds_floor_p99", floor_p99 > 0 ? r.end_to_end.at(0.99) / floor_p99 : 0.0},
         {"cpu_while_measuring", cpu_from && cpu_to ? cpu_json(*cpu_from, *cpu_to) : nlohmann::json()},
         {"dds_domain", domain},
+        {"dds_security", security_dir.empty() ? nlohmann::json(false) : nlohmann::json(security_dir)},
         {"logs", run_dir.string()},
     };
     if (subscribe_tracks) {

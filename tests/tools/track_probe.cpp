@@ -15,6 +15,7 @@
 
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/security_options.h"
 #include "panoptes/process.h"
 #include "panoptes/time.h"
 #include "panoptes_msgs/panoptes.h"
@@ -24,6 +25,7 @@ namespace {
 int run(int argc, char** argv) {
   std::string out_file;
   std::string dds_profile;
+  panoptes::dds::SecurityOptions security;
   double duration_s = 0;
   bool with_status = false;
   CLI::App app{"panoptes_track_probe: records received TrackFrames (and EstimatorStatus) as JSON lines",
@@ -32,6 +34,7 @@ int run(int argc, char** argv) {
   app.add_option("--out", out_file, "JSONL file to write")->required();
   app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile")
       ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
+  panoptes::dds::add_security_options(app, security);
   app.add_option("--duration", duration_s, "stop after this many seconds (0 = until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--status", with_status, "also record EstimatorStatus (per-camera utilisation)");
@@ -47,6 +50,7 @@ int run(int argc, char** argv) {
   try {
     panoptes::dds::BusOptions options;
     options.profile_file = dds_profile;
+    options.security = security;
     options.participant_name = "panoptes_track_probe";
     panoptes::dds::Bus bus(options);
     auto tracks = bus.make_reader<panoptes::msg::TrackFrame>([&](panoptes::msg::TrackFrame&& frame) {
@@ -89,6 +93,9 @@ int run(int argc, char** argv) {
     }
     std::fprintf(stderr, "panoptes_track_probe: %llu track frames received\n",
                  static_cast<unsigned long long>(tracks->received()));
+  } catch (const panoptes::ConfigError& error) {  // e.g. DDS Security files: refused before joining
+    std::fprintf(stderr, "panoptes_track_probe: %s\n", error.what());
+    return panoptes::kExitBadInput;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_track_probe: %s\n", error.what());
     return panoptes::kExitFailure;

@@ -15,10 +15,12 @@
 #include <thread>
 #include <vector>
 
+#include <fastdds/rtps/attributes/PropertyPolicy.h>
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/log/Log.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/DataWriterListener.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
@@ -33,6 +35,7 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
 #include "panoptes/dds/decode.h"
+#include "panoptes/dds/security.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/panoptesPubSubTypes.h"
 #include "panoptes_msgs/ros2.h"
@@ -333,6 +336,32 @@ ReturnCode return_code_ok() {
   return ReturnCode::RETCODE_OK;
 }
 
+// The profile asks for DDS Security with the participant property panoptes.security=required.
+bool profile_requires_security(const fdds::DomainParticipantQos& qos) {
+  const std::string* value =
+      eprosima::fastrtps::rtps::PropertyPolicyHelper::find_property(qos.properties(), "panoptes.security");
+  return value != nullptr && *value == "required";
+}
+
+// Adds the DDS Security properties to `qos` when `options` (or the environment) name security
+// files, after checking them; nullopt for an unsecured participant. SecurityError for bad files and
+// for a profile that requires security without them.
+std::optional<SecurityFiles> apply_security(const BusOptions& options, const std::filesystem::path& profile,
+                                            fdds::DomainParticipantQos& qos) {
+  std::optional<SecurityFiles> files = resolve_security_files(options.security);
+  if (!files) {
+    if (profile_requires_security(qos))
+      throw SecurityError(profile.string(), "panoptes.security",
+                          "the profile requires DDS Security: give --security-dir and --security-identity "
+                          "(or PANOPTES_SECURITY_DIR and PANOPTES_SECURITY_IDENTITY)");
+    return std::nullopt;
+  }
+  check_security_files(*files);
+  for (const auto& [name, value] : security_properties(*files))
+    qos.properties().properties().emplace_back(name, value);
+  return files;
+}
+
 class BusCore {
  public:
   explicit BusCore(const BusOptions& options) : profile_file_(resolve_profile_file(options.profile_file)) {
@@ -346,12 +375,24 @@ class BusCore {
                      options.participant_profile + "'");
     }
     qos.name(options.participant_name);
+    security_files_ = apply_security(options, profile_file_, qos);
     int domain = options.domain_id;
     if (domain < 0) {
       const char* env = std::getenv("PANOPTES_DOMAIN");
       domain = env != nullptr ? std::atoi(env) : 0;
     }
     participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos);
+    if (participant_ == nullptr && security_files_) {
+      fdds::Log::Flush();  // Fast DDS's own reason, logged asynchronously, goes out before ours
+      throw SecurityError(
+          security_files_->certificate.string(), "",
+          "DDS Security refused to create the participant (domain " + std::to_string(domain) +
+              "): a certificate not signed by the identity CA, expired or revoked, a key that "
+              "does not match it, or a governance or permissions document not signed by the "
+              "permissions CA or not granting this domain and subject (Fast DDS's reason is "
+              "logged above). Files: " +
+              describe_security_files(*security_files_));
+    }
     if (participant_ == nullptr)
       throw DdsError("cannot create DDS participant (domain " + std::to_string(domain) + ")");
     if (participant_->register_content_filter_factory(kIdFilterClass, &leading_id_filter_factory()) !=
@@ -387,7 +428,7 @@ class BusCore {
       throw DdsError("cannot register DDS type for " + name);
     }
     fdds::Topic* topic = participant_->create_topic(name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
-    if (topic == nullptr) throw DdsError("cannot create DDS topic " + name);
+    if (topic == nullptr) throw DdsError("cannot create DDS topic " + name + refusal_hint());
     topics_.emplace(name, topic);
     return topic;
   }
@@ -410,6 +451,11 @@ class BusCore {
   fdds::Subscriber* subscriber() const { return subscriber_; }
   const std::filesystem::path& profile_file() const { return profile_file_; }
   ReceiveCounters& receive_counters() { return receive_counters_; }
+  bool secured() const { return security_files_.has_value(); }
+  // Appended to a refused writer, reader or topic: with DDS Security, the likely reason.
+  std::string refusal_hint() const {
+    return secured() ? " (DDS Security: not granted by " + security_files_->permissions.string() + ")" : "";
+  }
 
  private:
   void teardown() {
@@ -421,6 +467,7 @@ class BusCore {
 
   std::filesystem::path profile_file_;
   ReceiveCounters receive_counters_;  // outlives the participant: its types refer to it
+  std::optional<SecurityFiles> security_files_;
   fdds::DomainParticipant* participant_ = nullptr;
   fdds::Publisher* publisher_ = nullptr;
   fdds::Subscriber* subscriber_ = nullptr;
@@ -580,6 +627,10 @@ std::map<std::string, std::uint64_t> Bus::receive_rejections() const {
   return core_->receive_counters().snapshot();
 }
 
+bool Bus::secured() const {
+  return core_->secured();
+}
+
 namespace {
 
 // The topic's name: `requested` if given, else the type's own; DdsError if neither.
@@ -602,7 +653,7 @@ std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos, const std::string& topic_na
   impl->writer = core_->publisher()->create_datawriter(topic, writer_qos_for(TopicTraits<T>::spec(), qos),
                                                        &impl->listener);
   if (impl->writer == nullptr) {
-    throw DdsError("cannot create DDS writer on " + name);
+    throw DdsError("cannot create DDS writer on " + name + core_->refusal_hint());
   }
   return std::make_unique<Writer<T>>(std::move(impl));
 }
@@ -628,7 +679,7 @@ std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_samp
   impl->reader = core_->subscriber()->create_datareader(topic, reader_qos, impl->listener.get());
   if (impl->reader == nullptr) {
     if (impl->filtered_topic != nullptr) core_->delete_filtered_topic(impl->filtered_topic);
-    throw DdsError("cannot create DDS reader on " + name);
+    throw DdsError("cannot create DDS reader on " + name + core_->refusal_hint());
   }
   return std::make_unique<Reader<T>>(std::move(impl));
 }
@@ -886,7 +937,7 @@ std::unique_ptr<RawReader> Bus::make_raw_reader(const std::string& topic, RawRea
   apply_spec(reader_qos, entry.spec, offered ? Qos::kReliable : Qos::kDefault);
   impl->reader =
       core_->subscriber()->create_datareader(raw_topic(*core_, entry), reader_qos, impl->listener.get());
-  if (impl->reader == nullptr) throw DdsError("cannot create DDS reader on " + topic);
+  if (impl->reader == nullptr) throw DdsError("cannot create DDS reader on " + topic + core_->refusal_hint());
   return std::make_unique<RawReader>(std::move(impl));
 }
 
@@ -896,7 +947,7 @@ std::unique_ptr<RawWriter> Bus::make_raw_writer(const std::string& topic) {
   impl->core = core_;
   impl->writer = core_->publisher()->create_datawriter(
       raw_topic(*core_, entry), writer_qos_for(entry.spec, Qos::kDefault), &impl->listener);
-  if (impl->writer == nullptr) throw DdsError("cannot create DDS writer on " + topic);
+  if (impl->writer == nullptr) throw DdsError("cannot create DDS writer on " + topic + core_->refusal_hint());
   return std::make_unique<RawWriter>(std::move(impl));
 }
 

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include "panoptes/cli.h"
+#include "panoptes/dds/security_options.h"
 #include "panoptes/time.h"
 
 namespace panoptes::estimator_app {
@@ -88,6 +89,7 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
   app.add_option("--out-tracks", c.out_tracks, "write every published TrackFrame as Track JSONL");
   app.add_option("--out-poses", c.out_poses, "write body poses as Pose JSONL (needs --bodies)");
   app.add_option("--dds-profile", c.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
+  dds::add_security_options(app, c.security);
   app.add_flag("--replay-arrival", c.replay_arrival,
                "offline: deliver frames in the order they reached the estimator (received_ns), through the "
                "latency window, as live mode would");

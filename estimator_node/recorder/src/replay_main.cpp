@@ -88,6 +88,9 @@ int run(int argc, char** argv) {
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "panoptes_replay: %s\n", e.what());
     return panoptes::kExitBadInput;
+  } catch (const panoptes::ConfigError& e) {  // e.g. DDS Security files: refused before joining
+    std::fprintf(stderr, "panoptes_replay: %s\n", e.what());
+    return panoptes::kExitBadInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "panoptes_replay: %s\n", e.what());
     return panoptes::kExitFailure;

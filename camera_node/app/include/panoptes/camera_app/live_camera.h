@@ -29,7 +29,8 @@ namespace panoptes::camera_app {
 struct LiveOptions {
   std::string source_spec;  // --source: a sim camera's scene clock offset is part of the node clock
   std::string dds_profile;
-  std::string out_features;  // also write every published frame here ("" = no)
+  dds::SecurityOptions security;  // DDS Security files (docs/security.md)
+  std::string out_features;       // also write every published frame here ("" = no)
   std::size_t queue_capacity = 4;
   double prediction_max_age_ms = 50;
   double duration_s = 0;

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "panoptes/dds/security.h"
+
 namespace panoptes::dds {
 
 class DdsError : public std::runtime_error {
@@ -29,6 +31,10 @@ struct BusOptions {
   std::string participant_profile = "panoptes_participant";
   int domain_id = -1;  // -1: $PANOPTES_DOMAIN, else the profile's domain, else 0
   std::string participant_name = "panoptes";
+  // DDS Security (docs/security.md). Empty: $PANOPTES_SECURITY_DIR and $PANOPTES_SECURITY_IDENTITY;
+  // neither set: an unsecured participant, unless the profile requires security (deploy/dds/secure.xml
+  // sets the participant property panoptes.security=required), which is then a SecurityError.
+  SecurityOptions security;
 };
 
 // Resolves the profile file as BusOptions describes; throws DdsError naming what was tried.
@@ -158,6 +164,8 @@ class Bus {
   std::unique_ptr<RawWriter> make_raw_writer(const std::string& topic);
 
   const std::filesystem::path& profile_file() const;
+  // True when the participant joined with DDS Security.
+  bool secured() const;
 
   // Received samples this Bus's readers dropped, by reason: the decode failures of decode.h
   // ("cdr_truncated", ...) and "handler_error" (a reader's callback threw). Reported in the nodes'

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "panoptes/dds/security.h"
 #include "panoptes/session/estimator_config.h"
 
 namespace panoptes::estimator_app {
@@ -23,6 +24,7 @@ struct NodeCommandLine {
   std::string out_tracks;
   std::string out_poses;
   std::string dds_profile;
+  dds::SecurityOptions security;
   bool replay_arrival = false;
   double duration_s = 0.0;
   bool latency_probe = false;

@@ -7,18 +7,20 @@
 
 #include <string>
 
+#include "panoptes/dds/security.h"
 #include "panoptes/session/body_file.h"
 #include "panoptes/session/estimator_session.h"
 
 namespace panoptes::estimator_app {
 
 struct LiveOptions {
-  std::string dds_profile;       // empty: the loopback profile
-  std::string calibration_file;  // cameras in it are not recalibrated from their CameraInfo
-  std::string out_tracks;        // optional Track JSONL
-  std::string out_poses;         // optional Pose JSONL
-  double duration_s = 0.0;       // 0: until a stop signal
-  bool latency_probe = false;    // benchmark aid (latency_probe_echoer.h)
+  std::string dds_profile;        // empty: the loopback profile
+  dds::SecurityOptions security;  // DDS Security files (docs/security.md)
+  std::string calibration_file;   // cameras in it are not recalibrated from their CameraInfo
+  std::string out_tracks;         // optional Track JSONL
+  std::string out_poses;          // optional Pose JSONL
+  double duration_s = 0.0;        // 0: until a stop signal
+  bool latency_probe = false;     // benchmark aid (latency_probe_echoer.h)
   bool quiet = false;
 };
 
