@@ -556,7 +556,7 @@ function showReport(job) {
   const report = job.report;
   if (!report) return;
   const headline = document.createElement('pre');
-  headline.textContent = (job.report_text || '').split('\n').slice(0, 4).join('\n');
+  headline.textContent = (job.report_text || '').split('\n').slice(0, 3).join('\n');
   box.append(headline);
   const table = document.createElement('table');
   table.innerHTML = '<tr><th>camera</th><th>state</th><th>observations</th><th>raw median px</th><th>raw mean px</th><th>rms px/axis</th><th>max px</th><th>offset ms</th><th>coverage</th></tr>';
