@@ -18,6 +18,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "panoptes/jsonl.h"
+
 extern char** environ;
 
 namespace panoptes::console {
@@ -84,6 +86,11 @@ struct CalibrationWorkflow::Impl {
   json report;  // from the last solve
   std::string report_text;
   std::string world_text;
+  // The running capture's file, read as the capture writes it, for the live coverage.
+  std::ifstream capture_file;
+  std::streamoff capture_offset = 0;
+  std::string capture_partial;
+  std::uint64_t capture_bad_lines = 0;
 
   Impl(CalibrationWorkflowOptions options_in, ConsoleState& state_in)
       : options(std::move(options_in)), state(state_in) {}
@@ -97,7 +104,12 @@ struct CalibrationWorkflow::Impl {
     step = name;
     result = "running";
     stop_requested = false;
-    if (name == "capture" || name == "floor_capture") state.start_coverage(wall_now_ns());
+    if (name == "capture" || name == "floor_capture") {
+      state.start_coverage(wall_now_ns());
+      capture_file = std::ifstream();
+      capture_offset = 0;
+      capture_partial.clear();
+    }
     publish();
     return {};
   }
@@ -146,12 +158,50 @@ struct CalibrationWorkflow::Impl {
                   offset, "--out", file("calibration.yaml").string()});
   }
 
+  // New complete lines of the capture file into the coverage (the CLI writes every 50 ms).
+  void read_capture() {
+    if (!capture_file.is_open()) {
+      capture_file.open(file(step == "capture" ? "wand.jsonl" : "floor.jsonl"), std::ios::binary);
+      if (!capture_file.is_open()) return;
+    }
+    capture_file.clear();
+    capture_file.seekg(capture_offset);
+    std::string chunk(1 << 16, '\0');
+    while (capture_file.read(chunk.data(), static_cast<std::streamsize>(chunk.size())) ||
+           capture_file.gcount() > 0) {
+      const auto count = capture_file.gcount();
+      capture_offset += count;
+      capture_partial.append(chunk.data(), static_cast<std::size_t>(count));
+    }
+    std::size_t start = 0;
+    for (auto end = capture_partial.find('\n'); end != std::string::npos;
+         end = capture_partial.find('\n', start)) {
+      const auto parsed = parse_feature_frame(std::string_view(capture_partial).substr(start, end - start));
+      start = end + 1;
+      if (!parsed.value) {
+        ++capture_bad_lines;
+        continue;
+      }
+      std::vector<BlobPoint> blobs;
+      blobs.reserve(parsed.value->blobs.size());
+      for (const auto& blob : parsed.value->blobs)
+        blobs.push_back(
+            {static_cast<float>(blob.x), static_cast<float>(blob.y), static_cast<float>(blob.area)});
+      state.add_coverage_frame(parsed.value->camera_id, blobs);
+    }
+    capture_partial.erase(0, start);
+  }
+
   void finished(int status) {
     child = -1;
     exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     const bool capture = step == "capture" || step == "floor_capture";
     result = exit_code == 0 ? "done" : (capture && stop_requested ? "stopped" : "failed");
-    if (capture) state.stop_coverage();
+    if (capture) {
+      read_capture();  // what the capture wrote last
+      capture_file.close();
+      state.stop_coverage();
+    }
     if (step == "solve") {
       report = json::parse(read_small(file("calibration.report.json")), nullptr, false);
       if (report.is_discarded()) report = nullptr;
@@ -181,13 +231,15 @@ struct CalibrationWorkflow::Impl {
                       {"report", report},
                       {"report_text", report_text},
                       {"world_text", world_text},
-                      {"plots", plots}};
+                      {"plots", plots},
+                      {"capture_bad_lines", capture_bad_lines}};
     state.set_calibration_job(job.dump());
   }
 
   void poll() {
     std::lock_guard lock(mutex);
     if (child >= 0) {
+      if (step == "capture" || step == "floor_capture") read_capture();
       int status = 0;
       if (::waitpid(child, &status, WNOHANG) == child) finished(status);
     }

@@ -101,13 +101,6 @@ void ConsoleState::on_features(const std::string& camera, FeatureRecord features
   Camera& entry = cameras_[camera];
   const double latency_ms = static_cast<double>(now - features.stamp_ns) * 1e-6;
   entry.latency_ms = entry.frames_received == 0 ? latency_ms : 0.9 * entry.latency_ms + 0.1 * latency_ms;
-  if (coverage_active_) {
-    Coverage& coverage = coverage_[camera];
-    ++coverage.frames;
-    if (!features.blobs.empty()) ++coverage.frames_with_blobs;
-    if (entry.info) coverage.grid.set_size(entry.info->geometry.width, entry.info->geometry.height);
-    for (const BlobPoint& blob : features.blobs) coverage.grid.add(blob.x, blob.y);
-  }
   entry.features = std::move(features);
   entry.features_ns = now;
   ++entry.frames_received;
@@ -223,6 +216,16 @@ void ConsoleState::start_coverage(TimeNs now) {
   coverage_.clear();
   coverage_active_ = true;
   coverage_start_ns_ = now;
+}
+
+void ConsoleState::add_coverage_frame(const std::string& camera, const std::vector<BlobPoint>& blobs) {
+  std::lock_guard lock(mutex_);
+  Coverage& coverage = coverage_[camera];
+  ++coverage.frames;
+  if (!blobs.empty()) ++coverage.frames_with_blobs;
+  if (const auto found = cameras_.find(camera); found != cameras_.end() && found->second.info)
+    coverage.grid.set_size(found->second.info->geometry.width, found->second.info->geometry.height);
+  for (const BlobPoint& blob : blobs) coverage.grid.add(blob.x, blob.y);
 }
 
 void ConsoleState::stop_coverage() {

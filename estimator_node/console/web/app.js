@@ -587,6 +587,7 @@ function showReport(job) {
 
 function onState(state) {
   page.state = state;
+  if (state.full) page.full = state;  // the latest with the slow parts (recorders, calibration, status)
   for (const camera of state.cameras) {
     updateCard(camera);
     updateFrustum(camera);

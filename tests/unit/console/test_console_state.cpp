@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <nlohmann/json.hpp>
@@ -156,6 +157,27 @@ TEST(ConsoleState, DetailsOfATrackAndABody) {
   EXPECT_EQ(figures["sigma_position_mm"], json({1.0, 1.0, 2.0}));
   EXPECT_DOUBLE_EQ(figures["sigma_rotation_deg"][0].get<double>(), 1.0);
   EXPECT_TRUE(state.details("body", "other", kT0).is_null());
+}
+
+TEST(ConsoleState, CaptureCoverageOnTheCamerasImageGrid) {
+  ConsoleState state;
+  state.on_info("cam0", vga_info(), kT0);
+  state.start_coverage(kT0);
+  state.add_coverage_frame("cam0", {{0, 0, 3}, {639, 479, 3}});
+  state.add_coverage_frame("cam0", {});
+  const json calibration = state.snapshot(kT0 + kNsPerSecond, true)["calibration"];
+  EXPECT_EQ(calibration["capturing"], true);
+  ASSERT_EQ(calibration["cameras"].size(), 1u);
+  const json& camera = calibration["cameras"][0];
+  EXPECT_EQ(camera["frames"], 2);
+  EXPECT_EQ(camera["frames_with_blobs"], 1);
+  EXPECT_EQ(camera["coverage_percent"], 3);  // 2 of 64 cells
+  const std::string cells = camera["cells"];
+  EXPECT_EQ(cells.front(), '1');  // top left
+  EXPECT_EQ(cells.back(), '1');   // bottom right
+  EXPECT_EQ(std::count(cells.begin(), cells.end(), '1'), 2);
+  state.stop_coverage();
+  EXPECT_EQ(state.snapshot(kT0 + kNsPerSecond, true)["calibration"]["capturing"], false);
 }
 
 }  // namespace

@@ -3,7 +3,8 @@
 // started by tests/integration/test_console_calibration.sh: capture the wand with live coverage,
 // stop, solve, and the report shown. Writes what the page showed to --out.
 //   node console_calibration_test.mjs --url <console URL with token> --out <results.json> --shots <dir>
-//        --cameras <shell command that runs the cameras and returns when they end> --wand <spec>
+//        --cameras <shell command that runs the cameras (waving the wand) and returns when they end>
+//        --floor-cameras <the same, the wand laid on the floor> --wand <spec>
 import { spawn } from 'node:child_process';
 import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
@@ -44,10 +45,13 @@ try {
   check(live, 'live 8x8 coverage for all six cameras while capturing');
   await Promise.race([camerasDone, new Promise((resolve) => setTimeout(resolve, 20000))]);
   await page.locator('#calibration').screenshot({ path: join(args.shots, 'console_calibration_capture.png') });
-  results.coverage = Object.fromEntries(await page.evaluate(() => window.panoptes.calibration.cameras.map((c) => [c.id, c.coverage_percent])));
   await page.locator('.cal-stop').first().click();
   check(await waitFor(page, () => ['done', 'stopped'].includes(window.panoptes.calibration.job.result) &&
-    window.panoptes.calibration.job.have_wand, null, 10000), `capture stopped: ${JSON.stringify((await job(page)).result)}`);
+    window.panoptes.calibration.job.have_wand && !window.panoptes.calibration.capturing, null, 10000),
+  `capture stopped: ${JSON.stringify((await job(page)).result)}`);
+  await new Promise((resolve) => setTimeout(resolve, 700));  // the next full state
+  results.coverage = Object.fromEntries(await page.evaluate(() => window.panoptes.calibration.cameras.map((c) =>
+    [c.id, [c.coverage_percent, c.frames, c.frames_with_blobs]])));
 
   await page.click('#cal-solve');
   const solved = await waitFor(page, () => window.panoptes.calibration.job.step === 'solve' && window.panoptes.calibration.job.result !== 'running' &&
@@ -70,6 +74,25 @@ try {
   await page.click('#cal-world');
   check(await waitFor(page, () => document.getElementById('cal-result').textContent.includes('floor first'), null, 5000),
         `world frame before a floor capture refused: "${await page.textContent('#cal-result')}"`);
+
+  // Step 4c: the wand laid on the floor, then the world frame.
+  await page.click('#cal-floor');
+  check(await waitFor(page, () => window.panoptes.calibration.job.step === 'floor_capture' && window.panoptes.calibration.job.result === 'running',
+                      null, 5000), 'floor capture running');
+  const floorCameras = spawn('bash', ['-c', args['floor-cameras']], { stdio: 'ignore' });
+  await Promise.race([new Promise((resolve) => floorCameras.on('exit', resolve)), new Promise((resolve) => setTimeout(resolve, 25000))]);
+  await page.locator('.cal-stop').last().click();
+  check(await waitFor(page, () => window.panoptes.calibration.job.result === 'done' && window.panoptes.calibration.job.have_floor, null, 10000),
+        `floor capture stopped: ${JSON.stringify((await job(page)).result)}`);
+  await page.fill('#cal-floor-offset', '0.007');
+  await page.click('#cal-world');
+  const world = await waitFor(page, () => window.panoptes.calibration.job.step === 'world' && window.panoptes.calibration.job.result !== 'running' &&
+    document.getElementById('cal-world-text').textContent.length > 0, null, 30000);
+  const worldJob = await job(page);
+  results.world_text = await page.textContent('#cal-world-text');
+  check(world && worldJob.result === 'done' && results.world_text.includes('placements'),
+        `world frame set from the page: ${worldJob.result}: "${results.world_text.split('\n')[0]}"`);
+  await page.locator('#calibration .steps > li').nth(3).screenshot({ path: join(args.shots, 'console_calibration_world.png') });
   check(errors.length === 0, `no console errors in the page (${errors.join(' | ') || 'none'})`);
 } catch (error) {
   check(false, `browser test aborted: ${error.stack || error}`);

@@ -174,7 +174,8 @@ try {
   // the blobs' top, its sides through their box's bottom corners, in image pixels.
   const corners = await page.evaluate(() => {
     const camera = window.panoptes.state.cameras.find((c) => c.id === 'cam2');
-    const [width, height] = [camera.geometry.width, camera.geometry.height];
+    const canvas = document.querySelector('.card[data-camera="cam2"] canvas');  // sized as the image
+    const [width, height] = [canvas.width, canvas.height];
     const xs = camera.blobs.map((b) => b[0]), ys = camera.blobs.map((b) => b[1]);
     const x0 = Math.min(...xs) - 30, x1 = Math.max(...xs) + 30, y0 = Math.min(...ys) - 30, y1 = Math.max(...ys) + 30;
     const cx = (x0 + x1) / 2, w = x1 - x0, h = y1 - y0;
@@ -268,7 +269,7 @@ try {
     await row.locator('button.stop').click();
     const inList = await waitFor(page, (name) => [...document.querySelectorAll('#recordings td:first-child')].some((cell) => cell.textContent.endsWith(name)),
                                  args['recording-name'], 6000);
-    const entry = await page.evaluate((name) => window.panoptes.state.recordings.find((r) => r.path.endsWith(name)), args['recording-name']);
+    const entry = await page.evaluate((name) => window.panoptes.full.recordings.find((r) => r.path.endsWith(name)), args['recording-name']);
     results.recording = entry || null;
     await page.locator('#recording').screenshot({ path: join(args.shots, 'console_recording.png') });
     check(inList && entry && entry.messages > 0, `the stopped recording is listed: ${JSON.stringify(entry)}`);

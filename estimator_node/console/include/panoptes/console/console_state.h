@@ -188,8 +188,10 @@ class ConsoleState {
   std::vector<CommandOutcome> take_outcomes(TimeNs now);
 
   // Wand capture coverage (the calibration page): from start_coverage on, every camera's frames
-  // and the 8x8 grid of where its blobs were seen, as `estimator_node calibrate capture` prints.
+  // and the 8x8 grid of where its blobs were seen, as `estimator_node calibrate capture` prints;
+  // fed with the frames the capture writes (the same frames the CLI counts).
   void start_coverage(TimeNs now);
+  void add_coverage_frame(const std::string& camera, const std::vector<BlobPoint>& blobs);
   void stop_coverage();
   // The calibration workflow's step, log and report (JSON text, from the program's runner).
   void set_calibration_job(std::string job_json);
