@@ -20,8 +20,6 @@
 
 #include "panoptes/jsonl.h"
 
-extern char** environ;
-
 namespace panoptes::console {
 
 namespace {

@@ -345,7 +345,8 @@ void ConsoleServer::Impl::handle_client_message(WebSocketSession& session, std::
   if (kind == "select") {
     const auto what = message.find("kind");
     const auto key = message.find("key");
-    if (what == message.end() || !what->is_string() || (*what != "track" && *what != "body" && *what != "") ||
+    if (what == message.end() || !what->is_string() ||
+        (*what != "track" && *what != "body" && !what->get_ref<const std::string&>().empty()) ||
         key == message.end() || !key->is_string() || key->get_ref<const std::string&>().size() > 128) {
       reject(session, 0, "bad_message", "select needs 'kind' (track | body | \"\") and a string 'key'");
       return;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <string>
 
 namespace panoptes {
@@ -13,6 +14,7 @@ namespace panoptes {
 class ImageCoverage {
  public:
   static constexpr int kCells = 8;
+  static constexpr std::size_t kCellCount = 64;  // kCells x kCells
 
   void set_size(int width, int height) {
     width_ = width;
@@ -25,10 +27,10 @@ class ImageCoverage {
     max_y_ = std::max(max_y_, y + 1);
     const int column = std::clamp(static_cast<int>(x * kCells / w), 0, kCells - 1);
     const int row = std::clamp(static_cast<int>(y * kCells / h), 0, kCells - 1);
-    cells_[static_cast<std::size_t>(row * kCells + column)] = true;
+    cells_[static_cast<std::size_t>(row) * kCells + static_cast<std::size_t>(column)] = true;
   }
-  int percent() const { return static_cast<int>(covered() * 100 / (kCells * kCells)); }
-  double fraction() const { return static_cast<double>(covered()) / (kCells * kCells); }
+  int percent() const { return static_cast<int>(covered() * 100 / static_cast<long>(kCellCount)); }
+  double fraction() const { return static_cast<double>(covered()) / static_cast<double>(kCellCount); }
   // Row by row from the top left, '1' where a blob was seen.
   std::string cells() const {
     std::string out;
@@ -43,7 +45,7 @@ class ImageCoverage {
   int height_ = 0;
   double max_x_ = 1;
   double max_y_ = 1;
-  std::array<bool, kCells * kCells> cells_{};
+  std::array<bool, kCellCount> cells_{};
 };
 
 }  // namespace panoptes
