@@ -84,6 +84,7 @@ struct CalibrationWorkflow::Impl {
   json report;  // from the last solve
   std::string report_text;
   std::string world_text;
+  std::uint64_t generation = 0;  // counts finished steps: the page fetches the report when it changes
   // The running capture's file, read as the capture writes it, for the live coverage.
   std::ifstream capture_file;
   std::streamoff capture_offset = 0;
@@ -192,6 +193,7 @@ struct CalibrationWorkflow::Impl {
 
   void finished(int status) {
     child = -1;
+    ++generation;
     exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     const bool capture = step == "capture" || step == "floor_capture";
     result = exit_code == 0 ? "done" : (capture && stop_requested ? "stopped" : "failed");
@@ -226,12 +228,14 @@ struct CalibrationWorkflow::Impl {
                       {"have_floor", fs::exists(file("floor.jsonl"), error)},
                       {"have_calibration", fs::exists(file("calibration.yaml"), error)},
                       {"wand", wand},
-                      {"report", report},
-                      {"report_text", report_text},
-                      {"world_text", world_text},
                       {"plots", plots},
+                      {"generation", generation},
                       {"capture_bad_lines", capture_bad_lines}};
-    state.set_calibration_job(job.dump());
+    json full = job;
+    full["report"] = report;
+    full["report_text"] = report_text;
+    full["world_text"] = world_text;
+    state.set_calibration_job(job.dump(), full.dump());
   }
 
   void poll() {

@@ -234,9 +234,15 @@ void ConsoleState::stop_coverage() {
   coverage_active_ = false;
 }
 
-void ConsoleState::set_calibration_job(std::string job_json) {
+void ConsoleState::set_calibration_job(std::string summary_json, std::string full_json) {
   std::lock_guard lock(mutex_);
-  calibration_job_ = std::move(job_json);
+  calibration_job_ = std::move(summary_json);
+  calibration_job_full_ = std::move(full_json);
+}
+
+std::string ConsoleState::calibration_job() const {
+  std::lock_guard lock(mutex_);
+  return calibration_job_full_;
 }
 
 // Called with the lock held.

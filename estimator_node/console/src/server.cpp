@@ -507,6 +507,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     if (path == "/api/state") {
       respond(request, http::status::ok, "application/json",
               server_.state.snapshot(wall_now_ns(), true).dump(), false);
+    } else if (path == "/api/calibration") {
+      respond(request, http::status::ok, "application/json", server_.state.calibration_job(), false);
     } else if (path == "/api/stats") {
       respond(request, http::status::ok, "application/json", ConsoleServer::Impl::stats_of(server_).dump(),
               false);

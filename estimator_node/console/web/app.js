@@ -521,7 +521,7 @@ function drawCoverage(canvas, cells) {
   }
 }
 
-let shownReport = '';
+let shownGeneration = null;
 function updateCalibration(calibration) {
   page.calibration = calibration;
   const job = calibration.job || {};
@@ -545,9 +545,14 @@ function updateCalibration(calibration) {
   const status = job.step === 'idle' ? '' : `${job.step}: ${job.result}${running && calibration.capturing ? ` (${calibration.seconds.toFixed(0)} s)` : ''}` +
     (job.result === 'failed' ? ` (exit ${job.exit_code})` : '');
   document.getElementById('cal-log').textContent = status ? `${status}\n${job.log}` : '';
-  document.getElementById('cal-world-text').textContent = job.world_text || '';
-  const key = JSON.stringify([job.report_text, job.plots]);
-  if (key !== shownReport) { shownReport = key; showReport(job); }
+  // The report and the world frame's summary come once per finished step (they can be large).
+  if (job.generation !== shownGeneration) {
+    shownGeneration = job.generation;
+    fetch('/api/calibration').then((response) => response.json()).then((full) => {
+      document.getElementById('cal-world-text').textContent = full.world_text || '';
+      showReport(full);
+    }).catch(() => { shownGeneration = null; });
+  }
 }
 
 function showReport(job) {

@@ -119,6 +119,12 @@ TEST_F(ConsoleServerTest, EveryRequestNeedsTheToken) {
   EXPECT_EQ(get("/app.js?token=" + kToken).body(), "// app.js\n");
   EXPECT_EQ(get("/../../etc/passwd?token=" + kToken).result(), http::status::not_found);
   EXPECT_EQ(json::parse(get("/api/state?token=" + kToken).body())["type"], "state");
+  EXPECT_EQ(get("/api/calibration").result(), http::status::unauthorized);
+  EXPECT_EQ(get("/calibration/calibration.layout.png").result(), http::status::unauthorized);
+  EXPECT_EQ(get("/api/calibration?token=" + kToken).result(), http::status::ok);
+  // Plots: a bare .png name only; nothing outside the calibration directory.
+  EXPECT_EQ(get("/calibration/..%2F..%2Fetc%2Fpasswd?token=" + kToken).result(), http::status::not_found);
+  EXPECT_EQ(get("/calibration/../app.js?token=" + kToken).result(), http::status::not_found);
 
   net::io_context io;
   EXPECT_THROW(open_socket(io, "/ws"), beast::system_error);

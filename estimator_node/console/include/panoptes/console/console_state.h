@@ -193,8 +193,10 @@ class ConsoleState {
   void start_coverage(TimeNs now);
   void add_coverage_frame(const std::string& camera, const std::vector<BlobPoint>& blobs);
   void stop_coverage();
-  // The calibration workflow's step, log and report (JSON text, from the program's runner).
-  void set_calibration_job(std::string job_json);
+  // The calibration workflow's step and log (JSON text, in every full snapshot) and the same with
+  // the last report and world-frame summary (served once per step by /api/calibration).
+  void set_calibration_job(std::string summary_json, std::string full_json);
+  std::string calibration_job() const;
 
   // The figures of one track (`kind` "track", key its id) or body ("body", key its name) for the
   // page's details panel; null when it is not (or no longer) live.
@@ -257,6 +259,7 @@ class ConsoleState {
   TimeNs coverage_stop_ns_ = 0;
   std::map<std::string, Coverage> coverage_;
   std::string calibration_job_ = "{}";
+  std::string calibration_job_full_ = "{}";
   std::vector<CommandOutcome> outcomes_;
 };
 
