@@ -484,7 +484,9 @@ function updateRecorders(recorders, recordings) {
   const seen = new Set(recorders.map((r) => r.id));
   for (const [id, row] of recorderRows) if (!seen.has(id)) { row.remove(); recorderRows.delete(id); }
   const body = document.querySelector('#recordings tbody');
-  if (body.children.length === recordings.length) return;
+  const key = `${recordings.length} ${recordings.length ? recordings.at(-1).started_ms : 0}`;
+  if (body.dataset.key === key) return;  // the list is capped: its length alone may not change
+  body.dataset.key = key;
   body.textContent = '';
   for (const r of [...recordings].reverse()) {
     const row = body.insertRow();
