@@ -92,3 +92,26 @@ start_clients_estimator() {  # RUN DURATION
   estimator=$!
   pids+=("$estimator")
 }
+
+# require_browser: the console's browser tests need playwright-core (npm ci in the console's web
+# folder) and Debian's chromium; skipped (77) without them outside CI, failed in CI. Sets $web.
+require_browser() {
+  web="$source_dir/estimator_node/console/web"
+  if [ ! -d "$web/node_modules/playwright-core" ] || [ ! -x /usr/bin/chromium ]; then
+    if [ -n "${CI:-}" ]; then fail "playwright-core (npm ci in $web) or /usr/bin/chromium missing"; finish; fi
+    echo "SKIP: playwright-core (npm ci in $web) or /usr/bin/chromium missing"; exit 77
+  fi
+}
+
+# floor_recording NAME POINTS QUATERNIONS: the room ($work/room.yaml, a copy of
+# deploy/scenes/wand_room.yaml) with the wand resting (1.5 s) and sliding (1 s)
+# on the floor through the waypoints (each given twice: start and end of a rest), marker centres
+# 7 mm up (their radius); features in $work/NAME/.
+floor_recording() {
+  local times="0, 1.5, 2.5, 4, 5, 6.5, 7, 8.5"
+  sed -e '/^    path: {type: lissajous/d' -e '/^    rotation: {type: oscillate/d' "$work/room.yaml" >"$work/$1.yaml"
+  printf '    path: {type: waypoints, points: [%s], times: [%s]}\n    rotation: {type: waypoints, q: [%s], times: [%s]}\n' \
+    "$2" "$times" "$3" "$times" >>"$work/$1.yaml"
+  expect_exit 0 "simulate the wand on the floor ($1)" -- "$bin/panoptes_sim" features --scene "$work/$1.yaml" \
+    --out-dir "$work/$1" --duration 8.5
+}

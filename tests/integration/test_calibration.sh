@@ -132,17 +132,6 @@ grep -q "UNSCALED" "$work/led_world.yaml" && fail "led_world.yaml is still marke
 expect_cameras_within "$work/led_world.yaml" 0.005 "single LED + L-frame: cameras within 5 mm of the truth"
 
 # --- world frame from the wand laid on the floor (--wand-floor) ----------------------------------
-# floor_recording NAME POINTS QUATERNIONS: the room with the wand resting (1.5 s) and sliding (1 s)
-# on the floor through the waypoints (each given twice: start and end of a rest), marker centres
-# 7 mm up (their radius); features in $work/NAME/.
-floor_recording() {
-  local times="0, 1.5, 2.5, 4, 5, 6.5, 7, 8.5"
-  sed -e '/^    path: {type: lissajous/d' -e '/^    rotation: {type: oscillate/d' "$work/room.yaml" >"$work/$1.yaml"
-  printf '    path: {type: waypoints, points: [%s], times: [%s]}\n    rotation: {type: waypoints, q: [%s], times: [%s]}\n' \
-    "$2" "$times" "$3" "$times" >>"$work/$1.yaml"
-  expect_exit 0 "simulate the wand on the floor ($1)" -- "$bin/panoptes_sim" features --scene "$work/$1.yaml" \
-    --out-dir "$work/$1" --duration 8.5
-}
 # The first rest puts the wand's first marker on the true origin, along +x: the frames must agree.
 floor_recording floor \
   "[0.25, 0, 0.007], [0.25, 0, 0.007], [-0.8, 0.5, 0.007], [-0.8, 0.5, 0.007], [0.9, 0.8, 0.007], [0.9, 0.8, 0.007], [-0.5, -0.9, 0.007], [-0.5, -0.9, 0.007]" \

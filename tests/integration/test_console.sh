@@ -6,13 +6,11 @@
 # scene's calibration and bodies, panoptes_console. The browser checks the page; this script
 # checks what the page showed against what each camera published (its own --out-features record):
 # blob counts and positions, the threshold taking every blob away within 1 s and bringing them
-# back, the mask removing the blobs inside it. Screenshots go to $PANOPTES_CONSOLE_SHOTS (docs/).
+# back, the mask rectangle and polygon removing the blobs inside them, a recording started and
+# stopped from the page (panoptes_record --idle on the bus) written to disk, and the estimator
+# killed and restarted. Screenshots go to $PANOPTES_CONSOLE_SHOTS (docs/).
 source "$(dirname "$0")/lib.sh"
-web="$source_dir/estimator_node/console/web"
-if [ ! -d "$web/node_modules/playwright-core" ] || [ ! -x /usr/bin/chromium ]; then
-  if [ -n "${CI:-}" ]; then fail "playwright-core (npm ci in $web) or /usr/bin/chromium missing"; finish; fi
-  echo "SKIP: playwright-core (npm ci in $web) or /usr/bin/chromium missing"; exit 77
-fi
+require_browser
 scene="$source_dir/deploy/scenes/console.yaml"
 shots="${PANOPTES_CONSOLE_SHOTS:-$work/shots}"
 mkdir -p "$shots"
@@ -20,11 +18,16 @@ mkdir -p "$shots"
   && "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim" --duration 0.1 >/dev/null 2>&1 \
   || { fail "simulate the console scene"; finish; }
 
-"$bin/estimator_node" --calibration "$work/calibration.yaml" --bodies "$work/sim/bodies.yaml" --duration 80 \
-  --status-period 1 >"$work/estimator.log" 2>&1 &
+estimator_command="'$bin/estimator_node' --calibration '$work/calibration.yaml' --bodies '$work/sim/bodies.yaml' --status-period 1"
+bash -c "exec $estimator_command --duration 150" >"$work/estimator.log" 2>&1 &
+estimator=$!
+pids+=("$estimator")
+estimator_restart="$estimator_command --duration 90 >'$work/estimator2.log' 2>&1 & echo \$! >'$work/estimator2.pid'"
+mkdir -p "$work/recordings"
+"$bin/panoptes_record" --idle --id console_test --out "$work/recordings/default.mcap" --quiet >"$work/recorder.log" 2>&1 &
 pids+=("$!")
 for camera in cam0 cam1 cam2 cam3; do
-  "$bin/camera_node" --source "sim:$scene#$camera" --duration 80 --out-features "$work/$camera.jsonl" --quiet \
+  "$bin/camera_node" --source "sim:$scene#$camera" --duration 150 --out-features "$work/$camera.jsonl" --quiet \
     >"$work/$camera.log" 2>&1 &
   pids+=("$!")
 done
@@ -43,10 +46,23 @@ expect_stderr_contains "at least 16 characters" "the refusal names the rule"
 
 start=$(date +%s)
 node "$web/test/console_test.mjs" --url "$url" --out "$work/browser.json" --shots "$shots" \
-  --console-pid "$console" --restart "$restart" | tee "$work/browser.out"
+  --console-pid "$console" --restart "$restart" --estimator-pid "$estimator" --estimator-restart "$estimator_restart" \
+  --recorder console_test --recording-name take_console.mcap | tee "$work/browser.out"
 rc=${PIPESTATUS[0]}
 [ -s "$work/console2.pid" ] && pids+=("$(cat "$work/console2.pid")")
+[ -s "$work/estimator2.pid" ] && pids+=("$(cat "$work/estimator2.pid")")
 [ "$rc" -eq 0 ] && pass "browser checks ($(( $(date +%s) - start )) s)" || fail "browser checks (exit $rc)"
+
+# The recording started and stopped from the page: on disk, next to the recorder's --out, a whole
+# MCAP file (magic at both ends) of the size the page listed.
+take="$work/recordings/take_console.mcap"
+listed_bytes="$(/usr/bin/python3 -c 'import json,sys; r=json.load(open(sys.argv[1])).get("recording") or {}; print(r.get("bytes", -1))' "$work/browser.json")"
+if [ -s "$take" ] && [ "$(head -c 8 "$take" | od -An -c | tr -d ' ')" = "211MCAP0\r\n" ] \
+   && [ "$(tail -c 8 "$take" | od -An -c | tr -d ' ')" = "211MCAP0\r\n" ] && [ "$(stat -c %s "$take")" = "$listed_bytes" ]; then
+  pass "the recording made from the page is a whole MCAP file of the listed size ($listed_bytes bytes)"
+else
+  fail "recording from the page: $take ($(stat -c %s "$take" 2>/dev/null || echo missing) bytes, listed $listed_bytes)"
+fi
 
 # What the page showed against what the cameras published.
 for pid in "${pids[@]}"; do kill -INT "$pid" 2>/dev/null; done
@@ -105,6 +121,24 @@ if cmd.get("mask_args"):
     had = sum(1 for r in before for b in r["blobs"] if overlaps(b))
     ok &= report(len(masked) > 10 and inside == 0 and had > 0,
                  f"cam1 published no blob with pixels inside the mask ({len(masked)} frames; {had} such blobs in the 3 s before)")
+if cmd.get("polygon_args"):
+    p = [float(v) for v in cmd["polygon_args"][1:]]
+    corners = [(p[0], p[1]), (p[2], p[3]), (p[4], p[5])]
+    def depth(x, y):  # distance inside the (convex) triangle, negative outside
+        out = []
+        for k in range(3):
+            (ax, ay), (bx, by), (cx, cy) = corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]
+            side = (bx - ax) * (y - ay) - (by - ay) * (x - ax)
+            other = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+            out.append(side * (1 if other > 0 else -1) / ((bx - ax) ** 2 + (by - ay) ** 2) ** 0.5)
+        return min(out)
+    # Centroids deeper than 3 px: a spot on the edge keeps its outside pixels.
+    masked = window("cam2", cmd["polygon_ms"] + 1000, cmd["clear_polygon_ms"])
+    inside = sum(1 for r in masked for b in r["blobs"] if depth(b["x"], b["y"]) > 3)
+    before = window("cam2", cmd["polygon_ms"] - 3000, cmd["polygon_ms"])
+    had = sum(1 for r in before for b in r["blobs"] if depth(b["x"], b["y"]) > 3)
+    ok &= report(len(masked) > 10 and inside == 0 and had > 0,
+                 f"cam2 published no blob inside the polygon ({len(masked)} frames; {had} such blobs in the 3 s before)")
 sys.exit(0 if ok else 1)
 PY
 [ $? -eq 0 ] && pass "the page agrees with what the cameras published" || fail "page against the cameras' records"

@@ -14,6 +14,7 @@
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
 #include "panoptes/dds/time_sync.h"
+#include "panoptes/image_coverage.h"
 #include "panoptes/jsonl.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
@@ -28,26 +29,7 @@ struct CameraProgress {
   std::int64_t frames_with_blobs = 0;
   std::int64_t missing = 0;      // frame numbers skipped between received frames (lost or not sent)
   std::int64_t last_frame = -1;  // frame number of the newest frame received
-  int width = 0, height = 0;     // from CameraInfo; else grown from the blobs seen
-  double max_x = 1, max_y = 1;
-  bool cells[8][8] = {};
-  std::vector<std::pair<double, double>> pending;  // blobs seen before the size was known
-
-  int coverage_percent() const {
-    int count = 0;
-    for (const auto& row : cells)
-      for (bool cell : row) count += cell ? 1 : 0;
-    return count * 100 / 64;
-  }
-  void add(double x, double y) {
-    const double w = width > 0 ? width : std::max(max_x, x + 1);
-    const double h = height > 0 ? height : std::max(max_y, y + 1);
-    max_x = std::max(max_x, x + 1);
-    max_y = std::max(max_y, y + 1);
-    const int cx = std::clamp(static_cast<int>(x * 8 / w), 0, 7),
-              cy = std::clamp(static_cast<int>(y * 8 / h), 0, 7);
-    cells[cy][cx] = true;
-  }
+  ImageCoverage coverage;        // sized from CameraInfo; else spans the blobs seen
 };
 
 }  // namespace
@@ -81,9 +63,8 @@ int run_calibrate_capture(int argc, char** argv) {
   auto info_reader = bus.make_reader<msg::CameraInfo>([&](msg::CameraInfo&& info) {
     if (auto calibration = dds::calibration_from(info)) {
       std::lock_guard<std::mutex> lock(mutex);
-      auto& p = progress[calibration->id];
-      p.width = calibration->intrinsics.width;
-      p.height = calibration->intrinsics.height;
+      progress[calibration->id].coverage.set_size(calibration->intrinsics.width,
+                                                  calibration->intrinsics.height);
     }
   });
   // Reliable: camera_node's feature writers offer reliability (the estimator asks for best effort
@@ -115,7 +96,7 @@ int run_calibrate_capture(int argc, char** argv) {
         if (p.last_frame >= 0 && frame.frame > p.last_frame + 1) p.missing += frame.frame - p.last_frame - 1;
         p.last_frame = std::max(p.last_frame, frame.frame);
         if (!frame.blobs.empty()) ++p.frames_with_blobs;
-        for (const auto& blob : frame.blobs) p.add(blob.x, blob.y);
+        for (const auto& blob : frame.blobs) p.coverage.add(blob.x, blob.y);
       }
     }
     for (const auto& frame : batch) writer.write(frame);
@@ -132,7 +113,7 @@ int run_calibrate_capture(int argc, char** argv) {
       std::string line = "[" + std::to_string(static_cast<int>(elapsed)) + " s]";
       for (const auto& [id, p] : progress)
         line += "  " + id + ": " + std::to_string(p.frames_with_blobs) + "/" + std::to_string(p.frames) +
-                " frames with blobs, coverage " + std::to_string(p.coverage_percent()) + "%" +
+                " frames with blobs, coverage " + std::to_string(p.coverage.percent()) + "%" +
                 (p.missing > 0 ? ", " + std::to_string(p.missing) + " missing" : "");
       if (progress.empty()) line += "  waiting for cameras...";
       std::fprintf(stderr, "%s\n", line.c_str());
@@ -147,7 +128,7 @@ int run_calibrate_capture(int argc, char** argv) {
   for (const auto& [id, p] : progress)
     std::printf("  %s: %lld frames, %lld with blobs, %lld missing, image coverage %d%%\n", id.c_str(),
                 static_cast<long long>(p.frames), static_cast<long long>(p.frames_with_blobs),
-                static_cast<long long>(p.missing), p.coverage_percent());
+                static_cast<long long>(p.missing), p.coverage.percent());
   return written > 0 ? kExitOk : kExitFailure;
 }
 

@@ -15,6 +15,7 @@
 
 #include "panoptes/calibration.h"
 #include "panoptes/calibration_file.h"
+#include "panoptes/image_coverage.h"
 
 namespace panoptes::calib {
 
@@ -51,17 +52,12 @@ std::filesystem::path sibling(const std::filesystem::path& out_yaml, const std::
 double image_coverage(const SolveResult& result, int camera) {
   const auto& k = result.cameras[static_cast<std::size_t>(camera)].intrinsics;
   if (k.width <= 0 || k.height <= 0) return 0.0;
-  bool cells[8][8] = {};
+  ImageCoverage grid;
+  grid.set_size(k.width, k.height);
   for (const auto& r : result.residuals) {
-    if (r.camera != camera) continue;
-    const int x = std::clamp(static_cast<int>(r.observed.x() * 8 / k.width), 0, 7);
-    const int y = std::clamp(static_cast<int>(r.observed.y() * 8 / k.height), 0, 7);
-    cells[y][x] = true;
+    if (r.camera == camera) grid.add(r.observed.x(), r.observed.y());
   }
-  int count = 0;
-  for (auto& row : cells)
-    for (bool cell : row) count += cell ? 1 : 0;
-  return count / 64.0;
+  return grid.fraction();
 }
 
 namespace {

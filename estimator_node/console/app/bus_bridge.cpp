@@ -2,6 +2,7 @@
 #include "bus_bridge.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "panoptes/dds/convert.h"
 #include "panoptes/time.h"
@@ -69,10 +70,37 @@ EstimatorRecord estimator_of(const msg::EstimatorStatus& status) {
   return out;
 }
 
+TrackPoint track_of(const msg::Track& track) {
+  TrackPoint out;
+  out.id = track.id();
+  std::copy(track.position().begin(), track.position().end(), out.position.begin());
+  std::copy(track.velocity().begin(), track.velocity().end(), out.velocity.begin());
+  std::copy(track.covariance().begin(), track.covariance().end(), out.covariance.begin());
+  out.status = track.status();
+  out.cameras = track.cameras();
+  return out;
+}
+
+BodyRecord body_of(const msg::BodyPose& pose) {
+  BodyRecord out{pose.name(), pose_of(pose.pose()), pose.quality()};
+  std::copy(pose.linear_velocity().begin(), pose.linear_velocity().end(), out.linear_velocity.begin());
+  std::copy(pose.angular_velocity().begin(), pose.angular_velocity().end(), out.angular_velocity.begin());
+  for (std::size_t k = 0; k < 6; ++k) out.sigma[k] = std::sqrt(std::max(0.0, pose.covariance()[k * 6 + k]));
+  out.stamp_ns = pose.stamp_ns();
+  return out;
+}
+
+RecorderRecord recorder_of(const msg::RecorderStatus& status) {
+  return {status.recording(), status.path(),           status.topics(), status.messages(),
+          status.bytes(),     status.messages_per_s(), status.error()};
+}
+
 }  // namespace
 
 struct BusBridge::Impl {
   std::unique_ptr<dds::Writer<msg::CameraCommand>> commands;
+  std::unique_ptr<dds::Writer<msg::RecorderCommand>> recorder_commands;
+  std::unique_ptr<dds::Reader<msg::RecorderStatus>> recorders;
   std::unique_ptr<dds::Reader<msg::CameraInfo>> info;
   std::unique_ptr<dds::Reader<msg::CameraStatus>> status;
   std::unique_ptr<dds::Reader<msg::FeatureFrame>> features;
@@ -115,13 +143,14 @@ BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_uniqu
   impl_->tracks = bus.make_reader<msg::TrackFrame>([&state](msg::TrackFrame&& frame) {
     std::vector<TrackPoint> tracks;
     tracks.reserve(frame.tracks().size());
-    for (const msg::Track& track : frame.tracks())
-      tracks.push_back(
-          {track.id(), {track.position()[0], track.position()[1], track.position()[2]}, track.status()});
+    for (const msg::Track& track : frame.tracks()) tracks.push_back(track_of(track));
     state.on_tracks(std::move(tracks), wall_now_ns());
   });
-  impl_->bodies = bus.make_reader<msg::BodyPose>([&state](msg::BodyPose&& pose) {
-    state.on_body({pose.name(), pose_of(pose.pose()), pose.quality()}, wall_now_ns());
+  impl_->bodies = bus.make_reader<msg::BodyPose>(
+      [&state](msg::BodyPose&& pose) { state.on_body(body_of(pose), wall_now_ns()); });
+  impl_->recorder_commands = bus.make_writer<msg::RecorderCommand>();
+  impl_->recorders = bus.make_reader<msg::RecorderStatus>([&state](msg::RecorderStatus&& status) {
+    state.on_recorder_status(status.recorder_id(), recorder_of(status), wall_now_ns());
   });
 }
 
@@ -135,6 +164,16 @@ bool BusBridge::send(const CameraCommandRequest& command) {
   message.command(command.command);
   message.arguments(command.arguments);
   return impl_->commands->write(message);
+}
+
+bool BusBridge::send(const RecorderCommandRequest& command) {
+  if (impl_->recorder_commands->matched_readers() == 0) return false;
+  msg::RecorderCommand message;
+  message.target(command.recorder);
+  message.seq(static_cast<unsigned long long>(wall_now_ns()));
+  message.command(command.command);
+  message.path(command.path);
+  return impl_->recorder_commands->write(message);
 }
 
 }  // namespace panoptes::console

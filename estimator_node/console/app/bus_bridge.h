@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // panoptes_console on the bus: readers that copy what the console shows into the ConsoleState
-// (camera_info, camera_status, features, calibration, estimator_status, tracks, bodies) and the
-// camera_command writer the server's checked commands go out through.
+// (camera_info, camera_status, features, calibration, estimator_status, tracks, bodies,
+// recorder_status) and the camera_command and recorder_command writers the server's checked commands go out
+// through.
 #pragma once
 
 #include <memory>
@@ -21,6 +22,8 @@ class BusBridge {
 
   // Writes the command as panoptes_ctl does; false when no camera node listens.
   bool send(const CameraCommandRequest& command);
+  // Writes a RecorderCommand as panoptes_record --command does; false when no recorder listens.
+  bool send(const RecorderCommandRequest& command);
 
  private:
   struct Impl;

@@ -2,6 +2,7 @@
 // panoptes_console: the operator console. Joins the bus, serves the page and streams the cameras,
 // tracks and bodies to browsers over a WebSocket; forwards checked commands (docs/console.md).
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bus_bridge.h"
+#include "calibration_workflow.h"
 #include "panoptes/cli.h"
 #include "panoptes/console/server.h"
 #include "panoptes/process.h"
@@ -57,6 +59,9 @@ int run(int argc, char** argv) {
   std::string token_file;
   std::string dds_profile;
   std::string url_file;
+  panoptes::console::CalibrationWorkflowOptions calibration;
+  calibration.directory = "panoptes_calibration";
+  calibration.estimator_node = std::filesystem::canonical("/proc/self/exe").parent_path() / "estimator_node";
   CLI::App app{"panoptes_console: the operator console in the browser (Panoptes, docs/console.md)",
                "panoptes_console"};
   app.option_defaults()->always_capture_default();
@@ -71,6 +76,13 @@ int run(int argc, char** argv) {
   app.add_option("--command-rate", options.commands_per_s, "commands per second allowed per browser")
       ->check(CLI::Range(0.1, 1000.0));
   app.add_option("--url-file", url_file, "also write the URL (with the token) to this file");
+  app.add_option("--calibration-dir", calibration.directory,
+                 "where the calibration page's captures, calibration.yaml and its report go");
+  app.add_option("--calibration-cameras", calibration.cameras_file,
+                 "intrinsics file for the calibration page's solve (docs/calibration.md, step 1)")
+      ->default_str("none: the page cannot solve");
+  app.add_option("--estimator-node", calibration.estimator_node,
+                 "the estimator_node program the calibration page runs");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
 
   const auto colon = bind.rfind(':');
@@ -84,6 +96,9 @@ int run(int argc, char** argv) {
     return panoptes::kExitBadInput;
   }
   options.bind_address = bind.substr(0, colon);
+  calibration.directory = std::filesystem::absolute(calibration.directory);
+  calibration.dds_profile = dds_profile;
+  options.calibration_dir = calibration.directory;
   options.port = static_cast<unsigned short>(port);
   try {
     options.token = token_file.empty() ? generate_token() : read_token(token_file);
@@ -99,11 +114,16 @@ int run(int argc, char** argv) {
   bus_options.participant_name = "panoptes_console";
   panoptes::dds::Bus bus(bus_options);
   panoptes::console::BusBridge bridge(bus, state);
+  panoptes::console::CalibrationWorkflow workflow(calibration, state);
   std::unique_ptr<panoptes::console::ConsoleServer> server;
   try {
     server = std::make_unique<panoptes::console::ConsoleServer>(
         options, state,
-        [&bridge](const panoptes::console::CameraCommandRequest& command) { return bridge.send(command); });
+        [&bridge](const panoptes::console::CameraCommandRequest& command) { return bridge.send(command); },
+        [&bridge](const panoptes::console::RecorderCommandRequest& command) { return bridge.send(command); },
+        [&workflow](const panoptes::console::CalibrationRequest& request) {
+          return workflow.handle(request);
+        });
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_console: cannot serve on %s: %s\n", bind.c_str(), error.what());
     return panoptes::kExitFailure;
@@ -115,8 +135,11 @@ int run(int argc, char** argv) {
   std::fflush(stdout);
   if (!url_file.empty()) std::ofstream(url_file) << url << "\n";
 
-  std::thread watcher([&server] {
-    while (!panoptes::stop_requested()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::thread watcher([&server, &workflow] {
+    for (int tick = 0; !panoptes::stop_requested(); ++tick) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      if (tick % 4 == 0) workflow.poll();
+    }
     server->stop();
   });
   server->run();

@@ -2,6 +2,7 @@
 #include "panoptes/console/command_gate.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -135,6 +136,12 @@ const std::map<std::string, std::pair<std::vector<Range>, std::size_t>>& numeric
   return rules;
 }
 
+// The browser's id for the reply (0 when missing).
+std::int64_t request_of(const json& message) {
+  const auto id = message.find("id");
+  return id != message.end() && id->is_number_integer() ? id->get<std::int64_t>() : 0;
+}
+
 }  // namespace
 
 const std::vector<std::string>& console_commands() {
@@ -150,9 +157,7 @@ const std::vector<std::string>& console_commands() {
 
 GateResult check_command(const json& message, bool camera_known,
                          const std::optional<std::pair<int, int>>& image_size) {
-  std::int64_t request = 0;
-  if (const auto id = message.find("id"); id != message.end() && id->is_number_integer())
-    request = id->get<std::int64_t>();
+  const std::int64_t request = request_of(message);
   const auto reject = [&](std::string counter, std::string reason) -> GateResult {
     return Rejection{request, std::move(counter), std::move(reason)};
   };
@@ -186,6 +191,95 @@ GateResult check_command(const json& message, bool camera_known,
     return reject(failed->counter, failed->reason);
   for (std::size_t i = 0; i < values->size(); ++i)
     out.arguments.push_back(format_number((*values)[i], ranges[i].integer));
+  return out;
+}
+
+RecorderGateResult check_recorder_command(const json& message, bool recorder_known) {
+  constexpr std::size_t kMaxFileNameLength = 128;
+  const std::int64_t request = request_of(message);
+  const auto reject = [&](std::string counter, std::string reason) -> RecorderGateResult {
+    return Rejection{request, std::move(counter), std::move(reason)};
+  };
+  const auto recorder = message.find("recorder");
+  const auto command = message.find("command");
+  const auto name = message.find("name");
+  if (recorder == message.end() || !recorder->is_string() || command == message.end() ||
+      !command->is_string())
+    return reject("bad_message", "a recorder command needs string fields 'recorder' and 'command'");
+  if (name != message.end() && !name->is_string() && !name->is_null())
+    return reject("bad_message", "'name' must be a string");
+  const std::string& verb = command->get_ref<const std::string&>();
+  if (verb != "start" && verb != "stop")
+    return reject("unknown_command", "unknown recorder command '" + verb.substr(0, 64) + "' (start | stop)");
+  const std::string& id = recorder->get_ref<const std::string&>();
+  if (id.empty() || id.size() > kMaxCameraIdLength || !recorder_known)
+    return reject("unknown_recorder",
+                  "recorder '" + id.substr(0, kMaxCameraIdLength) + "' is not on the bus");
+  RecorderCommandRequest out{request, id, verb, {}};
+  if (verb == "start" && name != message.end() && name->is_string()) {
+    const std::string& file = name->get_ref<const std::string&>();
+    const bool allowed_characters = std::all_of(file.begin(), file.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '_' || c == '.';
+    });
+    const bool mcap = file.size() > 5 && file.compare(file.size() - 5, 5, ".mcap") == 0;
+    if (!file.empty() &&
+        (!allowed_characters || !mcap || file.front() == '.' || file.size() > kMaxFileNameLength))
+      return reject("bad_arguments", "recording name '" + file.substr(0, kMaxFileNameLength) +
+                                         "': a file name of letters, digits, '-', '_', '.' ending in .mcap "
+                                         "(no directory)");
+    out.path = file;
+  }
+  return out;
+}
+
+CalibrationGateResult check_calibration_request(const json& message) {
+  constexpr std::size_t kMaxWandMarkers = 8;
+  constexpr double kMaxWandLength = 5;     // metres
+  constexpr double kMaxFloorOffset = 0.1;  // metres
+  const std::int64_t request = request_of(message);
+  const auto reject = [&](std::string counter, std::string reason) -> CalibrationGateResult {
+    return Rejection{request, std::move(counter), std::move(reason)};
+  };
+  const auto action = message.find("action");
+  if (action == message.end() || !action->is_string())
+    return reject("bad_message", "a calibration message needs a string field 'action'");
+  const std::string& name = action->get_ref<const std::string&>();
+  static const std::vector<std::string> actions = {"capture", "floor_capture", "stop", "solve", "world"};
+  if (std::find(actions.begin(), actions.end(), name) == actions.end())
+    return reject("unknown_command", "unknown calibration action '" + name.substr(0, 64) +
+                                         "' (capture | floor_capture | stop | solve | world)");
+  CalibrationRequest out{request, name, {}, 0, false};
+  if (const auto flag = message.find("time_service"); flag != message.end()) {
+    if (!flag->is_boolean()) return reject("bad_message", "'time_service' must be true or false");
+    out.time_service = flag->get<bool>();
+  }
+  if (name == "solve" || name == "world") {
+    const auto wand = message.find("wand");
+    if (wand == message.end() || !wand->is_string())
+      return reject("bad_arguments",
+                    name + ": needs 'wand', the marker positions along the bar in metres (0,0.18,0.5)");
+    json values = json::array();
+    std::string text = wand->get<std::string>();
+    for (std::size_t start = 0; start <= text.size();) {
+      const auto comma = std::min(text.find(',', start), text.size());
+      values.push_back(text.substr(start, comma - start));
+      start = comma + 1;
+    }
+    const auto positions = numbers(values, 0);
+    if (!positions || positions->empty() || positions->size() > kMaxWandMarkers)
+      return reject("bad_arguments", "wand '" + text.substr(0, 64) + "': 1 to 8 numbers separated by ','");
+    for (const double position : *positions) {
+      if (position < 0 || position > kMaxWandLength)
+        return reject("out_of_range", "wand: a marker position outside 0-5 m");
+      out.wand += (out.wand.empty() ? "" : ",") + format_number(position, false);
+    }
+  }
+  if (const auto offset = message.find("floor_offset"); name == "world" && offset != message.end()) {
+    if (!offset->is_number()) return reject("bad_arguments", "'floor_offset' must be a number (metres)");
+    out.floor_offset_m = offset->get<double>();
+    if (!(out.floor_offset_m >= 0 && out.floor_offset_m <= kMaxFloorOffset))
+      return reject("out_of_range", "floor_offset: 0 to 0.1 m");
+  }
   return out;
 }
 

@@ -126,14 +126,198 @@ void ConsoleState::on_estimator(EstimatorRecord status, TimeNs now) {
 
 void ConsoleState::on_tracks(std::vector<TrackPoint> tracks, TimeNs now) {
   std::lock_guard lock(mutex_);
+  std::map<std::int64_t, TimeNs> first_seen;
+  for (const TrackPoint& track : tracks) {
+    const auto known = track_first_seen_ns_.find(track.id);
+    first_seen[track.id] = known == track_first_seen_ns_.end() ? now : known->second;
+  }
+  track_first_seen_ns_ = std::move(first_seen);  // ids no longer published are forgotten
   tracks_ = std::move(tracks);
   tracks_ns_ = now;
 }
 
 void ConsoleState::on_body(BodyRecord body, TimeNs now) {
   std::lock_guard lock(mutex_);
+  const auto known = bodies_.find(body.name);
+  if (known == bodies_.end() || now - known->second.second > options_.body_timeout_ns)
+    body_first_seen_ns_[body.name] = now;
   std::string name = body.name;
   bodies_[std::move(name)] = {std::move(body), now};
+}
+
+// A recording ends when its recorder stops or starts another file; it is listed with the figures
+// of the last status that described it.
+void ConsoleState::on_recorder_status(const std::string& recorder, RecorderRecord status, TimeNs now) {
+  std::lock_guard lock(mutex_);
+  Recorder& entry = recorders_[recorder];
+  const RecorderRecord& before = entry.status;
+  if (before.recording && (!status.recording || status.path != before.path)) {
+    const bool same_file = status.path == before.path;
+    recordings_.push_back({recorder, before.path, same_file ? status.messages : before.messages,
+                           same_file ? status.bytes : before.bytes, entry.started_ns, now});
+    if (recordings_.size() > options_.max_recordings) recordings_.erase(recordings_.begin());
+  }
+  if (status.recording && (!before.recording || status.path != before.path)) entry.started_ns = now;
+  for (auto it = pending_recorder_.begin(); it != pending_recorder_.end();) {
+    if (it->recorder != recorder || it->want_recording != status.recording) {
+      ++it;
+      continue;
+    }
+    outcomes_.push_back(
+        {it->client, it->request, status.error.empty() ? "applied" : "rejected", status.error});
+    it = pending_recorder_.erase(it);
+  }
+  entry.status = std::move(status);
+  entry.status_ns = now;
+}
+
+void ConsoleState::on_recorder_command_sent(PendingRecorderCommand command) {
+  std::lock_guard lock(mutex_);
+  pending_recorder_.push_back(std::move(command));
+}
+
+bool ConsoleState::knows_recorder(const std::string& recorder) const {
+  std::lock_guard lock(mutex_);
+  return recorders_.count(recorder) > 0;
+}
+
+// Called with the lock held.
+json ConsoleState::recorders_json(TimeNs now) const {
+  json recorders = json::array();
+  for (const auto& [id, recorder] : recorders_) {
+    if (now - recorder.status_ns > options_.recorder_timeout_ns) continue;
+    const RecorderRecord& s = recorder.status;
+    recorders.push_back(
+        {{"id", id},
+         {"recording", s.recording},
+         {"path", s.path},
+         {"topics", s.topics},
+         {"messages", s.messages},
+         {"bytes", s.bytes},
+         {"messages_per_s", round_to(s.messages_per_s, 1)},
+         {"error", s.error},
+         {"seconds",
+          s.recording ? round_to(static_cast<double>(now - recorder.started_ns) * 1e-9, 1) : 0.0}});
+  }
+  json recordings = json::array();
+  for (const RecordingEntry& r : recordings_) {
+    recordings.push_back({{"recorder", r.recorder},
+                          {"path", r.path},
+                          {"messages", r.messages},
+                          {"bytes", r.bytes},
+                          {"started_ms", r.started_ns / 1'000'000},
+                          {"seconds", round_to(static_cast<double>(r.stopped_ns - r.started_ns) * 1e-9, 1)}});
+  }
+  return {{"recorders", std::move(recorders)}, {"recordings", std::move(recordings)}};
+}
+
+void ConsoleState::start_coverage(TimeNs now) {
+  std::lock_guard lock(mutex_);
+  coverage_.clear();
+  coverage_active_ = true;
+  coverage_start_ns_ = now;
+}
+
+void ConsoleState::add_coverage_frame(const std::string& camera, const std::vector<BlobPoint>& blobs) {
+  std::lock_guard lock(mutex_);
+  Coverage& coverage = coverage_[camera];
+  ++coverage.frames;
+  if (!blobs.empty()) ++coverage.frames_with_blobs;
+  if (const auto found = cameras_.find(camera); found != cameras_.end() && found->second.info)
+    coverage.grid.set_size(found->second.info->geometry.width, found->second.info->geometry.height);
+  for (const BlobPoint& blob : blobs) coverage.grid.add(blob.x, blob.y);
+}
+
+void ConsoleState::stop_coverage() {
+  std::lock_guard lock(mutex_);
+  if (coverage_active_) coverage_stop_ns_ = wall_now_ns();
+  coverage_active_ = false;
+}
+
+void ConsoleState::set_calibration_job(std::string summary_json, std::string full_json) {
+  std::lock_guard lock(mutex_);
+  calibration_job_ = std::move(summary_json);
+  calibration_job_full_ = std::move(full_json);
+}
+
+std::string ConsoleState::calibration_job() const {
+  std::lock_guard lock(mutex_);
+  return calibration_job_full_;
+}
+
+// Called with the lock held.
+json ConsoleState::calibration_json(TimeNs now) const {
+  json cameras = json::array();
+  for (const auto& [id, coverage] : coverage_) {
+    cameras.push_back({{"id", id},
+                       {"frames", coverage.frames},
+                       {"frames_with_blobs", coverage.frames_with_blobs},
+                       {"coverage_percent", coverage.grid.percent()},
+                       {"cells", coverage.grid.cells()}});
+  }
+  const TimeNs end = coverage_active_ ? now : coverage_stop_ns_;
+  return {{"capturing", coverage_active_},
+          {"seconds",
+           coverage_start_ns_ == 0 ? 0.0 : round_to(static_cast<double>(end - coverage_start_ns_) * 1e-9, 1)},
+          {"cameras", std::move(cameras)},
+          {"job", json::parse(calibration_job_, nullptr, false)}};
+}
+
+json ConsoleState::details(const std::string& kind, const std::string& key, TimeNs now) const {
+  std::lock_guard lock(mutex_);
+  const auto seconds = [](TimeNs ns) { return round_to(static_cast<double>(ns) * 1e-9, 2); };
+  const auto rounded = [](const auto& values, int decimals) {
+    json out = json::array();
+    for (const double value : values) out.push_back(round_to(value, decimals));
+    return out;
+  };
+  if (kind == "track" && now - tracks_ns_ <= options_.track_timeout_ns) {
+    for (const TrackPoint& track : tracks_) {
+      if (std::to_string(track.id) != key) continue;
+      const auto& c = track.covariance;  // xx xy xz yy yz zz
+      const std::array<double, 3> sigma = {std::sqrt(std::max(0.0, c[0])), std::sqrt(std::max(0.0, c[3])),
+                                           std::sqrt(std::max(0.0, c[5]))};
+      const auto first = track_first_seen_ns_.find(track.id);
+      return {{"kind", "track"},
+              {"id", track.id},
+              {"status", track.status == 0   ? "tentative"
+                         : track.status == 1 ? "confirmed"
+                                             : "coasting"},
+              {"position_m", rounded(track.position, 4)},
+              {"velocity_m_s", rounded(track.velocity, 3)},
+              {"speed_m_s", round_to(std::hypot(track.velocity[0], track.velocity[1], track.velocity[2]), 3)},
+              {"sigma_mm", rounded(std::array<double, 3>{1e3 * sigma[0], 1e3 * sigma[1], 1e3 * sigma[2]}, 2)},
+              {"covariance_m2", track.covariance},
+              {"cameras", track.cameras},
+              {"age_s", seconds(first == track_first_seen_ns_.end() ? 0 : now - first->second)}};
+    }
+    return nullptr;
+  }
+  if (kind == "body") {
+    const auto found = bodies_.find(key);
+    if (found == bodies_.end() || now - found->second.second > options_.body_timeout_ns) return nullptr;
+    const BodyRecord& body = found->second.first;
+    const auto first = body_first_seen_ns_.find(key);
+    const auto& v = body.linear_velocity;
+    return {
+        {"kind", "body"},
+        {"name", body.name},
+        {"position_m", rounded(body.pose.position, 4)},
+        {"orientation_xyzw", rounded(body.pose.orientation, 5)},
+        {"velocity_m_s", rounded(body.linear_velocity, 3)},
+        {"speed_m_s", round_to(std::hypot(v[0], v[1], v[2]), 3)},
+        {"angular_velocity_rad_s", rounded(body.angular_velocity, 3)},
+        {"sigma_position_mm",
+         rounded(std::array<double, 3>{1e3 * body.sigma[0], 1e3 * body.sigma[1], 1e3 * body.sigma[2]}, 2)},
+        {"sigma_rotation_deg",
+         rounded(std::array<double, 3>{body.sigma[3] * 180 / M_PI, body.sigma[4] * 180 / M_PI,
+                                       body.sigma[5] * 180 / M_PI},
+                 3)},
+        {"quality", round_to(body.quality, 3)},
+        {"age_s", seconds(first == body_first_seen_ns_.end() ? 0 : now - first->second)},
+        {"since_update_ms", round_to(static_cast<double>(now - found->second.second) * 1e-6, 1)}};
+  }
+  return nullptr;
 }
 
 bool ConsoleState::knows_camera(const std::string& camera) const {
@@ -194,6 +378,14 @@ std::vector<CommandOutcome> ConsoleState::take_outcomes(TimeNs now) {
     }
     outcomes_.push_back({it->client, it->request, "no_ack", "the camera's status did not count the command"});
     it = pending_.erase(it);
+  }
+  for (auto it = pending_recorder_.begin(); it != pending_recorder_.end();) {
+    if (now - it->sent_ns <= options_.ack_timeout_ns) {
+      ++it;
+      continue;
+    }
+    outcomes_.push_back({it->client, it->request, "no_ack", "the recorder's status did not show the change"});
+    it = pending_recorder_.erase(it);
   }
   std::vector<CommandOutcome> out;
   out.swap(outcomes_);
@@ -276,6 +468,10 @@ nlohmann::json ConsoleState::snapshot(TimeNs now, bool full) const {
                         {"cpu_percent", round_to(estimator_->cpu_percent, 1)},
                         {"update_p99_ms", round_to(estimator_->update_p99_ms, 3)},
                         {"age_s", round_to(static_cast<double>(now - estimator_ns_) * 1e-9, 1)}};
+  }
+  if (full) {
+    out.update(recorders_json(now));
+    out["calibration"] = calibration_json(now);
   }
   return out;
 }

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/console/server.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <deque>
 #include <fstream>
 #include <mutex>
@@ -134,10 +136,13 @@ struct Counters {
 class WebSocketSession;
 
 struct ConsoleServer::Impl {
-  Impl(ServerOptions options_in, ConsoleState& state_in, CommandSink sink_in)
+  Impl(ServerOptions options_in, ConsoleState& state_in, CommandSink sink_in, RecorderSink recorder_sink_in,
+       CalibrationSink calibration_sink_in)
       : options(std::move(options_in)),
         state(state_in),
         sink(std::move(sink_in)),
+        recorder_sink(std::move(recorder_sink_in)),
+        calibration_sink(std::move(calibration_sink_in)),
         files(load_web_files(options.web_root)),
         acceptor(io),
         timer(io) {}
@@ -150,11 +155,21 @@ struct ConsoleServer::Impl {
     ++counters.rejected[counter];
   }
   void handle_client_message(WebSocketSession& session, std::string_view text);
+  void handle_camera_command(WebSocketSession& session, const json& message, TimeNs now);
+  void handle_recorder_command(WebSocketSession& session, const json& message, TimeNs now);
+  void handle_calibration(WebSocketSession& session, const json& message, TimeNs now);
+  void reject(WebSocketSession& session, std::int64_t request, const std::string& counter,
+              const std::string& reason);
+  // The per-browser rate limit; a refused command is rejected (rate_limited).
+  bool admitted(WebSocketSession& session, std::int64_t request, TimeNs now);
+  void send_details();
   static json stats_of(const Impl& impl);
 
   ServerOptions options;
   ConsoleState& state;
   CommandSink sink;
+  RecorderSink recorder_sink;
+  CalibrationSink calibration_sink;
   std::map<std::string, std::pair<std::string, std::string>> files;
   net::io_context io;
   tcp::acceptor acceptor;
@@ -200,6 +215,9 @@ class WebSocketSession : public std::enable_shared_from_this<WebSocketSession> {
 
   std::uint64_t id() const { return id_; }
   RateLimiter& limiter() { return limiter_; }
+  // The track or body whose figures the page shows (kind "" when none).
+  void select(std::string kind, std::string key) { selection_ = {std::move(kind), std::move(key)}; }
+  const std::pair<std::string, std::string>& selection() const { return selection_; }
 
   void reply(const json& message) {
     if (replies_.size() >= kMaxQueuedReplies) {
@@ -288,52 +306,84 @@ class WebSocketSession : public std::enable_shared_from_this<WebSocketSession> {
   std::shared_ptr<const Snapshot> pending_live_;
   bool writing_ = false;
   bool closed_ = false;
+  std::pair<std::string, std::string> selection_;
 };
 
+void ConsoleServer::Impl::reject(WebSocketSession& session, std::int64_t request, const std::string& counter,
+                                 const std::string& reason) {
+  count_rejection(counter);
+  session.reply(json{{"type", "command_result"},
+                     {"id", request},
+                     {"result", "rejected"},
+                     {"counter", counter},
+                     {"reason", reason}});
+}
+
+bool ConsoleServer::Impl::admitted(WebSocketSession& session, std::int64_t request, TimeNs now) {
+  if (session.limiter().allow(now)) return true;
+  reject(session, request, "rate_limited",
+         "more than " + std::to_string(static_cast<int>(options.commands_per_s)) + " commands per second");
+  return false;
+}
+
+// Messages from the page: "command" (to a camera), "recorder" (to a recorder), "select" (which
+// track or body the page shows the figures of).
 void ConsoleServer::Impl::handle_client_message(WebSocketSession& session, std::string_view text) {
-  const auto reject = [&](std::int64_t request, const std::string& counter, const std::string& reason) {
-    count_rejection(counter);
-    session.reply(json{{"type", "command_result"},
-                       {"id", request},
-                       {"result", "rejected"},
-                       {"counter", counter},
-                       {"reason", reason}});
-  };
   if (text.size() > options.max_message_bytes) {
-    reject(0, "oversized",
+    reject(session, 0, "oversized",
            "message of " + std::to_string(text.size()) + " bytes exceeds " +
                std::to_string(options.max_message_bytes));
     return;
   }
   const json message = json::parse(text, nullptr, false);
   if (message.is_discarded() || !message.is_object()) {
-    reject(0, "bad_message", "not a JSON object");
+    reject(session, 0, "bad_message", "not a JSON object");
     return;
   }
   const auto type = message.find("type");
-  if (type == message.end() || !type->is_string() || *type != "command") {
-    reject(0, "bad_message", "unknown message type (expected \"command\")");
+  const std::string kind = type != message.end() && type->is_string() ? type->get<std::string>() : "";
+  if (kind == "select") {
+    const auto what = message.find("kind");
+    const auto key = message.find("key");
+    if (what == message.end() || !what->is_string() ||
+        (*what != "track" && *what != "body" && !what->get_ref<const std::string&>().empty()) ||
+        key == message.end() || !key->is_string() || key->get_ref<const std::string&>().size() > 128) {
+      reject(session, 0, "bad_message", "select needs 'kind' (track | body | \"\") and a string 'key'");
+      return;
+    }
+    session.select(what->get<std::string>(), key->get<std::string>());
+    return;
+  }
+  if (kind != "command" && kind != "recorder" && kind != "calibration") {
+    reject(session, 0, "bad_message",
+           "unknown message type (expected \"command\", \"recorder\", \"calibration\" or \"select\")");
     return;
   }
   ++counters.commands_received;
   const TimeNs now = wall_now_ns();
+  if (kind == "recorder") {
+    handle_recorder_command(session, message, now);
+  } else if (kind == "calibration") {
+    handle_calibration(session, message, now);
+  } else {
+    handle_camera_command(session, message, now);
+  }
+}
+
+void ConsoleServer::Impl::handle_camera_command(WebSocketSession& session, const json& message, TimeNs now) {
   std::string camera;
   if (const auto field = message.find("camera"); field != message.end() && field->is_string())
     camera = *field;
   GateResult result = check_command(message, state.knows_camera(camera), state.image_size(camera));
   if (const auto* rejection = std::get_if<Rejection>(&result)) {
-    reject(rejection->request, rejection->counter, rejection->reason);
+    reject(session, rejection->request, rejection->counter, rejection->reason);
     return;
   }
   const auto& command = std::get<CameraCommandRequest>(result);
   // The rate limit counts only valid commands, so a flood of them cannot starve the limit of others.
-  if (!session.limiter().allow(now)) {
-    reject(command.request, "rate_limited",
-           "more than " + std::to_string(static_cast<int>(options.commands_per_s)) + " commands per second");
-    return;
-  }
+  if (!admitted(session, command.request, now)) return;
   if (!sink(command)) {
-    reject(command.request, "not_sent", "no camera node is listening for commands");
+    reject(session, command.request, "not_sent", "no camera node is listening for commands");
     return;
   }
   ++counters.commands_forwarded;
@@ -344,6 +394,69 @@ void ConsoleServer::Impl::handle_client_message(WebSocketSession& session, std::
                      {"camera", command.camera},
                      {"command", command.command},
                      {"args", command.arguments}});
+}
+
+void ConsoleServer::Impl::handle_recorder_command(WebSocketSession& session, const json& message,
+                                                  TimeNs now) {
+  std::string recorder;
+  if (const auto field = message.find("recorder"); field != message.end() && field->is_string())
+    recorder = *field;
+  RecorderGateResult result = check_recorder_command(message, state.knows_recorder(recorder));
+  if (const auto* rejection = std::get_if<Rejection>(&result)) {
+    reject(session, rejection->request, rejection->counter, rejection->reason);
+    return;
+  }
+  const auto& command = std::get<RecorderCommandRequest>(result);
+  if (!admitted(session, command.request, now)) return;
+  if (!recorder_sink || !recorder_sink(command)) {
+    reject(session, command.request, "not_sent", "no recorder is listening for commands");
+    return;
+  }
+  ++counters.commands_forwarded;
+  state.on_recorder_command_sent(
+      {session.id(), command.request, command.recorder, command.command == "start", now});
+  session.reply(json{{"type", "command_result"},
+                     {"id", command.request},
+                     {"result", "sent"},
+                     {"recorder", command.recorder},
+                     {"command", command.command},
+                     {"args", command.path.empty() ? json::array() : json::array({command.path})}});
+}
+
+void ConsoleServer::Impl::handle_calibration(WebSocketSession& session, const json& message, TimeNs now) {
+  CalibrationGateResult result = check_calibration_request(message);
+  if (const auto* rejection = std::get_if<Rejection>(&result)) {
+    reject(session, rejection->request, rejection->counter, rejection->reason);
+    return;
+  }
+  const auto& request = std::get<CalibrationRequest>(result);
+  if (!admitted(session, request.request, now)) return;
+  if (!calibration_sink) {
+    reject(session, request.request, "not_sent", "this console runs no calibration workflow");
+    return;
+  }
+  if (const std::string refusal = calibration_sink(request); !refusal.empty()) {
+    reject(session, request.request, "refused", refusal);
+    return;
+  }
+  ++counters.commands_forwarded;
+  session.reply(json{{"type", "command_result"},
+                     {"id", request.request},
+                     {"result", "applied"},
+                     {"calibration", request.action},
+                     {"command", request.action},
+                     {"args", json::array()}});
+}
+
+// The figures of each page's selected track or body, ~5 times a second (only pages that ask).
+void ConsoleServer::Impl::send_details() {
+  const TimeNs now = wall_now_ns();
+  for (const auto& session : sessions) {
+    const auto& [kind, key] = session->selection();
+    if (kind.empty()) continue;
+    session->reply(
+        json{{"type", "details"}, {"kind", kind}, {"key", key}, {"figures", state.details(kind, key, now)}});
+  }
 }
 
 // A plain HTTP connection: the page's files, /api/state, /api/stats, or the upgrade to /ws.
@@ -394,14 +507,40 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     if (path == "/api/state") {
       respond(request, http::status::ok, "application/json",
               server_.state.snapshot(wall_now_ns(), true).dump(), false);
+    } else if (path == "/api/calibration") {
+      respond(request, http::status::ok, "application/json", server_.state.calibration_job(), false);
     } else if (path == "/api/stats") {
       respond(request, http::status::ok, "application/json", ConsoleServer::Impl::stats_of(server_).dump(),
               false);
+    } else if (path.rfind("/calibration/", 0) == 0) {
+      serve_calibration_file(request, path.substr(std::string("/calibration/").size()));
     } else if (const auto file = server_.files.find(path); file != server_.files.end()) {
       respond(request, http::status::ok, file->second.second, file->second.first, path == "/");
     } else {
       respond(request, http::status::not_found, "text/plain", "not found\n", false);
     }
+  }
+
+  // A plot the calibration workflow wrote: a bare .png name inside the calibration directory.
+  void serve_calibration_file(const http::request<http::string_body>& request, const std::string& name) {
+    const bool plain =
+        !name.empty() && name.front() != '.' && name.size() > 4 &&
+        name.compare(name.size() - 4, 4, ".png") == 0 && std::all_of(name.begin(), name.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-' || c == '.';
+        });
+    std::string body;
+    if (plain && !server_.options.calibration_dir.empty()) {
+      try {
+        body = read_file(server_.options.calibration_dir / name);
+      } catch (const std::exception&) {
+        body.clear();
+      }
+    }
+    if (body.empty()) {
+      respond(request, http::status::not_found, "text/plain", "not found\n", false);
+      return;
+    }
+    respond(request, http::status::ok, "image/png", std::move(body), false);
   }
 
   void respond(const http::request<http::string_body>& request, http::status status, const std::string& type,
@@ -466,6 +605,8 @@ void ConsoleServer::Impl::tick() {
       }
     }
     ++ticks;
+    if (ticks % std::max<std::uint64_t>(1, static_cast<std::uint64_t>(options.update_hz / 5)) == 0)
+      send_details();
     if (!sessions.empty()) {
       const bool full =
           options.full_every <= 1 || ticks % static_cast<std::uint64_t>(options.full_every) == 0;
@@ -505,8 +646,10 @@ json ConsoleServer::Impl::stats_of(const Impl& impl) {
           {"rejected", rejected}};
 }
 
-ConsoleServer::ConsoleServer(ServerOptions options, ConsoleState& state, CommandSink sink)
-    : impl_(std::make_unique<Impl>(std::move(options), state, std::move(sink))) {
+ConsoleServer::ConsoleServer(ServerOptions options, ConsoleState& state, CommandSink sink,
+                             RecorderSink recorder_sink, CalibrationSink calibration_sink)
+    : impl_(std::make_unique<Impl>(std::move(options), state, std::move(sink), std::move(recorder_sink),
+                                   std::move(calibration_sink))) {
   if (impl_->options.token.empty()) throw std::invalid_argument("the console needs an access token");
   if (!(impl_->options.update_hz > 0 && impl_->options.update_hz <= 240))
     throw std::invalid_argument("update rate must be in (0, 240] Hz");

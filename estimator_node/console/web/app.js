@@ -22,7 +22,10 @@ const pending = new Map();  // request id -> camera card
 function connect() {
   const scheme = location.protocol === 'https:' ? 'wss' : 'ws';
   socket = new WebSocket(`${scheme}://${location.host}/ws?token=${encodeURIComponent(token)}`);
-  socket.onopen = () => { page.connected = true; page.connects += 1; setConnection('connected', 'green'); };
+  socket.onopen = () => {
+    page.connected = true; page.connects += 1; setConnection('connected', 'green');
+    if (selected) socket.send(JSON.stringify({ type: 'select', kind: selected.kind, key: selected.key }));
+  };
   socket.onclose = () => {
     page.connected = false;
     setConnection('reconnecting', 'red');
@@ -34,6 +37,7 @@ function connect() {
     try { message = JSON.parse(event.data); } catch { return; }
     if (message.type === 'state') onState(message);
     else if (message.type === 'command_result') onResult(message);
+    else if (message.type === 'details') onDetails(message);
   };
 }
 
@@ -52,15 +56,27 @@ function send(card, command, args = []) {
   showResult(card, 'sending', `${command} ${args.join(' ')}`);
 }
 
+// A recorder command: start (with a file name) or stop; the row shows the outcome as a card does.
+function sendRecorder(row, command, name = '') {
+  if (!socket || socket.readyState !== WebSocket.OPEN) { showResult(row, 'rejected', 'not connected'); return; }
+  const id = nextRequest++;
+  pending.set(id, row);
+  socket.send(JSON.stringify({ type: 'recorder', id, recorder: row.dataset.recorder, command, name }));
+  page.sent.push({ id, recorder: row.dataset.recorder, command, args: [name], at: Date.now() });
+  showResult(row, 'sending', `${command} ${name}`);
+}
+
 function onResult(message) {
   page.results.push(message);
   const card = pending.get(message.id);
-  const text = message.result === 'sent' ? `${message.command} ${message.args.join(' ')}: sent, waiting for the camera`
+  const waiting = message.recorder ? 'recorder' : 'camera';
+  const text = message.result === 'sent' ? `${message.command} ${message.args.join(' ')}: sent, waiting for the ${waiting}`
     : `${message.result}${message.reason ? ': ' + message.reason : ''}`;
   if (card) showResult(card, message.result, text);
   if (message.result !== 'sent') pending.delete(message.id);
   const item = document.createElement('li');
-  item.textContent = `#${message.id} ${card ? card.dataset.camera + ' ' : ''}${text}`;
+  const target = card ? (card.dataset.camera || card.dataset.recorder) + ' ' : '';
+  item.textContent = `#${message.id} ${target}${text}`;
   const list = document.getElementById('results');
   list.prepend(item);
   while (list.children.length > 20) list.lastChild.remove();
@@ -99,8 +115,11 @@ function cardFor(camera) {
     });
   }
   const maskButton = card.querySelector('button.mask');
-  maskButton.addEventListener('click', () => maskButton.classList.toggle('active'));
+  const polygonButton = card.querySelector('button.polygon');
+  maskButton.addEventListener('click', () => { maskButton.classList.toggle('active'); polygonButton.classList.remove('active'); card.polygon = null; });
+  polygonButton.addEventListener('click', () => { polygonButton.classList.toggle('active'); maskButton.classList.remove('active'); card.polygon = null; });
   attachMaskDrawing(card, canvas, maskButton);
+  attachPolygonDrawing(card, canvas, polygonButton);
   const grid = document.getElementById('cameras');
   const after = [...grid.children].find((other) => other.dataset.camera > camera.id);
   grid.insertBefore(card, after || null);
@@ -127,9 +146,40 @@ function attachMaskDrawing(card, canvas, button) {
     start = null; card.drag = null;
     button.classList.remove('active');
     if (w < 1 || h < 1) return;
-    card.masks.push([x, y, w, h]);
+    card.masks.push([[x, y], [x + w, y], [x + w, y + h], [x, y + h]]);
     send(card, 'add_mask', ['rect', x, y, w, h]);
   });
+}
+
+const toImagePoint = (canvas, event) => {
+  const box = canvas.getBoundingClientRect();
+  return [Math.round((event.clientX - box.left) * canvas.width / box.width),
+          Math.round((event.clientY - box.top) * canvas.height / box.height)];
+};
+
+// Corners clicked on the image (in image pixels); clicking near the first corner again, or a
+// double-click, closes the polygon into add_mask poly x1 y1 x2 y2 ... (camera_node's mask kind).
+function attachPolygonDrawing(card, canvas, button) {
+  const close = () => {
+    const points = card.polygon || [];
+    card.polygon = null; card.hover = null;
+    button.classList.remove('active');
+    if (points.length < 3) return;
+    card.masks.push(points);
+    send(card, 'add_mask', ['poly', ...points.flat()]);
+  };
+  canvas.addEventListener('click', (event) => {
+    if (!button.classList.contains('active')) return;
+    const point = toImagePoint(canvas, event).map((v, i) => Math.max(0, Math.min(i ? canvas.height - 1 : canvas.width - 1, v)));
+    card.polygon = card.polygon || [];
+    const first = card.polygon[0];
+    const near = 12 * canvas.width / canvas.getBoundingClientRect().width;
+    if (first && card.polygon.length >= 3 && Math.hypot(point[0] - first[0], point[1] - first[1]) < near) { close(); return; }
+    card.polygon.push(point);
+    if (card.polygon.length >= 32) close();
+  });
+  canvas.addEventListener('dblclick', () => { if (button.classList.contains('active')) close(); });
+  canvas.addEventListener('mousemove', (event) => { if (card.polygon) card.hover = toImagePoint(canvas, event); });
 }
 
 const fixed = (value, digits) => (value === undefined || value === null ? '—' : Number(value).toFixed(digits));
@@ -176,7 +226,22 @@ function drawBlobs(card, blobs) {
   context.fillRect(0, 0, canvas.width, canvas.height);
   const scale = canvas.width / 640;
   context.fillStyle = 'rgba(229, 72, 77, 0.25)';
-  for (const [x, y, w, h] of card.masks) context.fillRect(x, y, w, h);
+  for (const points of card.masks) {
+    context.beginPath();
+    points.forEach(([x, y], i) => (i ? context.lineTo(x, y) : context.moveTo(x, y)));
+    context.closePath();
+    context.fill();
+  }
+  if (card.polygon && card.polygon.length) {
+    context.strokeStyle = '#f0b429';
+    context.lineWidth = 2 * scale;
+    context.beginPath();
+    card.polygon.forEach(([x, y], i) => (i ? context.lineTo(x, y) : context.moveTo(x, y)));
+    if (card.hover) context.lineTo(...card.hover);
+    context.stroke();
+    context.fillStyle = '#f0b429';
+    for (const [x, y] of card.polygon) context.fillRect(x - 3 * scale, y - 3 * scale, 6 * scale, 6 * scale);
+  }
   if (card.drag) {
     const [[x0, y0], [x1, y1]] = card.drag;
     context.strokeStyle = '#f0b429';
@@ -335,8 +400,201 @@ function updateBodies(list) {
   for (const [name, object] of bodies) if (!seen.has(name)) { scene.remove(object); object.traverse(dropLabel); bodies.delete(name); }
 }
 
+// ---------------------------------------------------------------------------------------------
+// Click a track or body in the 3D view: the console sends its figures ~5 times a second.
+let selected = null;  // { kind: 'track' | 'body', key }
+const details = document.getElementById('details');
+function select(kind, key) {
+  selected = kind ? { kind, key: String(key) } : null;
+  page.selected = selected;
+  details.hidden = !selected;
+  if (selected) { details.querySelector('h3').textContent = `${kind} ${key}`; details.querySelector('table').textContent = ''; }
+  if (socket && socket.readyState === WebSocket.OPEN)
+    socket.send(JSON.stringify({ type: 'select', kind: selected ? selected.kind : '', key: selected ? selected.key : '' }));
+}
+details.querySelector('.close').addEventListener('click', () => select(null));
+
+// The nearest track or body to the click on screen, within 15 px (bodies first: they are larger).
+let downAt = null;
+canvas3d.addEventListener('pointerdown', (event) => { downAt = [event.clientX, event.clientY]; });
+canvas3d.addEventListener('pointerup', (event) => {
+  if (!downAt || Math.hypot(event.clientX - downAt[0], event.clientY - downAt[1]) > 4) return;  // a drag orbits
+  const box = canvas3d.getBoundingClientRect();
+  const x = (event.clientX - box.left) * canvas3d.width / box.width, y = (event.clientY - box.top) * canvas3d.height / box.height;
+  const candidates = [];
+  for (const body of (page.state ? page.state.bodies : [])) candidates.push(['body', body.name, body.pose.p, 0]);
+  for (const [id, px, py, pz] of (page.state ? page.state.tracks : [])) candidates.push(['track', id, [px, py, pz], 4]);
+  let best = null;
+  for (const [kind, key, point, penalty] of candidates) {
+    const [u, v] = page.project(point);
+    const distance = Math.hypot(u - x, v - y) + penalty;
+    if (distance < 15 && (!best || distance < best[2])) best = [kind, key, distance];
+  }
+  if (best) select(best[0], best[1]);
+});
+
+const formatValue = (value) => (Array.isArray(value) ? value.map((v) => (typeof v === 'number' ? v.toFixed(3).replace(/\.?0+$/, '') : v)).join(', ') : String(value));
+function onDetails(message) {
+  if (!selected || message.kind !== selected.kind || message.key !== selected.key) return;
+  page.details = message.figures;
+  const table = details.querySelector('table');
+  if (!message.figures) { table.innerHTML = '<tr><td>not live</td><td></td></tr>'; return; }
+  const labels = { position_m: 'position m', velocity_m_s: 'velocity m/s', speed_m_s: 'speed m/s', sigma_mm: 'σ mm (x, y, z)',
+    sigma_position_mm: 'σ position mm', sigma_rotation_deg: 'σ rotation °', orientation_xyzw: 'orientation (x, y, z, w)',
+    angular_velocity_rad_s: 'angular velocity rad/s', cameras: 'cameras seeing it', age_s: 'age s', since_update_ms: 'last update ms ago',
+    status: 'status', quality: 'quality' };
+  table.textContent = '';
+  for (const [key, label] of Object.entries(labels)) {
+    if (!(key in message.figures)) continue;
+    const row = table.insertRow();
+    row.insertCell().textContent = label;
+    row.insertCell().textContent = formatValue(message.figures[key]);
+    row.dataset.key = key;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Recording: every recorder on the bus (its status), start/stop, and the recordings made.
+const recorderRows = new Map();
+const stamp = () => new Date().toISOString().replace(/[-:]/g, '').replace('T', '_').slice(0, 15);
+function updateRecorders(recorders, recordings) {
+  const box = document.getElementById('recorders');
+  box.querySelector('.none').hidden = recorders.length > 0;
+  for (const recorder of recorders) {
+    let row = recorderRows.get(recorder.id);
+    if (!row) {
+      row = document.getElementById('recorder-row').content.firstElementChild.cloneNode(true);
+      row.dataset.recorder = recorder.id;
+      row.querySelector('.name').textContent = recorder.id;
+      const file = row.querySelector('.file');
+      file.value = `take_${stamp()}.mcap`;
+      row.querySelector('.start').addEventListener('click', () => sendRecorder(row, 'start', file.value.trim()));
+      row.querySelector('.stop').addEventListener('click', () => { sendRecorder(row, 'stop'); file.value = `take_${stamp()}.mcap`; });
+      box.append(row);
+      recorderRows.set(recorder.id, row);
+    }
+    row.dataset.recording = String(recorder.recording);
+    row.querySelector('.light').className = `light ${recorder.error ? 'amber' : recorder.recording ? 'red' : 'green'}`;
+    row.querySelector('.figures').textContent = recorder.recording
+      ? `recording ${recorder.path} · ${recorder.seconds.toFixed(0)} s · ${recorder.topics} topics · ${recorder.messages} messages · ${(recorder.bytes / 1e6).toFixed(2)} MB · ${recorder.messages_per_s.toFixed(0)} msg/s`
+      : `idle${recorder.error ? ' · error: ' + recorder.error : ''}`;
+    row.querySelector('.start').disabled = recorder.recording;
+    row.querySelector('.stop').disabled = !recorder.recording;
+  }
+  const seen = new Set(recorders.map((r) => r.id));
+  for (const [id, row] of recorderRows) if (!seen.has(id)) { row.remove(); recorderRows.delete(id); }
+  const body = document.querySelector('#recordings tbody');
+  const key = `${recordings.length} ${recordings.length ? recordings.at(-1).started_ms : 0}`;
+  if (body.dataset.key === key) return;  // the list is capped: its length alone may not change
+  body.dataset.key = key;
+  body.textContent = '';
+  for (const r of [...recordings].reverse()) {
+    const row = body.insertRow();
+    for (const value of [r.path, r.recorder, r.seconds.toFixed(1), r.messages, (r.bytes / 1e6).toFixed(2)]) row.insertCell().textContent = value;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Calibration: the steps of docs/calibration.md, run by the console (estimator_node calibrate).
+const calibrationResult = { dataset: { recorder: 'calibration' }, querySelector: () => document.getElementById('cal-result') };
+function sendCalibration(action, extra = {}) {
+  if (!socket || socket.readyState !== WebSocket.OPEN) { showResult(calibrationResult, 'rejected', 'not connected'); return; }
+  const id = nextRequest++;
+  pending.set(id, calibrationResult);
+  socket.send(JSON.stringify({ type: 'calibration', id, action, ...extra }));
+  page.sent.push({ id, calibration: action, args: [], at: Date.now() });
+  showResult(calibrationResult, 'sending', action);
+}
+const captureOptions = () => ({ time_service: document.getElementById('cal-time-service').checked });
+document.getElementById('cal-capture').addEventListener('click', () => sendCalibration('capture', captureOptions()));
+document.getElementById('cal-floor').addEventListener('click', () => sendCalibration('floor_capture', captureOptions()));
+for (const button of document.querySelectorAll('.cal-stop')) button.addEventListener('click', () => sendCalibration('stop'));
+document.getElementById('cal-solve').addEventListener('click', () => sendCalibration('solve', { wand: document.getElementById('cal-wand').value.trim() }));
+document.getElementById('cal-world').addEventListener('click', () => sendCalibration('world', {
+  wand: document.getElementById('cal-wand').value.trim(), floor_offset: Number(document.getElementById('cal-floor-offset').value) }));
+if (params.get('view') === 'calibration') document.getElementById('calibration').open = true;
+
+function drawCoverage(canvas, cells) {
+  canvas.width = 96; canvas.height = 72;
+  const context = canvas.getContext('2d');
+  for (let i = 0; i < 64; ++i) {
+    context.fillStyle = cells[i] === '1' ? '#3ec46d' : '#262c35';
+    context.fillRect((i % 8) * 12 + 1, Math.floor(i / 8) * 9 + 1, 10, 7);
+  }
+}
+
+let shownGeneration = null;
+function updateCalibration(calibration) {
+  page.calibration = calibration;
+  const job = calibration.job || {};
+  document.getElementById('cal-cameras').textContent = job.cameras_file
+    ? `the solve starts from ${job.cameras_file}` : 'no intrinsics file: start panoptes_console with --calibration-cameras <intrinsics.yaml>';
+  const coverage = document.getElementById('cal-coverage');
+  coverage.textContent = '';
+  for (const camera of calibration.cameras) {
+    const item = document.createElement('div');
+    item.className = 'coverage';
+    item.dataset.camera = camera.id;
+    item.dataset.percent = String(camera.coverage_percent);
+    const canvas = document.createElement('canvas');
+    drawCoverage(canvas, camera.cells);
+    const text = document.createElement('div');
+    text.textContent = `${camera.id}: ${camera.coverage_percent}% · ${camera.frames_with_blobs}/${camera.frames} frames with blobs`;
+    item.append(canvas, text);
+    coverage.append(item);
+  }
+  const running = job.result === 'running';
+  const status = job.step === 'idle' ? '' : `${job.step}: ${job.result}${running && calibration.capturing ? ` (${calibration.seconds.toFixed(0)} s)` : ''}` +
+    (job.result === 'failed' ? ` (exit ${job.exit_code})` : '');
+  document.getElementById('cal-log').textContent = status ? `${status}\n${job.log}` : '';
+  // The report and the world frame's summary come once per finished step (they can be large).
+  if (job.generation !== shownGeneration) {
+    shownGeneration = job.generation;
+    fetch('/api/calibration').then((response) => response.json()).then((full) => {
+      document.getElementById('cal-world-text').textContent = full.world_text || '';
+      showReport(full);
+    }).catch(() => { shownGeneration = null; });
+  }
+}
+
+function showReport(job) {
+  const box = document.getElementById('cal-report');
+  box.textContent = '';
+  const report = job.report;
+  if (!report) return;
+  const headline = document.createElement('pre');
+  headline.textContent = (job.report_text || '').split('\n').slice(0, 3).join('\n');
+  box.append(headline);
+  const table = document.createElement('table');
+  table.innerHTML = '<tr><th>camera</th><th>state</th><th>observations</th><th>raw median px</th><th>raw mean px</th><th>rms px/axis</th><th>max px</th><th>offset ms</th><th>coverage</th></tr>';
+  for (const camera of report.cameras) {
+    const row = table.insertRow();
+    row.dataset.camera = camera.id;
+    const raw = camera.raw_frame_error_2d_px.all;
+    for (const value of [camera.id, camera.calibrated ? 'calibrated' : `failed: ${camera.failure}`, camera.observations, fixed(raw.median_px, 3),
+      fixed(raw.mean_px, 3), fixed(camera.raw_rms_axis_px, 3), fixed(camera.max_px, 2), fixed(camera.time_offset_ms, 3), `${fixed(100 * camera.coverage, 0)}%`])
+      row.insertCell().textContent = value;
+    if (!camera.calibrated) row.className = 'failed';
+  }
+  box.append(table);
+  const wand = report.wand_length;
+  const lengths = document.createElement('div');
+  lengths.id = 'cal-wand-length';
+  lengths.textContent = wand && wand.samples > 0
+    ? `wand length over ${wand.samples} samples: error mean ${fixed(wand.mean_error_mm, 3)} mm, σ ${fixed(wand.sigma_mm, 3)} mm, max ${fixed(wand.max_abs_error_mm, 3)} mm`
+    : 'wand length: no samples';
+  box.append(lengths);
+  for (const name of job.plots) {
+    const image = document.createElement('img');
+    image.src = `/calibration/${encodeURIComponent(name)}?v=${Date.now()}`;
+    image.alt = name; image.title = name;
+    box.append(image);
+  }
+}
+
 function onState(state) {
   page.state = state;
+  if (state.full) page.full = state;  // the latest with the slow parts (recorders, calibration, status)
   for (const camera of state.cameras) {
     updateCard(camera);
     updateFrustum(camera);
@@ -345,9 +603,15 @@ function onState(state) {
   updateBodies(state.bodies);
   if (state.estimator) {
     const e = state.estimator;
-    document.getElementById('estimator').textContent =
-      `estimator: ${e.tracks_confirmed} tracks (+${e.tracks_tentative} tentative) · update p99 ${fixed(e.update_p99_ms, 2)} ms · cpu ${fixed(e.cpu_percent, 0)}%`;
+    const element = document.getElementById('estimator');
+    // Its status comes every second: silent for 3 s means the estimator is gone (it is picked up
+    // again when it comes back).
+    element.className = e.age_s > 3 ? 'stale' : '';
+    element.textContent = e.age_s > 3 ? `estimator: no status for ${e.age_s.toFixed(0)} s`
+      : `estimator: ${e.tracks_confirmed} tracks (+${e.tracks_tentative} tentative) · update p99 ${fixed(e.update_p99_ms, 2)} ms · cpu ${fixed(e.cpu_percent, 0)}%`;
   }
+  if (state.recorders) updateRecorders(state.recorders, state.recordings);
+  if (state.calibration) updateCalibration(state.calibration);
   if (state.console) {
     const c = state.console;
     document.getElementById('console-stats').textContent =

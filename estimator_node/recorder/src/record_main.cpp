@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <deque>
 #include <exception>
+#include <filesystem>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -134,11 +135,19 @@ class RecordLoop {
     failed_ = true;
     std::fprintf(stderr, "panoptes_record: error: %s\n", what.c_str());
   }
+  // A relative path in a start command names a file next to --out (the recordings directory), so a
+  // console on another host need not know the recorder's working directory.
+  std::string path_for(const std::string& requested) const {
+    if (requested.empty()) return options_.out;
+    const std::filesystem::path path(requested);
+    if (path.is_absolute()) return requested;
+    return (std::filesystem::path(options_.out).parent_path() / path).string();
+  }
   void handle_commands() {
     for (auto& command : commands_.take()) {
       if (!command.target().empty() && command.target() != "*" && command.target() != options_.id) continue;
       if (command.command() == "start") {
-        if (!recorder_.recording()) start(command.path().empty() ? options_.out : command.path());
+        if (!recorder_.recording()) start(path_for(command.path()));
       } else if (command.command() == "stop") {
         stop();
       } else if (command.command() == "quit") {

@@ -70,6 +70,35 @@ TEST(CommandGate, RejectsWithAReasonAndACounter) {
             "bad_arguments");
 }
 
+TEST(RecorderGate, ForwardsStartAndStopWithABareFileName) {
+  const json start = {
+      {"type", "recorder"}, {"id", 9}, {"recorder", "studio"}, {"command", "start"}, {"name", "take_1.mcap"}};
+  const auto accepted = check_recorder_command(start, true);
+  ASSERT_TRUE(std::holds_alternative<RecorderCommandRequest>(accepted));
+  EXPECT_EQ(std::get<RecorderCommandRequest>(accepted).path, "take_1.mcap");
+  EXPECT_EQ(std::get<RecorderCommandRequest>(accepted).request, 9);
+  const auto stop =
+      check_recorder_command({{"recorder", "studio"}, {"command", "stop"}, {"name", "x"}}, true);
+  ASSERT_TRUE(std::holds_alternative<RecorderCommandRequest>(stop));
+  EXPECT_TRUE(std::get<RecorderCommandRequest>(stop).path.empty());  // stop takes no name
+  const auto counter_of = [](const json& message, bool known = true) {
+    const auto result = check_recorder_command(message, known);
+    return std::holds_alternative<Rejection>(result) ? std::get<Rejection>(result).counter
+                                                     : std::string("accepted");
+  };
+  EXPECT_EQ(counter_of({{"recorder", "studio"}, {"command", "start"}, {"name", "../etc/x.mcap"}}),
+            "bad_arguments");
+  EXPECT_EQ(counter_of({{"recorder", "studio"}, {"command", "start"}, {"name", "/tmp/x.mcap"}}),
+            "bad_arguments");
+  EXPECT_EQ(counter_of({{"recorder", "studio"}, {"command", "start"}, {"name", "take.txt"}}),
+            "bad_arguments");
+  EXPECT_EQ(counter_of({{"recorder", "studio"}, {"command", "start"}, {"name", ".mcap"}}), "bad_arguments");
+  EXPECT_EQ(counter_of({{"recorder", "studio"}, {"command", "quit"}}), "unknown_command");
+  EXPECT_EQ(counter_of({{"recorder", "studio"}, {"command", "start"}}, false), "unknown_recorder");
+  EXPECT_EQ(counter_of({{"recorder", 5}, {"command", "start"}}), "bad_message");
+  EXPECT_EQ(counter_of({{"recorder", "studio"}, {"command", "start"}, {"name", 3}}), "bad_message");
+}
+
 TEST(RateLimiter, AllowsTheBurstThenTheRate) {
   RateLimiter limiter(10, 20);
   const TimeNs start = 1'000'000'000;

@@ -46,10 +46,16 @@ class ConsoleServerTest : public ::testing::Test {
     options.token = kToken;
     options.web_root = web_root_;
     options.update_hz = update_hz;
-    server_ = std::make_unique<ConsoleServer>(options, state_, [this](const CameraCommandRequest& command) {
-      forwarded_.push_back(command);
-      return true;
-    });
+    server_ = std::make_unique<ConsoleServer>(
+        options, state_,
+        [this](const CameraCommandRequest& command) {
+          forwarded_.push_back(command);
+          return true;
+        },
+        [this](const RecorderCommandRequest& command) {
+          recorder_commands_.push_back(command);
+          return true;
+        });
     thread_ = std::thread([this] { server_->run(); });
   }
   void TearDown() override {
@@ -97,6 +103,7 @@ class ConsoleServerTest : public ::testing::Test {
   std::filesystem::path web_root_ = make_web_root();
   ConsoleState state_;
   std::vector<CameraCommandRequest> forwarded_;
+  std::vector<RecorderCommandRequest> recorder_commands_;
   std::unique_ptr<ConsoleServer> server_;
   std::thread thread_;
 };
@@ -112,6 +119,12 @@ TEST_F(ConsoleServerTest, EveryRequestNeedsTheToken) {
   EXPECT_EQ(get("/app.js?token=" + kToken).body(), "// app.js\n");
   EXPECT_EQ(get("/../../etc/passwd?token=" + kToken).result(), http::status::not_found);
   EXPECT_EQ(json::parse(get("/api/state?token=" + kToken).body())["type"], "state");
+  EXPECT_EQ(get("/api/calibration").result(), http::status::unauthorized);
+  EXPECT_EQ(get("/calibration/calibration.layout.png").result(), http::status::unauthorized);
+  EXPECT_EQ(get("/api/calibration?token=" + kToken).result(), http::status::ok);
+  // Plots: a bare .png name only; nothing outside the calibration directory.
+  EXPECT_EQ(get("/calibration/..%2F..%2Fetc%2Fpasswd?token=" + kToken).result(), http::status::not_found);
+  EXPECT_EQ(get("/calibration/../app.js?token=" + kToken).result(), http::status::not_found);
 
   net::io_context io;
   EXPECT_THROW(open_socket(io, "/ws"), beast::system_error);
@@ -148,6 +161,40 @@ TEST_F(ConsoleServerTest, CommandsPassTheGateOrAreRejectedAndCounted) {
   EXPECT_EQ(counters["rejected"]["oversized"], 1);
   EXPECT_EQ(counters["rejected"]["out_of_range"], 1);
   EXPECT_EQ(counters["commands_forwarded"], 1);
+}
+
+// A recorder command reaches the recorder sink; a page that selects a track gets its figures.
+TEST_F(ConsoleServerTest, RecorderCommandsAndDetailsOfTheSelection) {
+  state_.on_recorder_status("studio", {}, wall_now_ns());
+  TrackPoint track;
+  track.id = 7;
+  track.cameras = 2;
+  state_.on_tracks({track}, wall_now_ns());
+  start();
+  net::io_context io;
+  auto ws = open_socket(io, "/ws?token=" + kToken);
+  ws->write(net::buffer(
+      json{{"type", "recorder"}, {"id", 1}, {"recorder", "studio"}, {"command", "start"}, {"name", "a.mcap"}}
+          .dump()));
+  const json sent = read_until(*ws, "command_result");
+  EXPECT_EQ(sent["result"], "sent");
+  ASSERT_EQ(recorder_commands_.size(), 1u);
+  EXPECT_EQ(recorder_commands_[0].path, "a.mcap");
+  ws->write(net::buffer(json{
+      {"type", "recorder"}, {"id", 2}, {"recorder", "studio"}, {"command", "start"}, {"name", "../a.mcap"}}
+                            .dump()));
+  EXPECT_EQ(read_until(*ws, "command_result")["counter"], "bad_arguments");
+  EXPECT_EQ(recorder_commands_.size(), 1u);
+  ws->write(net::buffer(json{{"type", "select"}, {"kind", "track"}, {"key", "7"}}.dump()));
+  json details;
+  for (int i = 0; i < 20 && !details["figures"].is_object(); ++i) {  // live tracks time out after 0.5 s
+    state_.on_tracks({track}, wall_now_ns());
+    details = read_until(*ws, "details");
+  }
+  EXPECT_EQ(details["key"], "7");
+  EXPECT_EQ(details["figures"]["cameras"], 2);
+  ws->write(net::buffer(json{{"type", "select"}, {"kind", "planet"}, {"key", "7"}}.dump()));
+  EXPECT_EQ(read_until(*ws, "command_result")["counter"], "bad_message");
 }
 
 // Large snapshots at 60 Hz and a client that never reads: its socket fills, the server keeps only

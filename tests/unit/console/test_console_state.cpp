@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 
 #include "panoptes/console/console_state.h"
@@ -8,6 +11,7 @@
 namespace panoptes::console {
 namespace {
 
+using nlohmann::json;
 constexpr TimeNs kT0 = 1'700'000'000'000'000'000;
 
 CameraInfoRecord vga_info() {
@@ -85,6 +89,95 @@ TEST(ConsoleState, CommandOutcomesFromTheCamerasCounters) {
   ASSERT_EQ(timed_out.size(), 1u);
   EXPECT_EQ(timed_out[0].client, 2u);
   EXPECT_EQ(timed_out[0].result, "no_ack");
+}
+
+TEST(ConsoleState, RecordingsAreListedWhenTheirRecorderStopsAndCommandsResolveFromItsStatus) {
+  ConsoleState state;
+  RecorderRecord idle;
+  state.on_recorder_status("studio", idle, kT0);
+  EXPECT_TRUE(state.knows_recorder("studio"));
+  state.on_recorder_command_sent({1, 5, "studio", true, kT0});
+  RecorderRecord recording{true, "/data/take_1.mcap", 3, 100, 4096, 50, ""};
+  state.on_recorder_status("studio", recording, kT0 + kNsPerSecond);
+  recording.messages = 250;
+  state.on_recorder_status("studio", recording, kT0 + 2 * kNsPerSecond);
+  auto outcomes = state.take_outcomes(kT0 + 2 * kNsPerSecond);
+  ASSERT_EQ(outcomes.size(), 1u);
+  EXPECT_EQ(outcomes[0].request, 5);
+  EXPECT_EQ(outcomes[0].result, "applied");
+  EXPECT_TRUE(state.snapshot(kT0 + 2 * kNsPerSecond, true)["recordings"].empty());
+  state.on_recorder_command_sent({1, 6, "studio", false, kT0 + 3 * kNsPerSecond});
+  RecorderRecord stopped{false, "/data/take_1.mcap", 3, 300, 8192, 0, ""};
+  state.on_recorder_status("studio", stopped, kT0 + 4 * kNsPerSecond);
+  const json snapshot = state.snapshot(kT0 + 4 * kNsPerSecond, true);
+  ASSERT_EQ(snapshot["recordings"].size(), 1u);
+  EXPECT_EQ(snapshot["recordings"][0]["path"], "/data/take_1.mcap");
+  EXPECT_EQ(snapshot["recordings"][0]["messages"], 300);  // the figures of the closing status
+  EXPECT_DOUBLE_EQ(snapshot["recordings"][0]["seconds"].get<double>(), 3.0);
+  EXPECT_EQ(snapshot["recorders"][0]["recording"], false);
+  EXPECT_EQ(state.take_outcomes(kT0 + 4 * kNsPerSecond).at(0).request, 6);
+  // A start that no status confirms ends as no_ack.
+  state.on_recorder_command_sent({1, 7, "studio", true, kT0 + 5 * kNsPerSecond});
+  outcomes = state.take_outcomes(kT0 + 9 * kNsPerSecond);
+  ASSERT_EQ(outcomes.size(), 1u);
+  EXPECT_EQ(outcomes[0].result, "no_ack");
+  // A recorder silent for 5 s is no longer listed; its recordings stay.
+  const json later = state.snapshot(kT0 + 10 * kNsPerSecond, true);
+  EXPECT_TRUE(later["recorders"].empty());
+  EXPECT_EQ(later["recordings"].size(), 1u);
+}
+
+TEST(ConsoleState, DetailsOfATrackAndABody) {
+  ConsoleState state;
+  TrackPoint track;
+  track.id = 42;
+  track.position = {1, 2, 3};
+  track.velocity = {0.3, 0.4, 0};
+  track.covariance = {4e-6, 0, 0, 9e-6, 0, 1e-6};
+  track.cameras = 3;
+  track.status = 1;
+  state.on_tracks({track}, kT0);
+  state.on_tracks({track}, kT0 + kNsPerSecond / 4);
+  json figures = state.details("track", "42", kT0 + kNsPerSecond / 4);
+  EXPECT_EQ(figures["cameras"], 3);
+  EXPECT_EQ(figures["status"], "confirmed");
+  EXPECT_DOUBLE_EQ(figures["speed_m_s"].get<double>(), 0.5);
+  EXPECT_EQ(figures["sigma_mm"], json({2.0, 3.0, 1.0}));
+  EXPECT_DOUBLE_EQ(figures["age_s"].get<double>(), 0.25);
+  EXPECT_TRUE(state.details("track", "43", kT0 + kNsPerSecond / 4).is_null());
+  EXPECT_TRUE(state.details("track", "42", kT0 + 2 * kNsPerSecond).is_null());  // no longer live
+  BodyRecord body;
+  body.name = "wand";
+  body.pose.position = {0.5, 0, 1};
+  body.sigma = {1e-3, 1e-3, 2e-3, M_PI / 180, 0, 0};
+  body.quality = 0.9F;
+  state.on_body(body, kT0);
+  figures = state.details("body", "wand", kT0 + kNsPerSecond / 10);
+  EXPECT_EQ(figures["position_m"], json({0.5, 0.0, 1.0}));
+  EXPECT_EQ(figures["sigma_position_mm"], json({1.0, 1.0, 2.0}));
+  EXPECT_DOUBLE_EQ(figures["sigma_rotation_deg"][0].get<double>(), 1.0);
+  EXPECT_TRUE(state.details("body", "other", kT0).is_null());
+}
+
+TEST(ConsoleState, CaptureCoverageOnTheCamerasImageGrid) {
+  ConsoleState state;
+  state.on_info("cam0", vga_info(), kT0);
+  state.start_coverage(kT0);
+  state.add_coverage_frame("cam0", {{0, 0, 3}, {639, 479, 3}});
+  state.add_coverage_frame("cam0", {});
+  const json calibration = state.snapshot(kT0 + kNsPerSecond, true)["calibration"];
+  EXPECT_EQ(calibration["capturing"], true);
+  ASSERT_EQ(calibration["cameras"].size(), 1u);
+  const json& camera = calibration["cameras"][0];
+  EXPECT_EQ(camera["frames"], 2);
+  EXPECT_EQ(camera["frames_with_blobs"], 1);
+  EXPECT_EQ(camera["coverage_percent"], 3);  // 2 of 64 cells
+  const std::string cells = camera["cells"];
+  EXPECT_EQ(cells.front(), '1');  // top left
+  EXPECT_EQ(cells.back(), '1');   // bottom right
+  EXPECT_EQ(std::count(cells.begin(), cells.end(), '1'), 2);
+  state.stop_coverage();
+  EXPECT_EQ(state.snapshot(kT0 + kNsPerSecond, true)["calibration"]["capturing"], false);
 }
 
 }  // namespace

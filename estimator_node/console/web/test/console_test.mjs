@@ -5,12 +5,13 @@
 // to check against what each camera published.
 //   node console_test.mjs --url <console URL with token> --out <results.json> --shots <dir>
 //        --console-pid <pid> --restart <shell command that starts the console again, echoing its pid>
-import { chromium } from 'playwright-core';
+//        --estimator-pid <pid> --estimator-restart <shell command that starts the estimator again>
+//        --recorder <id of the idle panoptes_record on the bus> --recording-name <file name to record>
 import { spawn } from 'node:child_process';
 import http from 'node:http';
-import { mkdtempSync, writeFileSync, rmSync } from 'node:fs';
-import { tmpdir } from 'node:os';
+import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
+import { openBrowser } from './browser.mjs';
 
 const args = Object.fromEntries(process.argv.slice(2).reduce((pairs, value, i, all) =>
   (i % 2 === 0 ? [...pairs, [value.replace(/^--/, ''), all[i + 1]]] : pairs), []));
@@ -41,19 +42,8 @@ for (const [path, what] of [['/', 'page'], ['/api/state', 'state'], ['/app.js', 
   check(response.status === 401, `${what}: HTTP ${response.status} (401 expected)`);
 }
 
-const profile = mkdtempSync(join(tmpdir(), 'panoptes-chromium-'));
-const context = await chromium.launchPersistentContext(profile, {
-  executablePath: '/usr/bin/chromium',
-  headless: true,
-  viewport: { width: 1600, height: 1000 },
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
-});
-const consoleErrors = [];
+const { page, errors: consoleErrors, close } = await openBrowser({ width: 1600, height: 1000 });
 try {
-  const page = context.pages()[0] || await context.newPage();
-  page.on('console', (message) => { if (message.type() === 'error') consoleErrors.push(message.text()); });
-  page.on('pageerror', (error) => consoleErrors.push(String(error)));
   const started = Date.now();
   await page.goto(args.url);
 
@@ -176,6 +166,115 @@ try {
   await card1.locator('button.clear_masks').click();
   results.commands.clear_masks_ms = await sentAt('clear_masks', null);
 
+  // --- polygon mask: click three corners on cam2, then the first again ---------------------------
+  const card2p = page.locator('.card[data-camera="cam2"]');
+  await card2p.locator('button.polygon').click();
+  const box2 = await card2p.locator('canvas').boundingBox();
+  // A triangle around where cam2 sees blobs now (so that it had blobs to remove): its top edge on
+  // the blobs' top, its sides through their box's bottom corners, in image pixels.
+  const corners = await page.evaluate(() => {
+    const camera = window.panoptes.state.cameras.find((c) => c.id === 'cam2');
+    const canvas = document.querySelector('.card[data-camera="cam2"] canvas');  // sized as the image
+    const [width, height] = [canvas.width, canvas.height];
+    const xs = camera.blobs.map((b) => b[0]), ys = camera.blobs.map((b) => b[1]);
+    const x0 = Math.min(...xs) - 30, x1 = Math.max(...xs) + 30, y0 = Math.min(...ys) - 30, y1 = Math.max(...ys) + 30;
+    const cx = (x0 + x1) / 2, w = x1 - x0, h = y1 - y0;
+    const clamp = (v, high) => Math.max(1, Math.min(high - 2, v));
+    return [[clamp(cx - w, width), clamp(y0, height)], [clamp(cx + w, width), clamp(y0, height)], [clamp(cx, width), clamp(y1 + h, height)]]
+      .map(([x, y]) => [x / width, y / height]);
+  });
+  for (const [fx, fy] of corners) await page.mouse.click(box2.x + box2.width * fx, box2.y + box2.height * fy);
+  await page.mouse.move(box2.x + box2.width * 0.5, box2.y + box2.height * 0.5);
+  await card2p.screenshot({ path: join(args.shots, 'console_polygon.png') });
+  await page.mouse.click(box2.x + box2.width * corners[0][0] + 2, box2.y + box2.height * corners[0][1] + 2);
+  const polyArgs = await waitFor(page, () => window.panoptes.results.some((r) => r.command === 'add_mask' && r.args[0] === 'poly'), null, 5000)
+    ? await page.evaluate(() => window.panoptes.results.find((r) => r.command === 'add_mask' && r.args[0] === 'poly').args) : null;
+  results.commands.polygon_args = polyArgs;
+  check(polyArgs && polyArgs.length === 7, `polygon sent as add_mask ${polyArgs ? polyArgs.join(' ') : '(none)'}`);
+  if (polyArgs) results.commands.polygon_ms = await page.evaluate(() =>
+    window.panoptes.sent.filter((s) => s.command === 'add_mask' && s.args[0] === 'poly').at(-1).at);
+  await sleep(600);
+  let insidePolygon = 0;
+  for (let i = 0; polyArgs && i < 10; ++i) {
+    insidePolygon += await page.evaluate((poly) => {
+      const p = poly.slice(1).map(Number);
+      const corners = [[p[0], p[1]], [p[2], p[3]], [p[4], p[5]]];
+      // Deeper than 3 px inside every edge of the (convex) triangle.
+      const inside = (x, y) => corners.every(([ax, ay], k) => {
+        const [bx, by] = corners[(k + 1) % 3], [cx, cy] = corners[(k + 2) % 3];
+        const side = (bx - ax) * (y - ay) - (by - ay) * (x - ax), other = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
+        return side * Math.sign(other) / Math.hypot(bx - ax, by - ay) > 3;
+      });
+      return window.panoptes.state.cameras.find((c) => c.id === 'cam2').blobs.filter(([x, y]) => inside(x, y)).length;
+    }, polyArgs);
+    await sleep(50);
+  }
+  check(polyArgs && insidePolygon === 0, `no blob of cam2 inside the polygon in the page (${insidePolygon} seen over 0.5 s)`);
+  await card2p.locator('button.clear_masks').click();
+  results.commands.clear_polygon_ms = await sentAt('clear_masks', null);
+
+  // --- click a body, then a track, in the 3D view: their figures -------------------------------
+  const canvasBox = await page.locator('#view3d').boundingBox();
+  const clickWorld = async (point) => {
+    const [u, v, width, height] = await page.evaluate((p) => [...window.panoptes.project(p),
+      document.getElementById('view3d').width, document.getElementById('view3d').height], point);
+    await page.mouse.click(canvasBox.x + u * canvasBox.width / width, canvasBox.y + v * canvasBox.height / height);
+  };
+  const body = await page.evaluate(() => window.panoptes.state.bodies[0]);
+  await clickWorld(body.pose.p);
+  const bodyShown = await waitFor(page, (name) => window.panoptes.details && window.panoptes.details.kind === 'body' &&
+    window.panoptes.details.name === name && !document.getElementById('details').hidden, body.name, 3000);
+  const bodyFigures = await page.evaluate(() => ({ figures: window.panoptes.details, pose: window.panoptes.state.bodies[0].pose.p,
+    rows: document.querySelectorAll('#details tr').length }));
+  const bodyOffset = bodyShown ? Math.hypot(...bodyFigures.figures.position_m.map((v, i) => v - bodyFigures.pose[i])) : Infinity;
+  check(bodyShown && bodyOffset < 0.05 && bodyFigures.rows >= 8 && bodyFigures.figures.sigma_position_mm.every((v) => v >= 0),
+        `clicking body ${body.name} shows its figures (${bodyFigures.rows} rows, position ${bodyOffset.toFixed(3)} m from the streamed pose)`);
+  await page.locator('#view3d-panel').screenshot({ path: join(args.shots, 'console_details.png') });
+  // The loose track farthest on screen from every body (the body's markers are tracks too).
+  const track = await page.evaluate(() => {
+    const state = window.panoptes.state;
+    const bodyPixels = state.bodies.map((b) => window.panoptes.project(b.pose.p));
+    let best = null;
+    for (const [id, x, y, z] of state.tracks) {
+      const [u, v] = window.panoptes.project([x, y, z]);
+      const clearance = Math.min(...bodyPixels.map(([bu, bv]) => Math.hypot(bu - u, bv - v)));
+      if (!best || clearance > best.clearance) best = { id, p: [x, y, z], clearance };
+    }
+    return best;
+  });
+  let trackShown = false;
+  if (track) {
+    await clickWorld(track.p);
+    trackShown = await waitFor(page, () => window.panoptes.details && window.panoptes.details.kind === 'track', null, 3000);
+  }
+  const trackFigures = await page.evaluate(() => window.panoptes.details);
+  // Tracks close together on screen: the nearest to the click is shown, which may be a neighbour.
+  check(trackShown && trackFigures.cameras >= 2 && trackFigures.sigma_mm.length === 3 && trackFigures.age_s >= 0,
+        `clicking near track ${track ? track.id : '(none)'} shows track ${trackFigures && trackFigures.id}'s figures: ${JSON.stringify(trackFigures)}`);
+  await page.locator('#details .close').click();
+
+  // --- recording: start, stop, listed --------------------------------------------------------
+  if (args.recorder) {
+    const row = page.locator(`.recorder[data-recorder="${args.recorder}"]`);
+    const listed = await waitFor(page, (id) => document.querySelector(`.recorder[data-recorder="${id}"]`), args.recorder, 8000);
+    check(listed, `recorder ${args.recorder} listed in the page`);
+    await row.locator('input.file').fill(args['recording-name']);
+    await row.locator('button.start').click();
+    const recording = await waitFor(page, (id) => document.querySelector(`.recorder[data-recorder="${id}"]`).dataset.recording === 'true',
+                                    args.recorder, 5000);
+    const started = await waitFor(page, (id) => document.querySelector(`.recorder[data-recorder="${id}"] .result`).classList.contains('applied'),
+                                  args.recorder, 5000);
+    check(recording && started, `recording started from the page: "${await row.locator('.result').textContent()}"`);
+    await sleep(1500);
+    await row.locator('button.stop').click();
+    const inList = await waitFor(page, (name) => [...document.querySelectorAll('#recordings td:first-child')].some((cell) => cell.textContent.endsWith(name)),
+                                 args['recording-name'], 6000);
+    const entry = await page.evaluate((name) => window.panoptes.full.recordings.find((r) => r.path.endsWith(name)), args['recording-name']);
+    results.recording = entry || null;
+    await page.locator('#recording').screenshot({ path: join(args.shots, 'console_recording.png') });
+    check(inList && entry && entry.messages > 0, `the stopped recording is listed: ${JSON.stringify(entry)}`);
+  }
+
   // --- a command the camera rejects: its reason is shown ---------------------------------------
   const card2 = page.locator('.card[data-camera="cam2"]');
   await card2.locator('input.gain').fill('6');
@@ -220,6 +319,19 @@ try {
   });
   check(refusedStatus === 401, `WebSocket handshake without the token: HTTP ${refusedStatus} (401 expected)`);
 
+  // --- the estimator killed and started again: the page shows it gone, then its tracks again -----
+  if (args['estimator-pid']) {
+    process.kill(Number(args['estimator-pid']), 'SIGKILL');
+    const stale = await waitFor(page, () => document.getElementById('estimator').classList.contains('stale') &&
+      window.panoptes.state.tracks.length === 0, null, 8000);
+    check(stale, `the page shows the estimator gone: "${await page.locator('#estimator').textContent()}"`);
+    const t0 = Date.now();
+    spawn('bash', ['-c', args['estimator-restart']], { stdio: 'ignore' }).unref();
+    const back = await waitFor(page, () => !document.getElementById('estimator').classList.contains('stale') &&
+      window.panoptes.state.tracks.length > 0 && window.panoptes.state.bodies.length > 0, null, 20000);
+    check(back, `tracks and bodies back in the page after the estimator's restart, without a reload (${Date.now() - t0} ms)`);
+  }
+
   // --- the console killed and started again: the page recovers without a reload ----------------
   const connectsBefore = await page.evaluate(() => window.panoptes.connects);
   process.kill(Number(args['console-pid']), 'SIGKILL');
@@ -246,8 +358,7 @@ try {
 } catch (error) {
   fail(`browser test aborted: ${error.stack || error}`);
 } finally {
-  await context.close();
-  rmSync(profile, { recursive: true, force: true });
+  await close();
   writeFileSync(args.out, JSON.stringify(results, null, 1));
 }
 process.exit(failures === 0 ? 0 : 1);

@@ -44,6 +44,31 @@ const std::vector<std::string>& console_commands();
 GateResult check_command(const nlohmann::json& message, bool camera_known,
                          const std::optional<std::pair<int, int>>& image_size);
 
+// A recorder command from the page: {"type":"recorder", "id", "recorder", "command": "start" | "stop",
+// "name"}. The name is a bare file name ending in .mcap (no directory: the recorder writes it next
+// to its --out file, docs/recording.md); without one, start uses the recorder's --out.
+struct RecorderCommandRequest {
+  std::int64_t request = 0;
+  std::string recorder;
+  std::string command;
+  std::string path;
+};
+using RecorderGateResult = std::variant<RecorderCommandRequest, Rejection>;
+RecorderGateResult check_recorder_command(const nlohmann::json& message, bool recorder_known);
+
+// A calibration workflow step from the page (docs/calibration.md's steps, run by the console):
+// {"type":"calibration", "id", "action": "capture" | "floor_capture" | "stop" | "solve" | "world",
+//  "wand": "0,0.18,0.5" (solve, world), "floor_offset": metres (world), "time_service": bool (captures)}.
+struct CalibrationRequest {
+  std::int64_t request = 0;
+  std::string action;
+  std::string wand;  // canonical: numbers in metres joined by ','
+  double floor_offset_m = 0;
+  bool time_service = false;
+};
+using CalibrationGateResult = std::variant<CalibrationRequest, Rejection>;
+CalibrationGateResult check_calibration_request(const nlohmann::json& message);
+
 // Token bucket: `rate` commands per second on average, at most `burst` at once.
 class RateLimiter {
  public:

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "panoptes/image_coverage.h"
 #include "panoptes/time.h"
 
 namespace panoptes::console {
@@ -84,12 +85,49 @@ struct TrackPoint {
   std::int64_t id = 0;
   std::array<double, 3> position{};
   int status = 0;  // 0 tentative, 1 confirmed, 2 coasting
+  std::array<double, 3> velocity{};
+  std::array<double, 6> covariance{};  // position: xx xy xz yy yz zz
+  int cameras = 0;                     // cameras that updated the track recently
 };
 
 struct BodyRecord {
   std::string name;
   Pose pose;
   float quality = 0;
+  std::array<double, 3> linear_velocity{};
+  std::array<double, 3> angular_velocity{};
+  std::array<double, 6> sigma{};  // square roots of the pose covariance's diagonal: x y z, rx ry rz
+  TimeNs stamp_ns = 0;
+};
+
+// A recorder on the bus (rt/panoptes/recorder_status).
+struct RecorderRecord {
+  bool recording = false;
+  std::string path;
+  unsigned topics = 0;
+  std::uint64_t messages = 0;
+  std::uint64_t bytes = 0;
+  double messages_per_s = 0;
+  std::string error;
+};
+
+// A recording seen from start to stop while the console ran.
+struct RecordingEntry {
+  std::string recorder;
+  std::string path;
+  std::uint64_t messages = 0;
+  std::uint64_t bytes = 0;
+  TimeNs started_ns = 0;  // wall clock, when the console first saw it recording
+  TimeNs stopped_ns = 0;
+};
+
+// What the browser asked a recorder to do, waiting for its status to show it.
+struct PendingRecorderCommand {
+  std::uint64_t client = 0;
+  std::int64_t request = 0;
+  std::string recorder;
+  bool want_recording = false;
+  TimeNs sent_ns = 0;
 };
 
 // A light per camera, with the reason a person can act on.
@@ -118,11 +156,13 @@ struct CommandOutcome {
 };
 
 struct StateOptions {
-  TimeNs feature_timeout_ns = kNsPerSecond;     // no frame for this long: red
-  TimeNs status_timeout_ns = 3 * kNsPerSecond;  // no status for this long: red
-  TimeNs ack_timeout_ns = 3 * kNsPerSecond;     // a command not counted by then: no_ack
-  TimeNs body_timeout_ns = kNsPerSecond / 2;    // a body not updated for this long is dropped
-  TimeNs track_timeout_ns = kNsPerSecond / 2;   // tracks older than this are not shown
+  TimeNs feature_timeout_ns = kNsPerSecond;       // no frame for this long: red
+  TimeNs status_timeout_ns = 3 * kNsPerSecond;    // no status for this long: red
+  TimeNs ack_timeout_ns = 3 * kNsPerSecond;       // a command not counted by then: no_ack
+  TimeNs body_timeout_ns = kNsPerSecond / 2;      // a body not updated for this long is dropped
+  TimeNs track_timeout_ns = kNsPerSecond / 2;     // tracks older than this are not shown
+  TimeNs recorder_timeout_ns = 5 * kNsPerSecond;  // a recorder silent for this long is not listed
+  std::size_t max_recordings = 200;               // the list keeps the newest
 };
 
 class ConsoleState {
@@ -136,13 +176,31 @@ class ConsoleState {
   void on_estimator(EstimatorRecord status, TimeNs now);
   void on_tracks(std::vector<TrackPoint> tracks, TimeNs now);
   void on_body(BodyRecord body, TimeNs now);
+  void on_recorder_status(const std::string& recorder, RecorderRecord status, TimeNs now);
 
   bool knows_camera(const std::string& camera) const;
   // Image size of a camera, if its camera_info was seen.
   std::optional<std::pair<int, int>> image_size(const std::string& camera) const;
   // Records a forwarded command; its outcome comes from take_outcomes().
   void on_command_sent(PendingCommand command);
+  void on_recorder_command_sent(PendingRecorderCommand command);
+  bool knows_recorder(const std::string& recorder) const;
   std::vector<CommandOutcome> take_outcomes(TimeNs now);
+
+  // Wand capture coverage (the calibration page): from start_coverage on, every camera's frames
+  // and the 8x8 grid of where its blobs were seen, as `estimator_node calibrate capture` prints;
+  // fed with the frames the capture writes (the same frames the CLI counts).
+  void start_coverage(TimeNs now);
+  void add_coverage_frame(const std::string& camera, const std::vector<BlobPoint>& blobs);
+  void stop_coverage();
+  // The calibration workflow's step and log (JSON text, in every full snapshot) and the same with
+  // the last report and world-frame summary (served once per step by /api/calibration).
+  void set_calibration_job(std::string summary_json, std::string full_json);
+  std::string calibration_job() const;
+
+  // The figures of one track (`kind` "track", key its id) or body ("body", key its name) for the
+  // page's details panel; null when it is not (or no longer) live.
+  nlohmann::json details(const std::string& kind, const std::string& key, TimeNs now) const;
 
   // The state as JSON (docs/console.md, "Protocol"): cameras with blobs, health and, when `full`,
   // their info, geometry and status; tracks; bodies; estimator status.
@@ -165,8 +223,22 @@ class ConsoleState {
     double received_fps = 0;
   };
 
+  struct Recorder {
+    RecorderRecord status;
+    TimeNs status_ns = 0;
+    TimeNs started_ns = 0;
+  };
+
   Health health_of(const std::string& id, const Camera& camera, TimeNs now) const;
   void resolve_pending(const std::string& camera, const CameraStatusRecord& status);
+  nlohmann::json recorders_json(TimeNs now) const;
+  nlohmann::json calibration_json(TimeNs now) const;
+
+  struct Coverage {
+    std::uint64_t frames = 0;
+    std::uint64_t frames_with_blobs = 0;
+    ImageCoverage grid;
+  };
 
   StateOptions options_;
   mutable std::mutex mutex_;
@@ -175,8 +247,19 @@ class ConsoleState {
   TimeNs estimator_ns_ = 0;
   std::vector<TrackPoint> tracks_;
   TimeNs tracks_ns_ = 0;
+  std::map<std::int64_t, TimeNs> track_first_seen_ns_;
   std::map<std::string, std::pair<BodyRecord, TimeNs>> bodies_;
+  std::map<std::string, TimeNs> body_first_seen_ns_;
+  std::map<std::string, Recorder> recorders_;
+  std::vector<RecordingEntry> recordings_;
   std::vector<PendingCommand> pending_;
+  std::vector<PendingRecorderCommand> pending_recorder_;
+  bool coverage_active_ = false;
+  TimeNs coverage_start_ns_ = 0;
+  TimeNs coverage_stop_ns_ = 0;
+  std::map<std::string, Coverage> coverage_;
+  std::string calibration_job_ = "{}";
+  std::string calibration_job_full_ = "{}";
   std::vector<CommandOutcome> outcomes_;
 };
 

@@ -27,7 +27,8 @@ struct ServerOptions {
   std::string bind_address = "127.0.0.1";
   unsigned short port = 8080;  // 0: any free port (tests)
   std::string token;
-  std::filesystem::path web_root;  // index.html, app.js, style.css and node_modules/three
+  std::filesystem::path web_root;         // index.html, app.js, style.css and node_modules/three
+  std::filesystem::path calibration_dir;  // the calibration page's plots, served as /calibration/<name>.png
   double update_hz = 30;
   int full_every = 15;                    // every n-th snapshot carries info, geometry, status
   std::size_t max_message_bytes = 16384;  // larger client messages are rejected (counted)
@@ -39,6 +40,10 @@ struct ServerOptions {
 
 // Forwards a checked command to the camera; false if it could not be sent.
 using CommandSink = std::function<bool(const CameraCommandRequest&)>;
+// Forwards a checked recorder command; false if no recorder listens.
+using RecorderSink = std::function<bool(const RecorderCommandRequest&)>;
+// Runs a checked calibration step; returns "" when it started, else why it cannot.
+using CalibrationSink = std::function<std::string(const CalibrationRequest&)>;
 
 // Loads the page's files; throws std::runtime_error naming the missing file.
 std::map<std::string, std::pair<std::string, std::string>> load_web_files(
@@ -46,7 +51,9 @@ std::map<std::string, std::pair<std::string, std::string>> load_web_files(
 
 class ConsoleServer {
  public:
-  ConsoleServer(ServerOptions options, ConsoleState& state, CommandSink sink);
+  // Without a recorder or calibration sink, those commands are rejected (not_sent).
+  ConsoleServer(ServerOptions options, ConsoleState& state, CommandSink sink, RecorderSink recorder_sink = {},
+                CalibrationSink calibration_sink = {});
   ~ConsoleServer();
   ConsoleServer(const ConsoleServer&) = delete;
   ConsoleServer& operator=(const ConsoleServer&) = delete;
