@@ -125,7 +125,7 @@ try {
   const gone = await blobsOf('cam0', 'none');
   const goneMs = gone ? await page.evaluate(() => window.panoptes.seenAt) - results.commands.threshold_max_ms : Infinity;
   check(goneMs < 1000, `threshold 255: cam0's blobs gone in the page ${goneMs} ms after the command was sent`);
-  const applied = await waitFor(page, () => document.querySelector('.card[data-camera="cam0"] .result').classList.contains('applied'), null, 6000);
+  const applied = await waitFor(page, () => document.querySelector('.card[data-camera="cam0"] .result').classList.contains('applied'), null, 12000);
   check(applied, `the card shows the camera's acknowledgement: "${await card0.locator('.result').textContent()}"`);
   await card0.screenshot({ path: join(args.shots, 'console_threshold.png') });
   await sleep(Math.max(0, results.commands.threshold_max_ms + 1500 - Date.now()));  // 1.5 s at the maximum
@@ -349,7 +349,7 @@ try {
   check(recovered, `the page reconnected without a reload (${Date.now() - t0} ms after the restart)`);
   const frames0 = await page.evaluate(() => window.panoptes.state.cameras.map((c) => c.frame));
   const streaming = await waitFor(page, (before) => window.panoptes.state.cameras.every((c, i) => c.frame > before[i]),
-                                  frames0, 3000);
+                                  frames0, 12000);  // the new participant's discovery, on a loaded machine
   check(streaming, 'blobs keep streaming after the restart (every camera\'s frame number advances)');
   await page.screenshot({ path: join(args.shots, 'console_after_restart.png') });
   check(consoleErrors.filter((e) => !e.includes('WebSocket')).length === 0,

@@ -38,13 +38,13 @@ std::optional<MarkerPixel> landmark_pixel(const RigidTransform& T_world_rig,
                                           const CameraModel& camera_in_rig, double min_depth_m = 0.05);
 
 struct InsideOutOptions {
-  double pixel_sigma = 0.1;                   // blob centroid noise, px
+  double pixel_sigma = 0.1;                  // blob centroid noise, px
   BodyMotionNoise motion{50.0, 0.1, 100.0};  // a walking, turning head
-  double gate_chi2 = 13.82;                   // association gate, 2 degrees of freedom (99.9%)
-  double acquire_inlier_px = 2.0;             // a hypothesis's landmark counts when a blob is this close
-  int acquire_min_landmarks = 4;              // landmarks a cold-start hypothesis must explain
-  int track_min_landmarks = 3;                // fewer matched in a frame: the frame does not update
-  TimeNs lost_after_ns = 200'000'000;         // no update this long: lost, acquire again
+  double gate_chi2 = 13.82;                  // association gate, 2 degrees of freedom (99.9%)
+  double acquire_inlier_px = 2.0;            // a hypothesis's landmark counts when a blob is this close
+  int acquire_min_landmarks = 4;             // landmarks a cold-start hypothesis must explain
+  int track_min_landmarks = 3;               // fewer matched in a frame: the frame does not update
+  TimeNs lost_after_ns = 200'000'000;        // no update this long: lost, acquire again
 };
 
 struct InsideOutPose {
