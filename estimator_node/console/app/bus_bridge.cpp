@@ -104,6 +104,7 @@ struct BusBridge::Impl {
   std::unique_ptr<dds::Reader<msg::CameraInfo>> info;
   std::unique_ptr<dds::Reader<msg::CameraStatus>> status;
   std::unique_ptr<dds::Reader<msg::FeatureFrame>> features;
+  std::unique_ptr<dds::Reader<msg::Predictions>> predictions;
   std::unique_ptr<dds::Reader<msg::SystemCalibration>> calibration;
   std::unique_ptr<dds::Reader<msg::EstimatorStatus>> estimator;
   std::unique_ptr<dds::Reader<msg::TrackFrame>> tracks;
@@ -123,6 +124,13 @@ BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_uniqu
     record.blobs.reserve(frame.blobs().size());
     for (const msg::Blob& blob : frame.blobs()) record.blobs.push_back({blob.x(), blob.y(), blob.area()});
     state.on_features(frame.camera_id(), std::move(record), wall_now_ns());
+  });
+  impl_->predictions = bus.make_reader<msg::Predictions>([&state](msg::Predictions&& predictions) {
+    std::vector<PredictedWindowRecord> windows;
+    windows.reserve(predictions.windows().size());
+    for (const msg::PredictedWindow& window : predictions.windows())
+      windows.push_back({window.x(), window.y(), window.half_width(), window.half_height()});
+    state.on_predictions(predictions.camera_id(), std::move(windows), wall_now_ns());
   });
   impl_->calibration =
       bus.make_reader<msg::SystemCalibration>([&state](msg::SystemCalibration&& calibration) {

@@ -96,6 +96,14 @@ void ConsoleState::on_status(const std::string& camera, CameraStatusRecord statu
   entry.status_ns = now;
 }
 
+void ConsoleState::on_predictions(const std::string& camera, std::vector<PredictedWindowRecord> windows,
+                                  TimeNs now) {
+  std::lock_guard lock(mutex_);
+  Camera& entry = cameras_[camera];
+  entry.windows = std::move(windows);
+  entry.windows_ns = now;
+}
+
 void ConsoleState::on_features(const std::string& camera, FeatureRecord features, TimeNs now) {
   std::lock_guard lock(mutex_);
   Camera& entry = cameras_[camera];
@@ -418,10 +426,18 @@ nlohmann::json ConsoleState::snapshot(TimeNs now, bool full) const {
       for (const BlobPoint& blob : camera.features.blobs)
         blobs.push_back({round_to(blob.x, 2), round_to(blob.y, 2), round_to(blob.area, 1)});
     }
+    // The estimator's predicted windows, as stale as the blobs may be.
+    json windows = json::array();
+    if (now - camera.windows_ns <= options_.feature_timeout_ns) {
+      for (const PredictedWindowRecord& window : camera.windows)
+        windows.push_back({round_to(window.x, 1), round_to(window.y, 1), round_to(window.half_width, 1),
+                           round_to(window.half_height, 1)});
+    }
     const Health health = health_of(id, camera, now);
     json entry = {{"id", id},
                   {"frame", camera.features.frame},
                   {"blobs", std::move(blobs)},
+                  {"windows", std::move(windows)},
                   {"rx_fps", round_to(camera.received_fps, 1)},
                   {"latency_ms", round_to(camera.latency_ms, 2)},
                   {"health", {{"light", health.light}, {"reason", health.reason}}}};

@@ -216,10 +216,10 @@ function updateCard(camera) {
 function finishCard(card, camera) {
   card.dataset.blobs = String(camera.blobs.length);
   page.blobCounts[camera.id] = camera.blobs.length;
-  drawBlobs(card, camera.blobs);
+  drawBlobs(card, camera.blobs, camera.windows || []);
 }
 
-function drawBlobs(card, blobs) {
+function drawBlobs(card, blobs, windows = []) {
   const canvas = card.querySelector('canvas');
   const context = canvas.getContext('2d');
   context.fillStyle = '#000';
@@ -248,6 +248,12 @@ function drawBlobs(card, blobs) {
     context.lineWidth = 2 * scale;
     context.strokeRect(Math.min(x0, x1), Math.min(y0, y1), Math.abs(x1 - x0), Math.abs(y1 - y0));
   }
+  // The estimator's predicted windows for the next frame (where camera_node searches first).
+  context.strokeStyle = 'rgba(120, 160, 255, 0.9)';
+  context.lineWidth = 1.5 * scale;
+  context.setLineDash([4 * scale, 3 * scale]);
+  for (const [x, y, halfWidth, halfHeight] of windows) context.strokeRect(x - halfWidth, y - halfHeight, 2 * halfWidth, 2 * halfHeight);
+  context.setLineDash([]);
   context.fillStyle = '#7fffd4';
   for (const [x, y, area] of blobs) {
     const radius = Math.max(5 * scale, Math.sqrt(area / Math.PI));

@@ -65,6 +65,18 @@ TEST(ConsoleState, SnapshotCarriesTheLatestBlobsAndFullPartsOnRequest) {
   EXPECT_EQ(later["cameras"][0]["health"]["light"], "red");
 }
 
+TEST(ConsoleState, SnapshotCarriesThePredictedWindowsWhileFresh) {
+  ConsoleState state;
+  state.on_info("cam0", vga_info(), kT0);
+  state.on_predictions("cam0", {{100.04F, 200.0F, 6.0F, 7.5F}, {320.0F, 240.0F, 10.0F, 10.0F}},
+                       kT0 + 1'000'000);
+  const nlohmann::json live = state.snapshot(kT0 + 20'000'000, false);
+  ASSERT_EQ(live["cameras"][0]["windows"].size(), 2u);
+  EXPECT_EQ(live["cameras"][0]["windows"][0], json::parse("[100.0, 200.0, 6.0, 7.5]"));
+  // Windows of an estimator that stopped predicting are not drawn.
+  EXPECT_TRUE(state.snapshot(kT0 + 3 * kNsPerSecond, false)["cameras"][0]["windows"].empty());
+}
+
 TEST(ConsoleState, CommandOutcomesFromTheCamerasCounters) {
   ConsoleState state;
   CameraStatusRecord status;

@@ -65,6 +65,17 @@ try {
   }
   check(results.samples.every((sample) => sample.every((camera) => camera.shown === camera.blobs.length)),
         'each card shows the blob count of the frame it drew');
+  // The estimator's predicted windows (for each camera's next frame) drawn on every card, most of
+  // them around a blob of the frame shown (a garbage window would hold none).
+  const withWindows = await waitFor(page, (n) => window.panoptes.state.cameras.length === n &&
+    window.panoptes.state.cameras.every((c) => (c.windows || []).length > 0), cameras.length, 10000);
+  const windowStats = await page.evaluate(() => window.panoptes.state.cameras.map((c) => [
+    (c.windows || []).filter(([x, y, hw, hh]) => c.blobs.some(([bx, by]) => Math.abs(bx - x) <= hw + 3 && Math.abs(by - y) <= hh + 3)).length,
+    (c.windows || []).length]));
+  const held = windowStats.reduce((sum, [inside]) => sum + inside, 0);
+  const windowsShown = windowStats.reduce((sum, [, all]) => sum + all, 0);
+  check(withWindows && held >= 0.25 * windowsShown,
+        `predicted windows on every camera: ${held} of ${windowsShown} around a blob of the frame shown`);
   const health = await page.evaluate(() => window.panoptes.state.cameras.map((c) => `${c.id} ${c.health.light} (${c.health.reason})`));
   check(health.every((light) => !light.includes(' red ')), `health lights: ${health.join(', ')}`);
 

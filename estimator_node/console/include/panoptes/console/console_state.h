@@ -62,6 +62,15 @@ struct BlobPoint {
   float area = 0;
 };
 
+// A window the estimator predicts a track's blob in, for the camera's next frame (the
+// Predictions topic that guides camera_node's search).
+struct PredictedWindowRecord {
+  float x = 0;  // px, centre
+  float y = 0;
+  float half_width = 0;
+  float half_height = 0;
+};
+
 struct FeatureRecord {
   std::int64_t frame = 0;
   TimeNs stamp_ns = 0;
@@ -172,6 +181,7 @@ class ConsoleState {
   void on_info(const std::string& camera, CameraInfoRecord info, TimeNs now);
   void on_status(const std::string& camera, CameraStatusRecord status, TimeNs now);
   void on_features(const std::string& camera, FeatureRecord features, TimeNs now);
+  void on_predictions(const std::string& camera, std::vector<PredictedWindowRecord> windows, TimeNs now);
   void on_calibration(const std::map<std::string, CameraGeometry>& cameras);
   void on_estimator(EstimatorRecord status, TimeNs now);
   void on_tracks(std::vector<TrackPoint> tracks, TimeNs now);
@@ -215,6 +225,8 @@ class ConsoleState {
     std::uint64_t drops_last_period = 0;  // drops between the last two statuses
     FeatureRecord features;
     TimeNs features_ns = 0;
+    std::vector<PredictedWindowRecord> windows;
+    TimeNs windows_ns = 0;
     std::uint64_t frames_received = 0;
     double latency_ms = 0;  // receive time minus stamp, smoothed
     // Frames received per second, over the last whole second.
