@@ -105,6 +105,7 @@ struct BusBridge::Impl {
   std::unique_ptr<dds::Reader<msg::CameraStatus>> status;
   std::unique_ptr<dds::Reader<msg::FeatureFrame>> features;
   std::unique_ptr<dds::Reader<msg::Predictions>> predictions;
+  std::unique_ptr<dds::Reader<msg::CameraPreview>> previews;
   std::unique_ptr<dds::Reader<msg::SystemCalibration>> calibration;
   std::unique_ptr<dds::Reader<msg::EstimatorStatus>> estimator;
   std::unique_ptr<dds::Reader<msg::TrackFrame>> tracks;
@@ -124,6 +125,11 @@ BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_uniqu
     record.blobs.reserve(frame.blobs().size());
     for (const msg::Blob& blob : frame.blobs()) record.blobs.push_back({blob.x(), blob.y(), blob.area()});
     state.on_features(frame.camera_id(), std::move(record), wall_now_ns());
+  });
+  impl_->previews = bus.make_reader<msg::CameraPreview>([&state](msg::CameraPreview&& preview) {
+    state.on_preview(preview.camera_id(), preview.stamp_ns(), static_cast<int>(preview.width()),
+                     static_cast<int>(preview.height()),
+                     std::string(preview.pixels().begin(), preview.pixels().end()));
   });
   impl_->predictions = bus.make_reader<msg::Predictions>([&state](msg::Predictions&& predictions) {
     std::vector<PredictedWindowRecord> windows;

@@ -132,6 +132,7 @@ const std::map<std::string, std::pair<std::vector<Range>, std::size_t>>& numeric
       {"clear_background", {{}, 0}},
       {"clear_masks", {{}, 0}},
       {"restart", {{}, 0}},
+      {"preview", {{{16, 4096, true}}, 0}},  // [max width]: one downscaled image on camera_preview
   };
   return rules;
 }

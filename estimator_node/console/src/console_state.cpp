@@ -104,6 +104,29 @@ void ConsoleState::on_predictions(const std::string& camera, std::vector<Predict
   entry.windows_ns = now;
 }
 
+void ConsoleState::on_preview(const std::string& camera, TimeNs stamp_ns, int width, int height,
+                              std::string pixels) {
+  // A preview whose size does not match its pixels is dropped (a bad message, never a bad image).
+  if (width <= 0 || height <= 0 ||
+      pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
+    return;
+  std::lock_guard lock(mutex_);
+  Camera& entry = cameras_[camera];
+  entry.preview_stamp_ns = stamp_ns;
+  entry.preview_width = width;
+  entry.preview_height = height;
+  entry.preview_pixels = std::move(pixels);
+}
+
+std::optional<std::string> ConsoleState::preview_pgm(const std::string& camera) const {
+  std::lock_guard lock(mutex_);
+  const auto entry = cameras_.find(camera);
+  if (entry == cameras_.end() || entry->second.preview_stamp_ns == 0) return std::nullopt;
+  const Camera& c = entry->second;
+  return "P5\n" + std::to_string(c.preview_width) + " " + std::to_string(c.preview_height) + "\n255\n" +
+         c.preview_pixels;
+}
+
 void ConsoleState::on_features(const std::string& camera, FeatureRecord features, TimeNs now) {
   std::lock_guard lock(mutex_);
   Camera& entry = cameras_[camera];
@@ -438,6 +461,7 @@ nlohmann::json ConsoleState::snapshot(TimeNs now, bool full) const {
                   {"frame", camera.features.frame},
                   {"blobs", std::move(blobs)},
                   {"windows", std::move(windows)},
+                  {"preview_stamp_ns", camera.preview_stamp_ns},
                   {"rx_fps", round_to(camera.received_fps, 1)},
                   {"latency_ms", round_to(camera.latency_ms, 2)},
                   {"health", {{"light", health.light}, {"reason", health.reason}}}};

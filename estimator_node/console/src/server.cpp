@@ -512,6 +512,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     } else if (path == "/api/stats") {
       respond(request, http::status::ok, "application/json", ConsoleServer::Impl::stats_of(server_).dump(),
               false);
+    } else if (path.rfind("/api/preview/", 0) == 0) {
+      const auto pgm = server_.state.preview_pgm(path.substr(std::string("/api/preview/").size()));
+      if (pgm)
+        respond(request, http::status::ok, "image/x-portable-graymap", *pgm, false);
+      else
+        respond(request, http::status::not_found, "text/plain", "no preview from that camera\n", false);
     } else if (path.rfind("/calibration/", 0) == 0) {
       serve_calibration_file(request, path.substr(std::string("/calibration/").size()));
     } else if (const auto file = server_.files.find(path); file != server_.files.end()) {

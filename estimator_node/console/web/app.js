@@ -114,6 +114,7 @@ function cardFor(camera) {
       send(card, command);
     });
   }
+  card.querySelector('button.preview').addEventListener('click', () => send(card, 'preview', [640]));
   const maskButton = card.querySelector('button.mask');
   const polygonButton = card.querySelector('button.polygon');
   maskButton.addEventListener('click', () => { maskButton.classList.toggle('active'); polygonButton.classList.remove('active'); card.polygon = null; });
@@ -214,9 +215,38 @@ function updateCard(camera) {
 }
 
 function finishCard(card, camera) {
+  if (camera.preview_stamp_ns && String(camera.preview_stamp_ns) !== card.dataset.previewStamp) {
+    card.dataset.previewStamp = String(camera.preview_stamp_ns);
+    loadPreview(card, camera.id);
+  }
   card.dataset.blobs = String(camera.blobs.length);
   page.blobCounts[camera.id] = camera.blobs.length;
   drawBlobs(card, camera.blobs, camera.windows || []);
+}
+
+// The camera's preview (a PGM from /api/preview/<id>) becomes the card's background image.
+async function loadPreview(card, id) {
+  const response = await fetch(`/api/preview/${encodeURIComponent(id)}`, { cache: 'no-store' });
+  if (!response.ok) return;
+  const bytes = new Uint8Array(await response.arrayBuffer());
+  let offset = 0;
+  const fields = [];
+  while (fields.length < 4 && offset < bytes.length) {  // P5, width, height, maxval
+    while (offset < bytes.length && /\s/.test(String.fromCharCode(bytes[offset]))) ++offset;
+    let field = '';
+    while (offset < bytes.length && !/\s/.test(String.fromCharCode(bytes[offset]))) field += String.fromCharCode(bytes[offset++]);
+    fields.push(field);
+  }
+  ++offset;  // the single whitespace after maxval
+  const [magic, width, height] = [fields[0], Number(fields[1]), Number(fields[2])];
+  if (magic !== 'P5' || !(width > 0 && height > 0) || bytes.length - offset < width * height) return;
+  const image = new ImageData(width, height);
+  for (let i = 0; i < width * height; ++i) {
+    const v = bytes[offset + i];
+    image.data.set([v, v, v, 255], 4 * i);
+  }
+  card.preview = await createImageBitmap(image);
+  card.dataset.previewShown = card.dataset.previewStamp;
 }
 
 function drawBlobs(card, blobs, windows = []) {
@@ -224,6 +254,7 @@ function drawBlobs(card, blobs, windows = []) {
   const context = canvas.getContext('2d');
   context.fillStyle = '#000';
   context.fillRect(0, 0, canvas.width, canvas.height);
+  if (card.preview) context.drawImage(card.preview, 0, 0, canvas.width, canvas.height);
   const scale = canvas.width / 640;
   context.fillStyle = 'rgba(229, 72, 77, 0.25)';
   for (const points of card.masks) {

@@ -41,6 +41,9 @@ TEST(CommandGate, ForwardsValidCommandsWithCanonicalArguments) {
   EXPECT_EQ(accepted({{"camera", "cam0"}, {"command", "add_mask"}, {"args", {"poly", 0, 0, 10, 0, 5, 9}}})
                 .arguments.size(),
             7u);
+  EXPECT_EQ(accepted({{"camera", "cam0"}, {"command", "preview"}, {"args", {640}}}).arguments,
+            std::vector<std::string>({"640"}));
+  EXPECT_TRUE(accepted({{"camera", "cam0"}, {"command", "preview"}}).arguments.empty());
 }
 
 TEST(CommandGate, RejectsWithAReasonAndACounter) {
@@ -59,6 +62,8 @@ TEST(CommandGate, RejectsWithAReasonAndACounter) {
   EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "set_threshold"}}).counter, "bad_arguments");
   EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "set_gain"}, {"args", {-1}}}).counter, "out_of_range");
   EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "restart"}, {"args", {1}}}).counter, "bad_arguments");
+  EXPECT_EQ(rejected({{"camera", "cam0"}, {"command", "preview"}, {"args", {100000}}}).counter,
+            "out_of_range");
   EXPECT_EQ(
       rejected({{"camera", "cam0"}, {"command", "add_mask"}, {"args", {"rect", 600, 400, 100, 100}}}).counter,
       "out_of_range");

@@ -77,6 +77,18 @@ TEST(ConsoleState, SnapshotCarriesThePredictedWindowsWhileFresh) {
   EXPECT_TRUE(state.snapshot(kT0 + 3 * kNsPerSecond, false)["cameras"][0]["windows"].empty());
 }
 
+TEST(ConsoleState, ThePreviewIsServedAsPgmAndAMismatchedOneDropped) {
+  ConsoleState state;
+  EXPECT_FALSE(state.preview_pgm("cam0"));
+  state.on_preview("cam0", kT0, 3, 2, std::string("\x00\x10\x20\x30\x40\xff", 6));
+  const auto pgm = state.preview_pgm("cam0");
+  ASSERT_TRUE(pgm);
+  EXPECT_EQ(*pgm, std::string("P5\n3 2\n255\n\x00\x10\x20\x30\x40\xff", 17));
+  EXPECT_EQ(state.snapshot(kT0, false)["cameras"][0]["preview_stamp_ns"], kT0);
+  state.on_preview("cam0", kT0 + 1, 4, 4, std::string(6, '\x01'));  // 6 pixels claimed as 16: dropped
+  EXPECT_EQ(*state.preview_pgm("cam0"), *pgm);
+}
+
 TEST(ConsoleState, CommandOutcomesFromTheCamerasCounters) {
   ConsoleState state;
   CameraStatusRecord status;

@@ -146,6 +146,22 @@ try {
   const backMs = back ? await page.evaluate(() => window.panoptes.seenAt) - results.commands.threshold_restore_ms : Infinity;
   check(backMs < 1000, `threshold 64: cam0's blobs back in the page ${backMs} ms after the command was sent`);
 
+  // --- a preview on request: camera_node's image under the blobs --------------------------------
+  await card0.locator('button.preview').click();
+  const previewShown = await waitFor(page, () => {
+    const card = document.querySelector('.card[data-camera="cam0"]');
+    return card.dataset.previewShown !== undefined && card.dataset.previewShown === card.dataset.previewStamp;
+  }, null, 10000);
+  const previewImage = await page.evaluate(async () => {
+    const bytes = new Uint8Array(await (await fetch('/api/preview/cam0')).arrayBuffer());
+    const header = new TextDecoder().decode(bytes.slice(0, 20)).split(/\s+/);
+    let bright = 0;
+    for (let i = 15; i < bytes.length; ++i) bright += bytes[i] > 128 ? 1 : 0;
+    return { magic: header[0], width: Number(header[1]), height: Number(header[2]), bright };
+  });
+  check(previewShown && previewImage.magic === 'P5' && previewImage.width === 640 && previewImage.bright > 0,
+        `preview on request drawn under cam0's blobs (${previewImage.width}x${previewImage.height} P5, ${previewImage.bright} bright pixels)`);
+
   // --- mask: drag a rectangle over the left half of cam1's image ------------------------------
   const card1 = page.locator('.card[data-camera="cam1"]');
   await card1.locator('button.mask').click();

@@ -182,6 +182,10 @@ class ConsoleState {
   void on_status(const std::string& camera, CameraStatusRecord status, TimeNs now);
   void on_features(const std::string& camera, FeatureRecord features, TimeNs now);
   void on_predictions(const std::string& camera, std::vector<PredictedWindowRecord> windows, TimeNs now);
+  // A camera's preview image (8-bit grey, row-major), as camera_node sends it on request.
+  void on_preview(const std::string& camera, TimeNs stamp_ns, int width, int height, std::string pixels);
+  // The camera's latest preview as a binary PGM (P5) image; nullopt when it sent none.
+  std::optional<std::string> preview_pgm(const std::string& camera) const;
   void on_calibration(const std::map<std::string, CameraGeometry>& cameras);
   void on_estimator(EstimatorRecord status, TimeNs now);
   void on_tracks(std::vector<TrackPoint> tracks, TimeNs now);
@@ -227,6 +231,10 @@ class ConsoleState {
     TimeNs features_ns = 0;
     std::vector<PredictedWindowRecord> windows;
     TimeNs windows_ns = 0;
+    TimeNs preview_stamp_ns = 0;  // 0: no preview yet
+    int preview_width = 0;
+    int preview_height = 0;
+    std::string preview_pixels;
     std::uint64_t frames_received = 0;
     double latency_ms = 0;  // receive time minus stamp, smoothed
     // Frames received per second, over the last whole second.
