@@ -103,6 +103,16 @@ void SurfaceTracker::end_stale(TimeNs now_ns, std::vector<StrokeEvent>& events) 
   std::erase_if(spots_, stale);
 }
 
+// A confirmed spot becomes a stroke: its begin event carries its first sighting.
+void SurfaceTracker::begin_stroke(Spot& spot, std::vector<StrokeEvent>& events) {
+  spot.stroke_id = next_id_++;
+  ++counters_.strokes_begun;
+  StrokeEvent begin = spot.event(StrokePhase::kBegin);
+  begin.stamp_ns = spot.first_stamp_ns;
+  begin.position = spot.first_position;
+  events.push_back(begin);
+}
+
 std::vector<StrokeEvent> SurfaceTracker::end_silent(TimeNs now_ns) {
   std::vector<StrokeEvent> events;
   end_stale(now_ns, events);
@@ -164,14 +174,7 @@ std::vector<StrokeEvent> SurfaceTracker::add_frame(int camera, TimeNs stamp_ns,
     spot.stamp_ns = stamp_ns;
     spot.camera = camera;
     used[m] = true;
-    if (++spot.updates >= options_.confirm_updates && spot.stroke_id == 0) {
-      spot.stroke_id = next_id_++;
-      ++counters_.strokes_begun;
-      StrokeEvent begin = spot.event(StrokePhase::kBegin);
-      begin.stamp_ns = spot.first_stamp_ns;
-      begin.position = spot.first_position;
-      events.push_back(begin);
-    }
+    if (++spot.updates >= options_.confirm_updates && spot.stroke_id == 0) begin_stroke(spot, events);
     if (spot.stroke_id != 0) events.push_back(spot.event(StrokePhase::kContinue));
   }
 
@@ -200,11 +203,7 @@ std::vector<StrokeEvent> SurfaceTracker::add_frame(int camera, TimeNs stamp_ns,
     spot.first_position = measurements[m].position;
     spot.updates = 1;
     spot.camera = camera;
-    if (spot.updates >= options_.confirm_updates) {
-      spot.stroke_id = next_id_++;
-      ++counters_.strokes_begun;
-      events.push_back(spot.event(StrokePhase::kBegin));
-    }
+    if (spot.updates >= options_.confirm_updates) begin_stroke(spot, events);
     spots_.push_back(spot);
   }
   return events;

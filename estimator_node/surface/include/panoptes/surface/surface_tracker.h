@@ -83,6 +83,7 @@ class SurfaceTracker {
  private:
   struct Spot;
   void end_stale(TimeNs now_ns, std::vector<StrokeEvent>& events);
+  void begin_stroke(Spot& spot, std::vector<StrokeEvent>& events);
 
   SurfacePlane surface_;
   std::vector<ImageToSurface> cameras_;
