@@ -93,7 +93,42 @@ int send_command(const Options& options) {
   return panoptes::kExitOk;
 }
 
-// Lines "<target> <command> [arguments...]" or "sleep <seconds>"; '#' starts a comment.
+// "sleep <seconds>" or "wait_nodes <n> <seconds>": false (after a message) when malformed.
+bool script_pause(const std::vector<std::string>& tokens, panoptes::dds::Writer<msg::CameraCommand>& writer,
+                  const std::string& where) {
+  const bool wait_nodes = tokens[0] == "wait_nodes";
+  double seconds = -1;
+  int nodes = 1;
+  try {
+    if (wait_nodes && tokens.size() == 3) {
+      nodes = std::stoi(tokens[1]);
+      seconds = std::stod(tokens[2]);
+    } else if (!wait_nodes && tokens.size() == 2) {
+      seconds = std::stod(tokens[1]);
+    }
+  } catch (const std::exception&) {
+    seconds = -1;
+  }
+  if (!(seconds >= 0) || nodes < 1) {
+    std::fprintf(stderr, "panoptes_ctl: %s: expected '%s'\n", where.c_str(),
+                 wait_nodes ? "wait_nodes <nodes >= 1> <seconds>" : "sleep <seconds>");
+    return false;
+  }
+  const auto timeout =
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::duration<double>(seconds));
+  if (!wait_nodes) {
+    std::this_thread::sleep_for(timeout);
+  } else if (!writer.wait_for_readers(nodes, timeout)) {
+    // At most: a camera that never matches must not stall the script (the later commands still
+    // reach every node that did match), but the operator is told.
+    std::fprintf(stderr, "panoptes_ctl: %s: %d of %d node(s) matched after %.1f s; going on\n", where.c_str(),
+                 writer.matched_readers(), nodes, seconds);
+  }
+  return true;
+}
+
+// Lines "<target> <command> [arguments...]", "sleep <seconds>" or "wait_nodes <n> <seconds>"
+// (until n camera nodes listen for commands, at most that long); '#' starts a comment.
 int run_script(const Options& options) {
   std::ifstream file(options.out);
   if (!file) {
@@ -112,18 +147,9 @@ int run_script(const Options& options) {
     std::vector<std::string> tokens;
     for (std::string word; words >> word;) tokens.push_back(word);
     if (tokens.empty()) continue;
-    if (tokens[0] == "sleep") {
-      double seconds = -1;
-      try {
-        seconds = tokens.size() == 2 ? std::stod(tokens[1]) : -1;
-      } catch (const std::exception&) {
-      }
-      if (!(seconds >= 0)) {
-        std::fprintf(stderr, "panoptes_ctl: %s:%d: expected 'sleep <seconds>'\n", options.out.c_str(),
-                     number);
+    if (tokens[0] == "sleep" || tokens[0] == "wait_nodes") {
+      if (!script_pause(tokens, *writer, options.out + ":" + std::to_string(number)))
         return panoptes::kExitBadInput;
-      }
-      std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
       continue;
     }
     if (tokens.size() < 2) {
@@ -283,7 +309,10 @@ int run(int argc, char** argv) {
   auto* script = app.add_subcommand("script",
                                     "send the commands of a file: lines '<target> <command> [args]' "
                                     "or 'sleep <s>'");
-  script->add_option("file", options.out, "script file")->required();
+  script
+      ->add_option("file", options.out,
+                   "script file: '<target> <command> [args]', 'sleep <s>', 'wait_nodes <n> <s>'")
+      ->required();
 
   auto* status = app.add_subcommand("status", "print CameraStatus messages as JSON lines");
   status->add_option("--camera", options.camera, "only this camera")->default_str("every camera");

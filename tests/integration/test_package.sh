@@ -48,7 +48,10 @@ dpkg-deb -f "$deb" Depends | grep -q libfastrtps && pass "depends on the Fast DD
 # --- install --------------------------------------------------------------------------------------
 if dpkg -i "$deb" >"$work/dpkg.log" 2>&1; then installed=1; pass "dpkg -i"; else fail "dpkg -i"; cat "$work/dpkg.log"; finish; fi
 # The client library is known to the dynamic linker and to pkg-config (docs/clients.md).
-ldconfig -p | grep -q "libpanoptes_client.so" && pass "ldconfig knows libpanoptes_client" || fail "libpanoptes_client not in the ldconfig cache"
+# Into a file first: ldconfig -p prints ~100 kB, and with pipefail grep -q's early exit would
+# fail the pipeline on SIGPIPE whenever the library is listed before the last pipe buffer.
+ldconfig -p >"$work/ldconfig.txt"
+grep -q "libpanoptes_client.so" "$work/ldconfig.txt" && pass "ldconfig knows libpanoptes_client" || fail "libpanoptes_client not in the ldconfig cache"
 [ "$(pkg-config --modversion panoptes-client 2>/dev/null)" = "$(dpkg-deb -f "$deb" Version)" ] &&
   pass "pkg-config finds panoptes-client $(pkg-config --modversion panoptes-client)" || fail "pkg-config panoptes-client"
 # Every absolute path a unit names (programs, its settings' examples) exists once installed.
