@@ -9,7 +9,7 @@
 //                   [--markers <n>] [--sweep <n,n,...> | --no-sweep] [--bodies <n>] [--seed <n>]
 //                   [--chain-frames <n>]
 // The chain case (issue 21) times one camera frame's update of a 4-marker finger chain
-// (chain.h: predict, gate, 4 sequential updates) side by side with a rigid body of the same 4
+// (ChainFilter::process: predict, gate, 4 sequential updates) side by side with a rigid body of the same 4
 // markers through the body EKF (body_ekf.h, same gating and updates), on the same frames.
 // With --json the last line of output is one JSON object (docs/benchmarks.md).
 #include <algorithm>
@@ -200,7 +200,9 @@ ChainCost run_chain_case(int frame_count, std::uint64_t seed) {
   est::ChainIdentification identification;
   identification.base_pose = rest.base;
   identification.angles = rest.angles;
-  est::ChainState chain = est::chain_state_from_identification(identification, 0, est::test_chain_prior(), 2);
+  est::ChainFilter chain(finger,
+                         est::chain_state_from_identification(identification, 0, est::test_chain_prior(), 2),
+                         est::ChainMotionNoise{}, est::ChainUpdateOptions{});
   est::BodyState body;
   body.p = rest.base.t;
   body.q = rest.base.q;
@@ -214,10 +216,8 @@ ChainCost run_chain_case(int frame_count, std::uint64_t seed) {
   Clock::duration chain_time{}, body_time{};
   for (const Frame& frame : frames) {
     const auto t0 = Clock::now();
-    est::predict(chain, frame.stamp_ns, chain_noise, 2);
     cost.chain_updates +=
-        est::update_chain_frame(chain, finger, cameras[frame.camera], frame.chain_blobs, options)
-            .markers_updated;
+        chain.process(cameras[frame.camera], frame.stamp_ns, frame.chain_blobs).markers_updated;
     const auto t1 = Clock::now();
     est::predict(body, frame.stamp_ns, chain_noise.base);
     cost.body_updates += update_body_frame(body, body_markers, cameras[frame.camera], frame.body_blobs,
@@ -267,7 +267,7 @@ int run_command_line(int argc, char** argv) {
   app.add_option("--bodies", bodies, "rigid bodies (4 markers each) of the body case; 0: no body case")
       ->check(CLI::Range(0, 1000));
   app.add_option("--seed", seed, "scene seed");
-  int chain_frames = 40000;
+  int chain_frames = 12000;
   app.add_option("--chain-frames", chain_frames, "camera frames of the chain case; 0: no chain case")
       ->check(CLI::Range(0, 10000000));
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
