@@ -297,8 +297,7 @@ std::optional<Eigen::Vector3d> ChainFilter::confirmed(int marker, const Candidat
   const Eigen::Vector3d plane_normal = state_.q * Eigen::Vector3d::UnitZ();
   for (const CandidateRay& other : pending) {
     if ((ray.origin - other.origin).norm() < 0.05) continue;  // the same camera again
-    const auto point =
-        ray_meeting_point(ray.origin, ray.direction, other.origin, other.direction, rules.ray_gap_m);
+    auto point = ray_meeting_point(ray.origin, ray.direction, other.origin, other.direction, rules.ray_gap_m);
     if (!point) continue;
     if (std::abs(plane_normal.dot(*point - pose.markers[0])) > rules.plane_tolerance_m) continue;
     // The sphere test against every fresh neighbour (seed 000 Fig. 6.21).
