@@ -465,3 +465,76 @@ std::optional<GrabEvent> GrabDetector::observe(TimeNs stamp_ns, double bend_rad,
 }
 
 }  // namespace panoptes::estimator
+
+namespace panoptes::estimator {
+
+ChainTracker::ChainTracker(std::vector<ChainDefinition> chains, const ChainTrackerOptions& options)
+    : options_(options) {
+  for (ChainDefinition& chain : chains)
+    entries_.push_back(
+        {std::move(chain), ChainStatus::kNotIdentified, std::nullopt, GrabDetector(options.grab)});
+}
+
+void ChainTracker::identify(TimeNs stamp_ns, const std::vector<Eigen::Vector3d>& points) {
+  for (Entry& entry : entries_) {
+    if (entry.status == ChainStatus::kTracking) continue;
+    const ChainIdentification found = identify_chain(entry.definition, points, options_.identification);
+    if (found.status == ChainIdentificationStatus::kAmbiguous) entry.status = ChainStatus::kAmbiguous;
+    if (found.status == ChainIdentificationStatus::kNotFound) entry.status = ChainStatus::kNotIdentified;
+    if (found.status != ChainIdentificationStatus::kIdentified) continue;
+    entry.filter.emplace(
+        entry.definition,
+        chain_state_from_identification(found, stamp_ns, options_.prior, entry.definition.joint_count()),
+        options_.noise, options_.update);
+    entry.status = ChainStatus::kTracking;
+  }
+}
+
+void ChainTracker::process(const CameraModel& camera, TimeNs stamp_ns,
+                           const std::vector<Eigen::Vector2d>& blobs) {
+  for (Entry& entry : entries_) {
+    if (!entry.filter || stamp_ns < entry.filter->state().stamp_ns) continue;
+    entry.filter->process(camera, stamp_ns, blobs);
+    TimeNs newest_ns = entry.filter->last_update_ns(0);
+    for (int k = 1; k < entry.definition.marker_count(); ++k)
+      newest_ns = std::max(newest_ns, entry.filter->last_update_ns(k));
+    if (stamp_ns - newest_ns > options_.lost_after_ns) {
+      entry.filter.reset();
+      entry.status = ChainStatus::kNotIdentified;
+      continue;
+    }
+    const ChainPose pose = chain_pose(entry.filter->state(), entry.definition);
+    const double bend = entry.filter->state().angles.head(entry.definition.joint_count()).sum();
+    if (auto event = entry.grab.observe(stamp_ns, bend, pose.tip))
+      events_.push_back({entry.definition.name, *event});
+  }
+}
+
+std::vector<ChainOutput> ChainTracker::outputs(double horizon_s) const {
+  std::vector<ChainOutput> outputs;
+  for (const Entry& entry : entries_) {
+    ChainOutput output;
+    output.name = entry.definition.name;
+    output.status = entry.status;
+    output.grabbing = entry.grab.grabbing();
+    output.marker_valid.assign(entry.definition.marker_count(), false);
+    if (entry.filter) {
+      const ChainState& state = entry.filter->state();
+      output.stamp_ns = state.stamp_ns;
+      output.pose = chain_pose(state, entry.definition, horizon_s);
+      for (int k = 0; k < entry.definition.marker_count(); ++k)
+        output.marker_valid[k] =
+            state.stamp_ns - entry.filter->last_update_ns(k) <= options_.update.reacquisition.stale_after_ns;
+    }
+    outputs.push_back(std::move(output));
+  }
+  return outputs;
+}
+
+std::vector<NamedGrabEvent> ChainTracker::take_events() {
+  std::vector<NamedGrabEvent> taken;
+  taken.swap(events_);
+  return taken;
+}
+
+}  // namespace panoptes::estimator

@@ -277,5 +277,59 @@ TEST(ChainAcceptance, OneMarkerOccludedHalfASecondWhileBending) {
   expect_events_match(scene, result.events);
 }
 
+TEST(ChainTracker, AmbiguousThenTrackedThenLostAndFoundAgain) {
+  const ChainDefinition finger = test_finger();
+  const FingerScene scene(8.0, 2103);
+  const std::vector<CameraModel> cameras = make_ring_cameras(4, 1.9, 1.6);
+  std::mt19937 rng(2103);
+  ChainTracker tracker({finger}, ChainTrackerOptions{});
+  // At 0 s a reflection completes a second valid chain: reported, not forced.
+  std::vector<Eigen::Vector3d> points = FingerScene::markers(finger, scene.truth(0.0));
+  FingerTruth other = scene.truth(0.0);
+  other.angles(1) += 1.0;
+  points.push_back(FingerScene::markers(finger, other)[3]);
+  tracker.identify(0, points);
+  ASSERT_EQ(tracker.outputs().at(0).status, ChainStatus::kAmbiguous);
+  EXPECT_FALSE(tracker.outputs().at(0).marker_valid.at(0));
+  // Every marker hidden during [3, 3.5) s: lost after 0.3 s, then found again among reflections.
+  std::vector<ChainStatus> statuses;
+  double tip2 = 0;
+  int count = 0;
+  for (const SimFrame& frame : asynchronous_frames(4, 100.0, scene.duration_s())) {
+    const double t = ns_to_seconds(frame.stamp_ns);
+    const FingerTruth truth = scene.truth(t);
+    std::vector<Eigen::Vector3d> visible = FingerScene::reflections();
+    if (t < 3.0 || t >= 3.5) {
+      for (const Eigen::Vector3d& marker : FingerScene::markers(finger, truth)) visible.push_back(marker);
+    }
+    // Triangulated points (0.2 mm noise) ten times a second, as confirmed point tracks would be.
+    if (frame.camera == 0 && frame.stamp_ns % 100'000'000 == 0 && t >= 0.3)
+      tracker.identify(frame.stamp_ns, noisy(visible, 0.0002, rng));
+    tracker.process(cameras[frame.camera], frame.stamp_ns, observe(cameras[frame.camera], visible, 0.1, rng));
+    const ChainOutput output = tracker.outputs().at(0);
+    if (statuses.empty() || statuses.back() != output.status) statuses.push_back(output.status);
+    if (t > 4.0 && output.status == ChainStatus::kTracking) {
+      tip2 += (output.pose.tip - FingerScene::tip(finger, truth)).squaredNorm();
+      ++count;
+    }
+  }
+  EXPECT_EQ(statuses, (std::vector<ChainStatus>{ChainStatus::kAmbiguous, ChainStatus::kTracking,
+                                                ChainStatus::kNotIdentified, ChainStatus::kTracking}));
+  ASSERT_GT(count, 1000);
+  const double tip_rmse = std::sqrt(tip2 / count);
+  std::cout << "tip RMSE after re-identification " << tip_rmse * 1e3 << " mm\n";
+  EXPECT_LE(tip_rmse, 0.0005);
+  // Events keep flowing after the re-identification (found again at 3.5-3.6 s).
+  int events_after = 0;
+  for (const NamedGrabEvent& event : tracker.take_events()) {
+    EXPECT_EQ(event.chain, "index");
+    if (ns_to_seconds(event.event.stamp_ns) > 3.6) ++events_after;
+  }
+  int transitions_after = 0;
+  for (const BendTransition& transition : scene.transitions())
+    transitions_after += transition.start_s > 3.6 ? 1 : 0;
+  EXPECT_EQ(events_after, transitions_after);
+}
+
 }  // namespace
 }  // namespace panoptes::estimator

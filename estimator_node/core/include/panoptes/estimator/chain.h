@@ -18,6 +18,7 @@
 
 #include <array>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -244,6 +245,75 @@ class GrabDetector {
   GrabOptions options_;
   bool grabbing_ = false;
   std::optional<TimeNs> crossed_ns_;
+};
+
+}  // namespace panoptes::estimator
+
+namespace panoptes::estimator {
+
+// ---- Several chains, from identification to outputs (what the estimator application wires) ----
+
+enum class ChainStatus {
+  kNotIdentified,  // no complete chain among the points (or lost: every marker unseen too long)
+  kAmbiguous,      // several candidate chains: reported, never forced
+  kTracking,
+};
+
+struct ChainTrackerOptions {
+  ChainMotionNoise noise;
+  ChainUpdateOptions update;
+  ChainIdentificationOptions identification;
+  // After identification from triangulated points (millimetres, a few degrees; the motion
+  // unknown within what a hand does).
+  ChainPriorSigmas prior{.base = {.position_m = 0.002,
+                                  .velocity_mps = 0.3,
+                                  .acceleration_mps2 = 2.0,
+                                  .angle_rad = 0.05,
+                                  .angular_velocity_radps = 1.0,
+                                  .angular_acceleration_radps2 = 5.0},
+                         .angle_rad = 0.05,
+                         .rate_radps = 3.0};
+  TimeNs lost_after_ns = 300'000'000;  // every marker unseen this long: lost, identify again
+  GrabOptions grab;
+};
+
+struct ChainOutput {
+  std::string name;
+  ChainStatus status = ChainStatus::kNotIdentified;
+  TimeNs stamp_ns = 0;
+  ChainPose pose;                  // valid when tracking
+  std::vector<bool> marker_valid;  // updated within the stale time
+  bool grabbing = false;
+};
+
+struct NamedGrabEvent {
+  std::string chain;
+  GrabEvent event;
+};
+
+class ChainTracker {
+ public:
+  ChainTracker(std::vector<ChainDefinition> chains, const ChainTrackerOptions& options);
+
+  // 3D points at `stamp_ns` (confirmed point tracks, or triangulated markers): every chain not
+  // being tracked is searched for among them.
+  void identify(TimeNs stamp_ns, const std::vector<Eigen::Vector3d>& points);
+  // One camera frame (in stamp order) for every tracked chain; grab events are queued.
+  void process(const CameraModel& camera, TimeNs stamp_ns, const std::vector<Eigen::Vector2d>& blobs);
+
+  std::vector<ChainOutput> outputs(double horizon_s = 0.0) const;
+  std::vector<NamedGrabEvent> take_events();
+
+ private:
+  struct Entry {
+    ChainDefinition definition;
+    ChainStatus status = ChainStatus::kNotIdentified;
+    std::optional<ChainFilter> filter;
+    GrabDetector grab;
+  };
+  ChainTrackerOptions options_;
+  std::vector<Entry> entries_;
+  std::vector<NamedGrabEvent> events_;
 };
 
 }  // namespace panoptes::estimator
