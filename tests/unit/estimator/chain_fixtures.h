@@ -145,17 +145,9 @@ inline std::vector<Eigen::Vector2d> observe(const CameraModel& camera,
   return blobs;
 }
 
-// The prior after identification from triangulated points (millimetres, a few degrees; the
-// motion unknown within what a hand does).
+// The prior after identification the chain tracker uses.
 inline ChainPriorSigmas test_chain_prior() {
-  return {.base = {.position_m = 0.002,
-                   .velocity_mps = 0.3,
-                   .acceleration_mps2 = 2.0,
-                   .angle_rad = 0.05,
-                   .angular_velocity_radps = 1.0,
-                   .angular_acceleration_radps2 = 5.0},
-          .angle_rad = 0.05,
-          .rate_radps = 3.0};
+  return ChainTrackerOptions{}.prior;
 }
 
 }  // namespace panoptes::estimator
