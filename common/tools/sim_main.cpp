@@ -62,6 +62,18 @@ nlohmann::json truth_line(const Scene& scene, TimeNs scene_time_ns, TimeNs epoch
                       {"q", {T.q.x(), T.q.y(), T.q.z(), T.q.w()}}});
   }
   line["bodies"] = std::move(bodies);
+  const std::vector<ChainTruth> chain_truths = scene.chains_at(scene_time_ns);
+  if (chain_truths.empty()) return line;
+  nlohmann::json chains = nlohmann::json::array();
+  for (const ChainTruth& chain : chain_truths) {
+    nlohmann::json markers_json = nlohmann::json::array();
+    for (const Eigen::Vector3d& p : chain.markers) markers_json.push_back({p.x(), p.y(), p.z()});
+    chains.push_back({{"name", chain.name},
+                      {"angles", chain.angles},
+                      {"markers", std::move(markers_json)},
+                      {"tip", {chain.tip.x(), chain.tip.y(), chain.tip.z()}}});
+  }
+  line["chains"] = std::move(chains);
   return line;
 }
 

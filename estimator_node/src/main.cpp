@@ -10,6 +10,7 @@
 // (command line, live DDS loop).
 #include <cstdio>
 #include <exception>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -53,10 +54,25 @@ void prepare(const app::NodeCommandLine& command_line, session::EstimatorSession
   }
 }
 
+// Offline: the chains of the bodies file (docs/articulated.md), if it has any.
+std::optional<session::ChainStage> chain_stage(const app::NodeCommandLine& command_line) {
+  if (command_line.bodies_file.empty()) return std::nullopt;
+  auto chains = panoptes::load_chains(command_line.bodies_file);
+  if (chains.empty()) return std::nullopt;
+  session::log("tracking " + std::to_string(chains.size()) + " articulated chain" +
+               (chains.size() == 1 ? "" : "s") + " from " + command_line.bodies_file);
+  return std::optional<session::ChainStage>(std::in_place, std::move(chains),
+                                            panoptes::load_calibration(command_line.calibration_file),
+                                            command_line.out_chains);
+}
+
 int run(const app::NodeCommandLine& command_line, session::EstimatorSession& estimator,
         session::BodyFile& body_file) {
+  std::optional<session::ChainStage> chains;
+  if (command_line.no_dds || !command_line.in_recording.empty()) chains = chain_stage(command_line);
   if (!command_line.in_recording.empty()) {
-    const session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
+    session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
+    replay.chains = chains ? &*chains : nullptr;
     session::FeatureFiles input;
     try {
       input = app::read_recording_features(command_line.in_recording);
@@ -68,7 +84,8 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
                                 command_line.out_poses);
   }
   if (command_line.no_dds) {
-    const session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
+    session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
+    replay.chains = chains ? &*chains : nullptr;
     return session::run_offline(estimator, command_line.in_features, replay, command_line.out_tracks,
                                 command_line.out_poses);
   }

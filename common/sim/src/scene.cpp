@@ -10,6 +10,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "chain_motion.h"
 #include "motion.h"
 #include "panoptes/calibration_file.h"
 #include "panoptes/config.h"
@@ -415,6 +416,7 @@ struct Scene::Impl {
   std::vector<MarkerSpec> markers;
   std::optional<TrcSource> trc;
   std::vector<BodySpec> bodies;
+  std::vector<sim::ChainSpec> chains;
   std::vector<std::string> marker_names;
   std::vector<double> marker_radii;
 
@@ -423,8 +425,8 @@ struct Scene::Impl {
 
 void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& base_dir) {
   Impl& scene = *this;
-  reject_unknown_keys(root,
-                      {"seed", "duration", "description", "defaults", "cameras", "markers", "trc", "bodies"});
+  reject_unknown_keys(
+      root, {"seed", "duration", "description", "defaults", "cameras", "markers", "trc", "bodies", "chains"});
   scene.seed = static_cast<std::uint64_t>(root.get_int("seed", 0));
   const double duration_s = root.get_double("duration", kDefaultDurationS);
   if (!(duration_s > 0.0) || !std::isfinite(duration_s)) root.fail("duration", "must be > 0 s");
@@ -506,8 +508,16 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
     }
     scene.bodies.push_back(std::move(spec));
   }
+  for (const YamlReader& chain : root.sequence_or_empty("chains")) {
+    sim::ChainSpec spec = sim::read_chain_spec(chain, kDefaultMarkerRadius);
+    if (!body_names.insert(spec.definition.name).second)
+      chain.fail("name", "duplicate body or chain name '" + spec.definition.name + "'");
+    for (int m = 0; m < spec.definition.marker_count(); ++m)
+      add_name(chain, "name", spec.definition.name + "/" + std::to_string(m), spec.marker_radius);
+    scene.chains.push_back(std::move(spec));
+  }
   if (scene.marker_names.empty())
-    root.fail("markers", "the scene has no markers (give markers, trc or bodies)");
+    root.fail("markers", "the scene has no markers (give markers, trc, bodies or chains)");
 }
 
 Scene::Scene() : impl_(std::make_unique<Impl>()) {}
@@ -592,6 +602,20 @@ std::vector<MarkerTruth> Scene::markers_at(TimeNs scene_time_ns) const {
       truth.normal = q * outward.normalized();
       truth.facing_angle_rad = body.facing_angle_rad;
     }
+  }
+  for (const sim::ChainSpec& chain : impl_->chains) {
+    for (const Eigen::Vector3d& marker : sim::sample_chain(chain, t_s).markers) out[index++].p = marker;
+  }
+  return out;
+}
+
+std::vector<ChainTruth> Scene::chains_at(TimeNs scene_time_ns) const {
+  const double t_s = ns_to_seconds(scene_time_ns);
+  std::vector<ChainTruth> out;
+  for (const sim::ChainSpec& chain : impl_->chains) {
+    sim::ChainSample sample = sim::sample_chain(chain, t_s);
+    out.push_back({chain.definition.name, sample.T_world_base, std::move(sample.angles),
+                   std::move(sample.markers), sample.tip});
   }
   return out;
 }

@@ -88,6 +88,10 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
   app.add_flag("--no-dds", c.no_dds, "offline: do not use DDS; requires --in-features or --in-recording");
   app.add_option("--out-tracks", c.out_tracks, "write every published TrackFrame as Track JSONL");
   app.add_option("--out-poses", c.out_poses, "write body poses as Pose JSONL (needs --bodies)");
+  app.add_option(
+      "--out-chains", c.out_chains,
+      "offline: write the articulated chains of the bodies file (type: chain) and their grab/release "
+      "events as Chain JSONL (docs/articulated.md; needs --bodies)");
   app.add_option("--dds-profile", c.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
   dds::add_security_options(app, c.security);
   app.add_flag("--replay-arrival", c.replay_arrival,
@@ -114,6 +118,10 @@ void validate(const NodeCommandLine& c) {
   if ((c.no_dds || !c.in_recording.empty()) && c.calibration_file.empty())
     throw CLI::ValidationError("offline mode needs --calibration");
   if (!c.out_poses.empty() && c.bodies_file.empty()) throw CLI::ValidationError("--out-poses needs --bodies");
+  if (!c.out_chains.empty() && c.bodies_file.empty())
+    throw CLI::ValidationError("--out-chains needs --bodies");
+  if (!c.out_chains.empty() && !c.no_dds && c.in_recording.empty())
+    throw CLI::ValidationError("--out-chains is offline only (--no-dds or --in-recording)");
 }
 
 }  // namespace

@@ -97,14 +97,16 @@ int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineRepl
   sort_by_stamp(input.frames);
   JsonlOutputs outputs(out_tracks, out_poses);
   const est::Tracker& tracker = session.tracker();
-  replay_frames(session, input.frames, options, [&](const FeatureFrame&, est::FrameOutcome outcome) {
+  replay_frames(session, input.frames, options, [&](const FeatureFrame& frame, est::FrameOutcome outcome) {
     // Tracks and poses are written when the newest stamp advances; a replayed late frame refines
     // the state that the next frame's output shows.
     if (outcome != est::FrameOutcome::kProcessed) return;
+    if (options.chains) options.chains->observe(frame, tracker);
     if (outputs.writes_tracks()) outputs.write_tracks(tracker.current_tracks());
     if (outputs.writes_poses()) outputs.write_poses(session.current_poses());
   });
   session.print_summary(input.bad_lines);
+  if (options.chains) log(options.chains->summary());
   log(outputs.summary());
   return kExitOk;
 }

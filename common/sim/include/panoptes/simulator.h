@@ -62,6 +62,15 @@ struct BodyTruth {
   RigidTransform T_world_body;
 };
 
+// An articulated chain of the scene (`chains:`, docs/articulated.md) at one instant.
+struct ChainTruth {
+  std::string name;
+  RigidTransform T_world_base;
+  std::vector<double> angles;            // joint angles, rad
+  std::vector<Eigen::Vector3d> markers;  // world, base first
+  Eigen::Vector3d tip = Eigen::Vector3d::Zero();
+};
+
 // TRC playback reads marker files through the formats library (C3D too: docs/simulator.md).
 using TrcData = MarkerTrajectories;
 
@@ -86,6 +95,7 @@ class Scene {
   std::vector<MarkerTruth> markers_at(TimeNs scene_time_ns) const;
   std::vector<BodyTruth> bodies_at(TimeNs scene_time_ns) const;
   std::vector<BodyDefinition> body_definitions() const;
+  std::vector<ChainTruth> chains_at(TimeNs scene_time_ns) const;
   double marker_radius(std::size_t marker_index) const;
 
  private:

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "panoptes/jsonl.h"
+#include "panoptes/session/chain_stage.h"
 #include "panoptes/session/estimator_session.h"
 #include "panoptes/session/output_sinks.h"
 
@@ -33,6 +34,9 @@ std::vector<std::size_t> delivery_order(const std::vector<FeatureFrame>& frames,
 struct OfflineReplayOptions {
   bool by_arrival = false;  // --replay-arrival
   bool show_progress = true;
+  // Articulated chains of the bodies file (docs/articulated.md; --out-chains): fed every frame
+  // the tracker processed. Null: none.
+  ChainStage* chains = nullptr;
 };
 
 // Every frame the tracker was given, with what it did with it.

@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: Apache-2.0
+// Articulated chains in a session (docs/articulated.md): the `type: chain` entries of the bodies
+// file tracked by an estimator::ChainTracker beside the point tracker. After each camera frame
+// the tracker processed, untracked chains are searched for among the confirmed point tracks, the
+// frame updates the tracked chains, and (with --out-chains) one Chain JSONL record per chain and
+// one per grab/release event is written. Counts the statuses for the closing summary.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "panoptes/calibration.h"
+#include "panoptes/chain_definition.h"
+#include "panoptes/estimator/chain.h"
+#include "panoptes/estimator/tracker.h"
+#include "panoptes/jsonl.h"
+#include "panoptes/records.h"
+
+namespace panoptes::session {
+
+class ChainStage {
+ public:
+  // `out_path` empty: nothing is written. Throws if the file cannot be opened.
+  ChainStage(std::vector<ChainDefinition> chains, const SystemCalibration& calibration,
+             const std::string& out_path, const estimator::ChainTrackerOptions& options = {});
+
+  // One camera frame that `tracker` has just processed (stamp order; an older frame or one from
+  // an uncalibrated camera is counted and skipped).
+  void observe(const FeatureFrame& frame, const estimator::Tracker& tracker);
+
+  // "chains: <name> tracking N, ambiguous N, not identified N (frames); G grabs, R releases; ..."
+  std::string summary() const;
+
+ private:
+  struct Counts {
+    std::uint64_t tracking = 0;
+    std::uint64_t ambiguous = 0;
+    std::uint64_t not_identified = 0;
+    std::uint64_t grabs = 0;
+    std::uint64_t releases = 0;
+  };
+  void write(const std::vector<estimator::ChainOutput>& outputs,
+             const std::vector<estimator::NamedGrabEvent>& events);
+
+  std::vector<std::string> names_;
+  estimator::ChainTracker tracker_;
+  std::map<std::string, CameraModel> cameras_;
+  std::optional<JsonlWriter> out_;
+  std::map<std::string, Counts> counts_;
+  TimeNs last_stamp_ns_ = 0;
+  std::uint64_t frames_skipped_ = 0;
+  std::uint64_t records_ = 0;
+  bool all_tracking_ = false;
+};
+
+}  // namespace panoptes::session
