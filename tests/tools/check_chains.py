@@ -87,7 +87,7 @@ def main():
 
     expected = truth_transitions(stamps, angles, args.grab_rad, args.release_rad)
     unmatched = list(expected)
-    spurious = 0
+    spurious, worst_delay = 0, 0.0
     for e in events:
         match = next((t for t in unmatched if t[0] == e["type"] and abs(t[1] - e["stamp_ns"]) <= args.event_window * 1e9),
                      None)
@@ -95,10 +95,12 @@ def main():
             spurious += 1
         else:
             unmatched.remove(match)
+            worst_delay = max(worst_delay, abs(match[1] - e["stamp_ns"]) * 1e-9)
     detected = len(expected) - len(unmatched)
     summary = {"records": len(scored), "tracked": tracked_fraction, "tip_rmse_mm": tip_rmse_mm,
                "tip_max_mm": 1e3 * tip_max, "angle_rmse_deg": angle_rmse_deg, "transitions": len(expected),
-               "detected": detected, "spurious": spurious}
+               "detected": detected, "spurious": spurious,
+               "max_event_offset_ms": 1e3 * worst_delay}
     print(json.dumps(summary))
 
     failures = []

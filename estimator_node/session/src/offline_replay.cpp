@@ -106,7 +106,10 @@ int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineRepl
     if (outputs.writes_poses()) outputs.write_poses(session.current_poses());
   });
   session.print_summary(input.bad_lines);
-  if (options.chains) log(options.chains->summary());
+  if (options.chains) {
+    options.chains->flush();
+    log(options.chains->summary());
+  }
   log(outputs.summary());
   return kExitOk;
 }

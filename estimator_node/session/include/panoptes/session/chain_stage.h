@@ -31,6 +31,11 @@ class ChainStage {
   // an uncalibrated camera is counted and skipped).
   void observe(const FeatureFrame& frame, const estimator::Tracker& tracker);
 
+  // Writes out what is buffered (the end of a run).
+  void flush() {
+    if (out_) out_->flush();
+  }
+
   // "chains: <name> tracking N, ambiguous N, not identified N (frames); G grabs, R releases; ..."
   std::string summary() const;
 
