@@ -7,6 +7,7 @@
 // confirmation) is processed first and not timed.
 //   bench_estimator [--json] [--seconds <s>] [--warmup <s>] [--cameras <n>] [--rate <hz>]
 //                   [--markers <n>] [--sweep <n,n,...> | --no-sweep] [--bodies <n>] [--seed <n>]
+//                   [--inside-out-seconds <s>]
 // With --json the last line of output is one JSON object (docs/benchmarks.md).
 #include <algorithm>
 #include <chrono>
@@ -22,6 +23,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "inside_out_case.h"
 #include "panoptes/cli.h"
 #include "panoptes/estimator/tracker.h"
 #include "panoptes/simulator.h"
@@ -130,6 +132,28 @@ void print_row(const Result& r) {
               r.tracked_at_end, r.markers, r.tracks_at_end);
 }
 
+// The inside-out case (inside_out_case.h), printed; returns its JSON.
+std::string print_inside_out_case(double seconds, std::uint64_t seed) {
+  const auto r = panoptes::bench::run_inside_out_case(
+      std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/inside_out.yaml", 0.5, seconds, seed);
+  std::printf(
+      "inside-out: head camera, %d landmarks, %.1f blobs per frame, %zu frames timed: %.2f us per frame "
+      "(p99 %.1f us; cold start %.1f ms); a %d-marker rigid body from the same pixels (plus a second "
+      "camera): Tracker::process %.2f us per frame (p99 %.1f us), %.2f us without the body: the body "
+      "costs %.2f us per frame; body posed after %zu/%zu frames\n",
+      r.landmarks, r.blobs_per_frame, r.frames, r.inside_out_us, r.inside_out_p99_us, r.cold_start_ms,
+      r.landmarks, r.tracker_us, r.tracker_p99_us, r.points_only_us, r.tracker_us - r.points_only_us,
+      r.body_frames, r.frames);
+  char buffer[512];
+  std::snprintf(buffer, sizeof buffer,
+                "{\"landmarks\": %d, \"frames\": %zu, \"blobs_per_frame\": %.2f, \"us_per_frame\": %.3f, "
+                "\"p99_us\": %.2f, \"cold_start_ms\": %.2f, \"body_tracker_us_per_frame\": %.3f, "
+                "\"body_tracker_p99_us\": %.2f, \"points_only_us_per_frame\": %.3f, \"body_frames\": %zu}",
+                r.landmarks, r.frames, r.blobs_per_frame, r.inside_out_us, r.inside_out_p99_us,
+                r.cold_start_ms, r.tracker_us, r.tracker_p99_us, r.points_only_us, r.body_frames);
+  return buffer;
+}
+
 int run_command_line(int argc, char** argv) {
   RingConfig config;
   bool json = false;
@@ -155,6 +179,11 @@ int run_command_line(int argc, char** argv) {
   app.add_option("--bodies", bodies, "rigid bodies (4 markers each) of the body case; 0: no body case")
       ->check(CLI::Range(0, 1000));
   app.add_option("--seed", seed, "scene seed");
+  double inside_out_seconds = 5.0;
+  app.add_option(
+         "--inside-out-seconds", inside_out_seconds,
+         "simulated seconds of the inside-out case (deploy/scenes/inside_out.yaml); 0: no inside-out case")
+      ->check(CLI::Range(0.0, 20.0));
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   if (no_sweep) sweep.clear();
 
@@ -208,6 +237,8 @@ int run_command_line(int argc, char** argv) {
                   extra_us, extra_us / bodies, tracked);
     bodies_json = buffer;
   }
+  const std::string inside_out_json =
+      inside_out_seconds > 0 ? print_inside_out_case(inside_out_seconds, seed) : "null";
   if (json) {
     std::string sweep_json;
     for (const Result& r : scaling) sweep_json += (sweep_json.empty() ? "" : ", ") + to_json(r);
@@ -215,9 +246,10 @@ int run_command_line(int argc, char** argv) {
         scaling.empty() ? 0 : scaling.back().us_per_observation() / scaling.front().us_per_observation();
     std::printf(
         "{\"cameras\": %d, \"rate_hz\": %.1f, \"warmup_s\": %.3f, \"seconds\": %.3f, \"main\": %s, "
-        "\"scaling\": [%s], \"us_per_observation_ratio_last_to_first\": %.4f, \"bodies\": %s}\n",
+        "\"scaling\": [%s], \"us_per_observation_ratio_last_to_first\": %.4f, \"bodies\": %s, "
+        "\"inside_out\": %s}\n",
         config.cameras, config.rate_hz, config.warmup_s, config.seconds, to_json(main_case).c_str(),
-        sweep_json.c_str(), flatness, bodies_json.c_str());
+        sweep_json.c_str(), flatness, bodies_json.c_str(), inside_out_json.c_str());
   }
   return 0;
 }

@@ -59,17 +59,20 @@ InsideOutTracker::InsideOutTracker(std::vector<Constellation> constellations, Ca
       camera_in_rig_(std::move(camera_in_rig)),
       T_rig_cam_(camera_in_rig_.T_world_cam()),
       options_(options) {
-  if (constellations_.empty()) throw std::invalid_argument("inside-out: no landmark constellation given");
+  bool any_identifies = false;
   for (std::size_t c = 0; c < constellations_.size(); ++c) {
     const Constellation& constellation = constellations_[c];
-    if (constellation.landmarks.size() < 3)
+    if (constellation.identifies && constellation.landmarks.size() < 3)
       throw std::invalid_argument("constellation '" + constellation.name +
                                   "': needs at least 3 landmarks, has " +
                                   std::to_string(constellation.landmarks.size()));
-    widest_triangles_.push_back(widest_triangle(constellation));
+    widest_triangles_.push_back(constellation.identifies ? std::optional(widest_triangle(constellation))
+                                                         : std::nullopt);
+    any_identifies = any_identifies || constellation.identifies;
     for (const auto& landmark : constellation.landmarks)
       landmarks_.push_back({landmark, static_cast<int>(c)});
   }
+  if (!any_identifies) throw std::invalid_argument("inside-out: no landmark constellation given");
 }
 
 int InsideOutTracker::count_inliers(const RigidTransform& T_world_rig,
@@ -103,7 +106,8 @@ std::optional<RigidTransform> InsideOutTracker::acquire(std::span<const Eigen::V
   std::size_t best_constellation = 0;
   const std::size_t n = pixels.size();
   for (std::size_t c = 0; c < constellations_.size(); ++c) {
-    const auto& triangle = widest_triangles_[c];
+    if (!widest_triangles_[c]) continue;
+    const auto& triangle = *widest_triangles_[c];
     const auto& L = constellations_[c].landmarks;
     const std::array<Eigen::Vector3d, 3> points = {L[static_cast<std::size_t>(triangle[0])],
                                                    L[static_cast<std::size_t>(triangle[1])],

@@ -26,7 +26,10 @@ namespace panoptes::estimator {
 // A known arrangement of landmarks, world frame (surveyed, or from an outside-in calibration).
 struct Constellation {
   std::string name;
-  std::vector<Eigen::Vector3d> landmarks;  // at least 3, not all collinear
+  std::vector<Eigen::Vector3d> landmarks;  // at least 3, not all collinear (when `identifies`)
+  // false: single fixed markers and the like, used once tracking but never to identify from a
+  // cold start (a constellation's widest triangle is the P3P anchor).
+  bool identifies = true;
 };
 
 // A landmark's pixel in a camera mounted on a rig at `T_world_rig`, with the 2×6 Jacobian with
@@ -68,8 +71,8 @@ struct InsideOutCounters {
 
 class InsideOutTracker {
  public:
-  // Throws std::invalid_argument naming the constellation when it has fewer than three landmarks
-  // or they are collinear, or when no constellation is given.
+  // Throws std::invalid_argument naming the constellation when one that identifies has fewer than
+  // three landmarks or they are collinear, or when none identifies.
   InsideOutTracker(std::vector<Constellation> constellations, CameraModel camera_in_rig,
                    InsideOutOptions options = {});
 
@@ -83,6 +86,9 @@ class InsideOutTracker {
   const InsideOutCounters& counters() const { return counters_; }
   // The constellation the last cold start identified (empty before).
   const std::string& acquired_from() const { return acquired_from_; }
+  // Stamp of the last frame that updated the filter (0 before).
+  TimeNs last_update_ns() const { return last_update_ns_; }
+  const InsideOutOptions& options() const { return options_; }
 
  private:
   struct Landmark {
@@ -95,7 +101,7 @@ class InsideOutTracker {
 
   std::vector<Constellation> constellations_;
   std::vector<Landmark> landmarks_;
-  std::vector<std::array<int, 3>> widest_triangles_;  // per constellation, indices into it
+  std::vector<std::optional<std::array<int, 3>>> widest_triangles_;  // per constellation that identifies
   CameraModel camera_in_rig_;
   RigidTransform T_rig_cam_;
   InsideOutOptions options_;

@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Inside-out mode end to end (issue 21, docs/inside_out.md): the head-mounted camera of
+# deploy/scenes/inside_out.yaml, offline (features JSONL -> estimator_node --landmarks -> Pose
+# JSONL) and live over DDS (camera_node replaying the camera's features -> estimator_node ->
+# rt/panoptes/bodies and Pose JSONL), judged against the rig's ground truth: position RMSE <= 1 mm,
+# orientation <= 0.05 deg, first pose within 0.2 s of the first frame, no wrong pose. Bad landmark
+# files and a moving camera without landmarks exit 2 naming the file and entry.
+source "$(dirname "$0")/lib.sh"
+scene="$source_dir/deploy/scenes/inside_out.yaml"
+
+# first_pose_delay_ms FEATURES POSES: ms from the camera's first frame to the first pose.
+first_pose_delay_ms() {
+  local first_frame first_pose
+  # Not jq: it reads integers as doubles, and stamps need 19 digits.
+  first_frame=$(head -1 "$1" | grep -o '"stamp_ns":[0-9]*' | cut -d: -f2)
+  first_pose=$(head -1 "$2" | grep -o '"stamp_ns":[0-9]*' | cut -d: -f2)
+  echo $(((first_pose - first_frame) / 1000000))
+}
+
+# --- offline --------------------------------------------------------------------------------------
+expect_exit 0 "simulate the head camera (20 s)" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
+grep -q "moving: true" "$work/sim/calibration.yaml" && grep -q 'rig: "headset"' "$work/sim/calibration.yaml" &&
+  pass "the calibration marks the head camera moving on rig headset" || fail "calibration lacks moving/rig"
+[ -s "$work/sim/landmarks.yaml" ] && pass "landmarks.yaml written" || fail "no landmarks.yaml"
+grep -q '"name":"headset"' <(head -1 "$work/sim/truth.jsonl") && pass "truth.jsonl carries the rig's pose" ||
+  fail "no rig in truth.jsonl"
+expect_exit 0 "offline estimator in inside-out mode" -- "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" \
+  --landmarks "$work/sim/landmarks.yaml" --in-features "$work/sim/head.jsonl" --no-dds --out-poses "$work/poses.jsonl"
+expect_stderr_contains "inside-out: camera 'head' carries rig 'headset', tracked from 20 landmarks in 5 groups" \
+  "the set-up is reported"
+expect_stderr_contains "acquisitions 1 (last from" "one cold start, never lost"
+grep -q '"body":"headset"' "$work/poses.jsonl" && pass "poses are published under the rig's name" || fail "no headset poses"
+expect_exit 0 "offline poses: <= 1 mm, <= 0.05 deg, >= 99% of the time tracked" -- "$bin/panoptes_eval" --scene "$scene" \
+  --poses "$work/poses.jsonl" --warmup 0.5 --require-pose-rmse-mm 1.0 --require-pose-rmse-deg 0.05 \
+  --require-pose-tracked 0.99
+cat "$work/last.out"
+expect_exit 0 "no wrong pose from the cold start on" -- "$bin/panoptes_eval" --scene "$scene" --poses "$work/poses.jsonl" \
+  --warmup 0 --require-no-wrong-poses
+delay=$(first_pose_delay_ms "$work/sim/head.jsonl" "$work/poses.jsonl")
+echo "offline: first pose ${delay} ms after the first frame"
+[ "$delay" -le 200 ] && pass "acquired within 0.2 s" || fail "first pose after ${delay} ms"
+
+# --- bad input ------------------------------------------------------------------------------------
+run_bad() {  # run_bad DESCRIPTION EXPECTED-TEXT -- estimator arguments...
+  local what="$1" text="$2"
+  shift 3
+  expect_exit 2 "$what" -- "$bin/estimator_node" --in-features "$work/sim/head.jsonl" --no-dds \
+    --out-poses "$work/x.jsonl" "$@"
+  expect_stderr_contains "$text" "the error names it: $text"
+}
+printf 'landmarks:\n  - {name: a, markers: [[0,0,3],[1,0,3],[0,1,3]]}\n  - {name: a, position: [2,2,3]}\n' >"$work/dup.yaml"
+run_bad "landmarks with duplicate ids" "dup.yaml: landmarks[1].name: duplicate landmark id 'a'" -- \
+  --calibration "$work/sim/calibration.yaml" --landmarks "$work/dup.yaml"
+run_bad "a missing landmarks file" "$work/absent.yaml" -- --calibration "$work/sim/calibration.yaml" \
+  --landmarks "$work/absent.yaml"
+run_bad "a moving camera without landmarks" "camera 'head' is moving: true" -- \
+  --calibration "$work/sim/calibration.yaml" --bodies "$source_dir/deploy/scenes/bodies.yaml"
+
+# --- live over DDS --------------------------------------------------------------------------------
+epoch=$(( ($(date +%s) + 3) * 1000000000 ))
+"$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --landmarks "$scene" \
+  --out-poses "$work/live_poses.jsonl" --duration 12 --status-period 1 >"$work/estimator.log" 2>&1 &
+estimator=$!
+pids+=("$estimator")
+"$bin/camera_node" --source "features:$work/sim/head.jsonl" --sim-epoch-ns "$epoch" --duration 11 --quiet \
+  >"$work/camera.log" 2>&1 &
+pids+=("$!")
+timeout 40 tail --pid="$estimator" -f /dev/null
+wait "$estimator"
+rc=$?
+[ "$rc" -eq 0 ] && pass "live estimator exited cleanly" || { fail "live estimator exit $rc"; tail -20 "$work/estimator.log"; }
+grep "inside-out" "$work/estimator.log"
+live=$(grep -c '"body":"headset"' "$work/live_poses.jsonl" || true)
+echo "live poses: $live"
+[ "${live:-0}" -gt 500 ] && pass "headset poses published live" || fail "too few live poses ($live)"
+expect_exit 0 "live poses: <= 1 mm, <= 0.05 deg, no wrong pose" -- "$bin/panoptes_eval" --scene "$scene" \
+  --poses "$work/live_poses.jsonl" --epoch-ns "$epoch" --warmup 0.5 --require-pose-rmse-mm 1.0 \
+  --require-pose-rmse-deg 0.05 --require-no-wrong-poses
+cat "$work/last.out"
+finish
