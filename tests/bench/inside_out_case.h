@@ -27,10 +27,12 @@ struct InsideOutCase {
   double blobs_per_frame = 0;
   std::size_t frames = 0;  // timed
   double cold_start_ms = 0;
-  double inside_out_us = 0, inside_out_p99_us = 0;  // per frame while tracking
-  double tracker_us = 0, tracker_p99_us = 0;        // Tracker::process of camera a's frames, body defined
-  double points_only_us = 0;                        // the same without the body definition
-  std::size_t body_frames = 0;                      // timed frames after which the body had a pose
+  double inside_out_us = 0, inside_out_p50_us = 0, inside_out_p99_us = 0;  // per frame while tracking
+  // Tracker::process of camera a's frames, body defined.
+  double tracker_us = 0, tracker_p50_us = 0, tracker_p99_us = 0;
+  std::uint64_t body_identifications = 0;  // identified plus re-identified during the timed frames
+  double points_only_us = 0;               // the same without the body definition
+  std::size_t body_frames = 0;             // timed frames after which the body had a pose
 };
 
 namespace inside_out_detail {
@@ -43,9 +45,9 @@ inline double mean_us(const std::vector<double>& seconds) {
   return seconds.empty() ? 0 : 1e6 * sum / static_cast<double>(seconds.size());
 }
 
-inline double p99_us(std::vector<double> seconds) {
+inline double percentile_us(std::vector<double> seconds, double q) {
   if (seconds.empty()) return 0;
-  const auto k = static_cast<std::size_t>(0.99 * static_cast<double>(seconds.size() - 1));
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(seconds.size() - 1));
   std::nth_element(seconds.begin(), seconds.begin() + static_cast<std::ptrdiff_t>(k), seconds.end());
   return 1e6 * seconds[k];
 }
@@ -131,7 +133,8 @@ inline InsideOutCase run_inside_out_case(const std::string& scene_file, double w
   result.blobs_per_frame =
       static_cast<double>(blobs) / static_cast<double>(std::max<std::size_t>(result.frames, 1));
   result.inside_out_us = detail::mean_us(inside_out_s);
-  result.inside_out_p99_us = detail::p99_us(inside_out_s);
+  result.inside_out_p50_us = detail::percentile_us(inside_out_s, 0.5);
+  result.inside_out_p99_us = detail::percentile_us(inside_out_s, 0.99);
 
   // The room as a body: camera a at the origin sees the landmarks where the head camera did.
   SystemCalibration calibration;
@@ -149,14 +152,21 @@ inline InsideOutCase run_inside_out_case(const std::string& scene_file, double w
     tracker.set_calibration(calibration);
     if (with_body) tracker.set_bodies({room});
     std::vector<double> timed;
+    std::uint64_t identifications_before = 0;
     for (const FeatureFrame& frame : room_frames) {
+      if (frame.stamp_ns < timed_from)
+        identifications_before = tracker.body_stats().identified + tracker.body_stats().reidentified;
       const double spent = detail::timed_s([&] { tracker.process(frame); });
       if (frame.camera_id != "a" || frame.stamp_ns < timed_from) continue;
       timed.push_back(spent);
       if (with_body && !tracker.current_poses().empty()) ++result.body_frames;
     }
     (with_body ? result.tracker_us : result.points_only_us) = detail::mean_us(timed);
-    if (with_body) result.tracker_p99_us = detail::p99_us(timed);
+    if (!with_body) continue;
+    result.tracker_p50_us = detail::percentile_us(timed, 0.5);
+    result.tracker_p99_us = detail::percentile_us(timed, 0.99);
+    result.body_identifications =
+        tracker.body_stats().identified + tracker.body_stats().reidentified - identifications_before;
   }
   return result;
 }

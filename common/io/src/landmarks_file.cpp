@@ -48,6 +48,7 @@ std::vector<LandmarkGroup> read_landmarks(const YamlReader& root) {
   const std::vector<YamlReader> entries = root.sequence("landmarks");
   if (entries.empty()) root.fail("landmarks", "expected at least one landmark");
   std::vector<LandmarkGroup> landmarks;
+  landmarks.reserve(entries.size());
   std::set<std::string> names;
   for (const YamlReader& entry : entries) landmarks.push_back(read_entry(entry, names));
   return landmarks;

@@ -18,6 +18,7 @@ void InsideOutCameras::configure(const std::vector<LandmarkGroup>& landmarks,
                                  const std::string& landmarks_file, const InsideOutSettings& settings) {
   settings_ = settings;
   std::vector<est::Constellation> constellations;
+  constellations.reserve(landmarks.size());
   for (const LandmarkGroup& group : landmarks)
     constellations.push_back({group.name, group.points, group.constellation});
   std::map<std::string, Rig> rigs;

@@ -66,7 +66,8 @@ struct InsideOutCounters {
   std::uint64_t updates = 0;  // landmark updates
   std::uint64_t frames_without_update = 0;
   std::uint64_t lost = 0;
-  std::uint64_t late_frames = 0;  // older than the filter: dropped
+  std::uint64_t late_frames = 0;         // older than the filter: dropped
+  std::uint64_t outside_in_updates = 0;  // rig-marker updates from fixed cameras
 };
 
 class InsideOutTracker {
@@ -79,6 +80,15 @@ class InsideOutTracker {
   // One frame's blob centroids (pixels, distorted as the camera delivers them). Returns the pose
   // at the frame's stamp when tracking (after this frame's update), nullopt while not acquired.
   std::optional<InsideOutPose> add_frame(TimeNs stamp_ns, std::span<const Eigen::Vector2d> pixels);
+
+  // Fusion with outside-in (issue 21): a fixed camera's frame showing markers carried by the rig
+  // (`rig_markers`, rig frame; `fixed_camera` with its world pose). Each marker's projection is the
+  // rigid-body measurement (body_ekf.h's marker_pixel) and updates the same filter, gated and
+  // assigned as the landmarks are. Only while tracking: a cold start needs the moving camera.
+  // Returns the markers that updated (0 also for a late frame, counted).
+  int add_outside_in_frame(TimeNs stamp_ns, const CameraModel& fixed_camera,
+                           std::span<const Eigen::Vector3d> rig_markers,
+                           std::span<const Eigen::Vector2d> pixels);
 
   bool tracking() const { return state_.has_value(); }
   // The filter's state (pose, rates, covariance) while tracking.
