@@ -20,14 +20,19 @@
 namespace panoptes::estimator {
 namespace {
 
-CameraModel head_camera() {
+// 1280 × 1024, focal length `f` px, centred, no distortion.
+CameraIntrinsics sxga(double f) {
   CameraIntrinsics K;
   K.width = 1280;
   K.height = 1024;
-  K.fx = K.fy = 800.0;
+  K.fx = K.fy = f;
   K.cx = 639.5;
   K.cy = 511.5;
-  return CameraModel(K, RigidTransform{});  // the rig is the camera (T_rig_cam = identity)
+  return K;
+}
+
+CameraModel head_camera() {
+  return CameraModel(sxga(800.0), RigidTransform{});  // the rig is the camera (T_rig_cam = identity)
 }
 
 // The head at time t: a 1.5 m circle at 1.2 m/s, 1.7 m high with a bob, looking towards the room's
@@ -160,12 +165,7 @@ FusionRun run_fusion(bool use_head, bool use_fixed) {
   const auto constellations = room_landmarks(21);
   const std::vector<Eigen::Vector3d> headset = {
       {0.07, -0.10, -0.05}, {-0.08, -0.11, -0.03}, {0.01, -0.14, -0.12}, {-0.03, -0.08, 0.04}};
-  CameraIntrinsics K;
-  K.width = 1280;
-  K.height = 1024;
-  K.fx = K.fy = 1400.0;
-  K.cx = 639.5;
-  K.cy = 511.5;
+  const CameraIntrinsics K = sxga(1400.0);
   const std::vector<CameraModel> fixed = {
       CameraModel(K, look_at({3.6, 0.8, 2.6}, {0.0, 0.0, 1.6}, Eigen::Vector3d::UnitZ())),
       CameraModel(K, look_at({-0.8, 3.6, 2.6}, {0.0, 0.0, 1.6}, Eigen::Vector3d::UnitZ()))};
