@@ -112,7 +112,8 @@ int run_features(const Options& options) {
   fs::create_directories(dir);
   save_calibration(scene.calibration(), dir / "calibration.yaml");
   if (!scene.body_definitions().empty()) save_bodies(scene.body_definitions(), dir / "bodies.yaml");
-  if (!scene.landmarks().empty()) save_landmarks(scene.landmarks(), dir / "landmarks.yaml");
+  if (!scene.landmarks().empty())
+    save_landmarks(scene.landmarks(), dir / "landmarks.yaml", scene.rig_markers());
 
   for (const SimCameraConfig& config : scene.cameras()) {
     const CameraSimulator camera(scene, config.calibration.id);

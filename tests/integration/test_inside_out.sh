@@ -5,7 +5,8 @@
 # JSONL) and live over DDS (camera_node replaying the camera's features -> estimator_node ->
 # rt/panoptes/bodies and Pose JSONL), judged against the rig's ground truth: position RMSE <= 1 mm,
 # orientation <= 0.05 deg, first pose within 0.2 s of the first frame, no wrong pose. Bad landmark
-# files and a moving camera without landmarks exit 2 naming the file and entry.
+# files and a moving camera without landmarks exit 2 naming the file and entry. With the fixed pair
+# that sees the headset's markers, the fused pose beats inside-out alone.
 source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/inside_out.yaml"
 
@@ -40,6 +41,25 @@ expect_exit 0 "no wrong pose from the cold start on" -- "$bin/panoptes_eval" --s
 delay=$(first_pose_delay_ms "$work/sim/head.jsonl" "$work/poses.jsonl")
 echo "offline: first pose ${delay} ms after the first frame"
 [ "$delay" -le 200 ] && pass "acquired within 0.2 s" || fail "first pose after ${delay} ms"
+
+# --- fused with the fixed outside-in pair that sees the headset's markers --------------------------
+rmse_of() { awk '$1 == "headset" { print $2, $4 }' "$1"; }  # position mm, orientation deg
+expect_exit 0 "inside-out alone: evaluated" -- "$bin/panoptes_eval" --scene "$scene" --poses "$work/poses.jsonl" --warmup 0.5
+cp "$work/last.out" "$work/alone.eval"
+expect_exit 0 "offline estimator fusing the fixed pair's view of the headset" -- "$bin/estimator_node" \
+  --calibration "$work/sim/calibration.yaml" --landmarks "$work/sim/landmarks.yaml" \
+  --in-features "$work/sim/head.jsonl" "$work/sim/fixed0.jsonl" "$work/sim/fixed1.jsonl" --no-dds \
+  --out-poses "$work/fused.jsonl"
+expect_stderr_contains "rig 'headset' fused with the fixed cameras' view of its 4 markers" "fusion is reported"
+expect_stderr_contains "outside-in marker updates" "the summary counts the outside-in updates"
+expect_exit 0 "fused poses: no wrong pose, >= 99% tracked" -- "$bin/panoptes_eval" --scene "$scene" \
+  --poses "$work/fused.jsonl" --warmup 0.5 --require-pose-tracked 0.99 --require-no-wrong-poses
+cat "$work/last.out"
+read -r alone_mm alone_deg < <(rmse_of "$work/alone.eval")
+read -r fused_mm fused_deg < <(rmse_of "$work/last.out")
+echo "inside-out alone: $alone_mm mm, $alone_deg deg; fused: $fused_mm mm, $fused_deg deg"
+awk -v a="$alone_mm" -v f="$fused_mm" -v ad="$alone_deg" -v fd="$fused_deg" 'BEGIN { exit !(f < 0.8 * a && fd <= ad) }' &&
+  pass "the fused pose is better than inside-out alone" || fail "fusion did not help"
 
 # --- bad input ------------------------------------------------------------------------------------
 run_bad() {  # run_bad DESCRIPTION EXPECTED-TEXT -- estimator arguments...

@@ -59,7 +59,26 @@ std::vector<LandmarkGroup> load_landmarks(const std::filesystem::path& path) {
   return read_landmarks(YamlReader(path.string(), root));
 }
 
-void save_landmarks(const std::vector<LandmarkGroup>& landmarks, const std::filesystem::path& path) {
+RigMarkers load_rig_markers(const std::filesystem::path& path) {
+  const YAML::Node root = load_yaml_file(path);
+  const YamlReader reader(path.string(), root);
+  RigMarkers markers;
+  if (!reader.has("rig_markers")) return markers;
+  const YamlReader rigs = reader.child("rig_markers");
+  if (!rigs.node().IsMap()) reader.fail("rig_markers", "expected a map of rig name to markers");
+  for (const auto& entry : rigs.node()) {
+    const std::string name = entry.first.as<std::string>();
+    auto& points = markers[name];
+    const auto rows = rigs.get_double_rows(name, 3);
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      points.push_back(finite_point(rigs, name + "[" + std::to_string(i) + "]", rows[i]));
+    if (points.empty()) rigs.fail(name, "expected at least one marker");
+  }
+  return markers;
+}
+
+void save_landmarks(const std::vector<LandmarkGroup>& landmarks, const std::filesystem::path& path,
+                    const RigMarkers& rig_markers) {
   YAML::Emitter out;
   out.SetDoublePrecision(17);
   out << YAML::BeginMap << YAML::Key << "landmarks" << YAML::Value << YAML::BeginSeq;
@@ -78,7 +97,17 @@ void save_landmarks(const std::vector<LandmarkGroup>& landmarks, const std::file
     }
     out << YAML::EndMap;
   }
-  out << YAML::EndSeq << YAML::EndMap;
+  out << YAML::EndSeq;
+  if (!rig_markers.empty()) {
+    out << YAML::Key << "rig_markers" << YAML::Value << YAML::BeginMap;
+    for (const auto& [name, points] : rig_markers) {
+      out << YAML::Key << YAML::DoubleQuoted << name << YAML::Value << YAML::BeginSeq;
+      for (const auto& point : points) emit_point(point);
+      out << YAML::EndSeq;
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
   std::ofstream file(path, std::ios::out | std::ios::trunc);
   if (!file) throw ConfigError(path.string(), "", "cannot open file for writing");
   file << out.c_str() << "\n";

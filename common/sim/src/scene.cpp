@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <set>
@@ -68,7 +69,26 @@ struct RigSpec {
   std::string name;
   sim::Path path;
   sim::Rotation rotation;
+  std::vector<Eigen::Vector3d> markers;  // carried by the rig (rig frame): what fixed cameras see of it
 };
+
+RigSpec read_rig(const YamlReader& camera, const std::string& camera_id) {
+  const YamlReader rig_reader = camera.child("rig");
+  reject_unknown_keys(rig_reader, {"name", "path", "rotation", "markers"});
+  RigSpec rig{rig_reader.get_string("name", camera_id),
+              sim::read_path(rig_reader.child("path")),
+              rig_reader.has("rotation") ? sim::read_rotation(rig_reader.child("rotation")) : sim::Rotation{},
+              {}};
+  if (rig.name.empty()) rig_reader.fail("name", "must not be empty");
+  if (rig_reader.has("markers")) {
+    for (const auto& row : rig_reader.get_double_rows("markers", 3)) {
+      if (!std::isfinite(row[0]) || !std::isfinite(row[1]) || !std::isfinite(row[2]))
+        rig_reader.fail("markers", "expected finite numbers");
+      rig.markers.emplace_back(row[0], row[1], row[2]);
+    }
+  }
+  return rig;
+}
 
 // Reads a camera key from the camera's own map, falling back to the scene's `defaults`, so that
 // error messages name whichever map the value actually came from.
@@ -462,11 +482,7 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
     }
     std::optional<RigSpec> rig;
     if (config.calibration.moving) {
-      const YamlReader rig_reader = camera.child("rig");
-      reject_unknown_keys(rig_reader, {"name", "path", "rotation"});
-      rig = RigSpec{
-          rig_reader.get_string("name", config.calibration.id), sim::read_path(rig_reader.child("path")),
-          rig_reader.has("rotation") ? sim::read_rotation(rig_reader.child("rotation")) : sim::Rotation{}};
+      rig = read_rig(camera, config.calibration.id);
       config.calibration.rig = rig->name;
     }
     scene.camera_rigs.push_back(std::move(rig));
@@ -546,6 +562,10 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
       add_name(body, "name", spec.name + "/" + std::to_string(m), spec.marker_radius);
     }
     scene.bodies.push_back(std::move(spec));
+  }
+  for (const auto& rig : scene.camera_rigs) {
+    for (std::size_t m = 0; rig && m < rig->markers.size(); ++m)
+      add_name(root, "cameras", rig->name + "/" + std::to_string(m), kDefaultMarkerRadius);
   }
   if (scene.marker_names.empty())
     root.fail("markers", "the scene has no markers (give markers, trc, bodies or landmarks)");
@@ -634,6 +654,11 @@ std::vector<MarkerTruth> Scene::markers_at(TimeNs scene_time_ns) const {
       truth.facing_angle_rad = body.facing_angle_rad;
     }
   }
+  for (const auto& rig : impl_->camera_rigs) {
+    if (!rig || rig->markers.empty()) continue;
+    const RigidTransform T_world_rig{sim::evaluate(rig->rotation, t_s), sim::evaluate(rig->path, t_s)};
+    for (const Eigen::Vector3d& marker : rig->markers) out[index++].p = T_world_rig.apply(marker);
+  }
   return out;
 }
 
@@ -659,6 +684,13 @@ RigidTransform Scene::camera_pose_at(std::size_t camera_index, TimeNs scene_time
   if (!rig) return mount;
   const double t_s = ns_to_seconds(scene_time_ns);
   return RigidTransform{sim::evaluate(rig->rotation, t_s), sim::evaluate(rig->path, t_s)} * mount;
+}
+
+std::map<std::string, std::vector<Eigen::Vector3d>> Scene::rig_markers() const {
+  std::map<std::string, std::vector<Eigen::Vector3d>> markers;
+  for (const auto& rig : impl_->camera_rigs)
+    if (rig && !rig->markers.empty()) markers[rig->name] = rig->markers;
+  return markers;
 }
 
 std::vector<std::string> Scene::rig_names() const {

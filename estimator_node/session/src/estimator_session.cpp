@@ -28,12 +28,15 @@ void EstimatorSession::process_due(std::vector<FeatureFrame>& due,
   std::size_t late = 0;
   while (late < due.size() && due[late].stamp_ns < newest) ++late;
   if (late == 1) {
-    each(due[0], intake_.process(due[0]));
+    each(due[0], process(due[0]));
   } else if (late > 1) {
     const auto outcomes = intake_.process_batch({due.data(), late});
-    for (std::size_t i = 0; i < late; ++i) each(due[i], outcomes[i]);
+    for (std::size_t i = 0; i < late; ++i) {
+      if (!inside_out_.empty()) inside_out_.observe_fixed(due[i]);
+      each(due[i], outcomes[i]);
+    }
   }
-  for (std::size_t i = late; i < due.size(); ++i) each(due[i], intake_.process(due[i]));
+  for (std::size_t i = late; i < due.size(); ++i) each(due[i], process(due[i]));
 }
 
 void EstimatorSession::print_summary(std::size_t bad_lines) const {

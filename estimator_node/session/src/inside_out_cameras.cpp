@@ -27,12 +27,41 @@ void InsideOutCameras::configure(const std::vector<LandmarkGroup>& landmarks,
     const CameraModel camera_in_rig(camera.intrinsics, camera.T_world_cam.value_or(RigidTransform{}));
     try {
       rigs.emplace(camera.id, Rig{camera.rig.empty() ? camera.id : camera.rig,
-                                  est::InsideOutTracker(constellations, camera_in_rig, settings.tracker)});
+                                  est::InsideOutTracker(constellations, camera_in_rig, settings.tracker),
+                                  {}});
     } catch (const std::invalid_argument& error) {
       throw ConfigError(landmarks_file, "landmarks", error.what());
     }
   }
   rigs_ = std::move(rigs);
+}
+
+void InsideOutCameras::set_outside_in(const SystemCalibration& fixed, const RigMarkers& rig_markers,
+                                      const std::string& landmarks_file) {
+  for (const auto& [name, markers] : rig_markers) {
+    const auto rig = std::find_if(rigs_.begin(), rigs_.end(),
+                                  [&](const auto& entry) { return entry.second.name == name; });
+    if (rig == rigs_.end())
+      throw ConfigError(landmarks_file, "rig_markers." + name,
+                        "no camera marked moving: true is carried by rig '" + name + "'");
+    rig->second.markers = markers;
+  }
+  fixed_cameras_.clear();
+  if (rig_markers.empty()) return;
+  for (const CameraCalibration& camera : fixed.cameras)
+    if (camera.T_world_cam) fixed_cameras_.emplace(camera.id, camera.model());
+}
+
+void InsideOutCameras::observe_fixed(const FeatureFrame& frame) {
+  const auto camera = fixed_cameras_.find(frame.camera_id);
+  if (camera == fixed_cameras_.end()) return;
+  std::vector<Eigen::Vector2d> pixels;
+  pixels.reserve(frame.blobs.size());
+  for (const Blob& blob : frame.blobs)
+    if (std::isfinite(blob.x) && std::isfinite(blob.y)) pixels.emplace_back(blob.x, blob.y);
+  for (auto& [camera_id, rig] : rigs_)
+    if (!rig.markers.empty())
+      rig.tracker.add_outside_in_frame(frame.stamp_ns, camera->second, rig.markers, pixels);
 }
 
 est::FrameOutcome InsideOutCameras::process(const FeatureFrame& frame) {
@@ -97,7 +126,8 @@ std::vector<std::string> InsideOutCameras::summary_lines() const {
         (rig.tracker.acquired_from().empty() ? "" : " (last from '" + rig.tracker.acquired_from() + "')") +
         ", failed " + std::to_string(c.failed_acquisitions) + ", landmark updates " +
         std::to_string(c.updates) + ", frames without update " + std::to_string(c.frames_without_update) +
-        ", lost " + std::to_string(c.lost) + ", late " + std::to_string(c.late_frames));
+        ", lost " + std::to_string(c.lost) + ", late " + std::to_string(c.late_frames) +
+        (rig.markers.empty() ? "" : ", outside-in marker updates " + std::to_string(c.outside_in_updates)));
   }
   return lines;
 }
@@ -133,6 +163,11 @@ void set_up_inside_out(InsideOutCameras& cameras, SystemCalibration& calibration
     return;
   }
   cameras.configure(landmarks, moving, landmarks_file);
+  const RigMarkers rig_markers = load_rig_markers(landmarks_file);
+  cameras.set_outside_in(calibration, rig_markers, landmarks_file);
+  for (const auto& [rig, markers] : rig_markers)
+    log("inside-out: rig '" + rig + "' fused with the fixed cameras' view of its " +
+        std::to_string(markers.size()) + " markers");
   std::size_t points = 0;
   for (const auto& group : landmarks) points += group.points.size();
   for (const auto& camera : moving)

@@ -21,8 +21,9 @@ const fs::path kScene = fs::path(PANOPTES_SOURCE_DIR) / "deploy" / "scenes" / "i
 
 TEST(MovingCamera, InsideOutSceneCarriesTheHeadCameraOnItsRig) {
   const Scene scene = Scene::load(kScene);
-  ASSERT_EQ(scene.cameras().size(), 1u);
+  ASSERT_EQ(scene.cameras().size(), 3u);  // the head camera and a fixed pair
   const CameraCalibration& head = scene.cameras()[0].calibration;
+  EXPECT_FALSE(scene.cameras()[1].calibration.moving);
   EXPECT_TRUE(head.moving);
   EXPECT_EQ(head.rig, "headset");
   EXPECT_EQ(scene.rig_names(), (std::vector<std::string>{"headset"}));
@@ -31,6 +32,9 @@ TEST(MovingCamera, InsideOutSceneCarriesTheHeadCameraOnItsRig) {
   for (const auto& group : scene.landmarks()) landmarks += group.points.size();
   EXPECT_EQ(landmarks, 20u);
   EXPECT_EQ(scene.marker_names().front(), "ceiling0/0");
+  EXPECT_EQ(scene.marker_names().back(), "headset/3");  // the rig's own markers come last
+  ASSERT_EQ(scene.rig_markers().count("headset"), 1u);
+  EXPECT_EQ(scene.rig_markers().at("headset").size(), 4u);
 
   // The rig walks the 1.5 m circle 1.7 m high at 1.2 m/s, heading swinging at up to 2.9 rad/s.
   double max_turn_rate = 0.0;
@@ -47,6 +51,9 @@ TEST(MovingCamera, InsideOutSceneCarriesTheHeadCameraOnItsRig) {
     const Eigen::Vector3d axis = scene.camera_pose_at(0, t).q * Eigen::Vector3d::UnitZ();
     EXPECT_NEAR(std::asin(axis.z()) * 180.0 / M_PI, 40.0, 1e-6);
     EXPECT_TRUE(scene.camera_pose_at(0, t).t.isApprox(rig.t, 1e-12));
+    // The rig's markers move with it.
+    const auto markers = scene.markers_at(t);
+    EXPECT_TRUE(markers.back().p.isApprox(rig.apply(scene.rig_markers().at("headset").back()), 1e-12));
   }
   EXPECT_NEAR(max_turn_rate, 2.9, 0.05);
 }
@@ -64,6 +71,8 @@ TEST(MovingCamera, FeaturesFollowTheMovingPose) {
     ASSERT_EQ(frame.blobs.size(), visible.size());
     EXPECT_GE(visible.size(), 4u) << "frame " << k;
     for (std::size_t i = 0; i < visible.size(); ++i) {
+      EXPECT_EQ(markers[static_cast<std::size_t>(visible[i])].name.rfind("ceiling", 0), 0u)
+          << "the head camera sees only landmarks, never the markers on its own rig";
       const auto pixel = model.project(markers[static_cast<std::size_t>(visible[i])].p);
       ASSERT_TRUE(pixel);
       // Centroid noise is 0.1 px: 1 px is far beyond it, and far below a fixed camera's error.
@@ -72,6 +81,13 @@ TEST(MovingCamera, FeaturesFollowTheMovingPose) {
     }
   }
   EXPECT_GT(seen, 20);
+  // The fixed pair sees the headset's markers.
+  const CameraSimulator fixed(scene, "fixed0");
+  int headset_seen = 0;
+  for (std::int64_t k = 0; k < 1000; k += 50)
+    for (int index : fixed.visible_markers(k))
+      headset_seen += scene.marker_names()[static_cast<std::size_t>(index)].rfind("headset/", 0) == 0 ? 1 : 0;
+  EXPECT_GE(headset_seen, 60);  // of 80
 }
 
 TEST(MovingCamera, CalibrationMarksTheCameraMovingAndNamesItsRig) {
@@ -84,7 +100,7 @@ TEST(MovingCamera, CalibrationMarksTheCameraMovingAndNamesItsRig) {
   save_calibration(scene.calibration(), path);
   const SystemCalibration loaded = load_calibration(path);
   fs::remove(path);
-  ASSERT_EQ(loaded.cameras.size(), 1u);
+  ASSERT_EQ(loaded.cameras.size(), 3u);
   EXPECT_TRUE(loaded.cameras[0].moving);
   EXPECT_EQ(loaded.cameras[0].rig, "headset");
 }

@@ -7,6 +7,8 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "panoptes/landmarks.h"
@@ -20,6 +22,13 @@ class YamlReader;
 std::vector<LandmarkGroup> read_landmarks(const YamlReader& root);
 // Throws ConfigError naming the file when it is missing, unreadable or has no `landmarks`.
 std::vector<LandmarkGroup> load_landmarks(const std::filesystem::path& path);
-void save_landmarks(const std::vector<LandmarkGroup>& landmarks, const std::filesystem::path& path);
+// Markers carried by the rigs of moving cameras, rig frame, by rig name: the optional
+// `rig_markers: {<rig>: [[x, y, z], ...]}` map of the same file. Fixed cameras that see them
+// update the rig's pose too (fusion, docs/inside_out.md). Throws ConfigError naming the file and key.
+using RigMarkers = std::map<std::string, std::vector<Eigen::Vector3d>>;
+RigMarkers load_rig_markers(const std::filesystem::path& path);
+
+void save_landmarks(const std::vector<LandmarkGroup>& landmarks, const std::filesystem::path& path,
+                    const RigMarkers& rig_markers = {});
 
 }  // namespace panoptes

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -91,6 +92,9 @@ class Scene {
   // A camera's pose in the world: its T_world_cam, or for a camera on a rig (calibration.moving,
   // whose T_world_cam is then its mount T_rig_cam) the rig's pose times the mount.
   RigidTransform camera_pose_at(std::size_t camera_index, TimeNs scene_time_ns) const;
+  // The markers a rig carries (camera key rig.markers, rig frame), by rig name; simulated as
+  // markers "<rig>/<index>" after the bodies'.
+  std::map<std::string, std::vector<Eigen::Vector3d>> rig_markers() const;
   // The names of the rigs that carry moving cameras, in camera order.
   std::vector<std::string> rig_names() const;
   // The scene's `landmarks` (fixed markers whose positions a moving camera's tracking knows).

@@ -50,7 +50,9 @@ class EstimatorSession {
   // The owning thread: one tracker update (a moving camera's frame: its rig's update).
   estimator::FrameOutcome process(const FeatureFrame& frame) {
     if (inside_out_.handles(frame.camera_id)) return inside_out_.process(frame);
-    return intake_.process(frame);
+    const auto outcome = intake_.process(frame);
+    if (!inside_out_.empty()) inside_out_.observe_fixed(frame);
+    return outcome;
   }
   // The owning thread: frames taken from the inbox together (oldest first). Those older than the
   // newest processed frame go to the tracker as one batch (one rewind and replay for the burst);

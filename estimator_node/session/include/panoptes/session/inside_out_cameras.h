@@ -33,6 +33,14 @@ class InsideOutCameras {
   void configure(const std::vector<LandmarkGroup>& landmarks, const std::vector<CameraCalibration>& moving,
                  const std::string& landmarks_file, const InsideOutSettings& settings = {});
 
+  // Fusion (docs/inside_out.md): fixed cameras (`fixed`, with T_world_cam) that see markers carried
+  // by a rig (`rig_markers`, rig frame, by rig name) update that rig's filter too. Throws
+  // ConfigError naming `landmarks_file` for markers of a rig that no moving camera carries.
+  void set_outside_in(const SystemCalibration& fixed, const RigMarkers& rig_markers,
+                      const std::string& landmarks_file);
+  // A fixed camera's frame (the point tracker has it too): each rig with markers updates from it.
+  void observe_fixed(const FeatureFrame& frame);
+
   bool empty() const { return rigs_.empty(); }
   bool handles(const std::string& camera_id) const { return rigs_.count(camera_id) > 0; }
   // A frame of a moving camera (handles() is true): its rig's tracker update. kTooLate for a frame
@@ -50,8 +58,10 @@ class InsideOutCameras {
   struct Rig {
     std::string name;
     estimator::InsideOutTracker tracker;
+    std::vector<Eigen::Vector3d> markers;  // carried, rig frame (fusion)
   };
-  std::map<std::string, Rig> rigs_;  // by camera id
+  std::map<std::string, Rig> rigs_;                   // by camera id
+  std::map<std::string, CameraModel> fixed_cameras_;  // by camera id, when a rig carries markers
   InsideOutSettings settings_;
   TimeNs last_stamp_ns_ = 0;
 };
