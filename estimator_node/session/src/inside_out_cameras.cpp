@@ -38,13 +38,14 @@ void InsideOutCameras::configure(const std::vector<LandmarkGroup>& landmarks,
 
 void InsideOutCameras::set_outside_in(const SystemCalibration& fixed, const RigMarkers& rig_markers,
                                       const std::string& landmarks_file) {
-  for (const auto& [name, markers] : rig_markers) {
+  for (const auto& entry : rig_markers) {
+    const std::string& name = entry.first;
     const auto rig = std::find_if(rigs_.begin(), rigs_.end(),
-                                  [&](const auto& entry) { return entry.second.name == name; });
+                                  [&](const auto& camera_rig) { return camera_rig.second.name == name; });
     if (rig == rigs_.end())
       throw ConfigError(landmarks_file, "rig_markers." + name,
                         "no camera marked moving: true is carried by rig '" + name + "'");
-    rig->second.markers = markers;
+    rig->second.markers = entry.second;
   }
   fixed_cameras_.clear();
   if (rig_markers.empty()) return;

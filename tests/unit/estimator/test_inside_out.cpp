@@ -194,7 +194,7 @@ FusionRun run_fusion(bool use_head, bool use_fixed) {
       tracker.add_outside_in_frame(
           at, fixed[c], headset,
           observe(headset, [&](const Eigen::Vector3d& m) -> std::optional<Eigen::Vector2d> {
-            const auto pixel = fixed[c].project(head_then.apply(m));
+            auto pixel = fixed[c].project(head_then.apply(m));
             if (!pixel || !fixed[c].in_image(*pixel)) return std::nullopt;
             return pixel;
           }));
