@@ -91,8 +91,10 @@ std::vector<PoseRecord> InsideOutCameras::poses_at(TimeNs stamp_ns, TimeNs horiz
   for (const auto& [camera_id, rig] : rigs_) {
     const auto& state = rig.tracker.state();
     const est::InsideOutOptions& options = rig.tracker.options();
-    // Lost (no landmark update for this long): not reported, as a body that is no longer tracked.
-    if (!state || stamp_ns - rig.tracker.last_update_ns() > options.lost_after_ns) continue;
+    // Reported only while its newest frame (of its camera, or of a fixed camera seeing its markers)
+    // updated the filter: a prediction across dropped or unmatched frames of a head turning at
+    // 3 rad/s can be degrees off, and is never published as a pose.
+    if (!state || state->stamp_ns != rig.tracker.last_update_ns()) continue;
     const est::BodyState at = est::predicted(*state, std::max(stamp_ns, state->stamp_ns), options.motion);
     const double horizon_s = ns_to_seconds(horizon_ns);
     const RigidTransform pose = est::extrapolate_pose(at, horizon_s);
