@@ -37,13 +37,19 @@ namespace session = panoptes::session;
 void prepare(const app::NodeCommandLine& command_line, session::EstimatorSession& estimator,
              session::BodyFile& body_file) {
   if (!command_line.calibration_file.empty()) {
-    const auto calibration = panoptes::load_calibration(command_line.calibration_file);
+    auto calibration = panoptes::load_calibration(command_line.calibration_file);
+    // Moving cameras (inside-out mode, docs/inside_out.md) are not fixed cameras of the tracker.
+    session::set_up_inside_out(estimator.inside_out(), calibration, command_line.calibration_file,
+                               command_line.landmarks_file);
     estimator.tracker().set_calibration(calibration);
     for (const auto& camera : calibration.cameras) {
       if (!camera.T_world_cam)
         session::log("camera '" + camera.id + "' in " + command_line.calibration_file +
                      " has no T_world_cam: ignored");
     }
+  } else if (!command_line.landmarks_file.empty()) {
+    throw panoptes::ConfigError(command_line.landmarks_file, "",
+                                "landmarks need --calibration with a camera marked moving: true");
   }
   if (body_file.enabled()) body_file.load(estimator.tracker());
   if (!command_line.quiet) {

@@ -16,6 +16,7 @@ namespace panoptes::estimator_app {
 struct NodeCommandLine {
   std::string calibration_file;
   std::string bodies_file;
+  std::string landmarks_file;  // inside-out mode (docs/inside_out.md)
   std::string config_file;
   bool print_config = false;
   std::vector<std::string> in_features;
