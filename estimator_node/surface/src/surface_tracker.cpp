@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <utility>
+#include <vector>
 
 #include "panoptes/estimator/assignment.h"
 #include "panoptes/estimator/ekf.h"
@@ -54,8 +55,20 @@ struct SurfaceTracker::Spot {
   int updates = 0;
   std::uint32_t stroke_id = 0;  // 0 until confirmed
   int camera = -1;
+  std::vector<std::pair<int, TimeNs>> last_seen;  // per camera that updated it: its newest stamp
 
-  StrokeEvent event(StrokePhase phase) const {
+  void seen_by(int camera_index, TimeNs stamp) {
+    camera = camera_index;
+    for (auto& [seen_camera, seen_stamp] : last_seen) {
+      if (seen_camera == camera_index) {
+        seen_stamp = stamp;
+        return;
+      }
+    }
+    last_seen.emplace_back(camera_index, stamp);
+  }
+
+  StrokeEvent event(StrokePhase phase, TimeNs window_ns) const {
     StrokeEvent e;
     e.phase = phase;
     e.stroke_id = stroke_id;
@@ -64,6 +77,9 @@ struct SurfaceTracker::Spot {
     e.velocity = x.segment<2>(2);
     e.acceleration = x.tail<2>();
     e.camera = camera;
+    e.cameras = static_cast<int>(std::count_if(last_seen.begin(), last_seen.end(), [&](const auto& seen) {
+      return stamp_ns - seen.second <= window_ns;
+    }));
     return e;
   }
 
@@ -94,7 +110,7 @@ void SurfaceTracker::end_stale(TimeNs now_ns, std::vector<StrokeEvent>& events) 
   for (const Spot& spot : spots_) {
     if (!stale(spot)) continue;
     if (spot.stroke_id != 0) {
-      events.push_back(spot.event(StrokePhase::kEnd));
+      events.push_back(spot.event(StrokePhase::kEnd, options_.end_after_ns));
       ++counters_.strokes_ended;
     } else {
       ++counters_.unconfirmed_dropped;
@@ -107,7 +123,7 @@ void SurfaceTracker::end_stale(TimeNs now_ns, std::vector<StrokeEvent>& events) 
 void SurfaceTracker::begin_stroke(Spot& spot, std::vector<StrokeEvent>& events) {
   spot.stroke_id = next_id_++;
   ++counters_.strokes_begun;
-  StrokeEvent begin = spot.event(StrokePhase::kBegin);
+  StrokeEvent begin = spot.event(StrokePhase::kBegin, options_.end_after_ns);
   begin.stamp_ns = spot.first_stamp_ns;
   begin.position = spot.first_position;
   events.push_back(begin);
@@ -172,10 +188,10 @@ std::vector<StrokeEvent> SurfaceTracker::add_frame(int camera, TimeNs stamp_ns,
     spot.x = x;
     spot.P = P;
     spot.stamp_ns = stamp_ns;
-    spot.camera = camera;
+    spot.seen_by(camera, stamp_ns);
     used[m] = true;
     if (++spot.updates >= options_.confirm_updates && spot.stroke_id == 0) begin_stroke(spot, events);
-    if (spot.stroke_id != 0) events.push_back(spot.event(StrokePhase::kContinue));
+    if (spot.stroke_id != 0) events.push_back(spot.event(StrokePhase::kContinue, options_.end_after_ns));
   }
 
   // Spots no stroke explained start new ones, unless they sit on a stroke (a second blob of one
@@ -202,7 +218,7 @@ std::vector<StrokeEvent> SurfaceTracker::add_frame(int camera, TimeNs stamp_ns,
     spot.stamp_ns = spot.first_stamp_ns = stamp_ns;
     spot.first_position = measurements[m].position;
     spot.updates = 1;
-    spot.camera = camera;
+    spot.seen_by(camera, stamp_ns);
     if (spot.updates >= options_.confirm_updates) begin_stroke(spot, events);
     spots_.push_back(spot);
   }

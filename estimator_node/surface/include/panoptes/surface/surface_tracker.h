@@ -43,6 +43,7 @@ struct StrokeEvent {
   Eigen::Vector2d velocity = Eigen::Vector2d::Zero();      // m/s
   Eigen::Vector2d acceleration = Eigen::Vector2d::Zero();  // m/s²
   int camera = -1;                                         // the camera whose frame caused it
+  int cameras = 0;  // distinct cameras that updated the stroke within end_after_ns of its stamp
 };
 
 // Why spots and frames were not used, counted (docs/surface.md).
@@ -78,6 +79,8 @@ class SurfaceTracker {
   std::vector<StrokeEvent> end_silent(TimeNs now_ns);
 
   const SurfaceCounters& counters() const { return counters_; }
+  const SurfaceTrackerOptions& options() const { return options_; }
+  const SurfacePlane& surface() const { return surface_; }
   std::size_t active_strokes() const;
 
  private:
