@@ -194,9 +194,10 @@ int main(int argc, char** argv) {
         std::fprintf(
             events,
             "{\"phase\": \"%s\", \"id\": %u, \"stamp_ns\": %lld, \"p\": [%.6f, %.6f], \"v\": [%.4f, %.4f], "
-            "\"cameras\": %d, \"receive_ns\": %lld}\n",
+            "\"cameras\": %d, \"publish_ns\": %lld, \"receive_ns\": %lld}\n",
             phase_name(s.phase), s.id, static_cast<long long>(s.stamp_ns), s.position[0], s.position[1],
-            s.velocity[0], s.velocity[1], s.cameras, static_cast<long long>(s.receive_ns));
+            s.velocity[0], s.velocity[1], s.cameras, static_cast<long long>(s.publish_ns),
+            static_cast<long long>(s.receive_ns));
     }
     if (events != nullptr) std::fclose(events);
     if (!board.write_ppm(args.out, args.width)) {

@@ -27,6 +27,7 @@
 #include "panoptes/session/estimator_session.h"
 #include "panoptes/session/log.h"
 #include "panoptes/session/offline_replay.h"
+#include "panoptes/surface_app/calibrate_surface.h"
 #include "panoptes/surface_app/surface_mode.h"
 #include "panoptes/tune/tune_cli.h"
 
@@ -128,6 +129,8 @@ int run_surface_mode(const app::NodeCommandLine& command_line,
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 3 && std::string_view(argv[1]) == "calibrate" && std::string_view(argv[2]) == "surface")
+    return panoptes::surface_app::run_calibrate_surface(argc - 2, argv + 2);
   if (argc >= 2 && std::string_view(argv[1]) == "calibrate")
     return panoptes::calib::run_calibrate(argc - 1, argv + 1);
   if (argc >= 2 && std::string_view(argv[1]) == "tune")

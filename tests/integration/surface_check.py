@@ -159,16 +159,36 @@ def check_board(work, truth, samples, matched):
     check(stray == 0, f"board: no coloured pixel away from the true paths ({stray} stray)")
 
 
+def percentile(values, q):
+    values = sorted(values)
+    return values[min(len(values) - 1, int(q * len(values)))]
+
+
+def print_latency(events):
+    """Informational (docs/benchmarks.md, "Issue 22"): a continue event's stamp is its camera frame's
+    mid-exposure stamp, at which camera_node --source features publishes the frame."""
+    continues = [e for e in events if e["phase"] == "continue"]
+    total = [(e["receive_ns"] - e["stamp_ns"]) * 1e-6 for e in continues]
+    hop = [(e["receive_ns"] - e["publish_ns"]) * 1e-6 for e in continues]
+    if total:
+        print(f"latency: frame stamp -> stroke event at the application p50 {percentile(total, 0.5):.3f} ms, "
+              f"p99 {percentile(total, 0.99):.3f} ms; of that the estimator -> application hop p50 "
+              f"{percentile(hop, 0.5):.3f} ms, p99 {percentile(hop, 0.99):.3f} ms ({len(total)} events)")
+
+
 def main():
     work, scene, live_epoch = sys.argv[1], sys.argv[2], int(sys.argv[3])
     truth = truth_strokes(scene)
     samples = truth_samples(work)
     offline = [json.loads(line) for line in open(f"{work}/offline.jsonl")]
     check_strokes("offline", offline, SIM_EPOCH_NS, truth, samples)
+    homography = [json.loads(line) for line in open(f"{work}/homography.jsonl")]
+    check_strokes("offline, calibrated homographies", homography, SIM_EPOCH_NS, truth, samples)
     live = [json.loads(line) for line in open(f"{work}/events.jsonl")]
     published = [json.loads(line) for line in open(f"{work}/live.jsonl")]
     check(len(live) == len(published), f"live: the board received every event published ({len(live)} of {len(published)})")
     matched = check_strokes("live", live, live_epoch, truth, samples)
+    print_latency(live)
     check_board(work, truth, samples, matched)
     return 1 if failures else 0
 

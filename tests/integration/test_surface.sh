@@ -11,6 +11,8 @@
 source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/surface_wall.yaml"
 surface="$source_dir/deploy/scenes/surface_wall_surface.yaml"
+# The live run's settings (benchmark aid: another latency_window_ms, docs/benchmarks.md "Issue 22").
+live_surface="${PANOPTES_SURFACE_LIVE_SETTINGS:-$surface}"
 export PANOPTES_DOMAIN="${PANOPTES_DOMAIN:-0}"
 for tool in lumipoint_board estimator_node camera_node panoptes_sim; do
   [ -x "$bin/$tool" ] || { fail "$bin/$tool is not built"; finish; }
@@ -38,12 +40,61 @@ expect_stderr_contains "behind" "and says the plane is behind the camera"
 expect_exit 0 "offline surface mode" -- "$bin/estimator_node" --surface "$surface" --calibration "$cal" --no-dds \
   --in-features "$work"/sim/w*.jsonl --out-strokes "$work/offline.jsonl"
 
+# --- calibrate surface: homographies from known points (their pixels projected through the
+# simulator's calibration), then the offline run on those homographies alone (no --calibration) --
+python3 - "$cal" >"$work/points.yaml" <<'PYTHON'
+import sys, yaml
+cal = yaml.safe_load(open(sys.argv[1]))
+print("size: [3.0, 1.0]\ncameras:")
+for camera in cal["cameras"]:
+    fx, fy, cx, cy = camera["K"]
+    (qx, qy, qz, qw), t = camera["T_world_cam"]["q"], camera["T_world_cam"]["t"]
+    # R_world_cam from the quaternion; p_cam = R^T (p - t)
+    R = [[1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
+         [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
+         [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)]]
+    print(f"  - id: {camera['id']}\n    points:")
+    for ds, dt in [(-0.5, 0.1), (0.5, 0.1), (0.5, 0.9), (-0.5, 0.9), (0.0, 0.5), (0.3, 0.3)]:
+        s, height = t[0] + ds, dt  # the wall point (x = s, y = 0, z = t)
+        d = [s - t[0], 0.0 - t[1], height - t[2]]
+        x, y, z = (sum(R[r][c] * d[r] for r in range(3)) for c in range(3))
+        print(f"      - {{surface: [{s}, {height}], pixel: [{fx * x / z + cx}, {fy * y / z + cy}]}}")
+PYTHON
+expect_exit 0 "calibrate surface from known points" -- "$bin/estimator_node" calibrate surface --points "$work/points.yaml" \
+  --out "$work/wall.yaml"
+grep -E "camera w[0-2]: 6 points, residual RMS 0\.00[0-9] mm" "$work/last.err" | wc -l | grep -qx 3 &&
+  pass "each camera's homography explains its points (residual < 0.01 mm)" || { fail "residuals"; cat "$work/last.err"; }
+expect_exit 0 "offline surface mode on the fitted homographies alone" -- "$bin/estimator_node" --surface "$work/wall.yaml" \
+  --no-dds --in-features "$work"/sim/w*.jsonl --out-strokes "$work/homography.jsonl"
+printf 'size: [3, 1]\ncameras:\n  - {id: w0, corners: [[0, 0], [1, 1], [2, 2], [3, 4]]}\n' >"$work/collinear.yaml"
+expect_exit 2 "three collinear corners are refused" -- "$bin/estimator_node" calibrate surface --points "$work/collinear.yaml" \
+  --out "$work/x.yaml"
+expect_stderr_contains "collinear.yaml: cameras[0].corners" "the error names the file and key"
+
 # --- live: three camera_nodes -> estimator_node --surface -> lumipoint_board ------------------------
 "$bin/lumipoint_board" --out "$work/board.ppm" --events "$work/events.jsonl" --duration 20 --idle-exit 2 \
   >"$work/board.log" 2>&1 &
 board=$!
 pids+=("$board")
-"$bin/estimator_node" --surface "$surface" --calibration "$cal" --duration 14 --status-period 1 \
+# The Python binding reads the same strokes (docs/clients.md).
+python=$(cat "$build_dir/python/INTERPRETER" 2>/dev/null)
+if [ -n "$python" ] && [ -f "$build_dir/python/panoptes/__init__.py" ]; then
+  PYTHONPATH="$build_dir/python" "$python" - "$work/python.txt" >"$work/python.log" 2>&1 <<'PYTHON' &
+import collections, sys, panoptes
+phases = collections.Counter()
+with panoptes.Client() as client:
+    while True:
+        stroke = client.wait_for_stroke(2.0 if phases else 20.0)
+        if stroke is None:
+            break
+        phases[stroke.phase] += 1
+        assert len(stroke.position) == 2 and stroke.surface_size == (3.0, 1.0), stroke
+open(sys.argv[1], "w").write(f"{phases['begin']} {phases['continue']} {phases['end']}\n")
+PYTHON
+  python_reader=$!
+  pids+=("$python_reader")
+fi
+"$bin/estimator_node" --surface "$live_surface" --calibration "$cal" --duration 14 --status-period 1 \
   --out-strokes "$work/live.jsonl" >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
@@ -61,6 +112,15 @@ rc=$?
 timeout 20 tail --pid="$board" -f /dev/null
 wait "$board" && pass "lumipoint_board wrote its board" || { fail "lumipoint_board exit $?"; cat "$work/board.log"; }
 cat "$work/board.log"
+if [ -n "${python_reader:-}" ]; then
+  timeout 20 tail --pid="$python_reader" -f /dev/null
+  expected="$(python3 -c "
+import collections, json, sys
+c = collections.Counter(json.loads(l)['phase'] for l in open('$work/live.jsonl'))
+print(c['begin'], c['continue'], c['end'])")"
+  [ "$(cat "$work/python.txt" 2>/dev/null)" = "$expected" ] && pass "the Python binding received every stroke event ($expected)" ||
+    { fail "Python reader: '$(cat "$work/python.txt" 2>/dev/null)', expected '$expected'"; cat "$work/python.log"; }
+fi
 grep "surface mode:" "$work/estimator.log"
 
 python3 "$source_dir/tests/integration/surface_check.py" "$work" "$scene" "$epoch"

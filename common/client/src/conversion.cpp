@@ -209,6 +209,7 @@ std::optional<std::vector<Stroke>> to_strokes(const msg::StrokeEvents& message, 
     stroke.cameras = event.cameras();
     stroke.surface_size = size;
     stroke.source_camera = message.source_camera();
+    stroke.publish_ns = message.publish_ns();
     stroke.receive_ns = receive_ns;
     if (!all_finite(stroke.position) || !all_finite(stroke.velocity) || !all_finite(stroke.acceleration) ||
         !all_finite(size)) {

@@ -223,6 +223,7 @@ TEST(SurfaceTracker, CountsAndDropsWhatItCannotUse) {
   EXPECT_EQ(events[0].phase, StrokePhase::kBegin);
   EXPECT_EQ(events[0].stamp_ns, 2'000'000);
   EXPECT_EQ(events[1].phase, StrokePhase::kContinue);
+  EXPECT_EQ(events[1].cameras, 2);  // both cameras updated it within end_after_ns
   // An older frame, an unknown camera, NaN pixels: counted, nothing else changes.
   EXPECT_TRUE(tracker.add_frame(2, 4'000'000, a).empty());
   EXPECT_EQ(tracker.counters().late_frames, 1U);
@@ -236,6 +237,7 @@ TEST(SurfaceTracker, CountsAndDropsWhatItCannotUse) {
   const auto ended = tracker.end_silent(100'000'000);
   ASSERT_EQ(ended.size(), 1U);
   EXPECT_EQ(ended[0].phase, StrokePhase::kEnd);
+  EXPECT_EQ(ended[0].cameras, 2);
   EXPECT_EQ(ended[0].stamp_ns, 5'000'000);
   EXPECT_EQ(tracker.active_strokes(), 0U);
 }

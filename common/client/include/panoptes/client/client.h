@@ -140,6 +140,7 @@ struct Stroke {
   int cameras = 0;                       // cameras that saw it recently
   std::array<double, 2> surface_size{};  // m, the surface's extent
   std::string source_camera;             // camera whose frame caused the event ("": the clock)
+  std::int64_t publish_ns = 0;           // the estimator wrote it (common clock)
   std::int64_t receive_ns = 0;           // this client received it (its system clock)
 };
 
