@@ -135,7 +135,7 @@ int usage_error(const std::string& reason) {
 // Returns the exit code to leave with, or -1 to go on.
 int parse(int argc, char** argv, Arguments& args) {
   for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
+    std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") return std::printf("%s", kUsage), 0;
     if (i + 1 >= argc) return usage_error(arg + " needs a value");
     const std::string value = argv[++i];
@@ -149,7 +149,7 @@ int parse(int argc, char** argv, Arguments& args) {
     } else if (arg == "--profile") {
       args.options.profile_file = value;
     } else if (!numeric) {
-      return usage_error(arg + " " + value + ": not a number >= 0");
+      return usage_error(arg.append(" ").append(value).append(": not a number >= 0"));
     } else if (arg == "--width" && number >= 16 && number <= 8192) {
       args.width = static_cast<int>(number);
     } else if (arg == "--duration") {
@@ -159,7 +159,8 @@ int parse(int argc, char** argv, Arguments& args) {
     } else if (arg == "--domain" && number <= 232) {
       args.options.domain_id = static_cast<int>(number);
     } else {
-      return usage_error("unknown or out-of-range argument " + arg + " " + value);
+      return usage_error(
+          std::string("unknown or out-of-range argument ").append(arg).append(" ").append(value));
     }
   }
   if (args.out.empty()) return usage_error("--out is required");

@@ -173,7 +173,7 @@ void Client::Impl::dispatch(const Frame& frame) {
   if (callbacks->empty()) return;
   const std::shared_ptr<const CallbackList> current = callbacks;  // a callback may add or remove callbacks
   dispatching_client = this;
-  for (const auto& [handle, callback] : *current) guarded([&] { (*callback)(frame); });
+  for (const auto& entry : *current) guarded([&] { (*entry.second)(frame); });
   dispatching_client = nullptr;
 }
 
@@ -202,7 +202,7 @@ void Client::Impl::on_strokes(const msg::StrokeEvents& message) {
     const std::shared_ptr<const StrokeCallbackList> current = stroke_callbacks;
     dispatching_client = this;
     for (const Stroke& stroke : *converted)
-      for (const auto& [handle, callback] : *current) guarded([&] { (*callback)(stroke); });
+      for (const auto& entry : *current) guarded([&] { (*entry.second)(stroke); });
     dispatching_client = nullptr;
   }
   stroke_ready.notify_one();

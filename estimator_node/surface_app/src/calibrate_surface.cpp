@@ -20,7 +20,7 @@ namespace {
 
 Eigen::Vector2d read_pair(const YamlReader& reader, const std::string& key) {
   const auto values = reader.get_doubles(key, 2);
-  const Eigen::Vector2d v(values[0], values[1]);
+  Eigen::Vector2d v(values[0], values[1]);
   if (!v.allFinite()) reader.fail(key, "must be two finite numbers");
   return v;
 }

@@ -13,7 +13,7 @@ namespace {
 
 Eigen::Vector3d read_vector3(const YamlReader& reader, const std::string& key) {
   const auto values = reader.get_doubles(key, 3);
-  const Eigen::Vector3d v(values[0], values[1], values[2]);
+  Eigen::Vector3d v(values[0], values[1], values[2]);
   if (!v.allFinite()) reader.fail(key, "must be finite numbers");
   return v;
 }
@@ -49,8 +49,9 @@ Eigen::Matrix3d read_homography(const YamlReader& reader) {
     values = reader.get_doubles("homography", 9);
   }
   Eigen::Matrix3d H;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) H(r, c) = values[static_cast<std::size_t>(3 * r + c)];
+  for (std::size_t r = 0; r < 3; ++r)
+    for (std::size_t c = 0; c < 3; ++c)
+      H(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = values[3 * r + c];
   return H;
 }
 
