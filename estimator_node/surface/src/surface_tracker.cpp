@@ -2,6 +2,7 @@
 #include "panoptes/surface/surface_tracker.h"
 
 #include <algorithm>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -95,7 +96,10 @@ struct SurfaceTracker::Spot {
 
 SurfaceTracker::SurfaceTracker(SurfacePlane surface, std::vector<ImageToSurface> cameras,
                                SurfaceTrackerOptions options)
-    : surface_(std::move(surface)), cameras_(std::move(cameras)), options_(options) {}
+    : surface_(std::move(surface)),
+      cameras_(std::move(cameras)),
+      options_(options),
+      camera_stamp_ns_(cameras_.size(), std::numeric_limits<TimeNs>::min() / 2) {}
 SurfaceTracker::~SurfaceTracker() = default;
 SurfaceTracker::SurfaceTracker(SurfaceTracker&&) noexcept = default;
 SurfaceTracker& SurfaceTracker::operator=(SurfaceTracker&&) noexcept = default;
@@ -105,8 +109,15 @@ std::size_t SurfaceTracker::active_strokes() const {
       std::count_if(spots_.begin(), spots_.end(), [](const Spot& spot) { return spot.stroke_id != 0; }));
 }
 
-void SurfaceTracker::end_stale(TimeNs now_ns, std::vector<StrokeEvent>& events) {
-  auto stale = [&](const Spot& spot) { return now_ns - spot.stamp_ns > options_.end_after_ns; };
+void SurfaceTracker::end_stale(TimeNs now_ns, bool by_cameras, std::vector<StrokeEvent>& events) {
+  auto stale = [&](const Spot& spot) {
+    const TimeNs unseen = now_ns - spot.stamp_ns;
+    if (unseen <= options_.end_after_ns) return false;
+    if (!by_cameras || unseen > options_.camera_wait_ns) return true;
+    return std::all_of(spot.last_seen.begin(), spot.last_seen.end(), [&](const auto& seen) {
+      return camera_stamp_ns_[static_cast<std::size_t>(seen.first)] - spot.stamp_ns > options_.end_after_ns;
+    });
+  };
   for (const Spot& spot : spots_) {
     if (!stale(spot)) continue;
     if (spot.stroke_id != 0) {
@@ -131,7 +142,7 @@ void SurfaceTracker::begin_stroke(Spot& spot, std::vector<StrokeEvent>& events) 
 
 std::vector<StrokeEvent> SurfaceTracker::end_silent(TimeNs now_ns) {
   std::vector<StrokeEvent> events;
-  end_stale(now_ns, events);
+  end_stale(now_ns, false, events);
   return events;
 }
 
@@ -149,7 +160,9 @@ std::vector<StrokeEvent> SurfaceTracker::add_frame(int camera, TimeNs stamp_ns,
   started_ = true;
   last_stamp_ns_ = stamp_ns;
   ++counters_.frames;
-  end_stale(stamp_ns, events);
+  // Before the association (so that a new spot cannot join a stroke that has ended), this camera
+  // counts with its previous frame; after it, with this one.
+  end_stale(stamp_ns, true, events);
 
   std::vector<Measurement> measurements;
   const double variance = options_.pixel_sigma * options_.pixel_sigma;
@@ -222,6 +235,8 @@ std::vector<StrokeEvent> SurfaceTracker::add_frame(int camera, TimeNs stamp_ns,
     if (spot.updates >= options_.confirm_updates) begin_stroke(spot, events);
     spots_.push_back(spot);
   }
+  camera_stamp_ns_[static_cast<std::size_t>(camera)] = stamp_ns;
+  end_stale(stamp_ns, true, events);
   return events;
 }
 

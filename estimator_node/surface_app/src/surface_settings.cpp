@@ -57,7 +57,7 @@ Eigen::Matrix3d read_homography(const YamlReader& reader) {
 
 void read_tracker(const YamlReader& reader, surface::SurfaceTrackerOptions& o) {
   reader.expect_only({"pixel_sigma", "jerk_noise", "initial_speed_sigma", "initial_accel_sigma", "gate_chi2",
-                      "confirm_updates", "end_after_ms", "duplicate_distance_m"});
+                      "confirm_updates", "end_after_ms", "camera_wait_ms", "duplicate_distance_m"});
   o.pixel_sigma = positive(reader, "pixel_sigma", o.pixel_sigma);
   o.jerk_noise = positive(reader, "jerk_noise", o.jerk_noise);
   o.initial_speed_sigma = positive(reader, "initial_speed_sigma", o.initial_speed_sigma);
@@ -69,6 +69,10 @@ void read_tracker(const YamlReader& reader, surface::SurfaceTrackerOptions& o) {
   const double end_after_ms = positive(reader, "end_after_ms", static_cast<double>(o.end_after_ns) * 1e-6);
   if (end_after_ms > 10000.0) reader.fail("end_after_ms", "must be at most 10000");
   o.end_after_ns = static_cast<TimeNs>(std::llround(end_after_ms * 1e6));
+  const double camera_wait_ms =
+      positive(reader, "camera_wait_ms", static_cast<double>(o.camera_wait_ns) * 1e-6);
+  if (camera_wait_ms > 60000.0) reader.fail("camera_wait_ms", "must be at most 60000");
+  o.camera_wait_ns = static_cast<TimeNs>(std::llround(camera_wait_ms * 1e6));
   const double duplicate = reader.get_double("duplicate_distance_m", o.duplicate_distance_m);
   if (!(duplicate >= 0.0) || !std::isfinite(duplicate))
     reader.fail("duplicate_distance_m", "must be a finite number >= 0");

@@ -242,5 +242,38 @@ TEST(SurfaceTracker, CountsAndDropsWhatItCannotUse) {
   EXPECT_EQ(tracker.active_strokes(), 0U);
 }
 
+// A camera whose frames arrive late (and are dropped) does not end the strokes only it sees, while
+// the other cameras' frames move on; silence from every camera that saw it does.
+TEST(SurfaceTracker, ADelayedCameraDoesNotEndItsStrokes) {
+  const Scene scene = make_scene(1);
+  std::vector<ImageToSurface> mappings;
+  for (const auto& camera : scene.cameras)
+    mappings.push_back(ImageToSurface::from_plane(camera, scene.plane));
+  SurfaceTracker tracker(scene.plane, mappings);
+  const auto spot_at = [&](double s) {
+    return std::vector<Eigen::Vector2d>{*scene.cameras[0].project(scene.plane.at({s, 0.5}))};
+  };
+  const std::vector<Eigen::Vector2d> none;
+  constexpr TimeNs kMs = 1'000'000;
+  tracker.add_frame(0, 0, spot_at(0.30));
+  ASSERT_EQ(tracker.add_frame(0, 10 * kMs, spot_at(0.31)).front().phase, StrokePhase::kBegin);
+  // Camera 1 (which does not see the spot) goes on for 60 ms; camera 0's frames of that time come
+  // late and are dropped.
+  for (TimeNs t = 13; t <= 73; t += 10) EXPECT_TRUE(tracker.add_frame(1, t * kMs, none).empty()) << t;
+  EXPECT_TRUE(tracker.add_frame(0, 40 * kMs, spot_at(0.34)).empty());
+  EXPECT_EQ(tracker.counters().late_frames, 1U);
+  const auto resumed = tracker.add_frame(0, 80 * kMs, spot_at(0.38));
+  ASSERT_EQ(resumed.size(), 1U);
+  EXPECT_EQ(resumed[0].phase, StrokePhase::kContinue);
+  EXPECT_EQ(resumed[0].stroke_id, 1U);
+  // Pen up: camera 0 sends frames without it; 30 ms after the last update the stroke ends.
+  EXPECT_TRUE(tracker.add_frame(0, 100 * kMs, none).empty());
+  const auto ended = tracker.add_frame(0, 120 * kMs, none);
+  ASSERT_EQ(ended.size(), 1U);
+  EXPECT_EQ(ended[0].phase, StrokePhase::kEnd);
+  EXPECT_EQ(ended[0].stamp_ns, 80 * kMs);
+  EXPECT_EQ(tracker.counters().strokes_begun, 1U);
+}
+
 }  // namespace
 }  // namespace panoptes::surface
