@@ -82,11 +82,16 @@ struct TrackedRun {
   SurfaceCounters counters;
 };
 
-TrackedRun track(const Scene& scene, unsigned noise_seed) {
+// A tracker for the scene's wall, every camera mapped through its calibration.
+SurfaceTracker plane_tracker(const Scene& scene) {
   std::vector<ImageToSurface> mappings;
   for (const auto& camera : scene.cameras)
     mappings.push_back(ImageToSurface::from_plane(camera, scene.plane));
-  SurfaceTracker tracker(scene.plane, mappings);
+  return SurfaceTracker(scene.plane, mappings);
+}
+
+TrackedRun track(const Scene& scene, unsigned noise_seed) {
+  SurfaceTracker tracker = plane_tracker(scene);
   std::mt19937 rng(noise_seed);
   std::normal_distribution<double> noise(0.0, 0.2);
   TrackedRun run;
@@ -204,10 +209,7 @@ TEST(SurfaceTracker, LumiPointSceneStrokesBeginEndAndStayWhole) {
 
 TEST(SurfaceTracker, CountsAndDropsWhatItCannotUse) {
   const Scene scene = make_scene(1);
-  std::vector<ImageToSurface> mappings;
-  for (const auto& camera : scene.cameras)
-    mappings.push_back(ImageToSurface::from_plane(camera, scene.plane));
-  SurfaceTracker tracker(scene.plane, mappings);
+  SurfaceTracker tracker = plane_tracker(scene);
   const auto pixel_of = [&](int camera, const Eigen::Vector2d& st) {
     return *scene.cameras[static_cast<std::size_t>(camera)].project(scene.plane.at(st));
   };
@@ -246,10 +248,7 @@ TEST(SurfaceTracker, CountsAndDropsWhatItCannotUse) {
 // the other cameras' frames move on; silence from every camera that saw it does.
 TEST(SurfaceTracker, ADelayedCameraDoesNotEndItsStrokes) {
   const Scene scene = make_scene(1);
-  std::vector<ImageToSurface> mappings;
-  for (const auto& camera : scene.cameras)
-    mappings.push_back(ImageToSurface::from_plane(camera, scene.plane));
-  SurfaceTracker tracker(scene.plane, mappings);
+  SurfaceTracker tracker = plane_tracker(scene);
   const auto spot_at = [&](double s) {
     return std::vector<Eigen::Vector2d>{*scene.cameras[0].project(scene.plane.at({s, 0.5}))};
   };
