@@ -37,8 +37,10 @@ expect_stderr_contains "behind.yaml: surface.plane" "the error names the file an
 expect_stderr_contains "behind" "and says the plane is behind the camera"
 
 # --- offline: the same features, deterministic ----------------------------------------------------
-expect_exit 0 "offline surface mode" -- "$bin/estimator_node" --surface "$surface" --calibration "$cal" --no-dds \
-  --in-features "$work"/sim/w*.jsonl --out-strokes "$work/offline.jsonl"
+# (the `surface:` section inside the estimator's --config file, beside its other settings)
+{ printf 'node: {status_period_s: 1}\n'; cat "$surface"; } >"$work/config.yaml"
+expect_exit 0 "offline surface mode (surface: in --config)" -- "$bin/estimator_node" --config "$work/config.yaml" \
+  --calibration "$cal" --no-dds --in-features "$work"/sim/w*.jsonl --out-strokes "$work/offline.jsonl"
 
 # --- calibrate surface: homographies from known points (their pixels projected through the
 # simulator's calibration), then the offline run on those homographies alone (no --calibration) --
