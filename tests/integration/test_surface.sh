@@ -14,7 +14,7 @@ surface="$source_dir/deploy/scenes/surface_wall_surface.yaml"
 # The live run's settings (benchmark aid: another latency_window_ms, docs/benchmarks.md "Issue 22").
 live_surface="${PANOPTES_SURFACE_LIVE_SETTINGS:-$surface}"
 export PANOPTES_DOMAIN="${PANOPTES_DOMAIN:-0}"
-for tool in lumipoint_board estimator_node camera_node panoptes_sim; do
+for tool in lumipoint_board estimator_node camera_node panoptes_sim panoptes_track_probe; do
   [ -x "$bin/$tool" ] || { fail "$bin/$tool is not built"; finish; }
 done
 
@@ -41,6 +41,7 @@ expect_stderr_contains "behind" "and says the plane is behind the camera"
 { printf 'node: {status_period_s: 1}\n'; cat "$surface"; } >"$work/config.yaml"
 expect_exit 0 "offline surface mode (surface: in --config)" -- "$bin/estimator_node" --config "$work/config.yaml" \
   --calibration "$cal" --no-dds --in-features "$work"/sim/w*.jsonl --out-strokes "$work/offline.jsonl"
+expect_stderr_matches "surface_off_surface [1-9][0-9]+" "the spot below the wall is counted off the surface"
 
 # --- calibrate surface: homographies from known points (their pixels projected through the
 # simulator's calibration), then the offline run on those homographies alone (no --calibration) --
@@ -96,6 +97,8 @@ PYTHON
   python_reader=$!
   pids+=("$python_reader")
 fi
+"$bin/panoptes_track_probe" --status --out "$work/status.jsonl" --duration 16 >"$work/probe.log" 2>&1 &
+pids+=("$!")
 "$bin/estimator_node" --surface "$live_surface" --calibration "$cal" --duration 14 --status-period 1 \
   --out-strokes "$work/live.jsonl" >"$work/estimator.log" 2>&1 &
 estimator=$!
@@ -124,6 +127,15 @@ print(c['begin'], c['continue'], c['end'])")"
     { fail "Python reader: '$(cat "$work/python.txt" 2>/dev/null)', expected '$expected'"; cat "$work/python.log"; }
 fi
 grep "surface mode:" "$work/estimator.log"
+python3 - "$work/status.jsonl" <<'PYTHON' || failures=$((failures + 1))
+import json, sys
+status = [json.loads(l) for l in open(sys.argv[1]) if '"status"' in l]
+last = status[-1]["counters"] if status else {}
+ok = last.get("surface_strokes_begun") == 10 and last.get("surface_off_surface", 0) > 100 and last.get("surface_frames", 0) >= 1700
+print(("PASS: " if ok else "FAIL: ") + "estimator_status counts the strokes and the spots off the surface: " +
+      ", ".join(f"{k} {v}" for k, v in sorted(last.items()) if k.startswith("surface_")))
+sys.exit(0 if ok else 1)
+PYTHON
 
 python3 "$source_dir/tests/integration/surface_check.py" "$work" "$scene" "$epoch"
 [ $? -eq 0 ] || failures=$((failures + 1))
