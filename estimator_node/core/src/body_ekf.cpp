@@ -139,8 +139,8 @@ MarkerProjection pose_measurement(const BodyState& state, const MarkerPixel& pro
 }
 
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
-            double measurement_sigma_px) {
-  inject(state, state.P.update(projection, measurement, measurement_sigma_px));
+            double /*measurement_sigma_px: already in the projection's S*/) {
+  inject(state, state.P.update(projection, measurement));
 }
 
 void inject(BodyState& state, const BodyVector& dx) {

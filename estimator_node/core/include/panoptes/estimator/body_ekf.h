@@ -98,7 +98,8 @@ MarkerProjection pose_measurement(const BodyState& state, const MarkerPixel& pro
                                   double measurement_sigma_px);
 
 // EKF update with one marker measurement through the filter layer (ekf.h), which returns the error
-// state δx; it is injected into the nominal state and δθ reset into q (eq. A.41).
+// state δx; it is injected into the nominal state and δθ reset into q (eq. A.41). `projection`
+// must have been made from this state (its H P and S, with the noise σ, are reused).
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px);
 
