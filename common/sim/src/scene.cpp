@@ -4,10 +4,13 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <set>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include <yaml-cpp/yaml.h>
 
@@ -48,6 +51,15 @@ struct MarkerSpec {
   std::string name;
   double radius = kDefaultMarkerRadius;
   sim::Path path;
+  // `pen_down`: [start, end] intervals (s) in which the marker exists (a laser spot that is on);
+  // empty: always.
+  std::vector<std::pair<double, double>> pen_down;
+
+  bool exists_at(double t_s) const {
+    if (pen_down.empty()) return true;
+    return std::any_of(pen_down.begin(), pen_down.end(),
+                       [&](const auto& interval) { return t_s >= interval.first && t_s < interval.second; });
+  }
 };
 
 struct BodySpec {
@@ -500,7 +512,7 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
   const std::vector<YamlReader> markers = root.sequence_or_empty("markers");
   for (std::size_t i = 0; i < markers.size(); ++i) {
     const YamlReader& marker = markers[i];
-    reject_unknown_keys(marker, {"name", "radius", "path"});
+    reject_unknown_keys(marker, {"name", "radius", "path", "pen_down"});
     MarkerSpec spec;
     // Appending rather than "m" + to_string(i) sidesteps a GCC 12 -Wrestrict false positive.
     std::string default_name = "m";
@@ -509,6 +521,15 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
     if (spec.name.empty()) marker.fail("name", "must not be empty");
     spec.radius = read_marker_radius(marker, "radius");
     spec.path = sim::read_path(marker.child("path"));
+    if (marker.has("pen_down")) {
+      double previous_end = -std::numeric_limits<double>::infinity();
+      for (const auto& interval : marker.get_double_rows("pen_down", 2)) {
+        if (!(interval[0] < interval[1]) || !(interval[0] >= previous_end) || !std::isfinite(interval[1]))
+          marker.fail("pen_down", "intervals [start, end] must be finite, start < end, in increasing order");
+        spec.pen_down.emplace_back(interval[0], interval[1]);
+        previous_end = interval[1];
+      }
+    }
     add_name(marker, "name", spec.name, spec.radius);
     scene.markers.push_back(std::move(spec));
   }
@@ -633,7 +654,10 @@ std::vector<MarkerTruth> Scene::markers_at(TimeNs scene_time_ns) const {
   std::vector<MarkerTruth> out(impl_->marker_names.size());
   for (std::size_t i = 0; i < out.size(); ++i) out[i].name = impl_->marker_names[i];
   std::size_t index = 0;
-  for (const MarkerSpec& marker : impl_->markers) out[index++].p = sim::evaluate(marker.path, t_s);
+  for (const MarkerSpec& marker : impl_->markers) {
+    out[index].valid = marker.exists_at(t_s);
+    out[index++].p = sim::evaluate(marker.path, t_s);
+  }
   if (impl_->trc) {
     sample_trc(*impl_->trc, t_s, out, index);
     index += impl_->trc->columns.size();

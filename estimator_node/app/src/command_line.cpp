@@ -105,6 +105,11 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
                "live, benchmark aid: echo camera_node --latency-probe probes at once and trace when each "
                "frame's output is written (rt/panoptes/latency_probe/..., bench_latency)");
   app.add_flag("--quiet", c.quiet, "no progress output");
+  app.add_option(
+      "--surface", c.surface_file,
+      "surface mode (LumiPoint, docs/surface.md): a YAML whose `surface:` section defines the wall; "
+      "strokes on rt/panoptes/strokes instead of 3D tracks (a `surface:` section in --config does the same)");
+  app.add_option("--out-strokes", c.out_strokes, "surface mode: write every stroke event as Stroke JSONL");
 }
 
 void validate(const NodeCommandLine& c) {
@@ -117,7 +122,7 @@ void validate(const NodeCommandLine& c) {
     throw CLI::ValidationError(
         "--in-features runs offline: add --no-dds (replaying onto DDS is camera_node's job)");
   }
-  if ((c.no_dds || !c.in_recording.empty()) && c.calibration_file.empty())
+  if ((c.no_dds || !c.in_recording.empty()) && c.calibration_file.empty() && c.surface_file.empty())
     throw CLI::ValidationError("offline mode needs --calibration");
   if (!c.out_poses.empty() && c.bodies_file.empty() && c.landmarks_file.empty())
     throw CLI::ValidationError("--out-poses needs --bodies or --landmarks");
