@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <map>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <set>
