@@ -18,6 +18,7 @@
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/jsonl.h"
+#include "panoptes/landmarks_file.h"
 #include "panoptes/pgm.h"
 #include "panoptes/records.h"
 #include "panoptes/simulator.h"
@@ -103,6 +104,8 @@ int run_features(const Options& options) {
   fs::create_directories(dir);
   save_calibration(scene.calibration(), dir / "calibration.yaml");
   if (!scene.body_definitions().empty()) save_bodies(scene.body_definitions(), dir / "bodies.yaml");
+  if (!scene.landmarks().empty())
+    save_landmarks(scene.landmarks(), dir / "landmarks.yaml", scene.rig_markers());
 
   for (const SimCameraConfig& config : scene.cameras()) {
     const CameraSimulator camera(scene, config.calibration.id);
@@ -192,8 +195,9 @@ int run(int argc, char** argv) {
   calibration->add_option("--scene", options.scene, "Scene file (YAML)")->required();
   calibration->add_option("--out", options.out, "Calibration file to write (YAML)")->required();
 
-  CLI::App* features = app.add_subcommand(
-      "features", "Write ideal features per camera (<id>.jsonl), calibration.yaml, truth.jsonl, bodies.yaml");
+  CLI::App* features = app.add_subcommand("features",
+                                          "Write ideal features per camera (<id>.jsonl), calibration.yaml, "
+                                          "truth.jsonl, bodies.yaml, landmarks.yaml");
   features->add_option("--scene", options.scene, "Scene file (YAML)")->required();
   features->add_option("--out-dir", options.out_dir, "Output directory (created if missing)")->required();
   features->add_option("--epoch-ns", options.epoch_ns, "Absolute stamp of scene time 0 (ns)");

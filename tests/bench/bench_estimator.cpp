@@ -11,6 +11,7 @@
 // The chain case (issue 21) times one camera frame's update of a 4-marker finger chain
 // (ChainFilter::process: predict, gate, 4 sequential updates) side by side with a rigid body of the same 4
 // markers through the body EKF (body_ekf.h, same gating and updates), on the same frames.
+//                   [--inside-out-seconds <s>]
 // With --json the last line of output is one JSON object (docs/benchmarks.md).
 #include <algorithm>
 #include <chrono>
@@ -27,6 +28,7 @@
 #include <CLI/CLI.hpp>
 
 #include "chain_fixtures.h"
+#include "inside_out_case.h"
 #include "panoptes/cli.h"
 #include "panoptes/estimator/body_ekf.h"
 #include "panoptes/estimator/chain.h"
@@ -242,6 +244,34 @@ std::string chain_case_json(const ChainCost& cost) {
   return buffer;
 }
 
+// The inside-out case (inside_out_case.h), printed; returns its JSON.
+std::string print_inside_out_case(double seconds, std::uint64_t seed) {
+  const auto r = panoptes::bench::run_inside_out_case(
+      std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/inside_out.yaml", 0.5, seconds, seed);
+  std::printf(
+      "inside-out: head camera, %d landmarks, %.1f blobs per frame, %zu frames timed: %.2f us per frame "
+      "(p50 %.1f, p99 %.1f us; cold start %.1f ms)\n"
+      "  a %d-marker rigid body from the same pixels (plus a second camera): Tracker::process %.2f us per "
+      "frame "
+      "(p50 %.1f, p99 %.1f us), %.2f us without the body: the body costs %.2f us per frame; posed after "
+      "%zu/%zu frames, %llu (re-)identifications while timed\n",
+      r.landmarks, r.blobs_per_frame, r.frames, r.inside_out_us, r.inside_out_p50_us, r.inside_out_p99_us,
+      r.cold_start_ms, r.landmarks, r.tracker_us, r.tracker_p50_us, r.tracker_p99_us, r.points_only_us,
+      r.tracker_us - r.points_only_us, r.body_frames, r.frames,
+      static_cast<unsigned long long>(r.body_identifications));
+  char buffer[640];
+  std::snprintf(
+      buffer, sizeof buffer,
+      "{\"landmarks\": %d, \"frames\": %zu, \"blobs_per_frame\": %.2f, \"us_per_frame\": %.3f, "
+      "\"p50_us\": %.2f, \"p99_us\": %.2f, \"cold_start_ms\": %.2f, \"body_tracker_us_per_frame\": %.3f, "
+      "\"body_tracker_p50_us\": %.2f, \"body_tracker_p99_us\": %.2f, \"points_only_us_per_frame\": %.3f, "
+      "\"body_frames\": %zu, \"body_identifications\": %llu}",
+      r.landmarks, r.frames, r.blobs_per_frame, r.inside_out_us, r.inside_out_p50_us, r.inside_out_p99_us,
+      r.cold_start_ms, r.tracker_us, r.tracker_p50_us, r.tracker_p99_us, r.points_only_us, r.body_frames,
+      static_cast<unsigned long long>(r.body_identifications));
+  return buffer;
+}
+
 int run_command_line(int argc, char** argv) {
   RingConfig config;
   bool json = false;
@@ -270,6 +300,11 @@ int run_command_line(int argc, char** argv) {
   int chain_frames = 12000;
   app.add_option("--chain-frames", chain_frames, "camera frames of the chain case; 0: no chain case")
       ->check(CLI::Range(0, 10000000));
+  double inside_out_seconds = 5.0;
+  app.add_option(
+         "--inside-out-seconds", inside_out_seconds,
+         "simulated seconds of the inside-out case (deploy/scenes/inside_out.yaml); 0: no inside-out case")
+      ->check(CLI::Range(0.0, 20.0));
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   if (no_sweep) sweep.clear();
 
@@ -333,6 +368,8 @@ int run_command_line(int argc, char** argv) {
         cost.body_updates);
     chain_json = chain_case_json(cost);
   }
+  const std::string inside_out_json =
+      inside_out_seconds > 0 ? print_inside_out_case(inside_out_seconds, seed) : "null";
   if (json) {
     std::string sweep_json;
     for (const Result& r : scaling) sweep_json += (sweep_json.empty() ? "" : ", ") + to_json(r);
@@ -341,9 +378,9 @@ int run_command_line(int argc, char** argv) {
     std::printf(
         "{\"cameras\": %d, \"rate_hz\": %.1f, \"warmup_s\": %.3f, \"seconds\": %.3f, \"main\": %s, "
         "\"scaling\": [%s], \"us_per_observation_ratio_last_to_first\": %.4f, \"bodies\": %s, \"chain\": "
-        "%s}\n",
+        "%s, \"inside_out\": %s}\n",
         config.cameras, config.rate_hz, config.warmup_s, config.seconds, to_json(main_case).c_str(),
-        sweep_json.c_str(), flatness, bodies_json.c_str(), chain_json.c_str());
+        sweep_json.c_str(), flatness, bodies_json.c_str(), chain_json.c_str(), inside_out_json.c_str());
   }
   return 0;
 }

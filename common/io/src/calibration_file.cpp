@@ -73,6 +73,10 @@ CameraCalibration read_camera(const YamlReader& reader) {
   }
   if (reader.has("T_world_cam")) camera.T_world_cam = read_transform(reader.child("T_world_cam"));
   camera.nominal_intrinsics = reader.get_bool("nominal", false);
+  camera.moving = reader.get_bool("moving", false);
+  camera.rig = reader.get_string("rig", "");
+  if (!camera.rig.empty() && !camera.moving)
+    reader.fail("rig", "names the rig of a moving camera: add moving: true");
   return camera;
 }
 
@@ -131,6 +135,8 @@ std::string calibration_to_yaml(const SystemCalibration& calibration) {
     const auto& d = in.distortion;
     emit_numbers(out, {d[0], d[1], d[2], d[3], d[4]});
     if (camera.nominal_intrinsics) out << YAML::Key << "nominal" << YAML::Value << true;
+    if (camera.moving) out << YAML::Key << "moving" << YAML::Value << true;
+    if (!camera.rig.empty()) out << YAML::Key << "rig" << YAML::Value << YAML::DoubleQuoted << camera.rig;
     if (camera.T_world_cam) {
       const RigidTransform& T = *camera.T_world_cam;
       out << YAML::Key << "T_world_cam" << YAML::Value << YAML::BeginMap;

@@ -58,7 +58,8 @@ ChainStage::ChainStage(std::vector<ChainDefinition> chains, const SystemCalibrat
                        const std::string& out_path, const est::ChainTrackerOptions& options)
     : names_(names_of(chains)), tracker_(std::move(chains), options) {
   for (const auto& camera : calibration.cameras) {
-    if (camera.T_world_cam) cameras_.emplace(camera.id, camera.model());
+    // A moving camera's T_world_cam is its mount on a rig (docs/inside_out.md): not a fixed view.
+    if (camera.T_world_cam && !camera.moving) cameras_.emplace(camera.id, camera.model());
   }
   if (!out_path.empty()) out_.emplace(out_path);
   for (const auto& name : names_) counts_[name];

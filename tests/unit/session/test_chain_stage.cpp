@@ -53,7 +53,9 @@ TEST(ChainStage, HandSceneThroughTheOfflineSession) {
       continue;
     }
     ++records;
-    if (records == 1) EXPECT_EQ(record["status"], "not_identified") << "no confirmed tracks yet";
+    if (records == 1) {
+      EXPECT_EQ(record["status"], "not_identified") << "no confirmed tracks yet";
+    }
     if (record["status"] != "tracking") {
       EXPECT_FALSE(record.contains("tip")) << line;
       continue;
