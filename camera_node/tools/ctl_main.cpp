@@ -60,7 +60,8 @@ panoptes::dds::Bus open_bus(const Options& options, const std::string& name) {
 
 std::unique_ptr<panoptes::dds::Writer<msg::CameraCommand>> command_writer(panoptes::dds::Bus& bus,
                                                                           const Options& options) {
-  auto writer = bus.make_writer<msg::CameraCommand>();
+  // In the target's DDS partition: only that camera (or with '*', every camera) receives it.
+  auto writer = bus.make_writer<msg::CameraCommand>(panoptes::dds::Qos::kDefault, {}, options.target);
   // Reliable, volatile: a command only reaches readers already matched, so wait for them.
   if (!writer->wait_for_readers(1, std::chrono::milliseconds(static_cast<long>(options.timeout_s * 1000)))) {
     std::fprintf(stderr, "panoptes_ctl: no camera node is listening for commands (waited %.0f s)\n",
@@ -259,7 +260,7 @@ int get_preview(Options options) {
 // predictions when testing the guided search.
 int publish_predictions(const Options& options) {
   auto bus = open_bus(options, "predict");
-  auto writer = bus.make_writer<msg::Predictions>();
+  auto writer = bus.make_writer<msg::Predictions>(panoptes::dds::Qos::kDefault, {}, options.camera);
   msg::PredictedWindow window;
   window.track_id(0);
   window.x(static_cast<float>(options.window[0]));

@@ -76,10 +76,13 @@ int run(int argc, char** argv) {
           cameras[c.camera_id()] = {
               {"frames", c.frames()}, {"used", c.used()}, {"utilisation", c.utilisation()}};
         }
+        nlohmann::json counters = nlohmann::json::object();
+        for (const auto& counter : message.counters()) counters[counter.name()] = counter.value();
         const nlohmann::json line = {{"type", "status"},
                                      {"recv_ns", panoptes::wall_now_ns()},
                                      {"frames", message.frames()},
-                                     {"cameras", cameras}};
+                                     {"cameras", cameras},
+                                     {"counters", counters}};
         std::lock_guard lock(mutex);
         out << line.dump() << '\n';
       });
