@@ -178,8 +178,9 @@ netns_exec "$intruder_host" "$bin/camera_node" --source "sim:$scene#cam1" --came
     pass "cam1's certificate cannot publish as cam0 (camera_node refused: not granted)" ||
     { fail "camera_node as cam0 with cam1's certificate"; tail -n 3 "$work/cam1_as_cam0.log"; }; }
 # ... and a tampered program that writes as cam0 and as cam9 from cam1's own partition.
-netns_spawn "$intruder_host" "$bin/panoptes_feature_flood" $(secure_args "$studio" cam1) --partition cam1 \
-  --camera-ids cam0,cam9 --tracks 0 --rate 100 --duration 6 >"$work/impostor.log" 2>&1 &
+netns_spawn "$intruder_host" env PANOPTES_SECURITY_DIR="$studio" PANOPTES_SECURITY_IDENTITY=cam1 \
+  "$bin/panoptes_feature_flood" --dds-profile "$secure" --partition cam1 --camera-ids cam0,cam9 --tracks 0 \
+  --rate 100 --duration 6 >"$work/impostor.log" 2>&1 &
 pids+=("$!")
 netns_spawn "$intruder_host" env PANOPTES_SECURITY_DIR="$forged" PANOPTES_SECURITY_IDENTITY=mallory \
   "$bin/panoptes_feature_flood" --dds-profile "$secure" --cameras 8 --rate 50 --duration 5 \
