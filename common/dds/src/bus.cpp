@@ -202,7 +202,7 @@ bool scope_allows(const std::vector<std::string>& partitions, std::string_view i
 
 // The id a sample is addressed to or comes from: its leading camera or client id, or a command's target.
 template <class T>
-std::optional<std::string> addressed_id(const T& sample) {
+std::optional<std::string_view> addressed_id(const T& sample) {
   if constexpr (requires { sample.camera_id(); }) {
     return sample.camera_id();
   } else if constexpr (requires { sample.client_id(); }) {
@@ -250,13 +250,19 @@ class WriterPartitions : public fdds::DomainParticipantListener {
     std::lock_guard<std::mutex> lock(mutex_);
     partitions_.erase(key);
   }
-  // nullopt for a writer never discovered.
-  std::optional<bool> allows(const eprosima::fastrtps::rtps::InstanceHandle_t& writer,
-                             std::string_view id) const {
+  // Whether `writer` may write a sample addressed to `id` (none: any); what it may not is counted.
+  bool admits(const eprosima::fastrtps::rtps::InstanceHandle_t& writer, std::optional<std::string_view> id,
+              ReceiveCounters& counters) const {
+    if (!id) return true;
     std::lock_guard<std::mutex> lock(mutex_);
     const auto it = partitions_.find(writer_key(writer));
-    if (it == partitions_.end()) return std::nullopt;
-    return scope_allows(it->second, id);
+    if (it == partitions_.end()) {
+      counters.note("unknown_writer");  // discovery reports every writer before it matches
+      return false;
+    }
+    if (scope_allows(it->second, *id)) return true;
+    counters.note("id_outside_partition");
+    return false;
   }
 
  private:
@@ -276,17 +282,19 @@ constexpr const char* kIdFilterExpression = "leading_id = %0";
 
 // The first string of a sample: 4 bytes of encapsulation (its second byte's low bit: little
 // endian), a 4-byte length counting the terminating NUL, the characters.
-std::optional<std::string_view> leading_string(const eprosima::fastrtps::rtps::SerializedPayload_t& payload) {
-  if (payload.data == nullptr || payload.length < 8) return std::nullopt;
-  const unsigned char* d = payload.data;
+std::optional<std::string_view> leading_string(const unsigned char* d, std::size_t length) {
+  if (d == nullptr || length < 8) return std::nullopt;
   const bool little_endian = (d[1] & 1) != 0;
   std::uint32_t n = 0;
   for (int i = 0; i < 4; ++i) {
     const std::uint32_t byte = d[4 + (little_endian ? i : 3 - i)];
     n |= byte << (8 * i);
   }
-  if (n == 0 || n > payload.length - 8) return std::nullopt;
+  if (n == 0 || n > length - 8) return std::nullopt;
   return std::string_view(reinterpret_cast<const char*>(d + 8), n - 1);
+}
+std::optional<std::string_view> leading_string(const eprosima::fastrtps::rtps::SerializedPayload_t& payload) {
+  return leading_string(payload.data, payload.length);
 }
 
 class LeadingIdFilter final : public fdds::IContentFilter {
@@ -680,7 +688,9 @@ class ReaderListener : public fdds::DataReaderListener {
       const bool decoded = !t_last_decode_failed;
       t_last_decode_failed = false;
       if (!info.valid_data || !decoded) continue;  // a failed decode is counted by its type
-      if (!from_its_partition(sample, info)) continue;
+      if (partitions_ != nullptr &&
+          !partitions_->admits(info.publication_handle, addressed_id(sample), counters_))
+        continue;
       received.fetch_add(1);
       // Runs on a Fast DDS thread: whatever a sample makes the handler throw is counted, not fatal.
       try {
@@ -704,21 +714,6 @@ class ReaderListener : public fdds::DataReaderListener {
   std::atomic<std::uint64_t> received{0};
 
  private:
-  // False (and counted) for a sample whose id is not its writer's partition: a camera writing as
-  // another one, which its permissions let into its own partition only.
-  bool from_its_partition(const T& sample, const fdds::SampleInfo& info) {
-    if (partitions_ == nullptr) return true;
-    const std::optional<std::string> id = addressed_id(sample);
-    if (!id) return true;
-    const std::optional<bool> allowed = partitions_->allows(info.publication_handle, *id);
-    if (!allowed.has_value()) {
-      counters_.note("unknown_writer");  // discovery reports every writer before it matches
-      return false;
-    }
-    if (!*allowed) counters_.note("id_outside_partition");
-    return *allowed;
-  }
-
   typename Reader<T>::Callback callback_;
   ReceiveCounters& counters_;
   const WriterPartitions* partitions_;
@@ -997,7 +992,10 @@ const RawTopicEntry& raw_entry_named(const std::string& topic) {
 
 class RawReaderListener : public fdds::DataReaderListener {
  public:
-  explicit RawReaderListener(RawReader::Callback callback) : callback_(std::move(callback)) {}
+  // `partitions`, on a camera-scoped topic: as ReaderListener, the leading id read from the CDR.
+  RawReaderListener(RawReader::Callback callback, ReceiveCounters& counters,
+                    const WriterPartitions* partitions)
+      : callback_(std::move(callback)), counters_(counters), partitions_(partitions) {}
   void on_data_available(fdds::DataReader* reader) override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!active_) return;
@@ -1005,6 +1003,11 @@ class RawReaderListener : public fdds::DataReaderListener {
     fdds::SampleInfo info;
     while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
       if (!info.valid_data) continue;
+      // A sample that does not decode has no id: it is recorded as it came (docs/hostile_input.md).
+      if (partitions_ != nullptr &&
+          !partitions_->admits(info.publication_handle, leading_string(sample.cdr.data(), sample.cdr.size()),
+                               counters_))
+        continue;
       received.fetch_add(1);
       sample.source_timestamp_ns = info.source_timestamp.to_ns();
       callback_(std::move(sample));
@@ -1023,6 +1026,8 @@ class RawReaderListener : public fdds::DataReaderListener {
 
  private:
   RawReader::Callback callback_;
+  ReceiveCounters& counters_;
+  const WriterPartitions* partitions_;
   std::mutex mutex_;
   bool active_ = true;
 };
@@ -1093,7 +1098,9 @@ std::unique_ptr<RawReader> Bus::make_raw_reader(const std::string& topic, RawRea
   const RawTopicEntry& entry = raw_entry_named(topic);
   auto impl = std::make_unique<RawReader::Impl>();
   impl->core = core_;
-  impl->listener = std::make_unique<RawReaderListener>(std::move(on_sample));
+  impl->listener =
+      std::make_unique<RawReaderListener>(std::move(on_sample), core_->receive_counters(),
+                                          entry.spec.camera_scoped ? &core_->writer_partitions() : nullptr);
   fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
   const bool offered = entry.spec.reliable || entry.spec.offer_reliable;
   apply_spec(reader_qos, entry.spec, offered ? Qos::kReliable : Qos::kDefault);

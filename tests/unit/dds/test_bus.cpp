@@ -110,8 +110,10 @@ TEST(Bus, UnfilteredReaderStillGetsEverything) {
 TEST(Bus, CameraScopedWritersReachTheirCameraAndDropSamplesNamingAnother) {
   Bus cam0(options("cam0")), cam1(options("cam1")), estimator(options("estimator")),
       operators(options("ops"));
+  Bus recorder(options("recorder"));  // raw and typed readers of one topic need two participants
   std::atomic<int> commands_cam0{0};
   auto features = estimator.make_reader<msg::FeatureFrame>([](msg::FeatureFrame&&) {});
+  auto recorded = recorder.make_raw_reader("rt/panoptes/features", [](RawSample&&) {});
   auto cam0_commands = cam0.make_reader<msg::CameraCommand>(
       [&](msg::CameraCommand&&) { commands_cam0.fetch_add(1); }, Qos::kDefault, "cam0");
   auto cam0_predictions =
@@ -120,7 +122,7 @@ TEST(Bus, CameraScopedWritersReachTheirCameraAndDropSamplesNamingAnother) {
   auto cam1_predictions = estimator.make_writer<msg::Predictions>(Qos::kDefault, {}, "cam1");
   auto cam1_commands = operators.make_writer<msg::CameraCommand>(Qos::kDefault, {}, "cam1");
   auto every_camera_commands = operators.make_writer<msg::CameraCommand>();
-  ASSERT_TRUE(cam1_features->wait_for_readers(1, 5s));
+  ASSERT_TRUE(cam1_features->wait_for_readers(2, 5s));
   ASSERT_TRUE(every_camera_commands->wait_for_readers(1, 5s));
   ASSERT_TRUE(wait_until([&] { return features->matched_writers() == 1; }));
   std::this_thread::sleep_for(300ms);  // the writers for cam1 would have matched cam0's readers by now
@@ -141,11 +143,13 @@ TEST(Bus, CameraScopedWritersReachTheirCameraAndDropSamplesNamingAnother) {
     std::this_thread::sleep_for(2ms);
   }
   // Features are offered reliably but read best effort: allow a loss.
-  EXPECT_TRUE(wait_until([&] { return features->received() >= 4; }));
+  EXPECT_TRUE(wait_until([&] { return features->received() >= 4 && recorded->received() == 5; }));
   EXPECT_TRUE(wait_until([&] { return estimator.receive_rejections()["id_outside_partition"] >= 4; }));
+  EXPECT_TRUE(wait_until([&] { return recorder.receive_rejections()["id_outside_partition"] == 5; }));
   EXPECT_TRUE(wait_until([&] { return commands_cam0.load() == 1; }));
   std::this_thread::sleep_for(100ms);
   EXPECT_LE(features->received(), 5u);
+  EXPECT_EQ(recorded->received(), 5u);  // a recorder records cam1's own frames only
   EXPECT_EQ(estimator.receive_rejections().count("unknown_writer"), 0u);
 }
 
