@@ -114,6 +114,7 @@ int run(int argc, char** argv) {
   bus_options.participant_name = "panoptes_console";
   panoptes::dds::Bus bus(bus_options);
   panoptes::console::BusBridge bridge(bus, state);
+  options.bus_rejections = [&bus] { return bus.receive_rejections(); };
   panoptes::console::CalibrationWorkflow workflow(calibration, state);
   std::unique_ptr<panoptes::console::ConsoleServer> server;
   try {
