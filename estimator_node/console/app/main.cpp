@@ -136,10 +136,11 @@ int run(int argc, char** argv) {
   std::fflush(stdout);
   if (!url_file.empty()) std::ofstream(url_file) << url << "\n";
 
-  std::thread watcher([&server, &workflow] {
+  std::thread watcher([&server, &workflow, &bridge] {
     for (int tick = 0; !panoptes::stop_requested(); ++tick) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
       if (tick % 4 == 0) workflow.poll();
+      if (tick % 4 == 2) bridge.poll();
     }
     server->stop();
   });
