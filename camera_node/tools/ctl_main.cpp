@@ -202,6 +202,10 @@ int show_status(const Options& options) {
   while (printed.load() < options.count && Clock::now() < deadline && !panoptes::stop_requested()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+  // Samples the bus dropped (docs/hostile_input.md): malformed, or naming another camera than their writer.
+  for (const auto& [reason, count] : bus.receive_rejections())
+    std::fprintf(stderr, "panoptes_ctl: dropped %llu status messages (%s)\n",
+                 static_cast<unsigned long long>(count), reason.c_str());
   if (printed.load() < options.count) {
     std::fprintf(stderr, "panoptes_ctl: received %d of %d status messages within %.0f s\n", printed.load(),
                  options.count, options.timeout_s);
