@@ -18,8 +18,11 @@
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/jsonl.h"
+#include "panoptes/pgm.h"
+#include "panoptes/landmarks_file.h"
 #include "panoptes/records.h"
 #include "panoptes/simulator.h"
+#include "sim_ptz.h"
 
 namespace fs = std::filesystem;
 using namespace panoptes;
@@ -28,28 +31,6 @@ namespace {
 
 constexpr TimeNs kDefaultEpochNs = 1'700'000'000'000'000'000;
 constexpr TimeNs kTruthStepNs = 10 * kNsPerMillisecond;
-
-// Binary PGM (P5); 16-bit samples are big-endian as the format requires.
-void write_pgm(const Image& image, const fs::path& path) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
-  out << "P5\n" << image.width << ' ' << image.height << '\n' << image.max_value() << '\n';
-  if (image.bytes_per_pixel() == 1) {
-    out.write(reinterpret_cast<const char*>(image.data.data()),
-              static_cast<std::streamsize>(image.data.size()));
-  } else {
-    std::vector<char> row(image.stride());
-    for (int y = 0; y < image.height; ++y) {
-      const std::uint16_t* pixels = image.row16(y);
-      for (std::size_t x = 0; x < static_cast<std::size_t>(image.width); ++x) {
-        row[2 * x] = static_cast<char>(pixels[x] >> 8);
-        row[2 * x + 1] = static_cast<char>(pixels[x] & 0xFF);
-      }
-      out.write(row.data(), static_cast<std::streamsize>(row.size()));
-    }
-  }
-  if (!out) throw std::runtime_error(path.string() + ": write failed");
-}
 
 // JsonlWriter appends; a rerun into the same directory must replace, not extend, old output.
 JsonlWriter fresh_jsonl(const fs::path& path) {
@@ -111,6 +92,8 @@ int run_features(const Options& options) {
   fs::create_directories(dir);
   save_calibration(scene.calibration(), dir / "calibration.yaml");
   if (!scene.body_definitions().empty()) save_bodies(scene.body_definitions(), dir / "bodies.yaml");
+  if (!scene.landmarks().empty())
+    save_landmarks(scene.landmarks(), dir / "landmarks.yaml", scene.rig_markers());
 
   for (const SimCameraConfig& config : scene.cameras()) {
     const CameraSimulator camera(scene, config.calibration.id);
@@ -200,8 +183,9 @@ int run(int argc, char** argv) {
   calibration->add_option("--scene", options.scene, "Scene file (YAML)")->required();
   calibration->add_option("--out", options.out, "Calibration file to write (YAML)")->required();
 
-  CLI::App* features = app.add_subcommand(
-      "features", "Write ideal features per camera (<id>.jsonl), calibration.yaml, truth.jsonl, bodies.yaml");
+  CLI::App* features = app.add_subcommand("features",
+                                          "Write ideal features per camera (<id>.jsonl), calibration.yaml, "
+                                          "truth.jsonl, bodies.yaml, landmarks.yaml");
   features->add_option("--scene", options.scene, "Scene file (YAML)")->required();
   features->add_option("--out-dir", options.out_dir, "Output directory (created if missing)")->required();
   features->add_option("--epoch-ns", options.epoch_ns, "Absolute stamp of scene time 0 (ns)");
@@ -218,6 +202,9 @@ int run(int argc, char** argv) {
   render->add_option("--out-dir", options.out_dir, "Output directory (created if missing)")->required();
   render->add_option("--epoch-ns", options.epoch_ns, "Absolute stamp of scene time 0 (ns)");
 
+  sim_tool::PtzRunOptions ptz_options;
+  CLI::App* ptz = sim_tool::add_ptz_subcommand(app, ptz_options);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
@@ -229,6 +216,7 @@ int run(int argc, char** argv) {
   try {
     if (calibration->parsed()) return run_calibration(options);
     if (features->parsed()) return run_features(options);
+    if (ptz->parsed()) return sim_tool::run_ptz(ptz_options);
     return run_render(options);
   } catch (const ConfigError& error) {
     std::cerr << "panoptes_sim: " << error.what() << "\n";

@@ -10,6 +10,7 @@
 // (command line, live DDS loop).
 #include <cstdio>
 #include <exception>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -26,6 +27,8 @@
 #include "panoptes/session/estimator_session.h"
 #include "panoptes/session/log.h"
 #include "panoptes/session/offline_replay.h"
+#include "panoptes/surface_app/calibrate_surface.h"
+#include "panoptes/surface_app/surface_mode.h"
 #include "panoptes/tune/tune_cli.h"
 
 namespace {
@@ -37,13 +40,19 @@ namespace session = panoptes::session;
 void prepare(const app::NodeCommandLine& command_line, session::EstimatorSession& estimator,
              session::BodyFile& body_file) {
   if (!command_line.calibration_file.empty()) {
-    const auto calibration = panoptes::load_calibration(command_line.calibration_file);
+    auto calibration = panoptes::load_calibration(command_line.calibration_file);
+    // Moving cameras (inside-out mode, docs/inside_out.md) are not fixed cameras of the tracker.
+    session::set_up_inside_out(estimator.inside_out(), calibration, command_line.calibration_file,
+                               command_line.landmarks_file);
     estimator.tracker().set_calibration(calibration);
     for (const auto& camera : calibration.cameras) {
       if (!camera.T_world_cam)
         session::log("camera '" + camera.id + "' in " + command_line.calibration_file +
                      " has no T_world_cam: ignored");
     }
+  } else if (!command_line.landmarks_file.empty()) {
+    throw panoptes::ConfigError(command_line.landmarks_file, "",
+                                "landmarks need --calibration with a camera marked moving: true");
   }
   if (body_file.enabled()) body_file.load(estimator.tracker());
   if (!command_line.quiet) {
@@ -84,9 +93,50 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
   return app::run_live(live, estimator, body_file);
 }
 
+// Surface mode (docs/surface.md): the `surface:` section of --surface, else of --config; nullopt
+// when neither has one. Throws ConfigError.
+std::optional<panoptes::surface_app::SurfaceSettings> surface_settings(
+    const app::NodeCommandLine& command_line) {
+  namespace surface_app = panoptes::surface_app;
+  if (!command_line.surface_file.empty()) {
+    auto settings = surface_app::load_surface_settings(command_line.surface_file);
+    if (!settings) throw panoptes::ConfigError(command_line.surface_file, "surface", "missing");
+    return settings;
+  }
+  if (command_line.config_file.empty()) return std::nullopt;
+  return surface_app::load_surface_settings(command_line.config_file);
+}
+
+int run_surface_mode(const app::NodeCommandLine& command_line,
+                     const panoptes::surface_app::SurfaceSettings& settings,
+                     session::EstimatorSession& estimator) {
+  namespace surface_app = panoptes::surface_app;
+  std::optional<panoptes::SystemCalibration> calibration;
+  if (!command_line.calibration_file.empty())
+    calibration = panoptes::load_calibration(command_line.calibration_file);
+  auto setup = surface_app::build_surface(settings, calibration ? &*calibration : nullptr,
+                                          command_line.calibration_file);
+  if (command_line.no_dds || !command_line.in_recording.empty()) {
+    auto input = command_line.in_recording.empty() ? session::read_feature_files(command_line.in_features)
+                                                   : app::read_recording_features(command_line.in_recording);
+    return surface_app::run_surface_offline(setup, std::move(input), command_line.out_strokes,
+                                            command_line.quiet);
+  }
+  surface_app::SurfaceLiveOptions live;
+  live.dds_profile = command_line.dds_profile;
+  live.security = command_line.security;
+  live.out_strokes = command_line.out_strokes;
+  live.duration_s = command_line.duration_s;
+  live.latency_window_ms = settings.latency_window_ms;
+  live.quiet = command_line.quiet;
+  return surface_app::run_surface_live(live, setup, estimator);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 3 && std::string_view(argv[1]) == "calibrate" && std::string_view(argv[2]) == "surface")
+    return panoptes::surface_app::run_calibrate_surface(argc - 2, argv + 2);
   if (argc >= 2 && std::string_view(argv[1]) == "calibrate")
     return panoptes::calib::run_calibrate(argc - 1, argv + 1);
   if (argc >= 2 && std::string_view(argv[1]) == "tune")
@@ -108,6 +158,13 @@ int main(int argc, char** argv) {
 
   panoptes::install_stop_handlers();
   session::EstimatorSession estimator(config);
+  try {
+    if (const auto surface = surface_settings(command_line))
+      return run_surface_mode(command_line, *surface, estimator);
+  } catch (const std::exception& error) {
+    session::log(error.what());
+    return panoptes::kExitBadInput;
+  }
   session::BodyFile body_file(command_line.bodies_file);
   try {
     prepare(command_line, estimator, body_file);

@@ -7,6 +7,11 @@
 // confirmation) is processed first and not timed.
 //   bench_estimator [--json] [--seconds <s>] [--warmup <s>] [--cameras <n>] [--rate <hz>]
 //                   [--markers <n>] [--sweep <n,n,...> | --no-sweep] [--bodies <n>] [--seed <n>]
+//                   [--chain-frames <n>]
+// The chain case (issue 21) times one camera frame's update of a 4-marker finger chain
+// (ChainFilter::process: predict, gate, 4 sequential updates) side by side with a rigid body of the same 4
+// markers through the body EKF (body_ekf.h, same gating and updates), on the same frames.
+//                   [--inside-out-seconds <s>]
 // With --json the last line of output is one JSON object (docs/benchmarks.md).
 #include <algorithm>
 #include <chrono>
@@ -22,7 +27,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include "chain_fixtures.h"
+#include "inside_out_case.h"
 #include "panoptes/cli.h"
+#include "panoptes/estimator/body_ekf.h"
+#include "panoptes/estimator/chain.h"
 #include "panoptes/estimator/tracker.h"
 #include "panoptes/simulator.h"
 #include "ring_scene.h"
@@ -130,6 +139,139 @@ void print_row(const Result& r) {
               r.tracked_at_end, r.markers, r.tracks_at_end);
 }
 
+// ---- Chain case (issue 21) ----
+
+struct ChainCost {
+  int frames = 0;
+  double chain_us = 0.0;  // per camera frame
+  double body_us = 0.0;
+  long chain_updates = 0;
+  long body_updates = 0;
+};
+
+// The rigid-body counterpart of update_chain_frame: the same gate and sequential updates.
+int update_body_frame(est::BodyState& state, const std::vector<Eigen::Vector3d>& markers,
+                      const panoptes::CameraModel& camera, const std::vector<Eigen::Vector2d>& blobs,
+                      double sigma_px, double gate_chi2) {
+  int updated = 0;
+  for (const Eigen::Vector3d& marker : markers) {
+    const auto projection = est::project_marker(state, marker, camera, sigma_px);
+    if (!projection) continue;
+    int chosen = -1, in_gate = 0;
+    for (std::size_t b = 0; b < blobs.size(); ++b) {
+      if (est::mahalanobis2(*projection, blobs[b]) > gate_chi2) continue;
+      ++in_gate;
+      chosen = static_cast<int>(b);
+    }
+    if (in_gate != 1) continue;
+    est::update(state, *projection, blobs[chosen], sigma_px);
+    ++updated;
+  }
+  return updated;
+}
+
+ChainCost run_chain_case(int frame_count, std::uint64_t seed) {
+  const panoptes::ChainDefinition finger = est::test_finger();
+  const est::FingerScene scene(30.0, static_cast<unsigned>(seed));
+  const std::vector<panoptes::CameraModel> cameras = est::make_ring_cameras(4, 1.9, 1.6);
+  std::mt19937 rng(static_cast<unsigned>(seed));
+  // The rigid body: the finger's markers frozen at rest, tracked through the same frames.
+  const est::FingerTruth rest = scene.truth(0.0);
+  const est::ChainShape rest_shape = est::chain_shape(finger, rest.angles);
+  const std::vector<Eigen::Vector3d> body_markers(rest_shape.markers.begin(), rest_shape.markers.begin() + 4);
+  struct Frame {
+    int camera;
+    TimeNs stamp_ns;
+    std::vector<Eigen::Vector2d> chain_blobs, body_blobs;
+  };
+  std::vector<Frame> frames;
+  for (const est::SimFrame& frame : est::asynchronous_frames(4, 100.0, scene.duration_s())) {
+    if (static_cast<int>(frames.size()) >= frame_count) break;
+    const est::FingerTruth truth = scene.truth(panoptes::ns_to_seconds(frame.stamp_ns));
+    std::vector<Eigen::Vector3d> chain_points = est::FingerScene::markers(finger, truth);
+    std::vector<Eigen::Vector3d> body_points;
+    for (const Eigen::Vector3d& marker : body_markers) body_points.push_back(truth.base.apply(marker));
+    for (const Eigen::Vector3d& reflection : est::FingerScene::reflections()) {
+      chain_points.push_back(reflection);
+      body_points.push_back(reflection);
+    }
+    frames.push_back({frame.camera, frame.stamp_ns,
+                      est::observe(cameras[frame.camera], chain_points, 0.1, rng),
+                      est::observe(cameras[frame.camera], body_points, 0.1, rng)});
+  }
+  est::ChainIdentification identification;
+  identification.base_pose = rest.base;
+  identification.angles = rest.angles;
+  est::ChainFilter chain(finger,
+                         est::chain_state_from_identification(identification, 0, est::test_chain_prior(), 2),
+                         est::ChainMotionNoise{}, est::ChainUpdateOptions{});
+  est::BodyState body;
+  body.p = rest.base.t;
+  body.q = rest.base.q;
+  body.P = est::body_prior(est::test_chain_prior().base);
+  const est::ChainMotionNoise chain_noise;
+  const est::ChainUpdateOptions options;
+  ChainCost cost;
+  cost.frames = static_cast<int>(frames.size());
+  using Clock = std::chrono::steady_clock;
+  // Interleaved per frame, so both see the same machine state.
+  Clock::duration chain_time{}, body_time{};
+  for (const Frame& frame : frames) {
+    const auto t0 = Clock::now();
+    cost.chain_updates +=
+        chain.process(cameras[frame.camera], frame.stamp_ns, frame.chain_blobs).markers_updated;
+    const auto t1 = Clock::now();
+    est::predict(body, frame.stamp_ns, chain_noise.base);
+    cost.body_updates += update_body_frame(body, body_markers, cameras[frame.camera], frame.body_blobs,
+                                           options.measurement_sigma_px, options.gate_chi2);
+    const auto t2 = Clock::now();
+    chain_time += t1 - t0;
+    body_time += t2 - t1;
+  }
+  cost.chain_us = std::chrono::duration<double, std::micro>(chain_time).count() / cost.frames;
+  cost.body_us = std::chrono::duration<double, std::micro>(body_time).count() / cost.frames;
+  return cost;
+}
+
+std::string chain_case_json(const ChainCost& cost) {
+  char buffer[256];
+  std::snprintf(
+      buffer, sizeof buffer,
+      "{\"frames\": %d, \"chain_us_per_frame\": %.3f, \"body_us_per_frame\": %.3f, \"ratio\": %.3f, "
+      "\"chain_marker_updates\": %ld, \"body_marker_updates\": %ld}",
+      cost.frames, cost.chain_us, cost.body_us, cost.chain_us / cost.body_us, cost.chain_updates,
+      cost.body_updates);
+  return buffer;
+}
+
+// The inside-out case (inside_out_case.h), printed; returns its JSON.
+std::string print_inside_out_case(double seconds, std::uint64_t seed) {
+  const auto r = panoptes::bench::run_inside_out_case(
+      std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/inside_out.yaml", 0.5, seconds, seed);
+  std::printf(
+      "inside-out: head camera, %d landmarks, %.1f blobs per frame, %zu frames timed: %.2f us per frame "
+      "(p50 %.1f, p99 %.1f us; cold start %.1f ms)\n"
+      "  a %d-marker rigid body from the same pixels (plus a second camera): Tracker::process %.2f us per "
+      "frame "
+      "(p50 %.1f, p99 %.1f us), %.2f us without the body: the body costs %.2f us per frame; posed after "
+      "%zu/%zu frames, %llu (re-)identifications while timed\n",
+      r.landmarks, r.blobs_per_frame, r.frames, r.inside_out_us, r.inside_out_p50_us, r.inside_out_p99_us,
+      r.cold_start_ms, r.landmarks, r.tracker_us, r.tracker_p50_us, r.tracker_p99_us, r.points_only_us,
+      r.tracker_us - r.points_only_us, r.body_frames, r.frames,
+      static_cast<unsigned long long>(r.body_identifications));
+  char buffer[640];
+  std::snprintf(
+      buffer, sizeof buffer,
+      "{\"landmarks\": %d, \"frames\": %zu, \"blobs_per_frame\": %.2f, \"us_per_frame\": %.3f, "
+      "\"p50_us\": %.2f, \"p99_us\": %.2f, \"cold_start_ms\": %.2f, \"body_tracker_us_per_frame\": %.3f, "
+      "\"body_tracker_p50_us\": %.2f, \"body_tracker_p99_us\": %.2f, \"points_only_us_per_frame\": %.3f, "
+      "\"body_frames\": %zu, \"body_identifications\": %llu}",
+      r.landmarks, r.frames, r.blobs_per_frame, r.inside_out_us, r.inside_out_p50_us, r.inside_out_p99_us,
+      r.cold_start_ms, r.tracker_us, r.tracker_p50_us, r.tracker_p99_us, r.points_only_us, r.body_frames,
+      static_cast<unsigned long long>(r.body_identifications));
+  return buffer;
+}
+
 int run_command_line(int argc, char** argv) {
   RingConfig config;
   bool json = false;
@@ -155,6 +297,14 @@ int run_command_line(int argc, char** argv) {
   app.add_option("--bodies", bodies, "rigid bodies (4 markers each) of the body case; 0: no body case")
       ->check(CLI::Range(0, 1000));
   app.add_option("--seed", seed, "scene seed");
+  int chain_frames = 12000;
+  app.add_option("--chain-frames", chain_frames, "camera frames of the chain case; 0: no chain case")
+      ->check(CLI::Range(0, 10000000));
+  double inside_out_seconds = 5.0;
+  app.add_option(
+         "--inside-out-seconds", inside_out_seconds,
+         "simulated seconds of the inside-out case (deploy/scenes/inside_out.yaml); 0: no inside-out case")
+      ->check(CLI::Range(0.0, 20.0));
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   if (no_sweep) sweep.clear();
 
@@ -208,6 +358,18 @@ int run_command_line(int argc, char** argv) {
                   extra_us, extra_us / bodies, tracked);
     bodies_json = buffer;
   }
+  std::string chain_json = "null";
+  if (chain_frames > 0) {
+    const ChainCost cost = run_chain_case(chain_frames, seed);
+    std::printf(
+        "chain: 4-marker finger chain vs rigid body of 4 markers, %d camera frames (4 cameras, reflections): "
+        "%.3f us per frame for the chain, %.3f us for the body (ratio %.2f); marker updates %ld / %ld\n",
+        cost.frames, cost.chain_us, cost.body_us, cost.chain_us / cost.body_us, cost.chain_updates,
+        cost.body_updates);
+    chain_json = chain_case_json(cost);
+  }
+  const std::string inside_out_json =
+      inside_out_seconds > 0 ? print_inside_out_case(inside_out_seconds, seed) : "null";
   if (json) {
     std::string sweep_json;
     for (const Result& r : scaling) sweep_json += (sweep_json.empty() ? "" : ", ") + to_json(r);
@@ -215,9 +377,10 @@ int run_command_line(int argc, char** argv) {
         scaling.empty() ? 0 : scaling.back().us_per_observation() / scaling.front().us_per_observation();
     std::printf(
         "{\"cameras\": %d, \"rate_hz\": %.1f, \"warmup_s\": %.3f, \"seconds\": %.3f, \"main\": %s, "
-        "\"scaling\": [%s], \"us_per_observation_ratio_last_to_first\": %.4f, \"bodies\": %s}\n",
+        "\"scaling\": [%s], \"us_per_observation_ratio_last_to_first\": %.4f, \"bodies\": %s, \"chain\": "
+        "%s, \"inside_out\": %s}\n",
         config.cameras, config.rate_hz, config.warmup_s, config.seconds, to_json(main_case).c_str(),
-        sweep_json.c_str(), flatness, bodies_json.c_str());
+        sweep_json.c_str(), flatness, bodies_json.c_str(), chain_json.c_str(), inside_out_json.c_str());
   }
   return 0;
 }

@@ -6,7 +6,7 @@
 // check that follows it in the node: FeatureFrame -> from_message -> FrameScreen, TrackFrame ->
 // from_message per track, BodyPose -> from_message, CameraInfo -> camera_info_problem and
 // calibration_from, MocapFrame -> the client library's to_frame, BodyDescriptions -> its
-// to_descriptions. Any crash, sanitizer report or leak is a finding.
+// to_descriptions, StrokeEvents -> its to_strokes. Any crash, sanitizer report or leak is a finding.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -70,6 +70,12 @@ void body_descriptions(const std::uint8_t* data, std::size_t size) {
   if (decode(data, size, message)) (void)panoptes::client::detail::to_descriptions(message, error);
 }
 
+void stroke_events(const std::uint8_t* data, std::size_t size) {
+  msg::StrokeEvents message;
+  std::string error;
+  if (decode(data, size, message)) (void)panoptes::client::detail::to_strokes(message, 0, error);
+}
+
 // The other types a node reads: decoding is all that happens before the node's own checks.
 template <class T>
 void decode_only(const std::uint8_t* data, std::size_t size) {
@@ -83,7 +89,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size < 1) return 0;
   const std::uint8_t* payload = data + 1;
   const std::size_t n = size - 1;
-  switch (data[0] % 10) {
+  switch (data[0] % 11) {
     case 0:
       feature_frame(payload, n);
       break;
@@ -110,6 +116,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       break;
     case 8:
       body_descriptions(payload, n);
+      break;
+    case 9:
+      stroke_events(payload, n);
       break;
     default:
       decode_only<msg::EstimatorStatus>(payload, n);

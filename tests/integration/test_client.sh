@@ -31,10 +31,25 @@ probe=$!
 pids+=("$probe")
 replay_clients_scene_with_restart
 sleep 4
+# PTZ guidance on the same live frames (docs/ptz.md): ptz_guide follows the body "head".
+"$bin/ptz_guide" --ptz "$source_dir/deploy/ptz/walk_side.yaml" --body head --duration 3 --out "$work/ptz.jsonl" \
+  >"$work/ptz.log" 2>&1 &
+ptz_guide=$!
+pids+=("$ptz_guide")
 expect_exit 0 "sample_client prints live frames" -- "$bin/sample_client" --frames 300 --timeout-s 5
 grep -q "body 1 head .*tracked" "$work/last.out" && grep -q "body 2 tool" "$work/last.out" &&
   grep -q "marker .* unlabelled" "$work/last.out" && grep -q "marker .* head\[" "$work/last.out" &&
   pass "it prints bodies and labelled and unlabelled markers" || { fail "sample_client output"; head -20 "$work/last.out"; }
+timeout 10 tail --pid="$ptz_guide" -f /dev/null
+python3 - "$work/ptz.jsonl" <<'PY' && pass "ptz_guide steered at the live body 'head' ($(wc -l <"$work/ptz.jsonl") commands)" ||
+import json, math, sys
+lines = [json.loads(l) for l in open(sys.argv[1])]
+stamps = [c["issued_ns"] for c in lines]
+ok = len(lines) >= 45 and stamps == sorted(stamps) and all(math.isfinite(c[k]) for c in lines for k in c)
+ok = ok and max(c["pan"] for c in lines) - min(c["pan"] for c in lines) > 1e-4  # it follows a moving head
+sys.exit(0 if ok else 1)
+PY
+  { fail "ptz_guide live commands"; tail -3 "$work/ptz.log"; head -3 "$work/ptz.jsonl"; }
 timeout 30 tail --pid="$estimator" -f /dev/null
 wait "$estimator"
 rc=$?

@@ -5,6 +5,7 @@
 # links or includes what the layering forbids. The rules and their reasons are in
 # cmake/PanoptesLayering.cmake, which writes the manifests read here at configure time.
 set -euo pipefail
+[ $# -eq 1 ] || { echo "usage: check_layering.sh <build dir>" >&2; exit 2; }
 dir="$1/layering"
 [ -f "$dir/rules.txt" ] || { echo "layering: no $dir/rules.txt (configure first)"; exit 1; }
 violations=0

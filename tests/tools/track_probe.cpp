@@ -77,7 +77,7 @@ int run(int argc, char** argv) {
               {"frames", c.frames()}, {"used", c.used()}, {"utilisation", c.utilisation()}};
         }
         nlohmann::json counters = nlohmann::json::object();
-        for (const auto& counter : message.counters()) counters[counter.name()] = counter.value();
+        for (const auto& c : message.counters()) counters[c.name()] = c.value();
         const nlohmann::json line = {{"type", "status"},
                                      {"recv_ns", panoptes::wall_now_ns()},
                                      {"frames", message.frames()},

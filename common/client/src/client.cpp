@@ -18,6 +18,7 @@
 #include "panoptes/dds/bus.h"
 #include "panoptes/time.h"
 #include "panoptes_msgs/panoptes.h"
+#include "panoptes_msgs/surface.h"
 
 namespace panoptes::client {
 namespace {
@@ -99,7 +100,20 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
   std::unique_ptr<dds::Reader<msg::MocapFrame>> frame_reader;
   std::unique_ptr<dds::Reader<msg::BodyDescriptions>> description_reader;
 
+  // Surface mode: subscribed on first use (lifecycle_mutex); the queue and stats under `mutex`,
+  // the callbacks under callbacks_mutex like the frame callbacks.
+  std::unique_ptr<dds::Reader<msg::StrokeEvents>> stroke_reader;
+  std::condition_variable stroke_ready;
+  std::deque<Stroke> strokes;
+  using StrokeCallbackList = std::vector<std::pair<int, std::shared_ptr<const StrokeCallback>>>;
+  std::shared_ptr<const StrokeCallbackList> stroke_callbacks = std::make_shared<const StrokeCallbackList>();
+
   void on_frame(const msg::MocapFrame& message);
+  void on_strokes(const msg::StrokeEvents& message);
+  void subscribe_strokes();
+  // Runs `call` and counts what it throws.
+  template <class Call>
+  void guarded(const Call& call);
   void on_descriptions(const msg::BodyDescriptions& message);
   void dispatch(const Frame& frame);
 };
@@ -137,27 +151,72 @@ void Client::Impl::on_frame(const msg::MocapFrame& message) {
   frame_ready.notify_one();
 }
 
+template <class Call>
+void Client::Impl::guarded(const Call& call) {
+  std::string failure;
+  try {
+    call();
+  } catch (const std::exception& e) {
+    failure = e.what();
+  } catch (...) {
+    failure = "an exception that is not a std::exception";
+  }
+  if (!failure.empty()) {
+    std::lock_guard stats_lock(mutex);
+    ++stats.callback_errors;
+    stats.last_error = "callback: " + failure;
+  }
+}
+
 void Client::Impl::dispatch(const Frame& frame) {
   std::lock_guard lock(callbacks_mutex);
   if (callbacks->empty()) return;
   const std::shared_ptr<const CallbackList> current = callbacks;  // a callback may add or remove callbacks
   dispatching_client = this;
-  for (const auto& [handle, callback] : *current) {
-    std::string failure;
-    try {
-      (*callback)(frame);
-    } catch (const std::exception& e) {
-      failure = e.what();
-    } catch (...) {
-      failure = "an exception that is not a std::exception";
+  for (const auto& entry : *current) guarded([&] { (*entry.second)(frame); });
+  dispatching_client = nullptr;
+}
+
+void Client::Impl::on_strokes(const msg::StrokeEvents& message) {
+  std::string error;
+  auto converted = detail::to_strokes(message, wall_now_ns(), error);
+  {
+    std::lock_guard lock(mutex);
+    if (closed) return;
+    if (!converted) {
+      ++stats.strokes_malformed;
+      stats.last_error = "strokes from '" + message.source_camera() + "': " + error;
+      return;
     }
-    if (!failure.empty()) {
-      std::lock_guard stats_lock(mutex);
-      ++stats.callback_errors;
-      stats.last_error = "callback: " + failure;
+    for (const Stroke& stroke : *converted) {
+      if (strokes.size() >= options.queue_depth) {
+        strokes.pop_front();
+        ++stats.strokes_dropped;
+      }
+      strokes.push_back(stroke);
+      ++stats.strokes_received;
     }
   }
-  dispatching_client = nullptr;
+  {
+    std::lock_guard lock(callbacks_mutex);
+    const std::shared_ptr<const StrokeCallbackList> current = stroke_callbacks;
+    dispatching_client = this;
+    for (const Stroke& stroke : *converted)
+      for (const auto& entry : *current) guarded([&] { (*entry.second)(stroke); });
+    dispatching_client = nullptr;
+  }
+  stroke_ready.notify_one();
+}
+
+void Client::Impl::subscribe_strokes() {
+  std::lock_guard lifecycle(lifecycle_mutex);
+  if (stroke_reader || !bus) return;
+  try {
+    stroke_reader = bus->make_reader<msg::StrokeEvents>(
+        [this](msg::StrokeEvents&& message) { on_strokes(message); }, dds::Qos::kReliable);
+  } catch (const std::exception& e) {
+    throw ClientError(std::string("panoptes client: strokes: ") + e.what());
+  }
 }
 
 void Client::Impl::on_descriptions(const msg::BodyDescriptions& message) {
@@ -223,6 +282,41 @@ void Client::remove_callback(int handle) {
   auto list = std::make_shared<Impl::CallbackList>(*impl_->callbacks);
   std::erase_if(*list, [&](const auto& entry) { return entry.first == handle; });
   impl_->callbacks = std::move(list);
+}
+
+int Client::add_stroke_callback(StrokeCallback callback) {
+  int handle = 0;
+  {
+    std::lock_guard lock(impl_->callbacks_mutex);
+    handle = impl_->next_handle++;
+    auto list = std::make_shared<Impl::StrokeCallbackList>(*impl_->stroke_callbacks);
+    list->emplace_back(handle, std::make_shared<const StrokeCallback>(std::move(callback)));
+    impl_->stroke_callbacks = std::move(list);
+  }
+  impl_->subscribe_strokes();
+  return handle;
+}
+
+void Client::remove_stroke_callback(int handle) {
+  std::lock_guard lock(impl_->callbacks_mutex);
+  auto list = std::make_shared<Impl::StrokeCallbackList>(*impl_->stroke_callbacks);
+  std::erase_if(*list, [&](const auto& entry) { return entry.first == handle; });
+  impl_->stroke_callbacks = std::move(list);
+}
+
+StrokeResult Client::wait_for_stroke(std::chrono::milliseconds timeout) {
+  impl_->subscribe_strokes();
+  std::unique_lock lock(impl_->mutex);
+  impl_->stroke_ready.wait_for(lock, timeout, [&] { return impl_->closed || !impl_->strokes.empty(); });
+  StrokeResult result;
+  if (impl_->closed) {
+    result.status = Status::kClosed;
+  } else if (!impl_->strokes.empty()) {
+    result.status = Status::kOk;
+    result.stroke = std::move(impl_->strokes.front());
+    impl_->strokes.pop_front();
+  }
+  return result;
 }
 
 FrameResult Client::wait_for_frame(std::chrono::milliseconds timeout) {
@@ -313,9 +407,11 @@ void Client::close() {
     impl_->closed = true;
   }
   impl_->frame_ready.notify_all();
+  impl_->stroke_ready.notify_all();
   // From a callback the readers stay until the destructor: removing a reader waits for its
   // listener, which is this very thread.
   if (dispatching_client == impl_.get()) return;
+  impl_->stroke_reader.reset();
   impl_->frame_reader.reset();
   impl_->description_reader.reset();
   impl_->bus.reset();

@@ -182,4 +182,43 @@ std::optional<std::vector<BodyDescription>> to_descriptions(const msg::BodyDescr
   return bodies;
 }
 
+std::optional<std::vector<Stroke>> to_strokes(const msg::StrokeEvents& message, std::int64_t receive_ns,
+                                              std::string& error) {
+  std::vector<Stroke> strokes;
+  strokes.reserve(message.events().size());
+  const std::array<double, 2> size{message.surface_size()[0], message.surface_size()[1]};
+  for (std::size_t i = 0; i < message.events().size(); ++i) {
+    const msg::StrokeEvent& event = message.events()[i];
+    const std::string what = "stroke event " + std::to_string(i);
+    if (event.phase() > 2) {
+      error =
+          what + ": phase " + std::to_string(event.phase()) + " is not begin (0), continue (1) or end (2)";
+      return std::nullopt;
+    }
+    if (event.stroke_id() == 0) {
+      error = what + ": stroke_id 0";
+      return std::nullopt;
+    }
+    Stroke stroke;
+    stroke.phase = static_cast<StrokePhase>(event.phase());
+    stroke.id = event.stroke_id();
+    stroke.stamp_ns = event.stamp_ns();
+    stroke.position = {event.position()[0], event.position()[1]};
+    stroke.velocity = {event.velocity()[0], event.velocity()[1]};
+    stroke.acceleration = {event.acceleration()[0], event.acceleration()[1]};
+    stroke.cameras = event.cameras();
+    stroke.surface_size = size;
+    stroke.source_camera = message.source_camera();
+    stroke.publish_ns = message.publish_ns();
+    stroke.receive_ns = receive_ns;
+    if (!all_finite(stroke.position) || !all_finite(stroke.velocity) || !all_finite(stroke.acceleration) ||
+        !all_finite(size)) {
+      error = what + " (stroke " + std::to_string(stroke.id) + "): a non-finite number";
+      return std::nullopt;
+    }
+    strokes.push_back(std::move(stroke));
+  }
+  return strokes;
+}
+
 }  // namespace panoptes::client::detail

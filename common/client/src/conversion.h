@@ -10,6 +10,7 @@
 
 #include "panoptes/client/client.h"
 #include "panoptes_msgs/panoptes.h"
+#include "panoptes_msgs/surface.h"
 
 namespace panoptes::client::detail {
 
@@ -24,5 +25,10 @@ Latency latency_of(const msg::MocapFrame& message, std::int64_t receive_ns);
 // duplicate name, a body without markers, a non-finite marker position).
 std::optional<std::vector<BodyDescription>> to_descriptions(const msg::BodyDescriptions& message,
                                                             std::string& error);
+
+// A StrokeEvents sample as its strokes; nullopt with `error` for a malformed one (an unknown phase,
+// stroke id 0, a non-finite number).
+std::optional<std::vector<Stroke>> to_strokes(const msg::StrokeEvents& message, std::int64_t receive_ns,
+                                              std::string& error);
 
 }  // namespace panoptes::client::detail

@@ -42,6 +42,8 @@
 #include "panoptes_msgs/panoptesPubSubTypes.h"
 #include "panoptes_msgs/ros2.h"
 #include "panoptes_msgs/ros2PubSubTypes.h"
+#include "panoptes_msgs/surface.h"
+#include "panoptes_msgs/surfacePubSubTypes.h"
 
 namespace fdds = eprosima::fastdds::dds;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
@@ -124,6 +126,8 @@ PANOPTES_TOPIC(RecorderStatus, "rt/panoptes/recorder_status", false, Durability:
 // Off by default: camera_node and estimator_node --latency-probe (docs/protocol.md, "Latency probes").
 PANOPTES_TOPIC(LatencyTraces, "rt/panoptes/latency_probe/trace", false, Durability::kVolatile, 8, false,
                false)
+// Surface mode (docs/surface.md): every begin and end matters to a drawing application.
+PANOPTES_TOPIC(StrokeEvents, "rt/panoptes/strokes", true, Durability::kVolatile, 64, false, false)
 #undef PANOPTES_TOPIC
 
 // A probe measures one hop of the pipeline, so it takes the QoS of the topic it stands in for: the
@@ -868,6 +872,7 @@ PANOPTES_INSTANTIATE(MocapFrame)
 PANOPTES_INSTANTIATE(BodyDescriptions)
 PANOPTES_INSTANTIATE(RecorderCommand)
 PANOPTES_INSTANTIATE(RecorderStatus)
+PANOPTES_INSTANTIATE(StrokeEvents)
 PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::PoseStamped_)
 PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::TwistStamped_)
 PANOPTES_INSTANTIATE_TYPE(tf2_msgs::msg::dds_::TFMessage_)

@@ -11,6 +11,7 @@
 
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/ros2.h"
+#include "panoptes_msgs/surface.h"
 
 namespace panoptes::dds {
 
@@ -152,6 +153,7 @@ PANOPTES_DECODE(msg::MocapFrame)
 PANOPTES_DECODE(msg::BodyDescriptions)
 PANOPTES_DECODE(msg::RecorderCommand)
 PANOPTES_DECODE(msg::RecorderStatus)
+PANOPTES_DECODE(msg::StrokeEvents)
 PANOPTES_DECODE(geometry_msgs::msg::dds_::PoseStamped_)
 PANOPTES_DECODE(geometry_msgs::msg::dds_::TwistStamped_)
 PANOPTES_DECODE(tf2_msgs::msg::dds_::TFMessage_)

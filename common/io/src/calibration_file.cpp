@@ -73,6 +73,10 @@ CameraCalibration read_camera(const YamlReader& reader) {
   }
   if (reader.has("T_world_cam")) camera.T_world_cam = read_transform(reader.child("T_world_cam"));
   camera.nominal_intrinsics = reader.get_bool("nominal", false);
+  camera.moving = reader.get_bool("moving", false);
+  camera.rig = reader.get_string("rig", "");
+  if (!camera.rig.empty() && !camera.moving)
+    reader.fail("rig", "names the rig of a moving camera: add moving: true");
   return camera;
 }
 
@@ -131,6 +135,8 @@ std::string calibration_to_yaml(const SystemCalibration& calibration) {
     const auto& d = in.distortion;
     emit_numbers(out, {d[0], d[1], d[2], d[3], d[4]});
     if (camera.nominal_intrinsics) out << YAML::Key << "nominal" << YAML::Value << true;
+    if (camera.moving) out << YAML::Key << "moving" << YAML::Value << true;
+    if (!camera.rig.empty()) out << YAML::Key << "rig" << YAML::Value << YAML::DoubleQuoted << camera.rig;
     if (camera.T_world_cam) {
       const RigidTransform& T = *camera.T_world_cam;
       out << YAML::Key << "T_world_cam" << YAML::Value << YAML::BeginMap;
@@ -150,16 +156,67 @@ void save_calibration(const SystemCalibration& calibration, const std::filesyste
   write_text_file(path, calibration_to_yaml(calibration));
 }
 
-std::vector<BodyDefinition> load_bodies(const std::filesystem::path& path) {
+namespace {
+
+// Bodies and chains share one file and one namespace of names (`type: chain` entries are chains).
+struct BodiesFile {
+  std::vector<BodyDefinition> bodies;
+  std::vector<ChainDefinition> chains;
+};
+
+BodiesFile read_bodies_file(const std::filesystem::path& path) {
   const YAML::Node root = load_yaml_file(path);
   const YamlReader reader(path.string(), root);
   const std::vector<YamlReader> items = reader.sequence("bodies");
   if (items.empty()) reader.fail("bodies", "expected at least one body");
-  std::vector<BodyDefinition> bodies;
-  bodies.reserve(items.size());
+  BodiesFile file;
+  file.bodies.reserve(items.size());
   std::set<std::string> names;
-  for (const YamlReader& item : items) bodies.push_back(read_body_definition(item, names));
-  return bodies;
+  for (const YamlReader& item : items) {
+    if (item.get_string("type", "passive") == "chain") {
+      file.chains.push_back(read_chain_definition(item, names));
+    } else {
+      file.bodies.push_back(read_body_definition(item, names));
+    }
+  }
+  return file;
+}
+
+}  // namespace
+
+std::vector<BodyDefinition> load_bodies(const std::filesystem::path& path) {
+  return read_bodies_file(path).bodies;
+}
+
+std::vector<ChainDefinition> load_chains(const std::filesystem::path& path) {
+  return read_bodies_file(path).chains;
+}
+
+ChainDefinition read_chain_definition(const YamlReader& item, std::set<std::string>& names) {
+  item.expect_only({"name", "type", "links", "joint_limits", "base", "tip_offset"});
+  ChainDefinition chain;
+  chain.name = item.get_string("name");
+  if (chain.name.empty()) item.fail("name", "must not be empty");
+  if (!names.insert(chain.name).second) item.fail("name", "duplicate body name '" + chain.name + "'");
+  chain.link_lengths_m = item.get_doubles("links");
+  for (const auto& row : item.get_double_rows("joint_limits", 2))
+    chain.joint_limits.push_back({row[0], row[1]});
+  const std::string base = item.get_string("base", "first");
+  if (base == "last") {
+    std::reverse(chain.link_lengths_m.begin(), chain.link_lengths_m.end());
+    std::reverse(chain.joint_limits.begin(), chain.joint_limits.end());
+  } else if (base != "first") {
+    item.fail("base", "expected 'first' or 'last', got '" + base + "'");
+  }
+  if (item.has("tip_offset")) {
+    const auto tip = item.get_doubles("tip_offset", 3);
+    chain.tip_offset_m = Eigen::Vector3d(tip[0], tip[1], tip[2]);
+  }
+  if (const auto error = chain_definition_error(chain)) {
+    const std::string field = error->substr(0, error->find(':'));
+    item.fail(field.substr(0, field.find('[')), "chain '" + chain.name + "': " + *error);
+  }
+  return chain;
 }
 
 BodyDefinition read_body_definition(const YamlReader& item, std::set<std::string>& names) {

@@ -71,10 +71,11 @@ double peak_density(const SimCameraConfig& config) {
 std::vector<Spot> marker_spots(const Scene& scene, const SimCameraConfig& config, std::size_t camera_index,
                                std::int64_t k, TimeNs scene_time_ns) {
   const std::uint64_t marker_key = sim::hash_key(frame_key(scene, camera_index, k), kMarkerStream);
-  const CameraModel model = config.calibration.model();
+  // A moving camera's pose changes with the frame (inside-out tracking).
+  const CameraModel model(config.calibration.intrinsics, scene.camera_pose_at(camera_index, scene_time_ns));
   const CameraIntrinsics& intrinsics = model.intrinsics();
   const double focal = 0.5 * (intrinsics.fx + intrinsics.fy);
-  const Eigen::Vector3d camera_centre = config.calibration.T_world_cam->t;
+  const Eigen::Vector3d camera_centre = model.T_world_cam().t;
   const std::vector<MarkerTruth> markers = scene.markers_at(scene_time_ns);
   const double density = peak_density(config);
 

@@ -49,7 +49,10 @@ struct RotationEvaluator {
   double t;
   Eigen::Quaterniond operator()(const FixedRotation& rotation) const { return rotation.q; }
   Eigen::Quaterniond operator()(const SpinRotation& rotation) const {
-    return Eigen::Quaterniond(Eigen::AngleAxisd(rotation.rate_rad_s * t, rotation.axis)) * rotation.initial;
+    const double angle =
+        rotation.rate_rad_s * t +
+        rotation.swing_rad * std::sin(kTwoPi * rotation.swing_frequency_hz * t + rotation.swing_phase_rad);
+    return Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotation.axis)) * rotation.initial;
   }
   Eigen::Quaterniond operator()(const OscillateRotation& rotation) const {
     Eigen::Vector3d rotation_vector;
@@ -185,10 +188,14 @@ Rotation read_rotation(const YamlReader& reader) {
   const Eigen::Quaterniond initial =
       reader.has("initial") ? read_quaternion(reader, "initial") : Eigen::Quaterniond::Identity();
   if (type == "spin") {
-    reject_unknown_keys(reader, {"type", "axis", "rate", "initial"});
+    reject_unknown_keys(reader,
+                        {"type", "axis", "rate", "initial", "swing", "swing_frequency", "swing_phase"});
     SpinRotation rotation;
     rotation.axis = unit_vector(reader, "axis", Eigen::Vector3d::UnitZ());
     rotation.rate_rad_s = reader.get_double("rate");
+    rotation.swing_rad = reader.get_double("swing", 0.0);
+    rotation.swing_frequency_hz = reader.get_double("swing_frequency", 0.0);
+    rotation.swing_phase_rad = reader.get_double("swing_phase", 0.0);
     rotation.initial = initial;
     return rotation;
   }

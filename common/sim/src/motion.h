@@ -48,6 +48,10 @@ struct FixedRotation {
 struct SpinRotation {
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit
   double rate_rad_s = 0.0;
+  // A head looking about while it turns: the angle swings by swing_rad sin(2π f t + phase) on top.
+  double swing_rad = 0.0;
+  double swing_frequency_hz = 0.0;
+  double swing_phase_rad = 0.0;
   Eigen::Quaterniond initial = Eigen::Quaterniond::Identity();
 };
 struct OscillateRotation {

@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <set>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include <yaml-cpp/yaml.h>
 
@@ -15,6 +19,7 @@
 #include "panoptes/config.h"
 #include "panoptes/formats/c3d.h"
 #include "panoptes/geometry.h"
+#include "panoptes/landmarks_file.h"
 #include "panoptes/simulator.h"
 
 namespace panoptes {
@@ -46,6 +51,15 @@ struct MarkerSpec {
   std::string name;
   double radius = kDefaultMarkerRadius;
   sim::Path path;
+  // `pen_down`: [start, end] intervals (s) in which the marker exists (a laser spot that is on);
+  // empty: always.
+  std::vector<std::pair<double, double>> pen_down;
+
+  bool exists_at(double t_s) const {
+    if (pen_down.empty()) return true;
+    return std::any_of(pen_down.begin(), pen_down.end(),
+                       [&](const auto& interval) { return t_s >= interval.first && t_s < interval.second; });
+  }
 };
 
 struct BodySpec {
@@ -60,6 +74,33 @@ struct BodySpec {
   double facing_angle_rad = 0.0;
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
 };
+
+// A moving camera's rig (inside-out tracking, docs/inside_out.md): the camera's pose keys give its
+// mount on the rig, and the rig moves along `path` turning by `rotation`.
+struct RigSpec {
+  std::string name;
+  sim::Path path;
+  sim::Rotation rotation;
+  std::vector<Eigen::Vector3d> markers;  // carried by the rig (rig frame): what fixed cameras see of it
+};
+
+RigSpec read_rig(const YamlReader& camera, const std::string& camera_id) {
+  const YamlReader rig_reader = camera.child("rig");
+  reject_unknown_keys(rig_reader, {"name", "path", "rotation", "markers"});
+  RigSpec rig{rig_reader.get_string("name", camera_id),
+              sim::read_path(rig_reader.child("path")),
+              rig_reader.has("rotation") ? sim::read_rotation(rig_reader.child("rotation")) : sim::Rotation{},
+              {}};
+  if (rig.name.empty()) rig_reader.fail("name", "must not be empty");
+  if (rig_reader.has("markers")) {
+    for (const auto& row : rig_reader.get_double_rows("markers", 3)) {
+      if (!std::isfinite(row[0]) || !std::isfinite(row[1]) || !std::isfinite(row[2]))
+        rig_reader.fail("markers", "expected finite numbers");
+      rig.markers.emplace_back(row[0], row[1], row[2]);
+    }
+  }
+  return rig;
+}
 
 // Reads a camera key from the camera's own map, falling back to the scene's `defaults`, so that
 // error messages name whichever map the value actually came from.
@@ -123,7 +164,7 @@ RigidTransform read_pose(const YamlReader& camera, const std::optional<YamlReade
 }
 
 SimCameraConfig read_camera(const YamlReader& camera, const std::optional<YamlReader>& defaults) {
-  reject_unknown_keys(camera, {"id", PANOPTES_SIM_CAMERA_KEYS});
+  reject_unknown_keys(camera, {"id", "rig", PANOPTES_SIM_CAMERA_KEYS});
   const CameraKeys keys(camera, defaults);
   SimCameraConfig config;
   CameraCalibration& calibration = config.calibration;
@@ -151,7 +192,13 @@ SimCameraConfig read_camera(const YamlReader& camera, const std::optional<YamlRe
       intrinsics.distortion[i] = distortion[i];
     }
   }
-  calibration.T_world_cam = read_pose(camera, defaults);
+  // A camera on a rig is mounted as its own pose keys say (none: at the rig's origin, looking
+  // along the rig's z); the defaults' pose is a fixed camera's, not a mount.
+  const bool on_rig = camera.has("rig");
+  calibration.T_world_cam = on_rig && !camera.has("T_world_cam") && !camera.has("look_at")
+                                ? RigidTransform{}
+                                : read_pose(camera, on_rig ? std::nullopt : defaults);
+  calibration.moving = on_rig;
 
   config.rate_hz = keys.number("rate", config.rate_hz);
   if (!(config.rate_hz > 0.0)) keys.source("rate").fail("rate", "must be > 0 Hz");
@@ -417,14 +464,16 @@ struct Scene::Impl {
   std::vector<BodySpec> bodies;
   std::vector<std::string> marker_names;
   std::vector<double> marker_radii;
+  std::vector<std::optional<RigSpec>> camera_rigs;  // per camera
+  std::vector<LandmarkGroup> landmarks;
 
   void parse(const YamlReader& root, const std::filesystem::path& base_dir);
 };
 
 void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& base_dir) {
   Impl& scene = *this;
-  reject_unknown_keys(root,
-                      {"seed", "duration", "description", "defaults", "cameras", "markers", "trc", "bodies"});
+  reject_unknown_keys(root, {"seed", "duration", "description", "defaults", "cameras", "markers", "trc",
+                             "bodies", "landmarks"});
   scene.seed = static_cast<std::uint64_t>(root.get_int("seed", 0));
   const double duration_s = root.get_double("duration", kDefaultDurationS);
   if (!(duration_s > 0.0) || !std::isfinite(duration_s)) root.fail("duration", "must be > 0 s");
@@ -443,6 +492,12 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
     if (!camera_ids.insert(config.calibration.id).second) {
       camera.fail("id", "duplicate camera id '" + config.calibration.id + "'");
     }
+    std::optional<RigSpec> rig;
+    if (config.calibration.moving) {
+      rig = read_rig(camera, config.calibration.id);
+      config.calibration.rig = rig->name;
+    }
+    scene.camera_rigs.push_back(std::move(rig));
     scene.cameras.push_back(std::move(config));
   }
 
@@ -457,7 +512,7 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
   const std::vector<YamlReader> markers = root.sequence_or_empty("markers");
   for (std::size_t i = 0; i < markers.size(); ++i) {
     const YamlReader& marker = markers[i];
-    reject_unknown_keys(marker, {"name", "radius", "path"});
+    reject_unknown_keys(marker, {"name", "radius", "path", "pen_down"});
     MarkerSpec spec;
     // Appending rather than "m" + to_string(i) sidesteps a GCC 12 -Wrestrict false positive.
     std::string default_name = "m";
@@ -466,10 +521,33 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
     if (spec.name.empty()) marker.fail("name", "must not be empty");
     spec.radius = read_marker_radius(marker, "radius");
     spec.path = sim::read_path(marker.child("path"));
+    if (marker.has("pen_down")) {
+      double previous_end = -std::numeric_limits<double>::infinity();
+      for (const auto& interval : marker.get_double_rows("pen_down", 2)) {
+        if (!(interval[0] < interval[1]) || !(interval[0] >= previous_end) || !std::isfinite(interval[1]))
+          marker.fail("pen_down", "intervals [start, end] must be finite, start < end, in increasing order");
+        spec.pen_down.emplace_back(interval[0], interval[1]);
+        previous_end = interval[1];
+      }
+    }
     add_name(marker, "name", spec.name, spec.radius);
     scene.markers.push_back(std::move(spec));
   }
 
+  if (root.has("landmarks")) {
+    // Fixed in the room: static markers "<name>/<index>" (a single one: "<name>"), after `markers`
+    // as markers_at() fills them.
+    scene.landmarks = read_landmarks(root);
+    for (const LandmarkGroup& group : scene.landmarks) {
+      for (std::size_t m = 0; m < group.points.size(); ++m) {
+        MarkerSpec spec;
+        spec.name = group.constellation ? group.name + "/" + std::to_string(m) : group.name;
+        spec.path = sim::StaticPath{group.points[m]};
+        add_name(root, "landmarks", spec.name, spec.radius);
+        scene.markers.push_back(std::move(spec));
+      }
+    }
+  }
   if (root.has("trc")) {
     const YamlReader trc = root.child("trc");
     std::vector<std::string> trc_names;
@@ -506,8 +584,12 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
     }
     scene.bodies.push_back(std::move(spec));
   }
+  for (const auto& rig : scene.camera_rigs) {
+    for (std::size_t m = 0; rig && m < rig->markers.size(); ++m)
+      add_name(root, "cameras", rig->name + "/" + std::to_string(m), kDefaultMarkerRadius);
+  }
   if (scene.marker_names.empty())
-    root.fail("markers", "the scene has no markers (give markers, trc or bodies)");
+    root.fail("markers", "the scene has no markers (give markers, trc, bodies or landmarks)");
 }
 
 Scene::Scene() : impl_(std::make_unique<Impl>()) {}
@@ -572,7 +654,10 @@ std::vector<MarkerTruth> Scene::markers_at(TimeNs scene_time_ns) const {
   std::vector<MarkerTruth> out(impl_->marker_names.size());
   for (std::size_t i = 0; i < out.size(); ++i) out[i].name = impl_->marker_names[i];
   std::size_t index = 0;
-  for (const MarkerSpec& marker : impl_->markers) out[index++].p = sim::evaluate(marker.path, t_s);
+  for (const MarkerSpec& marker : impl_->markers) {
+    out[index].valid = marker.exists_at(t_s);
+    out[index++].p = sim::evaluate(marker.path, t_s);
+  }
   if (impl_->trc) {
     sample_trc(*impl_->trc, t_s, out, index);
     index += impl_->trc->columns.size();
@@ -593,6 +678,11 @@ std::vector<MarkerTruth> Scene::markers_at(TimeNs scene_time_ns) const {
       truth.facing_angle_rad = body.facing_angle_rad;
     }
   }
+  for (const auto& rig : impl_->camera_rigs) {
+    if (!rig || rig->markers.empty()) continue;
+    const RigidTransform T_world_rig{sim::evaluate(rig->rotation, t_s), sim::evaluate(rig->path, t_s)};
+    for (const Eigen::Vector3d& marker : rig->markers) out[index++].p = T_world_rig.apply(marker);
+  }
   return out;
 }
 
@@ -604,7 +694,38 @@ std::vector<BodyTruth> Scene::bodies_at(TimeNs scene_time_ns) const {
     out.push_back(
         {body.name, RigidTransform{sim::evaluate(body.rotation, t_s), sim::evaluate(body.path, t_s)}});
   }
+  for (const auto& rig : impl_->camera_rigs) {
+    if (rig)
+      out.push_back(
+          {rig->name, RigidTransform{sim::evaluate(rig->rotation, t_s), sim::evaluate(rig->path, t_s)}});
+  }
   return out;
+}
+
+RigidTransform Scene::camera_pose_at(std::size_t camera_index, TimeNs scene_time_ns) const {
+  const RigidTransform& mount = *impl_->cameras.at(camera_index).calibration.T_world_cam;
+  const auto& rig = impl_->camera_rigs.at(camera_index);
+  if (!rig) return mount;
+  const double t_s = ns_to_seconds(scene_time_ns);
+  return RigidTransform{sim::evaluate(rig->rotation, t_s), sim::evaluate(rig->path, t_s)} * mount;
+}
+
+std::map<std::string, std::vector<Eigen::Vector3d>> Scene::rig_markers() const {
+  std::map<std::string, std::vector<Eigen::Vector3d>> markers;
+  for (const auto& rig : impl_->camera_rigs)
+    if (rig && !rig->markers.empty()) markers[rig->name] = rig->markers;
+  return markers;
+}
+
+std::vector<std::string> Scene::rig_names() const {
+  std::vector<std::string> names;
+  for (const auto& rig : impl_->camera_rigs)
+    if (rig) names.push_back(rig->name);
+  return names;
+}
+
+const std::vector<LandmarkGroup>& Scene::landmarks() const {
+  return impl_->landmarks;
 }
 
 std::vector<BodyDefinition> Scene::body_definitions() const {

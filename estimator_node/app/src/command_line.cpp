@@ -80,6 +80,11 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
   app.add_option("--calibration", c.calibration_file, "calibration YAML (cameras with T_world_cam)");
   app.add_option("--bodies", c.bodies_file,
                  "rigid-body definitions YAML (docs/bodies.md); live, reloaded when the file changes");
+  app.add_option(
+      "--landmarks", c.landmarks_file,
+      "inside-out mode: landmarks YAML (a landmarks: list, e.g. a simulator scene) for the cameras "
+      "marked moving: true in --calibration; their rigs' poses are published like bodies "
+      "(docs/inside_out.md)");
   app.add_option("--in-features", c.in_features, "offline: FeatureFrame JSONL files (one per camera)")
       ->expected(1, -1);
   app.add_option(
@@ -87,7 +92,8 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
       "offline (no DDS): the FeatureFrames of an MCAP recording (panoptes_record, docs/recording.md)");
   app.add_flag("--no-dds", c.no_dds, "offline: do not use DDS; requires --in-features or --in-recording");
   app.add_option("--out-tracks", c.out_tracks, "write every published TrackFrame as Track JSONL");
-  app.add_option("--out-poses", c.out_poses, "write body poses as Pose JSONL (needs --bodies)");
+  app.add_option("--out-poses", c.out_poses,
+                 "write body poses as Pose JSONL (needs --bodies or --landmarks)");
   app.add_option("--dds-profile", c.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
   dds::add_security_options(app, c.security);
   app.add_flag("--replay-arrival", c.replay_arrival,
@@ -99,6 +105,11 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
                "live, benchmark aid: echo camera_node --latency-probe probes at once and trace when each "
                "frame's output is written (rt/panoptes/latency_probe/..., bench_latency)");
   app.add_flag("--quiet", c.quiet, "no progress output");
+  app.add_option(
+      "--surface", c.surface_file,
+      "surface mode (LumiPoint, docs/surface.md): a YAML whose `surface:` section defines the wall; "
+      "strokes on rt/panoptes/strokes instead of 3D tracks (a `surface:` section in --config does the same)");
+  app.add_option("--out-strokes", c.out_strokes, "surface mode: write every stroke event as Stroke JSONL");
 }
 
 void validate(const NodeCommandLine& c) {
@@ -111,9 +122,10 @@ void validate(const NodeCommandLine& c) {
     throw CLI::ValidationError(
         "--in-features runs offline: add --no-dds (replaying onto DDS is camera_node's job)");
   }
-  if ((c.no_dds || !c.in_recording.empty()) && c.calibration_file.empty())
+  if ((c.no_dds || !c.in_recording.empty()) && c.calibration_file.empty() && c.surface_file.empty())
     throw CLI::ValidationError("offline mode needs --calibration");
-  if (!c.out_poses.empty() && c.bodies_file.empty()) throw CLI::ValidationError("--out-poses needs --bodies");
+  if (!c.out_poses.empty() && c.bodies_file.empty() && c.landmarks_file.empty())
+    throw CLI::ValidationError("--out-poses needs --bodies or --landmarks");
 }
 
 }  // namespace

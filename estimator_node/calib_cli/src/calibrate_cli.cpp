@@ -45,6 +45,7 @@ constexpr const char* kUsage =
     "  import-points  a single-point recording of synchronised cameras (MultiCamSelfCal points.dat) as\n"
     "              features and nominal cameras for `solve --wand 0`\n"
     "  marker      self-calibration of a 7-LED marker (seed 004 §3)\n"
+    "  surface     homographies of a wall's cameras for surface mode (docs/surface.md)\n"
     "\n"
     "Each subcommand answers --help.\n";
 

@@ -26,13 +26,11 @@ BodyMatrix body_transition(const BodyState& state, double dt) {
   return A;
 }
 
-namespace {
-
 // Q(Δt) for white jerk (positions; p, v, a), white angular jerk (δθ, ω, α) and white angular
 // acceleration (δθ, ω); seed 003 eq. A.28 generalised to three integrators. For Δt < 0 (look-ups
 // into the past) the blocks take the signs of backward extrapolation, so uncertainty still grows
 // away from the last update.
-BodyMatrix process_noise(double dt, const BodyMotionNoise& noise) {
+BodyMatrix body_process_noise(double dt, const BodyMotionNoise& noise) {
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   const double d2 = dt * dt, d3 = d2 * dt, d4 = d3 * dt, d5 = d4 * dt;
   BodyMatrix Q = BodyMatrix::Zero();
@@ -52,8 +50,6 @@ BodyMatrix process_noise(double dt, const BodyMotionNoise& noise) {
   if (dt < 0) Q = -Q;
   return Q;
 }
-
-}  // namespace
 
 Eigen::Quaterniond rotation_vector_to_quaternion(const Eigen::Vector3d& r) {
   const double angle = r.norm();
@@ -87,7 +83,7 @@ void predict(BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise) {
     state.q =
         (state.q * rotation_vector_to_quaternion(dt * state.w + 0.5 * dt * dt * state.alpha)).normalized();
     state.w += dt * state.alpha;
-    state.P.propagate(A, process_noise(dt, noise));
+    state.P.propagate(A, body_process_noise(dt, noise));
   }
   state.stamp_ns = stamp_ns;
 }
@@ -139,18 +135,12 @@ MarkerProjection pose_measurement(const BodyState& state, const MarkerPixel& pro
 }
 
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
-            double measurement_sigma_px) {
-  inject(state, state.P.update(projection, measurement, measurement_sigma_px));
+            double /*measurement_sigma_px: already in the projection's S*/) {
+  inject(state, state.P.update(projection, measurement));
 }
 
 void inject(BodyState& state, const BodyVector& dx) {
-  state.p += dx.segment<3>(kBodyP);
-  state.v += dx.segment<3>(kBodyV);
-  state.a += dx.segment<3>(kBodyA);
-  state.w += dx.segment<3>(kBodyW);
-  state.alpha += dx.segment<3>(kBodyAlpha);
-  // Reset (seed 003 eq. A.41): the incremental rotation is added onto the external quaternion.
-  state.q = (state.q * rotation_vector_to_quaternion(dx.segment<3>(kBodyTheta))).normalized();
+  inject_pose_blocks(state, dx);
 }
 
 BodyVector body_difference(const BodyState& to, const BodyState& from) {

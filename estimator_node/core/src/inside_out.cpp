@@ -59,17 +59,20 @@ InsideOutTracker::InsideOutTracker(std::vector<Constellation> constellations, Ca
       camera_in_rig_(std::move(camera_in_rig)),
       T_rig_cam_(camera_in_rig_.T_world_cam()),
       options_(options) {
-  if (constellations_.empty()) throw std::invalid_argument("inside-out: no landmark constellation given");
+  bool any_identifies = false;
   for (std::size_t c = 0; c < constellations_.size(); ++c) {
     const Constellation& constellation = constellations_[c];
-    if (constellation.landmarks.size() < 3)
+    if (constellation.identifies && constellation.landmarks.size() < 3)
       throw std::invalid_argument("constellation '" + constellation.name +
                                   "': needs at least 3 landmarks, has " +
                                   std::to_string(constellation.landmarks.size()));
-    widest_triangles_.push_back(widest_triangle(constellation));
+    widest_triangles_.push_back(constellation.identifies ? std::optional(widest_triangle(constellation))
+                                                         : std::nullopt);
+    any_identifies = any_identifies || constellation.identifies;
     for (const auto& landmark : constellation.landmarks)
       landmarks_.push_back({landmark, static_cast<int>(c)});
   }
+  if (!any_identifies) throw std::invalid_argument("inside-out: no landmark constellation given");
 }
 
 int InsideOutTracker::count_inliers(const RigidTransform& T_world_rig,
@@ -103,7 +106,8 @@ std::optional<RigidTransform> InsideOutTracker::acquire(std::span<const Eigen::V
   std::size_t best_constellation = 0;
   const std::size_t n = pixels.size();
   for (std::size_t c = 0; c < constellations_.size(); ++c) {
-    const auto& triangle = widest_triangles_[c];
+    if (!widest_triangles_[c]) continue;
+    const auto& triangle = *widest_triangles_[c];
     const auto& L = constellations_[c].landmarks;
     const std::array<Eigen::Vector3d, 3> points = {L[static_cast<std::size_t>(triangle[0])],
                                                    L[static_cast<std::size_t>(triangle[1])],
@@ -125,28 +129,65 @@ std::optional<RigidTransform> InsideOutTracker::acquire(std::span<const Eigen::V
   return best;
 }
 
-int InsideOutTracker::update(BodyState& state, std::span<const Eigen::Vector2d> pixels) const {
-  // Gate every visible landmark's prediction against the blobs, assign jointly, then update one
-  // landmark at a time (each re-linearised at the state the previous one left).
+namespace {
+
+// Gates every point's predicted pixel in `camera` (project(state, i): the pixel and its pose
+// Jacobian) against the blobs, assigns jointly, then updates one point at a time, each
+// re-linearised at the state the previous one left. Returns the points assigned (0 and no update
+// when fewer than `min_points`).
+template <typename Project>
+int gated_update(BodyState& state, std::size_t points, const Project& project, const CameraModel& camera,
+                 std::span<const Eigen::Vector2d> pixels, const InsideOutOptions& options, int min_points) {
   std::vector<GatedPair> pairs;
-  for (std::size_t l = 0; l < landmarks_.size(); ++l) {
-    const auto projected = landmark_pixel(state.pose(), landmarks_[l].world, camera_in_rig_);
-    if (!projected || !camera_in_rig_.in_image(projected->pixel, -20.0)) continue;
-    const MarkerProjection measurement = pose_measurement(state, *projected, options_.pixel_sigma);
+  for (std::size_t i = 0; i < points; ++i) {
+    const auto projected = project(state, i);
+    if (!projected || !camera.in_image(projected->pixel, -20.0)) continue;
+    const MarkerProjection measurement = pose_measurement(state, *projected, options.pixel_sigma);
     for (std::size_t b = 0; b < pixels.size(); ++b) {
       const double d2 = mahalanobis2(measurement, pixels[b]);
-      if (inside_gate(d2, options_.gate_chi2)) pairs.push_back({l, b, d2});
+      if (inside_gate(d2, options.gate_chi2)) pairs.push_back({i, b, d2});
     }
   }
-  const auto assigned = assign_gated(pairs, 0.5 * options_.gate_chi2);
-  if (static_cast<int>(assigned.size()) < options_.track_min_landmarks) return 0;
-  for (const auto& [l, b] : assigned) {
-    const auto projected = landmark_pixel(state.pose(), landmarks_[l].world, camera_in_rig_);
+  const auto assigned = assign_gated(pairs, 0.5 * options.gate_chi2);
+  if (static_cast<int>(assigned.size()) < min_points) return 0;
+  for (const auto& [i, b] : assigned) {
+    const auto projected = project(state, i);
     if (!projected) continue;
-    estimator::update(state, pose_measurement(state, *projected, options_.pixel_sigma), pixels[b],
-                      options_.pixel_sigma);
+    estimator::update(state, pose_measurement(state, *projected, options.pixel_sigma), pixels[b],
+                      options.pixel_sigma);
   }
   return static_cast<int>(assigned.size());
+}
+
+}  // namespace
+
+int InsideOutTracker::update(BodyState& state, std::span<const Eigen::Vector2d> pixels) const {
+  const auto project = [&](const BodyState& at, std::size_t l) {
+    return landmark_pixel(at.pose(), landmarks_[l].world, camera_in_rig_);
+  };
+  return gated_update(state, landmarks_.size(), project, camera_in_rig_, pixels, options_,
+                      options_.track_min_landmarks);
+}
+
+int InsideOutTracker::add_outside_in_frame(TimeNs stamp_ns, const CameraModel& fixed_camera,
+                                           std::span<const Eigen::Vector3d> rig_markers,
+                                           std::span<const Eigen::Vector2d> pixels) {
+  if (!state_) return 0;
+  if (stamp_ns < state_->stamp_ns) {
+    ++counters_.late_frames;
+    return 0;
+  }
+  predict(*state_, stamp_ns, options_.motion);
+  const auto project = [&](const BodyState& at, std::size_t m) {
+    return marker_pixel(at.pose(), rig_markers[m], fixed_camera);
+  };
+  // One marker is a measurement too: the filter already knows the pose.
+  const int updated = gated_update(*state_, rig_markers.size(), project, fixed_camera, pixels, options_, 1);
+  if (updated > 0) {
+    counters_.outside_in_updates += static_cast<std::uint64_t>(updated);
+    last_update_ns_ = stamp_ns;
+  }
+  return updated;
 }
 
 std::optional<InsideOutPose> InsideOutTracker::add_frame(TimeNs stamp_ns,

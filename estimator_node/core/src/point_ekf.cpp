@@ -55,8 +55,8 @@ std::optional<PointProjection> project_point(const PointState& state, const Came
 }
 
 void update(PointState& state, const PointProjection& projection, const Eigen::Vector2d& measurement,
-            double measurement_sigma_px) {
-  state.x += state.P.update(projection, measurement, measurement_sigma_px);
+            double /*measurement_sigma_px: already in the projection's S*/) {
+  state.x += state.P.update(projection, measurement);
 }
 
 }  // namespace panoptes::estimator

@@ -342,7 +342,10 @@ std::string Evaluation::summary() const {
 PoseEvaluation evaluate_poses(const Scene& scene, const std::vector<PoseRecord>& poses,
                               const EvaluationOptions& options) {
   constexpr TimeNs kBin = 10'000'000;
-  const auto definitions = scene.body_definitions();
+  // Bodies, then the rigs of moving cameras (inside-out poses are judged like bodies').
+  std::vector<std::string> names;
+  for (const auto& definition : scene.body_definitions()) names.push_back(definition.name);
+  for (const auto& rig : scene.rig_names()) names.push_back(rig);
   const TimeNs first = options.warmup_ns, last = scene.duration_ns();
   const std::size_t bins = last > first ? static_cast<std::size_t>((last - first) / kBin) + 1 : 0;
   struct Sums {
@@ -352,10 +355,10 @@ PoseEvaluation evaluate_poses(const Scene& scene, const std::vector<PoseRecord>&
   };
   std::map<std::string, std::size_t> index;
   PoseEvaluation evaluation;
-  std::vector<Sums> sums(definitions.size());
-  for (std::size_t b = 0; b < definitions.size(); ++b) {
-    index[definitions[b].name] = b;
-    evaluation.bodies.push_back({definitions[b].name});
+  std::vector<Sums> sums(names.size());
+  for (std::size_t b = 0; b < names.size(); ++b) {
+    index[names[b]] = b;
+    evaluation.bodies.push_back({names[b]});
     sums[b].bins.assign(bins, 0);
   }
   for (const PoseRecord& pose : poses) {
@@ -384,7 +387,7 @@ PoseEvaluation evaluate_poses(const Scene& scene, const std::vector<PoseRecord>&
     e.max_deg = std::max(e.max_deg, da);
     s.bins[static_cast<std::size_t>((t - first) / kBin)] = 1;
   }
-  for (std::size_t b = 0; b < definitions.size(); ++b) {
+  for (std::size_t b = 0; b < names.size(); ++b) {
     BodyEvaluation& e = evaluation.bodies[b];
     const Sums& s = sums[b];
     if (s.correct > 0) {

@@ -102,6 +102,9 @@ class FieldReader {
     child.finish();
   }
 
+  // A key read elsewhere (`surface`: estimator_node's surface mode, docs/surface.md).
+  void elsewhere(const char* key) { keys_.emplace_back(key); }
+
   // Unknown keys are errors: a misspelt key must not silently leave a default in place.
   void finish() const { reader_.expect_only(keys_); }
 
@@ -323,6 +326,7 @@ EstimatorConfig estimator_config_from_yaml(const YamlReader& reader) {
   EstimatorConfig config;
   FieldReader fields(reader);
   visit_config(fields, config);
+  fields.elsewhere("surface");
   fields.finish();
   return config;
 }

@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/session/estimator_session.h"
 
+#include <algorithm>
+
+#include "panoptes/session/log.h"
+
 namespace panoptes::session {
 
 EstimatorSession::EstimatorSession(const EstimatorConfig& config)
@@ -12,16 +16,40 @@ EstimatorSession::EstimatorSession(const EstimatorConfig& config)
 
 void EstimatorSession::process_due(std::vector<FeatureFrame>& due,
                                    const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each) {
+  if (!inside_out_.empty()) {
+    // Moving cameras' frames go to their rigs' trackers, in the order taken; the rest as below.
+    const auto moving = std::stable_partition(due.begin(), due.end(), [&](const FeatureFrame& frame) {
+      return inside_out_.handles(frame.camera_id);
+    });
+    for (auto it = due.begin(); it != moving; ++it) each(*it, inside_out_.process(*it));
+    due.erase(due.begin(), moving);
+  }
   const TimeNs newest = tracker_.last_stamp_ns();
   std::size_t late = 0;
   while (late < due.size() && due[late].stamp_ns < newest) ++late;
   if (late == 1) {
-    each(due[0], intake_.process(due[0]));
+    each(due[0], process(due[0]));
   } else if (late > 1) {
     const auto outcomes = intake_.process_batch({due.data(), late});
-    for (std::size_t i = 0; i < late; ++i) each(due[i], outcomes[i]);
+    for (std::size_t i = 0; i < late; ++i) {
+      if (!inside_out_.empty()) inside_out_.observe_fixed(due[i]);
+      each(due[i], outcomes[i]);
+    }
   }
-  for (std::size_t i = late; i < due.size(); ++i) each(due[i], intake_.process(due[i]));
+  for (std::size_t i = late; i < due.size(); ++i) each(due[i], process(due[i]));
+}
+
+void EstimatorSession::print_summary(std::size_t bad_lines) const {
+  intake_.print_summary(inbox_.drops(), bad_lines);
+  for (const auto& line : inside_out_.summary_lines()) log(line);
+}
+
+std::vector<PoseRecord> EstimatorSession::current_poses() const {
+  std::vector<PoseRecord> poses = tracker_.current_poses(pose_horizon_ns_);
+  if (inside_out_.empty()) return poses;
+  const TimeNs newest = std::max(tracker_.last_stamp_ns(), inside_out_.last_stamp_ns());
+  for (auto& pose : inside_out_.poses_at(newest, pose_horizon_ns_)) poses.push_back(std::move(pose));
+  return poses;
 }
 
 }  // namespace panoptes::session

@@ -2,7 +2,9 @@
 #include "panoptes/surface/surface_tracker.h"
 
 #include <algorithm>
+#include <limits>
 #include <utility>
+#include <vector>
 
 #include "panoptes/estimator/assignment.h"
 #include "panoptes/estimator/ekf.h"
@@ -54,8 +56,20 @@ struct SurfaceTracker::Spot {
   int updates = 0;
   std::uint32_t stroke_id = 0;  // 0 until confirmed
   int camera = -1;
+  std::vector<std::pair<int, TimeNs>> last_seen;  // per camera that updated it: its newest stamp
 
-  StrokeEvent event(StrokePhase phase) const {
+  void seen_by(int camera_index, TimeNs stamp) {
+    camera = camera_index;
+    for (auto& [seen_camera, seen_stamp] : last_seen) {
+      if (seen_camera == camera_index) {
+        seen_stamp = stamp;
+        return;
+      }
+    }
+    last_seen.emplace_back(camera_index, stamp);
+  }
+
+  StrokeEvent event(StrokePhase phase, TimeNs window_ns) const {
     StrokeEvent e;
     e.phase = phase;
     e.stroke_id = stroke_id;
@@ -64,6 +78,9 @@ struct SurfaceTracker::Spot {
     e.velocity = x.segment<2>(2);
     e.acceleration = x.tail<2>();
     e.camera = camera;
+    e.cameras = static_cast<int>(std::count_if(last_seen.begin(), last_seen.end(), [&](const auto& seen) {
+      return stamp_ns - seen.second <= window_ns;
+    }));
     return e;
   }
 
@@ -79,7 +96,10 @@ struct SurfaceTracker::Spot {
 
 SurfaceTracker::SurfaceTracker(SurfacePlane surface, std::vector<ImageToSurface> cameras,
                                SurfaceTrackerOptions options)
-    : surface_(std::move(surface)), cameras_(std::move(cameras)), options_(options) {}
+    : surface_(std::move(surface)),
+      cameras_(std::move(cameras)),
+      options_(options),
+      camera_stamp_ns_(cameras_.size(), std::numeric_limits<TimeNs>::min() / 2) {}
 SurfaceTracker::~SurfaceTracker() = default;
 SurfaceTracker::SurfaceTracker(SurfaceTracker&&) noexcept = default;
 SurfaceTracker& SurfaceTracker::operator=(SurfaceTracker&&) noexcept = default;
@@ -89,12 +109,19 @@ std::size_t SurfaceTracker::active_strokes() const {
       std::count_if(spots_.begin(), spots_.end(), [](const Spot& spot) { return spot.stroke_id != 0; }));
 }
 
-void SurfaceTracker::end_stale(TimeNs now_ns, std::vector<StrokeEvent>& events) {
-  auto stale = [&](const Spot& spot) { return now_ns - spot.stamp_ns > options_.end_after_ns; };
+void SurfaceTracker::end_stale(TimeNs now_ns, bool by_cameras, std::vector<StrokeEvent>& events) {
+  auto stale = [&](const Spot& spot) {
+    const TimeNs unseen = now_ns - spot.stamp_ns;
+    if (unseen <= options_.end_after_ns) return false;
+    if (!by_cameras || unseen > options_.camera_wait_ns) return true;
+    return std::all_of(spot.last_seen.begin(), spot.last_seen.end(), [&](const auto& seen) {
+      return camera_stamp_ns_[static_cast<std::size_t>(seen.first)] - spot.stamp_ns > options_.end_after_ns;
+    });
+  };
   for (const Spot& spot : spots_) {
     if (!stale(spot)) continue;
     if (spot.stroke_id != 0) {
-      events.push_back(spot.event(StrokePhase::kEnd));
+      events.push_back(spot.event(StrokePhase::kEnd, options_.end_after_ns));
       ++counters_.strokes_ended;
     } else {
       ++counters_.unconfirmed_dropped;
@@ -107,7 +134,7 @@ void SurfaceTracker::end_stale(TimeNs now_ns, std::vector<StrokeEvent>& events) 
 void SurfaceTracker::begin_stroke(Spot& spot, std::vector<StrokeEvent>& events) {
   spot.stroke_id = next_id_++;
   ++counters_.strokes_begun;
-  StrokeEvent begin = spot.event(StrokePhase::kBegin);
+  StrokeEvent begin = spot.event(StrokePhase::kBegin, options_.end_after_ns);
   begin.stamp_ns = spot.first_stamp_ns;
   begin.position = spot.first_position;
   events.push_back(begin);
@@ -115,7 +142,7 @@ void SurfaceTracker::begin_stroke(Spot& spot, std::vector<StrokeEvent>& events) 
 
 std::vector<StrokeEvent> SurfaceTracker::end_silent(TimeNs now_ns) {
   std::vector<StrokeEvent> events;
-  end_stale(now_ns, events);
+  end_stale(now_ns, false, events);
   return events;
 }
 
@@ -133,7 +160,9 @@ std::vector<StrokeEvent> SurfaceTracker::add_frame(int camera, TimeNs stamp_ns,
   started_ = true;
   last_stamp_ns_ = stamp_ns;
   ++counters_.frames;
-  end_stale(stamp_ns, events);
+  // Before the association (so that a new spot cannot join a stroke that has ended), this camera
+  // counts with its previous frame; after it, with this one.
+  end_stale(stamp_ns, true, events);
 
   std::vector<Measurement> measurements;
   const double variance = options_.pixel_sigma * options_.pixel_sigma;
@@ -172,10 +201,10 @@ std::vector<StrokeEvent> SurfaceTracker::add_frame(int camera, TimeNs stamp_ns,
     spot.x = x;
     spot.P = P;
     spot.stamp_ns = stamp_ns;
-    spot.camera = camera;
+    spot.seen_by(camera, stamp_ns);
     used[m] = true;
     if (++spot.updates >= options_.confirm_updates && spot.stroke_id == 0) begin_stroke(spot, events);
-    if (spot.stroke_id != 0) events.push_back(spot.event(StrokePhase::kContinue));
+    if (spot.stroke_id != 0) events.push_back(spot.event(StrokePhase::kContinue, options_.end_after_ns));
   }
 
   // Spots no stroke explained start new ones, unless they sit on a stroke (a second blob of one
@@ -202,10 +231,12 @@ std::vector<StrokeEvent> SurfaceTracker::add_frame(int camera, TimeNs stamp_ns,
     spot.stamp_ns = spot.first_stamp_ns = stamp_ns;
     spot.first_position = measurements[m].position;
     spot.updates = 1;
-    spot.camera = camera;
+    spot.seen_by(camera, stamp_ns);
     if (spot.updates >= options_.confirm_updates) begin_stroke(spot, events);
     spots_.push_back(spot);
   }
+  camera_stamp_ns_[static_cast<std::size_t>(camera)] = stamp_ns;
+  end_stale(stamp_ns, true, events);
   return events;
 }
 

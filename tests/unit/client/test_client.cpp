@@ -16,6 +16,7 @@
 #include "panoptes/client/client.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes_msgs/panoptes.h"
+#include "panoptes_msgs/surface.h"
 
 namespace panoptes::client {
 namespace {
@@ -246,6 +247,55 @@ TEST(Client, BadOptionsNameWhatIsWrong) {
   options = client_options();
   options.domain_id = 300;
   EXPECT_THROW(Client{options}, ClientError);
+}
+
+// Surface mode (docs/surface.md): stroke events to the pull queue and the stroke callbacks, in
+// order; a malformed sample counted and ignored; a removed callback stops.
+TEST(Client, DeliversStrokeEventsToQueueAndCallbacks) {
+  dds::Bus bus(FakeEstimator::make_options());
+  auto writer = bus.make_writer<msg::StrokeEvents>();
+  Client client(client_options());
+  std::atomic<int> begun{0}, ended{0};
+  const int handle = client.add_stroke_callback([&](const Stroke& s) {
+    begun += s.phase == StrokePhase::kBegin ? 1 : 0;
+    ended += s.phase == StrokePhase::kEnd ? 1 : 0;
+  });
+  ASSERT_TRUE(writer->wait_for_readers(1, 5s));
+  const auto sample = [](std::uint8_t phase, std::uint32_t id, double s) {
+    msg::StrokeEvents message;
+    message.source_camera("w0");
+    message.surface_size({3.0, 1.0});
+    msg::StrokeEvent event;
+    event.phase(phase);
+    event.stroke_id(id);
+    event.stamp_ns(static_cast<long long>(s * 1e9));
+    event.position({s, 0.5});
+    message.events().push_back(event);
+    return message;
+  };
+  writer->write(sample(0, 1, 0.1));
+  writer->write(sample(1, 1, 0.2));
+  writer->write(sample(7, 1, 0.25));  // no such phase: counted, dropped
+  writer->write(sample(2, 1, 0.3));
+  const std::array<StrokePhase, 3> phases{StrokePhase::kBegin, StrokePhase::kContinue, StrokePhase::kEnd};
+  for (std::size_t i = 0; i < phases.size(); ++i) {
+    const StrokeResult result = client.wait_for_stroke(2s);
+    ASSERT_EQ(result.status, Status::kOk) << client.stats().last_error;
+    EXPECT_EQ(result.stroke.phase, phases[i]);
+    EXPECT_EQ(result.stroke.id, 1U);
+    EXPECT_DOUBLE_EQ(result.stroke.position[0], 0.1 * static_cast<double>(i + 1));
+    EXPECT_EQ(result.stroke.surface_size[0], 3.0);
+  }
+  EXPECT_TRUE(wait_until([&] { return begun == 1 && ended == 1; }));
+  const Stats stats = client.stats();
+  EXPECT_EQ(stats.strokes_received, 3U);
+  EXPECT_EQ(stats.strokes_malformed, 1U);
+  EXPECT_NE(stats.last_error.find("phase 7"), std::string::npos) << stats.last_error;
+  client.remove_stroke_callback(handle);
+  writer->write(sample(0, 2, 0.4));
+  EXPECT_EQ(client.wait_for_stroke(2s).stroke.id, 2U);
+  EXPECT_EQ(begun.load(), 1);
+  EXPECT_EQ(client.wait_for_stroke(50ms).status, Status::kTimeout);
 }
 
 }  // namespace

@@ -232,3 +232,62 @@ TEST(FrameSequence, CountsGapsAndRestarts) {
 
 }  // namespace
 }  // namespace panoptes::client::detail
+
+namespace panoptes::client::detail {
+namespace {
+
+msg::StrokeEvents stroke_sample() {
+  msg::StrokeEvents message;
+  message.source_camera("w1");
+  message.stamp_ns(1'700'000'000'010'000'000);
+  message.surface_size({3.0, 1.0});
+  message.publish_ns(1'700'000'000'011'000'000);
+  msg::StrokeEvent event;
+  event.phase(2);
+  event.stroke_id(9);
+  event.stamp_ns(1'700'000'000'005'000'000);
+  event.position({1.5, 0.25});
+  event.velocity({-0.5, 0.125});
+  event.acceleration({3.0, -1.0});
+  event.cameras(2);
+  message.events().push_back(event);
+  return message;
+}
+
+TEST(Conversion, StrokesCopyEveryField) {
+  std::string error;
+  const auto strokes = to_strokes(stroke_sample(), 42, error);
+  ASSERT_TRUE(strokes.has_value()) << error;
+  ASSERT_EQ(strokes->size(), 1U);
+  const Stroke& s = strokes->front();
+  EXPECT_EQ(s.phase, StrokePhase::kEnd);
+  EXPECT_EQ(s.id, 9U);
+  EXPECT_EQ(s.stamp_ns, 1'700'000'000'005'000'000);
+  EXPECT_EQ(s.position, (std::array<double, 2>{1.5, 0.25}));
+  EXPECT_EQ(s.velocity, (std::array<double, 2>{-0.5, 0.125}));
+  EXPECT_EQ(s.acceleration, (std::array<double, 2>{3.0, -1.0}));
+  EXPECT_EQ(s.cameras, 2);
+  EXPECT_EQ(s.surface_size, (std::array<double, 2>{3.0, 1.0}));
+  EXPECT_EQ(s.source_camera, "w1");
+  EXPECT_EQ(s.publish_ns, 1'700'000'000'011'000'000);
+  EXPECT_EQ(s.receive_ns, 42);
+}
+
+TEST(Conversion, RejectsMalformedStrokes) {
+  std::string error;
+  auto bad_phase = stroke_sample();
+  bad_phase.events()[0].phase(3);
+  EXPECT_FALSE(to_strokes(bad_phase, 0, error).has_value());
+  EXPECT_NE(error.find("phase 3"), std::string::npos) << error;
+  auto no_id = stroke_sample();
+  no_id.events()[0].stroke_id(0);
+  EXPECT_FALSE(to_strokes(no_id, 0, error).has_value());
+  EXPECT_NE(error.find("stroke_id 0"), std::string::npos) << error;
+  auto not_finite = stroke_sample();
+  not_finite.events()[0].velocity({std::numeric_limits<double>::quiet_NaN(), 0.0});
+  EXPECT_FALSE(to_strokes(not_finite, 0, error).has_value());
+  EXPECT_NE(error.find("non-finite"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace panoptes::client::detail

@@ -124,6 +124,52 @@ TEST(FilterLayer, UpdateEqualsTheJosephFormOnRandomBodyFilterCases) {
   check_against_joseph<15>(12);
 }
 
+// The prediction skips A's zero 3 x 3 blocks and the pixel update reuses the measurement's H P and
+// S: both must give what the dense formulas give, with the zero blocks where the body filter has
+// them and with none at all.
+TEST(FilterLayer, BlockSparsePredictionEqualsTheDenseProduct) {
+  constexpr int kN = 18;
+  std::mt19937 rng(21);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int trial = 0; trial < 50; ++trial) {
+    Eigen::Matrix<double, kN, kN> A;
+    for (int r = 0; r < kN; ++r)
+      for (int c = 0; c < kN; ++c) A(r, c) = normal(rng);
+    if (trial % 2 == 0) {  // the body transition's pattern: block upper triangular within p/v/a and θ/ω/α
+      for (Eigen::Index i = 0; i < 6; ++i)
+        for (Eigen::Index j = 0; j < 6; ++j)
+          if (j < i || i / 3 != j / 3) A.block<3, 3>(3 * i, 3 * j).setZero();
+    }
+    const Eigen::Matrix<double, kN, kN> prior = random_spd<kN>(rng, 1.0);
+    const Eigen::Matrix<double, kN, kN> Q = random_spd<kN>(rng, 1e-3);
+    FilterCovariance<kN> P(prior);
+    P.propagate(A, Q);
+    const Eigen::Matrix<double, kN, kN> dense = A * prior * A.transpose() + Q;
+    EXPECT_LT((P.matrix() - dense).norm(), 1e-12 * dense.norm()) << "trial " << trial;
+    EXPECT_EQ(P.matrix(), P.matrix().transpose());
+  }
+}
+
+TEST(FilterLayer, PixelUpdateEqualsTheGeneralUpdate) {
+  constexpr int kN = 18;
+  std::mt19937 rng(22);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int trial = 0; trial < 50; ++trial) {
+    const Eigen::Matrix<double, kN, kN> prior = random_spd<kN>(rng, std::pow(10.0, trial % 5 - 3));
+    Eigen::Matrix<double, 2, kN> H = Eigen::Matrix<double, 2, kN>::Zero();
+    for (int r = 0; r < 2; ++r)  // a marker's Jacobian: position and rotation columns only
+      for (int c : {0, 1, 2, 9, 10, 11}) H(r, c) = normal(rng) * 300.0;
+    const double sigma = 0.2;
+    const Eigen::Vector2d z(normal(rng), normal(rng));
+    FilterCovariance<kN> reused(prior), general(prior);
+    const PixelMeasurement<kN> measurement = reused.pixel_measurement(Eigen::Vector2d::Zero(), H, sigma);
+    const auto dx_reused = reused.update(measurement, z);
+    const auto dx_general = general.update<2>(H, sigma * sigma * Eigen::Matrix2d::Identity(), z);
+    EXPECT_LT((dx_reused - dx_general).norm(), 1e-9 * (1.0 + dx_general.norm())) << "trial " << trial;
+    EXPECT_LT((reused.matrix() - general.matrix()).norm(), 1e-9 * prior.norm()) << "trial " << trial;
+  }
+}
+
 TEST(FilterLayer, MahalanobisOfTheInnovation) {
   Eigen::Matrix2d S_inverse;
   S_inverse << 0.5, 0, 0, 0.25;

@@ -20,14 +20,19 @@
 namespace panoptes::estimator {
 namespace {
 
-CameraModel head_camera() {
+// 1280 × 1024, focal length `f` px, centred, no distortion.
+CameraIntrinsics sxga(double f) {
   CameraIntrinsics K;
   K.width = 1280;
   K.height = 1024;
-  K.fx = K.fy = 800.0;
+  K.fx = K.fy = f;
   K.cx = 639.5;
   K.cy = 511.5;
-  return CameraModel(K, RigidTransform{});  // the rig is the camera (T_rig_cam = identity)
+  return K;
+}
+
+CameraModel head_camera() {
+  return CameraModel(sxga(800.0), RigidTransform{});  // the rig is the camera (T_rig_cam = identity)
 }
 
 // The head at time t: a 1.5 m circle at 1.2 m/s, 1.7 m high with a bob, looking towards the room's
@@ -144,6 +149,96 @@ TEST(InsideOut, HeadMountedCameraTracksFromColdStart) {
   EXPECT_GE(tracked, frames * 8 / 10);
   EXPECT_LE(position_rmse_mm, 1.0);
   EXPECT_LE(angle_rmse_deg, 0.05);
+}
+
+struct FusionRun {
+  double position_rmse_mm = 0, angle_rmse_deg = 0;
+  int poses = 0;
+  std::uint64_t outside_in_updates = 0;
+};
+
+// The head of HeadMountedCameraTracksFromColdStart also carries four markers (rig frame, on top of
+// the head: −y is up in the camera frame) that a fixed outside-in pair sees. `use_head` false: the
+// head camera's first frame only (the cold start), then the fixed cameras alone.
+FusionRun run_fusion(bool use_head, bool use_fixed) {
+  const CameraModel camera = head_camera();
+  const auto constellations = room_landmarks(21);
+  const std::vector<Eigen::Vector3d> headset = {
+      {0.07, -0.10, -0.05}, {-0.08, -0.11, -0.03}, {0.01, -0.14, -0.12}, {-0.03, -0.08, 0.04}};
+  const CameraIntrinsics K = sxga(1400.0);
+  const std::vector<CameraModel> fixed = {
+      CameraModel(K, look_at({3.6, 0.8, 2.6}, {0.0, 0.0, 1.6}, Eigen::Vector3d::UnitZ())),
+      CameraModel(K, look_at({-0.8, 3.6, 2.6}, {0.0, 0.0, 1.6}, Eigen::Vector3d::UnitZ()))};
+  InsideOutTracker tracker(constellations, camera);
+  std::mt19937 rng(8);
+  std::normal_distribution<double> noise(0.0, 0.1);
+  const auto observe = [&](const std::vector<Eigen::Vector3d>& points, const auto& project) {
+    std::vector<Eigen::Vector2d> pixels;
+    for (const auto& point : points)
+      if (const auto pixel = project(point); pixel)
+        pixels.push_back(*pixel + Eigen::Vector2d(noise(rng), noise(rng)));
+    return pixels;
+  };
+  std::vector<Eigen::Vector3d> landmarks;
+  for (const auto& c : constellations)
+    landmarks.insert(landmarks.end(), c.landmarks.begin(), c.landmarks.end());
+  FusionRun run;
+  double p2 = 0, a2 = 0;
+  const TimeNs period = 10'000'000;
+  for (TimeNs stamp = 0; stamp < 10'000'000'000; stamp += period) {
+    const RigidTransform truth = head_pose(static_cast<double>(stamp) * 1e-9);
+    for (std::size_t c = 0; use_fixed && stamp > 0 && c < fixed.size(); ++c) {
+      // Asynchronous, between the head camera's frames; each run is judged after its head frame.
+      const TimeNs at = stamp - period + 3'000'000 * static_cast<TimeNs>(c + 1);
+      const RigidTransform head_then = head_pose(static_cast<double>(at) * 1e-9);
+      tracker.add_outside_in_frame(
+          at, fixed[c], headset,
+          observe(headset, [&](const Eigen::Vector3d& m) -> std::optional<Eigen::Vector2d> {
+            auto pixel = fixed[c].project(head_then.apply(m));
+            if (!pixel || !fixed[c].in_image(*pixel)) return std::nullopt;
+            return pixel;
+          }));
+    }
+    if (use_head || stamp == 0) {
+      tracker.add_frame(stamp,
+                        observe(landmarks, [&](const Eigen::Vector3d& l) -> std::optional<Eigen::Vector2d> {
+                          const auto projected = landmark_pixel(truth, l, camera);
+                          if (!projected || !camera.in_image(projected->pixel)) return std::nullopt;
+                          return projected->pixel;
+                        }));
+    }
+    if (!tracker.state() || stamp < 500'000'000) continue;  // settled after its cold start
+    const BodyState& state = *tracker.state();
+    const RigidTransform truth_then = head_pose(static_cast<double>(state.stamp_ns) * 1e-9);
+    p2 += (state.p - truth_then.t).squaredNorm();
+    a2 += std::pow(state.q.angularDistance(truth_then.q), 2);
+    ++run.poses;
+  }
+  run.position_rmse_mm = 1e3 * std::sqrt(p2 / std::max(run.poses, 1));
+  run.angle_rmse_deg = std::sqrt(a2 / std::max(run.poses, 1)) * 180.0 / M_PI;
+  run.outside_in_updates = tracker.counters().outside_in_updates;
+  return run;
+}
+
+// Issue 21: with one fixed outside-in pair also seeing the headset, the fused pose is better than
+// either alone (all three through the same filter, seeded).
+TEST(InsideOut, FusedWithAnOutsideInPairBeatsEitherAlone) {
+  const FusionRun inside_out = run_fusion(true, false);
+  const FusionRun outside_in = run_fusion(false, true);
+  const FusionRun fused = run_fusion(true, true);
+  for (const auto& [name, run] :
+       {std::pair{"inside-out", inside_out}, {"outside-in", outside_in}, {"fused", fused}})
+    std::printf(
+        "%-10s position RMSE %.3f mm, orientation RMSE %.4f deg (%d poses, %llu outside-in updates)\n", name,
+        run.position_rmse_mm, run.angle_rmse_deg, run.poses,
+        static_cast<unsigned long long>(run.outside_in_updates));
+  EXPECT_EQ(inside_out.outside_in_updates, 0u);
+  EXPECT_GT(outside_in.outside_in_updates, 1000u);
+  EXPECT_GE(outside_in.poses, 900);
+  EXPECT_LT(fused.position_rmse_mm, inside_out.position_rmse_mm);
+  EXPECT_LT(fused.position_rmse_mm, outside_in.position_rmse_mm);
+  EXPECT_LT(fused.angle_rmse_deg, inside_out.angle_rmse_deg);
+  EXPECT_LT(fused.angle_rmse_deg, outside_in.angle_rmse_deg);
 }
 
 TEST(InsideOut, BadConstellationsAreRefusedByName) {

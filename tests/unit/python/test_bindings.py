@@ -103,6 +103,14 @@ class EmptyDomain(unittest.TestCase):
         self.assertEqual(self.client.domain_id, EMPTY_DOMAIN)
         self.assertEqual(self.client.stats().frames_received, 0)
 
+    def test_stroke_wait_times_out_with_none(self):
+        start = time.monotonic()
+        self.assertIsNone(self.client.wait_for_stroke(0.2))
+        self.assertGreaterEqual(time.monotonic() - start, 0.19)
+        self.assertEqual(self.client.stats().strokes_received, 0)
+        with self.assertRaises(ValueError):
+            self.client.wait_for_stroke(-1.0)
+
     def test_bad_timeouts(self):
         for timeout in (-1.0, math.nan):
             with self.subTest(timeout=timeout), self.assertRaises(ValueError):

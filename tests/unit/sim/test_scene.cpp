@@ -404,3 +404,26 @@ TEST(Scene, MissingOrMalformedFilesAreConfigErrors) {
 
 }  // namespace
 }  // namespace panoptes
+
+namespace panoptes {
+namespace {
+
+// Issue 22: laser spots on the wall exist only while the pen is down.
+TEST(Scene, PenDownIntervalsSwitchAMarkerOnAndOff) {
+  const Scene scene = Scene::load(kScenes / "surface_wall.yaml");
+  ASSERT_EQ(scene.marker_names().at(4), "line_high");  // pen down in [0.2, 4.9) s
+  const auto valid_at = [&](double t_s) { return scene.markers_at(seconds_to_ns(t_s)).at(4).valid; };
+  EXPECT_FALSE(valid_at(0.19));
+  EXPECT_TRUE(valid_at(0.2));
+  EXPECT_TRUE(valid_at(4.89));
+  EXPECT_FALSE(valid_at(4.9));
+  // The spots lie on the wall (y = 0) whether on or off.
+  for (const auto& marker : scene.markers_at(seconds_to_ns(1.0))) EXPECT_NEAR(marker.p.y(), 0.0, 1e-12);
+  const ConfigError reversed = load_error(kOneCamera +
+                                          "markers: [{name: a, path: {type: static, position: [0, 0, 0]}, "
+                                          "pen_down: [[1.0, 2.0], [1.5, 3.0]]}]\n");
+  EXPECT_EQ(reversed.key(), "markers[0].pen_down") << reversed.what();
+}
+
+}  // namespace
+}  // namespace panoptes

@@ -82,11 +82,16 @@ struct TrackedRun {
   SurfaceCounters counters;
 };
 
-TrackedRun track(const Scene& scene, unsigned noise_seed) {
+// A tracker for the scene's wall, every camera mapped through its calibration.
+SurfaceTracker plane_tracker(const Scene& scene) {
   std::vector<ImageToSurface> mappings;
   for (const auto& camera : scene.cameras)
     mappings.push_back(ImageToSurface::from_plane(camera, scene.plane));
-  SurfaceTracker tracker(scene.plane, mappings);
+  return SurfaceTracker(scene.plane, mappings);
+}
+
+TrackedRun track(const Scene& scene, unsigned noise_seed) {
+  SurfaceTracker tracker = plane_tracker(scene);
   std::mt19937 rng(noise_seed);
   std::normal_distribution<double> noise(0.0, 0.2);
   TrackedRun run;
@@ -204,10 +209,7 @@ TEST(SurfaceTracker, LumiPointSceneStrokesBeginEndAndStayWhole) {
 
 TEST(SurfaceTracker, CountsAndDropsWhatItCannotUse) {
   const Scene scene = make_scene(1);
-  std::vector<ImageToSurface> mappings;
-  for (const auto& camera : scene.cameras)
-    mappings.push_back(ImageToSurface::from_plane(camera, scene.plane));
-  SurfaceTracker tracker(scene.plane, mappings);
+  SurfaceTracker tracker = plane_tracker(scene);
   const auto pixel_of = [&](int camera, const Eigen::Vector2d& st) {
     return *scene.cameras[static_cast<std::size_t>(camera)].project(scene.plane.at(st));
   };
@@ -223,6 +225,7 @@ TEST(SurfaceTracker, CountsAndDropsWhatItCannotUse) {
   EXPECT_EQ(events[0].phase, StrokePhase::kBegin);
   EXPECT_EQ(events[0].stamp_ns, 2'000'000);
   EXPECT_EQ(events[1].phase, StrokePhase::kContinue);
+  EXPECT_EQ(events[1].cameras, 2);  // both cameras updated it within end_after_ns
   // An older frame, an unknown camera, NaN pixels: counted, nothing else changes.
   EXPECT_TRUE(tracker.add_frame(2, 4'000'000, a).empty());
   EXPECT_EQ(tracker.counters().late_frames, 1U);
@@ -236,8 +239,39 @@ TEST(SurfaceTracker, CountsAndDropsWhatItCannotUse) {
   const auto ended = tracker.end_silent(100'000'000);
   ASSERT_EQ(ended.size(), 1U);
   EXPECT_EQ(ended[0].phase, StrokePhase::kEnd);
+  EXPECT_EQ(ended[0].cameras, 2);
   EXPECT_EQ(ended[0].stamp_ns, 5'000'000);
   EXPECT_EQ(tracker.active_strokes(), 0U);
+}
+
+// A camera whose frames arrive late (and are dropped) does not end the strokes only it sees, while
+// the other cameras' frames move on; silence from every camera that saw it does.
+TEST(SurfaceTracker, ADelayedCameraDoesNotEndItsStrokes) {
+  const Scene scene = make_scene(1);
+  SurfaceTracker tracker = plane_tracker(scene);
+  const auto spot_at = [&](double s) {
+    return std::vector<Eigen::Vector2d>{*scene.cameras[0].project(scene.plane.at({s, 0.5}))};
+  };
+  const std::vector<Eigen::Vector2d> none;
+  constexpr TimeNs kMs = 1'000'000;
+  tracker.add_frame(0, 0, spot_at(0.30));
+  ASSERT_EQ(tracker.add_frame(0, 10 * kMs, spot_at(0.31)).front().phase, StrokePhase::kBegin);
+  // Camera 1 (which does not see the spot) goes on for 60 ms; camera 0's frames of that time come
+  // late and are dropped.
+  for (TimeNs t = 13; t <= 73; t += 10) EXPECT_TRUE(tracker.add_frame(1, t * kMs, none).empty()) << t;
+  EXPECT_TRUE(tracker.add_frame(0, 40 * kMs, spot_at(0.34)).empty());
+  EXPECT_EQ(tracker.counters().late_frames, 1U);
+  const auto resumed = tracker.add_frame(0, 80 * kMs, spot_at(0.38));
+  ASSERT_EQ(resumed.size(), 1U);
+  EXPECT_EQ(resumed[0].phase, StrokePhase::kContinue);
+  EXPECT_EQ(resumed[0].stroke_id, 1U);
+  // Pen up: camera 0 sends frames without it; 30 ms after the last update the stroke ends.
+  EXPECT_TRUE(tracker.add_frame(0, 100 * kMs, none).empty());
+  const auto ended = tracker.add_frame(0, 120 * kMs, none);
+  ASSERT_EQ(ended.size(), 1U);
+  EXPECT_EQ(ended[0].phase, StrokePhase::kEnd);
+  EXPECT_EQ(ended[0].stamp_ns, 80 * kMs);
+  EXPECT_EQ(tracker.counters().strokes_begun, 1U);
 }
 
 }  // namespace

@@ -188,6 +188,10 @@ void bind_descriptions_and_stats(py::module_& m) {
                     "frame_number went back: a new estimator run")
       .def_readonly("callback_errors", &client::Stats::callback_errors,
                     "exceptions raised by callbacks (caught)")
+      .def_readonly("strokes_received", &client::Stats::strokes_received, "stroke events (surface mode)")
+      .def_readonly("strokes_malformed", &client::Stats::strokes_malformed, "counted and ignored")
+      .def_readonly("strokes_dropped", &client::Stats::strokes_dropped,
+                    "overflowed the wait_for_stroke queue")
       .def_readonly("last_error", &client::Stats::last_error,
                     "why the last malformed sample was ignored, or the last callback's exception")
       .def("__repr__", [](const client::Stats& s) {
@@ -199,6 +203,47 @@ void bind_descriptions_and_stats(py::module_& m) {
       });
 }
 
+// Surface mode (docs/surface.md): one stroke event.
+void bind_stroke(py::module_& m) {
+  py::class_<client::Stroke>(
+      m, "Stroke",
+      "One event of a stroke on the wall (surface mode, docs/surface.md): phase "
+      "'begin', 'continue' or 'end'; position, velocity, acceleration in surface metres.")
+      .def_property_readonly("phase",
+                             [](const client::Stroke& s) {
+                               return s.phase == client::StrokePhase::kBegin ? "begin"
+                                      : s.phase == client::StrokePhase::kEnd ? "end"
+                                                                             : "continue";
+                             })
+      .def_readonly("id", &client::Stroke::id, "stable for the stroke's life (int)")
+      .def_readonly("stamp_ns", &client::Stroke::stamp_ns, "common clock (int)")
+      .def_property_readonly(
+          "position", [](const client::Stroke& s) { return py::make_tuple(s.position[0], s.position[1]); },
+          "(s, t), m")
+      .def_property_readonly(
+          "velocity", [](const client::Stroke& s) { return py::make_tuple(s.velocity[0], s.velocity[1]); },
+          "m/s")
+      .def_property_readonly(
+          "acceleration",
+          [](const client::Stroke& s) { return py::make_tuple(s.acceleration[0], s.acceleration[1]); },
+          "m/s^2")
+      .def_readonly("cameras", &client::Stroke::cameras, "cameras that saw it recently")
+      .def_property_readonly(
+          "surface_size",
+          [](const client::Stroke& s) { return py::make_tuple(s.surface_size[0], s.surface_size[1]); },
+          "(width, height), m")
+      .def_readonly("source_camera", &client::Stroke::source_camera)
+      .def_readonly("publish_ns", &client::Stroke::publish_ns)
+      .def_readonly("receive_ns", &client::Stroke::receive_ns)
+      .def("__repr__", [](const client::Stroke& s) {
+        return "<panoptes.Stroke " + std::to_string(s.id) + " " +
+               (s.phase == client::StrokePhase::kBegin ? "begin"
+                : s.phase == client::StrokePhase::kEnd ? "end"
+                                                       : "continue") +
+               ">";
+      });
+}
+
 // Instances of the data classes come from the library only: `__new__` refuses to make an empty one
 // (pybind11 would hand out an object over unconstructed memory; copy.copy() would too). pybind11's
 // own instances are allocated with tp_alloc, not through __new__.
@@ -206,7 +251,7 @@ void forbid_new(py::module_& m) {
   const py::cpp_function refuse([](const py::args&, const py::kwargs&) {
     throw py::type_error("panoptes frames, bodies, markers, descriptions and stats come from a Client");
   });
-  for (const char* name : {"Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats"})
+  for (const char* name : {"Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats", "Stroke"})
     m.attr(name).attr("__new__") = py::staticmethod(refuse);
 }
 
@@ -252,10 +297,12 @@ PYBIND11_MODULE(_panoptes, m) {
   bind_marker(m);
   bind_frame(m);
   bind_descriptions_and_stats(m);
+  bind_stroke(m);
   bind_client(m);
   forbid_new(m);
   // Users meet these classes as panoptes.X (help(), repr of the types, pickling errors).
-  for (const char* name : {"Client", "Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats"})
+  for (const char* name :
+       {"Client", "Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats", "Stroke"})
     m.attr(name).attr("__module__") = "panoptes";
   py::module_::import("atexit").attr("register")(py::cpp_function(&PyClient::close_all_at_exit));
 }

@@ -160,7 +160,10 @@ void PyClient::destroy() {
   without_gil([this] { client_.reset(); });
 }
 
-py::object PyClient::wait_for_frame(double timeout_s) {
+// Waits in slices of kSignalCheckS with the GIL released, so Ctrl-C interrupts; `wait` is the
+// library's wait_for_frame or wait_for_stroke.
+template <class Wait>
+py::object PyClient::wait_sliced(double timeout_s, const Wait& wait) {
   if (std::isnan(timeout_s) || timeout_s < 0)
     throw py::value_error("timeout must be a non-negative number of seconds, not " +
                           std::to_string(timeout_s));
@@ -170,12 +173,27 @@ py::object PyClient::wait_for_frame(double timeout_s) {
     const double elapsed_s = std::chrono::duration<double>(Clock::now() - start).count();
     const double slice_s = std::clamp(timeout_s - elapsed_s, 0.0, kSignalCheckS);
     const auto slice = std::chrono::milliseconds(static_cast<long long>(std::ceil(slice_s * 1000.0)));
-    client::FrameResult result = without_gil([&] { return client_->wait_for_frame(slice); });
-    if (result.status == client::Status::kOk) return py::cast(std::move(result.frame));
-    if (result.status == client::Status::kClosed) return py::none();
+    auto result = without_gil([&] { return wait(slice); });
+    if (result.first == client::Status::kOk) return py::cast(std::move(result.second));
+    if (result.first == client::Status::kClosed) return py::none();
     if (PyErr_CheckSignals() != 0) throw py::error_already_set();
     if (std::chrono::duration<double>(Clock::now() - start).count() >= timeout_s) return py::none();
   }
+}
+
+py::object PyClient::wait_for_frame(double timeout_s) {
+  return wait_sliced(timeout_s, [this](std::chrono::milliseconds slice) {
+    client::FrameResult result = client_->wait_for_frame(slice);
+    // The cast needs the GIL: hand the frame out, cast it after.
+    return std::make_pair(result.status, std::move(result.frame));
+  });
+}
+
+py::object PyClient::wait_for_stroke(double timeout_s) {
+  return wait_sliced(timeout_s, [this](std::chrono::milliseconds slice) {
+    client::StrokeResult result = client_->wait_for_stroke(slice);
+    return std::make_pair(result.status, std::move(result.stroke));
+  });
 }
 
 std::optional<client::Frame> PyClient::latest() const {
@@ -318,6 +336,12 @@ Every method may be called from any thread. Clients still open when the interpre
 The next frame not yet returned by wait_for_frame (in order, from a queue of queue_depth frames), waiting
 up to `timeout` seconds with the GIL released. None on timeout (status_text() says why) or when the client
 is closed. Ctrl-C interrupts the wait (KeyboardInterrupt).)doc")
+      .def("wait_for_stroke", bound(&PyClient::wait_for_stroke), "timeout"_a,
+           R"doc(wait_for_stroke(timeout) -> Stroke or None
+
+Surface mode (docs/surface.md): the next stroke event not yet returned (in order, from a queue of
+queue_depth), waiting up to `timeout` seconds with the GIL released. The first call subscribes to
+rt/panoptes/strokes; events before it are not seen. None on timeout or when the client is closed.)doc")
       .def("latest", bound(&PyClient::latest),
            "latest() -> Frame or None: the newest frame received (does not consume the wait_for_frame queue)")
       .def("add_callback", bound(&PyClient::add_callback), "callback"_a,

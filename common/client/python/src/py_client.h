@@ -37,6 +37,7 @@ class PyClient {
   PyClient& operator=(const PyClient&) = delete;
 
   pybind11::object wait_for_frame(double timeout_s);
+  pybind11::object wait_for_stroke(double timeout_s);  // surface mode: a Stroke or None
   std::optional<client::Frame> latest() const;
   int add_callback(const pybind11::function& callback);
   void remove_callback(int handle);
@@ -55,6 +56,8 @@ class PyClient {
   static void close_all_at_exit();
 
  private:
+  template <class Wait>
+  pybind11::object wait_sliced(double timeout_s, const Wait& wait);
   void destroy();  // the destructor's work: close, drop the callables, destroy the library's client
 
   std::unique_ptr<client::Client> client_;

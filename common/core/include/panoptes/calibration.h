@@ -20,6 +20,12 @@ struct CameraCalibration {
   // YAML `nominal: true`: the intrinsics are a guess (focal length / pixel pitch, image centre,
   // no distortion), not a chessboard calibration; `calibrate solve` then refines them.
   bool nominal_intrinsics = false;
+  // YAML `moving: true`: the camera moves with the user (inside-out tracking, docs/inside_out.md).
+  // Its T_world_cam is then its mount on the rig it is carried by (T_rig_cam; absent: identity),
+  // and the estimator tracks the rig's pose from the landmarks the camera sees. `rig` names that
+  // pose (YAML `rig:`; empty: the camera id).
+  bool moving = false;
+  std::string rig;
 
   // Requires T_world_cam.
   CameraModel model() const;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "panoptes/calibration.h"
+#include "panoptes/chain_definition.h"
 
 namespace panoptes {
 
@@ -22,6 +23,10 @@ std::vector<BodyDefinition> load_bodies(const std::filesystem::path& path);
 // Reads one body (`name`, `markers`) from a YAML map; `names` collects names to reject duplicates.
 // Used by body files and simulator scenes alike. Throws ConfigError naming the file and key.
 BodyDefinition read_body_definition(const YamlReader& item, std::set<std::string>& names);
+// The `type: chain` entries of a bodies file (articulated chains, docs/articulated.md); load_bodies
+// skips them. Throws ConfigError naming the file and entry for impossible links or limits.
+std::vector<ChainDefinition> load_chains(const std::filesystem::path& path);
+ChainDefinition read_chain_definition(const YamlReader& item, std::set<std::string>& names);
 void save_bodies(const std::vector<BodyDefinition>& bodies, const std::filesystem::path& path);
 
 }  // namespace panoptes

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -16,6 +17,7 @@
 #include "panoptes/calibration.h"
 #include "panoptes/formats/trc.h"
 #include "panoptes/image.h"
+#include "panoptes/landmarks.h"
 #include "panoptes/records.h"
 #include "panoptes/time.h"
 
@@ -84,8 +86,19 @@ class Scene {
   // Every point marker, including those of bodies (named "<body>/<index>"), in a fixed order.
   const std::vector<std::string>& marker_names() const;
   std::vector<MarkerTruth> markers_at(TimeNs scene_time_ns) const;
+  // The bodies' poses, then the rigs' of moving cameras (camera key `rig`, docs/inside_out.md).
   std::vector<BodyTruth> bodies_at(TimeNs scene_time_ns) const;
   std::vector<BodyDefinition> body_definitions() const;
+  // A camera's pose in the world: its T_world_cam, or for a camera on a rig (calibration.moving,
+  // whose T_world_cam is then its mount T_rig_cam) the rig's pose times the mount.
+  RigidTransform camera_pose_at(std::size_t camera_index, TimeNs scene_time_ns) const;
+  // The markers a rig carries (camera key rig.markers, rig frame), by rig name; simulated as
+  // markers "<rig>/<index>" after the bodies'.
+  std::map<std::string, std::vector<Eigen::Vector3d>> rig_markers() const;
+  // The names of the rigs that carry moving cameras, in camera order.
+  std::vector<std::string> rig_names() const;
+  // The scene's `landmarks` (fixed markers whose positions a moving camera's tracking knows).
+  const std::vector<LandmarkGroup>& landmarks() const;
   double marker_radius(std::size_t marker_index) const;
 
  private:

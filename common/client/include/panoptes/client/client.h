@@ -123,6 +123,27 @@ struct BodyDescription {
   std::vector<Vec3> markers;  // m, body frame
 };
 
+// Surface mode (docs/surface.md): one event of a stroke on the wall (rt/panoptes/strokes).
+enum class StrokePhase {
+  kBegin,     // a new stroke: stamp and position of its first spot
+  kContinue,  // the filtered state at an update
+  kEnd,       // the stroke ended: stamp and state of its last update
+};
+
+struct Stroke {
+  StrokePhase phase = StrokePhase::kContinue;
+  std::uint32_t id = 0;                  // stable for the stroke's life, from 1 in each estimator run
+  std::int64_t stamp_ns = 0;             // common clock
+  std::array<double, 2> position{};      // m, surface frame (s along the width, t along the height)
+  std::array<double, 2> velocity{};      // m/s
+  std::array<double, 2> acceleration{};  // m/s²
+  int cameras = 0;                       // cameras that saw it recently
+  std::array<double, 2> surface_size{};  // m, the surface's extent
+  std::string source_camera;             // camera whose frame caused the event ("": the clock)
+  std::int64_t publish_ns = 0;           // the estimator wrote it (common clock)
+  std::int64_t receive_ns = 0;           // this client received it (its system clock)
+};
+
 enum class Status {
   kOk,       // a frame
   kTimeout,  // no frame within the timeout (see status_text())
@@ -134,6 +155,11 @@ struct FrameResult {
   Frame frame;  // empty unless kOk
 };
 
+struct StrokeResult {
+  Status status = Status::kTimeout;
+  Stroke stroke;  // empty unless kOk
+};
+
 struct Stats {
   std::uint64_t frames_received = 0;
   std::uint64_t frames_dropped = 0;    // overflowed the queue
@@ -143,6 +169,9 @@ struct Stats {
   std::uint64_t descriptions_malformed = 0;  // counted and ignored
   std::uint64_t estimator_restarts = 0;      // frame_number went back: a new estimator run
   std::uint64_t callback_errors = 0;         // exceptions thrown by callbacks (caught)
+  std::uint64_t strokes_received = 0;        // stroke events (surface mode)
+  std::uint64_t strokes_malformed = 0;       // counted and ignored
+  std::uint64_t strokes_dropped = 0;         // overflowed the stroke queue
   std::string last_error;  // why the last malformed sample was ignored, or the last callback's exception
 };
 
@@ -165,6 +194,15 @@ class PANOPTES_CLIENT_API Client {
   FrameResult wait_for_frame(std::chrono::milliseconds timeout);
   // The newest frame received, if any (does not consume the queue).
   std::optional<Frame> latest() const;
+
+  // Surface mode (docs/surface.md). The first of these calls subscribes to rt/panoptes/strokes
+  // (reliable: every begin and end arrives); events before it are not seen. Callbacks run on the
+  // bus's thread, one call per event, in order; exceptions are caught and counted.
+  using StrokeCallback = std::function<void(const Stroke&)>;
+  int add_stroke_callback(StrokeCallback callback);
+  void remove_stroke_callback(int handle);  // after it returns the callback does not run
+  // The next stroke event not yet returned (a queue of ClientOptions::queue_depth), waiting up to `timeout`.
+  StrokeResult wait_for_stroke(std::chrono::milliseconds timeout);
 
   // The estimator's bodies (from rt/panoptes/body_descriptions, known to late joiners too).
   std::vector<BodyDescription> body_descriptions() const;

@@ -16,6 +16,7 @@ namespace panoptes::estimator_app {
 struct NodeCommandLine {
   std::string calibration_file;
   std::string bodies_file;
+  std::string landmarks_file;  // inside-out mode (docs/inside_out.md)
   std::string config_file;
   bool print_config = false;
   std::vector<std::string> in_features;
@@ -29,6 +30,8 @@ struct NodeCommandLine {
   double duration_s = 0.0;
   bool latency_probe = false;
   bool quiet = false;
+  std::string surface_file;  // surface mode (docs/surface.md): a YAML with a `surface:` section
+  std::string out_strokes;   // surface mode: Stroke JSONL
   // The settings flags given explicitly, applied over the --config file.
   std::vector<std::function<void(session::EstimatorConfig&)>> overrides;
 

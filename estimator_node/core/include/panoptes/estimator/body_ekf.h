@@ -65,6 +65,8 @@ FilterCovariance<kBodyStateSize> body_prior(const BodyPriorSigmas& sigmas);
 
 // The error state's transition matrix over `dt` seconds from `state` (linearised about its ω, α).
 BodyMatrix body_transition(const BodyState& state, double dt);
+// The process noise Q(Δt) of the error state (also the base of an articulated chain, chain.h).
+BodyMatrix body_process_noise(double dt, const BodyMotionNoise& noise);
 
 // Moves the state to `stamp_ns` (forward or, for look-ups only, backward).
 void predict(BodyState& state, TimeNs stamp_ns, const BodyMotionNoise& noise);
@@ -98,7 +100,8 @@ MarkerProjection pose_measurement(const BodyState& state, const MarkerPixel& pro
                                   double measurement_sigma_px);
 
 // EKF update with one marker measurement through the filter layer (ekf.h), which returns the error
-// state δx; it is injected into the nominal state and δθ reset into q (eq. A.41).
+// state δx; it is injected into the nominal state and δθ reset into q (eq. A.41). `projection`
+// must have been made from this state (its H P and S, with the noise σ, are reused).
 void update(BodyState& state, const MarkerProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px);
 
@@ -110,5 +113,18 @@ void inject(BodyState& state, const BodyVector& dx);
 // Rotation vector -> quaternion (exp map) and back.
 Eigen::Quaterniond rotation_vector_to_quaternion(const Eigen::Vector3d& r);
 Eigen::Vector3d quaternion_to_rotation_vector(const Eigen::Quaterniond& q);
+
+// The pose blocks of inject()'s correction for any state with the body's members and block indices: the
+// body filter's and an articulated chain's base (chain.h).
+template <class State, class Correction>
+void inject_pose_blocks(State& state, const Correction& dx) {
+  state.p += dx.template segment<3>(kBodyP);
+  state.v += dx.template segment<3>(kBodyV);
+  state.a += dx.template segment<3>(kBodyA);
+  state.w += dx.template segment<3>(kBodyW);
+  state.alpha += dx.template segment<3>(kBodyAlpha);
+  // Reset (seed 003 eq. A.41): the incremental rotation is added onto the external quaternion.
+  state.q = (state.q * rotation_vector_to_quaternion(dx.template segment<3>(kBodyTheta))).normalized();
+}
 
 }  // namespace panoptes::estimator

@@ -26,7 +26,10 @@ namespace panoptes::estimator {
 // A known arrangement of landmarks, world frame (surveyed, or from an outside-in calibration).
 struct Constellation {
   std::string name;
-  std::vector<Eigen::Vector3d> landmarks;  // at least 3, not all collinear
+  std::vector<Eigen::Vector3d> landmarks;  // at least 3, not all collinear (when `identifies`)
+  // false: single fixed markers and the like, used once tracking but never to identify from a
+  // cold start (a constellation's widest triangle is the P3P anchor).
+  bool identifies = true;
 };
 
 // A landmark's pixel in a camera mounted on a rig at `T_world_rig`, with the 2×6 Jacobian with
@@ -63,13 +66,14 @@ struct InsideOutCounters {
   std::uint64_t updates = 0;  // landmark updates
   std::uint64_t frames_without_update = 0;
   std::uint64_t lost = 0;
-  std::uint64_t late_frames = 0;  // older than the filter: dropped
+  std::uint64_t late_frames = 0;         // older than the filter: dropped
+  std::uint64_t outside_in_updates = 0;  // rig-marker updates from fixed cameras
 };
 
 class InsideOutTracker {
  public:
-  // Throws std::invalid_argument naming the constellation when it has fewer than three landmarks
-  // or they are collinear, or when no constellation is given.
+  // Throws std::invalid_argument naming the constellation when one that identifies has fewer than
+  // three landmarks or they are collinear, or when none identifies.
   InsideOutTracker(std::vector<Constellation> constellations, CameraModel camera_in_rig,
                    InsideOutOptions options = {});
 
@@ -77,12 +81,24 @@ class InsideOutTracker {
   // at the frame's stamp when tracking (after this frame's update), nullopt while not acquired.
   std::optional<InsideOutPose> add_frame(TimeNs stamp_ns, std::span<const Eigen::Vector2d> pixels);
 
+  // Fusion with outside-in (issue 21): a fixed camera's frame showing markers carried by the rig
+  // (`rig_markers`, rig frame; `fixed_camera` with its world pose). Each marker's projection is the
+  // rigid-body measurement (body_ekf.h's marker_pixel) and updates the same filter, gated and
+  // assigned as the landmarks are. Only while tracking: a cold start needs the moving camera.
+  // Returns the markers that updated (0 also for a late frame, counted).
+  int add_outside_in_frame(TimeNs stamp_ns, const CameraModel& fixed_camera,
+                           std::span<const Eigen::Vector3d> rig_markers,
+                           std::span<const Eigen::Vector2d> pixels);
+
   bool tracking() const { return state_.has_value(); }
   // The filter's state (pose, rates, covariance) while tracking.
   const std::optional<BodyState>& state() const { return state_; }
   const InsideOutCounters& counters() const { return counters_; }
   // The constellation the last cold start identified (empty before).
   const std::string& acquired_from() const { return acquired_from_; }
+  // Stamp of the last frame that updated the filter (0 before).
+  TimeNs last_update_ns() const { return last_update_ns_; }
+  const InsideOutOptions& options() const { return options_; }
 
  private:
   struct Landmark {
@@ -95,7 +111,7 @@ class InsideOutTracker {
 
   std::vector<Constellation> constellations_;
   std::vector<Landmark> landmarks_;
-  std::vector<std::array<int, 3>> widest_triangles_;  // per constellation, indices into it
+  std::vector<std::optional<std::array<int, 3>>> widest_triangles_;  // per constellation that identifies
   CameraModel camera_in_rig_;
   RigidTransform T_rig_cam_;
   InsideOutOptions options_;

@@ -43,6 +43,8 @@ std::optional<PointProjection> project_point(const PointState& state, const Came
                                              double measurement_sigma_px);
 
 // EKF update with one 2D measurement through the filter layer (ekf.h: P − K S Kᵀ, symmetrised).
+// `projection` must have been made from this state (its H P and S, with the noise σ, are reused);
+// `measurement_sigma_px` is that σ, kept for the callers' readability.
 void update(PointState& state, const PointProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px);
 

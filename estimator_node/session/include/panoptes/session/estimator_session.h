@@ -15,6 +15,7 @@
 #include "panoptes/estimator/tracker.h"
 #include "panoptes/records.h"
 #include "panoptes/session/estimator_config.h"
+#include "panoptes/session/inside_out_cameras.h"
 #include "panoptes/session/intake.h"
 
 namespace panoptes::session {
@@ -42,8 +43,17 @@ class EstimatorSession {
   }
   estimator::FrameInbox& inbox() { return inbox_; }
 
-  // The owning thread: one tracker update.
-  estimator::FrameOutcome process(const FeatureFrame& frame) { return intake_.process(frame); }
+  // Moving cameras and their landmarks (inside-out mode); before the run.
+  InsideOutCameras& inside_out() { return inside_out_; }
+  const InsideOutCameras& inside_out() const { return inside_out_; }
+
+  // The owning thread: one tracker update (a moving camera's frame: its rig's update).
+  estimator::FrameOutcome process(const FeatureFrame& frame) {
+    if (inside_out_.handles(frame.camera_id)) return inside_out_.process(frame);
+    const auto outcome = intake_.process(frame);
+    if (!inside_out_.empty()) inside_out_.observe_fixed(frame);
+    return outcome;
+  }
   // The owning thread: frames taken from the inbox together (oldest first). Those older than the
   // newest processed frame go to the tracker as one batch (one rewind and replay for the burst);
   // then the others one at a time. `each` sees every frame right after its update, so the outputs
@@ -52,10 +62,11 @@ class EstimatorSession {
                    const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each);
 
   estimator::EstimatorUsage usage(TimeNs stamp_ns) const { return intake_.usage(stamp_ns, inbox_.drops()); }
-  void print_summary(std::size_t bad_lines) const { intake_.print_summary(inbox_.drops(), bad_lines); }
+  void print_summary(std::size_t bad_lines) const;
 
-  // Body poses at the newest frame, predicted node.prediction_horizon_ms ahead.
-  std::vector<PoseRecord> current_poses() const { return tracker_.current_poses(pose_horizon_ns_); }
+  // Body poses at the newest frame, predicted node.prediction_horizon_ms ahead; then the poses of
+  // the rigs of moving cameras at the newest frame of any camera.
+  std::vector<PoseRecord> current_poses() const;
 
  private:
   EstimatorConfig config_;
@@ -63,6 +74,7 @@ class EstimatorSession {
   Intake intake_;
   estimator::FrameInbox inbox_;
   TimeNs pose_horizon_ns_;
+  InsideOutCameras inside_out_;
 };
 
 }  // namespace panoptes::session

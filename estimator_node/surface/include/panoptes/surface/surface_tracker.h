@@ -21,13 +21,17 @@
 namespace panoptes::surface {
 
 struct SurfaceTrackerOptions {
-  double pixel_sigma = 0.2;             // spot centroid noise, pixels
-  double jerk_noise = 2000.0;           // white-jerk spectral density, m²/s⁵ (hand-held pointers)
-  double initial_speed_sigma = 3.0;     // m/s, a new spot's velocity prior
-  double initial_accel_sigma = 30.0;    // m/s²
-  double gate_chi2 = 13.82;             // 2 degrees of freedom, 99.9%
-  int confirm_updates = 2;              // a spot begins a stroke after this many updates
-  TimeNs end_after_ns = 30'000'000;     // a stroke ends when unseen this long
+  double pixel_sigma = 0.2;           // spot centroid noise, pixels
+  double jerk_noise = 2000.0;         // white-jerk spectral density, m²/s⁵ (hand-held pointers)
+  double initial_speed_sigma = 3.0;   // m/s, a new spot's velocity prior
+  double initial_accel_sigma = 30.0;  // m/s²
+  double gate_chi2 = 13.82;           // 2 degrees of freedom, 99.9%
+  int confirm_updates = 2;            // a spot begins a stroke after this many updates
+  TimeNs end_after_ns = 30'000'000;   // a stroke ends when unseen this long ...
+  // ... by every camera that saw it: each must have delivered a frame that much newer than the
+  // stroke's last update (a camera whose frames are delayed, and dropped as late, does not end it),
+  // or this long must have passed (a camera that stopped sending).
+  TimeNs camera_wait_ns = 250'000'000;
   double duplicate_distance_m = 0.005;  // an unexplained spot this close to a stroke is the same spot
 };
 
@@ -43,6 +47,7 @@ struct StrokeEvent {
   Eigen::Vector2d velocity = Eigen::Vector2d::Zero();      // m/s
   Eigen::Vector2d acceleration = Eigen::Vector2d::Zero();  // m/s²
   int camera = -1;                                         // the camera whose frame caused it
+  int cameras = 0;  // distinct cameras that updated the stroke within end_after_ns of its stamp
 };
 
 // Why spots and frames were not used, counted (docs/surface.md).
@@ -72,17 +77,20 @@ class SurfaceTracker {
 
   // One frame of camera `camera` at `stamp_ns` (mid-exposure) with its spots' pixel centroids.
   // Frames must come in stamp order across cameras (the estimator's inbox orders them); an older
-  // one is counted and dropped. Returns the events it causes, strokes ended by silence first.
+  // one is counted and dropped. Returns the events it causes, in order.
   std::vector<StrokeEvent> add_frame(int camera, TimeNs stamp_ns, std::span<const Eigen::Vector2d> pixels);
   // Ends the strokes unseen for end_after_ns at `now_ns` (call when no frames arrive).
   std::vector<StrokeEvent> end_silent(TimeNs now_ns);
 
   const SurfaceCounters& counters() const { return counters_; }
+  const SurfaceTrackerOptions& options() const { return options_; }
+  const SurfacePlane& surface() const { return surface_; }
   std::size_t active_strokes() const;
 
  private:
   struct Spot;
-  void end_stale(TimeNs now_ns, std::vector<StrokeEvent>& events);
+  // `by_cameras`: the camera-aware rule of add_frame; otherwise end_after_ns alone (end_silent).
+  void end_stale(TimeNs now_ns, bool by_cameras, std::vector<StrokeEvent>& events);
   void begin_stroke(Spot& spot, std::vector<StrokeEvent>& events);
 
   SurfacePlane surface_;
@@ -92,6 +100,7 @@ class SurfaceTracker {
   SurfaceCounters counters_;
   TimeNs last_stamp_ns_ = 0;
   bool started_ = false;
+  std::vector<TimeNs> camera_stamp_ns_;  // per camera: its newest processed frame
   std::uint32_t next_id_ = 1;
 };
 
