@@ -60,7 +60,8 @@ panoptes::dds::Bus open_bus(const Options& options, const std::string& name) {
 
 std::unique_ptr<panoptes::dds::Writer<msg::CameraCommand>> command_writer(panoptes::dds::Bus& bus,
                                                                           const Options& options) {
-  auto writer = bus.make_writer<msg::CameraCommand>();
+  // In the target's DDS partition: only that camera (or with '*', every camera) receives it.
+  auto writer = bus.make_writer<msg::CameraCommand>(panoptes::dds::Qos::kDefault, {}, options.target);
   // Reliable, volatile: a command only reaches readers already matched, so wait for them.
   if (!writer->wait_for_readers(1, std::chrono::milliseconds(static_cast<long>(options.timeout_s * 1000)))) {
     std::fprintf(stderr, "panoptes_ctl: no camera node is listening for commands (waited %.0f s)\n",
@@ -201,6 +202,10 @@ int show_status(const Options& options) {
   while (printed.load() < options.count && Clock::now() < deadline && !panoptes::stop_requested()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+  // Samples the bus dropped (docs/hostile_input.md): malformed, or naming another camera than their writer.
+  for (const auto& [reason, count] : bus.receive_rejections())
+    std::fprintf(stderr, "panoptes_ctl: dropped %llu status messages (%s)\n",
+                 static_cast<unsigned long long>(count), reason.c_str());
   if (printed.load() < options.count) {
     std::fprintf(stderr, "panoptes_ctl: received %d of %d status messages within %.0f s\n", printed.load(),
                  options.count, options.timeout_s);
@@ -259,7 +264,7 @@ int get_preview(Options options) {
 // predictions when testing the guided search.
 int publish_predictions(const Options& options) {
   auto bus = open_bus(options, "predict");
-  auto writer = bus.make_writer<msg::Predictions>();
+  auto writer = bus.make_writer<msg::Predictions>(panoptes::dds::Qos::kDefault, {}, options.camera);
   msg::PredictedWindow window;
   window.track_id(0);
   window.x(static_cast<float>(options.window[0]));

@@ -5,9 +5,9 @@
 # (a throw-away studio of deploy/security/panoptes-security, governance ENCRYPT by default),
 # alternated ROUNDS times in one run so both see the same machine; prints one JSON object with
 # every run and the medians' ratios (secure / plain).
-#   tests/bench/bench_security.sh BUILD_DIR [ROUNDS=2] [--protection encrypt|sign|payload] [bench_latency options...]
+#   tests/bench/bench_security.sh BUILD_DIR [ROUNDS=2] [--protection encrypt|sign|payload|submessage] [bench_latency options...]
 set -euo pipefail
-build_dir="${1:?usage: bench_security.sh BUILD_DIR [ROUNDS] [--protection encrypt|sign|payload] [bench_latency options]}"
+build_dir="${1:?usage: bench_security.sh BUILD_DIR [ROUNDS] [--protection encrypt|sign|payload|submessage] [bench_latency options]}"
 rounds="${2:-2}"
 shift $(($# >= 2 ? 2 : 1))
 protection=encrypt

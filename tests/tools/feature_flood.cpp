@@ -2,7 +2,8 @@
 // panoptes_feature_flood: one process that publishes, for N cameras at R Hz each, FeatureFrames with
 // B blobs moving on circles, plus each camera's CameraInfo and a CameraStatus once a second; and a
 // TrackFrame with T tracks at R Hz. A controlled bus load for the console benchmark
-// (tests/bench/bench_console.sh) that does not need N camera processes.
+// (tests/bench/bench_console.sh) that does not need N camera processes. With --partition and
+// --camera-ids it is also a camera that writes as others (tests/integration/test_security.sh).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -41,6 +42,8 @@ int run(int argc, char** argv) {
   int tracks = 3;
   double duration_s = 20;
   std::string dds_profile;
+  std::string partition;
+  std::vector<std::string> camera_ids;
   CLI::App app{"panoptes_feature_flood: publishes N cameras' features at R Hz (console benchmark)",
                "panoptes_feature_flood"};
   app.option_defaults()->always_capture_default();
@@ -50,6 +53,10 @@ int run(int argc, char** argv) {
   app.add_option("--tracks", tracks, "tracks per TrackFrame")->check(CLI::Range(0, 1000));
   app.add_option("--duration", duration_s, "seconds")->check(CLI::PositiveNumber);
   app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile");
+  app.add_option("--partition", partition,
+                 "camera id whose DDS partition the camera topics are written in (default: every camera's)");
+  app.add_option("--camera-ids", camera_ids, "camera ids to write as (default: cam0, cam1, ...)")
+      ->delimiter(',');
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
 
@@ -57,11 +64,16 @@ int run(int argc, char** argv) {
   bus_options.profile_file = dds_profile;
   bus_options.participant_name = "panoptes_feature_flood";
   panoptes::dds::Bus bus(bus_options);
-  auto info_writer = bus.make_writer<msg::CameraInfo>();
-  auto feature_writer = bus.make_writer<msg::FeatureFrame>();
-  auto status_writer = bus.make_writer<msg::CameraStatus>();
-  auto track_writer = bus.make_writer<msg::TrackFrame>();
-  for (int c = 0; c < cameras; ++c) info_writer->write(info_of("cam" + std::to_string(c), rate_hz));
+  const auto scoped = panoptes::dds::Qos::kDefault;
+  auto info_writer = bus.make_writer<msg::CameraInfo>(scoped, {}, partition);
+  auto feature_writer = bus.make_writer<msg::FeatureFrame>(scoped, {}, partition);
+  auto status_writer = bus.make_writer<msg::CameraStatus>(scoped, {}, partition);
+  auto track_writer = tracks > 0 ? bus.make_writer<msg::TrackFrame>() : nullptr;
+  if (camera_ids.empty()) {
+    for (int c = 0; c < cameras; ++c) camera_ids.push_back("cam" + std::to_string(c));
+  }
+  cameras = static_cast<int>(camera_ids.size());
+  for (const std::string& id : camera_ids) info_writer->write(info_of(id, rate_hz));
 
   // Cameras take turns: one tick per camera frame, spread evenly over the period.
   const auto tick = std::chrono::nanoseconds(static_cast<long long>(1e9 / (rate_hz * cameras)));
@@ -78,7 +90,7 @@ int run(int argc, char** argv) {
     const double t = static_cast<double>(frame) / rate_hz;
     const panoptes::TimeNs now = panoptes::wall_now_ns();
     msg::FeatureFrame features;
-    features.camera_id("cam" + std::to_string(camera));
+    features.camera_id(camera_ids[static_cast<std::size_t>(camera)]);
     features.frame(frame);
     features.stamp_ns(now);
     features.publish_ns(now);
@@ -107,7 +119,7 @@ int run(int argc, char** argv) {
     if (camera == 0 && frame % static_cast<long long>(rate_hz) == 0) {
       for (int c = 0; c < cameras; ++c) {
         msg::CameraStatus status;
-        status.camera_id("cam" + std::to_string(c));
+        status.camera_id(camera_ids[static_cast<std::size_t>(c)]);
         status.stamp_ns(now);
         status.fps(rate_hz);
         status.frames(static_cast<unsigned long long>(frame));

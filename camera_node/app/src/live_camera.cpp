@@ -109,19 +109,22 @@ LiveCamera::LiveCamera(LiveOptions options, camera::FrameSource& source, camera:
       time_sync_(make_time_sync(bus_, options_, camera_id_, clock_)),
       sync_view_(time_sync_ ? std::make_unique<TimeSyncClockView>(*time_sync_) : nullptr),
       stamps_(clock_, sync_view_.get()),
-      info_writer_(bus_.make_writer<msg::CameraInfo>()),
-      feature_writer_(bus_.make_writer<msg::FeatureFrame>()),
-      status_writer_(bus_.make_writer<msg::CameraStatus>()),
-      preview_writer_(bus_.make_writer<msg::CameraPreview>()),
-      command_reader_(bus_.make_reader<msg::CameraCommand>([this](msg::CameraCommand&& message) {
-        if (const std::string_view problem = command_problem(message); !problem.empty()) {
-          rejections_.note(problem);
-          return;
-        }
-        camera::Command command{message.target(), message.seq(), message.command(), {}};
-        command.arguments.assign(message.arguments().begin(), message.arguments().end());
-        commands_.push(std::move(command));
-      })),
+      // In this camera's DDS partition: what its permissions grant when secured (docs/security.md).
+      info_writer_(bus_.make_writer<msg::CameraInfo>(dds::Qos::kDefault, {}, camera_id_)),
+      feature_writer_(bus_.make_writer<msg::FeatureFrame>(dds::Qos::kDefault, {}, camera_id_)),
+      status_writer_(bus_.make_writer<msg::CameraStatus>(dds::Qos::kDefault, {}, camera_id_)),
+      preview_writer_(bus_.make_writer<msg::CameraPreview>(dds::Qos::kDefault, {}, camera_id_)),
+      command_reader_(bus_.make_reader<msg::CameraCommand>(
+          [this](msg::CameraCommand&& message) {
+            if (const std::string_view problem = command_problem(message); !problem.empty()) {
+              rejections_.note(problem);
+              return;
+            }
+            camera::Command command{message.target(), message.seq(), message.command(), {}};
+            command.arguments.assign(message.arguments().begin(), message.arguments().end());
+            commands_.push(std::move(command));
+          },
+          dds::Qos::kDefault, camera_id_)),
       prediction_reader_(make_prediction_reader(bus_, predictions_, rejections_, camera_id_)),
       out_(options_.out_features.empty() ? nullptr : std::make_unique<JsonlWriter>(options_.out_features)),
       sink_(stamps_, *feature_writer_, out_.get(), log_),

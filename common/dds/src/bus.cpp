@@ -4,6 +4,7 @@
 #include <dlfcn.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cstdlib>
 #include <cstring>
@@ -20,6 +21,7 @@
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/log/Log.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/DataWriterListener.hpp>
@@ -68,17 +70,39 @@ struct TopicSpec {
   // and every reliable reader, which then contends for the writer: at the frame rate of the ROS 2
   // topics that doubled their cost (docs/benchmarks.md, "Issue 15: ROS 2 publishers").
   int nack_suppression_ms = 0;
+  // A camera-scoped topic: its writers and readers are in DDS partitions named by camera (or
+  // time-sync client) id, which a camera's DDS Security permissions restrict to its own id.
+  bool camera_scoped = false;
 };
 
 template <class T>
 struct TopicTraits;
+
+// The camera-scoped topics (TopicSpec::camera_scoped).
+template <class T>
+constexpr bool kCameraScoped = false;
+template <>
+constexpr bool kCameraScoped<msg::CameraInfo> = true;
+template <>
+constexpr bool kCameraScoped<msg::FeatureFrame> = true;
+template <>
+constexpr bool kCameraScoped<msg::CameraStatus> = true;
+template <>
+constexpr bool kCameraScoped<msg::CameraCommand> = true;
+template <>
+constexpr bool kCameraScoped<msg::CameraPreview> = true;
+template <>
+constexpr bool kCameraScoped<msg::Predictions> = true;
+template <>
+constexpr bool kCameraScoped<msg::TimeSync> = true;
 
 #define PANOPTES_TOPIC(Type, topic_name, reliable, durability, depth, offer_reliable, leading_id) \
   template <>                                                                                     \
   struct TopicTraits<msg::Type> {                                                                 \
     using PubSubType = msg::Type##PubSubType;                                                     \
     static TopicSpec spec() {                                                                     \
-      return {topic_name, reliable, durability, depth, offer_reliable, leading_id};               \
+      return {topic_name,     reliable,   durability, depth,                                      \
+              offer_reliable, leading_id, 0,          kCameraScoped<msg::Type>};                  \
     }                                                                                             \
   };
 
@@ -116,6 +140,7 @@ PANOPTES_TOPIC(StrokeEvents, "rt/panoptes/strokes", true, Durability::kVolatile,
     static TopicSpec spec() {                              \
       TopicSpec spec = TopicTraits<msg::Measured>::spec(); \
       spec.name = topic_name;                              \
+      spec.camera_scoped = false;                          \
       return spec;                                         \
     }                                                      \
   };
@@ -147,6 +172,109 @@ constexpr int kOfferedReliableDepth = 64;
 constexpr std::int32_t kOfferedHeartbeatNs = 50'000'000;
 
 // ---------------------------------------------------------------------------------------------
+// Camera-scoped topics (docs/security.md, "Camera-scoped permissions"). Each writer and reader is
+// in DDS partitions (Fast DDS's per-endpoint "partitions" property): a camera's writers and its own
+// readers in the partition named by its id; the writers of everyone else in "*" (every camera);
+// the readers of every camera in "*" and the default partition "". DDS Security checks the
+// partitions of every endpoint against the signed permissions, which grant a camera its own id
+// only; each reader then drops a sample whose id is not its writer's partition, so a camera can
+// neither publish nor read as another.
+
+constexpr const char* kEveryCamera = "*";
+constexpr const char* kPartitionsProperty = "partitions";
+
+// The partitions of an endpoint on a camera-scoped topic, as the "partitions" property spells
+// them (';'-separated). `scope`: the camera or client id the endpoint is for, or empty.
+std::string scoped_partitions(const std::string& scope, bool reader) {
+  if (scope.find(';') != std::string::npos)
+    throw DdsError("camera or client id '" + scope + "': ';' cannot name a DDS partition");
+  if (!scope.empty()) return scope;
+  return reader ? std::string(";") + kEveryCamera : std::string(kEveryCamera);
+}
+
+// Whether a sample addressed to `id` may come from a writer in `partitions`: a writer in the
+// default partition or in a wildcard one speaks for every camera (only operators and the estimator
+// may do that when secured); a writer in named partitions only for those.
+bool scope_allows(const std::vector<std::string>& partitions, std::string_view id) {
+  if (partitions.empty()) return true;
+  for (const std::string& partition : partitions) {
+    if (partition.empty() || partition.find_first_of("*?[") != std::string::npos || partition == id)
+      return true;
+  }
+  return false;
+}
+
+// The id a sample is addressed to or comes from: its leading camera or client id, or a command's target.
+template <class T>
+std::optional<std::string_view> addressed_id(const T& sample) {
+  if constexpr (requires { sample.camera_id(); }) {
+    return sample.camera_id();
+  } else if constexpr (requires { sample.client_id(); }) {
+    return sample.client_id();
+  } else if constexpr (requires { sample.target(); }) {
+    return sample.target();
+  } else {
+    return std::nullopt;
+  }
+}
+
+using WriterKey = std::array<eprosima::fastrtps::rtps::octet, 16>;
+WriterKey writer_key(const eprosima::fastrtps::rtps::InstanceHandle_t& handle) {
+  WriterKey key{};
+  std::memcpy(key.data(), handle.value, key.size());
+  return key;
+}
+WriterKey writer_key(const eprosima::fastrtps::rtps::GUID_t& guid) {
+  eprosima::fastrtps::rtps::InstanceHandle_t handle;
+  handle = guid;
+  return writer_key(handle);
+}
+
+// The partitions of every writer this participant discovered (remote ones through discovery, its
+// own when created), so that a reader can check a sample against its writer's partitions.
+class WriterPartitions : public fdds::DomainParticipantListener {
+ public:
+  void on_publisher_discovery(fdds::DomainParticipant*,
+                              eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
+    using Status = eprosima::fastrtps::rtps::WriterDiscoveryInfo::DISCOVERY_STATUS;
+    const WriterKey key = writer_key(info.info.guid());
+    if (info.status == Status::REMOVED_WRITER) {
+      forget(key);
+      return;
+    }
+    std::vector<std::string> partitions;
+    for (const auto& name : info.info.m_qos.m_partition.names()) partitions.push_back(name);
+    remember(key, std::move(partitions));
+  }
+  void remember(const WriterKey& key, std::vector<std::string> partitions) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    partitions_[key] = std::move(partitions);
+  }
+  void forget(const WriterKey& key) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    partitions_.erase(key);
+  }
+  // Whether `writer` may write a sample addressed to `id` (none: any); what it may not is counted.
+  bool admits(const eprosima::fastrtps::rtps::InstanceHandle_t& writer, std::optional<std::string_view> id,
+              ReceiveCounters& counters) const {
+    if (!id) return true;
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = partitions_.find(writer_key(writer));
+    if (it == partitions_.end()) {
+      counters.note("unknown_writer");  // discovery reports every writer before it matches
+      return false;
+    }
+    if (scope_allows(it->second, *id)) return true;
+    counters.note("id_outside_partition");
+    return false;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<WriterKey, std::vector<std::string>> partitions_;
+};
+
+// ---------------------------------------------------------------------------------------------
 // The `only_id` content filter. A custom filter class (not the SQL one, which needs the type's
 // TypeObject) that reads the first member, a CDR string, straight from the serialised payload.
 // Every participant registers it, so writers evaluate it for each matched reader and skip the
@@ -158,17 +286,19 @@ constexpr const char* kIdFilterExpression = "leading_id = %0";
 
 // The first string of a sample: 4 bytes of encapsulation (its second byte's low bit: little
 // endian), a 4-byte length counting the terminating NUL, the characters.
-std::optional<std::string_view> leading_string(const eprosima::fastrtps::rtps::SerializedPayload_t& payload) {
-  if (payload.data == nullptr || payload.length < 8) return std::nullopt;
-  const unsigned char* d = payload.data;
+std::optional<std::string_view> leading_string(const unsigned char* d, std::size_t length) {
+  if (d == nullptr || length < 8) return std::nullopt;
   const bool little_endian = (d[1] & 1) != 0;
   std::uint32_t n = 0;
   for (int i = 0; i < 4; ++i) {
     const std::uint32_t byte = d[4 + (little_endian ? i : 3 - i)];
     n |= byte << (8 * i);
   }
-  if (n == 0 || n > payload.length - 8) return std::nullopt;
+  if (n == 0 || n > length - 8) return std::nullopt;
   return std::string_view(reinterpret_cast<const char*>(d + 8), n - 1);
+}
+std::optional<std::string_view> leading_string(const eprosima::fastrtps::rtps::SerializedPayload_t& payload) {
+  return leading_string(payload.data, payload.length);
 }
 
 class LeadingIdFilter final : public fdds::IContentFilter {
@@ -385,7 +515,8 @@ class BusCore {
       const char* env = std::getenv("PANOPTES_DOMAIN");
       domain = env != nullptr ? std::atoi(env) : 0;
     }
-    participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos);
+    participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos,
+                                               &writer_partitions_, fdds::StatusMask::none());
     if (participant_ == nullptr && security_files_) {
       fdds::Log::Flush();  // Fast DDS's own reason, logged asynchronously, goes out before ours
       throw SecurityError(
@@ -455,6 +586,7 @@ class BusCore {
   fdds::Subscriber* subscriber() const { return subscriber_; }
   const std::filesystem::path& profile_file() const { return profile_file_; }
   ReceiveCounters& receive_counters() { return receive_counters_; }
+  WriterPartitions& writer_partitions() { return writer_partitions_; }
   bool secured() const { return security_files_.has_value(); }
   // Appended to a refused writer, reader or topic: with DDS Security, the likely reason.
   std::string refusal_hint() const {
@@ -470,7 +602,8 @@ class BusCore {
   }
 
   std::filesystem::path profile_file_;
-  ReceiveCounters receive_counters_;  // outlives the participant: its types refer to it
+  ReceiveCounters receive_counters_;    // outlives the participant: its types refer to it
+  WriterPartitions writer_partitions_;  // the participant's listener
   std::optional<SecurityFiles> security_files_;
   fdds::DomainParticipant* participant_ = nullptr;
   fdds::Publisher* publisher_ = nullptr;
@@ -504,6 +637,7 @@ Writer<T>::Writer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 template <class T>
 Writer<T>::~Writer() {
   if (impl_ && impl_->writer != nullptr) {
+    impl_->core->writer_partitions().forget(writer_key(impl_->writer->guid()));
     impl_->writer->set_listener(nullptr);
     impl_->core->publisher()->delete_datawriter(impl_->writer);
   }
@@ -543,8 +677,10 @@ bool Writer<T>::wait_for_readers(int count, std::chrono::milliseconds timeout) c
 template <class T>
 class ReaderListener : public fdds::DataReaderListener {
  public:
-  ReaderListener(typename Reader<T>::Callback callback, ReceiveCounters& counters)
-      : callback_(std::move(callback)), counters_(counters) {}
+  // `partitions`, on a camera-scoped topic: the writers' partitions each sample is checked against.
+  ReaderListener(typename Reader<T>::Callback callback, ReceiveCounters& counters,
+                 const WriterPartitions* partitions = nullptr)
+      : callback_(std::move(callback)), counters_(counters), partitions_(partitions) {}
 
   void on_data_available(fdds::DataReader* reader) override {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -556,6 +692,9 @@ class ReaderListener : public fdds::DataReaderListener {
       const bool decoded = !t_last_decode_failed;
       t_last_decode_failed = false;
       if (!info.valid_data || !decoded) continue;  // a failed decode is counted by its type
+      if (partitions_ != nullptr &&
+          !partitions_->admits(info.publication_handle, addressed_id(sample), counters_))
+        continue;
       received.fetch_add(1);
       // Runs on a Fast DDS thread: whatever a sample makes the handler throw is counted, not fatal.
       try {
@@ -581,6 +720,7 @@ class ReaderListener : public fdds::DataReaderListener {
  private:
   typename Reader<T>::Callback callback_;
   ReceiveCounters& counters_;
+  const WriterPartitions* partitions_;
   std::mutex mutex_;
   bool active_ = true;
 };
@@ -649,16 +789,26 @@ std::string topic_name_for(const std::string& requested) {
 }  // namespace
 
 template <class T>
-std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos, const std::string& topic_name) {
+std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos, const std::string& topic_name,
+                                            const std::string& scope) {
   auto impl = std::make_unique<typename Writer<T>::Impl>();
   impl->core = core_;
+  const TopicSpec spec = TopicTraits<T>::spec();
   const std::string name = topic_name_for<T>(topic_name);
   fdds::Topic* topic = core_->topic<T>(name);
-  impl->writer = core_->publisher()->create_datawriter(topic, writer_qos_for(TopicTraits<T>::spec(), qos),
-                                                       &impl->listener);
-  if (impl->writer == nullptr) {
-    throw DdsError("cannot create DDS writer on " + name + core_->refusal_hint());
+  fdds::DataWriterQos writer_qos = writer_qos_for(spec, qos);
+  std::vector<std::string> partitions;
+  if (spec.camera_scoped) {
+    const std::string property = scoped_partitions(scope, false);
+    writer_qos.properties().properties().emplace_back(kPartitionsProperty, property);
+    partitions.push_back(property);
   }
+  impl->writer = core_->publisher()->create_datawriter(topic, writer_qos, &impl->listener);
+  if (impl->writer == nullptr) {
+    throw DdsError("cannot create DDS writer on " + name + (scope.empty() ? "" : " for '" + scope + "'") +
+                   core_->refusal_hint());
+  }
+  core_->writer_partitions().remember(writer_key(impl->writer->guid()), std::move(partitions));
   return std::make_unique<Writer<T>>(std::move(impl));
 }
 
@@ -669,21 +819,27 @@ std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_samp
   const std::string name = topic_name_for<T>(topic_name);
   auto impl = std::make_unique<typename Reader<T>::Impl>();
   impl->core = core_;
-  impl->listener = std::make_unique<ReaderListener<T>>(std::move(on_sample), core_->receive_counters());
+  impl->listener =
+      std::make_unique<ReaderListener<T>>(std::move(on_sample), core_->receive_counters(),
+                                          spec.camera_scoped ? &core_->writer_partitions() : nullptr);
   fdds::TopicDescription* topic = core_->topic<T>(name);
-  if (!only_id.empty()) {
+  fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
+  apply_spec(reader_qos, spec, qos);
+  if (spec.camera_scoped)
+    reader_qos.properties().properties().emplace_back(kPartitionsProperty, scoped_partitions(only_id, true));
+  // A camera-scoped topic without a leading id (commands): the partition alone selects the samples.
+  if (!only_id.empty() && !(spec.camera_scoped && !spec.leading_id)) {
     if (!spec.leading_id) throw DdsError("cannot filter " + name + " by id: it has no leading id");
     impl->filtered_topic = core_->filtered_topic<T>(name, only_id);
     if (impl->filtered_topic == nullptr)
       throw DdsError("cannot create the content filter on " + name + " for '" + only_id + "'");
     topic = impl->filtered_topic;
   }
-  fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
-  apply_spec(reader_qos, spec, qos);
   impl->reader = core_->subscriber()->create_datareader(topic, reader_qos, impl->listener.get());
   if (impl->reader == nullptr) {
     if (impl->filtered_topic != nullptr) core_->delete_filtered_topic(impl->filtered_topic);
-    throw DdsError("cannot create DDS reader on " + name + core_->refusal_hint());
+    throw DdsError("cannot create DDS reader on " + name + (only_id.empty() ? "" : " for '" + only_id + "'") +
+                   core_->refusal_hint());
   }
   return std::make_unique<Reader<T>>(std::move(impl));
 }
@@ -692,7 +848,8 @@ std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_samp
 #define PANOPTES_INSTANTIATE_TYPE(Type)                                                      \
   template class Writer<Type>;                                                               \
   template class Reader<Type>;                                                               \
-  template std::unique_ptr<Writer<Type>> Bus::make_writer<Type>(Qos, const std::string&);    \
+  template std::unique_ptr<Writer<Type>> Bus::make_writer<Type>(Qos, const std::string&,     \
+                                                                const std::string&);         \
   template std::unique_ptr<Reader<Type>> Bus::make_reader<Type>(Reader<Type>::Callback, Qos, \
                                                                 const std::string&, const std::string&);
 #define PANOPTES_INSTANTIATE(Type) PANOPTES_INSTANTIATE_TYPE(msg::Type)
@@ -840,7 +997,10 @@ const RawTopicEntry& raw_entry_named(const std::string& topic) {
 
 class RawReaderListener : public fdds::DataReaderListener {
  public:
-  explicit RawReaderListener(RawReader::Callback callback) : callback_(std::move(callback)) {}
+  // `partitions`, on a camera-scoped topic: as ReaderListener, the leading id read from the CDR.
+  RawReaderListener(RawReader::Callback callback, ReceiveCounters& counters,
+                    const WriterPartitions* partitions)
+      : callback_(std::move(callback)), counters_(counters), partitions_(partitions) {}
   void on_data_available(fdds::DataReader* reader) override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!active_) return;
@@ -848,6 +1008,11 @@ class RawReaderListener : public fdds::DataReaderListener {
     fdds::SampleInfo info;
     while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
       if (!info.valid_data) continue;
+      // A sample that does not decode has no id: it is recorded as it came (docs/hostile_input.md).
+      if (partitions_ != nullptr &&
+          !partitions_->admits(info.publication_handle, leading_string(sample.cdr.data(), sample.cdr.size()),
+                               counters_))
+        continue;
       received.fetch_add(1);
       sample.source_timestamp_ns = info.source_timestamp.to_ns();
       callback_(std::move(sample));
@@ -866,6 +1031,8 @@ class RawReaderListener : public fdds::DataReaderListener {
 
  private:
   RawReader::Callback callback_;
+  ReceiveCounters& counters_;
+  const WriterPartitions* partitions_;
   std::mutex mutex_;
   bool active_ = true;
 };
@@ -936,10 +1103,14 @@ std::unique_ptr<RawReader> Bus::make_raw_reader(const std::string& topic, RawRea
   const RawTopicEntry& entry = raw_entry_named(topic);
   auto impl = std::make_unique<RawReader::Impl>();
   impl->core = core_;
-  impl->listener = std::make_unique<RawReaderListener>(std::move(on_sample));
+  impl->listener =
+      std::make_unique<RawReaderListener>(std::move(on_sample), core_->receive_counters(),
+                                          entry.spec.camera_scoped ? &core_->writer_partitions() : nullptr);
   fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
   const bool offered = entry.spec.reliable || entry.spec.offer_reliable;
   apply_spec(reader_qos, entry.spec, offered ? Qos::kReliable : Qos::kDefault);
+  if (entry.spec.camera_scoped)
+    reader_qos.properties().properties().emplace_back(kPartitionsProperty, scoped_partitions({}, true));
   impl->reader =
       core_->subscriber()->create_datareader(raw_topic(*core_, entry), reader_qos, impl->listener.get());
   if (impl->reader == nullptr) throw DdsError("cannot create DDS reader on " + topic + core_->refusal_hint());
@@ -950,8 +1121,10 @@ std::unique_ptr<RawWriter> Bus::make_raw_writer(const std::string& topic) {
   const RawTopicEntry& entry = raw_entry_named(topic);
   auto impl = std::make_unique<RawWriter::Impl>();
   impl->core = core_;
-  impl->writer = core_->publisher()->create_datawriter(
-      raw_topic(*core_, entry), writer_qos_for(entry.spec, Qos::kDefault), &impl->listener);
+  fdds::DataWriterQos writer_qos = writer_qos_for(entry.spec, Qos::kDefault);
+  if (entry.spec.camera_scoped)
+    writer_qos.properties().properties().emplace_back(kPartitionsProperty, scoped_partitions({}, false));
+  impl->writer = core_->publisher()->create_datawriter(raw_topic(*core_, entry), writer_qos, &impl->listener);
   if (impl->writer == nullptr) throw DdsError("cannot create DDS writer on " + topic + core_->refusal_hint());
   return std::make_unique<RawWriter>(std::move(impl));
 }

@@ -203,7 +203,7 @@ struct TimeSyncClient::Impl {
 
 TimeSyncClient::TimeSyncClient(Bus& bus, TimeSyncClientOptions options)
     : impl_(std::make_unique<Impl>(std::move(options))) {
-  impl_->writer = bus.make_writer<msg::TimeSync>();
+  impl_->writer = bus.make_writer<msg::TimeSync>(Qos::kDefault, {}, impl_->options.client_id);
   Impl* impl = impl_.get();
   // Only the exchanges of this client: writers filter, so the replies to the other cameras never
   // reach this one. Best effort: a repaired reply arrives too late to time anything (it would be

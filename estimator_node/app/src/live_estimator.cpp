@@ -120,7 +120,12 @@ class LiveEstimator {
   std::unique_ptr<dds::Reader<msg::CameraInfo>> info_reader_;
   std::unique_ptr<dds::Reader<msg::FeatureFrame>> feature_reader_;
   std::unique_ptr<dds::Writer<msg::TrackFrame>> track_writer_;
-  std::unique_ptr<dds::Writer<msg::Predictions>> prediction_writer_;
+  std::unique_ptr<dds::Writer<msg::Predictions>>
+      prediction_writer_;  // for every camera: beyond the cap below
+  // One per camera, in its DDS partition, so that a camera reads its own predictions only
+  // (docs/security.md); created at its first prediction, whose first few samples are lost.
+  std::map<std::string, std::unique_ptr<dds::Writer<msg::Predictions>>> camera_prediction_writers_;
+  static constexpr std::size_t kMaxPredictionWriters = 256;
   std::unique_ptr<dds::Writer<msg::EstimatorStatus>> status_writer_;
   std::unique_ptr<dds::Writer<msg::BodyPose>> body_writer_;
   std::unique_ptr<dds::Writer<msg::MocapFrame>> frame_writer_;
@@ -181,7 +186,15 @@ void LiveEstimator::publish_predictions(const FeatureFrame& frame) {
     window.half_height(static_cast<float>(w.half_height));
     message.windows().push_back(window);
   }
-  prediction_writer_->write(message);
+  auto writer = camera_prediction_writers_.find(frame.camera_id);
+  if (writer == camera_prediction_writers_.end() &&
+      camera_prediction_writers_.size() < kMaxPredictionWriters) {
+    writer = camera_prediction_writers_
+                 .emplace(frame.camera_id,
+                          bus_->make_writer<msg::Predictions>(dds::Qos::kDefault, {}, frame.camera_id))
+                 .first;
+  }
+  (writer != camera_prediction_writers_.end() ? *writer->second : *prediction_writer_).write(message);
 }
 
 void LiveEstimator::update(std::vector<FeatureFrame>& due) {

@@ -3,6 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
+#include <set>
+#include <string>
 
 #include "panoptes/dds/convert.h"
 #include "panoptes/time.h"
@@ -98,7 +102,21 @@ RecorderRecord recorder_of(const msg::RecorderStatus& status) {
 }  // namespace
 
 struct BusBridge::Impl {
-  std::unique_ptr<dds::Writer<msg::CameraCommand>> commands;
+  static constexpr std::size_t kMaxCameraWriters = 256;
+
+  explicit Impl(dds::Bus& bus_in) : bus(bus_in) {}
+  dds::Bus& bus;
+  std::unique_ptr<dds::Writer<msg::CameraCommand>> commands;  // for every camera ('*')
+  // One command writer per camera seen, in its DDS partition, so that a command for one camera
+  // reaches that camera only (docs/security.md, "Camera-scoped permissions"). Created by poll(),
+  // never on a DDS listener thread.
+  std::mutex camera_mutex;
+  std::set<std::string> cameras_seen;
+  std::map<std::string, std::unique_ptr<dds::Writer<msg::CameraCommand>>> camera_commands;
+  void saw(const std::string& camera) {
+    std::lock_guard lock(camera_mutex);
+    if (cameras_seen.size() < kMaxCameraWriters) cameras_seen.insert(camera);
+  }
   std::unique_ptr<dds::Writer<msg::RecorderCommand>> recorder_commands;
   std::unique_ptr<dds::Reader<msg::RecorderStatus>> recorders;
   std::unique_ptr<dds::Reader<msg::CameraInfo>> info;
@@ -113,10 +131,13 @@ struct BusBridge::Impl {
 };
 
 // Listener callbacks copy only what the page shows and return: the state's lock is the only wait.
-BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_unique<Impl>()) {
+BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_unique<Impl>(bus)) {
   impl_->commands = bus.make_writer<msg::CameraCommand>();
-  impl_->info = bus.make_reader<msg::CameraInfo>(
-      [&state](msg::CameraInfo&& info) { state.on_info(info.camera_id(), info_of(info), wall_now_ns()); });
+  Impl* impl = impl_.get();
+  impl_->info = bus.make_reader<msg::CameraInfo>([&state, impl](msg::CameraInfo&& info) {
+    impl->saw(info.camera_id());
+    state.on_info(info.camera_id(), info_of(info), wall_now_ns());
+  });
   impl_->status = bus.make_reader<msg::CameraStatus>([&state](msg::CameraStatus&& status) {
     state.on_status(status.camera_id(), status_of(status), wall_now_ns());
   });
@@ -170,13 +191,34 @@ BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_uniqu
 
 BusBridge::~BusBridge() = default;
 
+void BusBridge::poll() {
+  std::lock_guard lock(impl_->camera_mutex);
+  for (const std::string& camera : impl_->cameras_seen) {
+    if (impl_->camera_commands.count(camera) != 0) continue;
+    std::unique_ptr<dds::Writer<msg::CameraCommand>> writer;
+    try {
+      writer = impl_->bus.make_writer<msg::CameraCommand>(dds::Qos::kDefault, {}, camera);
+    } catch (const dds::DdsError&) {
+      // An id that cannot name a partition: its commands go out through the writer for every camera.
+    }
+    impl_->camera_commands.emplace(camera, std::move(writer));
+  }
+}
+
 bool BusBridge::send(const CameraCommandRequest& command) {
-  if (impl_->commands->matched_readers() == 0) return false;
   msg::CameraCommand message;
   message.target(command.camera);
   message.seq(static_cast<unsigned long long>(wall_now_ns()));
   message.command(command.command);
   message.arguments(command.arguments);
+  {
+    // The camera's own writer once it matched the camera; before, the one for every camera.
+    std::lock_guard lock(impl_->camera_mutex);
+    const auto writer = impl_->camera_commands.find(command.camera);
+    if (writer != impl_->camera_commands.end() && writer->second && writer->second->matched_readers() > 0)
+      return writer->second->write(message);
+  }
+  if (impl_->commands->matched_readers() == 0) return false;
   return impl_->commands->write(message);
 }
 

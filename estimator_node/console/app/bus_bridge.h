@@ -22,6 +22,9 @@ class BusBridge {
 
   // Writes the command as panoptes_ctl does; false when no camera node listens.
   bool send(const CameraCommandRequest& command);
+  // Creates a command writer for each camera seen since (call it from a thread of the console's,
+  // not from a DDS listener).
+  void poll();
   // Writes a RecorderCommand as panoptes_record --command does; false when no recorder listens.
   bool send(const RecorderCommandRequest& command);
 

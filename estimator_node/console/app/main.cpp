@@ -114,6 +114,7 @@ int run(int argc, char** argv) {
   bus_options.participant_name = "panoptes_console";
   panoptes::dds::Bus bus(bus_options);
   panoptes::console::BusBridge bridge(bus, state);
+  options.bus_rejections = [&bus] { return bus.receive_rejections(); };
   panoptes::console::CalibrationWorkflow workflow(calibration, state);
   std::unique_ptr<panoptes::console::ConsoleServer> server;
   try {
@@ -135,10 +136,11 @@ int run(int argc, char** argv) {
   std::fflush(stdout);
   if (!url_file.empty()) std::ofstream(url_file) << url << "\n";
 
-  std::thread watcher([&server, &workflow] {
+  std::thread watcher([&server, &workflow, &bridge] {
     for (int tick = 0; !panoptes::stop_requested(); ++tick) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
       if (tick % 4 == 0) workflow.poll();
+      if (tick % 4 == 2) bridge.poll();
     }
     server->stop();
   });

@@ -638,6 +638,10 @@ json ConsoleServer::Impl::stats_of(const Impl& impl) {
     std::lock_guard lock(c.rejected_mutex);
     for (const auto& [name, count] : c.rejected) rejected[name] = count;
   }
+  json bus_rejected = json::object();
+  if (impl.options.bus_rejections) {
+    for (const auto& [reason, count] : impl.options.bus_rejections()) bus_rejected[reason] = count;
+  }
   return {{"clients", c.clients_connected.load()},
           {"clients_total", c.clients_total.load()},
           {"clients_refused", c.clients_refused.load()},
@@ -649,7 +653,8 @@ json ConsoleServer::Impl::stats_of(const Impl& impl) {
           {"replies_dropped", c.replies_dropped.load()},
           {"commands_received", c.commands_received.load()},
           {"commands_forwarded", c.commands_forwarded.load()},
-          {"rejected", rejected}};
+          {"rejected", rejected},
+          {"bus_rejected", bus_rejected}};
 }
 
 ConsoleServer::ConsoleServer(ServerOptions options, ConsoleState& state, CommandSink sink,

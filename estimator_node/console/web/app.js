@@ -652,7 +652,8 @@ function onState(state) {
   if (state.console) {
     const c = state.console;
     document.getElementById('console-stats').textContent =
-      `console: ${c.clients} client(s) · ${c.snapshots_skipped} skipped · ${c.commands_forwarded} commands sent · rejected ${JSON.stringify(c.rejected)}`;
+      `console: ${c.clients} client(s) · ${c.snapshots_skipped} skipped · ${c.commands_forwarded} commands sent · rejected ${JSON.stringify(c.rejected)}` +
+      (c.bus_rejected && Object.keys(c.bus_rejected).length ? ` · bus dropped ${JSON.stringify(c.bus_rejected)}` : '');
   }
 }
 

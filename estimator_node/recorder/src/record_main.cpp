@@ -70,6 +70,7 @@ class RecordLoop {
  public:
   RecordLoop(const Options& options, dds::Bus& bus, rec::Recorder& recorder)
       : options_(options),
+        bus_(bus),
         recorder_(recorder),
         status_writer_(bus.make_writer<msg::RecorderStatus>()),
         command_reader_(bus.make_reader<msg::RecorderCommand>(
@@ -121,6 +122,9 @@ class RecordLoop {
                  static_cast<unsigned long long>(p.received), static_cast<double>(p.bytes) / 1e6);
     for (const auto& [topic, count] : p.per_topic)
       std::fprintf(stderr, "  %s: %llu\n", topic.c_str(), static_cast<unsigned long long>(count));
+    // Samples the bus dropped instead of recording them (docs/hostile_input.md, docs/security.md).
+    for (const auto& [reason, count] : bus_.receive_rejections())
+      std::fprintf(stderr, "  dropped (%s): %llu\n", reason.c_str(), static_cast<unsigned long long>(count));
     report();
   }
   void pump() {
@@ -185,6 +189,7 @@ class RecordLoop {
   }
 
   const Options& options_;
+  dds::Bus& bus_;
   rec::Recorder& recorder_;
   CommandQueue commands_;
   std::unique_ptr<dds::Writer<msg::RecorderStatus>> status_writer_;

@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <thread>
 
 #include <boost/asio.hpp>
@@ -46,6 +48,7 @@ class ConsoleServerTest : public ::testing::Test {
     options.token = kToken;
     options.web_root = web_root_;
     options.update_hz = update_hz;
+    options.bus_rejections = [] { return std::map<std::string, std::uint64_t>{{"id_outside_partition", 3}}; };
     server_ = std::make_unique<ConsoleServer>(
         options, state_,
         [this](const CameraCommandRequest& command) {
@@ -161,6 +164,7 @@ TEST_F(ConsoleServerTest, CommandsPassTheGateOrAreRejectedAndCounted) {
   EXPECT_EQ(counters["rejected"]["oversized"], 1);
   EXPECT_EQ(counters["rejected"]["out_of_range"], 1);
   EXPECT_EQ(counters["commands_forwarded"], 1);
+  EXPECT_EQ(counters["bus_rejected"]["id_outside_partition"], 3);  // the bus's own drops, alongside
 }
 
 // A recorder command reaches the recorder sink; a page that selects a track gets its figures.

@@ -104,6 +104,55 @@ TEST(Bus, UnfilteredReaderStillGetsEverything) {
   EXPECT_EQ(filtered->received(), 5u);
 }
 
+// Camera-scoped topics (docs/security.md, "Camera-scoped permissions"): a writer for cam1 reaches
+// cam1's reader and the readers of every camera, not cam0's; what it writes naming another camera
+// is dropped and counted; a writer for every camera ("*") reaches them all, commands included.
+TEST(Bus, CameraScopedWritersReachTheirCameraAndDropSamplesNamingAnother) {
+  Bus cam0(options("cam0")), cam1(options("cam1")), estimator(options("estimator")),
+      operators(options("ops"));
+  Bus recorder(options("recorder"));  // raw and typed readers of one topic need two participants
+  std::atomic<int> commands_cam0{0};
+  auto features = estimator.make_reader<msg::FeatureFrame>([](msg::FeatureFrame&&) {});
+  auto recorded = recorder.make_raw_reader("rt/panoptes/features", [](RawSample&&) {});
+  auto cam0_commands = cam0.make_reader<msg::CameraCommand>(
+      [&](msg::CameraCommand&&) { commands_cam0.fetch_add(1); }, Qos::kDefault, "cam0");
+  auto cam0_predictions =
+      cam0.make_reader<msg::Predictions>([](msg::Predictions&&) {}, Qos::kDefault, "cam0");
+  auto cam1_features = cam1.make_writer<msg::FeatureFrame>(Qos::kDefault, {}, "cam1");
+  auto cam1_predictions = estimator.make_writer<msg::Predictions>(Qos::kDefault, {}, "cam1");
+  auto cam1_commands = operators.make_writer<msg::CameraCommand>(Qos::kDefault, {}, "cam1");
+  auto every_camera_commands = operators.make_writer<msg::CameraCommand>();
+  ASSERT_TRUE(cam1_features->wait_for_readers(2, 5s));
+  ASSERT_TRUE(every_camera_commands->wait_for_readers(1, 5s));
+  ASSERT_TRUE(wait_until([&] { return features->matched_writers() == 1; }));
+  std::this_thread::sleep_for(300ms);  // the writers for cam1 would have matched cam0's readers by now
+  EXPECT_EQ(cam1_predictions->matched_readers(), 0);
+  EXPECT_EQ(cam1_commands->matched_readers(), 0);
+  EXPECT_EQ(cam0_predictions->matched_writers(), 0);
+  EXPECT_EQ(cam0_commands->matched_writers(), 1);  // the operators' writer for every camera
+
+  msg::CameraCommand command;
+  command.target("*");
+  command.command("capture_background");
+  every_camera_commands->write(command);
+  for (int i = 0; i < 10; ++i) {
+    msg::FeatureFrame frame;
+    frame.camera_id(i % 2 == 0 ? "cam1" : "cam0");  // cam1 writing as cam0 every other frame
+    frame.frame(i);
+    cam1_features->write(frame);
+    std::this_thread::sleep_for(2ms);
+  }
+  // Features are offered reliably but read best effort: allow a loss.
+  EXPECT_TRUE(wait_until([&] { return features->received() >= 4 && recorded->received() == 5; }));
+  EXPECT_TRUE(wait_until([&] { return estimator.receive_rejections()["id_outside_partition"] >= 4; }));
+  EXPECT_TRUE(wait_until([&] { return recorder.receive_rejections()["id_outside_partition"] == 5; }));
+  EXPECT_TRUE(wait_until([&] { return commands_cam0.load() == 1; }));
+  std::this_thread::sleep_for(100ms);
+  EXPECT_LE(features->received(), 5u);
+  EXPECT_EQ(recorded->received(), 5u);  // a recorder records cam1's own frames only
+  EXPECT_EQ(estimator.receive_rejections().count("unknown_writer"), 0u);
+}
+
 TEST(Bus, OnlyIdOnATypeWithoutLeadingIdIsRefused) {
   Bus bus(options("refuse"));
   EXPECT_THROW(bus.make_reader<msg::TrackFrame>([](msg::TrackFrame&&) {}, Qos::kDefault, "cam0"), DdsError);

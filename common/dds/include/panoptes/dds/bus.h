@@ -145,14 +145,22 @@ class Bus {
   // ROS 2 types of idl/ros2.idl (docs/ros2.md). `topic_name`, if not empty, replaces the type's
   // topic name (same QoS): the ROS 2 per-body topics rt/panoptes/<body>/pose. Types without a
   // topic of their own (geometry_msgs PoseStamped, TwistStamped) need one; DdsError otherwise.
+  // `scope`, on a camera-scoped topic (camera_info, features, camera_status, camera_preview,
+  // camera_command, predictions, time_sync): the camera (or time-sync client) id the writer speaks
+  // for or writes to, the DDS partition it joins, which DDS Security permissions restrict
+  // (docs/security.md, "Camera-scoped permissions"); the readers drop its samples that name another
+  // id ("id_outside_partition"). Empty or "*": every camera (the estimator, operators, tools).
   template <class T>
-  std::unique_ptr<Writer<T>> make_writer(Qos qos = Qos::kDefault, const std::string& topic_name = {});
+  std::unique_ptr<Writer<T>> make_writer(Qos qos = Qos::kDefault, const std::string& topic_name = {},
+                                         const std::string& scope = {});
   // `on_sample` runs on a DDS listener thread: keep it short (enqueue and return).
   // `only_id`, if not empty, subscribes to the samples addressed to one camera or client only: those
   // whose first member (camera_id of Predictions, client_id of TimeSync) equals it. It is a DDS
   // content filter that the writers apply (every Bus registers it), so the samples of the other
-  // cameras are not even sent: traffic per camera stays constant as cameras are added. Throws
-  // DdsError for a type without such a member.
+  // cameras are not even sent: traffic per camera stays constant as cameras are added. On a
+  // camera-scoped topic (see make_writer) the reader also joins that camera's partition, so only
+  // the writers for that camera or for every camera match it; camera_command has no leading id and
+  // is selected by the partition alone. Throws DdsError for another type without such a member.
   template <class T>
   std::unique_ptr<Reader<T>> make_reader(typename Reader<T>::Callback on_sample, Qos qos = Qos::kDefault,
                                          const std::string& only_id = {}, const std::string& topic_name = {});
@@ -168,8 +176,9 @@ class Bus {
   bool secured() const;
 
   // Received samples this Bus's readers dropped, by reason: the decode failures of decode.h
-  // ("cdr_truncated", ...) and "handler_error" (a reader's callback threw). Reported in the nodes'
-  // status counters (docs/hostile_input.md).
+  // ("cdr_truncated", ...), "handler_error" (a reader's callback threw), and on camera-scoped topics
+  // "id_outside_partition" (a sample naming another camera than its writer's partition) and
+  // "unknown_writer". Reported in the nodes' status counters (docs/hostile_input.md).
   std::map<std::string, std::uint64_t> receive_rejections() const;
 
  private:

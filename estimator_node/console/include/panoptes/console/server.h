@@ -36,6 +36,9 @@ struct ServerOptions {
   double commands_per_s = 10;             // per client, token bucket
   double command_burst = 20;
   std::size_t max_clients = 32;
+  // Received DDS samples the console's bus dropped, by reason (dds::Bus::receive_rejections:
+  // malformed, or naming another camera than their writer's partition); in the console's counters.
+  std::function<std::map<std::string, std::uint64_t>()> bus_rejections;
 };
 
 // Forwards a checked command to the camera; false if it could not be sent.
