@@ -355,10 +355,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
-    std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
-    return panoptes::kExitFailure;
-  }
+  return panoptes::run_program("panoptes_ctl", [&] { return run(argc, argv); });
 }
