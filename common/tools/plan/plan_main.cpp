@@ -194,7 +194,8 @@ int run(const Arguments& args) {
     }
   }
   print_evaluation(report.evaluation, file.metric, report.cameras.size());
-  print_tracking(predict_tracking(report.cameras, samples, file.room.obstacles, file.metric, file.tracker));
+  report.tracking = predict_tracking(report.cameras, samples, file.room.obstacles, file.metric, file.tracker);
+  print_tracking(report.tracking);
   if (args.remove_one || !args.report.empty()) {
     report.removal_costs = removal_costs(report.cameras, samples, file.room.obstacles, file.metric);
   }
