@@ -181,6 +181,12 @@ class RecordLoop {
     status.bytes(p.bytes);
     status.messages_per_s(rate);
     status.error(error_);
+    for (const auto& [reason, count] : bus_.receive_rejections()) {
+      msg::Counter counter;
+      counter.name(reason);
+      counter.value(count);
+      status.counters().push_back(std::move(counter));
+    }
     status_writer_->write(status);
     if (!options_.quiet && p.recording)
       std::fprintf(stderr, "panoptes_record: %s: %u topics, %llu messages, %.2f MB, %.0f msg/s\n",
