@@ -153,7 +153,8 @@ class ScriptWriters {
  public:
   ScriptWriters(panoptes::dds::Bus& bus, const std::vector<std::vector<std::string>>& lines) : bus_(bus) {
     for (const auto& tokens : lines) {
-      if (tokens.size() < 2 || tokens[0] == "*" || tokens[0] == "sleep" || tokens[0] == "wait_nodes")
+      if (tokens.size() < 2 || !panoptes::dds::names_one_partition(tokens[0]) || tokens[0] == "sleep" ||
+          tokens[0] == "wait_nodes")
         continue;
       if (!per_camera_.contains(tokens[0]))
         per_camera_.emplace(

@@ -30,7 +30,7 @@ struct TimeSyncServer::Impl {
   ClockFunction clock;
   std::unique_ptr<Writer<msg::TimeSync>> writer;  // partition "*": every client
   // A writer per client in the client's partition (docs/security.md, "Camera-scoped permissions"),
-  // so a camera reads only its own replies; only this thread touches the map.
+  // so a camera reads only its own replies; null where DDS refused it. Only this thread touches it.
   std::map<std::string, std::unique_ptr<Writer<msg::TimeSync>>> client_writers;
   std::unique_ptr<Reader<msg::TimeSync>> reader;
   std::mutex mutex;
@@ -43,13 +43,22 @@ struct TimeSyncServer::Impl {
   std::atomic<std::uint64_t> dropped{0};
 
   // The writer in the client's own partition once it has matched the client's reader; until then
-  // (discovery of a new writer takes a moment, and no exchange should wait for it) the one in "*".
+  // (discovery of a new writer takes a moment, and no exchange should wait for it), and for a
+  // client id that cannot name one partition or a writer DDS refused, the one in "*".
   Writer<msg::TimeSync>& writer_for(const std::string& client_id) {
     auto found = client_writers.find(client_id);
-    if (found == client_writers.end() && !client_id.empty() && client_writers.size() < kMaxClientWriters)
-      found = client_writers.emplace(client_id, bus->make_writer<msg::TimeSync>(Qos::kDefault, {}, client_id))
-                  .first;
-    if (found != client_writers.end() && found->second->matched_readers() > 0) return *found->second;
+    if (found == client_writers.end() && names_one_partition(client_id) &&
+        client_writers.size() < kMaxClientWriters) {
+      std::unique_ptr<Writer<msg::TimeSync>> client_writer;
+      try {
+        client_writer = bus->make_writer<msg::TimeSync>(Qos::kDefault, {}, client_id);
+      } catch (const DdsError&) {
+        // Kept empty: this client's replies go to "*", and the writer is not tried again.
+      }
+      found = client_writers.emplace(client_id, std::move(client_writer)).first;
+    }
+    if (found != client_writers.end() && found->second && found->second->matched_readers() > 0)
+      return *found->second;
     answered_to_every_client.fetch_add(1);
     return *writer;
   }

@@ -179,6 +179,19 @@ TEST(Bus, TimeSyncRepliesGoToTheRequestingCamerasPartition) {
   EXPECT_LT(server.answered_to_every_client(), server.answered());
   EXPECT_EQ(client0.status().unmatched, 0u);
   EXPECT_EQ(client1.status().unmatched, 0u);
+  // Requests from ids that cannot name one partition (a separator, a wildcard, 1000 characters)
+  // are answered in "*", without a writer of their own and without stopping the server.
+  auto requests = cam0.make_writer<msg::TimeSync>();
+  ASSERT_TRUE(requests->wait_for_readers(1, 5s));
+  const std::uint64_t before = server.answered(), broadcast_before = server.answered_to_every_client();
+  for (const std::string& id : {std::string("cam0;cam1"), std::string("cam*"), std::string(1000, 'c')}) {
+    msg::TimeSync request;
+    request.client_id(id);
+    request.seq(1);
+    requests->write(request);
+  }
+  EXPECT_TRUE(wait_until([&] { return server.answered_to_every_client() >= broadcast_before + 3; }));
+  EXPECT_GE(server.answered(), before + 3);
 }
 
 TEST(Bus, OnlyIdOnATypeWithoutLeadingIdIsRefused) {
