@@ -181,6 +181,12 @@ class RecordLoop {
     status.bytes(p.bytes);
     status.messages_per_s(rate);
     status.error(error_);
+    for (const auto& [reason, count] : bus_.receive_rejections()) {
+      msg::Counter counter;
+      counter.name(reason);
+      counter.value(count);
+      status.counters().push_back(std::move(counter));
+    }
     status_writer_->write(status);
     if (!options_.quiet && p.recording)
       std::fprintf(stderr, "panoptes_record: %s: %u topics, %llu messages, %.2f MB, %.0f msg/s\n",
@@ -237,9 +243,15 @@ int send_command(const Options& options, dds::Bus& bus) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     const std::lock_guard<std::mutex> lock(mutex);
     if ((options.send == "quit" && seq >= 2) || (seen && last.recording() == want_recording)) {
-      if (seen)
-        std::fprintf(stderr, "panoptes_record: %s: %s %s\n", last.recorder_id().c_str(),
-                     last.recording() ? "recording" : "stopped", last.path().c_str());
+      if (seen) {
+        std::string dropped;  // what the recorder's bus dropped on receipt, by reason
+        for (const msg::Counter& counter : last.counters())
+          dropped += (dropped.empty() ? " (dropped: " : ", ") + counter.name() + " " +
+                     std::to_string(counter.value());
+        std::fprintf(stderr, "panoptes_record: %s: %s %s%s\n", last.recorder_id().c_str(),
+                     last.recording() ? "recording" : "stopped", last.path().c_str(),
+                     dropped.empty() ? "" : (dropped + ")").c_str());
+      }
       writer->wait_for_acknowledgments(std::chrono::seconds(2));
       return panoptes::kExitOk;
     }
