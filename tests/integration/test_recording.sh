@@ -51,6 +51,10 @@ kill -INT "$a"
 "$rec" --command quit --target rec_c 2>/dev/null
 wait "$a" && pass "recorder A stopped cleanly on SIGINT" || fail "recorder A exit $?"
 wait "$c" && pass "recorder C quit on its DDS command" || fail "recorder C exit $?"
+# D stops by itself when its file reaches the size limit; under heavy load the demo may not have
+# produced 300 kB by now: bounded wait, then a clear failure rather than a hang.
+timeout 30 tail --pid="$d" -f /dev/null ||
+  { echo "recorder D still running 30 s after the demo (the demo produced too little data?)"; kill -INT "$d"; }
 wait "$d"
 rc_d=$?
 
