@@ -246,9 +246,9 @@ int parse(int argc, char** argv, Arguments& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Arguments args;
-  if (const int code = parse(argc, argv, args); code >= 0) return code;
-  try {
+  try {  // the parser's set-up may throw too (out of memory)
+    Arguments args;
+    if (const int code = parse(argc, argv, args); code >= 0) return code;
     std::FILE* out = args.out.empty() ? nullptr : std::fopen(args.out.c_str(), "w");
     if (!args.out.empty() && out == nullptr) {
       std::fprintf(stderr, "grab_objects: --out %s: cannot write\n", args.out.c_str());

@@ -94,6 +94,7 @@ std::vector<BodyDefinition> InsideOutCameras::rig_descriptions() const {
     if (description.markers.empty()) description.markers = rig.markers;
   }
   std::vector<BodyDefinition> descriptions;
+  descriptions.reserve(by_name.size());
   for (auto& [name, description] : by_name) descriptions.push_back(std::move(description));
   return descriptions;
 }
