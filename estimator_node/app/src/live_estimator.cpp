@@ -141,6 +141,7 @@ class LiveEstimator {
   std::optional<Ros2Outputs> ros2_;  // docs/ros2.md
   std::optional<session::JsonlOutputs> outputs_;
   std::set<std::string> from_file_;
+  std::set<std::string> announced_moving_;  // logged once each
   FramePeriods periods_;
   std::vector<Processed> processed_;  // finished from the front; cleared (capacity kept) when all are
   struct StatusPoint {
@@ -166,6 +167,15 @@ void LiveEstimator::announce(const msg::CameraInfo& info) {
 void LiveEstimator::apply_announced_cameras() {
   std::lock_guard<std::mutex> lock(info_mutex_);
   for (const auto& camera : announced_) {
+    // A moving camera's pose is its mount on a rig, not a fixed view (docs/inside_out.md): inside-out
+    // tracking needs it in the calibration file with the landmarks.
+    if (camera.moving && from_file_.count(camera.id) == 0) {
+      if (announced_moving_.insert(camera.id).second)
+        log("camera '" + camera.id +
+            "' announces itself moving: not a fixed camera (inside-out needs it in --calibration with "
+            "--landmarks)");
+      continue;
+    }
     // The calibration file wins over what a camera announces about itself.
     if (from_file_.count(camera.id) == 0 && !tracker_.has_camera(camera.id)) {
       tracker_.set_camera(camera);
