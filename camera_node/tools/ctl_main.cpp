@@ -10,8 +10,10 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -73,23 +75,25 @@ std::unique_ptr<panoptes::dds::Writer<msg::CameraCommand>> command_writer(panopt
   return writer;
 }
 
-void write_command(panoptes::dds::Writer<msg::CameraCommand>& writer, const Options& options) {
+// `partition`: the DDS partition of `writer` ("*": every camera), printed with the command.
+void write_command(panoptes::dds::Writer<msg::CameraCommand>& writer, const Options& options,
+                   const std::string& partition) {
   msg::CameraCommand command;
   command.target(options.target);
   command.seq(static_cast<unsigned long long>(panoptes::wall_now_ns()));
   command.command(options.command);
   command.arguments(options.arguments);
   writer.write(command);
-  std::printf("sent %s to %s (seq %llu, %d node(s) matched)\n", options.command.c_str(),
+  std::printf("sent %s to %s (seq %llu, %d node(s) matched, partition %s)\n", options.command.c_str(),
               options.target.c_str(), static_cast<unsigned long long>(command.seq()),
-              writer.matched_readers());
+              writer.matched_readers(), partition.c_str());
 }
 
 int send_command(const Options& options) {
   auto bus = open_bus(options, "command");
   auto writer = command_writer(bus, options);
   if (!writer) return panoptes::kExitFailure;
-  write_command(*writer, options);
+  write_command(*writer, options, options.target);
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // let reliable delivery finish
   return panoptes::kExitOk;
 }
@@ -128,6 +132,60 @@ bool script_pause(const std::vector<std::string>& tokens, panoptes::dds::Writer<
   return true;
 }
 
+// The words of each line of a script, '#' starting a comment; empty lines stay (numbering).
+std::vector<std::vector<std::string>> read_script_lines(std::istream& file) {
+  std::vector<std::vector<std::string>> lines;
+  for (std::string line; std::getline(file, line);) {
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    std::istringstream words(line);
+    std::vector<std::string> tokens;
+    for (std::string word; words >> word;) tokens.push_back(word);
+    lines.push_back(std::move(tokens));
+  }
+  return lines;
+}
+
+// A script's command writers: one in "*" for commands to every camera (and wait_nodes), and one
+// in each named camera's DDS partition, so that only that camera reads its commands
+// (docs/security.md, "Camera-scoped permissions"). All are made before the first command, so
+// they match while the script starts.
+class ScriptWriters {
+ public:
+  ScriptWriters(panoptes::dds::Bus& bus, const std::vector<std::vector<std::string>>& lines) : bus_(bus) {
+    for (const auto& tokens : lines) {
+      if (tokens.size() < 2 || !panoptes::dds::names_one_partition(tokens[0]) || tokens[0] == "sleep" ||
+          tokens[0] == "wait_nodes")
+        continue;
+      if (!per_camera_.contains(tokens[0]))
+        per_camera_.emplace(
+            tokens[0], bus_.make_writer<msg::CameraCommand>(panoptes::dds::Qos::kDefault, {}, tokens[0]));
+    }
+  }
+
+  // Writes `command` with the target camera's writer once it has matched the camera (waiting for
+  // that up to a second, once per camera); else with the one in "*", which every camera reads.
+  void write(const Options& command, panoptes::dds::Writer<msg::CameraCommand>& every_camera) {
+    const auto found = per_camera_.find(command.target);
+    if (found != per_camera_.end()) {
+      panoptes::dds::Writer<msg::CameraCommand>& writer = *found->second;
+      if (writer.matched_readers() == 0 && waited_.insert(command.target).second)
+        writer.wait_for_readers(1, std::chrono::seconds(1));
+      if (writer.matched_readers() > 0) {
+        write_command(writer, command, command.target);
+        return;
+      }
+      std::fprintf(stderr, "panoptes_ctl: no camera '%s' matched its own writer; sending to every camera\n",
+                   command.target.c_str());
+    }
+    write_command(every_camera, command, "*");
+  }
+
+ private:
+  panoptes::dds::Bus& bus_;
+  std::map<std::string, std::unique_ptr<panoptes::dds::Writer<msg::CameraCommand>>> per_camera_;
+  std::set<std::string> waited_;
+};
+
 // Lines "<target> <command> [arguments...]", "sleep <seconds>" or "wait_nodes <n> <seconds>"
 // (until n camera nodes listen for commands, at most that long); '#' starts a comment.
 int run_script(const Options& options) {
@@ -136,33 +194,28 @@ int run_script(const Options& options) {
     std::fprintf(stderr, "panoptes_ctl: cannot read %s\n", options.out.c_str());
     return panoptes::kExitBadInput;
   }
+  const std::vector<std::vector<std::string>> lines = read_script_lines(file);
   auto bus = open_bus(options, "script");
+  ScriptWriters writers(bus, lines);
   auto writer = command_writer(bus, options);
   if (!writer) return panoptes::kExitFailure;
-  std::string line;
-  int number = 0;
-  while (std::getline(file, line) && !panoptes::stop_requested()) {
-    ++number;
-    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
-    std::istringstream words(line);
-    std::vector<std::string> tokens;
-    for (std::string word; words >> word;) tokens.push_back(word);
+  for (std::size_t index = 0; index < lines.size() && !panoptes::stop_requested(); ++index) {
+    const std::vector<std::string>& tokens = lines[index];
+    const std::string where = options.out + ":" + std::to_string(index + 1);
     if (tokens.empty()) continue;
     if (tokens[0] == "sleep" || tokens[0] == "wait_nodes") {
-      if (!script_pause(tokens, *writer, options.out + ":" + std::to_string(number)))
-        return panoptes::kExitBadInput;
+      if (!script_pause(tokens, *writer, where)) return panoptes::kExitBadInput;
       continue;
     }
     if (tokens.size() < 2) {
-      std::fprintf(stderr, "panoptes_ctl: %s:%d: expected '<target> <command> [arguments...]'\n",
-                   options.out.c_str(), number);
+      std::fprintf(stderr, "panoptes_ctl: %s: expected '<target> <command> [arguments...]'\n", where.c_str());
       return panoptes::kExitBadInput;
     }
     Options command = options;
     command.target = tokens[0];
     command.command = tokens[1];
     command.arguments.assign(tokens.begin() + 2, tokens.end());
-    write_command(*writer, command);
+    writers.write(command, *writer);
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   return panoptes::kExitOk;
@@ -355,10 +408,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
-    std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
-    return panoptes::kExitFailure;
-  }
+  return panoptes::run_program("panoptes_ctl", [&] { return run(argc, argv); });
 }

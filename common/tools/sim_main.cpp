@@ -20,6 +20,7 @@
 #include "panoptes/jsonl.h"
 #include "panoptes/landmarks_file.h"
 #include "panoptes/pgm.h"
+#include "panoptes/process.h"
 #include "panoptes/records.h"
 #include "panoptes/simulator.h"
 #include "sim_ptz.h"
@@ -225,27 +226,14 @@ int run(int argc, char** argv) {
     return 2;
   }
 
-  try {
-    if (calibration->parsed()) return run_calibration(options);
-    if (features->parsed()) return run_features(options);
-    if (ptz->parsed()) return sim_tool::run_ptz(ptz_options);
-    return run_render(options);
-  } catch (const ConfigError& error) {
-    std::cerr << "panoptes_sim: " << error.what() << "\n";
-    return 2;
-  } catch (const std::exception& error) {
-    std::cerr << "panoptes_sim: " << error.what() << "\n";
-    return 1;
-  }
+  if (calibration->parsed()) return run_calibration(options);
+  if (features->parsed()) return run_features(options);
+  if (ptz->parsed()) return sim_tool::run_ptz(ptz_options);
+  return run_render(options);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
-    std::cerr << "panoptes_sim: " << error.what() << "\n";
-    return 1;
-  }
+  return panoptes::run_program("panoptes_sim", [&] { return run(argc, argv); });
 }

@@ -210,10 +210,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
-    std::fprintf(stderr, "panoptes_eval: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("panoptes_eval", [&] { return run(argc, argv); });
 }

@@ -15,6 +15,7 @@
 
 #include "calib_scenes.h"
 #include "panoptes/cli.h"
+#include "panoptes/process.h"
 
 using namespace panoptes;
 using namespace panoptes::calib;
@@ -221,10 +222,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
-    std::fprintf(stderr, "bench_calibration: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_calibration", [&] { return run(argc, argv); });
 }

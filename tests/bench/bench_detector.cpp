@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "panoptes/camera/detector.h"
+#include "panoptes/process.h"
 #include "spot_renderer.h"
 
 namespace {
@@ -238,10 +239,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
-    std::fprintf(stderr, "bench_detector: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_detector", [&] { return run(argc, argv); });
 }

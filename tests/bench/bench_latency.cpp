@@ -507,10 +507,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
-    std::fprintf(stderr, "bench_latency: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_latency", [&] { return run(argc, argv); });
 }

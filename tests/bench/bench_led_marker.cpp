@@ -21,6 +21,7 @@
 #include "led_marker_fixtures.h"
 #include "panoptes/cli.h"
 #include "panoptes/estimator/led_marker.h"
+#include "panoptes/process.h"
 
 namespace {
 
@@ -131,10 +132,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
-    std::fprintf(stderr, "bench_led_marker: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_led_marker", [&] { return run(argc, argv); });
 }

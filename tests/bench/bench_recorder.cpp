@@ -22,6 +22,7 @@
 
 #include "panoptes/cli.h"
 #include "panoptes/dds/cdr.h"
+#include "panoptes/process.h"
 #include "panoptes/recording/mcap_writer.h"
 
 namespace {
@@ -174,10 +175,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "%s: %s\n", "bench_recorder", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_recorder", [&] { return run(argc, argv); });
 }

@@ -350,10 +350,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "bench_ros2_outputs: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_ros2_outputs", [&] { return run(argc, argv); });
 }

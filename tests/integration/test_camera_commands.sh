@@ -37,7 +37,11 @@ cam0 no_such_command
 sleep 0.2
 cam0 restart
 COMMANDS
-ctl script "$work/commands.txt" >/dev/null && pass "command script sent" || fail "command script"
+ctl script "$work/commands.txt" >"$work/script.out" && pass "command script sent" || fail "command script"
+# A command to one camera is written in that camera's DDS partition, a command to '*' in '*'.
+grep -q '^sent set_threshold to cam0 (.*, partition cam0)$' "$work/script.out" &&
+  grep -q '^sent add_mask to \* (.*, partition \*)$' "$work/script.out" &&
+  pass "the script writes each camera's commands in its partition" || fail "script partitions: $(cat "$work/script.out")"
 ctl preview cam0 --out "$work/preview.pgm" --width 160 >/dev/null && pass "preview received" || fail "no preview"
 [ "$(head -c 2 "$work/preview.pgm" 2>/dev/null)" = "P5" ] && head -2 "$work/preview.pgm" | tail -1 | grep -q "160 120" \
   && pass "preview is a 160x120 PGM" || fail "preview file wrong"

@@ -31,6 +31,10 @@ expect_exit 0 "offline estimator in inside-out mode" -- "$bin/estimator_node" --
 expect_stderr_contains "inside-out: camera 'head' carries rig 'headset', tracked from 20 landmarks in 5 groups" \
   "the set-up is reported"
 expect_stderr_contains "acquisitions 1 (last from" "one cold start, never lost"
+# The moving camera's frames count as used in the usage figures (status, console), not as dropped.
+util=$(grep -o "camera head: frames [0-9]* used [0-9]* .*utilisation [0-9.]*" "$work/last.err" | grep -o "utilisation [0-9.]*" | grep -o "[0-9.]*$")
+python3 -c "import sys; sys.exit(0 if ${util:-0} >= 0.99 else 1)" && pass "head camera utilisation $util" ||
+  fail "head camera utilisation '${util}' (want >= 0.99)"
 grep -q '"body":"headset"' "$work/poses.jsonl" && pass "poses are published under the rig's name" || fail "no headset poses"
 expect_exit 0 "offline poses: <= 1 mm, <= 0.05 deg, >= 99% of the time tracked" -- "$bin/panoptes_eval" --scene "$scene" \
   --poses "$work/poses.jsonl" --warmup 0.5 --require-pose-rmse-mm 1.0 --require-pose-rmse-deg 0.05 \

@@ -44,6 +44,8 @@ bad unknown_key 's/^occlusion: {planes: 64}/occlusion: {plains: 64}/' "unknown_k
 bad bad_norm 's/over_planes: rms/over_planes: median/' "bad_norm.yaml: metric.over_planes"
 bad no_focal 's/focal_mm: 4.5, pixel_um: 5.3, //' "no_focal.yaml: lenses[0].focal_px"
 bad negative_planes 's/^occlusion: {planes: 64}/occlusion: {planes: -3}/' "negative_planes.yaml: occlusion.planes"
+bad subject_size 's/^occlusion: {planes: 64}/occlusion: {planes: 64}\nsubject: {markers: 41, size: [0.7, 0, 1.5]}/' \
+  "subject_size.yaml: subject.size"
 # A volume no mount position can see: the lenses reach 0.5 m only.
 sed 's/max_depth_m: 1[04]/max_depth_m: 0.5/g' "$work/room.yaml" >"$work/blind.yaml"
 expect_exit 2 "a volume no camera can see" -- "$plan" --room "$work/blind.yaml" --cameras 2 --evaluations 50 --quiet

@@ -3,8 +3,8 @@
 # The planner against our own system (issue 19, item 4; docs/planner.md, "Validation"): for several
 # layouts of the same room (planned, rule-of-thumb rings, all on one wall, clustered in a corner)
 # the real walking motion (41 markers, self-occlusion by the body) is simulated through the
-# tracker; the planner's predicted P(>= 2 cameras see a point) and uncertainty are compared by
-# rank with the measured share of marker-time seen by >= 2 cameras and the tracks' RMSE.
+# tracker; the planner's predicted P(>= 2 cameras see a point), uncertainty and tracker RMSE are
+# compared by rank with the measured share of marker-time seen by >= 2 cameras and the tracks' RMSE.
 source "$(dirname "$0")/lib.sh"
 room="$source_dir/deploy/planner/walk_room.yaml"
 plan="$bin/panoptes_plan"
@@ -58,6 +58,8 @@ for name in planned ring8 ring6 ring4 ring3 wall6 corner6 pair; do
   predicted_p=$(sed -n 's/.*see a point) \([0-9.]*\)$/\1/p' "$work/$name.plan.out")
   predicted_u=$(sed -n 's/^uncertainty where .* see a point \([0-9.e-]*\) m$/\1/p' "$work/$name.plan.out")
   predicted_q=$(sed -n 's/^quality \([0-9.e-]*\) m.*/\1/p' "$work/$name.plan.out")
+  predicted_r=$(sed -n 's/^predicted tracker RMSE \([0-9.e-]*\) m, with two-view ambiguity \([0-9.e-]*\) m$/\1 \2/p' "$work/$name.plan.out")
+  predicted_c=$(sed -n 's/.*confirmable \([0-9.]*\) of .*/\1/p' "$work/$name.plan.out")
   rm -rf "$work/$name.sim"
   "$bin/panoptes_sim" features --scene "$work/$name.scene.yaml" --out-dir "$work/$name.sim" --duration "$duration" \
     >/dev/null 2>&1 || { fail "$name: simulate"; continue; }
@@ -65,7 +67,7 @@ for name in planned ring8 ring6 ring4 ring3 wall6 corner6 pair; do
     --no-dds --out-tracks "$work/$name.tracks.jsonl" --quiet 2>/dev/null || { fail "$name: estimator"; continue; }
   "$bin/panoptes_eval" --scene "$work/$name.scene.yaml" --tracks "$work/$name.tracks.jsonl" \
     --summary-json "$work/$name.eval.json" >/dev/null 2>&1 || { fail "$name: eval"; continue; }
-  echo "$name $predicted_p $predicted_u $predicted_q $work/$name.eval.json" >>"$results"
+  echo "$name $predicted_p $predicted_u $predicted_q $predicted_r $predicted_c $work/$name.eval.json" >>"$results"
 done
 
 /usr/bin/python3 - "$results" <<'PY' >"$work/validation.out"
@@ -73,21 +75,26 @@ import json, sys
 import numpy as np
 rows = []
 for line in open(sys.argv[1]):
-    name, p, u, q, path = line.split()
+    name, p, u, q, r, ra, c, path = line.split()
     e = json.load(open(path))
     steps = sum(m["steps"] for m in e["markers"])
     trackable = sum(m["trackable"] for m in e["markers"])
-    rows.append((name, float(p), float(u), trackable / steps, e["rmse_mm"], e["coverage"], float(q)))
+    rows.append((name, float(p), float(u), trackable / steps, e["rmse_mm"], e["coverage"], float(q),
+                 1000 * float(r), 1000 * float(ra), float(c)))
 def rank(v):
     r = np.empty(len(v)); r[np.argsort(v, kind="stable")] = np.arange(len(v)); return r
 def spearman(a, b):
     return float(np.corrcoef(rank(np.array(a)), rank(np.array(b)))[0, 1])
-print("%-8s %10s %12s %10s %9s %9s %10s" % ("layout", "pred P>=2", "pred U m", "meas >=2", "RMSE mm", "coverage", "quality m"))
+print("%-8s %10s %12s %10s %9s %9s %10s %9s %9s %9s" % ("layout", "pred P>=2", "pred U m", "meas >=2", "RMSE mm",
+      "coverage", "quality m", "pred RMSE", "+ambig.", "confirm."))
 for r in rows:
-    print("%-8s %10.4f %12.5g %10.4f %9.3f %9.4f %10.4g" % r)
+    print("%-8s %10.4f %12.5g %10.4f %9.3f %9.4f %10.4g %9.3f %9.3f %9.4f" % r)
 print("spearman_q %.3f" % spearman([r[6] for r in rows], [r[4] for r in rows]))
 print("spearman_p %.3f" % spearman([r[1] for r in rows], [r[3] for r in rows]))
 print("spearman_u %.3f" % spearman([r[2] for r in rows], [r[4] for r in rows]))
+print("spearman_r %.3f" % spearman([r[7] for r in rows], [r[4] for r in rows]))
+print("spearman_ra %.3f" % spearman([r[8] for r in rows], [r[4] for r in rows]))
+print("spearman_c %.3f" % spearman([r[9] for r in rows], [r[5] for r in rows]))
 by = {r[0]: r for r in rows}
 print("planned_vs_ring4 %.4f %.4f" % (by["planned"][3], by["ring4"][3]))
 PY
@@ -98,13 +105,18 @@ sp=$(sed -n 's/^spearman_p //p' "$work/validation.out")
 su=$(sed -n 's/^spearman_u //p' "$work/validation.out")
 awk -v s="$sp" 'BEGIN { exit !(s ~ /^-?[0-9.]+$/ && s >= 0.9) }' && pass "rank correlation of predicted and measured >=2-camera share: $sp" ||
   fail "rank correlation of predicted and measured >=2-camera share: $sp < 0.9"
-# Goal (issue 19): >= 0.9 between predicted uncertainty and measured RMSE; not reached yet
-# (docs/planner.md, "Validation"): the quality q ranks the layouts at 0.86 on 2026-11-25, the
-# uncertainty where >= 2 cameras see at 0.74. Guarded at 0.8 for q so that a regression shows.
+# Goal (issue 19): >= 0.9 between predicted uncertainty and measured RMSE. The planner's predicted
+# tracker RMSE (triangulation where >= 2 cameras see, the coasting error for the reported part of
+# one-camera time) ranks the layouts at 0.93-0.95 over the scene seeds 8, 9, 10 (2026-11-27,
+# docs/planner.md); the quality q at 0.90-0.95, guarded lower so that a regression shows.
+sr=$(sed -n 's/^spearman_r //p' "$work/validation.out")
+awk -v s="$sr" 'BEGIN { exit !(s ~ /^-?[0-9.]+$/ && s >= 0.9) }' &&
+  pass "rank correlation of the predicted tracker RMSE and the measured RMSE: $sr" ||
+  fail "rank correlation of the predicted tracker RMSE and the measured RMSE: $sr < 0.9"
 sq=$(sed -n 's/^spearman_q //p' "$work/validation.out")
-awk -v s="$sq" 'BEGIN { exit !(s ~ /^-?[0-9.]+$/ && s >= 0.8) }' &&
+awk -v s="$sq" 'BEGIN { exit !(s ~ /^-?[0-9.]+$/ && s >= 0.85) }' &&
   pass "rank correlation of the predicted quality and the measured RMSE: $sq (uncertainty where seen: $su)" ||
-  fail "rank correlation of the predicted quality and the measured RMSE: $sq < 0.8"
+  fail "rank correlation of the predicted quality and the measured RMSE: $sq < 0.85"
 read -r _ planned ring4 < <(grep "^planned_vs_ring4" "$work/validation.out")
 awk -v a="$planned" -v b="$ring4" 'BEGIN { exit !(a != "" && b != "" && a + 0 > b + 0) }' &&
   pass "the planned layout covers more marker-time with >= 2 cameras than the ring of 4 ($planned vs $ring4)" ||

@@ -233,7 +233,7 @@ done
 # of participants now and then never matches, docs/security.md), and every one of them whose
 # status the operator's reader saw reports 61 (the reader may miss a different camera); the
 # intruders' (255) none.
-matched=$(sed -n 's/^sent set_threshold to \* (seq [0-9]*, \([0-9]*\) node(s) matched)$/\1/p' "$work/ctl_ops.log")
+matched=$(sed -n 's/^sent set_threshold to \* (seq [0-9]*, \([0-9]*\) node(s) matched, partition \*)$/\1/p' "$work/ctl_ops.log")
 ops_seq=$(sed -n 's/^sent set_threshold to \* (seq \([0-9]*\), .*/\1/p' "$work/ctl_ops.log")
 applied=$(grep -l "command set_threshold #${ops_seq:-none} applied" "$work"/cam[0-9].log 2>/dev/null | sed 's#.*/\(cam[0-9]*\)\.log#\1#' | tr '\n' ' ')
 read -r seen checked operator_set intruder_set < <(python3 -c "

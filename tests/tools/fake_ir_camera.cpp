@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "panoptes/cli.h"
+#include "panoptes/process.h"
 #include "spot_renderer.h"
 
 namespace {
@@ -195,10 +196,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
-    std::fprintf(stderr, "panoptes_fake_gige: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("panoptes_fake_gige", [&] { return run(argc, argv); });
 }

@@ -137,10 +137,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "panoptes_feature_flood: %s\n", error.what());
-    return panoptes::kExitFailure;
-  }
+  return panoptes::run_program("panoptes_feature_flood", [&] { return run(argc, argv); });
 }

@@ -16,6 +16,7 @@
 #include "panoptes/cli.h"
 #include "panoptes/estimator_app/recording_input.h"
 #include "panoptes/jsonl.h"
+#include "panoptes/process.h"
 #include "panoptes/recording/mcap_reader.h"
 
 namespace {
@@ -66,10 +67,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "%s: %s\n", "panoptes_mcap_probe", error.what());
-    return 1;
-  }
+  return panoptes::run_program("panoptes_mcap_probe", [&] { return run(argc, argv); });
 }

@@ -397,10 +397,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "panoptes_rogue: %s\n", error.what());
-    return panoptes::kExitFailure;
-  }
+  return panoptes::run_program("panoptes_rogue", [&] { return run(argc, argv); });
 }

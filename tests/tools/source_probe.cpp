@@ -10,6 +10,7 @@
 
 #include "panoptes/camera/sources.h"
 #include "panoptes/cli.h"
+#include "panoptes/process.h"
 #include "panoptes/time.h"
 
 namespace {
@@ -64,10 +65,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
-    std::fprintf(stderr, "panoptes_source_probe: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("panoptes_source_probe", [&] { return run(argc, argv); });
 }

@@ -779,6 +779,11 @@ bool Bus::secured() const {
   return core_->secured();
 }
 
+bool names_one_partition(std::string_view id) {
+  constexpr std::size_t kMaxPartitionName = 256;
+  return !id.empty() && id.size() <= kMaxPartitionName && id.find_first_of(";*?[") == std::string_view::npos;
+}
+
 namespace {
 
 // The topic's name: `requested` if given, else the type's own; DdsError if neither.

@@ -23,9 +23,15 @@ struct TimeSyncServer::Impl {
   // the same thread (intra-process delivery) and re-enter the Bus's listener lock: replies are
   // therefore written from this thread, fed by the listener through `requests`.
   static constexpr std::size_t kQueueCapacity = 256;
+  // Beyond this many clients, replies to the others go to every client's partition ("*").
+  static constexpr std::size_t kMaxClientWriters = 256;
 
+  Bus* bus = nullptr;
   ClockFunction clock;
-  std::unique_ptr<Writer<msg::TimeSync>> writer;
+  std::unique_ptr<Writer<msg::TimeSync>> writer;  // partition "*": every client
+  // A writer per client in the client's partition (docs/security.md, "Camera-scoped permissions"),
+  // so a camera reads only its own replies; null where DDS refused it. Only this thread touches it.
+  std::map<std::string, std::unique_ptr<Writer<msg::TimeSync>>> client_writers;
   std::unique_ptr<Reader<msg::TimeSync>> reader;
   std::mutex mutex;
   std::condition_variable wake;
@@ -33,7 +39,29 @@ struct TimeSyncServer::Impl {
   bool stopping = false;
   std::thread thread;
   std::atomic<std::uint64_t> answered{0};
+  std::atomic<std::uint64_t> answered_to_every_client{0};
   std::atomic<std::uint64_t> dropped{0};
+
+  // The writer in the client's own partition once it has matched the client's reader; until then
+  // (discovery of a new writer takes a moment, and no exchange should wait for it), and for a
+  // client id that cannot name one partition or a writer DDS refused, the one in "*".
+  Writer<msg::TimeSync>& writer_for(const std::string& client_id) {
+    auto found = client_writers.find(client_id);
+    if (found == client_writers.end() && names_one_partition(client_id) &&
+        client_writers.size() < kMaxClientWriters) {
+      std::unique_ptr<Writer<msg::TimeSync>> client_writer;
+      try {
+        client_writer = bus->make_writer<msg::TimeSync>(Qos::kDefault, {}, client_id);
+      } catch (const DdsError&) {
+        // Kept empty: this client's replies go to "*", and the writer is not tried again.
+      }
+      found = client_writers.emplace(client_id, std::move(client_writer)).first;
+    }
+    if (found != client_writers.end() && found->second && found->second->matched_readers() > 0)
+      return *found->second;
+    answered_to_every_client.fetch_add(1);
+    return *writer;
+  }
 
   void on_sample(msg::TimeSync&& message) {
     if (message.is_reply()) return;
@@ -58,8 +86,9 @@ struct TimeSyncServer::Impl {
       requests.pop_front();
       lock.unlock();
       reply.is_reply(true);
+      Writer<msg::TimeSync>& reply_writer = writer_for(reply.client_id());
       reply.t3_ns(clock());
-      writer->write(reply);
+      reply_writer.write(reply);
       answered.fetch_add(1);
       lock.lock();
     }
@@ -67,6 +96,7 @@ struct TimeSyncServer::Impl {
 };
 
 TimeSyncServer::TimeSyncServer(Bus& bus, ClockFunction clock) : impl_(std::make_unique<Impl>()) {
+  impl_->bus = &bus;
   impl_->clock = std::move(clock);
   impl_->writer = bus.make_writer<msg::TimeSync>();
   Impl* impl = impl_.get();
@@ -85,11 +115,16 @@ TimeSyncServer::~TimeSyncServer() {
   }
   impl_->wake.notify_all();
   impl_->thread.join();
+  impl_->client_writers.clear();
   impl_->writer.reset();
 }
 
 std::uint64_t TimeSyncServer::answered() const {
   return impl_->answered.load();
+}
+
+std::uint64_t TimeSyncServer::answered_to_every_client() const {
+  return impl_->answered_to_every_client.load();
 }
 
 std::uint64_t TimeSyncServer::dropped() const {

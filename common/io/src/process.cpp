@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
@@ -98,6 +99,10 @@ int ChildProcess::stop(std::chrono::milliseconds timeout) {
 
 int ChildProcess::exit_code() const {
   return WIFEXITED(exit_status_) ? WEXITSTATUS(exit_status_) : -1;
+}
+
+void detail::report_program_error(const char* program, const char* what) {
+  std::fprintf(stderr, "%s: %s\n", program, what);
 }
 
 }  // namespace panoptes

@@ -25,6 +25,7 @@ constexpr std::size_t kMaxCameras = 64;
 struct CameraAtPoint {
   Eigen::Vector3d to_camera;  // unit vector from the point to the camera centre
   double width_m = 0;         // the pyramid's half-width at the point: sigma · depth / f
+  double depth_over_f = 0;    // metres at the point per pixel in the image: depth / f
   Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // JᵀJ / sigma²
 };
 
@@ -37,6 +38,18 @@ struct PointResult {
   double resolution_only = 0;
   double p_k = 0;
   std::vector<double> histogram;
+};
+
+// A point's share of the tracker's predicted error (TrackingPrediction), summed over its planes.
+struct TrackingPoint {
+  double reported = 0;  // share of its planes under which the tracker reports it
+  double error2 = 0;    // share-weighted squared error, m²
+  double error2_ambiguous = 0;
+  double one_view = 0;
+  double two_view = 0;
+  double ambiguous = 0;
+  double seen_by_two = 0;  // at least two cameras
+  double confirmable = 0;
 };
 
 class PointEvaluator {
@@ -67,12 +80,7 @@ class PointEvaluator {
     per_plane_.clear();
     const double share = 1.0 / static_cast<double>(samples_.normals.size());
     for (const Eigen::Vector3d& normal : samples_.normals) {
-      Mask mask = 0;
-      for (Mask rest = seen; rest != 0; rest &= rest - 1) {
-        const auto c = static_cast<std::size_t>(std::countr_zero(rest));
-        if (normal.dot(at_[c].to_camera) > samples_.facing_cos) mask |= Mask{1} << c;
-      }
-      mask = effective(mask);
+      const Mask mask = facing(seen, normal);
       const double u = uncertainty(mask);
       per_plane_.push_back(u);
       const int n = std::popcount(mask);
@@ -87,7 +95,97 @@ class PointEvaluator {
     return result;
   }
 
+  // The tracker's error at `p` under each plane (TrackingPrediction).
+  TrackingPoint track(const Eigen::Vector3d& p, const TrackerModel& tracker) {
+    const Mask seen = effective(static_visibility(p));
+    trace_cache_.clear();
+    TrackingPoint result;
+    if (samples_.normals.empty()) {
+      add_tracked(seen, 1.0, tracker, result);
+      return result;
+    }
+    const double share = 1.0 / static_cast<double>(samples_.normals.size());
+    for (const Eigen::Vector3d& normal : samples_.normals)
+      add_tracked(facing(seen, normal), share, tracker, result);
+    return result;
+  }
+
  private:
+  // The cameras of `seen` that the plane with `normal` through the point leaves in view.
+  Mask facing(Mask seen, const Eigen::Vector3d& normal) const {
+    Mask mask = 0;
+    for (Mask rest = seen; rest != 0; rest &= rest - 1) {
+      const auto c = static_cast<std::size_t>(std::countr_zero(rest));
+      if (normal.dot(at_[c].to_camera) > samples_.facing_cos) mask |= Mask{1} << c;
+    }
+    return effective(mask);
+  }
+
+  // One (point, plane) sample seen by the cameras of `mask`, weighted by `share`.
+  void add_tracked(Mask mask, double share, const TrackerModel& tracker, TrackingPoint& out) {
+    const int n = std::popcount(mask);
+    if (n == 0) return;  // not reported: a track nobody sees loses its depth within tens of ms
+    const double sigma2 = tracker.publish_max_sigma_m * tracker.publish_max_sigma_m;
+    const double coast2 = 0.25 * sigma2;
+    if (n == 1) {
+      const double published_s = std::cbrt(3.0 * sigma2 / std::max(tracker.process_noise, 1e-12));
+      const double published =
+          share * std::min(1.0, published_s / std::max(tracker.one_view_episode_s, 1e-9));
+      out.one_view += share;
+      out.reported += published;
+      out.error2 += published * coast2;
+      out.error2_ambiguous += published * coast2;
+      return;
+    }
+    out.reported += share;
+    const double triangulation2 = covariance_trace(mask);
+    out.seen_by_two += share;
+    out.error2 += share * triangulation2;
+    if (n > 2) {
+      out.confirmable += share;
+      out.error2_ambiguous += share * triangulation2;
+      return;
+    }
+    const double p = two_view_ambiguity(mask, tracker);
+    out.two_view += share;
+    out.ambiguous += share * p;
+    out.confirmable += share * (1.0 - p);
+    out.error2_ambiguous += share * ((1.0 - p) * triangulation2 + p * coast2);
+  }
+
+  // P(another of the subject's markers lies within the epipolar tolerance of the point's pairing
+  // by its two cameras): in camera b's image the band of ±epipolar_px about the epipolar line is,
+  // at the point, a slab of ±epipolar_px · depth_b / f_b about the epipolar plane (through both
+  // centres and the point). The subject's other markers spread evenly over its extent along the
+  // plane's normal fall in it in proportion; both directions of pairing (a's blob with b's, b's
+  // with a's) count. Poisson: P = 1 − exp(−expected).
+  double two_view_ambiguity(Mask mask, const TrackerModel& tracker) const {
+    if (tracker.subject_markers < 2) return 0.0;
+    const CameraAtPoint& a = at_[static_cast<std::size_t>(std::countr_zero(mask))];
+    const CameraAtPoint& b = at_[static_cast<std::size_t>(std::countr_zero(mask & (mask - 1)))];
+    const Eigen::Vector3d normal = a.to_camera.cross(b.to_camera).normalized();
+    const double extent = normal.cwiseAbs().dot(tracker.subject_size.cwiseAbs());
+    if (!(extent > 0.0)) return 1.0;
+    double expected = 0.0;
+    for (const CameraAtPoint* camera : {&a, &b})
+      expected += static_cast<double>(tracker.subject_markers - 1) *
+                  std::min(1.0, 2.0 * tracker.epipolar_px * camera->depth_over_f / extent);
+    return 1.0 - std::exp(-expected);
+  }
+
+  // trace of the triangulation covariance of the cameras in `mask` (the expected squared 3D error).
+  double covariance_trace(Mask mask) {
+    for (const auto& [m, t] : trace_cache_)
+      if (m == mask) return t;
+    const double huge = options_.unseen_m;
+    Eigen::Matrix3d information = Eigen::Matrix3d::Identity() / (huge * huge);
+    for (Mask rest = mask; rest != 0; rest &= rest - 1)
+      information += at_[static_cast<std::size_t>(std::countr_zero(rest))].information;
+    const double trace = information.inverse().trace();
+    trace_cache_.emplace_back(mask, trace);
+    return trace;
+  }
+
   // `mask`, or only its first camera when no two of its rays are min_triangulation_deg apart as
   // lines: rays from opposite sides (cameras facing each other across P) are as useless for
   // triangulation as rays from one side.
@@ -120,7 +218,8 @@ class PointEvaluator {
       const auto& K = camera.model.intrinsics();
       CameraAtPoint& at = at_[c];
       at.to_camera = (centre - p) / distance;
-      at.width_m = sigma * p_cam.z() / (0.5 * (K.fx + K.fy));
+      at.depth_over_f = p_cam.z() / (0.5 * (K.fx + K.fy));
+      at.width_m = sigma * at.depth_over_f;
       at.information = J.transpose() * J / (sigma * sigma);
       seen |= Mask{1} << c;
     }
@@ -182,6 +281,7 @@ class PointEvaluator {
   const MetricOptions& options_;
   std::vector<CameraAtPoint> at_;
   std::vector<std::pair<Mask, double>> cache_;
+  std::vector<std::pair<Mask, double>> trace_cache_;
   std::vector<double> per_plane_;
   std::vector<double> lengths_;
   double min_angle_cos_ = 1.0;
@@ -296,6 +396,37 @@ Evaluation evaluate(std::span<const PlannedCamera> cameras, const SampleSet& sam
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t k = 0; k < histograms[i].size(); ++k)
       result.visible_histogram[k] += samples.weights[i] * histograms[i][k];
+  return result;
+}
+
+TrackingPrediction predict_tracking(std::span<const PlannedCamera> cameras, const SampleSet& samples,
+                                    std::span<const Box> obstacles, const MetricOptions& options,
+                                    const TrackerModel& tracker) {
+  if (cameras.size() > kMaxCameras)
+    throw std::invalid_argument("planner: at most " + std::to_string(kMaxCameras) +
+                                " cameras per evaluation");
+  PointEvaluator evaluator(cameras, samples, obstacles, options);
+  TrackingPoint sum;
+  for (std::size_t i = 0; i < samples.points.size(); ++i) {
+    const TrackingPoint point = evaluator.track(samples.points[i], tracker);
+    const double w = samples.weights[i];
+    sum.reported += w * point.reported;
+    sum.error2 += w * point.error2;
+    sum.error2_ambiguous += w * point.error2_ambiguous;
+    sum.one_view += w * point.one_view;
+    sum.two_view += w * point.two_view;
+    sum.ambiguous += w * point.ambiguous;
+    sum.seen_by_two += w * point.seen_by_two;
+    sum.confirmable += w * point.confirmable;
+  }
+  TrackingPrediction result;
+  result.rmse_m = sum.reported > 0.0 ? std::sqrt(sum.error2 / sum.reported) : options.unseen_m;
+  result.rmse_with_ambiguity_m =
+      sum.reported > 0.0 ? std::sqrt(sum.error2_ambiguous / sum.reported) : options.unseen_m;
+  result.one_view_share = sum.one_view;
+  result.two_view_share = sum.two_view;
+  result.ambiguous_share = sum.ambiguous;
+  result.confirmable_share = sum.seen_by_two > 0.0 ? sum.confirmable / sum.seen_by_two : 0.0;
   return result;
 }
 

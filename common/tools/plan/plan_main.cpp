@@ -132,6 +132,16 @@ void print_evaluation(const Evaluation& e, const MetricOptions& metric, std::siz
   std::printf("\n");
 }
 
+// The tracker's predicted error (docs/planner.md, "Validation against the tracker").
+void print_tracking(const TrackingPrediction& t) {
+  std::printf("predicted tracker RMSE %.6g m, with two-view ambiguity %.6g m\n", t.rmse_m,
+              t.rmse_with_ambiguity_m);
+  std::printf(
+      "marker-time seen by one camera %.4f, by two %.4f, by two with a rival in the epipolar band %.4f; "
+      "confirmable %.4f of what two or more see\n",
+      t.one_view_share, t.two_view_share, t.ambiguous_share, t.confirmable_share);
+}
+
 int run(const Arguments& args) {
   RoomFile file = load_room(args.room);
   file.metric.threads = args.threads;
@@ -184,6 +194,8 @@ int run(const Arguments& args) {
     }
   }
   print_evaluation(report.evaluation, file.metric, report.cameras.size());
+  report.tracking = predict_tracking(report.cameras, samples, file.room.obstacles, file.metric, file.tracker);
+  print_tracking(report.tracking);
   if (args.remove_one || !args.report.empty()) {
     report.removal_costs = removal_costs(report.cameras, samples, file.room.obstacles, file.metric);
   }

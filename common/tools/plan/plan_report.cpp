@@ -189,6 +189,12 @@ void write_report(const ReportInput& input, const fs::path& dir) {
       "P(at least %d cameras see a point): <b>%.4f</b>.</p>\n",
       input.evaluation.quality, input.evaluation.resolution_only, input.metric.k_cameras,
       input.evaluation.p_at_least_k);
+  html << line;
+  std::snprintf(line, sizeof line,
+                "<p>Predicted tracker RMSE: <b>%.3g mm</b>; marker-time seen by one camera %.4f, by two %.4f "
+                "(with a rival marker in the epipolar band %.4f).</p>\n",
+                1000.0 * input.tracking.rmse_m, input.tracking.one_view_share, input.tracking.two_view_share,
+                input.tracking.ambiguous_share);
   html << line << "<p>Cameras seeing a point (over points and occluder planes):";
   for (std::size_t n = 0; n < input.evaluation.visible_histogram.size(); ++n) {
     std::snprintf(line, sizeof line, " %zu: %.3f;", n, input.evaluation.visible_histogram[n]);

@@ -19,6 +19,7 @@ struct ReportInput {
   MetricOptions metric;
   std::vector<PlannedCamera> cameras;
   Evaluation evaluation;
+  TrackingPrediction tracking;        // the tracker's predicted error (docs/planner.md, "Validation")
   std::vector<double> removal_costs;  // by camera (may be empty)
   std::vector<double> history;        // best quality per generation (may be empty)
   std::string notes;                  // how the plan was made (command, budget, time)

@@ -123,13 +123,35 @@ void read_occlusion(const YamlReader& reader, OccluderModel& occluders) {
     reader.fail("facing_angle_deg", "must be in (0, 180)");
 }
 
+// subject: {markers, size: [x, y, z], one_view_episode_s} and
+// tracker: {publish_max_sigma_m, process_noise, epipolar_px}.
+void read_tracker_model(const YamlReader& reader, TrackerModel& tracker) {
+  if (reader.has("subject")) {
+    const YamlReader subject = reader.child("subject");
+    subject.expect_only({"markers", "size", "one_view_episode_s"});
+    const long long markers = subject.get_int("markers", tracker.subject_markers);
+    if (markers < 0 || markers > 100000) subject.fail("markers", "must be 0..100000");
+    tracker.subject_markers = static_cast<int>(markers);
+    if (subject.has("size")) tracker.subject_size = vector3(subject, "size");
+    if (!(tracker.subject_size.minCoeff() > 0.0)) subject.fail("size", "must be positive in x, y and z");
+    tracker.one_view_episode_s = positive(subject, "one_view_episode_s", tracker.one_view_episode_s);
+  }
+  if (reader.has("tracker")) {
+    const YamlReader model = reader.child("tracker");
+    model.expect_only({"publish_max_sigma_m", "process_noise", "epipolar_px"});
+    tracker.publish_max_sigma_m = positive(model, "publish_max_sigma_m", tracker.publish_max_sigma_m);
+    tracker.process_noise = positive(model, "process_noise", tracker.process_noise);
+    tracker.epipolar_px = positive(model, "epipolar_px", tracker.epipolar_px);
+  }
+}
+
 }  // namespace
 
 RoomFile load_room(const std::filesystem::path& path) {
   const YAML::Node node = load_yaml_file(path);
   const YamlReader reader(path.string(), node);
-  reader.expect_only(
-      {"volume", "regions", "obstacles", "mounts", "lenses", "occlusion", "metric", "samples"});
+  reader.expect_only({"volume", "regions", "obstacles", "mounts", "lenses", "occlusion", "metric", "samples",
+                      "subject", "tracker"});
   RoomFile file;
   file.room.volume = read_box(reader.child("volume"));
   for (const YamlReader& region : reader.sequence_or_empty("regions")) {
@@ -148,6 +170,7 @@ RoomFile load_room(const std::filesystem::path& path) {
   if (file.room.lenses.empty()) reader.fail("lenses", "list at least one lens");
   if (reader.has("occlusion")) read_occlusion(reader.child("occlusion"), file.occluders);
   if (reader.has("metric")) read_metric(reader.child("metric"), file.metric);
+  read_tracker_model(reader, file.tracker);
   if (reader.has("samples")) {
     const YamlReader samples = reader.child("samples");
     samples.expect_only({"points", "directions", "seed"});

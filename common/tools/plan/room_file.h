@@ -13,6 +13,7 @@ struct RoomFile {
   Room room;
   OccluderModel occluders;
   MetricOptions metric;
+  TrackerModel tracker;  // keys subject and tracker: the predicted tracker RMSE
   int sample_points = 2000;
   int sample_directions = 32;
   std::uint64_t sample_seed = 1;

@@ -95,8 +95,10 @@ BodyRecord body_of(const msg::BodyPose& pose) {
 }
 
 RecorderRecord recorder_of(const msg::RecorderStatus& status) {
-  return {status.recording(), status.path(),           status.topics(), status.messages(),
-          status.bytes(),     status.messages_per_s(), status.error()};
+  RecorderRecord record{status.recording(), status.path(),           status.topics(), status.messages(),
+                        status.bytes(),     status.messages_per_s(), status.error(),  {}};
+  for (const msg::Counter& counter : status.counters()) record.rejections[counter.name()] = counter.value();
+  return record;
 }
 
 }  // namespace

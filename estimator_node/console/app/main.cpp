@@ -154,13 +154,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const panoptes::ConfigError& error) {  // e.g. DDS Security files: refused before joining
-    std::fprintf(stderr, "panoptes_console: %s\n", error.what());
-    return panoptes::kExitBadInput;
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "panoptes_console: %s\n", error.what());
-    return panoptes::kExitFailure;
-  }
+  return panoptes::run_program("panoptes_console", [&] { return run(argc, argv); });
 }

@@ -227,6 +227,7 @@ json ConsoleState::recorders_json(TimeNs now) const {
          {"bytes", s.bytes},
          {"messages_per_s", round_to(s.messages_per_s, 1)},
          {"error", s.error},
+         {"rejections", s.rejections},
          {"seconds",
           s.recording ? round_to(static_cast<double>(now - recorder.started_ns) * 1e-9, 1) : 0.0}});
   }

@@ -512,9 +512,13 @@ function updateRecorders(recorders, recordings) {
     }
     row.dataset.recording = String(recorder.recording);
     row.querySelector('.light').className = `light ${recorder.error ? 'amber' : recorder.recording ? 'red' : 'green'}`;
-    row.querySelector('.figures').textContent = recorder.recording
+    // Samples the recorder's bus dropped on receipt (docs/hostile_input.md), by reason.
+    const rejections = Object.entries(recorder.rejections || {});
+    const dropped = rejections.length
+      ? ` · dropped ${rejections.map(([reason, count]) => `${count} ${reason}`).join(', ')}` : '';
+    row.querySelector('.figures').textContent = (recorder.recording
       ? `recording ${recorder.path} · ${recorder.seconds.toFixed(0)} s · ${recorder.topics} topics · ${recorder.messages} messages · ${(recorder.bytes / 1e6).toFixed(2)} MB · ${recorder.messages_per_s.toFixed(0)} msg/s`
-      : `idle${recorder.error ? ' · error: ' + recorder.error : ''}`;
+      : `idle${recorder.error ? ' · error: ' + recorder.error : ''}`) + dropped;
     row.querySelector('.start').disabled = recorder.recording;
     row.querySelector('.stop').disabled = !recorder.recording;
   }

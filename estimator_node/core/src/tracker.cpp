@@ -380,6 +380,10 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   ++track.nis_updates;
   track.state = projected.state;
   update(track.state, projected.projection, pixel, options.measurement_noise_px);
+  // A tentative track that a camera sees again cancels one miss: a marker that the body hides
+  // from the other cameras is seen by two as often as it is missed by two and survives to be
+  // confirmed; a ghost, starved of blobs in its own views, still reaches tentative_max_misses.
+  if (!track.confirmed && track.misses > 0) --track.misses;
   note_update(track, camera_index, stamp);
   used[blob] = 1;
   ++core.blobs_associated;

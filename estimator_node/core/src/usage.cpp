@@ -57,8 +57,8 @@ void UsageMonitor::note_reason(const std::string& reason, std::uint64_t n) {
   if (n != 0) reasons_[reason] += n;
 }
 
-EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns,
-                                       double latency_window_ms) const {
+EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns, double latency_window_ms,
+                                       const std::map<std::string, CameraCounters>& other_cameras) const {
   EstimatorUsage usage;
   usage.stamp_ns = stamp_ns;
   const auto counts = tracker.track_counts(tracker.last_stamp_ns());
@@ -88,7 +88,7 @@ EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns,
     u.latency_p50_ms = camera.latency.quantile_ms(0.5);
     u.latency_p99_ms = camera.latency.quantile_ms(0.99);
   }
-  for (const auto& [id, counters] : tracked) {
+  const auto merge = [&merged](const std::string& id, const CameraCounters& counters) {
     auto& u = merged[id];
     u.camera_id = id;
     // Frames that never passed through the monitor (direct use of the tracker) still count.
@@ -100,7 +100,9 @@ EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns,
     u.blobs = counters.blobs;
     u.associated = counters.associated;
     u.last_stamp_ns = counters.last_stamp_ns;
-  }
+  };
+  for (const auto& [id, counters] : tracked) merge(id, counters);
+  for (const auto& [id, counters] : other_cameras) merge(id, counters);
   for (auto& [id, u] : merged) {
     u.utilisation = u.frames == 0 ? 0.0 : static_cast<double>(u.used) / static_cast<double>(u.frames);
     usage.cameras.push_back(u);

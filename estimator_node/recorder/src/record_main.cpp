@@ -181,6 +181,12 @@ class RecordLoop {
     status.bytes(p.bytes);
     status.messages_per_s(rate);
     status.error(error_);
+    for (const auto& [reason, count] : bus_.receive_rejections()) {
+      msg::Counter counter;
+      counter.name(reason);
+      counter.value(count);
+      status.counters().push_back(std::move(counter));
+    }
     status_writer_->write(status);
     if (!options_.quiet && p.recording)
       std::fprintf(stderr, "panoptes_record: %s: %u topics, %llu messages, %.2f MB, %.0f msg/s\n",
@@ -237,9 +243,15 @@ int send_command(const Options& options, dds::Bus& bus) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     const std::lock_guard<std::mutex> lock(mutex);
     if ((options.send == "quit" && seq >= 2) || (seen && last.recording() == want_recording)) {
-      if (seen)
-        std::fprintf(stderr, "panoptes_record: %s: %s %s\n", last.recorder_id().c_str(),
-                     last.recording() ? "recording" : "stopped", last.path().c_str());
+      if (seen) {
+        std::string dropped;  // what the recorder's bus dropped on receipt, by reason
+        for (const msg::Counter& counter : last.counters())
+          dropped += (dropped.empty() ? " (dropped: " : ", ") + counter.name() + " " +
+                     std::to_string(counter.value());
+        std::fprintf(stderr, "panoptes_record: %s: %s %s%s\n", last.recorder_id().c_str(),
+                     last.recording() ? "recording" : "stopped", last.path().c_str(),
+                     dropped.empty() ? "" : (dropped + ")").c_str());
+      }
       writer->wait_for_acknowledgments(std::chrono::seconds(2));
       return panoptes::kExitOk;
     }
@@ -285,39 +297,23 @@ int run(int argc, char** argv) {
 
   panoptes::install_stop_handlers();
   ::signal(SIGXFSZ, SIG_IGN);  // a file size limit fails the write (EFBIG) instead of killing us
-  try {
-    dds::BusOptions bus_options;
-    bus_options.profile_file = options.dds_profile;
-    bus_options.participant_name = "panoptes_record";
-    dds::Bus bus(bus_options);
-    if (!options.send.empty()) return send_command(options, bus);
-    rec::RecorderOptions recorder_options;
-    recorder_options.topics = options.topics;
-    recorder_options.mcap.compression = compression_of(options.compression);
-    recorder_options.mcap.chunk_size = static_cast<std::size_t>(options.chunk_kb) * 1024;
-    recorder_options.mcap.chunk_duration_ns = static_cast<std::uint64_t>(options.chunk_ms) * 1'000'000ULL;
-    rec::Recorder recorder(bus, recorder_options);
-    RecordLoop loop(options, bus, recorder);
-    return loop.run();
-  } catch (const dds::DdsError& e) {
-    std::fprintf(stderr, "panoptes_record: %s\n", e.what());
-    return panoptes::kExitBadInput;
-  } catch (const panoptes::ConfigError& e) {  // e.g. DDS Security files: refused before joining
-    std::fprintf(stderr, "panoptes_record: %s\n", e.what());
-    return panoptes::kExitBadInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "panoptes_record: %s\n", e.what());
-    return panoptes::kExitFailure;
-  }
+  dds::BusOptions bus_options;
+  bus_options.profile_file = options.dds_profile;
+  bus_options.participant_name = "panoptes_record";
+  dds::Bus bus(bus_options);
+  if (!options.send.empty()) return send_command(options, bus);
+  rec::RecorderOptions recorder_options;
+  recorder_options.topics = options.topics;
+  recorder_options.mcap.compression = compression_of(options.compression);
+  recorder_options.mcap.chunk_size = static_cast<std::size_t>(options.chunk_kb) * 1024;
+  recorder_options.mcap.chunk_duration_ns = static_cast<std::uint64_t>(options.chunk_ms) * 1'000'000ULL;
+  rec::Recorder recorder(bus, recorder_options);
+  RecordLoop loop(options, bus, recorder);
+  return loop.run();
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "%s: %s\n", "panoptes_record", error.what());
-    return 1;
-  }
+  return panoptes::run_program<dds::DdsError>("panoptes_record", [&] { return run(argc, argv); });
 }

@@ -53,57 +53,39 @@ int run(int argc, char** argv) {
     return *code;
 
   panoptes::install_stop_handlers();
-  try {
-    rec::Replayer replayer(input, options);
-    for (const auto& problem : replayer.problems())
-      std::fprintf(stderr, "panoptes_replay: %s\n", problem.c_str());
-    panoptes::dds::BusOptions bus_options;
-    bus_options.profile_file = dds_profile;
-    bus_options.participant_name = "panoptes_replay";
-    panoptes::dds::Bus bus(bus_options);
-    std::fprintf(stderr, "panoptes_replay: %s: %zu messages on %zu topics at rate %g\n", input.c_str(),
-                 replayer.messages().size(), replayer.topics().size(), options.rate);
-    const auto report = replayer.run(bus, discovery_s, [] { return panoptes::stop_requested(); });
-    if (options.restamp)
-      std::fprintf(stderr, "panoptes_replay: FeatureFrame times shifted by %lld ns\n",
-                   static_cast<long long>(report.first_shift_ns));
-    for (const auto& [topic, count] : report.per_topic)
-      std::fprintf(stderr, "  %s: %llu\n", topic.c_str(), static_cast<unsigned long long>(count));
-    const double achieved = report.wall_s > 0 ? report.recorded_s * report.passes / report.wall_s : 0;
-    if (report.kept_up()) {
-      std::fprintf(stderr, "panoptes_replay: published %llu messages; kept up (max lag %.1f ms, %.2fx)\n",
-                   static_cast<unsigned long long>(report.published), report.max_lag_ms, achieved);
-    } else {
-      std::fprintf(
-          stderr,
-          "panoptes_replay: published %llu messages; could not keep up at --rate %g: %llu messages more "
-          "than %g ms late, max lag %.1f ms, achieved %.2fx\n",
-          static_cast<unsigned long long>(report.published), options.rate,
-          static_cast<unsigned long long>(report.late), options.late_ms, report.max_lag_ms, achieved);
-    }
-    return panoptes::kExitOk;
-  } catch (const panoptes::recording::RecordingError& e) {
-    std::fprintf(stderr, "panoptes_replay: %s\n", e.what());
-    return panoptes::kExitBadInput;
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "panoptes_replay: %s\n", e.what());
-    return panoptes::kExitBadInput;
-  } catch (const panoptes::ConfigError& e) {  // e.g. DDS Security files: refused before joining
-    std::fprintf(stderr, "panoptes_replay: %s\n", e.what());
-    return panoptes::kExitBadInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "panoptes_replay: %s\n", e.what());
-    return panoptes::kExitFailure;
+  rec::Replayer replayer(input, options);
+  for (const auto& problem : replayer.problems())
+    std::fprintf(stderr, "panoptes_replay: %s\n", problem.c_str());
+  panoptes::dds::BusOptions bus_options;
+  bus_options.profile_file = dds_profile;
+  bus_options.participant_name = "panoptes_replay";
+  panoptes::dds::Bus bus(bus_options);
+  std::fprintf(stderr, "panoptes_replay: %s: %zu messages on %zu topics at rate %g\n", input.c_str(),
+               replayer.messages().size(), replayer.topics().size(), options.rate);
+  const auto report = replayer.run(bus, discovery_s, [] { return panoptes::stop_requested(); });
+  if (options.restamp)
+    std::fprintf(stderr, "panoptes_replay: FeatureFrame times shifted by %lld ns\n",
+                 static_cast<long long>(report.first_shift_ns));
+  for (const auto& [topic, count] : report.per_topic)
+    std::fprintf(stderr, "  %s: %llu\n", topic.c_str(), static_cast<unsigned long long>(count));
+  const double achieved = report.wall_s > 0 ? report.recorded_s * report.passes / report.wall_s : 0;
+  if (report.kept_up()) {
+    std::fprintf(stderr, "panoptes_replay: published %llu messages; kept up (max lag %.1f ms, %.2fx)\n",
+                 static_cast<unsigned long long>(report.published), report.max_lag_ms, achieved);
+  } else {
+    std::fprintf(
+        stderr,
+        "panoptes_replay: published %llu messages; could not keep up at --rate %g: %llu messages more "
+        "than %g ms late, max lag %.1f ms, achieved %.2fx\n",
+        static_cast<unsigned long long>(report.published), options.rate,
+        static_cast<unsigned long long>(report.late), options.late_ms, report.max_lag_ms, achieved);
   }
+  return panoptes::kExitOk;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "%s: %s\n", "panoptes_replay", error.what());
-    return 1;
-  }
+  return panoptes::run_program<panoptes::recording::RecordingError, std::invalid_argument>(
+      "panoptes_replay", [&] { return run(argc, argv); });
 }

@@ -40,7 +40,7 @@ void EstimatorSession::process_due(std::vector<FeatureFrame>& due,
 }
 
 void EstimatorSession::print_summary(std::size_t bad_lines) const {
-  intake_.print_summary(inbox_.drops(), bad_lines);
+  intake_.print_summary(inbox_.drops(), bad_lines, inside_out_.camera_counters());
   for (const auto& line : inside_out_.summary_lines()) log(line);
 }
 

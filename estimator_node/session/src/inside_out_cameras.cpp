@@ -80,8 +80,17 @@ est::FrameOutcome InsideOutCameras::process(const FeatureFrame& frame) {
   pixels.reserve(blobs.size());
   for (const Blob* blob : blobs) pixels.emplace_back(blob->x, blob->y);
   const std::uint64_t late_before = rig.tracker.counters().late_frames;
-  rig.tracker.add_frame(frame.stamp_ns, pixels);
-  if (rig.tracker.counters().late_frames != late_before) return est::FrameOutcome::kTooLate;
+  const auto pose = rig.tracker.add_frame(frame.stamp_ns, pixels);
+  est::CameraCounters& counters = counters_[frame.camera_id];
+  ++counters.frames;
+  counters.blobs += frame.blobs.size();
+  if (rig.tracker.counters().late_frames != late_before) {
+    ++counters.too_late;
+    return est::FrameOutcome::kTooLate;
+  }
+  ++counters.used;
+  if (pose) counters.associated += static_cast<std::uint64_t>(pose->landmarks);
+  counters.last_stamp_ns = std::max(counters.last_stamp_ns, frame.stamp_ns);
   last_stamp_ns_ = std::max(last_stamp_ns_, frame.stamp_ns);
   return est::FrameOutcome::kProcessed;
 }

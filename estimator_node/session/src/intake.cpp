@@ -51,9 +51,10 @@ std::vector<est::FrameOutcome> Intake::process_batch(std::span<const FeatureFram
   return outcomes;
 }
 
-est::EstimatorUsage Intake::usage(TimeNs stamp_ns, std::uint64_t inbox_drops) const {
+est::EstimatorUsage Intake::usage(TimeNs stamp_ns, std::uint64_t inbox_drops,
+                                  const std::map<std::string, est::CameraCounters>& other_cameras) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto usage = monitor_.summarize(tracker_, stamp_ns, latency_window_ms_);
+  auto usage = monitor_.summarize(tracker_, stamp_ns, latency_window_ms_, other_cameras);
   for (const auto& [reason, n] : screen_.counts()) usage.counters[reason] += n;
   if (inbox_drops) usage.counters["inbox_overflow"] += inbox_drops;
   return usage;
@@ -64,7 +65,8 @@ std::uint64_t Intake::frames_rejected() const {
   return screen_.stats().frames_rejected;
 }
 
-void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines) const {
+void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
+                           const std::map<std::string, est::CameraCounters>& other_cameras) const {
   const auto& s = tracker_.stats();
   const std::uint64_t rejected = frames_rejected();
   log("processed " + std::to_string(s.frames) + " frames (" + std::to_string(s.frames_late) +
@@ -73,7 +75,7 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines) con
       " rejected, " + std::to_string(bad_lines) + " malformed lines); tracks created " +
       std::to_string(s.tracks_created) + ", confirmed " + std::to_string(s.tracks_confirmed) +
       ", ghosts removed " + std::to_string(s.ghosts_deleted));
-  for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops).lines()) log(line);
+  for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops, other_cameras).lines()) log(line);
   if (tracker_.body_count() > 0) {
     const auto& b = tracker_.body_stats();
     log("bodies: identified " + std::to_string(b.identified) + ", acquired by one camera " +

@@ -121,7 +121,7 @@ TEST(ConsoleState, RecordingsAreListedWhenTheirRecorderStopsAndCommandsResolveFr
   state.on_recorder_status("studio", idle, kT0);
   EXPECT_TRUE(state.knows_recorder("studio"));
   state.on_recorder_command_sent({1, 5, "studio", true, kT0});
-  RecorderRecord recording{true, "/data/take_1.mcap", 3, 100, 4096, 50, ""};
+  RecorderRecord recording{true, "/data/take_1.mcap", 3, 100, 4096, 50, "", {}};
   state.on_recorder_status("studio", recording, kT0 + kNsPerSecond);
   recording.messages = 250;
   state.on_recorder_status("studio", recording, kT0 + 2 * kNsPerSecond);
@@ -131,7 +131,7 @@ TEST(ConsoleState, RecordingsAreListedWhenTheirRecorderStopsAndCommandsResolveFr
   EXPECT_EQ(outcomes[0].result, "applied");
   EXPECT_TRUE(state.snapshot(kT0 + 2 * kNsPerSecond, true)["recordings"].empty());
   state.on_recorder_command_sent({1, 6, "studio", false, kT0 + 3 * kNsPerSecond});
-  RecorderRecord stopped{false, "/data/take_1.mcap", 3, 300, 8192, 0, ""};
+  RecorderRecord stopped{false, "/data/take_1.mcap", 3, 300, 8192, 0, "", {{"id_outside_partition", 7}}};
   state.on_recorder_status("studio", stopped, kT0 + 4 * kNsPerSecond);
   const json snapshot = state.snapshot(kT0 + 4 * kNsPerSecond, true);
   ASSERT_EQ(snapshot["recordings"].size(), 1u);
@@ -139,6 +139,7 @@ TEST(ConsoleState, RecordingsAreListedWhenTheirRecorderStopsAndCommandsResolveFr
   EXPECT_EQ(snapshot["recordings"][0]["messages"], 300);  // the figures of the closing status
   EXPECT_DOUBLE_EQ(snapshot["recordings"][0]["seconds"].get<double>(), 3.0);
   EXPECT_EQ(snapshot["recorders"][0]["recording"], false);
+  EXPECT_EQ(snapshot["recorders"][0]["rejections"]["id_outside_partition"], 7);  // the recorder's drops
   EXPECT_EQ(state.take_outcomes(kT0 + 4 * kNsPerSecond).at(0).request, 6);
   // A start that no status confirms ends as no_ack.
   state.on_recorder_command_sent({1, 7, "studio", true, kT0 + 5 * kNsPerSecond});

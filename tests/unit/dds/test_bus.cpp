@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/time_sync.h"
 #include "panoptes_msgs/panoptes.h"
 
 namespace panoptes::dds {
@@ -151,6 +152,46 @@ TEST(Bus, CameraScopedWritersReachTheirCameraAndDropSamplesNamingAnother) {
   EXPECT_LE(features->received(), 5u);
   EXPECT_EQ(recorded->received(), 5u);  // a recorder records cam1's own frames only
   EXPECT_EQ(estimator.receive_rejections().count("unknown_writer"), 0u);
+}
+
+// Time-sync replies go to the requesting camera's partition, not to every camera ("*"), once the
+// server's writer for that camera has matched it (docs/security.md, "Camera-scoped permissions").
+TEST(Bus, TimeSyncRepliesGoToTheRequestingCamerasPartition) {
+  Bus estimator(options("estimator")), cam0(options("cam0")), cam1(options("cam1"));
+  TimeSyncServer server(estimator);
+  TimeSyncClientOptions client_options;
+  client_options.fast_rate_hz = 50;
+  client_options.client_id = "cam0";
+  TimeSyncClient client0(cam0, client_options);
+  client_options.client_id = "cam1";
+  TimeSyncClient client1(cam1, client_options);
+  ASSERT_TRUE(client0.wait_synchronised(10s));
+  ASSERT_TRUE(client1.wait_synchronised(10s));
+  // Ten answers in a row, none of them written for every camera.
+  const bool only_scoped_replies = wait_until(
+      [&] {
+        const std::uint64_t answered = server.answered(), broadcast = server.answered_to_every_client();
+        if (!wait_until([&] { return server.answered() >= answered + 10; }, 2s)) return false;
+        return server.answered_to_every_client() == broadcast;
+      },
+      10s);
+  EXPECT_TRUE(only_scoped_replies);
+  EXPECT_LT(server.answered_to_every_client(), server.answered());
+  EXPECT_EQ(client0.status().unmatched, 0u);
+  EXPECT_EQ(client1.status().unmatched, 0u);
+  // Requests from ids that cannot name one partition (a separator, a wildcard, 1000 characters)
+  // are answered in "*", without a writer of their own and without stopping the server.
+  auto requests = cam0.make_writer<msg::TimeSync>();
+  ASSERT_TRUE(requests->wait_for_readers(1, 5s));
+  const std::uint64_t before = server.answered(), broadcast_before = server.answered_to_every_client();
+  for (const std::string& id : {std::string("cam0;cam1"), std::string("cam*"), std::string(1000, 'c')}) {
+    msg::TimeSync request;
+    request.client_id(id);
+    request.seq(1);
+    requests->write(request);
+  }
+  EXPECT_TRUE(wait_until([&] { return server.answered_to_every_client() >= broadcast_before + 3; }));
+  EXPECT_GE(server.answered(), before + 3);
 }
 
 TEST(Bus, OnlyIdOnATypeWithoutLeadingIdIsRefused) {

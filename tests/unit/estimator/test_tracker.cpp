@@ -201,6 +201,38 @@ TEST(Tracker, WithholdsAMarkerOnlyOneCameraSeesAndKeepsItsId) {
   }
 }
 
+// Issue 19, validation: a marker that the body hides from two of four cameras for the whole run
+// (inside their images, never in their frames) is seen by two. The misses of the cameras that
+// cannot see it must not delete its tentative track faster than the two that see it confirm it;
+// and no ghost may be published for it.
+TEST(Tracker, ConfirmsAMarkerTwoCamerasSeeWhileTheOthersAreBlocked) {
+  auto visible = [](int m, double, int camera) { return m != 1 || camera <= 1; };
+  const auto run = make_run(2.0, visible, 4);
+  Tracker tracker;
+  tracker.set_calibration(SystemCalibration{run.cameras});
+  std::set<std::int64_t> ids;
+  int instants = 0, tracked = 0, far_records = 0;
+  for (const auto& frame : run.frames) {
+    tracker.process(frame);
+    const double t = ns_to_seconds(scene_time(frame.stamp_ns));
+    if (t < 0.3) continue;
+    ++instants;
+    for (const auto& track : tracker.current_tracks()) {
+      double nearest = 1e9;
+      for (int m = 0; m < 3; ++m) nearest = std::min(nearest, (track.p - marker_position(m, t)).norm());
+      if (nearest > 0.01) ++far_records;
+      if ((track.p - marker_position(1, t)).norm() < 0.005) {
+        ++tracked;
+        ids.insert(track.id);
+      }
+    }
+  }
+  EXPECT_GE(tracked, instants * 99 / 100) << "the two-camera marker was not tracked";
+  EXPECT_EQ(ids.size(), 1u);
+  EXPECT_EQ(far_records, 0) << "records more than 1 cm from every marker";
+  EXPECT_EQ(tracker.stats().tracks_confirmed, 3u);
+}
+
 TEST(Tracker, CountsFramesFromUncalibratedCamerasAndLateFrames) {
   auto always = [](int, double) { return true; };
   const auto run = make_run(1.0, always);

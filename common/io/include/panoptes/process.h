@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "panoptes/errors.h"
+
 namespace panoptes {
 
 // Installs handlers for SIGINT and SIGTERM that set a flag (and nothing else).
@@ -46,5 +48,39 @@ class ChildProcess {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;   // a run-time failure
 inline constexpr int kExitBadInput = 2;  // bad arguments, config, calibration or input file
+
+namespace detail {
+void report_program_error(const char* program, const char* what);
+
+template <typename Body, typename BadInput, typename... More>
+int run_catching_bad_input(const char* program, Body& body) {
+  try {
+    if constexpr (sizeof...(More) == 0) {
+      return body();
+    } else {
+      return run_catching_bad_input<Body, More...>(program, body);
+    }
+  } catch (const BadInput& error) {
+    report_program_error(program, error.what());
+    return kExitBadInput;
+  }
+}
+}  // namespace detail
+
+// Every program's main(): runs `body` (returns the exit code) and turns an exception that escapes
+// it into one line "<program>: <what>" on stderr and an exit code: kExitBadInput for a ConfigError
+// and for the `BadInput` types given (e.g. a DDS error from a bad profile), kExitFailure for any
+// other exception (e.g. out of memory), never an abort.
+template <typename... BadInput, typename Body>
+int run_program(const char* program, Body&& body) {
+  try {
+    return detail::run_catching_bad_input<Body, ConfigError, BadInput...>(program, body);
+  } catch (const std::exception& error) {
+    detail::report_program_error(program, error.what());
+  } catch (...) {
+    detail::report_program_error(program, "unknown error");
+  }
+  return kExitFailure;
+}
 
 }  // namespace panoptes

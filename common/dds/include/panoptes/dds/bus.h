@@ -12,6 +12,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "panoptes/dds/security.h"
@@ -133,6 +134,11 @@ class Reader {
  private:
   std::unique_ptr<Impl> impl_;
 };
+
+// Whether `id` can be the `scope` of a writer for that one camera (or client): a DDS partition name
+// without ';' (the separator), wildcards ("*?[") and at most 256 characters. Ids from the bus
+// (a time-sync request's client id, a script's target) are checked before a writer is made.
+bool names_one_partition(std::string_view id);
 
 class Bus {
  public:

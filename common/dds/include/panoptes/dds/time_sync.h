@@ -23,7 +23,9 @@ using ClockFunction = std::function<TimeNs()>;
 // Answers every request on rt/panoptes/time_sync: t2 is read when the request reaches the
 // listener, t3 just before the reply is written, both on `clock` (default: the wall clock, the
 // common time base). Replies are written from the server's own thread, never from the DDS
-// listener. The constructor throws DdsError if the topic cannot be joined.
+// listener, in the DDS partition named by the request's client id (a writer per client, made at
+// its first request; "*" until that writer has matched the client, and for clients beyond 256).
+// The constructor throws DdsError if the topic cannot be joined.
 class TimeSyncServer {
  public:
   explicit TimeSyncServer(Bus& bus, ClockFunction clock = wall_now_ns);
@@ -32,7 +34,8 @@ class TimeSyncServer {
   TimeSyncServer& operator=(const TimeSyncServer&) = delete;
 
   std::uint64_t answered() const;
-  std::uint64_t dropped() const;  // requests not answered because the reply queue was full
+  std::uint64_t answered_to_every_client() const;  // of answered(): written in partition "*"
+  std::uint64_t dropped() const;                   // requests not answered because the reply queue was full
 
  private:
   struct Impl;

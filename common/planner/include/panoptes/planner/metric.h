@@ -82,6 +82,53 @@ struct Evaluation {
 Evaluation evaluate(std::span<const PlannedCamera> cameras, const SampleSet& samples,
                     std::span<const Box> obstacles, const MetricOptions& options);
 
+// What the tracker (docs/estimator.md) does with what the cameras see, for a predicted RMSE of
+// its reported positions (docs/planner.md, "Validation"). Every parameter is the tracker's or the
+// subject's; none is fitted to measurements.
+struct TrackerModel {
+  // A track that one camera sees has no depth: under white acceleration of spectral density
+  // `process_noise` its depth variance grows as q·t³/3, and it is reported while its 1σ stays
+  // under `publish_max_sigma_m`, i.e. for t_pub = (3·σ_max²/q)^(1/3) (29 ms with the tracker's
+  // defaults). A consistent filter's squared error equals its variance: over the reported time
+  // it averages σ_max²/4. Of an episode seen by one camera only the first t_pub is reported.
+  double publish_max_sigma_m = 0.02;  // TrackerOptions::publish_max_sigma_m
+  double process_noise = 50.0;        // TrackerOptions::process_noise, m²/s³
+  // How long a marker typically stays seen by one camera: on a walking body the visibility of a
+  // marker changes with the gait (limbs swing, the torso turns), about twice a cycle of ~1 s.
+  double one_view_episode_s = 0.5;
+  // Two-view pairing: another marker within this many pixels of the epipolar line pairs as well
+  // (InitiatorOptions::epipolar_px).
+  double epipolar_px = 2.0;
+  // The subject: its markers and its extent at one instant (metres, x y z). 0 markers: no
+  // two-view ambiguity term.
+  int subject_markers = 0;
+  Eigen::Vector3d subject_size{0.6, 0.7, 1.6};
+};
+
+// The tracker's error predicted over the (point, plane) samples, each a marker at an instant. A
+// sample seen by at least two cameras is reported with the triangulation covariance (trace,
+// centroid noise MetricOptions::pixel_sigma); one seen by one camera is reported for the share
+// t_pub / one_view_episode_s of the time with the coasting error above; one seen by none is not
+// reported.
+struct TrackingPrediction {
+  double rmse_m = 0;  // over the reported samples
+  // The same when a two-view sample is as good as one view with the probability that another
+  // marker lies in its epipolar band (the tracker cannot tell the pairs apart without a third
+  // camera): the correspondence ambiguity charged to the error.
+  double rmse_with_ambiguity_m = 0;
+  double one_view_share = 0;  // of all samples
+  double two_view_share = 0;
+  // Of all samples: seen by exactly two cameras, weighted by P(another marker in the epipolar band).
+  double ambiguous_share = 0;
+  // Share of the samples seen by >= 2 cameras that the tracker can confirm: seen by three, or
+  // by two without a competing marker in the epipolar band.
+  double confirmable_share = 0;
+};
+
+TrackingPrediction predict_tracking(std::span<const PlannedCamera> cameras, const SampleSet& samples,
+                                    std::span<const Box> obstacles, const MetricOptions& options,
+                                    const TrackerModel& tracker);
+
 // norm_k of `values` weighted by `weights` (empty: equal weights).
 double aggregate(std::span<const double> values, std::span<const double> weights, Norm norm);
 

@@ -118,6 +118,7 @@ struct RecorderRecord {
   std::uint64_t bytes = 0;
   double messages_per_s = 0;
   std::string error;
+  std::map<std::string, std::uint64_t> rejections;  // samples dropped on receipt, by reason
 };
 
 // A recording seen from start to stop while the console ran.

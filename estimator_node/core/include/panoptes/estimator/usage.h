@@ -15,6 +15,7 @@
 namespace panoptes::estimator {
 
 class Tracker;
+struct CameraCounters;
 
 // Quantiles of positive durations in log-spaced bins (0.1 µs to 1000 s, 2% wide): constant memory.
 class DurationHistogram {
@@ -72,7 +73,10 @@ class UsageMonitor {
   void note_reason(const std::string& reason, std::uint64_t n);
   void note_update_time(double milliseconds) { update_.add(milliseconds); }
 
-  EstimatorUsage summarize(const Tracker& tracker, TimeNs stamp_ns, double latency_window_ms) const;
+  // The tracker's per-camera counters, and `other_cameras`' (cameras whose frames bypass the
+  // point tracker: the moving cameras of inside-out mode) counted the same way.
+  EstimatorUsage summarize(const Tracker& tracker, TimeNs stamp_ns, double latency_window_ms,
+                           const std::map<std::string, CameraCounters>& other_cameras = {}) const;
 
  private:
   struct PerCamera {

@@ -61,7 +61,9 @@ class EstimatorSession {
   void process_due(std::vector<FeatureFrame>& due,
                    const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each);
 
-  estimator::EstimatorUsage usage(TimeNs stamp_ns) const { return intake_.usage(stamp_ns, inbox_.drops()); }
+  estimator::EstimatorUsage usage(TimeNs stamp_ns) const {
+    return intake_.usage(stamp_ns, inbox_.drops(), inside_out_.camera_counters());
+  }
   void print_summary(std::size_t bad_lines) const;
 
   // Body poses at the newest frame, predicted node.prediction_horizon_ms ahead; then the poses of

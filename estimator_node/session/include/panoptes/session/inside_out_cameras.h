@@ -54,6 +54,10 @@ class InsideOutCameras {
   // Every rig once, by name, with the markers it carries (rig frame; none without fusion): what
   // rt/panoptes/body_descriptions lists as kind "rig" so that clients learn the rigs' names.
   std::vector<BodyDefinition> rig_descriptions() const;
+  // What became of each moving camera's frames, counted like the point tracker's cameras (usage,
+  // utilisation): used = given to the filter; too_late = older than its state (dropped);
+  // associated = landmark updates.
+  const std::map<std::string, estimator::CameraCounters>& camera_counters() const { return counters_; }
   // One line per rig: frames, acquisitions, landmark updates, losses (run summaries).
   std::vector<std::string> summary_lines() const;
 
@@ -63,8 +67,9 @@ class InsideOutCameras {
     estimator::InsideOutTracker tracker;
     std::vector<Eigen::Vector3d> markers;  // carried, rig frame (fusion)
   };
-  std::map<std::string, Rig> rigs_;                   // by camera id
-  std::map<std::string, CameraModel> fixed_cameras_;  // by camera id, when a rig carries markers
+  std::map<std::string, Rig> rigs_;                            // by camera id
+  std::map<std::string, estimator::CameraCounters> counters_;  // by camera id
+  std::map<std::string, CameraModel> fixed_cameras_;           // by camera id, when a rig carries markers
   InsideOutSettings settings_;
   TimeNs last_stamp_ns_ = 0;
 };

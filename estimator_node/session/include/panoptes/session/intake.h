@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <mutex>
 #include <set>
 #include <span>
@@ -46,12 +47,16 @@ class Intake {
 
   // Usage so far: the monitor's summary plus the screen's drop reasons and inbox overflows (the
   // tracker's thread only: reads the tracker).
-  estimator::EstimatorUsage usage(TimeNs stamp_ns, std::uint64_t inbox_drops) const;
+  // `other_cameras`: counters of cameras whose frames bypass the tracker (inside-out rigs).
+  estimator::EstimatorUsage usage(
+      TimeNs stamp_ns, std::uint64_t inbox_drops,
+      const std::map<std::string, estimator::CameraCounters>& other_cameras = {}) const;
 
   std::uint64_t frames_rejected() const;
 
   // The closing lines of a run (processed, usage per camera, bodies).
-  void print_summary(std::uint64_t inbox_drops, std::size_t bad_lines) const;
+  void print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
+                     const std::map<std::string, estimator::CameraCounters>& other_cameras = {}) const;
 
  private:
   estimator::Tracker& tracker_;
