@@ -62,7 +62,8 @@ void prepare(const app::NodeCommandLine& command_line, session::EstimatorSession
   }
 }
 
-// Offline: the chains of the bodies file (docs/articulated.md), if it has any.
+// The chains of the bodies file (docs/articulated.md), if it has any. Live, their tips are also
+// predicted kLiveChainHorizonS ahead (seed 000 §6.4.5).
 std::optional<session::ChainStage> chain_stage(const app::NodeCommandLine& command_line) {
   if (command_line.bodies_file.empty()) return std::nullopt;
   auto chains = panoptes::load_chains(command_line.bodies_file);
@@ -73,16 +74,20 @@ std::optional<session::ChainStage> chain_stage(const app::NodeCommandLine& comma
   }
   session::log("tracking " + std::to_string(chains.size()) + " articulated chain" +
                (chains.size() == 1 ? "" : "s") + " from " + command_line.bodies_file);
-  return std::optional<session::ChainStage>(std::in_place, std::move(chains),
-                                            panoptes::load_calibration(command_line.calibration_file),
+  // Live without a calibration file, the cameras come from their CameraInfo (add_camera).
+  const auto calibration = command_line.calibration_file.empty()
+                               ? panoptes::SystemCalibration{}
+                               : panoptes::load_calibration(command_line.calibration_file);
+  return std::optional<session::ChainStage>(std::in_place, std::move(chains), calibration,
                                             command_line.out_chains);
 }
+
+constexpr double kLiveChainHorizonS = 0.08;
 
 int run(const app::NodeCommandLine& command_line, session::EstimatorSession& estimator,
         session::BodyFile& body_file) {
   session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
-  std::optional<session::ChainStage> chains;
-  if (command_line.no_dds || !command_line.in_recording.empty()) chains = chain_stage(command_line);
+  std::optional<session::ChainStage> chains = chain_stage(command_line);
   if (chains) replay.chains = &*chains;
   if (!command_line.in_recording.empty()) {
     session::FeatureFiles input;
@@ -108,7 +113,16 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
   live.duration_s = command_line.duration_s;
   live.latency_probe = command_line.latency_probe;
   live.quiet = command_line.quiet;
-  return app::run_live(live, estimator, body_file);
+  if (chains) {
+    chains->set_prediction_horizon(kLiveChainHorizonS);
+    live.chains = &*chains;
+  }
+  const int exit_code = app::run_live(live, estimator, body_file);
+  if (chains) {
+    chains->flush();
+    session::log(chains->summary());
+  }
+  return exit_code;
 }
 
 // Surface mode (docs/surface.md): the `surface:` section of --surface, else of --config; nullopt

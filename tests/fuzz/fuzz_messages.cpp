@@ -6,7 +6,8 @@
 // check that follows it in the node: FeatureFrame -> from_message -> FrameScreen, TrackFrame ->
 // from_message per track, BodyPose -> from_message, CameraInfo -> camera_info_problem and
 // calibration_from, MocapFrame -> the client library's to_frame, BodyDescriptions -> its
-// to_descriptions, StrokeEvents -> its to_strokes. Any crash, sanitizer report or leak is a finding.
+// to_descriptions, StrokeEvents -> its to_strokes, ChainFrame -> its to_chain_update. Any crash, sanitizer
+// report or leak is a finding.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -16,6 +17,7 @@
 #include "panoptes/dds/convert.h"
 #include "panoptes/dds/decode.h"
 #include "panoptes/estimator/frame_screen.h"
+#include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
 
 namespace {
@@ -76,6 +78,12 @@ void stroke_events(const std::uint8_t* data, std::size_t size) {
   if (decode(data, size, message)) (void)panoptes::client::detail::to_strokes(message, 0, error);
 }
 
+void chain_frame(const std::uint8_t* data, std::size_t size) {
+  msg::ChainFrame message;
+  std::string error;
+  if (decode(data, size, message)) (void)panoptes::client::detail::to_chain_update(message, 0, error);
+}
+
 // The other types a node reads: decoding is all that happens before the node's own checks.
 template <class T>
 void decode_only(const std::uint8_t* data, std::size_t size) {
@@ -89,7 +97,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size < 1) return 0;
   const std::uint8_t* payload = data + 1;
   const std::size_t n = size - 1;
-  switch (data[0] % 11) {
+  switch (data[0] % 12) {
     case 0:
       feature_frame(payload, n);
       break;
@@ -119,6 +127,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       break;
     case 9:
       stroke_events(payload, n);
+      break;
+    case 10:
+      chain_frame(payload, n);
       break;
     default:
       decode_only<msg::EstimatorStatus>(payload, n);

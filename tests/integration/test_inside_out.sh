@@ -87,6 +87,20 @@ epoch=$(( ($(date +%s) + 3) * 1000000000 ))
   --out-poses "$work/live_poses.jsonl" --duration 10 --status-period 1 >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
+# The rig is described to clients (rt/panoptes/body_descriptions, kind "rig").
+python=$(cat "$build_dir/python/INTERPRETER" 2>/dev/null)
+if [ -n "$python" ] && [ -f "$build_dir/python/panoptes/__init__.py" ]; then
+  PYTHONPATH="$build_dir/python" timeout 20 "$python" - >"$work/descriptions.txt" 2>&1 <<'PYTHON' &
+import time, panoptes
+with panoptes.Client() as client:
+    deadline = time.monotonic() + 8
+    while time.monotonic() < deadline and not client.body_descriptions():
+        time.sleep(0.1)
+    print(" ".join(f"{d.name}:{d.kind}" for d in client.body_descriptions()))
+PYTHON
+  describer=$!
+  pids+=("$describer")
+fi
 "$bin/camera_node" --source "sim:$scene#head" --sim-epoch-ns "$epoch" --duration 8 --quiet >"$work/camera.log" 2>&1 &
 pids+=("$!")
 timeout 40 tail --pid="$estimator" -f /dev/null
@@ -94,6 +108,11 @@ wait "$estimator"
 rc=$?
 [ "$rc" -eq 0 ] && pass "live estimator exited cleanly" || { fail "live estimator exit $rc"; tail -20 "$work/estimator.log"; }
 grep "inside-out" "$work/estimator.log"
+if [ -n "${describer:-}" ]; then
+  wait "$describer"
+  grep -qx "headset:rig" "$work/descriptions.txt" && pass "the rig is in body_descriptions as kind rig" ||
+    { fail "body descriptions: $(cat "$work/descriptions.txt")"; }
+fi
 live=$(grep -c '"body":"headset"' "$work/live_poses.jsonl" || true)
 echo "live poses: $live"
 [ "${live:-0}" -gt 400 ] && pass "headset poses published live" || fail "too few live poses ($live)"

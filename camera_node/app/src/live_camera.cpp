@@ -154,8 +154,8 @@ void LiveCamera::publish_camera_info() {
   const camera::SourceInfo& info = source_.info();
   msg::CameraInfo camera_info;
   if (info.calibration) {
-    camera_info =
-        dds::to_camera_info(camera_id_, info.calibration->intrinsics, info.calibration->T_world_cam);
+    camera_info = dds::to_camera_info(camera_id_, info.calibration->intrinsics, info.calibration->T_world_cam,
+                                      info.calibration->moving);
   } else {
     camera_info.camera_id(camera_id_);
     camera_info.width(static_cast<uint32_t>(info.width));

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Client: two Bus readers (rt/panoptes/frames, rt/panoptes/body_descriptions) feeding a queue, the
-// newest frame and the callbacks. The DDS listener thread converts and checks each sample, then
-// hands the same immutable Frame to all three.
+// newest frame and the callbacks; on first use, readers of rt/panoptes/strokes and rt/panoptes/chains. The
+// DDS listener thread converts and checks each sample, then hands the same immutable Frame to all three.
 #include "panoptes/client/client.h"
 
 #include <algorithm>
@@ -17,6 +17,7 @@
 #include "frame_sequence.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/time.h"
+#include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/surface.h"
 
@@ -61,6 +62,11 @@ const RigidBody* Frame::body(const std::string& name) const {
   const auto it =
       std::find_if(bodies.begin(), bodies.end(), [&](const RigidBody& b) { return b.name == name; });
   return it == bodies.end() ? nullptr : &*it;
+}
+
+const Chain* ChainUpdate::chain(const std::string& name) const {
+  const auto it = std::find_if(chains.begin(), chains.end(), [&](const Chain& c) { return c.name == name; });
+  return it == chains.end() ? nullptr : &*it;
 }
 
 // Hidden: nested in the exported Client, it would otherwise be exported with it.
@@ -108,9 +114,25 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
   using StrokeCallbackList = std::vector<std::pair<int, std::shared_ptr<const StrokeCallback>>>;
   std::shared_ptr<const StrokeCallbackList> stroke_callbacks = std::make_shared<const StrokeCallbackList>();
 
+  // Articulated chains: as the strokes (subscribed on first use); the newest update and the grab
+  // event queue under `mutex`.
+  std::unique_ptr<dds::Reader<msg::ChainFrame>> chain_reader;
+  std::condition_variable grab_ready;
+  std::deque<GrabEvent> grabs;
+  std::shared_ptr<const ChainUpdate> newest_chains;
+  using ChainCallbackList = std::vector<std::pair<int, std::shared_ptr<const ChainCallback>>>;
+  std::shared_ptr<const ChainCallbackList> chain_callbacks = std::make_shared<const ChainCallbackList>();
+
   void on_frame(const msg::MocapFrame& message);
   void on_strokes(const msg::StrokeEvents& message);
   void subscribe_strokes();
+  void on_chains(const msg::ChainFrame& message);
+  void subscribe_chains();
+  // A callback list with `callback` added under a new handle (callbacks_mutex held).
+  template <class List, class Callback>
+  int added(std::shared_ptr<const List>& list, Callback callback);
+  template <class List>
+  void removed(std::shared_ptr<const List>& list, int handle);
   // Runs `call` and counts what it throws.
   template <class Call>
   void guarded(const Call& call);
@@ -219,6 +241,68 @@ void Client::Impl::subscribe_strokes() {
   }
 }
 
+void Client::Impl::on_chains(const msg::ChainFrame& message) {
+  std::string error;
+  auto converted = detail::to_chain_update(message, wall_now_ns(), error);
+  std::shared_ptr<const ChainUpdate> update;
+  if (converted) update = std::make_shared<const ChainUpdate>(std::move(*converted));
+  {
+    std::lock_guard lock(mutex);
+    if (closed) return;
+    if (!update) {
+      ++stats.chain_updates_malformed;
+      stats.last_error = "chains from '" + message.source_camera() + "' frame " +
+                         std::to_string(message.source_frame()) + ": " + error;
+      return;
+    }
+    ++stats.chain_updates_received;
+    newest_chains = update;
+    for (const GrabEvent& event : update->events) {
+      if (grabs.size() >= options.queue_depth) {
+        grabs.pop_front();
+        ++stats.grab_events_dropped;
+      }
+      grabs.push_back(event);
+      ++stats.grab_events_received;
+    }
+  }
+  {
+    std::lock_guard lock(callbacks_mutex);
+    const std::shared_ptr<const ChainCallbackList> current = chain_callbacks;
+    dispatching_client = this;
+    for (const auto& entry : *current) guarded([&] { (*entry.second)(*update); });
+    dispatching_client = nullptr;
+  }
+  if (!update->events.empty()) grab_ready.notify_one();
+}
+
+void Client::Impl::subscribe_chains() {
+  std::lock_guard lifecycle(lifecycle_mutex);
+  if (chain_reader || !bus) return;
+  try {
+    chain_reader = bus->make_reader<msg::ChainFrame>(
+        [this](msg::ChainFrame&& message) { on_chains(message); }, dds::Qos::kReliable);
+  } catch (const std::exception& e) {
+    throw ClientError(std::string("panoptes client: chains: ") + e.what());
+  }
+}
+
+template <class List, class Callback>
+int Client::Impl::added(std::shared_ptr<const List>& list, Callback callback) {
+  const int handle = next_handle++;
+  auto copy = std::make_shared<List>(*list);
+  copy->emplace_back(handle, std::make_shared<const Callback>(std::move(callback)));
+  list = std::move(copy);
+  return handle;
+}
+
+template <class List>
+void Client::Impl::removed(std::shared_ptr<const List>& list, int handle) {
+  auto copy = std::make_shared<List>(*list);
+  std::erase_if(*copy, [&](const auto& entry) { return entry.first == handle; });
+  list = std::move(copy);
+}
+
 void Client::Impl::on_descriptions(const msg::BodyDescriptions& message) {
   std::string error;
   auto bodies = detail::to_descriptions(message, error);
@@ -270,28 +354,19 @@ Client::~Client() {
 
 int Client::add_callback(FrameCallback callback) {
   std::lock_guard lock(impl_->callbacks_mutex);
-  const int handle = impl_->next_handle++;
-  auto list = std::make_shared<Impl::CallbackList>(*impl_->callbacks);
-  list->emplace_back(handle, std::make_shared<const FrameCallback>(std::move(callback)));
-  impl_->callbacks = std::move(list);
-  return handle;
+  return impl_->added(impl_->callbacks, std::move(callback));
 }
 
 void Client::remove_callback(int handle) {
   std::lock_guard lock(impl_->callbacks_mutex);
-  auto list = std::make_shared<Impl::CallbackList>(*impl_->callbacks);
-  std::erase_if(*list, [&](const auto& entry) { return entry.first == handle; });
-  impl_->callbacks = std::move(list);
+  impl_->removed(impl_->callbacks, handle);
 }
 
 int Client::add_stroke_callback(StrokeCallback callback) {
   int handle = 0;
   {
     std::lock_guard lock(impl_->callbacks_mutex);
-    handle = impl_->next_handle++;
-    auto list = std::make_shared<Impl::StrokeCallbackList>(*impl_->stroke_callbacks);
-    list->emplace_back(handle, std::make_shared<const StrokeCallback>(std::move(callback)));
-    impl_->stroke_callbacks = std::move(list);
+    handle = impl_->added(impl_->stroke_callbacks, std::move(callback));
   }
   impl_->subscribe_strokes();
   return handle;
@@ -299,9 +374,48 @@ int Client::add_stroke_callback(StrokeCallback callback) {
 
 void Client::remove_stroke_callback(int handle) {
   std::lock_guard lock(impl_->callbacks_mutex);
-  auto list = std::make_shared<Impl::StrokeCallbackList>(*impl_->stroke_callbacks);
-  std::erase_if(*list, [&](const auto& entry) { return entry.first == handle; });
-  impl_->stroke_callbacks = std::move(list);
+  impl_->removed(impl_->stroke_callbacks, handle);
+}
+
+int Client::add_chain_callback(ChainCallback callback) {
+  int handle = 0;
+  {
+    std::lock_guard lock(impl_->callbacks_mutex);
+    handle = impl_->added(impl_->chain_callbacks, std::move(callback));
+  }
+  impl_->subscribe_chains();
+  return handle;
+}
+
+void Client::remove_chain_callback(int handle) {
+  std::lock_guard lock(impl_->callbacks_mutex);
+  impl_->removed(impl_->chain_callbacks, handle);
+}
+
+GrabResult Client::wait_for_grab_event(std::chrono::milliseconds timeout) {
+  impl_->subscribe_chains();
+  std::unique_lock lock(impl_->mutex);
+  impl_->grab_ready.wait_for(lock, timeout, [&] { return impl_->closed || !impl_->grabs.empty(); });
+  GrabResult result;
+  if (impl_->closed) {
+    result.status = Status::kClosed;
+  } else if (!impl_->grabs.empty()) {
+    result.status = Status::kOk;
+    result.event = std::move(impl_->grabs.front());
+    impl_->grabs.pop_front();
+  }
+  return result;
+}
+
+std::optional<ChainUpdate> Client::latest_chains() {
+  impl_->subscribe_chains();
+  std::shared_ptr<const ChainUpdate> update;
+  {
+    std::lock_guard lock(impl_->mutex);
+    update = impl_->newest_chains;
+  }
+  if (!update) return std::nullopt;
+  return *update;
 }
 
 StrokeResult Client::wait_for_stroke(std::chrono::milliseconds timeout) {
@@ -408,10 +522,12 @@ void Client::close() {
   }
   impl_->frame_ready.notify_all();
   impl_->stroke_ready.notify_all();
+  impl_->grab_ready.notify_all();
   // From a callback the readers stay until the destructor: removing a reader waits for its
   // listener, which is this very thread.
   if (dispatching_client == impl_.get()) return;
   impl_->stroke_reader.reset();
+  impl_->chain_reader.reset();
   impl_->frame_reader.reset();
   impl_->description_reader.reset();
   impl_->bus.reset();

@@ -164,7 +164,7 @@ std::optional<std::vector<BodyDescription>> to_descriptions(const msg::BodyDescr
       error = what + " appears twice";
       return std::nullopt;
     }
-    if (in.markers().empty()) {
+    if (in.markers().empty() && in.kind() != "rig") {  // a rig (inside-out) may carry none
       error = what + ": no markers";
       return std::nullopt;
     }
@@ -219,6 +219,103 @@ std::optional<std::vector<Stroke>> to_strokes(const msg::StrokeEvents& message, 
     strokes.push_back(std::move(stroke));
   }
   return strokes;
+}
+
+namespace {
+
+constexpr std::size_t kMaxChainMarkers = 16;  // the core allows 3..5; more is not a chain
+
+// One chain of a ChainFrame, or an error naming its field.
+std::optional<Chain> to_chain(const msg::ChainState& in, std::string& error) {
+  const std::string what = "chain '" + in.name() + "'";
+  if (in.status() > 2) {
+    error = what + ": status " + std::to_string(in.status()) +
+            " is not tracking (0), ambiguous (1) or not identified (2)";
+    return std::nullopt;
+  }
+  if (in.name().empty() || in.chain_id() == 0) {
+    error = what + ": an empty name or chain_id 0";
+    return std::nullopt;
+  }
+  Chain out;
+  out.name = in.name();
+  out.id = static_cast<int>(in.chain_id());
+  out.status = static_cast<ChainStatus>(in.status());
+  out.stamp_ns = in.stamp_ns();
+  out.grabbing = in.grabbing();
+  if (out.status != ChainStatus::kTracking) return out;
+  const std::size_t markers = in.markers().size();
+  if (markers < 3 || markers > kMaxChainMarkers || in.marker_valid().size() != markers ||
+      in.angles().size() != markers - 2) {
+    error = what + ": " + std::to_string(markers) + " markers, " + std::to_string(in.marker_valid().size()) +
+            " valid flags and " + std::to_string(in.angles().size()) + " angles (wants 3.." +
+            std::to_string(kMaxChainMarkers) + " markers, one flag each, markers - 2 angles)";
+    return std::nullopt;
+  }
+  for (const double angle : in.angles()) {
+    if (!std::isfinite(angle)) {
+      error = what + ": a non-finite joint angle";
+      return std::nullopt;
+    }
+    out.joint_angles.push_back(angle);
+  }
+  for (const auto& marker : in.markers()) {
+    if (!all_finite(marker.position())) {
+      error = what + ": a non-finite marker position";
+      return std::nullopt;
+    }
+    out.markers.push_back(marker.position());
+  }
+  out.marker_valid.assign(in.marker_valid().begin(), in.marker_valid().end());
+  out.tip = in.tip();
+  out.predicted_tip = in.predicted_tip();
+  out.prediction_horizon_ns = in.prediction_horizon_ns();
+  if (!all_finite(out.tip) || !all_finite(out.predicted_tip) || out.prediction_horizon_ns < 0) {
+    error = what + ": a non-finite tip or a negative prediction horizon";
+    return std::nullopt;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::optional<ChainUpdate> to_chain_update(const msg::ChainFrame& message, std::int64_t receive_ns,
+                                           std::string& error) {
+  ChainUpdate update;
+  update.stamp_ns = message.stamp_ns();
+  update.publish_ns = message.publish_ns();
+  update.receive_ns = receive_ns;
+  update.source_camera = message.source_camera();
+  update.source_frame = message.source_frame();
+  update.chains.reserve(message.chains().size());
+  for (const auto& state : message.chains()) {
+    auto chain = to_chain(state, error);
+    if (!chain) return std::nullopt;
+    update.chains.push_back(std::move(*chain));
+  }
+  for (std::size_t i = 0; i < message.events().size(); ++i) {
+    const msg::ChainEvent& in = message.events()[i];
+    const std::string what = "chain event " + std::to_string(i) + " ('" + in.chain() + "')";
+    if (in.kind() > 1) {
+      error = what + ": kind " + std::to_string(in.kind()) + " is not grab (0) or release (1)";
+      return std::nullopt;
+    }
+    if (in.chain().empty() || !all_finite(in.tip()) || !std::isfinite(in.bend())) {
+      error = what + ": an empty chain name, or a non-finite tip or bend";
+      return std::nullopt;
+    }
+    GrabEvent event;
+    event.kind = static_cast<GrabKind>(in.kind());
+    event.chain = in.chain();
+    event.chain_id = static_cast<int>(in.chain_id());
+    event.stamp_ns = in.stamp_ns();
+    event.tip = in.tip();
+    event.bend = in.bend();
+    event.publish_ns = message.publish_ns();
+    event.receive_ns = receive_ns;
+    update.events.push_back(std::move(event));
+  }
+  return update;
 }
 
 }  // namespace panoptes::client::detail

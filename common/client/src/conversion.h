@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "panoptes/client/client.h"
+#include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/surface.h"
 
@@ -30,5 +31,11 @@ std::optional<std::vector<BodyDescription>> to_descriptions(const msg::BodyDescr
 // stroke id 0, a non-finite number).
 std::optional<std::vector<Stroke>> to_strokes(const msg::StrokeEvents& message, std::int64_t receive_ns,
                                               std::string& error);
+
+// A ChainFrame sample as a ChainUpdate; nullopt with `error` naming the chain or event and the
+// field for a malformed one (an unknown status or kind, chain id 0, a tracking chain whose markers,
+// valid flags and angles do not agree in number, a non-finite number).
+std::optional<ChainUpdate> to_chain_update(const msg::ChainFrame& message, std::int64_t receive_ns,
+                                           std::string& error);
 
 }  // namespace panoptes::client::detail

@@ -38,6 +38,8 @@
 
 #include "panoptes/dds/decode.h"
 #include "panoptes/dds/security.h"
+#include "panoptes_msgs/chains.h"
+#include "panoptes_msgs/chainsPubSubTypes.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/panoptesPubSubTypes.h"
 #include "panoptes_msgs/ros2.h"
@@ -128,6 +130,8 @@ PANOPTES_TOPIC(LatencyTraces, "rt/panoptes/latency_probe/trace", false, Durabili
                false)
 // Surface mode (docs/surface.md): every begin and end matters to a drawing application.
 PANOPTES_TOPIC(StrokeEvents, "rt/panoptes/strokes", true, Durability::kVolatile, 64, false, false)
+// Articulated chains (docs/articulated.md): grab and release events ride in these samples.
+PANOPTES_TOPIC(ChainFrame, "rt/panoptes/chains", true, Durability::kVolatile, 64, false, false)
 #undef PANOPTES_TOPIC
 
 // A probe measures one hop of the pipeline, so it takes the QoS of the topic it stands in for: the
@@ -878,6 +882,7 @@ PANOPTES_INSTANTIATE(BodyDescriptions)
 PANOPTES_INSTANTIATE(RecorderCommand)
 PANOPTES_INSTANTIATE(RecorderStatus)
 PANOPTES_INSTANTIATE(StrokeEvents)
+PANOPTES_INSTANTIATE(ChainFrame)
 PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::PoseStamped_)
 PANOPTES_INSTANTIATE_TYPE(geometry_msgs::msg::dds_::TwistStamped_)
 PANOPTES_INSTANTIATE_TYPE(tf2_msgs::msg::dds_::TFMessage_)

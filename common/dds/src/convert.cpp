@@ -86,9 +86,10 @@ TrackRecord from_message(const msg::Track& message, TimeNs stamp_ns) {
 }
 
 msg::CameraInfo to_camera_info(const std::string& camera_id, const CameraIntrinsics& intrinsics,
-                               const std::optional<RigidTransform>& T_world_cam) {
+                               const std::optional<RigidTransform>& T_world_cam, bool moving) {
   msg::CameraInfo info;
   info.camera_id(camera_id);
+  info.moving(moving);
   info.width(static_cast<uint32_t>(intrinsics.width));
   info.height(static_cast<uint32_t>(intrinsics.height));
   info.K({intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy});
@@ -148,6 +149,7 @@ std::optional<CameraCalibration> calibration_from(const msg::CameraInfo& info) {
   calibration.intrinsics.cx = info.K()[2];
   calibration.intrinsics.cy = info.K()[3];
   calibration.intrinsics.distortion = info.distortion();
+  calibration.moving = info.moving();
   if (info.has_pose()) {
     const auto& pose = info.T_world_cam();
     RigidTransform T;

@@ -9,6 +9,7 @@
 #include <new>
 #include <stdexcept>
 
+#include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/ros2.h"
 #include "panoptes_msgs/surface.h"
@@ -154,6 +155,7 @@ PANOPTES_DECODE(msg::BodyDescriptions)
 PANOPTES_DECODE(msg::RecorderCommand)
 PANOPTES_DECODE(msg::RecorderStatus)
 PANOPTES_DECODE(msg::StrokeEvents)
+PANOPTES_DECODE(msg::ChainFrame)
 PANOPTES_DECODE(geometry_msgs::msg::dds_::PoseStamped_)
 PANOPTES_DECODE(geometry_msgs::msg::dds_::TwistStamped_)
 PANOPTES_DECODE(tf2_msgs::msg::dds_::TFMessage_)

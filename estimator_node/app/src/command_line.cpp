@@ -96,8 +96,8 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
                  "write body poses as Pose JSONL (needs --bodies or --landmarks)");
   app.add_option(
       "--out-chains", c.out_chains,
-      "offline: write the articulated chains of the bodies file (type: chain) and their grab/release "
-      "events as Chain JSONL (docs/articulated.md; needs --bodies)");
+      "write the articulated chains of the bodies file (type: chain) and their grab/release events as "
+      "Chain JSONL (docs/articulated.md; needs --bodies; live mode also publishes rt/panoptes/chains)");
   app.add_option("--dds-profile", c.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
   dds::add_security_options(app, c.security);
   app.add_flag("--replay-arrival", c.replay_arrival,
@@ -132,8 +132,6 @@ void validate(const NodeCommandLine& c) {
     throw CLI::ValidationError("--out-poses needs --bodies or --landmarks");
   if (!c.out_chains.empty() && c.bodies_file.empty())
     throw CLI::ValidationError("--out-chains needs --bodies");
-  if (!c.out_chains.empty() && !c.no_dds && c.in_recording.empty())
-    throw CLI::ValidationError("--out-chains is offline only (--no-dds or --in-recording)");
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include "panoptes/estimator_app/frame_messages.h"
 
 #include <algorithm>
+#include <set>
 
 #include "panoptes/dds/convert.h"
 
@@ -63,17 +64,26 @@ msg::MocapFrame to_frame_message(const session::FrameOutput& frame, TimeNs publi
 
 msg::BodyDescriptions to_descriptions_message(const std::vector<BodyDefinition>& bodies,
                                               std::uint64_t generation, const std::string& source,
-                                              TimeNs stamp_ns) {
+                                              TimeNs stamp_ns, const std::vector<BodyDefinition>& rigs) {
   msg::BodyDescriptions message;
   message.stamp_ns(stamp_ns);
   message.generation(generation);
   message.source(source);
   int id = 0;
-  for (const auto& body : bodies) {
+  std::vector<const BodyDefinition*> listed;
+  std::set<std::string> names;
+  for (const auto& body : bodies)
+    if (names.insert(body.name).second) listed.push_back(&body);
+  const std::size_t body_count = listed.size();
+  // A rig named like a body would make the set malformed for clients (a name twice): left out.
+  for (const auto& rig : rigs)
+    if (names.insert(rig.name).second) listed.push_back(&rig);
+  for (std::size_t i = 0; i < listed.size(); ++i) {
+    const BodyDefinition& body = *listed[i];
     msg::BodyDescription description;
     description.name(body.name);
     description.id(++id);
-    description.kind(body.kind == BodyKind::kLed7 ? "led7" : "passive");
+    description.kind(i >= body_count ? "rig" : body.kind == BodyKind::kLed7 ? "led7" : "passive");
     for (const auto& marker : body.markers) {
       msg::MarkerPosition position;
       position.position({marker.x(), marker.y(), marker.z()});

@@ -17,6 +17,7 @@
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
 #include "panoptes/dds/time_sync.h"
+#include "panoptes/estimator_app/chain_messages.h"
 #include "panoptes/estimator_app/frame_messages.h"
 #include "panoptes/estimator_app/frame_periods.h"
 #include "panoptes/estimator_app/latency_probe_echoer.h"
@@ -67,6 +68,7 @@ class LiveEstimator {
         body_writer_(bus_->make_writer<msg::BodyPose>()),
         frame_writer_(bus_->make_writer<msg::MocapFrame>()),
         descriptions_writer_(bus_->make_writer<msg::BodyDescriptions>()) {
+    if (options_.chains) chain_writer_ = bus_->make_writer<msg::ChainFrame>();
     if (options_.latency_probe) {
       latency_probe_.emplace(*bus_);
       log("benchmark aid: echoing latency probes (rt/panoptes/latency_probe/...)");
@@ -105,6 +107,7 @@ class LiveEstimator {
   void publish_predictions(const FeatureFrame& frame);
   void publish_status(TimeNs now, TimeNs start);
   void publish_descriptions_if_changed();
+  void publish_chains(const FeatureFrame& frame);
 
   const LiveOptions& options_;
   const session::NodeSettings& node_;
@@ -130,6 +133,7 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::BodyPose>> body_writer_;
   std::unique_ptr<dds::Writer<msg::MocapFrame>> frame_writer_;
   std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
+  std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;  // with options_.chains
   session::FrameOutputBuilder frame_builder_;
   std::uint64_t descriptions_generation_ = 0;  // the bodies file's generation last published
   std::uint64_t descriptions_sent_ = 0;        // BodyDescriptions.generation: 1, 2, ... per run
@@ -137,6 +141,7 @@ class LiveEstimator {
   std::optional<Ros2Outputs> ros2_;  // docs/ros2.md
   std::optional<session::JsonlOutputs> outputs_;
   std::set<std::string> from_file_;
+  std::set<std::string> announced_moving_;  // logged once each
   FramePeriods periods_;
   std::vector<Processed> processed_;  // finished from the front; cleared (capacity kept) when all are
   struct StatusPoint {
@@ -162,9 +167,19 @@ void LiveEstimator::announce(const msg::CameraInfo& info) {
 void LiveEstimator::apply_announced_cameras() {
   std::lock_guard<std::mutex> lock(info_mutex_);
   for (const auto& camera : announced_) {
+    // A moving camera's pose is its mount on a rig, not a fixed view (docs/inside_out.md): inside-out
+    // tracking needs it in the calibration file with the landmarks.
+    if (camera.moving && from_file_.count(camera.id) == 0) {
+      if (announced_moving_.insert(camera.id).second)
+        log("camera '" + camera.id +
+            "' announces itself moving: not a fixed camera (inside-out needs it in --calibration with "
+            "--landmarks)");
+      continue;
+    }
     // The calibration file wins over what a camera announces about itself.
     if (from_file_.count(camera.id) == 0 && !tracker_.has_camera(camera.id)) {
       tracker_.set_camera(camera);
+      if (options_.chains) options_.chains->add_camera(camera);
       log("camera '" + camera.id + "' calibrated from its CameraInfo");
     }
   }
@@ -215,6 +230,7 @@ void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {
     body_writer_->write(pose_message);
     if (latency_probe_) latency_probe_->note_pose(pose_message);
   }
+  publish_chains(frame);
   auto tracks = tracker_.current_tracks();
   const session::FrameStages stages{frame.arrival_ns,  frame.processing_ns, frame.publish_ns,
                                     frame.received_ns, dequeued_ns,         updated_ns};
@@ -226,11 +242,20 @@ void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {
   processed_.push_back({std::move(frame), std::move(tracks), std::move(poses), stamps, std::move(output)});
 }
 
+// Chains right after the poses: their grab events are what an application waits for.
+void LiveEstimator::publish_chains(const FeatureFrame& frame) {
+  if (!options_.chains || !options_.chains->observe(frame, tracker_)) return;
+  msg::ChainFrame message = to_chain_message(*options_.chains, frame);
+  message.publish_ns(wall_now_ns());
+  chain_writer_->write(message);
+}
+
 void LiveEstimator::publish_descriptions_if_changed() {
   if (descriptions_sent_ > 0 && body_file_.generation() == descriptions_generation_) return;
   descriptions_generation_ = body_file_.generation();
   descriptions_writer_->write(to_descriptions_message(tracker_.body_definitions(), ++descriptions_sent_,
-                                                      body_file_.path(), wall_now_ns()));
+                                                      body_file_.path(), wall_now_ns(),
+                                                      session_.inside_out().rig_descriptions()));
 }
 
 void LiveEstimator::finish(Processed& done) {

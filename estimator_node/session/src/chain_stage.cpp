@@ -57,19 +57,21 @@ std::vector<std::string> names_of(const std::vector<ChainDefinition>& chains) {
 ChainStage::ChainStage(std::vector<ChainDefinition> chains, const SystemCalibration& calibration,
                        const std::string& out_path, const est::ChainTrackerOptions& options)
     : names_(names_of(chains)), tracker_(std::move(chains), options) {
-  for (const auto& camera : calibration.cameras) {
-    // A moving camera's T_world_cam is its mount on a rig (docs/inside_out.md): not a fixed view.
-    if (camera.T_world_cam && !camera.moving) cameras_.emplace(camera.id, camera.model());
-  }
+  for (const auto& camera : calibration.cameras) add_camera(camera);
   if (!out_path.empty()) out_.emplace(out_path);
   for (const auto& name : names_) counts_[name];
 }
 
-void ChainStage::observe(const FeatureFrame& frame, const est::Tracker& tracker) {
+void ChainStage::add_camera(const CameraCalibration& camera) {
+  // A moving camera's T_world_cam is its mount on a rig (docs/inside_out.md): not a fixed view.
+  if (camera.T_world_cam && !camera.moving) cameras_.emplace(camera.id, camera.model());
+}
+
+bool ChainStage::observe(const FeatureFrame& frame, const est::Tracker& tracker) {
   const auto camera = cameras_.find(frame.camera_id);
   if (camera == cameras_.end() || frame.stamp_ns < last_stamp_ns_) {
     ++frames_skipped_;
-    return;
+    return false;
   }
   last_stamp_ns_ = frame.stamp_ns;
   if (!all_tracking_) {
@@ -84,8 +86,11 @@ void ChainStage::observe(const FeatureFrame& frame, const est::Tracker& tracker)
   for (const auto& blob : frame.blobs) blobs.emplace_back(blob.x, blob.y);
   tracker_.process(camera->second, frame.stamp_ns, blobs);
 
-  const auto outputs = tracker_.outputs();
-  const auto events = tracker_.take_events();
+  outputs_ = tracker_.outputs();
+  events_ = tracker_.take_events();
+  if (prediction_horizon_s_ > 0.0) predicted_ = tracker_.outputs(prediction_horizon_s_);
+  const auto& outputs = outputs_;
+  const auto& events = events_;
   all_tracking_ = std::all_of(outputs.begin(), outputs.end(), [](const auto& output) {
     return output.status == est::ChainStatus::kTracking;
   });
@@ -100,6 +105,7 @@ void ChainStage::observe(const FeatureFrame& frame, const est::Tracker& tracker)
     ++(named.event.kind == est::GrabEventKind::kGrab ? counts.grabs : counts.releases);
   }
   if (out_) write(outputs, events);
+  return true;
 }
 
 void ChainStage::write(const std::vector<est::ChainOutput>& outputs,

@@ -95,6 +95,19 @@ est::FrameOutcome InsideOutCameras::process(const FeatureFrame& frame) {
   return est::FrameOutcome::kProcessed;
 }
 
+std::vector<BodyDefinition> InsideOutCameras::rig_descriptions() const {
+  std::map<std::string, BodyDefinition> by_name;
+  for (const auto& [camera_id, rig] : rigs_) {
+    BodyDefinition& description = by_name[rig.name];
+    description.name = rig.name;
+    if (description.markers.empty()) description.markers = rig.markers;
+  }
+  std::vector<BodyDefinition> descriptions;
+  descriptions.reserve(by_name.size());
+  for (auto& [name, description] : by_name) descriptions.push_back(std::move(description));
+  return descriptions;
+}
+
 std::vector<PoseRecord> InsideOutCameras::poses_at(TimeNs stamp_ns, TimeNs horizon_ns) const {
   std::vector<PoseRecord> poses;
   for (const auto& [camera_id, rig] : rigs_) {

@@ -15,6 +15,7 @@
 
 #include "panoptes/client/client.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/surface.h"
 
@@ -296,6 +297,74 @@ TEST(Client, DeliversStrokeEventsToQueueAndCallbacks) {
   EXPECT_EQ(client.wait_for_stroke(2s).stroke.id, 2U);
   EXPECT_EQ(begun.load(), 1);
   EXPECT_EQ(client.wait_for_stroke(50ms).status, Status::kTimeout);
+}
+
+// Articulated chains (docs/articulated.md): updates to the chain callbacks and latest_chains(),
+// their grab events to the pull queue in order; a malformed sample counted and ignored.
+TEST(Client, DeliversChainUpdatesAndGrabEvents) {
+  dds::Bus bus(FakeEstimator::make_options());
+  auto writer = bus.make_writer<msg::ChainFrame>();
+  Client client(client_options());
+  std::atomic<int> updates{0}, grabbing{0};
+  const int handle = client.add_chain_callback([&](const ChainUpdate& update) {
+    ++updates;
+    if (const Chain* chain = update.chain("index"); chain != nullptr && chain->grabbing) ++grabbing;
+  });
+  ASSERT_TRUE(writer->wait_for_readers(1, 5s));
+  const auto sample = [](std::int64_t frame, int event_kind, std::uint8_t status) {
+    msg::ChainFrame message;
+    message.source_camera("c0");
+    message.source_frame(frame);
+    message.stamp_ns(frame * 10'000'000);
+    msg::ChainState state;
+    state.name("index");
+    state.chain_id(1);
+    state.status(status);
+    state.grabbing(event_kind == 0);
+    if (status == 0) {  // tracking: a 3-marker chain's shape
+      state.angles({0.5});
+      state.markers().resize(3);
+      state.marker_valid({true, true, true});
+    }
+    message.chains().push_back(state);
+    if (event_kind >= 0) {
+      msg::ChainEvent event;
+      event.chain("index");
+      event.chain_id(1);
+      event.kind(static_cast<std::uint8_t>(event_kind));
+      event.stamp_ns(frame * 10'000'000);
+      event.tip({0.01 * static_cast<double>(frame), 0.0, 1.0});
+      message.events().push_back(event);
+    }
+    return message;
+  };
+  writer->write(sample(1, -1, 2));
+  writer->write(sample(2, 0, 0));
+  writer->write(sample(3, -1, 9));  // no such status: counted, dropped
+  writer->write(sample(4, 1, 0));
+  const std::array<GrabKind, 2> kinds{GrabKind::kGrab, GrabKind::kRelease};
+  for (std::size_t i = 0; i < kinds.size(); ++i) {
+    const GrabResult result = client.wait_for_grab_event(2s);
+    ASSERT_EQ(result.status, Status::kOk) << client.stats().last_error;
+    EXPECT_EQ(result.event.kind, kinds[i]);
+    EXPECT_EQ(result.event.chain, "index");
+    EXPECT_DOUBLE_EQ(result.event.tip[0], 0.01 * static_cast<double>(2 * i + 2));
+  }
+  EXPECT_TRUE(wait_until([&] { return updates == 3; }));
+  EXPECT_EQ(grabbing.load(), 1);
+  const auto latest = client.latest_chains();
+  ASSERT_TRUE(latest.has_value());
+  EXPECT_EQ(latest->source_frame, 4);
+  const Stats stats = client.stats();
+  EXPECT_EQ(stats.chain_updates_received, 3U);
+  EXPECT_EQ(stats.chain_updates_malformed, 1U);
+  EXPECT_EQ(stats.grab_events_received, 2U);
+  EXPECT_NE(stats.last_error.find("status 9"), std::string::npos) << stats.last_error;
+  client.remove_chain_callback(handle);
+  writer->write(sample(5, 0, 0));
+  EXPECT_EQ(client.wait_for_grab_event(2s).event.kind, GrabKind::kGrab);
+  EXPECT_EQ(updates.load(), 3);
+  EXPECT_EQ(client.wait_for_grab_event(50ms).status, Status::kTimeout);
 }
 
 }  // namespace

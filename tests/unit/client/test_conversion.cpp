@@ -217,6 +217,11 @@ TEST(Conversion, RejectsMalformedDescriptions) {
   d.bodies()[0].markers().clear();
   EXPECT_FALSE(to_descriptions(d, error));
   EXPECT_NE(error.find("'head': no markers"), std::string::npos) << error;
+  d.bodies()[0].kind("rig");  // an inside-out rig may carry no markers
+  const auto with_rig = to_descriptions(d, error);
+  ASSERT_TRUE(with_rig.has_value()) << error;
+  EXPECT_EQ(with_rig->front().kind, "rig");
+  EXPECT_TRUE(with_rig->front().markers.empty());
 }
 
 TEST(FrameSequence, CountsGapsAndRestarts) {
@@ -287,6 +292,123 @@ TEST(Conversion, RejectsMalformedStrokes) {
   not_finite.events()[0].velocity({std::numeric_limits<double>::quiet_NaN(), 0.0});
   EXPECT_FALSE(to_strokes(not_finite, 0, error).has_value());
   EXPECT_NE(error.find("non-finite"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace panoptes::client::detail
+
+namespace panoptes::client::detail {
+namespace {
+
+msg::ChainFrame chain_sample() {
+  msg::ChainFrame message;
+  message.source_camera("c2");
+  message.source_frame(17);
+  message.stamp_ns(1'700'000'000'010'000'000);
+  message.publish_ns(1'700'000'000'011'000'000);
+  msg::ChainState state;
+  state.name("index");
+  state.chain_id(1);
+  state.status(0);
+  state.stamp_ns(1'700'000'000'010'000'000);
+  state.angles({0.25, 1.5});
+  for (int k = 0; k < 4; ++k) {
+    msg::ChainMarker marker;
+    marker.position({0.01 * k, 0.0, 1.0});
+    state.markers().push_back(marker);
+  }
+  state.marker_valid({true, true, false, true});
+  state.tip({0.05, 0.0, 0.99});
+  state.predicted_tip({0.06, 0.0, 0.98});
+  state.prediction_horizon_ns(80'000'000);
+  state.grabbing(true);
+  message.chains().push_back(state);
+  msg::ChainEvent event;
+  event.chain("index");
+  event.chain_id(1);
+  event.kind(1);
+  event.stamp_ns(1'700'000'000'009'000'000);
+  event.tip({0.04, 0.01, 0.97});
+  event.bend(0.95);
+  message.events().push_back(event);
+  return message;
+}
+
+TEST(Conversion, ChainUpdateCopiesEveryField) {
+  std::string error;
+  const auto update = to_chain_update(chain_sample(), 42, error);
+  ASSERT_TRUE(update.has_value()) << error;
+  EXPECT_EQ(update->source_camera, "c2");
+  EXPECT_EQ(update->source_frame, 17);
+  EXPECT_EQ(update->stamp_ns, 1'700'000'000'010'000'000);
+  EXPECT_EQ(update->receive_ns, 42);
+  ASSERT_EQ(update->chains.size(), 1U);
+  const Chain* chain = update->chain("index");
+  ASSERT_NE(chain, nullptr);
+  EXPECT_EQ(update->chain("thumb"), nullptr);
+  EXPECT_TRUE(chain->tracking());
+  EXPECT_EQ(chain->id, 1);
+  EXPECT_EQ(chain->joint_angles, (std::vector<double>{0.25, 1.5}));
+  ASSERT_EQ(chain->markers.size(), 4U);
+  EXPECT_EQ(chain->markers[3], (Vec3{0.03, 0.0, 1.0}));
+  EXPECT_EQ(chain->marker_valid, (std::vector<bool>{true, true, false, true}));
+  EXPECT_EQ(chain->tip, (Vec3{0.05, 0.0, 0.99}));
+  EXPECT_EQ(chain->predicted_tip, (Vec3{0.06, 0.0, 0.98}));
+  EXPECT_EQ(chain->prediction_horizon_ns, 80'000'000);
+  EXPECT_TRUE(chain->grabbing);
+  ASSERT_EQ(update->events.size(), 1U);
+  const GrabEvent& event = update->events[0];
+  EXPECT_EQ(event.kind, GrabKind::kRelease);
+  EXPECT_EQ(event.chain, "index");
+  EXPECT_EQ(event.stamp_ns, 1'700'000'000'009'000'000);
+  EXPECT_EQ(event.tip, (Vec3{0.04, 0.01, 0.97}));
+  EXPECT_DOUBLE_EQ(event.bend, 0.95);
+  EXPECT_EQ(event.publish_ns, 1'700'000'000'011'000'000);
+  EXPECT_EQ(event.receive_ns, 42);
+}
+
+TEST(Conversion, ChainNotTrackingCarriesNoShape) {
+  auto message = chain_sample();
+  message.chains()[0].status(1);
+  message.chains()[0].markers().clear();  // an ambiguous chain has none: not an error
+  std::string error;
+  const auto update = to_chain_update(message, 0, error);
+  ASSERT_TRUE(update.has_value()) << error;
+  EXPECT_EQ(update->chains[0].status, ChainStatus::kAmbiguous);
+  EXPECT_TRUE(update->chains[0].markers.empty());
+}
+
+TEST(Conversion, RejectsMalformedChains) {
+  const auto rejected = [](const msg::ChainFrame& message, const std::string& expected) {
+    std::string error;
+    const bool dropped = !to_chain_update(message, 0, error).has_value();
+    return dropped && error.find(expected) != std::string::npos ? ::testing::AssertionSuccess()
+                                                                : ::testing::AssertionFailure() << error;
+  };
+  auto bad_status = chain_sample();
+  bad_status.chains()[0].status(3);
+  EXPECT_TRUE(rejected(bad_status, "status 3"));
+  auto no_id = chain_sample();
+  no_id.chains()[0].chain_id(0);
+  EXPECT_TRUE(rejected(no_id, "chain_id 0"));
+  auto short_flags = chain_sample();
+  short_flags.chains()[0].marker_valid().pop_back();
+  EXPECT_TRUE(rejected(short_flags, "3 valid flags"));
+  auto extra_angle = chain_sample();
+  extra_angle.chains()[0].angles().push_back(0.0);
+  EXPECT_TRUE(rejected(extra_angle, "3 angles"));
+  auto nan_marker = chain_sample();
+  nan_marker.chains()[0].markers()[1].position({0.0, std::numeric_limits<double>::quiet_NaN(), 1.0});
+  EXPECT_TRUE(rejected(nan_marker, "non-finite marker"));
+  auto infinite_tip = chain_sample();
+  infinite_tip.chains()[0].predicted_tip({std::numeric_limits<double>::infinity(), 0.0, 0.0});
+  EXPECT_TRUE(rejected(infinite_tip, "non-finite tip"));
+  auto bad_kind = chain_sample();
+  bad_kind.events()[0].kind(2);
+  EXPECT_TRUE(rejected(bad_kind, "kind 2"));
+  auto nan_bend = chain_sample();
+  nan_bend.events()[0].bend(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_TRUE(rejected(nan_bend, "non-finite tip or bend"));
 }
 
 }  // namespace

@@ -121,6 +121,22 @@ TEST(Decode, CameraInfoWithNonFiniteCalibrationIsRejected) {
   EXPECT_EQ(camera_info_problem(info), "bad_camera_id");
 }
 
+// A camera carried by a rig says so (docs/inside_out.md): `moving` reaches the calibration, so the
+// estimator does not take its mount for a fixed pose.
+TEST(Decode, CameraInfoCarriesMoving) {
+  CameraIntrinsics intrinsics;
+  intrinsics.width = 1280;
+  intrinsics.height = 1024;
+  intrinsics.fx = intrinsics.fy = 800;
+  const RigidTransform mount;
+  const auto moving = calibration_from(to_camera_info("head", intrinsics, mount, true));
+  ASSERT_TRUE(moving.has_value());
+  EXPECT_TRUE(moving->moving);
+  const auto fixed = calibration_from(to_camera_info("cam0", intrinsics, mount));
+  ASSERT_TRUE(fixed.has_value());
+  EXPECT_FALSE(fixed->moving);
+}
+
 // A reader on the bus: malformed samples from a raw writer are counted by reason and never reach
 // the callback; a genuine sample after them still does.
 TEST(Decode, BusCountsMalformedSamplesAndKeepsReceiving) {

@@ -166,7 +166,7 @@ void bind_descriptions_and_stats(py::module_& m) {
       "A body of the estimator's bodies file: name, id, kind and marker layout (Client.body_descriptions()).")
       .def_readonly("name", &client::BodyDescription::name, "str")
       .def_readonly("id", &client::BodyDescription::id, "1-based position in the bodies file")
-      .def_readonly("kind", &client::BodyDescription::kind, "'passive' or 'led7'")
+      .def_readonly("kind", &client::BodyDescription::kind, "'passive', 'led7' or 'rig' (an inside-out rig)")
       .def_property_readonly(
           "markers", [](const client::BodyDescription& d) { return to_points(d.markers); },
           "marker layout, m, body frame: array of shape (N, 3)")
@@ -244,6 +244,76 @@ void bind_stroke(py::module_& m) {
       });
 }
 
+py::tuple vec3_tuple(const client::Vec3& v) {
+  return py::make_tuple(v[0], v[1], v[2]);
+}
+
+// Articulated chains (docs/articulated.md): chain states, grab events and the update holding both.
+void bind_chains(py::module_& m) {
+  py::class_<client::Chain>(m, "Chain",
+                            "One articulated chain after a camera frame; angles, markers and tips only "
+                            "while status is 'tracking'.")
+      .def_readonly("name", &client::Chain::name)
+      .def_readonly("id", &client::Chain::id, "1-based position among the chains of the bodies file")
+      .def_property_readonly("status",
+                             [](const client::Chain& c) {
+                               return c.status == client::ChainStatus::kTracking    ? "tracking"
+                                      : c.status == client::ChainStatus::kAmbiguous ? "ambiguous"
+                                                                                    : "not_identified";
+                             })
+      .def_readonly("stamp_ns", &client::Chain::stamp_ns)
+      .def_readonly("joint_angles", &client::Chain::joint_angles, "rad, base first")
+      .def_property_readonly(
+          "markers",
+          [](const client::Chain& c) {
+            py::list markers;
+            for (const auto& marker : c.markers) markers.append(vec3_tuple(marker));
+            return markers;
+          },
+          "world m, base first")
+      .def_readonly("marker_valid", &client::Chain::marker_valid)
+      .def_property_readonly(
+          "tip", [](const client::Chain& c) { return vec3_tuple(c.tip); }, "world m")
+      .def_property_readonly(
+          "predicted_tip", [](const client::Chain& c) { return vec3_tuple(c.predicted_tip); },
+          "world m, prediction_horizon_ns ahead")
+      .def_readonly("prediction_horizon_ns", &client::Chain::prediction_horizon_ns)
+      .def_readonly("grabbing", &client::Chain::grabbing)
+      .def("__repr__", [](const client::Chain& c) { return "<panoptes.Chain " + c.name + ">"; });
+  py::class_<client::GrabEvent>(m, "GrabEvent", "A grab or release gesture of a chain (seed 000 §6.4.5).")
+      .def_property_readonly(
+          "kind",
+          [](const client::GrabEvent& e) { return e.kind == client::GrabKind::kGrab ? "grab" : "release"; })
+      .def_readonly("chain", &client::GrabEvent::chain)
+      .def_readonly("chain_id", &client::GrabEvent::chain_id)
+      .def_readonly("stamp_ns", &client::GrabEvent::stamp_ns, "when the bend crossed the threshold")
+      .def_property_readonly(
+          "tip", [](const client::GrabEvent& e) { return vec3_tuple(e.tip); }, "world m")
+      .def_readonly("bend", &client::GrabEvent::bend, "rad, the sum of the joint angles")
+      .def_readonly("publish_ns", &client::GrabEvent::publish_ns)
+      .def_readonly("receive_ns", &client::GrabEvent::receive_ns)
+      .def("__repr__", [](const client::GrabEvent& e) {
+        return std::string("<panoptes.GrabEvent ") +
+               (e.kind == client::GrabKind::kGrab ? "grab " : "release ") + e.chain + ">";
+      });
+  py::class_<client::ChainUpdate>(m, "ChainUpdate",
+                                  "Every chain after one camera frame, and its grab events.")
+      .def_readonly("stamp_ns", &client::ChainUpdate::stamp_ns)
+      .def_readonly("publish_ns", &client::ChainUpdate::publish_ns)
+      .def_readonly("receive_ns", &client::ChainUpdate::receive_ns)
+      .def_readonly("source_camera", &client::ChainUpdate::source_camera)
+      .def_readonly("source_frame", &client::ChainUpdate::source_frame)
+      .def_readonly("chains", &client::ChainUpdate::chains)
+      .def_readonly("events", &client::ChainUpdate::events)
+      .def(
+          "chain",
+          [](const client::ChainUpdate& u, const std::string& name) -> py::object {
+            const client::Chain* chain = u.chain(name);
+            return chain ? py::cast(*chain) : py::none();
+          },
+          "name"_a, "chain(name) -> Chain or None");
+}
+
 // Instances of the data classes come from the library only: `__new__` refuses to make an empty one
 // (pybind11 would hand out an object over unconstructed memory; copy.copy() would too). pybind11's
 // own instances are allocated with tp_alloc, not through __new__.
@@ -251,7 +321,8 @@ void forbid_new(py::module_& m) {
   const py::cpp_function refuse([](const py::args&, const py::kwargs&) {
     throw py::type_error("panoptes frames, bodies, markers, descriptions and stats come from a Client");
   });
-  for (const char* name : {"Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats", "Stroke"})
+  for (const char* name : {"Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats", "Stroke",
+                           "Chain", "GrabEvent", "ChainUpdate"})
     m.attr(name).attr("__new__") = py::staticmethod(refuse);
 }
 
@@ -298,11 +369,12 @@ PYBIND11_MODULE(_panoptes, m) {
   bind_frame(m);
   bind_descriptions_and_stats(m);
   bind_stroke(m);
+  bind_chains(m);
   bind_client(m);
   forbid_new(m);
   // Users meet these classes as panoptes.X (help(), repr of the types, pickling errors).
-  for (const char* name :
-       {"Client", "Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats", "Stroke"})
+  for (const char* name : {"Client", "Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats",
+                           "Stroke", "Chain", "GrabEvent", "ChainUpdate"})
     m.attr(name).attr("__module__") = "panoptes";
   py::module_::import("atexit").attr("register")(py::cpp_function(&PyClient::close_all_at_exit));
 }

@@ -196,6 +196,17 @@ py::object PyClient::wait_for_stroke(double timeout_s) {
   });
 }
 
+py::object PyClient::wait_for_grab_event(double timeout_s) {
+  return wait_sliced(timeout_s, [this](std::chrono::milliseconds slice) {
+    client::GrabResult result = client_->wait_for_grab_event(slice);
+    return std::make_pair(result.status, std::move(result.event));
+  });
+}
+
+std::optional<client::ChainUpdate> PyClient::latest_chains() {
+  return without_gil([this] { return client_->latest_chains(); });
+}
+
 std::optional<client::Frame> PyClient::latest() const {
   return client_->latest();
 }
@@ -342,6 +353,16 @@ is closed. Ctrl-C interrupts the wait (KeyboardInterrupt).)doc")
 Surface mode (docs/surface.md): the next stroke event not yet returned (in order, from a queue of
 queue_depth), waiting up to `timeout` seconds with the GIL released. The first call subscribes to
 rt/panoptes/strokes; events before it are not seen. None on timeout or when the client is closed.)doc")
+      .def("wait_for_grab_event", bound(&PyClient::wait_for_grab_event), "timeout"_a,
+           R"doc(wait_for_grab_event(timeout) -> GrabEvent or None
+
+Articulated chains (docs/articulated.md): the next grab or release not yet returned (in order, from a
+queue of queue_depth), waiting up to `timeout` seconds with the GIL released. The first call subscribes
+to rt/panoptes/chains; events before it are not seen. None on timeout or when the client is closed.)doc")
+      .def(
+          "latest_chains", bound(&PyClient::latest_chains),
+          "latest_chains() -> ChainUpdate or None: the newest chain update (subscribes to rt/panoptes/chains "
+          "on first use)")
       .def("latest", bound(&PyClient::latest),
            "latest() -> Frame or None: the newest frame received (does not consume the wait_for_frame queue)")
       .def("add_callback", bound(&PyClient::add_callback), "callback"_a,

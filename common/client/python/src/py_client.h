@@ -37,7 +37,9 @@ class PyClient {
   PyClient& operator=(const PyClient&) = delete;
 
   pybind11::object wait_for_frame(double timeout_s);
-  pybind11::object wait_for_stroke(double timeout_s);  // surface mode: a Stroke or None
+  pybind11::object wait_for_stroke(double timeout_s);      // surface mode: a Stroke or None
+  pybind11::object wait_for_grab_event(double timeout_s);  // chains: a GrabEvent or None
+  std::optional<client::ChainUpdate> latest_chains();
   std::optional<client::Frame> latest() const;
   int add_callback(const pybind11::function& callback);
   void remove_callback(int handle);

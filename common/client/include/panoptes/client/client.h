@@ -119,7 +119,7 @@ struct PANOPTES_CLIENT_API Frame {
 struct BodyDescription {
   std::string name;
   int id = 0;
-  std::string kind;           // passive | led7
+  std::string kind;           // passive | led7 | rig (an inside-out rig: its markers may be empty)
   std::vector<Vec3> markers;  // m, body frame
 };
 
@@ -144,6 +144,59 @@ struct Stroke {
   std::int64_t receive_ns = 0;           // this client received it (its system clock)
 };
 
+// Articulated chains (docs/articulated.md): a finger's markers on a kinematic chain, from
+// rt/panoptes/chains after every camera frame.
+enum class ChainStatus {
+  kTracking,       // angles, markers and tips hold the estimate
+  kAmbiguous,      // more than one candidate: not forced onto markers, nothing estimated
+  kNotIdentified,  // not found (yet, or lost)
+};
+
+struct Chain {
+  std::string name;
+  int id = 0;  // 1-based position among the chains of the bodies file
+  ChainStatus status = ChainStatus::kNotIdentified;
+  std::int64_t stamp_ns = 0;         // common clock
+  std::vector<double> joint_angles;  // rad, one per joint, base first
+  std::vector<Vec3> markers;         // m, world, base first
+  std::vector<bool> marker_valid;    // per marker: seen within the last 50 ms
+  Vec3 tip{};                        // m, world: the hot spot
+  Vec3 predicted_tip{};              // m, world: prediction_horizon_ns ahead (= tip when 0)
+  std::int64_t prediction_horizon_ns = 0;
+  bool grabbing = false;  // between a grab and its release
+  bool tracking() const { return status == ChainStatus::kTracking; }
+};
+
+enum class GrabKind {
+  kGrab,     // the finger bent past the grab threshold
+  kRelease,  // it straightened past the release threshold
+};
+
+// A grab gesture (seed 000 §6.4.5), delivered once.
+struct GrabEvent {
+  GrabKind kind = GrabKind::kGrab;
+  std::string chain;
+  int chain_id = 0;
+  std::int64_t stamp_ns = 0;    // when the bend crossed the threshold (common clock)
+  Vec3 tip{};                   // m, world, at that time
+  double bend = 0.0;            // rad, the sum of the joint angles
+  std::int64_t publish_ns = 0;  // the estimator wrote it (common clock)
+  std::int64_t receive_ns = 0;  // this client received it (its system clock)
+};
+
+// Every chain after one camera frame, and the grab events that frame caused.
+struct PANOPTES_CLIENT_API ChainUpdate {
+  std::int64_t stamp_ns = 0;  // the camera frame's (mid-exposure, common clock)
+  std::int64_t publish_ns = 0;
+  std::int64_t receive_ns = 0;
+  std::string source_camera;
+  std::int64_t source_frame = 0;
+  std::vector<Chain> chains;
+  std::vector<GrabEvent> events;
+  // nullptr if no chain of that name is in this update.
+  const Chain* chain(const std::string& name) const;
+};
+
 enum class Status {
   kOk,       // a frame
   kTimeout,  // no frame within the timeout (see status_text())
@@ -160,18 +213,27 @@ struct StrokeResult {
   Stroke stroke;  // empty unless kOk
 };
 
+struct GrabResult {
+  Status status = Status::kTimeout;
+  GrabEvent event;  // empty unless kOk
+};
+
 struct Stats {
   std::uint64_t frames_received = 0;
   std::uint64_t frames_dropped = 0;    // overflowed the queue
   std::uint64_t frames_missed = 0;     // gaps in frame_number: not delivered by the bus
   std::uint64_t frames_malformed = 0;  // counted and ignored
   std::uint64_t descriptions_received = 0;
-  std::uint64_t descriptions_malformed = 0;  // counted and ignored
-  std::uint64_t estimator_restarts = 0;      // frame_number went back: a new estimator run
-  std::uint64_t callback_errors = 0;         // exceptions thrown by callbacks (caught)
-  std::uint64_t strokes_received = 0;        // stroke events (surface mode)
-  std::uint64_t strokes_malformed = 0;       // counted and ignored
-  std::uint64_t strokes_dropped = 0;         // overflowed the stroke queue
+  std::uint64_t descriptions_malformed = 0;   // counted and ignored
+  std::uint64_t estimator_restarts = 0;       // frame_number went back: a new estimator run
+  std::uint64_t callback_errors = 0;          // exceptions thrown by callbacks (caught)
+  std::uint64_t strokes_received = 0;         // stroke events (surface mode)
+  std::uint64_t strokes_malformed = 0;        // counted and ignored
+  std::uint64_t strokes_dropped = 0;          // overflowed the stroke queue
+  std::uint64_t chain_updates_received = 0;   // rt/panoptes/chains samples (articulated chains)
+  std::uint64_t chain_updates_malformed = 0;  // counted and ignored
+  std::uint64_t grab_events_received = 0;
+  std::uint64_t grab_events_dropped = 0;  // overflowed the grab event queue
   std::string last_error;  // why the last malformed sample was ignored, or the last callback's exception
 };
 
@@ -203,6 +265,19 @@ class PANOPTES_CLIENT_API Client {
   void remove_stroke_callback(int handle);  // after it returns the callback does not run
   // The next stroke event not yet returned (a queue of ClientOptions::queue_depth), waiting up to `timeout`.
   StrokeResult wait_for_stroke(std::chrono::milliseconds timeout);
+
+  // Articulated chains (docs/articulated.md). The first of these calls subscribes to
+  // rt/panoptes/chains (reliable: every grab and release arrives); what came before it is not
+  // seen. Callbacks run on the bus's thread, one call per update, in order; exceptions are caught
+  // and counted.
+  using ChainCallback = std::function<void(const ChainUpdate&)>;
+  int add_chain_callback(ChainCallback callback);
+  void remove_chain_callback(int handle);  // after it returns the callback does not run
+  // The next grab or release not yet returned (a queue of ClientOptions::queue_depth), waiting up
+  // to `timeout`.
+  GrabResult wait_for_grab_event(std::chrono::milliseconds timeout);
+  // The newest chain update received, if any (subscribes on first use).
+  std::optional<ChainUpdate> latest_chains();
 
   // The estimator's bodies (from rt/panoptes/body_descriptions, known to late joiners too).
   std::vector<BodyDescription> body_descriptions() const;

@@ -21,8 +21,9 @@ TrackRecord from_message(const msg::Track& message, TimeNs stamp_ns);
 msg::BodyPose to_message(const PoseRecord& pose);
 PoseRecord from_message(const msg::BodyPose& message);
 
+// `moving`: the camera is carried by a rig (docs/inside_out.md); T_world_cam is then its mount.
 msg::CameraInfo to_camera_info(const std::string& camera_id, const CameraIntrinsics& intrinsics,
-                               const std::optional<RigidTransform>& T_world_cam);
+                               const std::optional<RigidTransform>& T_world_cam, bool moving = false);
 // A camera or client id worth keeping: 1..256 characters, none of them a control character.
 bool plausible_id(const std::string& id);
 // Why a CameraInfo cannot be trusted ("bad_camera_id", "image_size_out_of_range",

@@ -24,7 +24,7 @@ struct NodeCommandLine {
   bool no_dds = false;
   std::string out_tracks;
   std::string out_poses;
-  std::string out_chains;  // offline: Chain JSONL (docs/articulated.md)
+  std::string out_chains;  // Chain JSONL (docs/articulated.md)
   std::string dds_profile;
   dds::SecurityOptions security;
   bool replay_arrival = false;

@@ -15,8 +15,9 @@ namespace panoptes::estimator_app {
 
 msg::MocapFrame to_frame_message(const session::FrameOutput& frame, TimeNs publish_ns);
 
+// The bodies, then the inside-out rigs (kind "rig", docs/inside_out.md) whose names no body has.
 msg::BodyDescriptions to_descriptions_message(const std::vector<BodyDefinition>& bodies,
                                               std::uint64_t generation, const std::string& source,
-                                              TimeNs stamp_ns);
+                                              TimeNs stamp_ns, const std::vector<BodyDefinition>& rigs = {});
 
 }  // namespace panoptes::estimator_app

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Live mode of estimator_node: an EstimatorSession fed by rt/panoptes/features (DDS listener
 // threads screen frames into the session's inbox) and run on one estimator thread that publishes
-// rt/panoptes/tracks, predictions, body poses and estimator_status, serves rt/panoptes/time_sync,
+// rt/panoptes/tracks, predictions, body poses, chains and estimator_status, serves rt/panoptes/time_sync,
 // applies calibrations announced by CameraInfo and reloads the bodies file when it changes.
 #pragma once
 
@@ -9,6 +9,7 @@
 
 #include "panoptes/dds/security.h"
 #include "panoptes/session/body_file.h"
+#include "panoptes/session/chain_stage.h"
 #include "panoptes/session/estimator_session.h"
 
 namespace panoptes::estimator_app {
@@ -22,6 +23,9 @@ struct LiveOptions {
   double duration_s = 0.0;        // 0: until a stop signal
   bool latency_probe = false;     // benchmark aid (latency_probe_echoer.h)
   bool quiet = false;
+  // Articulated chains of the bodies file (docs/articulated.md): fed every processed frame and
+  // published on rt/panoptes/chains. Null: none.
+  session::ChainStage* chains = nullptr;
 };
 
 // Runs until a stop signal (panoptes::stop_requested) or the duration; returns the exit code.

@@ -27,9 +27,22 @@ class ChainStage {
   ChainStage(std::vector<ChainDefinition> chains, const SystemCalibration& calibration,
              const std::string& out_path, const estimator::ChainTrackerOptions& options = {});
 
+  // A fixed camera learnt after the start (live: announced by its CameraInfo). A moving camera or
+  // one without T_world_cam is ignored; a camera already known keeps its model.
+  void add_camera(const CameraCalibration& camera);
+
   // One camera frame that `tracker` has just processed (stamp order; an older frame or one from
-  // an uncalibrated camera is counted and skipped).
-  void observe(const FeatureFrame& frame, const estimator::Tracker& tracker);
+  // an uncalibrated camera is counted and skipped: false).
+  bool observe(const FeatureFrame& frame, const estimator::Tracker& tracker);
+
+  // After observe() returned true: every chain at that frame (bodies-file order), the same
+  // predicted `prediction_horizon_s` ahead (empty when the horizon is 0), and the events that frame
+  // caused. Live mode publishes them on rt/panoptes/chains.
+  const std::vector<estimator::ChainOutput>& outputs() const { return outputs_; }
+  const std::vector<estimator::ChainOutput>& predicted_outputs() const { return predicted_; }
+  const std::vector<estimator::NamedGrabEvent>& events() const { return events_; }
+  void set_prediction_horizon(double horizon_s) { prediction_horizon_s_ = horizon_s; }
+  double prediction_horizon_s() const { return prediction_horizon_s_; }
 
   // Writes out what is buffered (the end of a run).
   void flush() {
@@ -59,6 +72,10 @@ class ChainStage {
   std::uint64_t frames_skipped_ = 0;
   std::uint64_t records_ = 0;
   bool all_tracking_ = false;
+  double prediction_horizon_s_ = 0.0;
+  std::vector<estimator::ChainOutput> outputs_;
+  std::vector<estimator::ChainOutput> predicted_;
+  std::vector<estimator::NamedGrabEvent> events_;
 };
 
 }  // namespace panoptes::session

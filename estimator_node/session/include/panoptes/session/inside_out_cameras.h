@@ -51,6 +51,9 @@ class InsideOutCameras {
   TimeNs last_stamp_ns() const { return last_stamp_ns_; }
   // Every tracking rig's pose, its filter predicted to `stamp_ns` and extrapolated `horizon_ns`.
   std::vector<PoseRecord> poses_at(TimeNs stamp_ns, TimeNs horizon_ns) const;
+  // Every rig once, by name, with the markers it carries (rig frame; none without fusion): what
+  // rt/panoptes/body_descriptions lists as kind "rig" so that clients learn the rigs' names.
+  std::vector<BodyDefinition> rig_descriptions() const;
   // What became of each moving camera's frames, counted like the point tracker's cameras (usage,
   // utilisation): used = given to the filter; too_late = older than its state (dropped);
   // associated = landmark updates.
