@@ -66,6 +66,18 @@ finish() {
   exit 1
 }
 
+# replay_cameras EPOCH_NS SECONDS CAMERA...: one camera_node per CAMERA replaying
+# $work/sim/CAMERA.jsonl in real time from EPOCH_NS for SECONDS, logs in $work/CAMERA.log (pids added).
+replay_cameras() {
+  local epoch_ns=$1 seconds=$2 camera
+  shift 2
+  for camera in "$@"; do
+    "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch_ns" --duration "$seconds" \
+      --quiet >"$work/$camera.log" 2>&1 &
+    pids+=("$!")
+  done
+}
+
 # replay_clients_scene_with_restart: the client tests' live run (test_client.sh,
 # test_python_client.sh). The simulated clients scene in $work/sim replayed by six camera_nodes
 # (24 s) into estimator_node (run 1, --out-poses $work/poses1.jsonl), which is killed (-9) after
@@ -74,11 +86,7 @@ finish() {
 replay_clients_scene_with_restart() {
   local epoch=$(( ($(date +%s) + 3) * 1000000000 ))
   start_clients_estimator 1 30
-  for camera in c0 c1 c2 c3 c4 c5; do
-    "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration 24 --quiet \
-      >"$work/$camera.log" 2>&1 &
-    pids+=("$!")
-  done
+  replay_cameras "$epoch" 24 c0 c1 c2 c3 c4 c5
   sleep 12
   kill -KILL "$estimator"
   wait "$estimator" 2>/dev/null

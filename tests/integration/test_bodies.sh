@@ -60,11 +60,7 @@ epoch=$(( ($(date +%s) + 3) * 1000000000 ))
   --out-poses "$work/live_poses.jsonl" --duration 13 --status-period 1 >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
-for camera in c0 c1 c2 c3 c4 c5; do
-  "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration 12 --quiet \
-    >"$work/$camera.log" 2>&1 &
-  pids+=("$!")
-done
+replay_cameras "$epoch" 12 c0 c1 c2 c3 c4 c5
 sleep 7
 printf 'bodies:\n  - name: head\n    markers: [[0,0,0],[0.1,0,0]]\n' >"$work/live_bodies.yaml"
 sleep 2

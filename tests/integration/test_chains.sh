@@ -63,11 +63,7 @@ estimator=$!
 pids+=("$estimator")
 sleep 1.5
 epoch=$(( ($(date +%s) + 3) * 1000000000 ))
-for camera in c0 c1 c2 c3; do
-  "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration 16 --quiet \
-    >"$work/$camera.log" 2>&1 &
-  pids+=("$!")
-done
+replay_cameras "$epoch" 16 c0 c1 c2 c3
 timeout 30 tail --pid="$estimator" -f /dev/null
 wait "$estimator"
 rc=$?

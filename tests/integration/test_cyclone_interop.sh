@@ -41,11 +41,7 @@ pids+=("$probe_pid")
   >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
-for camera in c0 c1 c2 c3 c4 c5; do
-  "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration 22 --quiet \
-    >"$work/$camera.log" 2>&1 &
-  pids+=("$!")
-done
+replay_cameras "$epoch" 22 c0 c1 c2 c3 c4 c5
 # While they run, no UDP socket of theirs is bound to an address outside 127.0.0.0/8. Cyclone DDS binds
 # its two unicast receive sockets (the RTPS ports of its participant index) to the wildcard, as it
 # always does (Cyclone issues #1923, #2090); it advertises and sends from 127.0.0.1 only

@@ -105,11 +105,7 @@ estimator=$!
 pids+=("$estimator")
 sleep 2
 epoch=$(( ($(date +%s) + 4) * 1000000000 ))
-for camera in w0 w1 w2; do
-  "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration 11 --quiet \
-    >"$work/$camera.log" 2>&1 &
-  pids+=("$!")
-done
+replay_cameras "$epoch" 11 w0 w1 w2
 timeout 20 tail --pid="$estimator" -f /dev/null
 wait "$estimator"
 rc=$?
