@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/planner/optimizer.h"
 
+#include "panoptes/planner/incremental_metric.h"
+
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <limits>
 #include <numeric>
 #include <random>
@@ -19,27 +23,176 @@ std::size_t pick_index(double gene, std::size_t count) {
   return std::min(count - 1, static_cast<std::size_t>(std::max(0.0, gene) * static_cast<double>(count)));
 }
 
+using Genes = std::array<double, kGenes>;
+
+// The search's clocks: wall time, and this process's CPU time for a loaded machine.
+class Stopwatch {
+ public:
+  Stopwatch() : wall_begin_(Clock::now()), cpu_begin_(std::clock()) {}
+  double wall() const { return std::chrono::duration<double>(Clock::now() - wall_begin_).count(); }
+  double cpu() const { return static_cast<double>(std::clock() - cpu_begin_) / CLOCKS_PER_SEC; }
+
+ private:
+  Clock::time_point wall_begin_;
+  std::clock_t cpu_begin_;
+};
+
 class Search {
  public:
   Search(const Room& room, const SampleSet& samples, const MetricOptions& metric, const PlanOptions& options)
-      : room_(room), samples_(samples), metric_(metric), options_(options), begin_(Clock::now()) {
-    // The search's figure is the quality alone; the histogram etc. are recomputed at the end.
-    dimensions_ = static_cast<std::size_t>(options.cameras) * kGenes;
+      : room_(room),
+        options_(options),
+        fixed_(options.fixed.size()),
+        metric_(samples, room.obstacles, metric,
+                options.fixed.size() + static_cast<std::size_t>(options.cameras)),
+        genes_(static_cast<std::size_t>(options.cameras)) {
+    for (std::size_t f = 0; f < fixed_; ++f) metric_.place(f, options.fixed[f]);
+    current_ = metric_.quality();
   }
 
-  double score(const std::vector<double>& genes) {
-    ++evaluations_;
-    std::vector<PlannedCamera> cameras = options_.fixed;
-    for (int c = 0; c < options_.cameras; ++c)
-      cameras.push_back(decode_camera(room_, genes.data() + static_cast<std::ptrdiff_t>(c) * kGenes, ""));
-    const double q = evaluate(cameras, samples_, room_.obstacles, metric_).quality;
-    if (q < best_) {
-      best_ = q;
-      best_genes_ = genes;
+  PlanResult run() {
+    std::mt19937_64 rng(options_.seed);
+    const int starts = std::max(1, options_.starts);
+    // Half of the budget for the starts, each until its share is spent or it has converged; the
+    // rest for the iterated search from the best of them.
+    for (start_ = 0; start_ < starts && !out_of_budget(); ++start_) {
+      const double share_end = 0.5 * static_cast<double>(start_ + 1) / static_cast<double>(starts);
+      greedy_start(rng);
+      descend(rng, share_end);
     }
-    if (options_.progress && evaluations_ % std::max(1, options_.evaluations / 50) == 0)
-      options_.progress({evaluations_, start_, best_, seconds()});
+    start_ = starts;
+    iterate(rng);
+    if (best_genes_.empty()) best_genes_ = genes_;  // out of budget before a whole layout
+    PlanResult result;
+    result.cameras = options_.fixed;
+    for (std::size_t c = 0; c < genes_.size(); ++c)
+      result.cameras.push_back(
+          decode_camera(room_, best_genes_[c].data(), "plan" + std::to_string(fixed_ + c)));
+    result.history = history_;
+    result.evaluations = evaluations_;
+    result.seconds = clock_.wall();
+    result.cpu_seconds = clock_.cpu();
+    result.stopped_by_time = stopped_by_time_;
+    return result;
+  }
+
+ private:
+  // Camera `c` with `genes`: the metric after the move. Keep it with accept(), or undo().
+  double try_move(std::size_t c, const Genes& genes) {
+    ++evaluations_;
+    const double q = metric_.place(fixed_ + c, decode_camera(room_, genes.data(), ""));
+    report_progress();
     return q;
+  }
+  void accept(std::size_t c, const Genes& genes, double q) {
+    genes_[c] = genes;
+    current_ = q;
+    if (complete_ && q < best_) {
+      best_ = q;
+      best_genes_ = genes_;
+    }
+  }
+  // Moves camera `c` to `genes` if that improves the layout; true when it did.
+  bool improve(std::size_t c, const Genes& genes) {
+    const double q = try_move(c, genes);
+    if (q < current_) {
+      accept(c, genes, q);
+      return true;
+    }
+    metric_.undo();
+    return false;
+  }
+
+  // Every camera placed in turn where the best of `kCandidates` random genes puts it, the cameras
+  // after it not yet in the room.
+  void greedy_start(std::mt19937_64& rng) {
+    complete_ = false;
+    for (std::size_t c = 0; c < genes_.size(); ++c) metric_.remove(fixed_ + c);
+    current_ = std::numeric_limits<double>::infinity();
+    for (std::size_t c = 0; c < genes_.size() && !out_of_budget(); ++c) {
+      complete_ = c + 1 == genes_.size();
+      place_best_of_random(c, rng);
+    }
+  }
+
+  void place_best_of_random(std::size_t c, std::mt19937_64& rng) {
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    const double before = current_;
+    current_ = std::numeric_limits<double>::infinity();  // the first candidate is always taken
+    bool placed = false;
+    for (int k = 0; k < kCandidates && !out_of_budget(); ++k) {
+      Genes genes;
+      for (double& g : genes) g = uniform(rng);
+      placed = improve(c, genes) || placed;
+    }
+    if (!placed) current_ = before;
+  }
+
+  // A (1+1) evolution strategy on each camera in turn, a few trials each per sweep, with its own
+  // step (grown 1.5× on success, shrunk on failure: the 1/5 success rule), until every step is
+  // below kMinStep or the budget reaches `share_end`.
+  void descend(std::mt19937_64& rng, double share_end) {
+    std::vector<double> step(genes_.size(), kFirstStep);
+    std::vector<std::size_t> order(genes_.size());
+    std::iota(order.begin(), order.end(), 0);
+    while (!out_of_budget() && used_share() < share_end) {
+      std::shuffle(order.begin(), order.end(), rng);
+      bool moving = false;
+      for (const std::size_t c : order) {
+        for (int t = 0; t < kTrialsPerSweep && step[c] >= kMinStep && !out_of_budget(); ++t) {
+          moving = true;
+          step[c] =
+              improve(c, mutate(genes_[c], step[c], rng)) ? std::min(0.5, step[c] * 1.5) : step[c] * kShrink;
+        }
+      }
+      if (std::isfinite(best_)) history_.push_back(best_);
+      if (!moving) break;
+    }
+  }
+
+  Genes mutate(const Genes& genes, double step, std::mt19937_64& rng) {
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    Genes trial = genes;
+    for (int g = 1; g <= 5; ++g) trial[g] = std::clamp(trial[g] + step * gauss(rng), 0.0, 1.0);
+    // The surface and the lens are choices: another one now and then, more often while steps are
+    // large.
+    for (const int g : {0, 6})
+      if (uniform(rng) < std::min(0.15, step)) trial[g] = uniform(rng);
+    return trial;
+  }
+
+  // Iterated local search: from the best layout, re-place one camera (every third round two) at
+  // the best of random positions, descend, and keep the result if it beats the best.
+  void iterate(std::mt19937_64& rng) {
+    if (best_genes_.empty() || evaluations_ + static_cast<int>(genes_.size()) > options_.evaluations) return;
+    restore_best();
+    std::uniform_int_distribution<std::size_t> pick(0, genes_.size() - 1);
+    for (int round = 0; !out_of_budget(); ++round) {
+      const int moved = round % 3 == 2 && genes_.size() > 1 ? 2 : 1;
+      for (int m = 0; m < moved; ++m) place_best_of_random(pick(rng), rng);
+      descend(rng, 1.0);
+      if (current_ > best_) {
+        if (evaluations_ + static_cast<int>(genes_.size()) > options_.evaluations) break;
+        restore_best();
+      }
+    }
+  }
+
+  void restore_best() {
+    for (std::size_t c = 0; c < genes_.size(); ++c) {
+      if (genes_[c] == best_genes_[c]) continue;
+      ++evaluations_;
+      genes_[c] = best_genes_[c];
+      metric_.place(fixed_ + c, decode_camera(room_, genes_[c].data(), ""));
+    }
+    current_ = metric_.quality();
+  }
+
+  // The larger of the shares of the evaluation and time budgets spent.
+  double used_share() const {
+    return std::max(static_cast<double>(evaluations_) / std::max(1, options_.evaluations),
+                    seconds() / options_.seconds);
   }
 
   bool out_of_budget() {
@@ -51,126 +204,36 @@ class Search {
     return false;
   }
 
-  // One (mu/mu_w, lambda) evolution strategy with cumulative step-size adaptation in the unit
-  // cube (genes clamped), until its share of the budget is spent or its step has collapsed.
-  void evolve(std::mt19937_64& rng, int budget) {
-    const std::size_t n = dimensions_;
-    const auto lambda =
-        static_cast<std::size_t>(std::max(10.0, 4.0 + 3.0 * std::log(static_cast<double>(n))));
-    const std::size_t mu = lambda / 2;
-    std::vector<double> w(mu);
-    for (std::size_t i = 0; i < mu; ++i)
-      w[i] = std::log(static_cast<double>(mu) + 0.5) - std::log(static_cast<double>(i) + 1.0);
-    const double w_sum = std::accumulate(w.begin(), w.end(), 0.0);
-    for (double& wi : w) wi /= w_sum;
-    double mu_eff = 0.0;
-    for (const double wi : w) mu_eff += wi * wi;
-    mu_eff = 1.0 / mu_eff;
-    const double dn = static_cast<double>(n);
-    const double c_sigma = (mu_eff + 2.0) / (dn + mu_eff + 5.0);
-    const double d_sigma = 1.0 + c_sigma + 2.0 * std::max(0.0, std::sqrt((mu_eff - 1.0) / (dn + 1.0)) - 1.0);
-    const double chi_n = std::sqrt(dn) * (1.0 - 1.0 / (4.0 * dn) + 1.0 / (21.0 * dn * dn));
+  double seconds() const { return options_.cpu_clock ? clock_.cpu() : clock_.wall(); }
 
-    std::uniform_real_distribution<double> uniform(0.0, 1.0);
-    std::normal_distribution<double> gauss(0.0, 1.0);
-    std::vector<double> mean(n);
-    for (double& m : mean) m = uniform(rng);
-    double sigma = 0.3;
-    std::vector<double> path(n, 0.0);
-    const int stop_at = evaluations_ + budget;
-    std::vector<std::vector<double>> steps(lambda, std::vector<double>(n));
-    std::vector<std::pair<double, std::size_t>> ranked(lambda);
-    std::vector<double> candidate(n);
-    while (evaluations_ + static_cast<int>(lambda) <= stop_at && !out_of_budget() && sigma > 1e-4) {
-      for (std::size_t k = 0; k < lambda; ++k) {
-        for (std::size_t i = 0; i < n; ++i) {
-          steps[k][i] = gauss(rng);
-          candidate[i] = std::clamp(mean[i] + sigma * steps[k][i], 0.0, 1.0);
-        }
-        ranked[k] = {score(candidate), k};
-      }
-      std::sort(ranked.begin(), ranked.end());
-      std::vector<double> step(n, 0.0);
-      for (std::size_t r = 0; r < mu; ++r)
-        for (std::size_t i = 0; i < n; ++i) step[i] += w[r] * steps[ranked[r].second][i];
-      double path_norm2 = 0.0;
-      for (std::size_t i = 0; i < n; ++i) {
-        mean[i] = std::clamp(mean[i] + sigma * step[i], 0.0, 1.0);
-        path[i] = (1.0 - c_sigma) * path[i] + std::sqrt(c_sigma * (2.0 - c_sigma) * mu_eff) * step[i];
-        path_norm2 += path[i] * path[i];
-      }
-      sigma *= std::exp(c_sigma / d_sigma * (std::sqrt(path_norm2) / chi_n - 1.0));
-      sigma = std::min(sigma, 0.5);
-      history_.push_back(best_);
-    }
+  void report_progress() {
+    if (!options_.progress) return;
+    const double now = clock_.wall();
+    if (evaluations_ % std::max(1, options_.evaluations / 50) != 0 && now < last_progress_ + 1.0) return;
+    last_progress_ = now;
+    options_.progress({evaluations_, start_, best_, now});
   }
 
-  // Pattern search around the best genes with halving steps.
-  void refine() {
-    if (best_genes_.empty()) return;
-    std::vector<double> genes = best_genes_;
-    double current = best_;
-    for (double step = 0.05; step > 1e-3 && !out_of_budget(); step *= 0.5) {
-      bool improved = true;
-      while (improved && !out_of_budget()) {
-        improved = false;
-        for (std::size_t i = 0; i < genes.size() && !out_of_budget(); ++i) {
-          for (const double sign : {1.0, -1.0}) {
-            if (out_of_budget()) break;
-            std::vector<double> trial = genes;
-            trial[i] = std::clamp(trial[i] + sign * step, 0.0, 1.0);
-            if (trial[i] == genes[i]) continue;
-            const double q = score(trial);
-            if (q < current) {
-              current = q;
-              genes = std::move(trial);
-              improved = true;
-              break;
-            }
-          }
-        }
-      }
-      history_.push_back(best_);
-    }
-  }
-
-  PlanResult run() {
-    std::mt19937_64 rng(options_.seed);
-    const int starts = std::max(1, options_.starts);
-    const int refine_budget = options_.evaluations / 5;
-    for (start_ = 0; start_ < starts && !out_of_budget(); ++start_) {
-      std::mt19937_64 start_rng(rng());
-      evolve(start_rng, (options_.evaluations - refine_budget) / starts);
-    }
-    refine();
-    PlanResult result;
-    result.cameras = options_.fixed;
-    for (int c = 0; c < options_.cameras; ++c)
-      result.cameras.push_back(
-          decode_camera(room_, best_genes_.data() + static_cast<std::ptrdiff_t>(c) * kGenes,
-                        "plan" + std::to_string(options_.fixed.size() + static_cast<std::size_t>(c))));
-    result.evaluation = evaluate(result.cameras, samples_, room_.obstacles, metric_);
-    result.history = history_;
-    result.evaluations = evaluations_;
-    result.seconds = seconds();
-    result.stopped_by_time = stopped_by_time_;
-    return result;
-  }
-
- private:
-  double seconds() const { return std::chrono::duration<double>(Clock::now() - begin_).count(); }
+  static constexpr int kCandidates = 24;
+  static constexpr int kTrialsPerSweep = 4;
+  static constexpr double kFirstStep = 0.1;
+  static constexpr double kMinStep = 2e-3;
+  static constexpr double kShrink = 0.9036;  // 1.5^(-1/4): steady at one success in five
 
   const Room& room_;
-  const SampleSet& samples_;
-  const MetricOptions& metric_;
   const PlanOptions& options_;
-  Clock::time_point begin_;
-  std::size_t dimensions_ = 0;
+  std::size_t fixed_ = 0;
+  IncrementalMetric metric_;
+  std::vector<Genes> genes_;  // the layout in metric_
+  double current_ = 0;        // its quality
+  std::vector<Genes> best_genes_;
+  double best_ = std::numeric_limits<double>::infinity();
+  Stopwatch clock_;
   int evaluations_ = 0;
   int start_ = 0;
-  double best_ = std::numeric_limits<double>::infinity();
-  std::vector<double> best_genes_;
+  bool complete_ = false;  // every camera placed: a layout that may become the best
   std::vector<double> history_;
+  double last_progress_ = 0;
   bool stopped_by_time_ = false;
 };
 
@@ -198,6 +261,7 @@ PlanResult plan(const Room& room, const SampleSet& samples, const MetricOptions&
     throw std::invalid_argument("infeasible plan: the working volume is empty");
   Search search(room, samples, metric, options);
   PlanResult result = search.run();
+  result.evaluation = evaluate(result.cameras, samples, room.obstacles, metric);
   if (result.evaluation.visible_histogram.empty() || result.evaluation.p_at_least_k <= 0.0) {
     bool any_seen = false;
     for (const double p : result.evaluation.point_p_k) any_seen = any_seen || p > 0.0;

@@ -42,6 +42,7 @@ struct Arguments {
   fs::path scene_out;
   int evaluations = 4000;
   double seconds = 60.0;
+  bool cpu_clock = false;
   int starts = 3;
   std::uint64_t seed = 1;
   int threads = 1;
@@ -164,6 +165,7 @@ int run(const Arguments& args) {
     options.fixed = fixed;
     options.evaluations = args.evaluations;
     options.seconds = args.seconds;
+    options.cpu_clock = args.cpu_clock;
     options.starts = args.starts;
     options.seed = args.seed;
     if (!args.quiet)
@@ -176,9 +178,9 @@ int run(const Arguments& args) {
       };
     const PlanResult result = plan(file.room, samples, file.metric, options);
     if (!args.quiet) std::fprintf(stderr, "\n");
-    std::printf("placed %d camera(s)%s in %d evaluations, %.1f s%s\n", args.cameras,
+    std::printf("placed %d camera(s)%s in %d evaluations, %.1f s (%.1f CPU s)%s\n", args.cameras,
                 fixed.empty() ? "" : (" beside " + std::to_string(fixed.size()) + " existing").c_str(),
-                result.evaluations, result.seconds,
+                result.evaluations, result.seconds, result.cpu_seconds,
                 result.stopped_by_time ? " (stopped by --seconds: not reproducible)" : "");
     report.title = "Camera plan: " + std::to_string(result.cameras.size()) + " cameras";
     report.cameras = result.cameras;
@@ -251,7 +253,9 @@ static int run_command_line(int argc, char** argv) {
   app.add_option("--seconds", args.seconds, "time cap; a run it cuts is not reproducible")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 1e6));
-  app.add_option("--starts", args.starts, "independent evolution strategies before the refinement")
+  app.add_flag("--cpu-clock", args.cpu_clock,
+               "--seconds counts this process's CPU time (on a loaded machine), not wall time");
+  app.add_option("--starts", args.starts, "independent greedy starts before the iterated search")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
   app.add_option("--seed", args.seed, "search seed (the samples have their own, in the room file)")
