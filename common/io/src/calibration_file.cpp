@@ -194,10 +194,15 @@ std::vector<ChainDefinition> load_chains(const std::filesystem::path& path) {
 
 ChainDefinition read_chain_definition(const YamlReader& item, std::set<std::string>& names) {
   item.expect_only({"name", "type", "links", "joint_limits", "base", "tip_offset"});
+  ChainDefinition chain = read_chain_fields(item);
+  if (!names.insert(chain.name).second) item.fail("name", "duplicate body name '" + chain.name + "'");
+  return chain;
+}
+
+ChainDefinition read_chain_fields(const YamlReader& item) {
   ChainDefinition chain;
   chain.name = item.get_string("name");
   if (chain.name.empty()) item.fail("name", "must not be empty");
-  if (!names.insert(chain.name).second) item.fail("name", "duplicate body name '" + chain.name + "'");
   chain.link_lengths_m = item.get_doubles("links");
   for (const auto& row : item.get_double_rows("joint_limits", 2))
     chain.joint_limits.push_back({row[0], row[1]});

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "chain_motion.h"
 
+#include "panoptes/calibration_file.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -71,17 +73,8 @@ ChainSpec read_chain_spec(const YamlReader& reader, double default_marker_radius
   reject_unknown_keys(
       reader, {"name", "links", "joint_limits", "tip_offset", "marker_radius", "path", "rotation", "bend"});
   ChainSpec spec;
-  ChainDefinition& chain = spec.definition;
-  chain.name = reader.get_string("name");
-  if (chain.name.empty()) reader.fail("name", "must not be empty");
-  chain.link_lengths_m = reader.get_doubles("links");
-  for (const auto& row : reader.get_double_rows("joint_limits", 2))
-    chain.joint_limits.push_back({row[0], row[1]});
-  chain.tip_offset_m = read_vector3(reader, "tip_offset", Eigen::Vector3d::Zero());
-  if (const auto error = chain_definition_error(chain)) {
-    const std::string field = error->substr(0, error->find(':'));
-    reader.fail(field.substr(0, field.find('[')), "chain '" + chain.name + "': " + *error);
-  }
+  spec.definition = read_chain_fields(reader);  // no `base` here: the scene's chains start at their base
+  const ChainDefinition& chain = spec.definition;
   spec.marker_radius = reader.get_double("marker_radius", default_marker_radius);
   if (!(spec.marker_radius > 0.0)) reader.fail("marker_radius", "must be > 0 m");
   spec.path = read_path(reader.child("path"));

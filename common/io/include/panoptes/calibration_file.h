@@ -27,6 +27,10 @@ BodyDefinition read_body_definition(const YamlReader& item, std::set<std::string
 // skips them. Throws ConfigError naming the file and entry for impossible links or limits.
 std::vector<ChainDefinition> load_chains(const std::filesystem::path& path);
 ChainDefinition read_chain_definition(const YamlReader& item, std::set<std::string>& names);
+// A chain's own fields (`name`, `links`, `joint_limits`, `base`, `tip_offset`), validated
+// (chain_definition_error); the caller checks which keys its entry may have. Used by bodies files
+// and simulator scenes alike. Throws ConfigError naming the file and key.
+ChainDefinition read_chain_fields(const YamlReader& item);
 void save_bodies(const std::vector<BodyDefinition>& bodies, const std::filesystem::path& path);
 
 }  // namespace panoptes
