@@ -59,89 +59,18 @@ wait "$probe" || fail "panoptes_client_probe exit $?"
 cat "$work/probe.log"
 published2=$(frames_published "$work/estimator2.log")
 
-python3 - "$work" "$restart_ns" "${published2:-0}" <<'PYTHON'
-import json, sys, yaml
+PYTHONPATH="$source_dir/tests/tools" python3 - "$work" "$restart_ns" "${published2:-0}" <<'PYTHON'
+import sys
+from client_run_check import (Checks, ClientRun, check_descriptions, check_poses_exact, check_restart_delivery,
+                              read_estimator_poses)
 work, restart_ns, published2 = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
-failures = 0
-def check(ok, what):
-    global failures
-    print(("PASS: " if ok else "FAIL: ") + what)
-    failures += 0 if ok else 1
-
-lines = [json.loads(l) for l in open(f"{work}/client.jsonl")]
-frames = [l for l in lines if l["type"] == "frame"]
-stats = [l for l in lines if l["type"] == "stats"][-1]
-runs = [[]]
-for f in frames:
-    if runs[-1] and f["frame"] <= runs[-1][-1]["frame"]:
-        runs.append([])
-    runs[-1].append(f)
-check(len(runs) == 2, f"the client saw two estimator runs ({len(runs)})")
-check(stats["estimator_restarts"] == 1, f"Stats counts one estimator restart ({stats['estimator_restarts']})")
-check(stats["frames_malformed"] == 0 and stats["descriptions_malformed"] == 0, "nothing malformed")
-if len(runs) == 2:
-    # Run 1 was killed: what it published is known up to its last frame number the client saw.
-    # Frames the new estimator wrote before its writer matched this reader cannot be delivered to
-    # anyone (rt/panoptes/frames is volatile); discovery usually takes tens of milliseconds on
-    # loopback but up to a second on a loaded machine. So the share is over the frames published
-    # while matched, and the gap is bounded by the resume check below (as test_python_client).
-    first2 = runs[1][0]
-    published1 = runs[0][-1]["frame"] - runs[0][0]["frame"] + 1
-    published = published1 + published2 - first2["frame"] + 1
-    received = len(runs[0]) + len(runs[1])
-    span_s = (frames[-1]["receive_ns"] - frames[0]["receive_ns"]) * 1e-9
-    check(published2 > 0 and runs[1][-1]["frame"] == published2,
-          f"the client has the restarted estimator's last frame ({runs[1][-1]['frame']} of {published2})")
-    check(span_s >= 20 and received >= 0.99 * published,
-          f"received {received} of {published} frames published while matched "
-          f"({100.0 * received / max(published, 1):.2f}%) over {span_s:.1f} s")
-    resume_s = (first2["receive_ns"] - restart_ns) * 1e-9
-    gap_s = (first2["receive_ns"] - runs[0][-1]["receive_ns"]) * 1e-9
-    check(resume_s <= 2.0, f"delivery resumed {resume_s:.3f} s after the estimator was restarted "
-          f"(first frame of the new run: {first2['frame']}; {gap_s:.3f} s since the killed run's last frame)")
-
-# Poses bit for bit against the estimator's own output (matched by stamp and body).
-estimator = {}
-for run in (1, 2):
-    for l in open(f"{work}/poses{run}.jsonl"):
-        try:
-            p = json.loads(l)
-        except ValueError:
-            continue  # the killed run's last line may be cut
-        estimator[(p["stamp_ns"], p["body"])] = p
-compared = equal = 0
-names = set()
-for f in frames:
-    for b in f["bodies"]:
-        names.add(b["name"])
-        if not b["valid"]:
-            continue
-        p = estimator.get((f["stamp_ns"], b["name"]))
-        if p is None:
-            continue
-        compared += 1
-        if (b["p"] == p["p"] and b["q"] == p["q"] and b["v"] == p["v"] and b["w"] == p["w"]
-                and b["sigma"] == p["sigma"] and b["horizon_ns"] == p["horizon_ns"]):
-            equal += 1
-        elif compared - equal <= 3:
-            print("  differs:", f["stamp_ns"], b, p)
-valid = sum(1 for f in frames for b in f["bodies"] if b["valid"])
-check(compared >= 0.95 * valid and compared > 5000,
-      f"{compared} of the client's {valid} tracked poses found in the estimator's --out-poses")
-check(compared > 0 and equal == compared, f"{equal} of {compared} poses equal bit for bit (position, quaternion, velocities, sigma)")
-check(names == {"head", "tool"}, f"body names in frames: {sorted(names)}")
-
-# Body descriptions: those of the bodies file, known again after the restart.
-defined = yaml.safe_load(open(f"{work}/sim/bodies.yaml"))["bodies"]
-descriptions = [l for l in lines if l["type"] == "descriptions"]
-check(len(descriptions) >= 1 and stats["descriptions_received"] >= 2,
-      f"descriptions received {stats['descriptions_received']} times (once per estimator run)")
-last = descriptions[-1]["bodies"] if descriptions else []
-check([d["name"] for d in last] == [b["name"] for b in defined] and [d["id"] for d in last] == [1, 2],
-      f"description names and ids: {[(d['name'], d['id']) for d in last]}")
-check(all(d["markers"] == [[float(x) for x in m] for m in b["markers"]] and d["kind"] == "passive"
-          for d, b in zip(last, defined)), "description marker layouts equal the bodies file")
-sys.exit(1 if failures else 0)
+checks = Checks("the client")
+run = ClientRun(work)
+checks.check(run.stats["frames_malformed"] == 0 and run.stats["descriptions_malformed"] == 0, "nothing malformed")
+check_restart_delivery(checks, run, restart_ns, published2)
+check_poses_exact(checks, run, read_estimator_poses(work), float)
+check_descriptions(checks, run, f"{work}/sim/bodies.yaml")
+sys.exit(1 if checks.failures else 0)
 PYTHON
 [ $? -eq 0 ] || failures=$((failures + 1))
 finish

@@ -87,98 +87,29 @@ wait "$probe" || fail "python_client_probe exit $?"
 cat "$work/probe.log"
 published2=$(frames_published "$work/estimator2.log")
 
-"$python" - "$work" "$restart_ns" "${published2:-0}" <<'PYTHON'
-import csv, json, sys
+PYTHONPATH="$source_dir/tests/tools:$PYTHONPATH" "$python" - "$work" "$restart_ns" "${published2:-0}" <<'PYTHON'
+import csv, sys
+from client_run_check import (Checks, ClientRun, check_descriptions, check_poses_exact, check_restart_delivery,
+                              read_estimator_poses)
 work, restart_ns, published2 = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
-failures = 0
-def check(ok, what):
-    global failures
-    print(("PASS: " if ok else "FAIL: ") + what)
-    failures += 0 if ok else 1
-
-lines = [json.loads(l) for l in open(f"{work}/client.jsonl")]
-frames = [l for l in lines if l["type"] == "frame"]
-stats = [l for l in lines if l["type"] == "stats"][-1]
-runs = [[]]
-for f in frames:
-    if runs[-1] and f["frame"] <= runs[-1][-1]["frame"]:
-        runs.append([])
-    runs[-1].append(f)
-check(len(runs) == 2, f"the Python client saw two estimator runs ({len(runs)})")
-check(stats["estimator_restarts"] == 1, f"Stats counts one estimator restart ({stats['estimator_restarts']})")
+checks = Checks("the Python client")
+check = checks.check
+run = ClientRun(work)
+stats = run.stats
 check(stats["frames_malformed"] == 0 and stats["frames_dropped"] == 0 and stats["callback_errors"] == 0,
       f"nothing malformed or dropped ({stats['frames_malformed']}, {stats['frames_dropped']})")
-if len(runs) == 2:
-    published = runs[0][-1]["frame"] + published2  # the killed run: up to its last frame the client saw
-    received = len(runs[0]) + len(runs[1])
-    span_s = (frames[-1]["receive_ns"] - frames[0]["receive_ns"]) * 1e-9
-    check(published2 > 0 and runs[1][-1]["frame"] == published2,
-          f"the client has the restarted estimator's last frame ({runs[1][-1]['frame']} of {published2})")
-    first2 = runs[1][0]
-    # Frames the new estimator wrote before its writer matched this reader cannot reach any volatile
-    # subscriber (discovery: tens of ms on an idle loopback, up to a second on a busy host); they are
-    # left out here and bounded by the resume check below.
-    before_match = first2["frame"] - 1
-    matched = published - before_match
-    check(span_s >= 20 and received >= 0.99 * matched,
-          f"received {received} of {matched} frames published while matched ({100.0 * received / max(matched, 1):.2f}%) "
-          f"over {span_s:.1f} s; {published} published in all, {before_match} by the new estimator before discovery")
-    check(len(runs[0]) >= 0.99 * runs[0][-1]["frame"],
-          f"first run: {len(runs[0])} of {runs[0][-1]['frame']} frames ({100.0 * len(runs[0]) / runs[0][-1]['frame']:.2f}%)")
-    resume_s = (first2["receive_ns"] - restart_ns) * 1e-9
-    check(resume_s <= 2.0, f"delivery resumed {resume_s:.3f} s after the estimator was restarted "
-          f"(first frame of the new run: {first2['frame']})")
-
-# Poses bit for bit against the estimator's own output (matched by stamp and body).
-estimator = {}
-for run in (1, 2):
-    for l in open(f"{work}/poses{run}.jsonl"):
-        try:
-            p = json.loads(l)
-        except ValueError:
-            continue  # the killed run's last line may be cut
-        estimator[(p["stamp_ns"], p["body"])] = p
-exact = lambda hexes, values: [float.fromhex(h) for h in hexes] == [float(v) for v in values]
-compared = equal = 0
-names = set()
-for f in frames:
-    for b in f["bodies"]:
-        names.add(b["name"])
-        p = estimator.get((f["stamp_ns"], b["name"])) if b["valid"] else None
-        if p is None:
-            continue
-        compared += 1
-        if (exact(b["p"], p["p"]) and exact(b["q"], p["q"]) and exact(b["v"], p["v"]) and exact(b["w"], p["w"])
-                and exact(b["sigma"], p["sigma"]) and b["horizon_ns"] == p["horizon_ns"]):
-            equal += 1
-        elif compared - equal <= 3:
-            print("  differs:", f["stamp_ns"], b, p)
-valid = sum(1 for f in frames for b in f["bodies"] if b["valid"])
-check(compared >= 0.95 * valid and compared > 5000,
-      f"{compared} of the Python client's {valid} tracked poses found in the estimator's --out-poses")
-check(compared > 0 and equal == compared, f"{equal} of {compared} poses equal bit for bit (position, quaternion, velocities, sigma)")
-check(names == {"head", "tool"}, f"body names in frames: {sorted(names)}")
+check_restart_delivery(checks, run, restart_ns, published2)
+if len(run.runs) == 2:
+    first = run.runs[0]
+    check(len(first) >= 0.99 * first[-1]["frame"],
+          f"first run: {len(first)} of {first[-1]['frame']} frames ({100.0 * len(first) / first[-1]['frame']:.2f}%)")
+estimator = read_estimator_poses(work)
+check_poses_exact(checks, run, estimator, float.fromhex)
+frames = run.frames
 check(all(f["unlabelled"] + f["labelled"] == f["markers"] for f in frames) and
       sum(f["unlabelled"] > 0 for f in frames) > 0.9 * len(frames) and sum(f["labelled"] > 0 for f in frames) > 0.9 * len(frames),
       "frames carry labelled and unlabelled markers")
-
-# The simulator's bodies.yaml, read without PyYAML (not a dependency): `- name: "x"` and `- [x, y, z]`.
-defined = []
-for line in open(f"{work}/sim/bodies.yaml"):
-    item = line.strip()
-    if item.startswith("- name:"):
-        defined.append({"name": item.split(":", 1)[1].strip().strip('"'), "markers": []})
-    elif item.startswith("- [") and defined:
-        defined[-1]["markers"].append(json.loads(item[2:]))
-check(len(defined) == 2 and all(len(b["markers"]) >= 4 for b in defined), f"bodies.yaml read: {defined}")
-descriptions = [l for l in lines if l["type"] == "descriptions"]
-check(len(descriptions) >= 1 and stats["descriptions_received"] >= 2,
-      f"descriptions received {stats['descriptions_received']} times (once per estimator run)")
-last = descriptions[-1]["bodies"] if descriptions else []
-check([d["name"] for d in last] == [b["name"] for b in defined] and [d["id"] for d in last] == [1, 2],
-      f"description names and ids: {[(d['name'], d['id']) for d in last]}")
-check(all(d["markers"] == [[float(x) for x in m] for m in b["markers"]] and d["kind"] == "passive"
-          for d, b in zip(last, defined)), "description marker layouts equal the bodies file")
+check_descriptions(checks, run, f"{work}/sim/bodies.yaml")
 
 # log_poses_csv.py: the header, two bodies per frame, values equal to the estimator's poses.
 rows = list(csv.DictReader(open(f"{work}/poses.csv")))
@@ -189,7 +120,7 @@ same = sum(1 for r, p in matched if [float(r[k]) for k in ("x", "y", "z")] == p[
            and [float(r[k]) for k in ("qx", "qy", "qz", "qw")] == p["q"])
 check(len(matched) > 0.95 * len(rows) and same == len(matched),
       f"{same} of {len(matched)} CSV poses (of {len(rows)} rows) equal the estimator's exactly")
-sys.exit(1 if failures else 0)
+sys.exit(1 if checks.failures else 0)
 PYTHON
 [ $? -eq 0 ] || failures=$((failures + 1))
 finish
