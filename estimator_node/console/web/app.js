@@ -504,7 +504,7 @@ function updateChains(list) {
 // figures, joint angles included) and brings the view to it.
 function updateChainLegend(list) {
   const legend = document.getElementById('chains');
-  legend.hidden = list.length === 0;
+  if (legend.hidden !== (list.length === 0)) legend.hidden = list.length === 0;
   const items = legend.querySelector('ul');
   for (const c of list) {
     let item = items.querySelector(`li[data-chain="${CSS.escape(c.name)}"]`);
@@ -514,10 +514,10 @@ function updateChainLegend(list) {
       item.addEventListener('click', () => { select('chain', c.name); focusChain(c.name); });
       items.append(item);
     }
-    item.dataset.status = c.status;
-    item.dataset.grabbing = String(c.grabbing);
+    const text = `${c.name}: ${c.status.replace('_', ' ')}${c.grabbing ? ' · grabbing' : ''} · ${c.grabs} grabs, ${c.releases} releases`;
+    if (item.textContent === text) continue;  // 30 snapshots a second: touch the page only on a change
     item.className = c.grabbing ? 'grabbing' : c.status;
-    item.textContent = `${c.name}: ${c.status.replace('_', ' ')}${c.grabbing ? ' · grabbing' : ''} · ${c.grabs} grabs, ${c.releases} releases`;
+    item.textContent = text;
   }
   for (const item of [...items.children]) if (!list.some((c) => c.name === item.dataset.chain)) item.remove();
 }
