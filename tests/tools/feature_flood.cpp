@@ -38,7 +38,8 @@ msg::CameraInfo info_of(const std::string& id, double rate_hz) {
 }
 
 // `chains` fingers curling and opening at t s, one frame's sample; every 10th grabs.
-msg::ChainFrame chain_frame(int chains, const std::string& camera, long long frame, double t, panoptes::TimeNs now) {
+msg::ChainFrame chain_frame(int chains, const std::string& camera, long long frame, double t,
+                            panoptes::TimeNs now) {
   msg::ChainFrame message;
   message.source_camera(camera);
   message.source_frame(frame);
