@@ -62,8 +62,11 @@ void prepare(const app::NodeCommandLine& command_line, session::EstimatorSession
   }
 }
 
-// The chains of the bodies file (docs/articulated.md), if it has any. Live, their tips are also
-// predicted kLiveChainHorizonS ahead (seed 000 §6.4.5).
+// Chain tips are also predicted this far ahead (seed 000 §6.4.5), on rt/panoptes/chains and in
+// the Chain JSONL alike.
+constexpr double kChainHorizonS = 0.08;
+
+// The chains of the bodies file (docs/articulated.md), if it has any.
 std::optional<session::ChainStage> chain_stage(const app::NodeCommandLine& command_line) {
   if (command_line.bodies_file.empty()) return std::nullopt;
   auto chains = panoptes::load_chains(command_line.bodies_file);
@@ -78,11 +81,11 @@ std::optional<session::ChainStage> chain_stage(const app::NodeCommandLine& comma
   const auto calibration = command_line.calibration_file.empty()
                                ? panoptes::SystemCalibration{}
                                : panoptes::load_calibration(command_line.calibration_file);
-  return std::optional<session::ChainStage>(std::in_place, std::move(chains), calibration,
-                                            command_line.out_chains);
+  std::optional<session::ChainStage> stage(std::in_place, std::move(chains), calibration,
+                                           command_line.out_chains);
+  stage->set_prediction_horizon(kChainHorizonS);
+  return stage;
 }
-
-constexpr double kLiveChainHorizonS = 0.08;
 
 int run(const app::NodeCommandLine& command_line, session::EstimatorSession& estimator,
         session::BodyFile& body_file) {
@@ -113,10 +116,7 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
   live.duration_s = command_line.duration_s;
   live.latency_probe = command_line.latency_probe;
   live.quiet = command_line.quiet;
-  if (chains) {
-    chains->set_prediction_horizon(kLiveChainHorizonS);
-    live.chains = &*chains;
-  }
+  if (chains) live.chains = &*chains;
   const int exit_code = app::run_live(live, estimator, body_file);
   if (chains) {
     chains->flush();

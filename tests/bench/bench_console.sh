@@ -5,15 +5,17 @@
 # frame round, on the loopback profile; panoptes_console reads them and one chromium page shows them
 # (estimator_node/console/web/test/bench_console.mjs). Prints one JSON line: the console's CPU and
 # WebSocket bandwidth, the page's frame rates, and beside them the publisher's CPU over the same
-# seconds (the cost of writing the same samples to DDS).
-#   tests/bench/bench_console.sh <build dir> <source dir> <cameras> [rate Hz] [blobs] [seconds] [synthetic tracks]
+# seconds (the cost of writing the same samples to DDS). With [chains] > 0 the flood also writes a
+# ChainFrame of that many finger chains after every camera frame, as estimator_node does.
+#   tests/bench/bench_console.sh <build dir> <source dir> <cameras> [rate Hz] [blobs] [seconds] [synthetic tracks] [chains]
 source "$(dirname "$0")/../integration/lib.sh"
 cameras="${3:-4}"
 rate="${4:-120}"
 blobs="${5:-3}"
 seconds="${6:-10}"
 synthetic="${7:-0}"
-"$bin/panoptes_feature_flood" --cameras "$cameras" --rate "$rate" --blobs "$blobs" --duration $((seconds + 90)) \
+chains="${8:-0}"
+"$bin/panoptes_feature_flood" --cameras "$cameras" --rate "$rate" --blobs "$blobs" --chains "$chains" --duration $((seconds + 90)) \
   >"$work/flood.log" 2>&1 &
 flood=$!
 pids+=("$flood")
@@ -33,7 +35,7 @@ result=$(node "$source_dir/estimator_node/console/web/test/bench_console.mjs" --
 flood_ticks1=$(ticks "$flood")
 elapsed=$(echo "$(date +%s.%N) - $start" | bc)
 flood_cpu=$(echo "scale=1; ($flood_ticks1 - $flood_ticks0) / $elapsed" | bc)
-echo "{\"cameras\": $cameras, \"rate_hz\": $rate, \"blobs\": $blobs, \"publisher_cpu_percent\": $flood_cpu, \"load_average\": \"$(cut -d' ' -f1-3 /proc/loadavg)\", \"console\": $result}"
+echo "{\"cameras\": $cameras, \"rate_hz\": $rate, \"blobs\": $blobs, \"chains\": $chains, \"publisher_cpu_percent\": $flood_cpu, \"load_average\": \"$(cut -d' ' -f1-3 /proc/loadavg)\", \"console\": $result}"
 kill -INT "$flood" "$console" 2>/dev/null
 wait "$flood" 2>/dev/null
 tail -1 "$work/flood.log"

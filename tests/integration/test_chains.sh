@@ -18,9 +18,9 @@ expect_exit 0 "offline estimator with the finger chain" -- "$bin/estimator_node"
   --out-chains "$work/chains.jsonl" --quiet
 expect_stderr_contains "tracking 1 articulated chain" "the chain is loaded"
 expect_stderr_contains "chains (camera frames by status): index tracking" "chain status counts in the summary"
-expect_exit 0 "tip within 2 mm RMSE, angles within 2 deg, >= 95% tracked, every grab/release and none spurious" -- \
+expect_exit 0 "tip within 2 mm RMSE, angles within 2 deg, the 80 ms predicted tip within 5 mm of the truth 80 ms later, >= 95% tracked, every grab/release and none spurious" -- \
   python3 "$source_dir/tests/tools/check_chains.py" --truth "$work/sim/truth.jsonl" --chains "$work/chains.jsonl" \
-  --require-tip-rmse-mm 2 --require-angle-rmse-deg 2 --require-tracked 0.95 --require-events
+  --require-tip-rmse-mm 2 --require-angle-rmse-deg 2 --require-predicted-rmse-mm 5 --require-tracked 0.95 --require-events
 cat "$work/last.out"
 expect_exit 2 "--out-chains without --bodies is refused" -- "$bin/estimator_node" \
   --calibration "$work/sim/calibration.yaml" --in-features "$work/sim/c0.jsonl" --no-dds --out-chains "$work/x.jsonl"

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
 # Scores estimator_node --out-chains (Chain JSONL, docs/articulated.md) against panoptes_sim's
-# truth.jsonl: tip and joint-angle RMSE of the tracking records after a warm-up, the fraction
-# tracked, and grab/release events matched one to one to the truth's threshold crossings (the
+# truth.jsonl: tip and joint-angle RMSE of the tracking records after a warm-up, the predicted
+# tip's RMSE against the truth prediction_horizon_ns later (records written before the JSONL had a
+# predicted tip are scored without it), the fraction tracked, and grab/release events matched one to one to the truth's threshold crossings (the
 # same hysteresis as the estimator's GrabDetector). Exit 1 when a --require-* bound fails.
 import argparse
 import bisect
@@ -56,6 +57,8 @@ def main():
     parser.add_argument("--event-window", type=float, default=0.1, help="s between an event and its truth")
     parser.add_argument("--require-tip-rmse-mm", type=float)
     parser.add_argument("--require-angle-rmse-deg", type=float)
+    parser.add_argument("--require-predicted-rmse-mm", type=float,
+                        help="predicted tip against the truth prediction_horizon_ns later")
     parser.add_argument("--require-tracked", type=float)
     parser.add_argument("--require-events", action="store_true", help="every transition detected, none spurious")
     args = parser.parse_args()
@@ -81,6 +84,16 @@ def main():
         for estimated, true in zip(r["angles"], interpolate(stamps, angles, r["stamp_ns"])):
             angle_sq += (estimated - true) ** 2
             angle_n += 1
+    # The predicted tip against where the truth's tip is one horizon later (inside the truth's span).
+    predicted_sq, predicted_n, horizons = 0.0, 0, set()
+    for r in tracked:
+        horizon = r.get("prediction_horizon_ns", 0)
+        if "predicted_tip" not in r or horizon <= 0 or r["stamp_ns"] + horizon > stamps[-1]:
+            continue
+        horizons.add(horizon)
+        predicted_sq += math.dist(interpolate(stamps, tips, r["stamp_ns"] + horizon), r["predicted_tip"]) ** 2
+        predicted_n += 1
+    predicted_rmse_mm = 1e3 * math.sqrt(predicted_sq / predicted_n) if predicted_n else None
     tip_rmse_mm = 1e3 * math.sqrt(tip_sq / max(len(tracked), 1))
     angle_rmse_deg = math.degrees(math.sqrt(angle_sq / max(angle_n, 1)))
     tracked_fraction = len(tracked) / max(len(scored), 1)
@@ -98,7 +111,8 @@ def main():
             worst_delay = max(worst_delay, abs(match[1] - e["stamp_ns"]) * 1e-9)
     detected = len(expected) - len(unmatched)
     summary = {"records": len(scored), "tracked": tracked_fraction, "tip_rmse_mm": tip_rmse_mm,
-               "tip_max_mm": 1e3 * tip_max, "angle_rmse_deg": angle_rmse_deg, "transitions": len(expected),
+               "tip_max_mm": 1e3 * tip_max, "predicted_tip_rmse_mm": predicted_rmse_mm,
+               "prediction_horizons_ms": sorted(h / 1e6 for h in horizons), "angle_rmse_deg": angle_rmse_deg, "transitions": len(expected),
                "detected": detected, "spurious": spurious,
                "max_event_offset_ms": 1e3 * worst_delay}
     print(json.dumps(summary))
@@ -108,6 +122,10 @@ def main():
         failures.append(f"tip RMSE {tip_rmse_mm:.3f} mm > {args.require_tip_rmse_mm} mm")
     if args.require_angle_rmse_deg is not None and not angle_rmse_deg <= args.require_angle_rmse_deg:
         failures.append(f"joint-angle RMSE {angle_rmse_deg:.3f} deg > {args.require_angle_rmse_deg} deg")
+    if args.require_predicted_rmse_mm is not None and not (
+            predicted_rmse_mm is not None and predicted_rmse_mm <= args.require_predicted_rmse_mm):
+        failures.append(f"predicted tip RMSE {predicted_rmse_mm} mm > {args.require_predicted_rmse_mm} mm "
+                        "(None: no record with a predicted tip)")
     if args.require_tracked is not None and tracked_fraction < args.require_tracked:
         failures.append(f"tracked {tracked_fraction:.3f} < {args.require_tracked}")
     if args.require_events and (detected != len(expected) or spurious or not expected):

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // panoptes_feature_flood: one process that publishes, for N cameras at R Hz each, FeatureFrames with
 // B blobs moving on circles, plus each camera's CameraInfo and a CameraStatus once a second; and a
-// TrackFrame with T tracks at R Hz. A controlled bus load for the console benchmark
+// TrackFrame with T tracks at R Hz; with --chains C, a ChainFrame of C 4-marker finger chains after
+// every camera frame (as estimator_node publishes them). A controlled bus load for the console benchmark
 // (tests/bench/bench_console.sh) that does not need N camera processes. With --partition and
 // --camera-ids it is also a camera that writes as others (tests/integration/test_security.sh).
 #include <chrono>
@@ -17,6 +18,7 @@
 #include "panoptes/dds/bus.h"
 #include "panoptes/process.h"
 #include "panoptes/time.h"
+#include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
 
 namespace {
@@ -35,11 +37,48 @@ msg::CameraInfo info_of(const std::string& id, double rate_hz) {
   return info;
 }
 
+// `chains` fingers curling and opening at t s, one frame's sample; every 10th grabs.
+msg::ChainFrame chain_frame(int chains, const std::string& camera, long long frame, double t,
+                            panoptes::TimeNs now) {
+  msg::ChainFrame message;
+  message.source_camera(camera);
+  message.source_frame(frame);
+  message.stamp_ns(now);
+  message.publish_ns(now);
+  for (int c = 0; c < chains; ++c) {
+    msg::ChainState state;
+    state.name("finger" + std::to_string(c));
+    state.chain_id(static_cast<std::uint32_t>(c + 1));
+    state.stamp_ns(now);
+    const double bend = 0.7 + 0.6 * std::sin(t + c);
+    state.angles({bend, bend});
+    double x = 0.1 * c;
+    double z = 1.0;
+    double heading = 0;
+    for (const double link : {0.0, 0.045, 0.03, 0.025}) {
+      x += link * std::cos(heading);
+      z -= link * std::sin(heading);
+      if (link > 0) heading += bend;
+      msg::ChainMarker marker;
+      marker.position({x, 0.0, z});
+      state.markers().push_back(marker);
+      state.marker_valid().push_back(true);
+    }
+    state.tip({x + 0.012, 0.0, z});
+    state.predicted_tip({x + 0.013, 0.0, z});
+    state.prediction_horizon_ns(80'000'000);
+    state.grabbing(bend > 1.2);
+    message.chains().push_back(state);
+  }
+  return message;
+}
+
 int run(int argc, char** argv) {
   int cameras = 32;
   double rate_hz = 120;
   int blobs = 3;
   int tracks = 3;
+  int chains = 0;
   double duration_s = 20;
   std::string dds_profile;
   std::string partition;
@@ -51,6 +90,8 @@ int run(int argc, char** argv) {
   app.add_option("--rate", rate_hz, "frames per second per camera")->check(CLI::Range(1.0, 1000.0));
   app.add_option("--blobs", blobs, "blobs per frame")->check(CLI::Range(0, 1000));
   app.add_option("--tracks", tracks, "tracks per TrackFrame")->check(CLI::Range(0, 1000));
+  app.add_option("--chains", chains, "chains per ChainFrame, one ChainFrame per camera frame")
+      ->check(CLI::Range(0, 64));
   app.add_option("--duration", duration_s, "seconds")->check(CLI::PositiveNumber);
   app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile");
   app.add_option("--partition", partition,
@@ -69,6 +110,7 @@ int run(int argc, char** argv) {
   auto feature_writer = bus.make_writer<msg::FeatureFrame>(scoped, {}, partition);
   auto status_writer = bus.make_writer<msg::CameraStatus>(scoped, {}, partition);
   auto track_writer = tracks > 0 ? bus.make_writer<msg::TrackFrame>() : nullptr;
+  auto chain_writer = chains > 0 ? bus.make_writer<msg::ChainFrame>() : nullptr;
   if (camera_ids.empty()) {
     for (int c = 0; c < cameras; ++c) camera_ids.push_back("cam" + std::to_string(c));
   }
@@ -104,6 +146,7 @@ int run(int argc, char** argv) {
     features.blobs(std::move(list));
     feature_writer->write(features);
     ++written;
+    if (chain_writer) chain_writer->write(chain_frame(chains, features.camera_id(), frame, t, now));
     if (camera == 0 && tracks > 0) {
       msg::TrackFrame frame_message;
       frame_message.stamp_ns(now);

@@ -10,6 +10,7 @@
 
 #include "panoptes/dds/convert.h"
 #include "panoptes/time.h"
+#include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
 
 namespace panoptes::console {
@@ -94,6 +95,31 @@ BodyRecord body_of(const msg::BodyPose& pose) {
   return out;
 }
 
+// A ChainFrame as it arrived; ConsoleState::on_chains checks it (chain_frame_error).
+ChainFrameRecord chains_of(const msg::ChainFrame& frame) {
+  ChainFrameRecord out;
+  out.stamp_ns = frame.stamp_ns();
+  out.chains.reserve(frame.chains().size());
+  for (const msg::ChainState& in : frame.chains()) {
+    ChainRecord chain;
+    chain.name = in.name();
+    chain.chain_id = in.chain_id();
+    chain.status = in.status();
+    chain.stamp_ns = in.stamp_ns();
+    chain.angles = in.angles();
+    for (const msg::ChainMarker& marker : in.markers()) chain.markers.push_back(marker.position());
+    chain.marker_valid.assign(in.marker_valid().begin(), in.marker_valid().end());
+    chain.tip = in.tip();
+    chain.predicted_tip = in.predicted_tip();
+    chain.prediction_horizon_ns = in.prediction_horizon_ns();
+    chain.grabbing = in.grabbing();
+    out.chains.push_back(std::move(chain));
+  }
+  for (const msg::ChainEvent& in : frame.events())
+    out.events.push_back({in.chain(), in.kind(), in.stamp_ns(), in.tip(), in.bend()});
+  return out;
+}
+
 RecorderRecord recorder_of(const msg::RecorderStatus& status) {
   RecorderRecord record{status.recording(), status.path(),           status.topics(), status.messages(),
                         status.bytes(),     status.messages_per_s(), status.error(),  {}};
@@ -130,6 +156,7 @@ struct BusBridge::Impl {
   std::unique_ptr<dds::Reader<msg::EstimatorStatus>> estimator;
   std::unique_ptr<dds::Reader<msg::TrackFrame>> tracks;
   std::unique_ptr<dds::Reader<msg::BodyPose>> bodies;
+  std::unique_ptr<dds::Reader<msg::ChainFrame>> chains;
 };
 
 // Listener callbacks copy only what the page shows and return: the state's lock is the only wait.
@@ -185,6 +212,8 @@ BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_uniqu
   });
   impl_->bodies = bus.make_reader<msg::BodyPose>(
       [&state](msg::BodyPose&& pose) { state.on_body(body_of(pose), wall_now_ns()); });
+  impl_->chains = bus.make_reader<msg::ChainFrame>(
+      [&state](msg::ChainFrame&& frame) { state.on_chains(chains_of(frame), wall_now_ns()); });
   impl_->recorder_commands = bus.make_writer<msg::RecorderCommand>();
   impl_->recorders = bus.make_reader<msg::RecorderStatus>([&state](msg::RecorderStatus&& status) {
     state.on_recorder_status(status.recorder_id(), recorder_of(status), wall_now_ns());

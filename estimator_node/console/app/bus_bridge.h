@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // panoptes_console on the bus: readers that copy what the console shows into the ConsoleState
-// (camera_info, camera_status, features, calibration, estimator_status, tracks, bodies,
+// (camera_info, camera_status, features, calibration, estimator_status, tracks, bodies, chains,
 // recorder_status) and the camera_command and recorder_command writers the server's checked commands go out
 // through.
 #pragma once

@@ -325,6 +325,7 @@ json ConsoleState::details(const std::string& kind, const std::string& key, Time
     }
     return nullptr;
   }
+  if (kind == "chain") return chain_details(key, now);
   if (kind == "body") {
     const auto found = bodies_.find(key);
     if (found == bodies_.end() || now - found->second.second > options_.body_timeout_ns) return nullptr;
@@ -502,7 +503,13 @@ nlohmann::json ConsoleState::snapshot(TimeNs now, bool full) const {
               {"full", full},
               {"cameras", std::move(cameras)},
               {"tracks", std::move(tracks)},
-              {"bodies", std::move(bodies)}};
+              {"bodies", std::move(bodies)},
+              {"chains", chains_json(now)}};
+  if (full) {
+    out["chain_samples"] = {{"received", chain_samples_.received},
+                            {"dropped", chain_samples_.dropped},
+                            {"last_error", chain_samples_.last_error}};
+  }
   if (full && estimator_) {
     out["estimator"] = {{"tracks_confirmed", estimator_->tracks_confirmed},
                         {"tracks_tentative", estimator_->tracks_tentative},

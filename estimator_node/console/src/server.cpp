@@ -327,7 +327,7 @@ bool ConsoleServer::Impl::admitted(WebSocketSession& session, std::int64_t reque
 }
 
 // Messages from the page: "command" (to a camera), "recorder" (to a recorder), "select" (which
-// track or body the page shows the figures of).
+// track, body or chain the page shows the figures of).
 void ConsoleServer::Impl::handle_client_message(WebSocketSession& session, std::string_view text) {
   if (text.size() > options.max_message_bytes) {
     reject(session, 0, "oversized",
@@ -346,9 +346,11 @@ void ConsoleServer::Impl::handle_client_message(WebSocketSession& session, std::
     const auto what = message.find("kind");
     const auto key = message.find("key");
     if (what == message.end() || !what->is_string() ||
-        (*what != "track" && *what != "body" && !what->get_ref<const std::string&>().empty()) ||
+        (*what != "track" && *what != "body" && *what != "chain" &&
+         !what->get_ref<const std::string&>().empty()) ||
         key == message.end() || !key->is_string() || key->get_ref<const std::string&>().size() > 128) {
-      reject(session, 0, "bad_message", "select needs 'kind' (track | body | \"\") and a string 'key'");
+      reject(session, 0, "bad_message",
+             "select needs 'kind' (track | body | chain | \"\") and a string 'key'");
       return;
     }
     session.select(what->get<std::string>(), key->get<std::string>());

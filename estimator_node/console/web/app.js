@@ -333,7 +333,7 @@ function drawLabels() {
   context.clearRect(0, 0, width, height);
   context.font = '12px sans-serif';
   for (const object of labels) {
-    if (!object.parent) continue;
+    if (!object.parent || !object.visible) continue;
     object.getWorldPosition(projected).project(camera3d);
     if (projected.z > 1 || Math.abs(projected.x) > 1 || Math.abs(projected.y) > 1) continue;
     context.fillStyle = object.userData.label.color;
@@ -437,9 +437,106 @@ function updateBodies(list) {
   for (const [name, object] of bodies) if (!seen.has(name)) { scene.remove(object); object.traverse(dropLabel); bodies.delete(name); }
 }
 
+// Articulated chains (rt/panoptes/chains, docs/articulated.md): the joints linked by segments,
+// valid markers filled and bright, invalid ones (not updated lately) small and grey, the tip and
+// the tip predicted ahead joined by a dashed line. Grabbing turns the bones and the tip magenta.
+// Drawn over everything else (no depth test): the finger is small beside the tracks' points.
+const chainColours = { bone: 0x4dd0e1, grab: 0xff00ff, tip: 0x00ff80, predicted: 0xffa000, valid: 0xf0f0f0, invalid: 0x59626c };
+const chains = new Map();  // name -> { group, bones, valid, invalid, tip, predicted, ahead, label }
+function chainObject(name) {
+  const onTop = (object, order) => { object.renderOrder = order; object.material.depthTest = false; object.frustumCulled = false; return object; };
+  // Drawn in this order: bones, markers, predicted tip, tip (the tip is never hidden).
+  const points = (colour, size, order) => onTop(new THREE.Points(new THREE.BufferGeometry(),
+    new THREE.PointsMaterial({ color: colour, size, sizeAttenuation: false })), order);
+  const chain = {
+    group: new THREE.Group(),
+    bones: onTop(new THREE.LineSegments(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: chainColours.bone })), 10),
+    ahead: onTop(new THREE.LineSegments(new THREE.BufferGeometry(),
+      new THREE.LineDashedMaterial({ color: chainColours.predicted, dashSize: 0.004, gapSize: 0.003 })), 10),
+    valid: points(chainColours.valid, 7, 11),
+    invalid: points(chainColours.invalid, 4, 11),
+    predicted: points(chainColours.predicted, 8, 12),
+    tip: points(chainColours.tip, 10, 13),
+    label: label(name, '#4dd0e1'),
+  };
+  chain.group.add(chain.bones, chain.ahead, chain.valid, chain.invalid, chain.predicted, chain.tip, chain.label);
+  scene.add(chain.group);
+  return chain;
+}
+const setPoints = (object, points) => {
+  object.geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(points.flat()), 3));
+  object.geometry.computeBoundingSphere();
+};
+function updateChains(list) {
+  labelsDirty = true;
+  const seen = new Set();
+  for (const c of list) {
+    seen.add(c.name);
+    let chain = chains.get(c.name);
+    if (!chain) { chain = chainObject(c.name); chains.set(c.name, chain); }
+    const tracking = c.status === 'tracking' && c.markers;
+    chain.group.visible = Boolean(tracking);
+    chain.label.visible = Boolean(tracking);
+    chain.label.userData.label.text = `${c.name}${c.grabbing ? ' · grab' : ''}`;
+    chain.label.userData.label.color = c.grabbing ? '#ff00ff' : '#4dd0e1';
+    if (!tracking) continue;
+    const bones = [];
+    for (let i = 1; i < c.markers.length; ++i) bones.push(c.markers[i - 1], c.markers[i]);
+    bones.push(c.markers.at(-1), c.tip);
+    setPoints(chain.bones, bones);
+    chain.bones.material.color.setHex(c.grabbing ? chainColours.grab : chainColours.bone);
+    setPoints(chain.valid, c.markers.filter((_, i) => c.valid[i]));
+    setPoints(chain.invalid, c.markers.filter((_, i) => !c.valid[i]));
+    setPoints(chain.tip, [c.tip]);
+    chain.tip.material.color.setHex(c.grabbing ? chainColours.grab : chainColours.tip);
+    setPoints(chain.predicted, [c.predicted_tip]);
+    setPoints(chain.ahead, [c.tip, c.predicted_tip]);
+    chain.ahead.computeLineDistances();
+    chain.label.position.set(c.tip[0], c.tip[1], c.tip[2] + 0.01);
+  }
+  for (const [name, chain] of chains) {
+    if (!seen.has(name)) { scene.remove(chain.group); chain.group.traverse(dropLabel); chains.delete(name); }
+  }
+  updateChainLegend(list);
+}
+
+// The list beside the view: name, status, grab state and counts; a click selects the chain (its
+// figures, joint angles included) and brings the view to it.
+function updateChainLegend(list) {
+  const legend = document.getElementById('chains');
+  if (legend.hidden !== (list.length === 0)) legend.hidden = list.length === 0;
+  const items = legend.querySelector('ul');
+  for (const c of list) {
+    let item = items.querySelector(`li[data-chain="${CSS.escape(c.name)}"]`);
+    if (!item) {
+      item = document.createElement('li');
+      item.dataset.chain = c.name;
+      item.addEventListener('click', () => { select('chain', c.name); focusChain(c.name); });
+      items.append(item);
+    }
+    const text = `${c.name}: ${c.status.replace('_', ' ')}${c.grabbing ? ' · grabbing' : ''} · ${c.grabs} grabs, ${c.releases} releases`;
+    if (item.textContent === text) continue;  // 30 snapshots a second: touch the page only on a change
+    item.className = c.grabbing ? 'grabbing' : c.status;
+    item.textContent = text;
+  }
+  for (const item of [...items.children]) if (!list.some((c) => c.name === item.dataset.chain)) item.remove();
+}
+
+// Orbit around the chain's tip from 0.4 m, keeping the direction the view looks from.
+function focusChain(name) {
+  const c = page.state && page.state.chains.find((chain) => chain.name === name);
+  if (!c || !c.tip) return;
+  const target = new THREE.Vector3(...c.tip);
+  const direction = camera3d.position.clone().sub(controls.target).normalize();
+  controls.target.copy(target);
+  camera3d.position.copy(target).addScaledVector(direction, 0.4);
+  controls.update();
+  labelsDirty = true;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Click a track or body in the 3D view: the console sends its figures ~5 times a second.
-let selected = null;  // { kind: 'track' | 'body', key }
+let selected = null;  // { kind: 'track' | 'body' | 'chain', key }
 const details = document.getElementById('details');
 function select(kind, key) {
   selected = kind ? { kind, key: String(key) } : null;
@@ -460,6 +557,9 @@ canvas3d.addEventListener('pointerup', (event) => {
   const x = (event.clientX - box.left) * canvas3d.width / box.width, y = (event.clientY - box.top) * canvas3d.height / box.height;
   const candidates = [];
   for (const body of (page.state ? page.state.bodies : [])) candidates.push(['body', body.name, body.pose.p, 0]);
+  for (const chain of (page.state ? page.state.chains || [] : [])) {
+    for (const point of chain.tip ? [chain.tip, ...chain.markers] : []) candidates.push(['chain', chain.name, point, 0]);
+  }
   for (const [id, px, py, pz] of (page.state ? page.state.tracks : [])) candidates.push(['track', id, [px, py, pz], 4]);
   let best = null;
   for (const [kind, key, point, penalty] of candidates) {
@@ -479,7 +579,9 @@ function onDetails(message) {
   const labels = { position_m: 'position m', velocity_m_s: 'velocity m/s', speed_m_s: 'speed m/s', sigma_mm: 'σ mm (x, y, z)',
     sigma_position_mm: 'σ position mm', sigma_rotation_deg: 'σ rotation °', orientation_xyzw: 'orientation (x, y, z, w)',
     angular_velocity_rad_s: 'angular velocity rad/s', cameras: 'cameras seeing it', age_s: 'age s', since_update_ms: 'last update ms ago',
-    status: 'status', quality: 'quality' };
+    status: 'status', quality: 'quality', grabbing: 'grabbing', joint_angles_deg: 'joint angles ° (base first)', bend_deg: 'bend °',
+    tip_m: 'tip m', predicted_tip_m: 'predicted tip m', horizon_ms: 'predicted ms ahead', markers_valid: 'markers valid',
+    grabs: 'grabs', releases: 'releases', last_event: 'last event' };
   table.textContent = '';
   for (const [key, label] of Object.entries(labels)) {
     if (!(key in message.figures)) continue;
@@ -640,8 +742,9 @@ function onState(state) {
     updateCard(camera);
     updateFrustum(camera);
   }
-  if (!synthetic) updateTracks(state.tracks);
+  if (!synthetic) updateTracks(withoutChainMarkers(state.tracks, state.chains || []));
   updateBodies(state.bodies);
+  updateChains(state.chains || []);
   if (state.estimator) {
     const e = state.estimator;
     const element = document.getElementById('estimator');
@@ -653,12 +756,23 @@ function onState(state) {
   }
   if (state.recorders) updateRecorders(state.recorders, state.recordings);
   if (state.calibration) updateCalibration(state.calibration);
+  if (state.chain_samples) chainSamples = state.chain_samples;
   if (state.console) {
     const c = state.console;
     document.getElementById('console-stats').textContent =
       `console: ${c.clients} client(s) · ${c.snapshots_skipped} skipped · ${c.commands_forwarded} commands sent · rejected ${JSON.stringify(c.rejected)}` +
-      (c.bus_rejected && Object.keys(c.bus_rejected).length ? ` · bus dropped ${JSON.stringify(c.bus_rejected)}` : '');
+      (c.bus_rejected && Object.keys(c.bus_rejected).length ? ` · bus dropped ${JSON.stringify(c.bus_rejected)}` : '') +
+      (chainSamples.dropped ? ` · chain samples dropped ${chainSamples.dropped} (last: ${chainSamples.last_error})` : '');
   }
+}
+
+let chainSamples = {};  // received and dropped rt/panoptes/chains samples (full snapshots)
+
+// The point tracks a chain is made of are drawn as the chain: their 6 cm points would hide it.
+function withoutChainMarkers(tracks, chainList) {
+  const markers = chainList.flatMap((c) => c.markers || []);
+  if (!markers.length) return tracks;
+  return tracks.filter(([, x, y, z]) => !markers.some(([mx, my, mz]) => Math.hypot(mx - x, my - y, mz - z) < 0.015));
 }
 
 // ?synthetic_tracks=N: N tracks moving on circles, generated in the page (the 3D benchmark).

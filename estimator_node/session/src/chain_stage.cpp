@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "panoptes/time.h"
+
 namespace panoptes::session {
 
 namespace est = panoptes::estimator;
@@ -28,7 +30,10 @@ const char* status_name(est::ChainStatus status) {
   return "not_identified";
 }
 
-nlohmann::ordered_json chain_record(const est::ChainOutput& output, TimeNs frame_stamp_ns, int joint_count) {
+// `predicted`: the same chain prediction_horizon_ns ahead (nullptr: no prediction, the record
+// carries the tip as predicted_tip with horizon 0, as the ChainFrame does).
+nlohmann::ordered_json chain_record(const est::ChainOutput& output, const est::ChainOutput* predicted,
+                                    TimeNs prediction_horizon_ns, TimeNs frame_stamp_ns, int joint_count) {
   nlohmann::ordered_json line{{"type", "chain"},
                               {"stamp_ns", frame_stamp_ns},
                               {"chain", output.name},
@@ -41,6 +46,8 @@ nlohmann::ordered_json chain_record(const est::ChainOutput& output, TimeNs frame
   line["markers"] = std::move(markers);
   line["marker_valid"] = output.marker_valid;
   line["tip"] = xyz(output.pose.tip);
+  line["predicted_tip"] = xyz(predicted ? predicted->pose.tip : output.pose.tip);
+  line["prediction_horizon_ns"] = predicted ? prediction_horizon_ns : 0;
   line["grabbing"] = output.grabbing;
   return line;
 }
@@ -110,9 +117,12 @@ bool ChainStage::observe(const FeatureFrame& frame, const est::Tracker& tracker)
 
 void ChainStage::write(const std::vector<est::ChainOutput>& outputs,
                        const std::vector<est::NamedGrabEvent>& events) {
-  for (const auto& output : outputs) {
+  const TimeNs horizon_ns = seconds_to_ns(prediction_horizon_s_);
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    const est::ChainOutput& output = outputs[i];
+    const est::ChainOutput* ahead = i < predicted_.size() ? &predicted_[i] : nullptr;
     const int joint_count = static_cast<int>(output.marker_valid.size()) - 2;
-    out_->write_line(chain_record(output, last_stamp_ns_, joint_count).dump());
+    out_->write_line(chain_record(output, ahead, horizon_ns, last_stamp_ns_, joint_count).dump());
     ++records_;
   }
   for (const auto& named : events) {

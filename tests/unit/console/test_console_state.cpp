@@ -184,6 +184,90 @@ TEST(ConsoleState, DetailsOfATrackAndABody) {
   EXPECT_TRUE(state.details("body", "other", kT0).is_null());
 }
 
+ChainRecord tracking_finger() {
+  ChainRecord chain;
+  chain.name = "index";
+  chain.chain_id = 1;
+  chain.status = 0;
+  chain.stamp_ns = kT0;
+  chain.angles = {0.5, 1.0};
+  chain.markers = {{0, 0, 1}, {0.045, 0, 1}, {0.075, 0, 0.99}, {0.09, 0, 0.97}};
+  chain.marker_valid = {true, true, false, true};
+  chain.tip = {0.1, 0.00004, 0.96};
+  chain.predicted_tip = {0.11, 0.01, 0.95};
+  chain.prediction_horizon_ns = 80'000'000;
+  chain.grabbing = true;
+  return chain;
+}
+
+TEST(ConsoleState, ChainsInTheSnapshotAndTheirDetails) {
+  ConsoleState state;
+  ChainRecord lost;
+  lost.name = "thumb";
+  lost.chain_id = 2;
+  lost.status = 1;
+  ChainFrameRecord frame{kT0, {tracking_finger(), lost}, {{"index", 0, kT0, {0.1, 0, 0.96}, 1.7}}};
+  ASSERT_TRUE(state.on_chains(frame, kT0));
+  const json live = state.snapshot(kT0 + kNsPerSecond / 10, false);
+  ASSERT_EQ(live["chains"].size(), 2u);
+  const json& index = live["chains"][0];
+  EXPECT_EQ(index["name"], "index");
+  EXPECT_EQ(index["status"], "tracking");
+  EXPECT_EQ(index["grabbing"], true);
+  EXPECT_EQ(index["grabs"], 1);
+  EXPECT_EQ(index["markers"].size(), 4u);
+  EXPECT_EQ(index["valid"], json({true, true, false, true}));
+  EXPECT_EQ(index["tip"], json({0.1, 0.0, 0.96}));  // 0.1 mm steps
+  EXPECT_EQ(index["predicted_tip"], json({0.11, 0.01, 0.95}));
+  EXPECT_DOUBLE_EQ(index["horizon_ms"].get<double>(), 80.0);
+  EXPECT_FALSE(live.contains("chain_samples"));
+  // Not tracking: name and status only, no shape.
+  EXPECT_EQ(live["chains"][1]["status"], "ambiguous");
+  EXPECT_FALSE(live["chains"][1].contains("markers"));
+  const json figures = state.details("chain", "index", kT0 + kNsPerSecond / 10);
+  EXPECT_EQ(figures["joint_angles_deg"], json({28.65, 57.3}));
+  EXPECT_EQ(figures["markers_valid"], "3 of 4");
+  EXPECT_EQ(figures["last_event"], "grab at [0.1,0.0,0.96], bend 97°");
+  EXPECT_TRUE(state.details("chain", "index", kT0 + kNsPerSecond).is_null());  // no longer live
+  EXPECT_TRUE(state.snapshot(kT0 + kNsPerSecond, false)["chains"].empty());
+}
+
+TEST(ConsoleState, AMalformedChainSampleIsCountedAndDropped) {
+  ConsoleState state;
+  ASSERT_TRUE(state.on_chains({kT0, {tracking_finger()}, {}}, kT0));
+  ChainRecord short_of_angles = tracking_finger();
+  short_of_angles.angles.pop_back();
+  ChainRecord not_finite = tracking_finger();
+  not_finite.predicted_tip[1] = std::nan("");
+  ChainRecord bad_status = tracking_finger();
+  bad_status.status = 7;
+  for (const ChainRecord& bad : {short_of_angles, not_finite, bad_status})
+    EXPECT_FALSE(state.on_chains({kT0, {bad}, {}}, kT0 + 1));
+  EXPECT_FALSE(state.on_chains({kT0, {tracking_finger()}, {{"index", 3, kT0, {}, 0}}}, kT0 + 1));
+  EXPECT_EQ(
+      chain_frame_error({kT0, {short_of_angles}, {}}),
+      "chain 'index': markers: 4 markers, 4 valid flags and 1 angles (wants 3..5 markers, one flag each, "
+      "markers - 2 angles)");
+  EXPECT_EQ(chain_frame_error({kT0, {not_finite}, {}}), "chain 'index': tip or predicted_tip: not finite");
+  const json full = state.snapshot(kT0 + 2, true);
+  EXPECT_EQ(full["chain_samples"]["received"], 5);
+  EXPECT_EQ(full["chain_samples"]["dropped"], 4);
+  EXPECT_EQ(full["chain_samples"]["last_error"], "events[0]: kind 3 is not grab (0) or release (1)");
+  // The dropped samples changed nothing: the chain shown is the good one, with no event counted.
+  ASSERT_EQ(full["chains"].size(), 1u);
+  EXPECT_EQ(full["chains"][0]["grabs"], 0);
+  EXPECT_EQ(full["chains"][0]["markers"].size(), 4u);
+  // More chain names than the state keeps: dropped, named.
+  StateOptions options;
+  options.max_chains = 1;
+  ConsoleState small(options);
+  ChainRecord other = tracking_finger();
+  other.name = "middle";
+  EXPECT_TRUE(small.on_chains({kT0, {tracking_finger()}, {}}, kT0));
+  EXPECT_FALSE(small.on_chains({kT0, {tracking_finger(), other}, {}}, kT0));
+  EXPECT_EQ(small.snapshot(kT0, true)["chain_samples"]["last_error"], "chains: more than 1 chain names");
+}
+
 TEST(ConsoleState, CaptureCoverageOnTheCamerasImageGrid) {
   ConsoleState state;
   state.on_info("cam0", vga_info(), kT0);

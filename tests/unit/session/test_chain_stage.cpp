@@ -35,6 +35,7 @@ TEST(ChainStage, HandSceneThroughTheOfflineSession) {
   EstimatorSession session(EstimatorConfig{});
   session.tracker().set_calibration(scene.calibration());
   ChainStage chains(load_chains(kScenes / "hand_bodies.yaml"), scene.calibration(), out.string());
+  chains.set_prediction_horizon(0.08);
   OfflineReplayOptions options{false, false};
   options.chains = &chains;
   ASSERT_EQ(run_offline(session, std::move(input), options, "", ""), 0);
@@ -44,6 +45,7 @@ TEST(ChainStage, HandSceneThroughTheOfflineSession) {
   std::vector<std::string> events;
   int tracking = 0;
   int records = 0;
+  int predicted_apart = 0;
   while (std::getline(file, line)) {
     const auto record = nlohmann::json::parse(line);
     ASSERT_EQ(record["chain"], "index") << line;
@@ -65,7 +67,12 @@ TEST(ChainStage, HandSceneThroughTheOfflineSession) {
     EXPECT_EQ(record["markers"].size(), 4U) << line;
     EXPECT_EQ(record["marker_valid"].size(), 4U) << line;
     EXPECT_EQ(record["tip"].size(), 3U) << line;
+    EXPECT_EQ(record["prediction_horizon_ns"], 80'000'000) << line;
+    ASSERT_EQ(record["predicted_tip"].size(), 3U) << line;
+    predicted_apart += record["predicted_tip"] != record["tip"];
   }
+  // The finger moves all the time: the tip 80 ms ahead is somewhere else.
+  EXPECT_GT(predicted_apart, tracking * 9 / 10);
   EXPECT_EQ(events, (std::vector<std::string>{"grab", "release"}));
   EXPECT_GT(tracking, records * 9 / 10);
   const std::string summary = chains.summary();

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // Console benchmark (docs/benchmarks.md, issue 18): one chromium page on the console for
-// --seconds; prints one JSON line: the console's CPU (% of one core, from /proc/<pid>/stat), the
+// --seconds; prints one JSON line: the chains shown and chain samples received per second, the console's CPU (% of one core, from /proc/<pid>/stat), the
 // WebSocket bytes and messages per second it sent (its /api/stats), snapshots skipped, the page's
 // 3D frame rate, and the frame rate of a second page showing the 3D view alone (?view=3d) with
 // --synthetic-tracks tracks generated in the page, and the page's own milliseconds per frame.
@@ -37,6 +37,8 @@ try {
   const stats0 = await (await fetch(statsUrl)).json();
   const ticks0 = cpuTicks(args['console-pid']);
   const frames0 = await page.evaluate(() => window.panoptes.frames);
+  const chainSamples = () => page.evaluate(() => (window.panoptes.full.chain_samples || {}).received || 0);
+  const chains0 = await chainSamples();
   const t0 = Date.now();
   await sleep(seconds * 1000);
   const elapsed = (Date.now() - t0) / 1000;
@@ -47,6 +49,8 @@ try {
   out.cameras = state.cameras.length;
   out.blobs_per_snapshot = state.cameras.reduce((sum, c) => sum + c.blobs.length, 0);
   out.tracks = state.tracks.length;
+  out.chains = (state.chains || []).length;
+  out.chain_samples_per_s = Math.round((await chainSamples() - chains0) / elapsed);  // full snapshots: ~0.5 s stale
   out.seconds = Number(elapsed.toFixed(1));
   out.console_cpu_percent = Number((100 * (ticks1 - ticks0) / ticksPerSecond / elapsed).toFixed(1));
   out.websocket_bytes_per_s = Math.round((stats1.bytes_sent - stats0.bytes_sent) / elapsed);

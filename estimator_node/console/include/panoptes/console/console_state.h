@@ -109,6 +109,41 @@ struct BodyRecord {
   TimeNs stamp_ns = 0;
 };
 
+// One articulated chain after a camera frame (rt/panoptes/chains, idl/chains.idl,
+// docs/articulated.md). Markers, angles and tips mean something only while tracking.
+struct ChainRecord {
+  std::string name;
+  std::uint32_t chain_id = 0;  // 1-based among the chains of the estimator's bodies file
+  int status = 2;              // 0 tracking, 1 ambiguous, 2 not identified
+  TimeNs stamp_ns = 0;
+  std::vector<double> angles;                  // rad, one per joint, base first
+  std::vector<std::array<double, 3>> markers;  // m, world, base first
+  std::vector<bool> marker_valid;              // updated within the estimator's stale time
+  std::array<double, 3> tip{};
+  std::array<double, 3> predicted_tip{};  // prediction_horizon_ns ahead (= tip when 0)
+  TimeNs prediction_horizon_ns = 0;
+  bool grabbing = false;
+};
+
+// A grab (kind 0) or release (1) that a chain sample carried.
+struct ChainEventRecord {
+  std::string chain;
+  int kind = 0;
+  TimeNs stamp_ns = 0;
+  std::array<double, 3> tip{};
+  double bend = 0;  // rad
+};
+
+// One rt/panoptes/chains sample: every chain after one camera frame and the events it caused.
+struct ChainFrameRecord {
+  TimeNs stamp_ns = 0;
+  std::vector<ChainRecord> chains;
+  std::vector<ChainEventRecord> events;
+};
+
+// Why a chain sample cannot be shown (naming the chain or event and the field); empty when it can.
+std::string chain_frame_error(const ChainFrameRecord& frame);
+
 // A recorder on the bus (rt/panoptes/recorder_status).
 struct RecorderRecord {
   bool recording = false;
@@ -172,6 +207,8 @@ struct StateOptions {
   TimeNs body_timeout_ns = kNsPerSecond / 2;      // a body not updated for this long is dropped
   TimeNs track_timeout_ns = kNsPerSecond / 2;     // tracks older than this are not shown
   TimeNs recorder_timeout_ns = 5 * kNsPerSecond;  // a recorder silent for this long is not listed
+  TimeNs chain_timeout_ns = kNsPerSecond / 2;     // a chain not updated for this long is not shown
+  std::size_t max_chains = 64;                    // chains by name; samples naming more are dropped
   std::size_t max_recordings = 200;               // the list keeps the newest
 };
 
@@ -192,6 +229,10 @@ class ConsoleState {
   void on_tracks(std::vector<TrackPoint> tracks, TimeNs now);
   void on_body(BodyRecord body, TimeNs now);
   void on_recorder_status(const std::string& recorder, RecorderRecord status, TimeNs now);
+  // A chain sample: kept (latest state per chain, events counted) or, when chain_frame_error
+  // names a fault or it names more than max_chains chains, counted as dropped with that reason
+  // (the full snapshot's "chain_samples"). False when dropped.
+  bool on_chains(ChainFrameRecord frame, TimeNs now);
 
   bool knows_camera(const std::string& camera) const;
   // Image size of a camera, if its camera_info was seen.
@@ -213,12 +254,12 @@ class ConsoleState {
   void set_calibration_job(std::string summary_json, std::string full_json);
   std::string calibration_job() const;
 
-  // The figures of one track (`kind` "track", key its id) or body ("body", key its name) for the
-  // page's details panel; null when it is not (or no longer) live.
+  // The figures of one track (`kind` "track", key its id), body ("body", key its name) or chain
+  // ("chain", key its name) for the page's details panel; null when it is not (or no longer) live.
   nlohmann::json details(const std::string& kind, const std::string& key, TimeNs now) const;
 
   // The state as JSON (docs/console.md, "Protocol"): cameras with blobs, health and, when `full`,
-  // their info, geometry and status; tracks; bodies; estimator status.
+  // their info, geometry and status; tracks; bodies; chains; estimator status.
   nlohmann::json snapshot(TimeNs now, bool full) const;
 
  private:
@@ -250,7 +291,23 @@ class ConsoleState {
     TimeNs started_ns = 0;
   };
 
+  struct Chain {
+    ChainRecord latest;
+    TimeNs received_ns = 0;
+    TimeNs first_seen_ns = 0;
+    std::uint64_t grabs = 0;
+    std::uint64_t releases = 0;
+    std::optional<ChainEventRecord> last_event;
+  };
+  struct ChainSampleCounts {
+    std::uint64_t received = 0;
+    std::uint64_t dropped = 0;
+    std::string last_error;
+  };
+
   Health health_of(const std::string& id, const Camera& camera, TimeNs now) const;
+  nlohmann::json chains_json(TimeNs now) const;
+  nlohmann::json chain_details(const std::string& name, TimeNs now) const;
   void resolve_pending(const std::string& camera, const CameraStatusRecord& status);
   nlohmann::json recorders_json(TimeNs now) const;
   nlohmann::json calibration_json(TimeNs now) const;
@@ -271,6 +328,8 @@ class ConsoleState {
   std::map<std::int64_t, TimeNs> track_first_seen_ns_;
   std::map<std::string, std::pair<BodyRecord, TimeNs>> bodies_;
   std::map<std::string, TimeNs> body_first_seen_ns_;
+  std::map<std::string, Chain> chains_;
+  ChainSampleCounts chain_samples_;
   std::map<std::string, Recorder> recorders_;
   std::vector<RecordingEntry> recordings_;
   std::vector<PendingCommand> pending_;
