@@ -5,13 +5,10 @@
 // 3D frame rate, and the frame rate of a second page showing the 3D view alone (?view=3d) with
 // --synthetic-tracks tracks generated in the page, and the page's own milliseconds per frame.
 //   node bench_console.mjs --url <console URL> --console-pid <pid> --seconds 10 [--synthetic-tracks 200]
-import { chromium } from 'playwright-core';
-import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
-import { tmpdir } from 'node:os';
-import { join } from 'node:path';
+import { readFileSync } from 'node:fs';
+import { openBrowser, parseArgs, sleep } from './browser.mjs';
 
-const args = Object.fromEntries(process.argv.slice(2).reduce((pairs, value, i, all) =>
-  (i % 2 === 0 ? [...pairs, [value.replace(/^--/, ''), all[i + 1]]] : pairs), []));
+const args = parseArgs(process.argv.slice(2));
 const seconds = Number(args.seconds || 10);
 const url = new URL(args.url);
 const statsUrl = `${url.protocol}//${url.host}/api/stats?token=${url.searchParams.get('token')}`;
@@ -20,17 +17,10 @@ const cpuTicks = (pid) => {
   const fields = readFileSync(`/proc/${pid}/stat`, 'utf8').split(') ')[1].split(' ');
   return Number(fields[11]) + Number(fields[12]);  // utime + stime
 };
-const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
-const profile = mkdtempSync(join(tmpdir(), 'panoptes-chromium-'));
-const context = await chromium.launchPersistentContext(profile, {
-  executablePath: '/usr/bin/chromium', headless: true, viewport: { width: 1600, height: 1000 },
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
-});
+const { context, page, close } = await openBrowser({ width: 1600, height: 1000 });
 const out = {};
 try {
-  const page = context.pages()[0] || await context.newPage();
   await page.goto(args.url);
   await page.waitForFunction(() => window.panoptes.state && window.panoptes.state.cameras.length > 0, null, { timeout: 20000 });
   await sleep(2000);
@@ -73,7 +63,6 @@ try {
     out.synthetic_ms_per_frame = Object.fromEntries(Object.entries(timing).map(([k, v]) => [k, Number((v / frames).toFixed(2))]));
   }
 } finally {
-  await context.close();
-  rmSync(profile, { recursive: true, force: true });
+  await close();
 }
 console.log(JSON.stringify(out));

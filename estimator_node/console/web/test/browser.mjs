@@ -20,7 +20,7 @@ export async function openBrowser(viewport) {
   page.on('console', (message) => { if (message.type() === 'error') errors.push(message.text()); });
   page.on('pageerror', (error) => errors.push(String(error)));
   const close = async () => { await context.close(); rmSync(profile, { recursive: true, force: true }); };
-  return { page, errors, close };
+  return { context, page, errors, close };
 }
 
 // `--name value` pairs of the command line as an object.

@@ -8,19 +8,15 @@
 import { spawn } from 'node:child_process';
 import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { openBrowser } from './browser.mjs';
+import { openBrowser, parseArgs, waitFor } from './browser.mjs';
 
-const args = Object.fromEntries(process.argv.slice(2).reduce((pairs, value, i, all) =>
-  (i % 2 === 0 ? [...pairs, [value.replace(/^--/, ''), all[i + 1]]] : pairs), []));
+const args = parseArgs(process.argv.slice(2));
 const results = { checks: [] };
 let failures = 0;
 const check = (ok, what) => {
   console.log(`${ok ? 'PASS' : 'FAIL'}: ${what}`);
   results.checks.push({ what, ok });
   if (!ok) failures += 1;
-};
-const waitFor = async (page, predicate, arg, timeoutMs) => {
-  try { await page.waitForFunction(predicate, arg, { timeout: timeoutMs, polling: 50 }); return true; } catch { return false; }
 };
 const job = (page) => page.evaluate(() => (window.panoptes.calibration || {}).job || {});
 

@@ -11,25 +11,14 @@ import { spawn } from 'node:child_process';
 import http from 'node:http';
 import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { openBrowser } from './browser.mjs';
+import { openBrowser, parseArgs, sleep, waitFor } from './browser.mjs';
 
-const args = Object.fromEntries(process.argv.slice(2).reduce((pairs, value, i, all) =>
-  (i % 2 === 0 ? [...pairs, [value.replace(/^--/, ''), all[i + 1]]] : pairs), []));
+const args = parseArgs(process.argv.slice(2));
 const results = { samples: [], commands: {}, checks: [] };
 let failures = 0;
 const pass = (what) => { console.log(`PASS: ${what}`); results.checks.push({ what, ok: true }); };
 const fail = (what) => { console.log(`FAIL: ${what}`); results.checks.push({ what, ok: false }); failures += 1; };
 const check = (ok, what) => (ok ? pass(what) : fail(what));
-const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
-
-async function waitFor(page, predicate, arg, timeoutMs) {
-  try {
-    await page.waitForFunction(predicate, arg, { timeout: timeoutMs, polling: 20 });
-    return true;
-  } catch {
-    return false;
-  }
-}
 
 const url = new URL(args.url);
 const base = `${url.protocol}//${url.host}`;
