@@ -153,10 +153,9 @@ compare planned_vs_ring4_tracked "a + 0 > b + 0" "the planned layout's tracks co
 compare planned_vs_planned_q_rmse "a + 0 < b + 0" "the tracker_rmse plan tracks with a lower RMSE (mm) than the q plan"
 compare planned_vs_planned_q_two "a + 0 >= b + 0" "the tracker_rmse plan sees as much by >= 2 cameras as the q plan"
 # Against the ring of 4 the plan does NOT reach the goal (RMSE at most the ring's): 1.344 vs
-# 1.061 mm on 2026-11-27. The planner's occlusion model gives the ring 5.0% of marker-time seen
-# by one camera (measured: 2.5%), and no coverage price makes ring-like layouts its optimum
-# (docs/planner.md, "Not yet done"). This bound (1.3x the ring's, measured 1.27x) only guards
-# against a regression.
+# 1.061 mm on 2026-11-27: the ring sees 2.5% of the marker-time by fewer than two cameras and is
+# more precise where it sees; the objective takes the coverage (docs/planner.md, "Not yet done").
+# This bound (1.3x the ring's, measured 1.27x) only guards against a regression.
 compare planned_vs_ring4_rmse "a + 0 <= 1.3 * b" \
   "the planned layout's RMSE (mm) is within 1.3x the ring of 4's (a regression guard; the goal, <= 1x, is not met)"
 finish
