@@ -4,7 +4,9 @@
 # of panoptes_plan with different seeds define the best quality; short runs with other seeds must
 # each end within 2% of it. Budgets are CPU seconds of the planning process (--cpu-clock), so that
 # a shared machine slows the runs down without shortening their search; runs go `jobs` at a time
-# under nice. Prints one line per run and the verdict.
+# under nice. Prints one line per run and the verdict. The value compared is the search's objective
+# (panoptes_plan's `objective <name> <value> m` line: tracker_rmse by default; OBJECTIVE=q for the
+# seed's quality, as the 2026-11-27 figures were measured).
 #   tests/bench/bench_plan_budget.sh <build dir> [room] [cameras] [long s] [short s] [short runs] [jobs]
 #                                    [long runs' starts]
 set -euo pipefail
@@ -22,9 +24,9 @@ trap 'rm -rf "$work"' EXIT
 
 run() {  # SEED SECONDS STARTS: one plan, its output in $work/SEED.out
   nice -n 5 "$plan" --room "$room" --cameras "$cameras" --evaluations 100000000 --seconds "$2" --cpu-clock \
-    --starts "$3" --seed "$1" --quiet >"$work/$1.out" 2>&1 || { echo "seed $1 failed:"; cat "$work/$1.out"; exit 1; }
+    --starts "$3" --seed "$1" --objective "${OBJECTIVE:-tracker_rmse}" --quiet >"$work/$1.out" 2>&1 || { echo "seed $1 failed:"; cat "$work/$1.out"; exit 1; }
 }
-quality() { sed -n 's/^quality \([0-9.e-]*\) m.*/\1/p' "$work/$1.out"; }
+quality() { sed -n 's/^objective [a-z_]* \([0-9.e-]*\) m$/\1/p' "$work/$1.out"; }
 budget() { sed -n 's/^placed .* in \([0-9]*\) evaluations, \([0-9.]*\) s (\([0-9.]*\) CPU s).*/\1 evaluations, \2 s wall, \3 CPU s/p' "$work/$1.out"; }
 
 queue() {  # SECONDS:STARTS:SEED...: every run, `jobs` at a time

@@ -2,11 +2,14 @@
 // bench_planner: the placement metric's cost (issue 19): 16 cameras on a ring around a 4 x 4 x 2 m
 // volume, 10 000 points, 64 occluder planes, both resolution models, one thread and --threads;
 // then, side by side on one thread, a full evaluation against the incremental metric's cost of
-// moving one camera (what the optimiser pays per evaluation).
+// moving one camera (what the optimiser pays per evaluation), for both objectives (q and
+// tracker_rmse), and the search's evaluations per CPU second with each objective.
 //   bench_planner [--points 10000] [--planes 64] [--cameras 16] [--threads 2] [--repeat 3]
+//                 [--plan-evaluations 3000]
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <exception>
 #include <numbers>
 #include <vector>
@@ -16,51 +19,79 @@
 #include "panoptes/cli.h"
 #include "panoptes/planner/incremental_metric.h"
 #include "panoptes/planner/metric.h"
+#include "panoptes/planner/optimizer.h"
 
 using namespace panoptes;
 using namespace panoptes::planner;
 
-// Each camera in turn moved 0.3 m along the ring's tangent and back, full evaluation vs incremental.
+static double cpu_seconds() {
+  return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
+}
+
+// Each camera in turn moved 0.3 m along the ring's tangent and back, full evaluation vs
+// incremental, for `objective`; CPU seconds per move, best of `repeat`.
 static void compare_one_camera_moves(const std::vector<PlannedCamera>& rig, const SampleSet& samples,
-                                     const Lens& lens, int repeat) {
-  MetricOptions metric;
-  IncrementalMetric incremental(samples, {}, metric, rig.size());
+                                     const Lens& lens, int repeat, Objective objective) {
+  const MetricOptions metric;
+  const TrackerModel tracker;
+  IncrementalMetric incremental(samples, {}, metric, rig.size(), objective, tracker);
   for (std::size_t c = 0; c < rig.size(); ++c) incremental.place(c, rig[c]);
+  const auto moved_camera = [&](std::size_t c) {
+    const Eigen::Vector3d centre = rig[c].model.center_world();
+    return make_camera(rig[c].id, lens,
+                       centre + 0.3 * Eigen::Vector3d(-centre.y(), centre.x(), 0).normalized(), {0, 0, 0.9});
+  };
   std::vector<PlannedCamera> moved_rig = rig;
-  double full = 1e30, moved = 1e30, q_full = 0, q_moved = 0;
+  double full = 1e30, moved = 1e30, value_full = 0, value_moved = 0;
   for (int r = 0; r < repeat; ++r) {
-    const auto begin = std::chrono::steady_clock::now();
+    const double begin = cpu_seconds();
     for (std::size_t c = 0; c < rig.size(); ++c) {
-      const Eigen::Vector3d centre = rig[c].model.center_world();
-      moved_rig[c] =
-          make_camera(rig[c].id, lens,
-                      centre + 0.3 * Eigen::Vector3d(-centre.y(), centre.x(), 0).normalized(), {0, 0, 0.9});
-      q_full = evaluate(moved_rig, samples, {}, metric).quality;
+      moved_rig[c] = moved_camera(c);
+      value_full = objective_value(moved_rig, samples, {}, metric, objective, tracker);
       moved_rig[c] = rig[c];
     }
-    const auto middle = std::chrono::steady_clock::now();
+    const double middle = cpu_seconds();
     for (std::size_t c = 0; c < rig.size(); ++c) {
-      const Eigen::Vector3d centre = rig[c].model.center_world();
-      q_moved = incremental.place(
-          c,
-          make_camera(rig[c].id, lens,
-                      centre + 0.3 * Eigen::Vector3d(-centre.y(), centre.x(), 0).normalized(), {0, 0, 0.9}));
+      value_moved = incremental.place(c, moved_camera(c));
       incremental.undo();
     }
-    const auto end = std::chrono::steady_clock::now();
+    const double end = cpu_seconds();
     const double n = static_cast<double>(rig.size());
-    full = std::min(full, std::chrono::duration<double>(middle - begin).count() / n);
-    moved = std::min(moved, std::chrono::duration<double>(end - middle).count() / n);
+    full = std::min(full, (middle - begin) / n);
+    moved = std::min(moved, (end - middle) / n);
   }
   std::printf(
-      "one camera moved (covariance, 1 thread): full evaluation %.4f s, incremental %.4f s (%.1fx); "
-      "quality of the last move %.6g vs %.6g m\n",
-      full, moved, full / moved, q_full, q_moved);
+      "%-12s one camera moved (1 thread): full evaluation %.4f CPU s (%.1f/CPU s), incremental %.4f CPU s "
+      "(%.1f/CPU s, %.1fx); value of the last move %.9g vs %.9g m\n",
+      objective_name(objective), full, 1.0 / full, moved, 1.0 / moved, full / moved, value_full, value_moved);
+}
+
+// The search itself (greedy starts, per-camera evolution strategy, iterated local search) on the
+// ring's room with its walls as mounts: evaluations per CPU second with `objective`.
+static void plan_rate(Room room, const SampleSet& samples, const Lens& lens, int cameras, int evaluations,
+                      Objective objective) {
+  const Eigen::Vector3d low(-4.5, -4.5, 2.2), span(9.0, 9.0, 0.0), up(0, 0, 0.8);
+  room.mounts = {{"south", low, {span.x(), 0, 0}, up},
+                 {"west", low, {0, span.y(), 0}, up},
+                 {"north", low + Eigen::Vector3d(0, span.y(), 0), {span.x(), 0, 0}, up},
+                 {"east", low + Eigen::Vector3d(span.x(), 0, 0), {0, span.y(), 0}, up}};
+  room.lenses = {lens};
+  PlanOptions options;
+  options.cameras = cameras;
+  options.evaluations = evaluations;
+  options.seconds = 1e6;
+  options.objective = objective;
+  const PlanResult result = plan(room, samples, {}, options);
+  std::printf(
+      "%-12s search, %d cameras: %d evaluations in %.2f CPU s: %.0f evaluations per CPU s; "
+      "plan's q %.6g m, objective %.6g m\n",
+      objective_name(objective), cameras, result.evaluations, result.cpu_seconds,
+      result.evaluations / result.cpu_seconds, result.evaluation.quality, result.objective_value);
 }
 
 static int run_command_line(int argc, char** argv) {
   CLI::App app{"bench_planner: cost of the camera placement metric (docs/benchmarks.md)"};
-  int points = 10000, planes = 64, cameras = 16, threads = 2, repeat = 3;
+  int points = 10000, planes = 64, cameras = 16, threads = 2, repeat = 3, plan_evaluations = 3000;
   app.add_option("--points", points, "sample points")->capture_default_str();
   app.add_option("--planes", planes, "occluder planes per point")->capture_default_str();
   app.add_option("--cameras", cameras, "cameras on the ring")
@@ -68,6 +99,9 @@ static int run_command_line(int argc, char** argv) {
       ->check(CLI::Range(1, 64));
   app.add_option("--threads", threads, "threads of the second measurement")->capture_default_str();
   app.add_option("--repeat", repeat, "best of this many runs")->capture_default_str();
+  app.add_option("--plan-evaluations", plan_evaluations,
+                 "budget of the search measured with each objective (8 cameras, 1500 of the points)")
+      ->capture_default_str();
   if (const auto code = parse_command_line(app, argc, argv)) return *code;
 
   Room room;
@@ -107,7 +141,11 @@ static int run_command_line(int argc, char** argv) {
                   e.p_at_least_k);
     }
   }
-  compare_one_camera_moves(rig, samples, lens, repeat);
+  for (const Objective objective : {Objective::kQuality, Objective::kTrackerRmse})
+    compare_one_camera_moves(rig, samples, lens, repeat, objective);
+  const SampleSet plan_samples = draw_samples(room, {planes}, std::min(points, 1500), 32, 1);
+  for (const Objective objective : {Objective::kQuality, Objective::kTrackerRmse})
+    plan_rate(room, plan_samples, lens, 8, plan_evaluations, objective);
   return 0;
 }
 

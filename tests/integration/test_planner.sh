@@ -31,6 +31,17 @@ cmp -s "$work/plan.yaml" "$work/plan2.yaml" && pass "same seed, same plan" || fa
 # --- bad input ---------------------------------------------------------------------------------
 expect_exit 0 "--help" -- "$plan" --help
 grep -q "evaluations.*4000" "$work/last.out" && pass "--help shows defaults" || fail "--help lacks defaults"
+grep -q "objective.*tracker_rmse" "$work/last.out" && pass "--help shows the default objective" ||
+  fail "--help lacks the default objective"
+expect_exit 2 "an unknown --objective" -- "$plan" --room "$work/room.yaml" --cameras 2 --objective fastest
+# The room file's objective key, and --objective over it: the plan says which it minimised.
+sed '$a objective: q' "$work/room.yaml" >"$work/room_q.yaml"
+expect_exit 0 "plan by the room file's objective q" -- "$plan" --room "$work/room_q.yaml" --cameras 2 --evaluations 60 --quiet
+grep -q "^objective q " "$work/last.out" && pass "the room file's objective is used" || fail "objective key ignored"
+expect_exit 0 "--objective over the room file's" -- "$plan" --room "$work/room_q.yaml" --cameras 2 --evaluations 60 \
+  --objective tracker_rmse --quiet
+grep -q "^objective tracker_rmse " "$work/last.out" && pass "--objective overrides the room file" ||
+  fail "--objective did not override the room file"
 expect_exit 2 "no --cameras" -- "$plan" --room "$work/room.yaml"
 expect_exit 2 "zero cameras" -- "$plan" --room "$work/room.yaml" --cameras 0
 bad() {  # NAME SED-EXPRESSION EXPECTED-STDERR
@@ -43,6 +54,7 @@ bad inverted_box 's/^volume: .*/volume: {min: [2, -2, 0], max: [-2, 2, 2]}/' "in
 bad unknown_key 's/^occlusion: {planes: 64}/occlusion: {plains: 64}/' "unknown_key.yaml: occlusion.plains"
 bad bad_norm 's/over_planes: rms/over_planes: median/' "bad_norm.yaml: metric.over_planes"
 bad no_focal 's/focal_mm: 4.5, pixel_um: 5.3, //' "no_focal.yaml: lenses[0].focal_px"
+bad bad_objective '$a objective: fastest' "bad_objective.yaml: objective"
 bad negative_planes 's/^occlusion: {planes: 64}/occlusion: {planes: -3}/' "negative_planes.yaml: occlusion.planes"
 bad subject_size 's/^occlusion: {planes: 64}/occlusion: {planes: 64}\nsubject: {markers: 41, size: [0.7, 0, 1.5]}/' \
   "subject_size.yaml: subject.size"

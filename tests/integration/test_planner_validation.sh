@@ -46,13 +46,20 @@ layout corner6 "3.9 2.9 2.0; 3.5 2.9 2.4; 3.9 2.5 2.8; 3.1 2.9 2.8; 3.9 2.1 2.4;
 layout pair "3.9 0.2 2.4; -3.9 -0.2 2.4"
 
 # The planner's own layout of 4 cameras, written as a scene from the template (with 6 or more
-# cameras the rings already see everything by two).
+# cameras the rings already see everything by two): with the default objective (tracker_rmse),
+# and with the seed's q for the comparison that made tracker_rmse the default (docs/planner.md,
+# "Objectives"). The q plan is judged apart: it is not one of the ranked layouts.
 expect_exit 0 "plan 4 cameras for the walk" -- "$plan" --room "$room" --cameras 4 --evaluations 4000 --quiet \
   --out "$work/planned.cal.yaml" --scene-template "$work/template.yaml" --scene-out "$work/planned.scene.yaml"
+grep -q "^objective tracker_rmse " "$work/last.out" && pass "the default objective is tracker_rmse" ||
+  fail "the default objective is not tracker_rmse: $(grep '^objective' "$work/last.out")"
+expect_exit 0 "plan 4 cameras for the walk by q" -- "$plan" --room "$room" --cameras 4 --evaluations 4000 --quiet \
+  --objective q --out "$work/planned_q.cal.yaml" --scene-template "$work/template.yaml" \
+  --scene-out "$work/planned_q.scene.yaml"
 
 results="$work/results.txt"
 : >"$results"
-for name in planned ring8 ring6 ring4 ring3 wall6 corner6 pair; do
+for name in planned ring8 ring6 ring4 ring3 wall6 corner6 pair planned_q; do
   "$plan" --room "$room" --evaluate "$work/$name.cal.yaml" >"$work/$name.plan.out" 2>&1 ||
     { fail "$name: evaluate"; cat "$work/$name.plan.out"; continue; }
   predicted_p=$(sed -n 's/.*see a point) \([0-9.]*\)$/\1/p' "$work/$name.plan.out")
@@ -81,6 +88,8 @@ for line in open(sys.argv[1]):
     trackable = sum(m["trackable"] for m in e["markers"])
     rows.append((name, float(p), float(u), trackable / steps, e["rmse_mm"], e["coverage"], float(q),
                  1000 * float(r), 1000 * float(ra), float(c)))
+by = {r[0]: r for r in rows}
+rows = [r for r in rows if r[0] != "planned_q"]  # the ranked layouts
 def rank(v):
     r = np.empty(len(v)); r[np.argsort(v, kind="stable")] = np.arange(len(v)); return r
 def spearman(a, b):
@@ -95,12 +104,17 @@ print("spearman_u %.3f" % spearman([r[2] for r in rows], [r[4] for r in rows]))
 print("spearman_r %.3f" % spearman([r[7] for r in rows], [r[4] for r in rows]))
 print("spearman_ra %.3f" % spearman([r[8] for r in rows], [r[4] for r in rows]))
 print("spearman_c %.3f" % spearman([r[9] for r in rows], [r[5] for r in rows]))
-by = {r[0]: r for r in rows}
+if "planned_q" in by:
+    print("%-8s %10.4f %12.5g %10.4f %9.3f %9.4f %10.4g %9.3f %9.3f %9.4f (not ranked)" % by["planned_q"])
 print("planned_vs_ring4 %.4f %.4f" % (by["planned"][3], by["ring4"][3]))
 print("planned_vs_ring4_tracked %.4f %.4f" % (by["planned"][5], by["ring4"][5]))
+print("planned_vs_ring4_rmse %.3f %.3f" % (by["planned"][4], by["ring4"][4]))
+if "planned_q" in by:
+    print("planned_vs_planned_q_rmse %.3f %.3f" % (by["planned"][4], by["planned_q"][4]))
+    print("planned_vs_planned_q_two %.4f %.4f" % (by["planned"][3], by["planned_q"][3]))
 PY
 cat "$work/validation.out"
-rows=$(grep -c . "$results")
+rows=$(grep -vc "^planned_q " "$results")
 [ "$rows" -ge 6 ] && pass "$rows layouts simulated and judged" || fail "only $rows layouts judged"
 sp=$(sed -n 's/^spearman_p //p' "$work/validation.out")
 su=$(sed -n 's/^spearman_u //p' "$work/validation.out")
@@ -120,12 +134,28 @@ sq=$(sed -n 's/^spearman_q //p' "$work/validation.out")
 awk -v s="$sq" 'BEGIN { exit !(s ~ /^-?[0-9.]+$/ && s >= 0.8) }' &&
   pass "rank correlation of the predicted quality and the measured RMSE: $sq (uncertainty where seen: $su)" ||
   fail "rank correlation of the predicted quality and the measured RMSE: $sq < 0.8"
-read -r _ planned ring4 < <(grep "^planned_vs_ring4" "$work/validation.out")
-awk -v a="$planned" -v b="$ring4" 'BEGIN { exit !(a != "" && b != "" && a + 0 > b + 0) }' &&
-  pass "the planned layout covers more marker-time with >= 2 cameras than the ring of 4 ($planned vs $ring4)" ||
-  fail "the planned layout ($planned) does not beat the ring of 4 ($ring4)"
-read -r _ planned ring4 < <(grep "^planned_vs_ring4_tracked" "$work/validation.out")
-awk -v a="$planned" -v b="$ring4" 'BEGIN { exit !(a != "" && b != "" && a + 0 > b + 0) }' &&
-  pass "the planned layout's tracks cover more of the marker-time than the ring of 4's ($planned vs $ring4)" ||
-  fail "the planned layout's tracked coverage ($planned) does not beat the ring of 4's ($ring4)"
+# compare KEY CONDITION TEXT: the two figures a and b on the line "KEY a b" of validation.out
+# satisfy the awk CONDITION.
+compare() {
+  local a b
+  read -r _ a b < <(grep "^$1 " "$work/validation.out")
+  if awk -v a="$a" -v b="$b" "BEGIN { exit !(a != \"\" && b != \"\" && ($2)) }"; then
+    pass "$3 ($a vs $b)"
+  else
+    fail "NOT $3 ($a vs $b)"
+  fi
+}
+compare planned_vs_ring4 "a + 0 > b + 0" "the planned layout covers more marker-time with >= 2 cameras than the ring of 4"
+compare planned_vs_ring4_tracked "a + 0 > b + 0" "the planned layout's tracks cover more of the marker-time than the ring of 4's"
+# Why tracker_rmse is the default: its plan tracks with a lower measured RMSE than q's plan and sees
+# as much by >= 2 cameras (seeds 1-3: 1.344/1.349/1.417 mm against 1.633/1.482/1.687 mm, all
+# 1.0000 seen by two; docs/planner.md, "Objectives").
+compare planned_vs_planned_q_rmse "a + 0 < b + 0" "the tracker_rmse plan tracks with a lower RMSE (mm) than the q plan"
+compare planned_vs_planned_q_two "a + 0 >= b + 0" "the tracker_rmse plan sees as much by >= 2 cameras as the q plan"
+# Against the ring of 4 the plan does NOT reach the goal (RMSE at most the ring's): 1.344 vs
+# 1.061 mm on 2026-11-27: the ring sees 2.5% of the marker-time by fewer than two cameras and is
+# more precise where it sees; the objective takes the coverage (docs/planner.md, "Not yet done").
+# This bound (1.3x the ring's, measured 1.27x) only guards against a regression.
+compare planned_vs_ring4_rmse "a + 0 <= 1.3 * b" \
+  "the planned layout's RMSE (mm) is within 1.3x the ring of 4's (a regression guard; the goal, <= 1x, is not met)"
 finish

@@ -22,11 +22,27 @@ std::size_t table_hash(std::uint64_t mask) {
   return static_cast<std::size_t>((mask * 0x9E3779B97F4A7C15ULL) >> 56U) & (kTableSize - 1);
 }
 
+// trace(A⁻¹) of a symmetric 3 × 3 matrix given as its upper triangle (xx, xy, xz, yy, yz, zz): its
+// principal cofactors over its determinant.
+double trace_of_inverse(const std::array<double, 6>& a) {
+  const double c00 = a[3] * a[5] - a[4] * a[4];
+  const double c11 = a[0] * a[5] - a[2] * a[2];
+  const double c22 = a[0] * a[3] - a[1] * a[1];
+  const double det = a[0] * c00 - a[1] * (a[1] * a[5] - a[2] * a[4]) + a[2] * (a[1] * a[4] - a[2] * a[3]);
+  return (c00 + c11 + c22) / det;
+}
+
 }  // namespace
 
 IncrementalMetric::IncrementalMetric(const SampleSet& samples, std::span<const Box> obstacles,
-                                     const MetricOptions& options, std::size_t slots)
-    : samples_(samples), obstacles_(obstacles.begin(), obstacles.end()), options_(options), slots_(slots) {
+                                     const MetricOptions& options, std::size_t slots, Objective objective,
+                                     const TrackerModel& tracker)
+    : samples_(samples),
+      obstacles_(obstacles.begin(), obstacles.end()),
+      options_(options),
+      objective_(objective),
+      tracker_(tracker),
+      slots_(slots) {
   if (slots == 0 || slots > 64)
     throw std::invalid_argument("planner: an incremental metric holds 1 to 64 cameras, not " +
                                 std::to_string(slots));
@@ -38,9 +54,9 @@ IncrementalMetric::IncrementalMetric(const SampleSet& samples, std::span<const B
   wide_.assign(points * slots_, 0);
   table_masks_.assign(kTableSize, 0);
   table_counts_.assign(kTableSize, 0);
-  point_u_.resize(points);
-  for (std::size_t i = 0; i < points; ++i) point_u_[i] = point_uncertainty(i);
-  quality_ = aggregate_points();
+  point_value_.resize(points);
+  for (std::size_t i = 0; i < points; ++i) point_value_[i] = point_value(i);
+  value_ = aggregate_points();
 }
 
 double IncrementalMetric::place(std::size_t slot, const PlannedCamera& camera) {
@@ -59,8 +75,8 @@ double IncrementalMetric::update(std::size_t slot, const PlannedCamera* camera) 
   undo_views_.resize(points);
   undo_facing_.resize(points * words_);
   undo_wide_.resize(points);
-  undo_point_u_ = point_u_;
-  undo_quality_ = quality_;
+  undo_point_value_ = point_value_;
+  undo_value_ = value_;
   for (std::size_t i = 0; i < points; ++i) {
     undo_views_[i] = view(i, slot);
     std::copy_n(facing(i, slot), words_, undo_facing_.begin() + static_cast<std::ptrdiff_t>(i * words_));
@@ -68,10 +84,10 @@ double IncrementalMetric::update(std::size_t slot, const PlannedCamera* camera) 
     const bool was_seen = view(i, slot).seen;
     compute_view(i, slot, camera);
     update_pairs(i, slot);
-    if (was_seen || view(i, slot).seen) point_u_[i] = point_uncertainty(i);
+    if (was_seen || view(i, slot).seen) point_value_[i] = point_value(i);
   }
-  quality_ = aggregate_points();
-  return quality_;
+  value_ = aggregate_points();
+  return value_;
 }
 
 void IncrementalMetric::undo() {
@@ -89,8 +105,8 @@ void IncrementalMetric::undo() {
       other = (pairs >> d & 1U) != 0 ? (other | Mask{1} << slot) : (other & ~(Mask{1} << slot));
     }
   }
-  point_u_.swap(undo_point_u_);
-  quality_ = undo_quality_;
+  point_value_.swap(undo_point_value_);
+  value_ = undo_value_;
 }
 
 // Visibility as in metric.cpp: in front, within the depth range, in the image, not behind an
@@ -150,14 +166,15 @@ IncrementalMetric::Mask IncrementalMetric::effective(std::size_t point, Mask mas
   return mask & (~mask + 1);
 }
 
-// U(P) (eq. 4.5): the planes grouped by the set of cameras they leave visible.
-double IncrementalMetric::point_uncertainty(std::size_t point) {
+// The point's share of the objective: U(P) (eq. 4.5), or the mean squared tracker cost over its
+// planes; the planes grouped by the set of cameras they leave visible.
+double IncrementalMetric::point_value(std::size_t point) {
   Mask seen = 0;
   for (std::size_t c = 0; c < slots_; ++c)
     if (view(point, c).seen) seen |= Mask{1} << c;
   seen = effective(point, seen);  // as metric.cpp: the planes hide cameras of the effective set
   const std::size_t planes = samples_.normals.size();
-  if (planes == 0) return mask_uncertainty(point, seen);
+  if (planes == 0) return mask_value(point, seen);
   table_used_.clear();
   std::array<Mask, 64> masks{};
   for (std::size_t w = 0; w < words_; ++w) {
@@ -179,13 +196,15 @@ double IncrementalMetric::point_uncertainty(std::size_t point) {
     }
   }
   double sum = 0.0, worst = 0.0;
+  const bool squared = options_.over_planes == Norm::kRms && objective_ == Objective::kQuality;
   for (const std::size_t h : table_used_) {
-    const double u = mask_uncertainty(point, effective(point, table_masks_[h]));
+    const double u = mask_value(point, effective(point, table_masks_[h]));
     const double count = table_counts_[h];
     table_counts_[h] = 0;
     worst = std::max(worst, u);
-    sum += count * (options_.over_planes == Norm::kRms ? u * u : u);
+    sum += count * (squared ? u * u : u);
   }
+  if (objective_ == Objective::kTrackerRmse) return sum / static_cast<double>(planes);  // a mean of squares
   switch (options_.over_planes) {
     case Norm::kMax:
       return worst;
@@ -197,28 +216,35 @@ double IncrementalMetric::point_uncertainty(std::size_t point) {
   return std::sqrt(sum / static_cast<double>(planes));
 }
 
-double IncrementalMetric::mask_uncertainty(std::size_t point, Mask mask) {
+double IncrementalMetric::mask_value(std::size_t point, Mask mask) {
+  if (objective_ == Objective::kTrackerRmse) return tracker_cost2(point, mask);
   return options_.resolution == ResolutionModel::kPyramid ? pyramid_uncertainty(point, mask)
                                                           : covariance_uncertainty(point, mask);
 }
 
-double IncrementalMetric::covariance_uncertainty(std::size_t point, Mask mask) {
+// The information of the cameras in `mask` with the prior of `unseen_m` in every direction, as its
+// upper triangle: xx, xy, xz, yy, yz, zz.
+std::array<double, 6> IncrementalMetric::information(std::size_t point, Mask mask) const {
   const double prior = 1.0 / (options_.unseen_m * options_.unseen_m);
-  // The information's upper triangle: xx, xy, xz, yy, yz, zz.
   std::array<double, 6> a{prior, 0.0, 0.0, prior, 0.0, prior};
   for (Mask rest = mask; rest != 0; rest &= rest - 1) {
     const std::array<double, 6>& add =
         view(point, static_cast<std::size_t>(std::countr_zero(rest))).information;
     for (std::size_t k = 0; k < 6; ++k) a[k] += add[k];
   }
-  if (options_.over_directions == Norm::kRms) {
-    // trace(A⁻¹) of a symmetric 3 × 3 matrix: its principal cofactors over its determinant.
-    const double c00 = a[3] * a[5] - a[4] * a[4];
-    const double c11 = a[0] * a[5] - a[2] * a[2];
-    const double c22 = a[0] * a[3] - a[1] * a[1];
-    const double det = a[0] * c00 - a[1] * (a[1] * a[5] - a[2] * a[4]) + a[2] * (a[1] * a[4] - a[2] * a[3]);
-    return std::sqrt(std::max(0.0, (c00 + c11 + c22) / det / 3.0));
-  }
+  return a;
+}
+
+// The tracker objective's squared cost of a sample seen by the cameras in `mask`.
+double IncrementalMetric::tracker_cost2(std::size_t point, Mask mask) const {
+  const int cameras = std::popcount(mask);
+  return tracker_sample_cost2(cameras, cameras >= 2 ? trace_of_inverse(information(point, mask)) : 0.0,
+                              tracker_);
+}
+
+double IncrementalMetric::covariance_uncertainty(std::size_t point, Mask mask) {
+  const std::array<double, 6> a = information(point, mask);
+  if (options_.over_directions == Norm::kRms) return std::sqrt(std::max(0.0, trace_of_inverse(a) / 3.0));
   Eigen::Matrix3d information;
   information << a[0], a[1], a[2], a[1], a[3], a[4], a[2], a[4], a[5];
   const Eigen::Matrix3d covariance = information.inverse();
@@ -248,7 +274,9 @@ double IncrementalMetric::pyramid_uncertainty(std::size_t point, Mask mask) {
 }
 
 double IncrementalMetric::aggregate_points() const {
-  return aggregate(point_u_, samples_.weights, options_.over_points);
+  if (objective_ == Objective::kTrackerRmse)  // as predict_tracking aggregates it
+    return std::sqrt(aggregate(point_value_, samples_.weights, Norm::kMean));
+  return aggregate(point_value_, samples_.weights, options_.over_points);
 }
 
 }  // namespace panoptes::planner

@@ -50,6 +50,7 @@ struct TrackingPoint {
   double ambiguous = 0;
   double seen_by_two = 0;  // at least two cameras
   double confirmable = 0;
+  double cost2 = 0;  // share-weighted tracker_sample_cost2, m²
 };
 
 class PointEvaluator {
@@ -124,13 +125,12 @@ class PointEvaluator {
   // One (point, plane) sample seen by the cameras of `mask`, weighted by `share`.
   void add_tracked(Mask mask, double share, const TrackerModel& tracker, TrackingPoint& out) {
     const int n = std::popcount(mask);
+    const double triangulation2 = n >= 2 ? covariance_trace(mask) : 0.0;
+    out.cost2 += share * tracker_sample_cost2(n, triangulation2, tracker);
     if (n == 0) return;  // not reported: a track nobody sees loses its depth within tens of ms
-    const double sigma2 = tracker.publish_max_sigma_m * tracker.publish_max_sigma_m;
-    const double coast2 = 0.25 * sigma2;
+    const double coast2 = one_view_error2(tracker);
     if (n == 1) {
-      const double published_s = std::cbrt(3.0 * sigma2 / std::max(tracker.process_noise, 1e-12));
-      const double published =
-          share * std::min(1.0, published_s / std::max(tracker.one_view_episode_s, 1e-9));
+      const double published = share * one_view_reported_share(tracker);
       out.one_view += share;
       out.reported += published;
       out.error2 += published * coast2;
@@ -138,7 +138,6 @@ class PointEvaluator {
       return;
     }
     out.reported += share;
-    const double triangulation2 = covariance_trace(mask);
     out.seen_by_two += share;
     out.error2 += share * triangulation2;
     if (n > 2) {
@@ -307,6 +306,20 @@ Eigen::Vector3d uniform_in(std::mt19937_64& rng, const Box& box) {
 
 }  // namespace
 
+double one_view_reported_share(const TrackerModel& tracker) {
+  const double sigma2 = tracker.publish_max_sigma_m * tracker.publish_max_sigma_m;
+  const double published_s = std::cbrt(3.0 * sigma2 / std::max(tracker.process_noise, 1e-12));
+  return std::min(1.0, published_s / std::max(tracker.one_view_episode_s, 1e-9));
+}
+
+double one_view_error2(const TrackerModel& tracker) {
+  return 0.25 * tracker.publish_max_sigma_m * tracker.publish_max_sigma_m;
+}
+
+double tracker_sample_cost2(int cameras, double triangulation_trace, const TrackerModel& tracker) {
+  return cameras >= 2 ? triangulation_trace : one_view_error2(tracker);
+}
+
 double aggregate(std::span<const double> values, std::span<const double> weights, Norm norm) {
   if (values.empty()) return 0.0;
   if (norm == Norm::kMax) return *std::max_element(values.begin(), values.end());
@@ -407,8 +420,10 @@ TrackingPrediction predict_tracking(std::span<const PlannedCamera> cameras, cons
                                 " cameras per evaluation");
   PointEvaluator evaluator(cameras, samples, obstacles, options);
   TrackingPoint sum;
+  std::vector<double> point_cost2(samples.points.size(), 0.0);
   for (std::size_t i = 0; i < samples.points.size(); ++i) {
     const TrackingPoint point = evaluator.track(samples.points[i], tracker);
+    point_cost2[i] = point.cost2;
     const double w = samples.weights[i];
     sum.reported += w * point.reported;
     sum.error2 += w * point.error2;
@@ -427,6 +442,8 @@ TrackingPrediction predict_tracking(std::span<const PlannedCamera> cameras, cons
   result.two_view_share = sum.two_view;
   result.ambiguous_share = sum.ambiguous;
   result.confirmable_share = sum.seen_by_two > 0.0 ? sum.confirmable / sum.seen_by_two : 0.0;
+  // As IncrementalMetric aggregates it, so that the two agree to rounding.
+  result.rmse_gaps_charged_m = std::sqrt(aggregate(point_cost2, samples.weights, Norm::kMean));
   return result;
 }
 

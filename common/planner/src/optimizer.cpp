@@ -44,10 +44,11 @@ class Search {
         options_(options),
         fixed_(options.fixed.size()),
         metric_(samples, room.obstacles, metric,
-                options.fixed.size() + static_cast<std::size_t>(options.cameras)),
+                options.fixed.size() + static_cast<std::size_t>(options.cameras), options.objective,
+                options.tracker),
         genes_(static_cast<std::size_t>(options.cameras)) {
     for (std::size_t f = 0; f < fixed_; ++f) metric_.place(f, options.fixed[f]);
-    current_ = metric_.quality();
+    current_ = metric_.value();
   }
 
   PlanResult run() {
@@ -186,7 +187,7 @@ class Search {
       genes_[c] = best_genes_[c];
       metric_.place(fixed_ + c, decode_camera(room_, genes_[c].data(), ""));
     }
-    current_ = metric_.quality();
+    current_ = metric_.value();
   }
 
   // The larger of the shares of the evaluation and time budgets spent.
@@ -262,6 +263,10 @@ PlanResult plan(const Room& room, const SampleSet& samples, const MetricOptions&
   Search search(room, samples, metric, options);
   PlanResult result = search.run();
   result.evaluation = evaluate(result.cameras, samples, room.obstacles, metric);
+  result.objective_value = options.objective == Objective::kQuality
+                               ? result.evaluation.quality
+                               : objective_value(result.cameras, samples, room.obstacles, metric,
+                                                 options.objective, options.tracker);
   if (result.evaluation.visible_histogram.empty() || result.evaluation.p_at_least_k <= 0.0) {
     bool any_seen = false;
     for (const double p : result.evaluation.point_p_k) any_seen = any_seen || p > 0.0;
@@ -273,16 +278,34 @@ PlanResult plan(const Room& room, const SampleSet& samples, const MetricOptions&
   return result;
 }
 
+double objective_value(std::span<const PlannedCamera> cameras, const SampleSet& samples,
+                       std::span<const Box> obstacles, const MetricOptions& metric, Objective objective,
+                       const TrackerModel& tracker) {
+  if (objective == Objective::kQuality) return evaluate(cameras, samples, obstacles, metric).quality;
+  return predict_tracking(cameras, samples, obstacles, metric, tracker).rmse_gaps_charged_m;
+}
+
 std::vector<double> removal_costs(std::span<const PlannedCamera> cameras, const SampleSet& samples,
-                                  std::span<const Box> obstacles, const MetricOptions& metric) {
+                                  std::span<const Box> obstacles, const MetricOptions& metric,
+                                  Objective objective, const TrackerModel& tracker) {
   std::vector<double> costs;
   for (std::size_t skip = 0; skip < cameras.size(); ++skip) {
     std::vector<PlannedCamera> rest;
     for (std::size_t c = 0; c < cameras.size(); ++c)
       if (c != skip) rest.push_back(cameras[c]);
-    costs.push_back(evaluate(rest, samples, obstacles, metric).quality);
+    costs.push_back(objective_value(rest, samples, obstacles, metric, objective, tracker));
   }
   return costs;
+}
+
+const char* objective_name(Objective objective) {
+  return objective == Objective::kQuality ? "q" : "tracker_rmse";
+}
+
+std::optional<Objective> objective_from_name(const std::string& name) {
+  if (name == "q") return Objective::kQuality;
+  if (name == "tracker_rmse") return Objective::kTrackerRmse;
+  return std::nullopt;
 }
 
 }  // namespace panoptes::planner

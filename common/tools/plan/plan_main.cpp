@@ -47,6 +47,7 @@ struct Arguments {
   std::uint64_t seed = 1;
   int threads = 1;
   bool quiet = false;
+  std::string objective;  // empty: the room file's (objective key), else its default
 };
 
 std::vector<PlannedCamera> load_existing(const fs::path& path, const Room& room) {
@@ -137,6 +138,8 @@ void print_evaluation(const Evaluation& e, const MetricOptions& metric, std::siz
 void print_tracking(const TrackingPrediction& t) {
   std::printf("predicted tracker RMSE %.6g m, with two-view ambiguity %.6g m\n", t.rmse_m,
               t.rmse_with_ambiguity_m);
+  std::printf("predicted tracker RMSE with gaps charged (objective tracker_rmse) %.6g m\n",
+              t.rmse_gaps_charged_m);
   std::printf(
       "marker-time seen by one camera %.4f, by two %.4f, by two with a rival in the epipolar band %.4f; "
       "confirmable %.4f of what two or more see\n",
@@ -146,6 +149,7 @@ void print_tracking(const TrackingPrediction& t) {
 int run(const Arguments& args) {
   RoomFile file = load_room(args.room);
   file.metric.threads = args.threads;
+  if (!args.objective.empty()) file.objective = *objective_from_name(args.objective);  // checked by CLI11
   const SampleSet samples =
       draw_samples(file.room, file.occluders, file.sample_points, file.sample_directions, file.sample_seed);
   std::vector<PlannedCamera> fixed;
@@ -155,6 +159,7 @@ int run(const Arguments& args) {
   report.room = &file.room;
   report.samples = &samples;
   report.metric = file.metric;
+  report.objective = objective_name(file.objective);
   if (args.evaluate_only || args.remove_one) {
     report.title = "Camera layout: " + args.existing.filename().string();
     report.cameras = fixed;
@@ -168,6 +173,8 @@ int run(const Arguments& args) {
     options.cpu_clock = args.cpu_clock;
     options.starts = args.starts;
     options.seed = args.seed;
+    options.objective = file.objective;
+    options.tracker = file.tracker;
     if (!args.quiet)
       options.progress = [&args](const PlanProgress& p) {
         const std::string phase =
@@ -182,13 +189,15 @@ int run(const Arguments& args) {
                 fixed.empty() ? "" : (" beside " + std::to_string(fixed.size()) + " existing").c_str(),
                 result.evaluations, result.seconds, result.cpu_seconds,
                 result.stopped_by_time ? " (stopped by --seconds: not reproducible)" : "");
+    std::printf("objective %s %.6g m\n", objective_name(file.objective), result.objective_value);
     report.title = "Camera plan: " + std::to_string(result.cameras.size()) + " cameras";
     report.cameras = result.cameras;
     report.evaluation = result.evaluation;
     report.history = result.history;
     char notes[200];
-    std::snprintf(notes, sizeof notes, "%d evaluations, %d starts, seed %llu, %.1f s.", result.evaluations,
-                  args.starts, static_cast<unsigned long long>(args.seed), result.seconds);
+    std::snprintf(notes, sizeof notes, "Objective %s; %d evaluations, %d starts, seed %llu, %.1f s.",
+                  objective_name(file.objective), result.evaluations, args.starts,
+                  static_cast<unsigned long long>(args.seed), result.seconds);
     report.notes = notes;
     if (!args.out.empty()) {
       save_plan(result.cameras, args.out);
@@ -199,17 +208,21 @@ int run(const Arguments& args) {
   report.tracking = predict_tracking(report.cameras, samples, file.room.obstacles, file.metric, file.tracker);
   print_tracking(report.tracking);
   if (args.remove_one || !args.report.empty()) {
-    report.removal_costs = removal_costs(report.cameras, samples, file.room.obstacles, file.metric);
+    report.removal_costs = removal_costs(report.cameras, samples, file.room.obstacles, file.metric,
+                                         file.objective, file.tracker);
   }
   if (args.remove_one) {
     std::vector<std::size_t> order(report.cameras.size());
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(),
               [&](auto a, auto b) { return report.removal_costs[a] < report.removal_costs[b]; });
-    std::printf("quality without each camera (cheapest to remove first):\n");
+    const double with_all = file.objective == Objective::kQuality ? report.evaluation.quality
+                                                                  : report.tracking.rmse_gaps_charged_m;
+    std::printf("objective %s without each camera (cheapest to remove first):\n",
+                objective_name(file.objective));
     for (const std::size_t c : order)
       std::printf("  %-12s %.6g m (%+.1f%%)\n", report.cameras[c].id.c_str(), report.removal_costs[c],
-                  100.0 * (report.removal_costs[c] / report.evaluation.quality - 1.0));
+                  100.0 * (report.removal_costs[c] / with_all - 1.0));
   }
   if (!args.scene_out.empty()) {
     save_scene(report.cameras, args.scene_template, args.scene_out);
@@ -263,6 +276,11 @@ static int run_command_line(int argc, char** argv) {
   app.add_option("--threads", args.threads, "threads evaluating the metric")
       ->capture_default_str()
       ->check(CLI::Range(1, 64));
+  app.add_option("--objective", args.objective,
+                 "what the search and --remove-one minimise: q (the seed's quality) or tracker_rmse (the "
+                 "predicted tracker RMSE, gaps charged); overrides the room file's objective key")
+      ->default_str(objective_name(RoomFile{}.objective))
+      ->check(CLI::IsMember({"q", "tracker_rmse"}));
   app.add_flag("--quiet", args.quiet, "no progress line");
   if (const auto code = parse_command_line(app, argc, argv, [&] {
         args.evaluate_only = app.count("--evaluate") > 0;

@@ -20,8 +20,9 @@ struct ReportInput {
   std::vector<PlannedCamera> cameras;
   Evaluation evaluation;
   TrackingPrediction tracking;        // the tracker's predicted error (docs/planner.md, "Validation")
-  std::vector<double> removal_costs;  // by camera (may be empty)
-  std::vector<double> history;        // best quality per generation (may be empty)
+  std::string objective = "q";        // what the history and the removal costs are of
+  std::vector<double> removal_costs;  // the objective without each camera (may be empty)
+  std::vector<double> history;        // the objective's best value per sweep (may be empty)
   std::string notes;                  // how the plan was made (command, budget, time)
 };
 

@@ -8,6 +8,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "panoptes/config.h"
+#include "panoptes/planner/optimizer.h"
 
 namespace panoptes::planner {
 
@@ -151,7 +152,7 @@ RoomFile load_room(const std::filesystem::path& path) {
   const YAML::Node node = load_yaml_file(path);
   const YamlReader reader(path.string(), node);
   reader.expect_only({"volume", "regions", "obstacles", "mounts", "lenses", "occlusion", "metric", "samples",
-                      "subject", "tracker"});
+                      "subject", "tracker", "objective"});
   RoomFile file;
   file.room.volume = read_box(reader.child("volume"));
   for (const YamlReader& region : reader.sequence_or_empty("regions")) {
@@ -171,6 +172,11 @@ RoomFile load_room(const std::filesystem::path& path) {
   if (reader.has("occlusion")) read_occlusion(reader.child("occlusion"), file.occluders);
   if (reader.has("metric")) read_metric(reader.child("metric"), file.metric);
   read_tracker_model(reader, file.tracker);
+  if (reader.has("objective")) {
+    const auto objective = objective_from_name(reader.get_string("objective"));
+    if (!objective) reader.fail("objective", "must be q or tracker_rmse");
+    file.objective = *objective;
+  }
   if (reader.has("samples")) {
     const YamlReader samples = reader.child("samples");
     samples.expect_only({"points", "directions", "seed"});

@@ -14,6 +14,9 @@ struct RoomFile {
   OccluderModel occluders;
   MetricOptions metric;
   TrackerModel tracker;  // keys subject and tracker: the predicted tracker RMSE
+  // Key objective (q | tracker_rmse): what the search minimises; tracker_rmse by default, measured
+  // to plan better (docs/planner.md, "Objectives").
+  Objective objective = Objective::kTrackerRmse;
   int sample_points = 2000;
   int sample_directions = 32;
   std::uint64_t sample_seed = 1;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The incremental metric the optimiser uses gives the quality that evaluate() gives, for every
-// resolution model and norm, through places, removals and undos of single cameras.
+// resolution model and norm, and the tracker objective that predict_tracking() gives, through
+// places, removals and undos of single cameras.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -43,36 +44,25 @@ Room studio() {
   return room;
 }
 
-using Case = std::tuple<ResolutionModel, Norm, Norm, int>;  // model, over directions, over planes, planes
-
-class IncrementalMetricMatches : public ::testing::TestWithParam<Case> {};
-
-TEST_P(IncrementalMetricMatches, EvaluateThroughMovesAndUndos) {
-  const auto [model, directions, planes_norm, planes] = GetParam();
-  const Room room = studio();
-  // 70 planes: two words of plane flags, the second partly used.
-  const SampleSet samples = draw_samples(room, {planes}, 120, 12, 3);
-  MetricOptions metric;
-  metric.resolution = model;
-  metric.over_directions = directions;
-  metric.over_planes = planes_norm;
-  metric.min_triangulation_deg = 15.0;
-  constexpr std::size_t kSlots = 5;
-  IncrementalMetric incremental(samples, room.obstacles, metric, kSlots);
-  std::vector<std::optional<PlannedCamera>> slots(kSlots);
+// Random places, removals and undos of single cameras in 5 slots; after each, the incremental
+// value must equal `expected` (a full evaluation of the cameras in the slots) to 1e-9 relative.
+template <typename FullEvaluation>
+void check_through_moves_and_undos(const Room& room, IncrementalMetric& incremental,
+                                   const FullEvaluation& full_evaluation) {
+  std::vector<std::optional<PlannedCamera>> slots(incremental.slots());
   const auto expected = [&] {
     std::vector<PlannedCamera> cameras;
     for (const auto& camera : slots)
       if (camera) cameras.push_back(*camera);
-    return evaluate(cameras, samples, room.obstacles, metric).quality;
+    return full_evaluation(cameras);
   };
-  EXPECT_NEAR(incremental.quality(), expected(), 1e-9);  // no camera at all
+  EXPECT_NEAR(incremental.value(), expected(), 1e-9 * expected());  // no camera at all
 
   std::mt19937_64 rng(17);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   int undone = 0, removed = 0;
   for (int step = 0; step < 40; ++step) {
-    const std::size_t slot = rng() % kSlots;
+    const std::size_t slot = rng() % slots.size();
     const double action = uniform(rng);
     if (action < 0.15 && slots[slot]) {
       slots[slot].reset();
@@ -92,13 +82,60 @@ TEST_P(IncrementalMetricMatches, EvaluateThroughMovesAndUndos) {
     if (action > 0.6) {
       incremental.undo();
       slots[slot] = before;
-      ASSERT_NEAR(incremental.quality(), expected(), 1e-9 * q) << "after undoing slot " << slot;
+      ASSERT_NEAR(incremental.value(), expected(), 1e-9 * q) << "after undoing slot " << slot;
       ++undone;
     }
   }
   EXPECT_GT(undone, 5);
   EXPECT_GT(removed, 0);
 }
+
+using Case = std::tuple<ResolutionModel, Norm, Norm, int>;  // model, over directions, over planes, planes
+
+class IncrementalMetricMatches : public ::testing::TestWithParam<Case> {};
+
+TEST_P(IncrementalMetricMatches, EvaluateThroughMovesAndUndos) {
+  const auto [model, directions, planes_norm, planes] = GetParam();
+  const Room room = studio();
+  // 70 planes: two words of plane flags, the second partly used.
+  const SampleSet samples = draw_samples(room, {planes}, 120, 12, 3);
+  MetricOptions metric;
+  metric.resolution = model;
+  metric.over_directions = directions;
+  metric.over_planes = planes_norm;
+  metric.min_triangulation_deg = 15.0;
+  IncrementalMetric incremental(samples, room.obstacles, metric, 5);
+  check_through_moves_and_undos(room, incremental, [&](const std::vector<PlannedCamera>& cameras) {
+    return evaluate(cameras, samples, room.obstacles, metric).quality;
+  });
+}
+
+// The tracker objective (predicted tracker RMSE with gaps charged) against predict_tracking, for
+// 64 planes, 70 (two words of flags) and none; the resolution model and norms of q do not enter it.
+class IncrementalTrackerObjectiveMatches : public ::testing::TestWithParam<int> {};
+
+TEST_P(IncrementalTrackerObjectiveMatches, PredictTrackingThroughMovesAndUndos) {
+  const Room room = studio();
+  const SampleSet samples = draw_samples(room, {GetParam()}, 120, 12, 3);
+  MetricOptions metric;
+  metric.min_triangulation_deg = 15.0;
+  metric.resolution = ResolutionModel::kPyramid;  // q's choices: no effect on the tracker objective
+  metric.over_planes = Norm::kMax;
+  TrackerModel tracker;
+  tracker.subject_markers = 41;
+  tracker.one_view_episode_s = 0.2;
+  IncrementalMetric incremental(samples, room.obstacles, metric, 5, Objective::kTrackerRmse, tracker);
+  EXPECT_EQ(incremental.objective(), Objective::kTrackerRmse);
+  check_through_moves_and_undos(room, incremental, [&](const std::vector<PlannedCamera>& cameras) {
+    const double full =
+        predict_tracking(cameras, samples, room.obstacles, metric, tracker).rmse_gaps_charged_m;
+    EXPECT_DOUBLE_EQ(
+        full, objective_value(cameras, samples, room.obstacles, metric, Objective::kTrackerRmse, tracker));
+    return full;
+  });
+}
+
+INSTANTIATE_TEST_SUITE_P(Planes, IncrementalTrackerObjectiveMatches, ::testing::Values(64, 70, 0));
 
 std::string case_name(const ::testing::TestParamInfo<Case>& info) {
   const auto name = [](Norm norm) {

@@ -139,6 +139,53 @@ TEST(Optimizer, AddsToAnExistingRigAndRanksRemovals) {
   for (const double cost : costs) EXPECT_GE(cost, result.evaluation.quality);
 }
 
+// The validation room of deploy/planner/walk_room.yaml: a walking subject in an 8 × 6 m room,
+// cameras on the walls between 2.0 and 2.8 m, markers facing mostly sideways.
+Room walk_room() {
+  Room room;
+  room.volume = {Eigen::Vector3d(-1.6, -0.45, 0.0), Eigen::Vector3d(1.8, 0.45, 1.6)};
+  const Eigen::Vector3d up(0, 0, 0.8);
+  room.mounts = {{"north", {-4, 3, 2}, {8, 0, 0}, up},
+                 {"south", {-4, -3, 2}, {8, 0, 0}, up},
+                 {"east", {4, -3, 2}, {0, 6, 0}, up},
+                 {"west", {-4, -3, 2}, {0, 6, 0}, up}};
+  room.lenses = {{"f1000", CameraIntrinsics{1280, 1024, 1000.0, 1000.0, 639.5, 511.5, {}}, 0.3, 12.0}};
+  return room;
+}
+
+// q prices mostly the share of a point's planes that fewer than two cameras see; the tracker
+// objective prices the triangulation error of the rest as well. On the walking room they prefer
+// different layouts of 4 cameras, and the search with each objective finds the layout its own
+// objective prefers: each plan is better than the other on its own objective and worse on the other.
+TEST(Optimizer, QualityAndTrackerRmsePickTheirOwnLayouts) {
+  const Room room = walk_room();
+  const OccluderModel body{.planes = 64, .max_angle_deg = 135, .min_angle_deg = 45, .facing_angle_deg = 100};
+  const SampleSet samples = draw_samples(room, body, 300, 16, 1);
+  const MetricOptions metric;
+  TrackerModel tracker;
+  tracker.subject_markers = 41;
+  PlanOptions options;
+  options.cameras = 4;
+  options.evaluations = 2000;
+  options.tracker = tracker;
+  options.objective = Objective::kQuality;
+  const PlanResult by_q = plan(room, samples, metric, options);
+  options.objective = Objective::kTrackerRmse;
+  const PlanResult by_rmse = plan(room, samples, metric, options);
+  const auto value = [&](const PlanResult& result, Objective objective) {
+    return objective_value(result.cameras, samples, room.obstacles, metric, objective, tracker);
+  };
+  const double q_of_q = value(by_q, Objective::kQuality), q_of_rmse = value(by_rmse, Objective::kQuality);
+  const double rmse_of_q = value(by_q, Objective::kTrackerRmse);
+  const double rmse_of_rmse = value(by_rmse, Objective::kTrackerRmse);
+  std::printf("q plan: q %.5f m, tracker_rmse %.4f mm; tracker_rmse plan: q %.5f m, tracker_rmse %.4f mm\n",
+              q_of_q, 1000 * rmse_of_q, q_of_rmse, 1000 * rmse_of_rmse);
+  EXPECT_DOUBLE_EQ(by_q.objective_value, q_of_q);
+  EXPECT_DOUBLE_EQ(by_rmse.objective_value, rmse_of_rmse);
+  EXPECT_LT(q_of_q, 0.95 * q_of_rmse);
+  EXPECT_LT(rmse_of_rmse, 0.95 * rmse_of_q);
+}
+
 TEST(Optimizer, InfeasiblePlansNameTheConstraint) {
   Room room = floor_room();
   const SampleSet samples = draw_samples(room, {8}, 50, 8, 4);

@@ -123,7 +123,27 @@ struct TrackingPrediction {
   // Share of the samples seen by >= 2 cameras that the tracker can confirm: seen by three, or
   // by two without a competing marker in the epipolar band.
   double confirmable_share = 0;
+  // The RMSE over *all* samples, each one that fewer than two cameras see (unseen, or reported
+  // only while a one-camera track coasts) charged the mean squared error of such a coasting track,
+  // σ_max²/4: rmse_m priced for coverage, the planner's `tracker_rmse` objective
+  // (tracker_sample_cost2). docs/planner.md, "Objectives".
+  double rmse_gaps_charged_m = 0;
 };
+
+// What the search minimises (docs/planner.md, "Objectives"): the seed's quality q, or the
+// predicted tracker RMSE with gaps charged (TrackingPrediction::rmse_gaps_charged_m).
+enum class Objective { kQuality, kTrackerRmse };
+
+// The share of a one-camera episode the tracker reports, t_pub / one_view_episode_s (at most 1),
+// and the mean squared error of what it reports then, σ_max²/4 (TrackerModel).
+double one_view_reported_share(const TrackerModel& tracker);
+double one_view_error2(const TrackerModel& tracker);
+
+// The squared cost of one (point, plane) sample under the tracker objective, from the number of
+// cameras that see it (after the short-baseline rule) and, for two or more, the trace of their
+// triangulation covariance: two or more → the trace; fewer → one_view_error2, whether or not the
+// tracker publishes it (docs/planner.md, "Objectives": why).
+double tracker_sample_cost2(int cameras, double triangulation_trace, const TrackerModel& tracker);
 
 TrackingPrediction predict_tracking(std::span<const PlannedCamera> cameras, const SampleSet& samples,
                                     std::span<const Box> obstacles, const MetricOptions& options,

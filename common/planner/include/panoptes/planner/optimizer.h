@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,7 @@ namespace panoptes::planner {
 struct PlanProgress {
   int evaluations = 0;
   int start = 0;       // which of the starts is running (0-based); = starts: the iterated search
-  double best = 0;     // best quality so far
+  double best = 0;     // the objective's best value so far
   double seconds = 0;  // since the plan began
 };
 
@@ -32,13 +33,18 @@ struct PlanOptions {
   bool cpu_clock = false;            // `seconds` counts this process's CPU time, not wall time
   int starts = 3;                    // independent greedy starts before the iterated search
   std::uint64_t seed = 1;
+  // What the search minimises (docs/planner.md, "Objectives"); `tracker` for kTrackerRmse. The
+  // library's default is the seed's q (its examples are q's); panoptes_plan's is the room file's.
+  Objective objective = Objective::kQuality;
+  TrackerModel tracker;
   std::function<void(const PlanProgress&)> progress;  // called about every 2% of the budget
 };
 
 struct PlanResult {
   std::vector<PlannedCamera> cameras;  // fixed first, then the placed ones
   Evaluation evaluation;
-  std::vector<double> history;  // best quality after each sweep over the cameras
+  double objective_value = 0;   // of the plan, by a full evaluation (objective_value())
+  std::vector<double> history;  // the objective's best value after each sweep over the cameras
   int evaluations = 0;
   double seconds = 0;      // wall
   double cpu_seconds = 0;  // this process's CPU time
@@ -50,9 +56,22 @@ struct PlanResult {
 PlanResult plan(const Room& room, const SampleSet& samples, const MetricOptions& metric,
                 const PlanOptions& options);
 
-// The quality without each camera in turn: which one costs least to remove.
+// The objective's value for `cameras` by a full evaluation: evaluate(...).quality or
+// predict_tracking(...).rmse_gaps_charged_m.
+double objective_value(std::span<const PlannedCamera> cameras, const SampleSet& samples,
+                       std::span<const Box> obstacles, const MetricOptions& metric, Objective objective,
+                       const TrackerModel& tracker);
+
+// The objective without each camera in turn: which one costs least to remove.
 std::vector<double> removal_costs(std::span<const PlannedCamera> cameras, const SampleSet& samples,
-                                  std::span<const Box> obstacles, const MetricOptions& metric);
+                                  std::span<const Box> obstacles, const MetricOptions& metric,
+                                  Objective objective = Objective::kQuality,
+                                  const TrackerModel& tracker = {});
+
+// The objective's name in room files and on the command line ("q", "tracker_rmse"), and back;
+// std::nullopt for an unknown name.
+const char* objective_name(Objective objective);
+std::optional<Objective> objective_from_name(const std::string& name);
 
 // A camera from its genes, each in [0, 1]: surface, s, t, aim x, y, z, lens (kGenes per camera).
 inline constexpr int kGenes = 7;
