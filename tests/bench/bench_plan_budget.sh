@@ -54,14 +54,14 @@ echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
 
 best=$(for s in $long_seeds; do quality "$s"; done | sort -g | head -1)
 for s in $long_seeds; do
-  awk -v q="$(quality "$s")" -v b="$best" -v s="$s" -v u="$(budget "$s")" \
-    'BEGIN { printf "long  seed %3d  q %.6f m  %+6.2f%%  (%s)\n", s, q, 100 * (q / b - 1), u }'
+  awk -v q="$(quality "$s")" -v b="$best" -v s="$s" -v o="${OBJECTIVE:-tracker_rmse}" -v u="$(budget "$s")" \
+    'BEGIN { printf "long  seed %3d  %s %.6f m  %+6.2f%%  (%s)\n", s, o, q, 100 * (q / b - 1), u }'
 done
 verdict=0
 for s in $short_seeds; do
   q=$(quality "$s")
-  awk -v q="$q" -v b="$best" -v s="$s" -v u="$(budget "$s")" \
-    'BEGIN { printf "short seed %3d  q %.6f m  %+6.2f%%  (%s)\n", s, q, 100 * (q / b - 1), u }'
+  awk -v q="$q" -v b="$best" -v s="$s" -v o="${OBJECTIVE:-tracker_rmse}" -v u="$(budget "$s")" \
+    'BEGIN { printf "short seed %3d  %s %.6f m  %+6.2f%%  (%s)\n", s, o, q, 100 * (q / b - 1), u }'
   awk -v q="$q" -v b="$best" 'BEGIN { exit !(q <= 1.02 * b) }' || verdict=1
 done
 [ "$verdict" -eq 0 ] && echo "every short run within 2% of the best long run (${best} m)" ||
