@@ -4,6 +4,7 @@
 #include <dlfcn.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdlib>
@@ -17,6 +18,8 @@
 #include <vector>
 
 #include <fastdds/rtps/attributes/PropertyPolicy.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
@@ -38,6 +41,7 @@
 
 #include "panoptes/dds/decode.h"
 #include "panoptes/dds/security.h"
+#include "panoptes/dds/shm_ports.h"
 #include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/chainsPubSubTypes.h"
 #include "panoptes_msgs/panoptes.h"
@@ -500,6 +504,56 @@ std::optional<SecurityFiles> apply_security(const BusOptions& options, const std
   return files;
 }
 
+// Where Fast DDS 2.9 keeps its shared-memory segments and their lock files on Linux.
+constexpr const char* kShmDir = "/dev/shm";
+// Participant ids tried for one without an initial-peer range (discovery by multicast or server).
+constexpr int kParticipantIdLimit = 120;
+
+bool uses_shared_memory(const fdds::DomainParticipantQos& qos) {
+  if (qos.transport().use_builtin_transports) return true;
+  for (const auto& transport : qos.transport().user_transports) {
+    if (std::dynamic_pointer_cast<eprosima::fastdds::rtps::SharedMemTransportDescriptor>(transport))
+      return true;
+  }
+  return false;
+}
+
+// The ids a participant can take and still be found: with initial peers, those whose ports the
+// UDP transports probe (maxInitialPeersRange).
+int participant_id_limit(const fdds::DomainParticipantQos& qos) {
+  int limit = kParticipantIdLimit;
+  if (qos.wire_protocol().builtin.initialPeersList.empty()) return limit;
+  if (qos.transport().use_builtin_transports)
+    limit = std::min(
+        limit, static_cast<int>(eprosima::fastdds::rtps::UDPv4TransportDescriptor().maxInitialPeersRange));
+  for (const auto& transport : qos.transport().user_transports) {
+    if (std::dynamic_pointer_cast<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(transport))
+      limit = std::min(limit, static_cast<int>(transport->maxInitialPeersRange));
+  }
+  return limit;
+}
+
+// Keeps a participant off the shared-memory ports of participants killed on this host (shm_ports.h):
+// taking one would cut it off from every writer that still maps the killed one's segment (a console
+// restarted after SIGKILL received no FeatureFrame from some or all cameras). An id the profile sets
+// is kept; when every id is taken, Fast DDS chooses as before.
+void keep_off_killed_participants_ports(fdds::DomainParticipantQos& qos, std::uint32_t domain) {
+  auto& wire = qos.wire_protocol();
+  if (wire.participant_id >= 0 || !uses_shared_memory(qos)) return;
+  const ParticipantPortRule rule{wire.port.portBase, wire.port.domainIDGain, wire.port.participantIDGain,
+                                 wire.port.offsetd1, wire.port.offsetd3};
+  if (const auto id =
+          participant_id_clear_of_owned_shm_ports(rule, domain, participant_id_limit(qos), kShmDir))
+    wire.participant_id = *id;
+}
+
+// Held from choosing a participant id until its ports exist: two buses of one process never take
+// the same id.
+std::mutex& participant_creation_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
 class BusCore {
  public:
   explicit BusCore(const BusOptions& options) : profile_file_(resolve_profile_file(options.profile_file)) {
@@ -519,8 +573,12 @@ class BusCore {
       const char* env = std::getenv("PANOPTES_DOMAIN");
       domain = env != nullptr ? std::atoi(env) : 0;
     }
-    participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos,
-                                               &writer_partitions_, fdds::StatusMask::none());
+    {
+      std::lock_guard<std::mutex> lock(participant_creation_mutex());
+      keep_off_killed_participants_ports(qos, static_cast<std::uint32_t>(domain));
+      participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos,
+                                                 &writer_partitions_, fdds::StatusMask::none());
+    }
     if (participant_ == nullptr && security_files_) {
       fdds::Log::Flush();  // Fast DDS's own reason, logged asynchronously, goes out before ours
       throw SecurityError(
