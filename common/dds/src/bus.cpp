@@ -506,6 +506,7 @@ std::optional<SecurityFiles> apply_security(const BusOptions& options, const std
 
 // Where Fast DDS 2.9 keeps its shared-memory segments and their lock files on Linux.
 constexpr const char* kShmDir = "/dev/shm";
+constexpr const char* kProcDir = "/proc";
 // Participant ids tried for one without an initial-peer range (discovery by multicast or server).
 constexpr int kParticipantIdLimit = 120;
 
@@ -533,7 +534,8 @@ int participant_id_limit(const fdds::DomainParticipantQos& qos) {
   return limit;
 }
 
-// Keeps a participant off the shared-memory ports of participants killed on this host (shm_ports.h):
+// Keeps a participant off the shared-memory ports of participants killed on this host, and off
+// those a process still maps after they were removed (shm_ports.h):
 // taking one would cut it off from every writer that still maps the killed one's segment (a console
 // restarted after SIGKILL received no FeatureFrame from some or all cameras). An id the profile sets
 // is kept; when every id is taken, Fast DDS chooses as before.
@@ -542,8 +544,8 @@ void keep_off_killed_participants_ports(fdds::DomainParticipantQos& qos, std::ui
   if (wire.participant_id >= 0 || !uses_shared_memory(qos)) return;
   const ParticipantPortRule rule{wire.port.portBase, wire.port.domainIDGain, wire.port.participantIDGain,
                                  wire.port.offsetd1, wire.port.offsetd3};
-  if (const auto id =
-          participant_id_clear_of_owned_shm_ports(rule, domain, participant_id_limit(qos), kShmDir))
+  if (const auto id = participant_id_clear_of_owned_shm_ports(
+          rule, domain, participant_id_limit(qos), kShmDir, shm_ports_mapped_after_removal(kProcDir)))
     wire.participant_id = *id;
 }
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -25,17 +26,18 @@ class ShmPortsTest : public ::testing::Test {
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
 
+  static void touch(const std::filesystem::path& path) { std::ofstream file(path); }
   // A port as a participant leaves it: its segment, and the reader lock file unless it closed cleanly.
   void leave_port(std::uint32_t port, bool lock_file) const {
     std::ofstream(shm_port_file(dir_, port)) << "segment";
-    if (lock_file) std::ofstream(shm_port_file(dir_, port).string() + "_el");
+    if (lock_file) touch(shm_port_file(dir_, port).string() + "_el");
   }
   // Domain 3's user-data port of participant `id` with Fast DDS's default port rule.
   static std::uint32_t user_port(int id) { return 7400 + 250 * 3 + 11 + 2 * id; }
   static std::uint32_t metatraffic_port(int id) { return 7400 + 250 * 3 + 10 + 2 * id; }
 
   std::filesystem::path dir_;
-  const ParticipantPortRule rule_;
+  ParticipantPortRule rule_;
 };
 
 TEST_F(ShmPortsTest, EmptyHostGivesTheFirstId) {
@@ -55,7 +57,7 @@ TEST_F(ShmPortsTest, SkipsPortsOfLiveAndKilledParticipants) {
 
 TEST_F(ShmPortsTest, ALockFileWithoutItsSegmentDoesNotHoldTheId) {
   // deploy/dds-shm-clean.sh removes segments no process maps and leaves the lock files.
-  std::ofstream(shm_port_file(dir_, user_port(0)).string() + "_el");
+  touch(shm_port_file(dir_, user_port(0)).string() + "_el");
   EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 3, 80, dir_), std::optional<int>(0));
 }
 
@@ -76,6 +78,23 @@ TEST_F(ShmPortsTest, NoIdBeyondTheLastPort) {
   EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 232, 80, dir_), std::optional<int>(0));
   for (int id = 0; id <= 62; ++id) leave_port(7400 + 250 * 232 + 11 + 2 * id, true);
   EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 232, 80, dir_), std::nullopt);
+}
+
+TEST_F(ShmPortsTest, SkipsAPortRemovedWhileAProcessMapsIt) {
+  // `fastdds shm clean` removed a killed participant's port 0 while a camera maps it: no file is
+  // left, only the camera's mapping, and the next participant there would be cut off from it.
+  const std::filesystem::path proc = dir_ / "proc";
+  std::filesystem::create_directories(proc / "4242");
+  std::filesystem::create_directories(proc / "self-not-a-pid");
+  std::ofstream(proc / "4242" / "maps")
+      << "7f0000000000-7f0000001000 rw-s 00000000 00:1a 17 /dev/shm/fastrtps_port" << user_port(0)
+      << " (deleted)\n"
+      << "7f0000001000-7f0000002000 rw-s 00000000 00:1a 18 /dev/shm/fastrtps_port" << user_port(1) << "\n"
+      << "7f0000002000-7f0000003000 rw-s 00000000 00:1a 19 /dev/shm/fastrtps_7416c84d46971cd5 (deleted)\n";
+  const std::set<std::uint32_t> removed = shm_ports_mapped_after_removal(proc);
+  EXPECT_EQ(removed, std::set<std::uint32_t>{user_port(0)});
+  EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 3, 80, dir_, removed), std::optional<int>(1));
+  EXPECT_TRUE(shm_ports_mapped_after_removal(dir_ / "no-such-proc").empty());
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <string>
 
 namespace panoptes::dds {
@@ -32,11 +33,17 @@ std::filesystem::path shm_port_file(const std::filesystem::path& shm_dir, std::u
 // closes cleanly removes the lock file; a segment without one is reopened safely by the next.
 bool shm_port_owned(const std::filesystem::path& shm_dir, std::uint32_t port);
 
+// The shared-memory ports whose segment a process still maps although its file was removed
+// ("fastrtps_port<N> (deleted)" in /proc/<pid>/maps): a killed participant's port that
+// `fastdds shm clean` removed while writers mapped it. Only the processes this one may read
+// (the same user, or root) are seen.
+std::set<std::uint32_t> shm_ports_mapped_after_removal(const std::filesystem::path& proc_dir);
+
 // The lowest participant id in [0, id_limit) none of whose unicast ports (metatraffic and user
-// data) is owned (shm_port_owned) in `shm_dir`; nullopt when every id is, or the ports would
-// exceed 65535.
-std::optional<int> participant_id_clear_of_owned_shm_ports(const ParticipantPortRule& rule,
-                                                           std::uint32_t domain, int id_limit,
-                                                           const std::filesystem::path& shm_dir);
+// data) is owned (shm_port_owned) in `shm_dir` or in `removed_but_mapped`; nullopt when every id
+// is, or the ports would exceed 65535.
+std::optional<int> participant_id_clear_of_owned_shm_ports(
+    const ParticipantPortRule& rule, std::uint32_t domain, int id_limit, const std::filesystem::path& shm_dir,
+    const std::set<std::uint32_t>& removed_but_mapped = {});
 
 }  // namespace panoptes::dds
