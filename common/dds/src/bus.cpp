@@ -738,37 +738,15 @@ bool Writer<T>::wait_for_readers(int count, std::chrono::milliseconds timeout) c
 // ---------------------------------------------------------------------------------------------
 // Reader
 
-template <class T>
-class ReaderListener : public fdds::DataReaderListener {
+// What the typed and the raw readers' listeners share: the callback, the check of a sample's id
+// against its writer's partition on a camera-scoped topic, the counts, and deactivation.
+template <class Callback>
+class GatedReaderListener : public fdds::DataReaderListener {
  public:
   // `partitions`, on a camera-scoped topic: the writers' partitions each sample is checked against.
-  ReaderListener(typename Reader<T>::Callback callback, ReceiveCounters& counters,
-                 const WriterPartitions* partitions = nullptr)
+  GatedReaderListener(Callback callback, ReceiveCounters& counters, const WriterPartitions* partitions)
       : callback_(std::move(callback)), counters_(counters), partitions_(partitions) {}
 
-  void on_data_available(fdds::DataReader* reader) override {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!active_) return;
-    T sample;
-    fdds::SampleInfo info;
-    t_last_decode_failed = false;
-    while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
-      const bool decoded = !t_last_decode_failed;
-      t_last_decode_failed = false;
-      if (!info.valid_data || !decoded) continue;  // a failed decode is counted by its type
-      if (partitions_ != nullptr &&
-          !partitions_->admits(info.publication_handle, addressed_id(sample), counters_))
-        continue;
-      received.fetch_add(1);
-      // Runs on a Fast DDS thread: whatever a sample makes the handler throw is counted, not fatal.
-      try {
-        callback_(std::move(sample));
-      } catch (const std::exception&) {
-        counters_.note("handler_error");
-      }
-      sample = T();
-    }
-  }
   void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& status) override {
     matched.store(status.current_count);
   }
@@ -781,12 +759,49 @@ class ReaderListener : public fdds::DataReaderListener {
   std::atomic<int> matched{0};
   std::atomic<std::uint64_t> received{0};
 
- private:
-  typename Reader<T>::Callback callback_;
+ protected:
+  // False (counted) when the sample's id, from `id_of()` (asked only on a camera-scoped topic),
+  // names another camera than its writer's partition.
+  template <class IdOf>
+  bool admits(const fdds::SampleInfo& info, const IdOf& id_of) {
+    return partitions_ == nullptr || partitions_->admits(info.publication_handle, id_of(), counters_);
+  }
+
+  Callback callback_;
   ReceiveCounters& counters_;
-  const WriterPartitions* partitions_;
-  std::mutex mutex_;
+  std::mutex mutex_;  // held while a callback runs
   bool active_ = true;
+
+ private:
+  const WriterPartitions* partitions_;
+};
+
+template <class T>
+class ReaderListener : public GatedReaderListener<typename Reader<T>::Callback> {
+ public:
+  using GatedReaderListener<typename Reader<T>::Callback>::GatedReaderListener;
+
+  void on_data_available(fdds::DataReader* reader) override {
+    std::lock_guard<std::mutex> lock(this->mutex_);
+    if (!this->active_) return;
+    T sample;
+    fdds::SampleInfo info;
+    t_last_decode_failed = false;
+    while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
+      const bool decoded = !t_last_decode_failed;
+      t_last_decode_failed = false;
+      if (!info.valid_data || !decoded) continue;  // a failed decode is counted by its type
+      if (!this->admits(info, [&] { return addressed_id(sample); })) continue;
+      this->received.fetch_add(1);
+      // Runs on a Fast DDS thread: whatever a sample makes the handler throw is counted, not fatal.
+      try {
+        this->callback_(std::move(sample));
+      } catch (const std::exception&) {
+        this->counters_.note("handler_error");
+      }
+      sample = T();
+    }
+  }
 };
 
 template <class T>
@@ -1065,12 +1080,10 @@ const RawTopicEntry& raw_entry_named(const std::string& topic) {
   throw DdsError("'" + topic + "' is not a Panoptes topic (docs/protocol.md)");
 }
 
-class RawReaderListener : public fdds::DataReaderListener {
+class RawReaderListener : public GatedReaderListener<RawReader::Callback> {
  public:
-  // `partitions`, on a camera-scoped topic: as ReaderListener, the leading id read from the CDR.
-  RawReaderListener(RawReader::Callback callback, ReceiveCounters& counters,
-                    const WriterPartitions* partitions)
-      : callback_(std::move(callback)), counters_(counters), partitions_(partitions) {}
+  using GatedReaderListener<RawReader::Callback>::GatedReaderListener;
+
   void on_data_available(fdds::DataReader* reader) override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!active_) return;
@@ -1079,32 +1092,13 @@ class RawReaderListener : public fdds::DataReaderListener {
     while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
       if (!info.valid_data) continue;
       // A sample that does not decode has no id: it is recorded as it came (docs/hostile_input.md).
-      if (partitions_ != nullptr &&
-          !partitions_->admits(info.publication_handle, leading_string(sample.cdr.data(), sample.cdr.size()),
-                               counters_))
-        continue;
+      if (!admits(info, [&] { return leading_string(sample.cdr.data(), sample.cdr.size()); })) continue;
       received.fetch_add(1);
       sample.source_timestamp_ns = info.source_timestamp.to_ns();
       callback_(std::move(sample));
       sample = RawSample();
     }
   }
-  void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& status) override {
-    matched.store(status.current_count);
-  }
-  void deactivate() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    active_ = false;
-  }
-  std::atomic<int> matched{0};
-  std::atomic<std::uint64_t> received{0};
-
- private:
-  RawReader::Callback callback_;
-  ReceiveCounters& counters_;
-  const WriterPartitions* partitions_;
-  std::mutex mutex_;
-  bool active_ = true;
 };
 
 }  // namespace
