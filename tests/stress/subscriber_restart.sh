@@ -5,7 +5,9 @@
 # sim:...), then starts the subscriber, kills it with -9 and starts it again K times. After each
 # start it waits (bounded) until FeatureFrames from every camera have arrived and prints one line:
 # the restart, the seconds until every camera was seen, the cameras still missing at the timeout and
-# whether their CameraStatus arrived. The last line is a JSON summary.
+# whether their CameraStatus arrived, and which cameras still map a removed shared-memory port. The
+# last line is a JSON summary. Findings and figures: docs/protocol.md ("Restarting after a crash"),
+# docs/benchmarks.md ("Subscriber restart after SIGKILL").
 #
 #   bash tests/stress/subscriber_restart.sh BUILD_DIR [options]
 #     --restarts K        restarts (20)
@@ -45,7 +47,10 @@ camera_pids=()
 subscriber_pid=""
 
 cleanup() {
-  [ -n "$subscriber_pid" ] && kill -KILL "$subscriber_pid" 2>/dev/null
+  if [ -n "$subscriber_pid" ]; then
+    kill -KILL "$subscriber_pid" 2>/dev/null
+    wait "$subscriber_pid" 2>/dev/null
+  fi
   for pid in "${pids[@]}"; do kill -INT "$pid" 2>/dev/null; done
   sleep 0.5
   for pid in "${pids[@]}"; do kill -KILL "$pid" 2>/dev/null; done
