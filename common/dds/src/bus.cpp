@@ -4,6 +4,7 @@
 #include <dlfcn.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdlib>
@@ -17,6 +18,8 @@
 #include <vector>
 
 #include <fastdds/rtps/attributes/PropertyPolicy.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
@@ -38,6 +41,7 @@
 
 #include "panoptes/dds/decode.h"
 #include "panoptes/dds/security.h"
+#include "panoptes/dds/shm_ports.h"
 #include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/chainsPubSubTypes.h"
 #include "panoptes_msgs/panoptes.h"
@@ -500,6 +504,58 @@ std::optional<SecurityFiles> apply_security(const BusOptions& options, const std
   return files;
 }
 
+// Where Fast DDS 2.9 keeps its shared-memory segments and their lock files on Linux.
+constexpr const char* kShmDir = "/dev/shm";
+constexpr const char* kProcDir = "/proc";
+// Participant ids tried for one without an initial-peer range (discovery by multicast or server).
+constexpr int kParticipantIdLimit = 120;
+
+bool uses_shared_memory(const fdds::DomainParticipantQos& qos) {
+  if (qos.transport().use_builtin_transports) return true;
+  for (const auto& transport : qos.transport().user_transports) {
+    if (std::dynamic_pointer_cast<eprosima::fastdds::rtps::SharedMemTransportDescriptor>(transport))
+      return true;
+  }
+  return false;
+}
+
+// The ids a participant can take and still be found: with initial peers, those whose ports the
+// UDP transports probe (maxInitialPeersRange).
+int participant_id_limit(const fdds::DomainParticipantQos& qos) {
+  int limit = kParticipantIdLimit;
+  if (qos.wire_protocol().builtin.initialPeersList.empty()) return limit;
+  if (qos.transport().use_builtin_transports)
+    limit = std::min(
+        limit, static_cast<int>(eprosima::fastdds::rtps::UDPv4TransportDescriptor().maxInitialPeersRange));
+  for (const auto& transport : qos.transport().user_transports) {
+    if (std::dynamic_pointer_cast<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(transport))
+      limit = std::min(limit, static_cast<int>(transport->maxInitialPeersRange));
+  }
+  return limit;
+}
+
+// Keeps a participant off the shared-memory ports of participants killed on this host, and off
+// those a process still maps after they were removed (shm_ports.h):
+// taking one would cut it off from every writer that still maps the killed one's segment (a console
+// restarted after SIGKILL received no FeatureFrame from some or all cameras). An id the profile sets
+// is kept; when every id is taken, Fast DDS chooses as before.
+void keep_off_killed_participants_ports(fdds::DomainParticipantQos& qos, std::uint32_t domain) {
+  auto& wire = qos.wire_protocol();
+  if (wire.participant_id >= 0 || !uses_shared_memory(qos)) return;
+  const ParticipantPortRule rule{wire.port.portBase, wire.port.domainIDGain, wire.port.participantIDGain,
+                                 wire.port.offsetd1, wire.port.offsetd3};
+  if (const auto id = participant_id_clear_of_owned_shm_ports(
+          rule, domain, participant_id_limit(qos), kShmDir, shm_ports_mapped_after_removal(kProcDir)))
+    wire.participant_id = *id;
+}
+
+// Held from choosing a participant id until its ports exist: two buses of one process never take
+// the same id.
+std::mutex& participant_creation_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
 class BusCore {
  public:
   explicit BusCore(const BusOptions& options) : profile_file_(resolve_profile_file(options.profile_file)) {
@@ -519,8 +575,12 @@ class BusCore {
       const char* env = std::getenv("PANOPTES_DOMAIN");
       domain = env != nullptr ? std::atoi(env) : 0;
     }
-    participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos,
-                                               &writer_partitions_, fdds::StatusMask::none());
+    {
+      std::lock_guard<std::mutex> lock(participant_creation_mutex());
+      keep_off_killed_participants_ports(qos, static_cast<std::uint32_t>(domain));
+      participant_ = factory->create_participant(static_cast<fdds::DomainId_t>(domain), qos,
+                                                 &writer_partitions_, fdds::StatusMask::none());
+    }
     if (participant_ == nullptr && security_files_) {
       fdds::Log::Flush();  // Fast DDS's own reason, logged asynchronously, goes out before ours
       throw SecurityError(
@@ -678,37 +738,15 @@ bool Writer<T>::wait_for_readers(int count, std::chrono::milliseconds timeout) c
 // ---------------------------------------------------------------------------------------------
 // Reader
 
-template <class T>
-class ReaderListener : public fdds::DataReaderListener {
+// What the typed and the raw readers' listeners share: the callback, the check of a sample's id
+// against its writer's partition on a camera-scoped topic, the counts, and deactivation.
+template <class Callback>
+class GatedReaderListener : public fdds::DataReaderListener {
  public:
   // `partitions`, on a camera-scoped topic: the writers' partitions each sample is checked against.
-  ReaderListener(typename Reader<T>::Callback callback, ReceiveCounters& counters,
-                 const WriterPartitions* partitions = nullptr)
+  GatedReaderListener(Callback callback, ReceiveCounters& counters, const WriterPartitions* partitions)
       : callback_(std::move(callback)), counters_(counters), partitions_(partitions) {}
 
-  void on_data_available(fdds::DataReader* reader) override {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!active_) return;
-    T sample;
-    fdds::SampleInfo info;
-    t_last_decode_failed = false;
-    while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
-      const bool decoded = !t_last_decode_failed;
-      t_last_decode_failed = false;
-      if (!info.valid_data || !decoded) continue;  // a failed decode is counted by its type
-      if (partitions_ != nullptr &&
-          !partitions_->admits(info.publication_handle, addressed_id(sample), counters_))
-        continue;
-      received.fetch_add(1);
-      // Runs on a Fast DDS thread: whatever a sample makes the handler throw is counted, not fatal.
-      try {
-        callback_(std::move(sample));
-      } catch (const std::exception&) {
-        counters_.note("handler_error");
-      }
-      sample = T();
-    }
-  }
   void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& status) override {
     matched.store(status.current_count);
   }
@@ -721,12 +759,49 @@ class ReaderListener : public fdds::DataReaderListener {
   std::atomic<int> matched{0};
   std::atomic<std::uint64_t> received{0};
 
- private:
-  typename Reader<T>::Callback callback_;
+ protected:
+  // False (counted) when the sample's id, from `id_of()` (asked only on a camera-scoped topic),
+  // names another camera than its writer's partition.
+  template <class IdOf>
+  bool admits(const fdds::SampleInfo& info, const IdOf& id_of) {
+    return partitions_ == nullptr || partitions_->admits(info.publication_handle, id_of(), counters_);
+  }
+
+  Callback callback_;
   ReceiveCounters& counters_;
-  const WriterPartitions* partitions_;
-  std::mutex mutex_;
+  std::mutex mutex_;  // held while a callback runs
   bool active_ = true;
+
+ private:
+  const WriterPartitions* partitions_;
+};
+
+template <class T>
+class ReaderListener : public GatedReaderListener<typename Reader<T>::Callback> {
+ public:
+  using GatedReaderListener<typename Reader<T>::Callback>::GatedReaderListener;
+
+  void on_data_available(fdds::DataReader* reader) override {
+    std::lock_guard<std::mutex> lock(this->mutex_);
+    if (!this->active_) return;
+    T sample;
+    fdds::SampleInfo info;
+    t_last_decode_failed = false;
+    while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
+      const bool decoded = !t_last_decode_failed;
+      t_last_decode_failed = false;
+      if (!info.valid_data || !decoded) continue;  // a failed decode is counted by its type
+      if (!this->admits(info, [&] { return addressed_id(sample); })) continue;
+      this->received.fetch_add(1);
+      // Runs on a Fast DDS thread: whatever a sample makes the handler throw is counted, not fatal.
+      try {
+        this->callback_(std::move(sample));
+      } catch (const std::exception&) {
+        this->counters_.note("handler_error");
+      }
+      sample = T();
+    }
+  }
 };
 
 template <class T>
@@ -1005,12 +1080,10 @@ const RawTopicEntry& raw_entry_named(const std::string& topic) {
   throw DdsError("'" + topic + "' is not a Panoptes topic (docs/protocol.md)");
 }
 
-class RawReaderListener : public fdds::DataReaderListener {
+class RawReaderListener : public GatedReaderListener<RawReader::Callback> {
  public:
-  // `partitions`, on a camera-scoped topic: as ReaderListener, the leading id read from the CDR.
-  RawReaderListener(RawReader::Callback callback, ReceiveCounters& counters,
-                    const WriterPartitions* partitions)
-      : callback_(std::move(callback)), counters_(counters), partitions_(partitions) {}
+  using GatedReaderListener<RawReader::Callback>::GatedReaderListener;
+
   void on_data_available(fdds::DataReader* reader) override {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!active_) return;
@@ -1019,32 +1092,13 @@ class RawReaderListener : public fdds::DataReaderListener {
     while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
       if (!info.valid_data) continue;
       // A sample that does not decode has no id: it is recorded as it came (docs/hostile_input.md).
-      if (partitions_ != nullptr &&
-          !partitions_->admits(info.publication_handle, leading_string(sample.cdr.data(), sample.cdr.size()),
-                               counters_))
-        continue;
+      if (!admits(info, [&] { return leading_string(sample.cdr.data(), sample.cdr.size()); })) continue;
       received.fetch_add(1);
       sample.source_timestamp_ns = info.source_timestamp.to_ns();
       callback_(std::move(sample));
       sample = RawSample();
     }
   }
-  void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& status) override {
-    matched.store(status.current_count);
-  }
-  void deactivate() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    active_ = false;
-  }
-  std::atomic<int> matched{0};
-  std::atomic<std::uint64_t> received{0};
-
- private:
-  RawReader::Callback callback_;
-  ReceiveCounters& counters_;
-  const WriterPartitions* partitions_;
-  std::mutex mutex_;
-  bool active_ = true;
 };
 
 }  // namespace

@@ -1,0 +1,49 @@
+// SPDX-License-Identifier: Apache-2.0
+// Choosing a participant id whose shared-memory ports no participant owns, live or killed
+// (docs/protocol.md, "Restarting after a crash"). Fast DDS 2.9 names a participant's shared-memory
+// ports after its well-known UDP ports (RTPS 2.2 §9.6.1.1). A participant that takes the port of
+// one killed with SIGKILL removes the dead one's segment ("zombie port") and creates a new one,
+// while the writers in other processes keep writing into the removed segment they have mapped: the
+// new participant then never receives their samples over shared memory. Choosing the id keeps the
+// new participant off the killed one's ports.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <set>
+#include <string>
+
+namespace panoptes::dds {
+
+// Fast DDS's well-known unicast ports: base + domain_gain * domain + offset + participant_gain * id.
+struct ParticipantPortRule {
+  std::uint32_t base = 7400;
+  std::uint32_t domain_gain = 250;
+  std::uint32_t participant_gain = 2;
+  std::uint32_t metatraffic_unicast_offset = 10;
+  std::uint32_t user_unicast_offset = 11;
+};
+
+// The file of shared-memory port `port` in `shm_dir` (Fast DDS 2.9: "fastrtps_port<port>").
+std::filesystem::path shm_port_file(const std::filesystem::path& shm_dir, std::uint32_t port);
+
+// Whether a participant owns shared-memory port `port`, or owned it and was killed: both the
+// port's segment and its exclusive-reader lock file ("<segment>_el") exist. A participant that
+// closes cleanly removes the lock file; a segment without one is reopened safely by the next.
+bool shm_port_owned(const std::filesystem::path& shm_dir, std::uint32_t port);
+
+// The shared-memory ports whose segment a process still maps although its file was removed
+// ("fastrtps_port<N> (deleted)" in /proc/<pid>/maps): a killed participant's port that
+// `fastdds shm clean` removed while writers mapped it. Only the processes this one may read
+// (the same user, or root) are seen.
+std::set<std::uint32_t> shm_ports_mapped_after_removal(const std::filesystem::path& proc_dir);
+
+// The lowest participant id in [0, id_limit) none of whose unicast ports (metatraffic and user
+// data) is owned (shm_port_owned) in `shm_dir` or in `removed_but_mapped`; nullopt when every id
+// is, or the ports would exceed 65535.
+std::optional<int> participant_id_clear_of_owned_shm_ports(
+    const ParticipantPortRule& rule, std::uint32_t domain, int id_limit, const std::filesystem::path& shm_dir,
+    const std::set<std::uint32_t>& removed_but_mapped = {});
+
+}  // namespace panoptes::dds
