@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# How long a late frame matters to a zero-wait estimator (docs/benchmarks.md, "Issue 16 — how long
-# a late frame matters"). The walk8 scene is simulated in order and with 10% of frames late by
+# How long a late frame matters to a zero-wait estimator (docs/estimator.md, "How long a
+# late frame matters"). The walk8 scene is simulated in order and with 10% of frames late by
 # delays drawn uniformly in each range below (the same frames are late in every run: the late draw
 # does not depend on the range). Each late run is estimated offline in arrival order with the
 # estimator's defaults (zero wait, replays from checkpoints) and scored against the truth. In the

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # bench_openssl_transform: what the OpenSSL 3 calls of Fast DDS 2.9's AES-GCM-GMAC transform cost
-# per protected message on this machine (docs/benchmarks.md, "Issue 20 — camera-scoped
-# permissions"): the session key a receiver derives again for every message (HMAC-SHA256 through
+# per protected message on this machine (docs/security.md, "Camera-scoped
+# partitions and where the secure latency goes"): the session key a receiver derives again for
+# every message (HMAC-SHA256 through
 # a new EVP_PKEY), an AES-256-GCM pass over 300 bytes with a new cipher context (what both sides
 # do), and the same pass with one context kept. Needs gcc and libssl-dev.
 #   tests/bench/bench_openssl_transform.sh [ITERATIONS=20000]

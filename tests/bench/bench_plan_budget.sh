@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# The planning budget of issue 19 (docs/benchmarks.md, "Issue 19 — planning budget"): ten long runs
+# The planning budget of issue 19 (docs/planner.md, "Planning budget"): ten long runs
 # of panoptes_plan with different seeds define the best quality; short runs with other seeds must
 # each end within 2% of it. Budgets are CPU seconds of the planning process (--cpu-clock), so that
 # a shared machine slows the runs down without shortening their search; runs go `jobs` at a time

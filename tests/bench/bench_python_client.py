@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""Throughput of the Python client (issue 15, docs/benchmarks.md "Issue 15: Python client").
+"""Throughput of the Python client (issue 15; docs/clients.md, "Python client: throughput and the
+live test").
 
 A child `bench_client --publish` writes MocapFrames (two tracked bodies, 8 labelled and 4 unlabelled
 markers) at --rate for --duration seconds; this process reads them with panoptes.Client.wait_for_frame

@@ -2,7 +2,7 @@
 // bench_ros2_outputs: CPU cost of estimator_node's ROS 2 publishers (issue 15, docs/ros2.md) at
 // 4 cameras x 240 Hz = 960 processed frames/s with 2 bodies, side by side with the native
 // rt/panoptes/frames (MocapFrame) write of the same frames in the same run, as JSON
-// (docs/benchmarks.md, "Issue 15: ROS 2 publishers").
+// (docs/ros2.md, "Cost of the ROS 2 publishers").
 //
 // Frames are paced in real time at --rate. Each phase lasts --seconds:
 //   idle         no writes (the process's DDS threads only): the baseline

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# bench_security: what DDS Security costs the live pipeline (docs/benchmarks.md, "Issue 20 — secure
-# vs plain"; docs/security.md, "Cost"). bench_latency on the loopback profile, plain and secured
+# bench_security: what DDS Security costs the live pipeline (docs/security.md, "Secure
+# vs plain latency" and "Cost"). bench_latency on the loopback profile, plain and secured
 # (a throw-away studio of deploy/security/panoptes-security, governance ENCRYPT by default),
 # alternated ROUNDS times in one run so both see the same machine; prints one JSON object with
 # every run and the medians' ratios (secure / plain). With --variant-profile FILE a third run per

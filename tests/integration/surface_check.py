@@ -165,8 +165,8 @@ def percentile(values, q):
 
 
 def print_latency(events):
-    """Informational (docs/benchmarks.md, "Issue 22"): a continue event's stamp is its camera frame's
-    mid-exposure stamp, at which camera_node --source features publishes the frame."""
+    """Informational (docs/surface.md, "End-to-end stroke latency"): a continue event's stamp is its
+    camera frame's mid-exposure stamp, at which camera_node --source features publishes the frame."""
     continues = [e for e in events if e["phase"] == "continue"]
     total = [(e["receive_ns"] - e["stamp_ns"]) * 1e-6 for e in continues]
     hop = [(e["receive_ns"] - e["publish_ns"]) * 1e-6 for e in continues]

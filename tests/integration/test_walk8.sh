@@ -46,7 +46,7 @@ late_rmse=$(json "$work/late.json" "['rmse_mm']")
 # Zero wait publishes each output without the frames that have not arrived yet: +6.2% here (a 20 ms
 # window that holds every output back 20 ms gives +1.7%). A frame matters to the live estimate for
 # ~5-10 ms, so one 10 ms late costs what losing it costs (tests/bench/bench_late_delay.sh;
-# docs/benchmarks.md, "Issue 16 — how long a late frame matters").
+# docs/estimator.md, "How long a late frame matters").
 python3 -c "import sys; sys.exit(0 if $late_rmse <= 1.07 * $rmse else 1)" &&
   pass "RMSE with late frames $late_rmse mm within 7% of in order ($rmse mm)" || fail "RMSE $late_rmse mm vs $rmse mm"
 finish

@@ -7,7 +7,7 @@
 # the restart, the seconds until every camera was seen, the cameras still missing at the timeout and
 # whether their CameraStatus arrived, and which cameras still map a removed shared-memory port. The
 # last line is a JSON summary. Findings and figures: docs/protocol.md ("Restarting after a crash"),
-# docs/benchmarks.md ("Subscriber restart after SIGKILL").
+# docs/protocol.md ("Subscriber restart after SIGKILL: measurements").
 #
 #   bash tests/stress/subscriber_restart.sh BUILD_DIR [options]
 #     --restarts K        restarts (20)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-# Where the zero-wait outputs of a late-delivery run lose accuracy (issue 16; docs/benchmarks.md,
-# "Issue 16 — replay cost"). The outputs of `estimator_node --replay-arrival` are split into those
+# Where the zero-wait outputs of a late-delivery run lose accuracy (issue 16; docs/estimator.md,
+# "Replay cost"). The outputs of `estimator_node --replay-arrival` are split into those
 # published when every older frame had arrived ("complete") and those published while older frames
 # were still in flight, and each record is compared with the in-order run's record of the same
 # stamp and id. Exact replay: every complete record is identical.

@@ -3,7 +3,7 @@
 // the default measurement_noise_px) shortened to 6 s, the held-out-camera criterion — which needs
 // no ground truth — picks settings whose ground-truth RMSE is within 5% of the best the
 // ground-truth criterion finds, from the same 4x-off start. The full 20 s measurement is in
-// docs/benchmarks.md ("Issue 17 — filter tuning").
+// docs/recording.md ("Filter tuning on a noisy scene").
 #include <cstdio>
 #include <fstream>
 #include <sstream>

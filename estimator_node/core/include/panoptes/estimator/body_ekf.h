@@ -32,7 +32,7 @@ inline constexpr int kBodyP = 0, kBodyV = 3, kBodyA = 6, kBodyTheta = 9, kBodyW 
 // acceleration). With angular_jerk = 0 and no prior on α, α stays zero: the constant angular
 // velocity model.
 // Defaults from sweeps on issue 5's acceptance scene and issue 16's small fast bodies
-// (docs/benchmarks.md); bodies accelerating at 10-20 m/s² want jerk ≈ 150.
+// (docs/bodies.md, "Measurements"); bodies accelerating at 10-20 m/s² want jerk ≈ 150.
 struct BodyMotionNoise {
   double jerk = 50.0;           // σ² of white jerk, m²/s⁵ (drives a; with it v and p)
   double angular_accel = 0.1;   // σ² of white angular acceleration, rad²/s³ (drives ω)

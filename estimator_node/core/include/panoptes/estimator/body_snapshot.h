@@ -3,7 +3,7 @@
 // instant, the marker correspondences are known, and Gauss–Newton minimises the sum of squared
 // reprojection errors over all (camera, marker) observations, with no motion model and no memory.
 // It is the reference the body filter is measured against (issue 16; docs/bodies.md,
-// docs/benchmarks.md), as SyncBaseline is for points: for comparisons, not for production.
+// "Measurements"), as SyncBaseline is for points: for comparisons, not for production.
 #pragma once
 
 #include <cstddef>

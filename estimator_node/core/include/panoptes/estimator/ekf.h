@@ -9,8 +9,9 @@
 // equals the Joseph form (I − K H) P (I − K H)ᵀ + K R Kᵀ exactly; in floating point both are
 // symmetrised, and the test (tests/unit/estimator/test_ekf.cpp) checks them equal on random cases.
 // It costs M·N² multiplications instead of ~2·N³ (15-state body filter: 450 against 6750), which
-// the body filter's per-marker updates need (docs/benchmarks.md, "bodies' share"); the Joseph
-// form's robustness to a suboptimal gain is not needed because the gain is never anything else.
+// the body filter's per-marker updates need (docs/bodies.md, "Acceptance scene, prediction and
+// cost"); the Joseph form's robustness to a suboptimal gain is not needed because the gain is never
+// anything else.
 #pragma once
 
 #include <Eigen/Core>
