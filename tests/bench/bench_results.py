@@ -225,7 +225,9 @@ def render_row(row):
     if "note" in row:
         figure += f"; {row['note']}"
     goal = row.get("goal")
-    goal_text = "—" if goal is None else f"{GOAL_OPS[goal['op']]} {with_unit(goal['value'], row['unit'])} ({goal['source']})"
+    goal_text = "—"
+    if goal is not None:
+        goal_text = f"{GOAL_OPS[goal['op']]} {with_unit(goal['value'], row['unit'])} ({goal['source']})"
     date = "—" if row["date"] is None else row["date"] + ("†" if "carried_over" in row else "")
     commit = "—" if row["commit"] is None else f"`{row['commit'][:10]}`"
     what = f"[{row['what']}]({row['details']})"
@@ -312,6 +314,12 @@ def last_json_object(path):
 
 
 def extract(path, field):
+    """The number at a dotted path of the file's JSON, optionally scaled: "a.b" or "a.b * 0.001"."""
+    field, _, factor = (part.strip() for part in field.partition("*"))
+    try:
+        scale = float(factor) if factor else 1.0
+    except ValueError as error:
+        raise RecordError(f"extract '{field} * {factor}': the factor is not a number") from error
     value = last_json_object(path)
     for part in field.split("."):
         if isinstance(value, list) and part.isdigit() and int(part) < len(value):
@@ -322,7 +330,7 @@ def extract(path, field):
             raise RecordError(f"{path}: field '{field}' not found (stopped at '{part}')")
     if not is_number(value):
         raise RecordError(f"{path}: field '{field}' is {value!r}, not a number")
-    return value
+    return float(f"{value * scale:.12g}") if factor else value
 
 
 def machine_now():
@@ -401,7 +409,8 @@ def parser(root):
     top.add_argument("--results", default=os.environ.get("PANOPTES_BENCH_RESULTS",
                                                          os.path.join(root, "docs", "bench-results")),
                      help="folder of <capability>.json records (default: docs/bench-results)")
-    top.add_argument("--doc", default=os.environ.get("PANOPTES_BENCH_DOC", os.path.join(root, "docs", "benchmarks.md")),
+    top.add_argument("--doc", default=os.environ.get("PANOPTES_BENCH_DOC",
+                                                     os.path.join(root, "docs", "benchmarks.md")),
                      help="the document whose tables are regenerated (default: docs/benchmarks.md)")
     sub = top.add_subparsers(dest="mode", required=True)
     report = sub.add_parser("report", help="regenerate the tables between the markers")

@@ -61,6 +61,12 @@ check "the table shows the recorded row" grep -q '\*\*0.61 ms\*\* (3 runs: 0.55â
   "$docs/benchmarks.md"
 check "the tables are current after record_result.sh" \
   bash "$report" --check --results "$results" --doc "$docs/benchmarks.md" >/dev/null
+printf '{"cameras": 32, "console": {"console_cpu_percent": 5.5, "websocket_bytes_per_s": 210400}}\nflood: done\n' \
+  >"$work/c.json"
+PANOPTES_BENCH_RESULTS="$results" PANOPTES_BENCH_DOC="$docs/benchmarks.md" bash "$record" console \
+  bandwidth_32_cameras --from-json "$work/c.json" --commit abcdef0 --machine "test machine" >/dev/null
+check "record_result.sh scales an extracted figure ('websocket_bytes_per_s * 0.001')" \
+  grep -q '\*\*210.4 kB/s\*\*.*`abcdef0`' "$docs/benchmarks.md"
 
 # 5. Malformed records are refused with exit 2, naming the file and the field.
 refused() {  # refused <field shown> <python statement on row>: break row 0 of tracking.json
@@ -93,6 +99,14 @@ refused figure 'row["figure"] = 1'
 refused id 'data["rows"][1]["id"] = row["id"]'
 refused runs 'row["runs"] = []'
 refused date 'row["value"] = None'
+printf '{"capability": "x", "order": 99, "rows": [' >"$work/broken.json"
+broken_json() {
+  local bad="$work/bad" out rc=0
+  rm -rf "$bad" && cp -r "$results" "$bad" && cp "$work/broken.json" "$bad/broken.json"
+  out="$(bash "$report" --check --results "$bad" --doc "$docs/benchmarks.md" 2>&1)" || rc=$?
+  [[ $rc -eq 2 && "$out" == *"$bad/broken.json: not valid JSON"* ]]
+}
+check "a file that is not JSON is refused, named" broken_json
 
 if ((failures)); then
   echo "$failures check(s) failed"
