@@ -11,6 +11,7 @@ format is described in docs/benchmarks.md, "Results format".
 import argparse
 import datetime
 import difflib
+import functools
 import json
 import os
 import re
@@ -51,6 +52,7 @@ def slug(heading):
     return "".join(out)
 
 
+@functools.lru_cache(maxsize=None)
 def anchors(doc_path):
     found = set()
     counts = {}
