@@ -12,9 +12,9 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "bus_bridge.h"
-#include "calibration_workflow.h"
 #include "panoptes/cli.h"
+#include "panoptes/console/bus_bridge.h"
+#include "panoptes/console/calibration_workflow.h"
 #include "panoptes/console/server.h"
 #include "panoptes/process.h"
 
