@@ -13,9 +13,9 @@
 #include <nlohmann/json.hpp>
 
 #include "panoptes/cli.h"
-#include "panoptes/console/bus_bridge.h"
-#include "panoptes/console/calibration_workflow.h"
 #include "panoptes/console/server.h"
+#include "panoptes/console_app/bus_bridge.h"
+#include "panoptes/console_app/calibration_workflow.h"
 #include "panoptes/process.h"
 
 namespace {
