@@ -28,11 +28,66 @@ set(PANOPTES_LAYERING_RULES
   "panoptes_camera|${_panoptes_dds_links}||the camera pipeline runs without DDS (offline mode, tests)"
   "panoptes_evaluation|${_panoptes_dds_links}||only panoptes_dds knows DDS"
   "panoptes_session|${_panoptes_dds_links}||the estimator session runs without DDS (offline mode, tests)"
-  "panoptes_console_server|${_panoptes_dds_links}|panoptes_sim|CLI11|#include [<\"](fastdds/|fastrtps/|panoptes_msgs/|panoptes/dds/|CLI/)|the console's state and server run without DDS (tests), panoptes_console adapts the bus"
+  "panoptes_console_server|${_panoptes_dds_links}|panoptes_sim|CLI11|#include [<\"](fastdds/|fastrtps/|panoptes_msgs/|panoptes/dds/|CLI/)|the console's state and server run without DDS (tests), panoptes_console_app adapts the bus"
   "panoptes_tune|${_panoptes_dds_links}||filter tuning replays recordings offline: no DDS"
   "panoptes_recording|${_panoptes_dds_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](fastdds/|fastrtps/|fastcdr/|panoptes_msgs/|panoptes/dds/|CLI/)|MCAP files are read and written without DDS (offline tools, estimator_node --in-recording)"
   "panoptes_client|${_panoptes_io_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](CLI/|yaml-cpp/|nlohmann/|spdlog/|fstream|opencv2/|panoptes/jsonl\\.h|panoptes/config\\.h)|the client library applications link: the bus and its messages, no file formats, simulator or CLI"
   "panoptes_python|${_panoptes_io_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](fastdds/|fastrtps/|fastcdr/|panoptes_msgs/|panoptes/dds/|CLI/|yaml-cpp/|nlohmann/)|the Python binding uses the public client API only")
+
+# Generated rules (panoptes_layering_manifest), from where each library's folder is:
+# - tools/ sits above the nodes: a tool's library may link any library below it, but no library in
+#   idl/, common/, camera_node/ or estimator_node/ links a library in tools/.
+# - The console and the recorder serve the whole bus through its messages: they link no library of
+#   camera_node/ or estimator_node/ (so a change to them rebuilds no node library, and the reverse).
+set(PANOPTES_LAYERING_BUS_TOOLS panoptes_console_server panoptes_console_app panoptes_recorder)
+
+# Every library target defined in `dir` or below, into `out_var`.
+function(_panoptes_libraries dir out_var)
+  set(found "")
+  get_property(targets DIRECTORY ${dir} PROPERTY BUILDSYSTEM_TARGETS)
+  foreach(target ${targets})
+    get_target_property(type ${target} TYPE)
+    if(type MATCHES "_LIBRARY$")
+      list(APPEND found ${target})
+    endif()
+  endforeach()
+  get_property(subdirs DIRECTORY ${dir} PROPERTY SUBDIRECTORIES)
+  foreach(subdir ${subdirs})
+    _panoptes_libraries(${subdir} below)
+    list(APPEND found ${below})
+  endforeach()
+  set(${out_var} ${found} PARENT_SCOPE)
+endfunction()
+
+# PANOPTES_LAYERING_RULES plus the generated rules above, into `out_var`.
+function(_panoptes_layering_rules out_var)
+  set(rules ${PANOPTES_LAYERING_RULES})
+  _panoptes_libraries(${CMAKE_SOURCE_DIR}/tools tool_libraries)
+  set(node_libraries "")
+  foreach(dir camera_node estimator_node)
+    _panoptes_libraries(${CMAKE_SOURCE_DIR}/${dir} found)
+    list(APPEND node_libraries ${found})
+  endforeach()
+  set(lower_libraries ${node_libraries})
+  foreach(dir idl common)
+    _panoptes_libraries(${CMAKE_SOURCE_DIR}/${dir} found)
+    list(APPEND lower_libraries ${found})
+  endforeach()
+  string(REPLACE ";" "|" tool_regex "${tool_libraries}")
+  string(REPLACE ";" "|" node_regex "${node_libraries}")
+  if(tool_regex)
+    foreach(target ${lower_libraries})
+      list(APPEND rules "${target}|${tool_regex}||tools/ sits above the nodes and common/: no library below it links a tool's library")
+    endforeach()
+  endif()
+  foreach(target ${PANOPTES_LAYERING_BUS_TOOLS})
+    if(NOT target IN_LIST tool_libraries)
+      message(FATAL_ERROR "layering: ${target} (PANOPTES_LAYERING_BUS_TOOLS) is not a library in tools/")
+    endif()
+    list(APPEND rules "${target}|${node_regex}||the console and the recorder serve the whole bus through its messages: no node library")
+  endforeach()
+  set(${out_var} ${rules} PARENT_SCOPE)
+endfunction()
 
 # Transitive link closure of `target` (names of targets and libraries) into `out_var`.
 function(_panoptes_link_closure target out_var)
@@ -80,13 +135,16 @@ function(panoptes_layering_manifest)
   set(dir ${CMAKE_BINARY_DIR}/layering)
   file(MAKE_DIRECTORY ${dir})
   set(rules_file ${dir}/rules.txt)
-  string(REPLACE ";" "\n" rules_text "${PANOPTES_LAYERING_RULES}")
+  _panoptes_layering_rules(rules)
+  string(REPLACE ";" "\n" rules_text "${rules}")
   file(WRITE ${rules_file} "${rules_text}\n")
-  foreach(rule ${PANOPTES_LAYERING_RULES})
+  set(written "")
+  foreach(rule ${rules})
     string(REGEX MATCH "^[^|]+" target "${rule}")
-    if(NOT TARGET ${target})
+    if(NOT TARGET ${target} OR target IN_LIST written)
       continue()
     endif()
+    list(APPEND written ${target})
     _panoptes_link_closure(${target} closure)
     set(text "")
     foreach(link ${closure})
@@ -94,6 +152,9 @@ function(panoptes_layering_manifest)
     endforeach()
     get_target_property(source_dir ${target} SOURCE_DIR)
     get_target_property(sources ${target} SOURCES)
+    if(NOT sources)
+      set(sources "")  # an INTERFACE library
+    endif()
     foreach(source ${sources})
       get_filename_component(path ${source} ABSOLUTE BASE_DIR ${source_dir})
       string(APPEND text "file ${path}\n")

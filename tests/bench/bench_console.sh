@@ -3,7 +3,7 @@
 # Console benchmark (issue 18, docs/benchmarks.md): panoptes_feature_flood publishes N cameras'
 # FeatureFrames (640x480, B blobs each) at R Hz, their CameraInfo and status, and a TrackFrame per
 # frame round, on the loopback profile; panoptes_console reads them and one chromium page shows them
-# (estimator_node/console/web/test/bench_console.mjs). Prints one JSON line: the console's CPU and
+# (tools/console/web/test/bench_console.mjs). Prints one JSON line: the console's CPU and
 # WebSocket bandwidth, the page's frame rates, and beside them the publisher's CPU over the same
 # seconds (the cost of writing the same samples to DDS). With [chains] > 0 the flood also writes a
 # ChainFrame of that many finger chains after every camera frame, as estimator_node does.
@@ -30,7 +30,7 @@ flood_ticks0=$(ticks "$flood")
 start=$(date +%s.%N)
 extra=()
 [ "$synthetic" -gt 0 ] && extra=(--synthetic-tracks "$synthetic")
-result=$(node "$source_dir/estimator_node/console/web/test/bench_console.mjs" --url "$(cat "$work/url")" \
+result=$(node "$source_dir/tools/console/web/test/bench_console.mjs" --url "$(cat "$work/url")" \
   --console-pid "$console" --seconds "$seconds" "${extra[@]}")
 flood_ticks1=$(ticks "$flood")
 elapsed=$(echo "$(date +%s.%N) - $start" | bc)

@@ -104,7 +104,7 @@ start_clients_estimator() {  # RUN DURATION
 # require_browser: the console's browser tests need playwright-core (npm ci in the console's web
 # folder) and Debian's chromium; skipped (77) without them outside CI, failed in CI. Sets $web.
 require_browser() {
-  web="$source_dir/estimator_node/console/web"
+  web="$source_dir/tools/console/web"
   if [ ! -d "$web/node_modules/playwright-core" ] || [ ! -x /usr/bin/chromium ]; then
     if [ -n "${CI:-}" ]; then fail "playwright-core (npm ci in $web) or /usr/bin/chromium missing"; finish; fi
     echo "SKIP: playwright-core (npm ci in $web) or /usr/bin/chromium missing"; exit 77

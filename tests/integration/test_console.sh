@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # The operator console (issue 18, docs/console.md) in Debian's chromium driven by playwright-core
-# (estimator_node/console/web/test/console_test.mjs) against a live simulated system: four
+# (tools/console/web/test/console_test.mjs) against a live simulated system: four
 # camera_nodes (deploy/scenes/console.yaml: two loose markers and a body), estimator_node with the
 # scene's calibration and bodies, panoptes_console. The browser checks the page; this script
 # checks what the page showed against what each camera published (its own --out-features record):

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # The console's calibration page (issue 18, docs/console.md "Calibration") in Debian's chromium
-# driven by playwright-core (estimator_node/console/web/test/console_calibration_test.mjs): the
+# driven by playwright-core (tools/console/web/test/console_calibration_test.mjs): the
 # page starts a wand capture, six camera_nodes replay the simulated wand room (as
 # test_calibration_capture.sh), the page shows each camera's 8x8 coverage live, stops the capture,
 # runs the solve and shows its report (per-camera residuals, wand-length statistics, the plots),

@@ -3,7 +3,7 @@
 # Articulated chains in the operator console (docs/console.md, "Chains"; docs/articulated.md): the
 # hand scene (test_chains.sh's, 40 s of it) replayed live by four camera_nodes into estimator_node --bodies
 # hand_bodies.yaml --out-chains, panoptes_console, and Debian's chromium driven by playwright-core
-# (estimator_node/console/web/test/console_chains_test.mjs). The browser checks that the chain is
+# (tools/console/web/test/console_chains_test.mjs). The browser checks that the chain is
 # listed with its figures, that its tip is drawn where the published tip projects, and that a
 # grab turns it magenta; this script checks that every chain state the page showed is one the
 # estimator wrote to its Chain JSONL (same stamp: same tip and predicted tip, to the page's 0.1 mm

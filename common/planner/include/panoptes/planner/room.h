@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // What a camera placement plan is made of (docs/planner.md): the working volume where markers
 // move, the surfaces cameras may be mounted on, static obstacles, and the lenses to choose from.
-// Types and geometry only; the room file is read by panoptes_plan (common/tools/plan).
+// Types and geometry only; the room file is read by panoptes_plan (tools/plan).
 #pragma once
 
 #include <string>

@@ -22,8 +22,8 @@
 #include "panoptes/pgm.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"
+#include "panoptes/sim_ptz/sim_ptz.h"
 #include "panoptes/simulator.h"
-#include "sim_ptz.h"
 
 namespace fs = std::filesystem;
 using namespace panoptes;

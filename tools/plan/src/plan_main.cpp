@@ -20,9 +20,9 @@
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/errors.h"
+#include "panoptes/plan_io/plan_report.h"
+#include "panoptes/plan_io/room_file.h"
 #include "panoptes/planner/optimizer.h"
-#include "plan_report.h"
-#include "room_file.h"
 
 namespace fs = std::filesystem;
 using namespace panoptes;

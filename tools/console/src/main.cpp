@@ -12,10 +12,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "bus_bridge.h"
-#include "calibration_workflow.h"
 #include "panoptes/cli.h"
 #include "panoptes/console/server.h"
+#include "panoptes/console_app/bus_bridge.h"
+#include "panoptes/console_app/calibration_workflow.h"
 #include "panoptes/process.h"
 
 namespace {

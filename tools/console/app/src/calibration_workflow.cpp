@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "calibration_workflow.h"
+#include "panoptes/console_app/calibration_workflow.h"
 
 #include <fcntl.h>
 #include <signal.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "room_file.h"
+#include "panoptes/plan_io/room_file.h"
 
 #include <cmath>
 #include <string>

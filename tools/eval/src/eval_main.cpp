@@ -10,10 +10,10 @@
 
 #include <CLI/CLI.hpp>
 
-#include "eval_plot.h"
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/eval/evaluation.h"
+#include "panoptes/eval_plot/eval_plot.h"
 #include "panoptes/jsonl.h"
 #include "panoptes/process.h"
 #include "panoptes/records.h"

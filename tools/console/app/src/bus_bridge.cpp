@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "bus_bridge.h"
+#include "panoptes/console_app/bus_bridge.h"
 
 #include <algorithm>
 #include <cmath>

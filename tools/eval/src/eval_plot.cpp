@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "eval_plot.h"
+#include "panoptes/eval_plot/eval_plot.h"
 
 #include <algorithm>
 #include <array>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "sim_ptz.h"
+#include "panoptes/sim_ptz/sim_ptz.h"
 
 #include <algorithm>
 #include <cmath>

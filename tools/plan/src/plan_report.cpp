@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "plan_report.h"
+#include "panoptes/plan_io/plan_report.h"
 
 #include <algorithm>
 #include <cmath>
