@@ -336,13 +336,15 @@ class Live(unittest.TestCase):
         def pull(out):
             while (frame := self.client.wait_for_frame(1.0)) is not None:
                 out.append(frame.frame_number)
+        # The publisher's first frame before the threads start, whose 1 s wait means "the run is over".
+        first = self.first_frame().frame_number
         threads = [threading.Thread(target=pull, args=(out,)) for out in frames]
         for thread in threads:
             thread.start()
         for thread in threads:
             thread.join(20)
         self.assertTrue(all(not t.is_alive() for t in threads))
-        numbers = frames[0] + frames[1]
+        numbers = [first] + frames[0] + frames[1]
         stats = self.client.stats()
         self.assertEqual(len(set(numbers)), len(numbers))  # each frame to one thread only
         self.assertEqual(len(numbers), stats.frames_received)  # and every received frame to one
