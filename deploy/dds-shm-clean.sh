@@ -1,18 +1,47 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# Removes Fast DDS shared-memory files that no process maps any more. `fastdds shm clean` (Fast DDS
-# 2.9) can leave the port files (/dev/shm/fastrtps_port<N> and their sem.*_mutex) of processes that
-# were killed (tests kill estimator_node with -9), so they pile up; it has also been seen to remove
-# a killed process's port that writers still mapped (Panoptes processes keep off such a port:
-# docs/protocol.md, "Restarting after a crash"). A file some process still maps (an open
-# participant, e.g. another test running in parallel) is left alone by the loop below.
-fastdds shm clean >/dev/null 2>&1 || true
-in_use="$(cat /proc/[0-9]*/maps 2>/dev/null | grep -o '/dev/shm/fastrtps_[^ ]*' | sort -u)"
-for file in /dev/shm/fastrtps_port*; do
+# Removes the Fast DDS shared-memory files that no live participant owns and no process maps:
+# segments (/dev/shm/fastrtps_<id>) and ports (fastrtps_port<N>, with sem.fastrtps_port<N>_mutex)
+# left by processes that were killed (tests kill estimator_node with -9), so that they do not pile
+# up. It is safe while other Panoptes processes run, e.g. tests running in parallel (docs/testing.md,
+# "Shared memory"): a file is removed only if
+#   - it is older than PANOPTES_SHM_CLEAN_MIN_AGE_S seconds (default 10): a participant creates its
+#     files, then locks and maps them; a file seen in between would look abandoned;
+#   - its lock file (<file>_el or _sl), if any, is not locked: a live owner holds that lock;
+#   - no process maps it: writers keep a killed reader's port mapped, and a new segment under that
+#     name would cut the next reader off from them (docs/protocol.md, "Restarting after a crash").
+# `fastdds shm clean` (Fast DDS 2.9) checks the lock only, so it removes such ports, and files a
+# starting participant has created but not yet locked; this script replaces it.
+set -uo pipefail
+shm="${PANOPTES_SHM_DIR:-/dev/shm}"
+min_age_s="${PANOPTES_SHM_CLEAN_MIN_AGE_S:-10}"
+now=$(date +%s)
+in_use="$(cat /proc/[0-9]*/maps 2>/dev/null | grep -o "$shm/fastrtps_[^ ]*" | sort -u)"
+
+old_enough() {  # FILE...: every one that exists is older than min_age_s
+  local file modified
+  for file in "$@"; do
+    modified=$(stat -c %Y "$file" 2>/dev/null) || continue
+    [ $((now - modified)) -ge "$min_age_s" ] || return 1
+  done
+  return 0
+}
+
+unlocked() {  # LOCK_FILE: not locked by any process (a missing file is not locked)
+  [ ! -e "$1" ] || flock --nonblock --exclusive "$1" true 2>/dev/null
+}
+
+for file in "$shm"/fastrtps_*; do
   [ -e "$file" ] || continue
-  case "$file" in *_el) continue ;; esac
-  if ! grep -qxF "$file" <<<"$in_use"; then
-    rm -f "$file" "/dev/shm/sem.$(basename "$file")_mutex"
-  fi
+  case "$file" in *_el | *_sl) continue ;; esac
+  grep -qxF "$file" <<<"$in_use" && continue
+  old_enough "$file" "${file}_el" "${file}_sl" || continue
+  unlocked "${file}_el" && unlocked "${file}_sl" || continue
+  rm -f "$file" "${file}_el" "${file}_sl" "$shm/sem.$(basename "$file")_mutex"
+done
+# Lock files whose segment or port is gone.
+for lock in "$shm"/fastrtps_*_el "$shm"/fastrtps_*_sl; do
+  [ -e "$lock" ] && [ ! -e "${lock%_??}" ] || continue
+  old_enough "$lock" && unlocked "$lock" && rm -f "$lock"
 done
 exit 0

@@ -6,6 +6,11 @@ source_dir="$2"
 bin="$build_dir/bin"
 work="$(mktemp -d /tmp/panoptes-test-XXXXXX)"
 export PANOPTES_DDS_PROFILE="$source_dir/deploy/dds/loopback.xml"
+# The test's DDS domain (docs/testing.md, "DDS domains"): ctest gives each integration test one of
+# its own (PANOPTES_DOMAIN) and a second that nobody publishes on (PANOPTES_EMPTY_DOMAIN), so that
+# tests run in parallel without seeing each other. Run by hand: 0 and (domain + 117) % 233.
+export PANOPTES_DOMAIN="${PANOPTES_DOMAIN:-0}"
+empty_domain="${PANOPTES_EMPTY_DOMAIN:-$(( (PANOPTES_DOMAIN + 117) % 233 ))}"
 pids=()
 failures=0
 

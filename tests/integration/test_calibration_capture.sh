@@ -8,9 +8,8 @@
 # records every frame.
 source "$(dirname "$0")/lib.sh"
 en="$bin/estimator_node"
-# A DDS domain of its own: benchmarks and other tests on this machine publish cam0.. too (found:
-# a latency benchmark's cameras doubled cam0-cam3 in the recording).
-export PANOPTES_DOMAIN=$(( 100 + $$ % 100 ))
+# A DDS domain of its own (lib.sh): benchmarks and other tests on this machine publish cam0.. too
+# (found: a latency benchmark's cameras doubled cam0-cam3 in the recording).
 
 cp "$source_dir/deploy/scenes/wand_room.yaml" "$work/room.yaml"
 expect_exit 0 "simulate wand features" -- "$bin/panoptes_sim" features --scene "$work/room.yaml" --out-dir "$work/wand" --duration 6

@@ -7,8 +7,7 @@
 # the truth is exact: after 5 s each camera's estimated offset must be within 0.2 ms of it, the
 # tracks must be as accurate as with perfect clocks, and no camera may be starved.
 source "$(dirname "$0")/lib.sh"
-# A domain of our own: other runs of the suite on this host must not answer our requests.
-export PANOPTES_DOMAIN="${PANOPTES_DOMAIN:-$((RANDOM % 200 + 20))}"
+# A domain of our own (lib.sh): other tests on this host must not answer our requests.
 
 # The demo's four cameras; cam2's own clock is 4 ms ahead in the scene, which the node must treat
 # as part of its clock and correct as well.

@@ -47,7 +47,7 @@ replay_cameras "$epoch" 22 c0 c1 c2 c3 c4 c5
 # always does (Cyclone issues #1923, #2090); it advertises and sends from 127.0.0.1 only
 # (docs/interop.md), so those two are accepted, and nothing else.
 sleep 10
-domain=${PANOPTES_DOMAIN:-0}
+domain=$PANOPTES_DOMAIN
 first_port=$((7400 + 250 * domain + 10))
 sockets=$(ss -uanpH 2>/dev/null | grep -E "pid=($probe_pid|$estimator),") || true
 outside=$(echo "$sockets" | awk -v probe="pid=$probe_pid," -v first="$first_port" 'NF {

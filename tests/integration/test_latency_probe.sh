@@ -11,7 +11,7 @@ if [ ! -x "$bin/bench_latency" ]; then
 fi
 
 expect_exit 0 "bench_latency runs the pipeline with probes" -- "$bin/bench_latency" --json --duration 2 \
-  --warmup 1 --log-dir "$work/run" --samples "$work/samples.jsonl"
+  --warmup 1 --domain "$PANOPTES_DOMAIN" --log-dir "$work/run" --samples "$work/samples.jsonl"
 cp "$work/last.out" "$work/result.json"
 expect_stderr_contains "measuring" "progress on stderr"
 python3 - "$work/result.json" "$work/samples.jsonl" <<'PY' && pass "probes echoed, poses tied to their frames, stamps in order" || fail "latency probe results: $(head -c 600 "$work/result.json")"

@@ -11,7 +11,6 @@
 # package that imports from <prefix>/lib/python3/dist-packages and finds the installed library and profile.
 source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/clients.yaml"
-export PANOPTES_DOMAIN="${PANOPTES_DOMAIN:-0}"
 python=$(cat "$build_dir/python/INTERPRETER" 2>/dev/null)
 [ -n "$python" ] && [ -f "$build_dir/python/panoptes/__init__.py" ] || { fail "the Python package is not built ($build_dir/python)"; finish; }
 export PYTHONPATH="$build_dir/python"
@@ -20,7 +19,6 @@ for tool in estimator_node camera_node panoptes_sim; do
 done
 
 # --- an empty domain ----------------------------------------------------------------------------
-empty_domain=$(( (PANOPTES_DOMAIN + 117) % 233 ))
 expect_exit 0 "wait_for_frame on an empty domain returns None within the timeout" -- "$python" -c "
 import re, time, panoptes
 with panoptes.Client(domain=$empty_domain) as c:

@@ -12,7 +12,6 @@
 # Then panoptes_replay publishes A's features into a live estimator (same tracks as the original
 # run), and at --rate 10 says whether it kept up. Bad input: empty and foreign files.
 source "$(dirname "$0")/lib.sh"
-export PANOPTES_DOMAIN="${PANOPTES_DOMAIN:-71}"
 check_mcap() { node "$source_dir/tests/mcap/check_mcap.mjs" "$@"; }
 json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
 if [ ! -d "$source_dir/tests/mcap/node_modules/@mcap/core" ]; then

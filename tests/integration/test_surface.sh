@@ -14,7 +14,6 @@ surface="$source_dir/deploy/scenes/surface_wall_surface.yaml"
 # The live run's settings (benchmark aid: another latency_window_ms, docs/surface.md, "End-to-end
 # stroke latency").
 live_surface="${PANOPTES_SURFACE_LIVE_SETTINGS:-$surface}"
-export PANOPTES_DOMAIN="${PANOPTES_DOMAIN:-0}"
 for tool in lumipoint_board estimator_node camera_node panoptes_sim panoptes_track_probe; do
   [ -x "$bin/$tool" ] || { fail "$bin/$tool is not built"; finish; }
 done

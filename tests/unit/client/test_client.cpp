@@ -3,8 +3,6 @@
 // order to the queue, latest() and callbacks; late-joining body descriptions and their replacement
 // by a restarted estimator; malformed samples counted and ignored; gaps, restarts, drops, timeouts,
 // callback exceptions, close(); errors naming what is wrong.
-#include <unistd.h>
-
 #include <atomic>
 #include <chrono>
 #include <limits>
@@ -13,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../dds_test_support.h"
 #include "panoptes/client/client.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes_msgs/chains.h"
@@ -24,24 +23,16 @@ namespace {
 
 using namespace std::chrono_literals;
 
+using panoptes::test::wait_until;
+
 int test_domain() {
-  return 100 + static_cast<int>(getpid() % 100);
+  return panoptes::test::dds_test_domain();
 }
 
 ClientOptions client_options() {
   ClientOptions o;
   o.domain_id = test_domain();
   return o;
-}
-
-template <class Predicate>
-bool wait_until(Predicate predicate, std::chrono::milliseconds timeout = 5s) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!predicate()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(5ms);
-  }
-  return true;
 }
 
 // The estimator's side of the two topics.

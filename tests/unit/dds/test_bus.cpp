@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The DDS bus over the loopback profile: per-camera content filters (Bus::make_reader's `only_id`)
 // and the reliability a feature writer offers to a calibration capture.
-#include <unistd.h>
-
 #include <atomic>
 #include <chrono>
 #include <mutex>
@@ -12,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../dds_test_support.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/time_sync.h"
 #include "panoptes_msgs/panoptes.h"
@@ -21,23 +20,17 @@ namespace {
 
 using namespace std::chrono_literals;
 
+using test::wait_until;
+
 // One domain per test process, so that parallel ctest runs do not hear each other.
 BusOptions options(const std::string& name) {
   BusOptions o;
-  o.domain_id = 100 + static_cast<int>(getpid() % 100);
+  o.domain_id = test::dds_test_domain();
   o.participant_name = name;
   return o;
 }
 
-template <class Predicate>
-bool wait_until(Predicate predicate, std::chrono::milliseconds timeout = 5s) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!predicate()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(5ms);
-  }
-  return true;
-}
+constexpr long long kLastRound = 1000;
 
 msg::Predictions predictions_for(const std::string& camera, long long stamp) {
   msg::Predictions p;
@@ -50,18 +43,21 @@ TEST(Bus, OnlyIdReaderGetsOnlyItsCamerasSamples) {
   Bus estimator(options("estimator")), camera_a(options("cam_a")), camera_b(options("cam_b"));
   std::mutex mutex;
   std::vector<std::string> got_a, got_b;
+  bool last_a = false, last_b = false;
+  // The last round's sample for the reader's own camera marks the end; any other id is collected.
+  const auto collect = [&](const std::string& own, std::vector<std::string>& got, bool& last,
+                           const msg::Predictions& p) {
+    std::lock_guard lock(mutex);
+    if (p.stamp_ns() == kLastRound && p.camera_id() == own) {
+      last = true;
+      return;
+    }
+    got.push_back(p.camera_id());
+  };
   auto reader_a = camera_a.make_reader<msg::Predictions>(
-      [&](msg::Predictions&& p) {
-        std::lock_guard lock(mutex);
-        got_a.push_back(p.camera_id());
-      },
-      Qos::kDefault, "cam_a");
+      [&](msg::Predictions&& p) { collect("cam_a", got_a, last_a, p); }, Qos::kDefault, "cam_a");
   auto reader_b = camera_b.make_reader<msg::Predictions>(
-      [&](msg::Predictions&& p) {
-        std::lock_guard lock(mutex);
-        got_b.push_back(p.camera_id());
-      },
-      Qos::kDefault, "cam_b");
+      [&](msg::Predictions&& p) { collect("cam_b", got_b, last_b, p); }, Qos::kDefault, "cam_b");
   auto writer = estimator.make_writer<msg::Predictions>();
   ASSERT_TRUE(writer->wait_for_readers(2, 5s));
   // Best effort: samples written before a reader has matched the writer are not for it.
@@ -71,13 +67,20 @@ TEST(Bus, OnlyIdReaderGetsOnlyItsCamerasSamples) {
   const std::vector<std::string> ids = {"cam_a", "cam_b", "cam_", "cam_ab", "cam_c", ""};
   for (int round = 0; round < 20; ++round) {
     for (const auto& id : ids) writer->write(predictions_for(id, round));
-    std::this_thread::sleep_for(2ms);
+    std::this_thread::sleep_for(2ms);  // pacing, so that best effort loses little
   }
   ASSERT_TRUE(wait_until([&] {
     std::lock_guard lock(mutex);
     return got_a.size() >= 15 && got_b.size() >= 15;  // best effort: allow a little loss
   }));
-  std::this_thread::sleep_for(100ms);
+  // One writer delivers in order: once a last sample for each reader has arrived (written again
+  // until it does, as best effort may lose it), whatever the filters let through has arrived too.
+  ASSERT_TRUE(wait_until([&] {
+    writer->write(predictions_for("cam_a", kLastRound));
+    writer->write(predictions_for("cam_b", kLastRound));
+    std::lock_guard lock(mutex);
+    return last_a && last_b;
+  }));
   std::lock_guard lock(mutex);
   for (const auto& id : got_a) EXPECT_EQ(id, "cam_a");
   for (const auto& id : got_b) EXPECT_EQ(id, "cam_b");
@@ -88,7 +91,12 @@ TEST(Bus, OnlyIdReaderGetsOnlyItsCamerasSamples) {
 TEST(Bus, UnfilteredReaderStillGetsEverything) {
   Bus writer_bus(options("writer")), reader_bus(options("reader"));
   std::atomic<int> received{0};
-  auto filtered = reader_bus.make_reader<msg::TimeSync>([](msg::TimeSync&&) {}, Qos::kDefault, "cam0");
+  std::atomic<bool> filtered_saw_last{false};
+  auto filtered = reader_bus.make_reader<msg::TimeSync>(
+      [&](msg::TimeSync&& sample) {
+        if (sample.seq() == kLastRound) filtered_saw_last = true;
+      },
+      Qos::kDefault, "cam0");
   auto all = reader_bus.make_reader<msg::TimeSync>([&](msg::TimeSync&&) { received.fetch_add(1); });
   auto writer = writer_bus.make_writer<msg::TimeSync>();
   ASSERT_TRUE(writer->wait_for_readers(2, 5s));
@@ -98,11 +106,15 @@ TEST(Bus, UnfilteredReaderStillGetsEverything) {
     sample.seq(static_cast<unsigned long long>(i));
     writer->write(sample);
   }
-  // TimeSync is reliable: every sample arrives at the unfiltered reader, 5 at the filtered one.
-  EXPECT_TRUE(wait_until([&] { return received.load() == 10; }));
-  EXPECT_TRUE(wait_until([&] { return filtered->received() == 5; }));
-  std::this_thread::sleep_for(100ms);
-  EXPECT_EQ(filtered->received(), 5u);
+  // TimeSync is reliable and in order: once a last sample for cam0 has reached the filtered
+  // reader, so has everything its filter lets through: 5 samples, and the last.
+  msg::TimeSync last;
+  last.client_id("cam0");
+  last.seq(kLastRound);
+  writer->write(last);
+  EXPECT_TRUE(wait_until([&] { return received.load() == 11; }));
+  ASSERT_TRUE(wait_until([&] { return filtered_saw_last.load(); }));
+  EXPECT_EQ(filtered->received(), 6u);
 }
 
 // Camera-scoped topics (docs/security.md, "Camera-scoped permissions"): a writer for cam1 reaches
@@ -113,7 +125,15 @@ TEST(Bus, CameraScopedWritersReachTheirCameraAndDropSamplesNamingAnother) {
       operators(options("ops"));
   Bus recorder(options("recorder"));  // raw and typed readers of one topic need two participants
   std::atomic<int> commands_cam0{0};
-  auto features = estimator.make_reader<msg::FeatureFrame>([](msg::FeatureFrame&&) {});
+  std::atomic<bool> features_saw_last{false};
+  std::atomic<int> features_before_last{0};
+  auto features = estimator.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&& frame) {
+    if (frame.frame() == kLastRound) {
+      features_saw_last = true;
+    } else {
+      features_before_last.fetch_add(1);
+    }
+  });
   auto recorded = recorder.make_raw_reader("rt/panoptes/features", [](RawSample&&) {});
   auto cam0_commands = cam0.make_reader<msg::CameraCommand>(
       [&](msg::CameraCommand&&) { commands_cam0.fetch_add(1); }, Qos::kDefault, "cam0");
@@ -123,14 +143,21 @@ TEST(Bus, CameraScopedWritersReachTheirCameraAndDropSamplesNamingAnother) {
   auto cam1_predictions = estimator.make_writer<msg::Predictions>(Qos::kDefault, {}, "cam1");
   auto cam1_commands = operators.make_writer<msg::CameraCommand>(Qos::kDefault, {}, "cam1");
   auto every_camera_commands = operators.make_writer<msg::CameraCommand>();
+  // Endpoints are announced in the order they were created, and matched as each announcement
+  // arrives: once writers created after those for cam1 have matched cam0's readers (in both
+  // participants), the writers for cam1 have been matched against them or refused.
+  auto cam0_predictions_writer = estimator.make_writer<msg::Predictions>(Qos::kDefault, {}, "cam0");
   ASSERT_TRUE(cam1_features->wait_for_readers(2, 5s));
   ASSERT_TRUE(every_camera_commands->wait_for_readers(1, 5s));
-  ASSERT_TRUE(wait_until([&] { return features->matched_writers() == 1; }));
-  std::this_thread::sleep_for(300ms);  // the writers for cam1 would have matched cam0's readers by now
+  ASSERT_TRUE(cam0_predictions_writer->wait_for_readers(1, 5s));
+  ASSERT_TRUE(wait_until([&] {
+    return features->matched_writers() == 1 && cam0_commands->matched_writers() >= 1 &&
+           cam0_predictions->matched_writers() >= 1;
+  }));
   EXPECT_EQ(cam1_predictions->matched_readers(), 0);
   EXPECT_EQ(cam1_commands->matched_readers(), 0);
-  EXPECT_EQ(cam0_predictions->matched_writers(), 0);
-  EXPECT_EQ(cam0_commands->matched_writers(), 1);  // the operators' writer for every camera
+  EXPECT_EQ(cam0_predictions->matched_writers(), 1);  // the estimator's writer for cam0 only
+  EXPECT_EQ(cam0_commands->matched_writers(), 1);     // the operators' writer for every camera
 
   msg::CameraCommand command;
   command.target("*");
@@ -148,9 +175,21 @@ TEST(Bus, CameraScopedWritersReachTheirCameraAndDropSamplesNamingAnother) {
   EXPECT_TRUE(wait_until([&] { return estimator.receive_rejections()["id_outside_partition"] >= 4; }));
   EXPECT_TRUE(wait_until([&] { return recorder.receive_rejections()["id_outside_partition"] == 5; }));
   EXPECT_TRUE(wait_until([&] { return commands_cam0.load() == 1; }));
-  std::this_thread::sleep_for(100ms);
-  EXPECT_LE(features->received(), 5u);
-  EXPECT_EQ(recorded->received(), 5u);  // a recorder records cam1's own frames only
+  // In order from one writer: once a last frame of cam1's own has arrived (written again until
+  // it does at the best-effort reader), whatever else would pass has arrived too.
+  msg::FeatureFrame last;
+  last.camera_id("cam1");
+  last.frame(kLastRound);
+  std::uint64_t lasts_written = 0;
+  ASSERT_TRUE(wait_until([&] {
+    cam1_features->write(last);
+    ++lasts_written;
+    return features_saw_last.load();
+  }));
+  EXPECT_LE(features_before_last.load(), 5);
+  // The recorder reads reliably: every last frame arrives, after every frame of cam1's own.
+  EXPECT_TRUE(wait_until([&] { return recorded->received() >= 5 + lasts_written; }));
+  EXPECT_EQ(recorded->received(), 5 + lasts_written);  // a recorder records cam1's own frames only
   EXPECT_EQ(estimator.receive_rejections().count("unknown_writer"), 0u);
 }
 

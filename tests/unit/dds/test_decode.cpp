@@ -1,18 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 // decode_sample (every typed reader's decoder) and the Bus's counting of malformed samples
 // (docs/hostile_input.md).
-#include <unistd.h>
-
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "../dds_test_support.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
 #include "panoptes/dds/decode.h"
@@ -141,7 +138,7 @@ TEST(Decode, CameraInfoCarriesMoving) {
 // the callback; a genuine sample after them still does.
 TEST(Decode, BusCountsMalformedSamplesAndKeepsReceiving) {
   BusOptions options;
-  options.domain_id = 100 + static_cast<int>(getpid() % 100);
+  options.domain_id = panoptes::test::dds_test_domain();
   options.participant_name = "decode_reader";
   Bus reader_bus(options);
   options.participant_name = "decode_rogue";
@@ -153,10 +150,7 @@ TEST(Decode, BusCountsMalformedSamplesAndKeepsReceiving) {
     if (command.command() == "genuine") genuine = true;
   });
   auto writer = rogue_bus.make_raw_writer("rt/panoptes/camera_command");
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  while (writer->matched_readers() < 1 && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  ASSERT_GE(writer->matched_readers(), 1);
+  ASSERT_TRUE(panoptes::test::wait_until([&] { return writer->matched_readers() >= 1; }));
 
   msg::CameraCommand command;
   command.target("rogue-id-11");
@@ -173,9 +167,7 @@ TEST(Decode, BusCountsMalformedSamplesAndKeepsReceiving) {
   command.command("genuine");
   EXPECT_TRUE(writer->write(encode_sample(command)));
 
-  while (!genuine && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  EXPECT_TRUE(genuine);
+  EXPECT_TRUE(panoptes::test::wait_until([&] { return genuine.load(); }));
   EXPECT_EQ(delivered.load(), 1);
   const auto counts = reader_bus.receive_rejections();
   EXPECT_EQ(counts.count("cdr_truncated") ? counts.at("cdr_truncated") : 0, 1U);

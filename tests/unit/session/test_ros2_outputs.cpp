@@ -2,8 +2,6 @@
 // The ROS 2 topics of estimator_node (docs/ros2.md): stamps, names, the messages built from a
 // FrameOutput, and delivery to a best-effort (ROS 2 SensorDataQoS-like) and a reliable (ROS 2
 // default QoS-like) reader over the loopback profile.
-#include <unistd.h>
-
 #include <atomic>
 #include <chrono>
 #include <limits>
@@ -14,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../dds_test_support.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/estimator_app/ros2_outputs.h"
 
@@ -160,21 +159,13 @@ TEST(Ros2Messages, CarryTheFramesStampsNamesAndValues) {
   EXPECT_EQ(markers.markers().size(), 1U);
 }
 
+using panoptes::test::wait_until;
+
 dds::BusOptions bus_options(const std::string& name) {
   dds::BusOptions o;
-  o.domain_id = 100 + static_cast<int>(getpid() % 100);  // one domain per test process
+  o.domain_id = panoptes::test::dds_test_domain();  // one domain per test process
   o.participant_name = name;
   return o;
-}
-
-template <class Predicate>
-bool wait_until(Predicate predicate, std::chrono::milliseconds timeout = 10s) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!predicate()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(5ms);
-  }
-  return true;
 }
 
 // What a reader of one topic with one QoS received.
