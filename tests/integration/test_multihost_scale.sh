@@ -26,6 +26,7 @@ camera_hosts=8
 estimator_host=9
 seconds=${PANOPTES_SCALE_SECONDS:-15}
 scene="$source_dir/deploy/scenes/scale32.yaml"
+discovery_pid=""
 netns_create_lan "$estimator_host" || { fail "could not create the namespaces"; finish; }
 if [ "${PANOPTES_SCALE_PROFILE:-discovery_server}" = lan ]; then
   profile="$source_dir/deploy/dds/lan.xml"
@@ -36,6 +37,7 @@ else
     "$source_dir/deploy/dds/discovery_client.xml" >"$profile"
   netns_spawn "$estimator_host" fast-discovery-server -i 0 -l "$server_ip" -p 11811 >"$work/discovery_server.log" 2>&1 &
   pids+=("$!")
+  discovery_pid=$!
 fi
 echo "profile: $profile"
 "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/features" --duration "$seconds" >"$work/sim.log"
@@ -61,7 +63,13 @@ cpu_ticks() { awk '{print $14 + $15}' "/proc/$estimator/stat"; }
 sleep "$(python3 -c "import time; print(max(0.0, ($epoch - time.time_ns()) / 1e9))")"
 ticks0=$(cpu_ticks)
 t0=$(date +%s%N)
+# Where the two cores go over the replay (docs/deployment.md, "How many cameras one box simulates").
+python3 "$source_dir/tests/tools/cpu_sampler.py" --out "$work/cpu.json" --seconds "$((seconds - 1))" \
+  --group "cameras=$(IFS=,; echo "${camera_pids[*]}")" --group "estimator=$estimator" \
+  ${discovery_pid:+--group "discovery_server=$discovery_pid"} --threads "$estimator" &
+sampler=$!
 sleep "$seconds"
+wait "$sampler" || echo "cpu sampler failed"
 ticks1=$(cpu_ticks)
 t1=$(date +%s%N)
 rss_peak_kb=$(awk '/VmHWM/ {print $2}' "/proc/$estimator/status")
@@ -91,12 +99,19 @@ python3 - "$work/estimator.log" "$cameras" "$sent" "$ticks0" "$ticks1" "$t0" "$t
 import json, re, sys
 log, cameras, sent, ticks0, ticks1, t0, t1, peak_kb, rss_kb, threads, hz, seconds = sys.argv[1:]
 usage = {}
+latency_p99 = {}
 dropped = ""
 for line in open(log):
-    m = re.search(r"camera (\S+): frames (\d+) used (\d+) .*utilisation ([0-9.]+)", line)
-    if m: usage[m.group(1)] = (int(m.group(2)), int(m.group(3)), float(m.group(4)))
+    m = re.search(r"camera (\S+): frames (\d+) used (\d+) .*utilisation ([0-9.]+) latency p50 [0-9.]+ ms p99 ([0-9.]+)", line)
+    if m:
+        usage[m.group(1)] = (int(m.group(2)), int(m.group(3)), float(m.group(4)))
+        latency_p99[m.group(1)] = float(m.group(5))
     if "dropped by reason:" in line: dropped = line.split("dropped by reason:")[1].strip()
 received = sum(f for f, _, _ in usage.values())
+try:
+    cpu = json.load(open(log.rsplit("/", 1)[0] + "/cpu.json"))
+except (OSError, ValueError):
+    cpu = {}
 summary = {
     "cameras": int(cameras), "hosts": 8, "rate_hz": 120, "seconds": int(seconds),
     "cameras_seen": len(usage), "frames_sent": int(sent), "frames_received": received,
@@ -105,6 +120,14 @@ summary = {
     "estimator_cpu_percent": round(100.0 * (int(ticks1) - int(ticks0)) / int(hz) / ((int(t1) - int(t0)) / 1e9), 1),
     "estimator_rss_peak_mb": round(int(peak_kb) / 1024, 1), "estimator_rss_mb": round(int(rss_kb) / 1024, 1),
     "estimator_threads": int(threads),
+    # Arrival minus stamp at the estimator: the worst camera's p99 and the median camera's.
+    "latency_p99_ms_worst_camera": max(latency_p99.values(), default=0.0),
+    "latency_p99_ms_median_camera": sorted(latency_p99.values())[len(latency_p99) // 2] if latency_p99 else 0.0,
+    # tests/tools/cpu_sampler.py: percentages of one core (the machine has cpu["cores"]).
+    "cpu_percent_of_one_core": cpu.get("percent_of_one_core", {}),
+    "machine_busy_percent": cpu.get("machine_busy_percent_mean"),
+    "run_queue_mean": cpu.get("run_queue_mean"),
+    "estimator_busiest_threads": dict(list(cpu.get("threads_percent_of_one_core", {}).items())[:4]),
 }
 print(json.dumps(summary))
 PY

@@ -576,7 +576,7 @@ function onDetails(message) {
   page.details = message.figures;
   const table = details.querySelector('table');
   if (!message.figures) { table.innerHTML = '<tr><td>not live</td><td></td></tr>'; return; }
-  const labels = { position_m: 'position m', velocity_m_s: 'velocity m/s', speed_m_s: 'speed m/s', sigma_mm: 'σ mm (x, y, z)',
+  const labels = { stamp_ns: 'pose stamp ns', position_m: 'position m', velocity_m_s: 'velocity m/s', speed_m_s: 'speed m/s', sigma_mm: 'σ mm (x, y, z)',
     sigma_position_mm: 'σ position mm', sigma_rotation_deg: 'σ rotation °', orientation_xyzw: 'orientation (x, y, z, w)',
     angular_velocity_rad_s: 'angular velocity rad/s', cameras: 'cameras seeing it', age_s: 'age s', since_update_ms: 'last update ms ago',
     status: 'status', quality: 'quality', grabbing: 'grabbing', joint_angles_deg: 'joint angles ° (base first)', bend_deg: 'bend °',
