@@ -803,6 +803,9 @@ function render(now) {
   if (synthetic && now - syntheticAt >= 1000 / 30) { syntheticAt = now; updateTracks(syntheticTracks(now / 1000)); }
   const t1 = performance.now();
   renderer.render(scene, camera3d);
+  // The bodies this frame shows, for a test that reads the canvas: a snapshot may arrive
+  // between this render and the test's look, and the body moves (issue 37).
+  page.drawnBodies = page.state ? page.state.bodies : [];
   const t2 = performance.now();
   drawLabels();
   page.timing.tracks += t1 - t0;

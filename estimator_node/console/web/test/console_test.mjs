@@ -89,7 +89,8 @@ try {
     };
     let lit = 0;
     for (let i = 0; i < pixels.length; i += 4) if (isLit(i)) lit += 1;
-    const near = window.panoptes.state.bodies.map((body) => {
+    // The poses the canvas was drawn from, not the newest snapshot (they can differ by a frame).
+    const near = (window.panoptes.drawnBodies || []).map((body) => {
       const [u, v] = window.panoptes.project(body.pose.p);
       let count = 0;
       for (let y = Math.round(v) - 8; y <= Math.round(v) + 8; ++y) {
