@@ -19,7 +19,9 @@ mkdir -p "$shots"
   || { fail "simulate the console scene"; finish; }
 
 estimator_command="'$bin/estimator_node' --calibration '$work/calibration.yaml' --bodies '$work/sim/bodies.yaml' --status-period 1"
-bash -c "exec $estimator_command --duration 150" >"$work/estimator.log" 2>&1 &
+# The first run's published poses (--out-poses: the same records as rt/panoptes/poses) to check the
+# body figures the page showed against the pose of the stamp it showed.
+bash -c "exec $estimator_command --out-poses '$work/poses.jsonl' --duration 150" >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
 estimator_restart="$estimator_command --duration 90 >'$work/estimator2.log' 2>&1 & echo \$! >'$work/estimator2.pid'"
@@ -95,6 +97,19 @@ for sample in result["samples"]:
                 worst = max(worst, min(max(abs(px - sx), abs(py - sy)) for px, py in published))
 ok &= report(compared >= 30 and matched == compared and worst <= 0.006,
              f"page blobs = published blobs: {matched}/{compared} frames with the same count, worst position difference {worst:.4f} px")
+# The body's figures against the pose the estimator published at the stamp the page showed. The
+# page parses stamps as doubles (~256 ns steps at today's epoch): the nearest stamp within 1 us;
+# poses of one body are >= 1 ms apart (60 Hz cameras, distinct phases). Figures are rounded to 0.1 mm.
+shown = result.get("body_details")
+if shown:
+    same = [json.loads(line) for line in open(f"{work}/poses.jsonl")]
+    same = [p for p in same if p["body"] == shown["name"] and abs(p["stamp_ns"] - shown["stamp_ns"]) <= 1000]
+    offset = min((max(abs(a - b) for a, b in zip(p["p"], shown["position_m"])) for p in same), default=float("inf"))
+    ok &= report(same and offset <= 0.0001,
+                 f"body {shown['name']}'s figures = its published pose of stamp {shown['stamp_ns']} "
+                 f"({len(same)} such pose(s), position within {1e3 * offset:.3f} mm)")
+else:
+    ok &= report(False, "the page showed no body figures")
 cmd = result["commands"]
 def window(camera, t0_ms, t1_ms):
     return [r for r in frames[camera].values() if t0_ms * 1e6 <= r["arrival_ns"] < t1_ms * 1e6]

@@ -176,8 +176,10 @@ TEST(ConsoleState, DetailsOfATrackAndABody) {
   body.pose.position = {0.5, 0, 1};
   body.sigma = {1e-3, 1e-3, 2e-3, M_PI / 180, 0, 0};
   body.quality = 0.9F;
+  body.stamp_ns = kT0 - 7;
   state.on_body(body, kT0);
   figures = state.details("body", "wand", kT0 + kNsPerSecond / 10);
+  EXPECT_EQ(figures["stamp_ns"].get<std::int64_t>(), kT0 - 7);  // the pose's own stamp, not the receive time
   EXPECT_EQ(figures["position_m"], json({0.5, 0.0, 1.0}));
   EXPECT_EQ(figures["sigma_position_mm"], json({1.0, 1.0, 2.0}));
   EXPECT_DOUBLE_EQ(figures["sigma_rotation_deg"][0].get<double>(), 1.0);

@@ -576,7 +576,7 @@ function onDetails(message) {
   page.details = message.figures;
   const table = details.querySelector('table');
   if (!message.figures) { table.innerHTML = '<tr><td>not live</td><td></td></tr>'; return; }
-  const labels = { position_m: 'position m', velocity_m_s: 'velocity m/s', speed_m_s: 'speed m/s', sigma_mm: 'σ mm (x, y, z)',
+  const labels = { stamp_ns: 'pose stamp ns', position_m: 'position m', velocity_m_s: 'velocity m/s', speed_m_s: 'speed m/s', sigma_mm: 'σ mm (x, y, z)',
     sigma_position_mm: 'σ position mm', sigma_rotation_deg: 'σ rotation °', orientation_xyzw: 'orientation (x, y, z, w)',
     angular_velocity_rad_s: 'angular velocity rad/s', cameras: 'cameras seeing it', age_s: 'age s', since_update_ms: 'last update ms ago',
     status: 'status', quality: 'quality', grabbing: 'grabbing', joint_angles_deg: 'joint angles ° (base first)', bend_deg: 'bend °',
@@ -803,6 +803,9 @@ function render(now) {
   if (synthetic && now - syntheticAt >= 1000 / 30) { syntheticAt = now; updateTracks(syntheticTracks(now / 1000)); }
   const t1 = performance.now();
   renderer.render(scene, camera3d);
+  // The bodies this frame shows, for a test that reads the canvas: a snapshot may arrive
+  // between this render and the test's look, and the body moves (issue 37).
+  page.drawnBodies = page.state ? page.state.bodies : [];
   const t2 = performance.now();
   drawLabels();
   page.timing.tracks += t1 - t0;

@@ -335,6 +335,9 @@ json ConsoleState::details(const std::string& kind, const std::string& key, Time
     return {
         {"kind", "body"},
         {"name", body.name},
+        // The stamp of the pose shown: a test or user compares the figures with the pose the
+        // estimator published at that stamp, not with whichever pose is newest when it looks.
+        {"stamp_ns", body.stamp_ns},
         {"position_m", rounded(body.pose.position, 4)},
         {"orientation_xyzw", rounded(body.pose.orientation, 5)},
         {"velocity_m_s", rounded(body.linear_velocity, 3)},
