@@ -281,6 +281,9 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(stats.chain_updates_malformed));
     if (out != nullptr) std::fclose(out);
     return table.updates() > 0 ? 0 : 1;
+  } catch (const client::OptionError& error) {  // e.g. $PANOPTES_DOMAIN=abc: a usage error
+    std::fprintf(stderr, "grab_objects: %s\n", error.what());
+    return 2;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "grab_objects: %s\n", error.what());
     return 1;

@@ -210,6 +210,9 @@ int main(int argc, char** argv) {
                  board.strokes(), static_cast<unsigned long long>(stats.strokes_received),
                  static_cast<unsigned long long>(stats.strokes_malformed), args.out.c_str());
     return any ? 0 : 1;
+  } catch (const client::OptionError& error) {  // e.g. $PANOPTES_DOMAIN=abc: a usage error
+    std::fprintf(stderr, "lumipoint_board: %s\n", error.what());
+    return 2;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "lumipoint_board: %s\n", error.what());
     return 1;

@@ -251,6 +251,9 @@ int run(int argc, char** argv) {
   } catch (const panoptes::ConfigError& error) {
     std::cerr << "ptz_guide: " << error.what() << "\n";
     return 2;
+  } catch (const panoptes::client::OptionError& error) {  // e.g. $PANOPTES_DOMAIN=abc: a usage error
+    std::cerr << "ptz_guide: " << error.what() << "\n";
+    return 2;
   } catch (const std::exception& error) {
     std::cerr << "ptz_guide: " << error.what() << "\n";
     return 1;

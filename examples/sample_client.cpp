@@ -91,6 +91,9 @@ int main(int argc, char** argv) {
                  static_cast<unsigned long long>(stats.frames_missed),
                  static_cast<unsigned long long>(stats.frames_malformed));
     return 0;
+  } catch (const panoptes::client::OptionError& e) {  // e.g. $PANOPTES_DOMAIN=abc: a usage error
+    std::fprintf(stderr, "sample_client: %s\n", e.what());
+    return 2;
   } catch (const panoptes::client::ClientError& e) {
     std::fprintf(stderr, "sample_client: %s\n", e.what());
     return 1;

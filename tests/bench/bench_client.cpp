@@ -28,6 +28,7 @@
 #include "panoptes/cli.h"
 #include "panoptes/client/client.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/domain.h"
 #include "panoptes/process.h"
 #include "panoptes/time.h"
 #include "panoptes_msgs/panoptes.h"
@@ -234,7 +235,8 @@ int run(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
-  if (domain >= 0) setenv("PANOPTES_DOMAIN", std::to_string(domain).c_str(), 1);
+  // The publishing child gets the same domain; a bad one (or $PANOPTES_DOMAIN) is a usage error.
+  setenv(panoptes::dds::kDomainVariable, std::to_string(panoptes::dds::resolve_domain(domain)).c_str(), 1);
   try {
     if (publisher) return publish(rate_hz, duration_s, readers);
     return measure(rate_hz, duration_s, warmup_s, client_first,

@@ -45,6 +45,7 @@
 #include "panoptes/calibration_file.h"
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/domain.h"
 #include "panoptes/process.h"
 #include "panoptes/simulator.h"
 #include "panoptes/time.h"
@@ -282,8 +283,8 @@ int run(int argc, char** argv) {
                "do not subscribe to rt/panoptes/tracks (the secondary TrackFrame row)");
   app.add_option("--domain", domain,
                  "DDS domain of the run (so that other pipelines on this host do not mix in)")
-      ->check(CLI::Range(0, 232))
-      ->default_str("100 + pid % 100");
+      ->check(CLI::Range(0, panoptes::dds::kMaxDomainId))
+      ->default_str("100 + pid % 100 ($PANOPTES_DOMAIN is not read)");
   app.add_option("--dds-profile", profile, "Fast DDS profile for every process")
       ->check(CLI::ExistingFile)
       ->capture_default_str();

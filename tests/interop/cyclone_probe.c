@@ -887,9 +887,19 @@ static bool parse_number(const char* text, double minimum, double maximum, doubl
 
 // Returns 0 to run, 1 after --help, 2 on a bad argument (the reason printed).
 static int parse_options(int argc, char** argv, Options* options) {
+  // The rule of panoptes::dds::resolve_domain (docs/protocol.md, "The domain"), which this C
+  // program on Cyclone DDS cannot link: unset or empty is 0, anything but an integer 0..232 exits 2.
   const char* domain = getenv("PANOPTES_DOMAIN");
   double number = 0.0;
-  options->domain = domain != NULL && parse_number(domain, 0, 232, &number) ? (uint32_t)number : 0;
+  options->domain = 0;
+  if (domain != NULL && *domain != '\0') {
+    if (strspn(domain, "0123456789") != strlen(domain) || !parse_number(domain, 0, 232, &number)) {
+      fprintf(stderr, "panoptes_cyclone_probe: PANOPTES_DOMAIN=%s: not a DDS domain id (an integer 0..232)\n",
+              domain);
+      return 2;
+    }
+    options->domain = (uint32_t)number;
+  }
   options->duration_s = 10.0;
   options->world_frame = "world";
   options->config = getenv("CYCLONEDDS_URI");

@@ -108,6 +108,9 @@ int run(int argc, char** argv) {
     }
     out << stats_line(client.stats()).dump() << '\n';
     std::fprintf(stderr, "panoptes_client_probe: %s\n", client.status_text().c_str());
+  } catch (const pc::OptionError& e) {  // e.g. $PANOPTES_DOMAIN=abc
+    std::fprintf(stderr, "panoptes_client_probe: %s\n", e.what());
+    return panoptes::kExitBadInput;
   } catch (const pc::ClientError& e) {
     std::fprintf(stderr, "panoptes_client_probe: %s\n", e.what());
     return panoptes::kExitFailure;

@@ -88,6 +88,9 @@ int run(int argc, char** argv) {
       out << line.dump() << '\n';
       out.flush();
     }
+  } catch (const panoptes::ConfigError& error) {  // e.g. $PANOPTES_DOMAIN=abc, DDS Security files
+    std::fprintf(stderr, "panoptes_feature_probe: %s\n", error.what());
+    return panoptes::kExitBadInput;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_feature_probe: %s\n", error.what());
     return panoptes::kExitFailure;

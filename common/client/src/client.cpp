@@ -8,7 +8,6 @@
 #include <array>
 #include <condition_variable>
 #include <cstdio>
-#include <cstdlib>
 #include <deque>
 #include <mutex>
 #include <utility>
@@ -16,6 +15,7 @@
 #include "conversion.h"
 #include "frame_sequence.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/domain.h"
 #include "panoptes/time.h"
 #include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
@@ -24,20 +24,7 @@
 namespace panoptes::client {
 namespace {
 
-constexpr int kMaxDomain = 232;          // the largest DDS domain id whose ports fit the RTPS port mapping
 constexpr std::size_t kRateWindow = 64;  // arrivals kept for status_text()'s frame rate
-
-int resolve_domain(int requested) {
-  if (requested >= 0) return requested;
-  const char* env = std::getenv("PANOPTES_DOMAIN");
-  if (env == nullptr || *env == '\0') return 0;
-  char* end = nullptr;
-  const long value = std::strtol(env, &end, 10);
-  if (*end != '\0' || value < 0 || value > kMaxDomain)
-    throw ClientError(std::string("PANOPTES_DOMAIN=") + env + ": not a domain id (0.." +
-                      std::to_string(kMaxDomain) + ")");
-  return static_cast<int>(value);
-}
 
 std::string seconds_text(std::chrono::steady_clock::duration d) {
   char buffer[32];
@@ -320,13 +307,14 @@ void Client::Impl::on_descriptions(const msg::BodyDescriptions& message) {
 }
 
 Client::Client(const ClientOptions& options) : impl_(std::make_unique<Impl>()) {
-  if (options.queue_depth == 0) throw ClientError("queue_depth must be at least 1");
-  if (options.stale_after.count() <= 0) throw ClientError("stale_after must be positive");
+  if (options.queue_depth == 0) throw OptionError("queue_depth must be at least 1");
+  if (options.stale_after.count() <= 0) throw OptionError("stale_after must be positive");
   impl_->options = options;
-  impl_->domain = resolve_domain(options.domain_id);
-  if (impl_->domain > kMaxDomain)
-    throw ClientError("domain " + std::to_string(impl_->domain) + ": not a domain id (0.." +
-                      std::to_string(kMaxDomain) + ")");
+  try {
+    impl_->domain = dds::resolve_domain(options.domain_id);  // the check every program makes
+  } catch (const dds::DomainError& e) {
+    throw OptionError(e.what());  // "PANOPTES_DOMAIN=abc: not a DDS domain id (an integer 0..232)"
+  }
   Impl* impl = impl_.get();
   try {
     dds::BusOptions bus_options;

@@ -5,6 +5,7 @@
 // callback exceptions, close(); errors naming what is wrong.
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <limits>
 #include <string>
 #include <thread>
@@ -235,10 +236,34 @@ TEST(Client, BadOptionsNameWhatIsWrong) {
   }
   options = client_options();
   options.queue_depth = 0;
-  EXPECT_THROW(Client{options}, ClientError);
+  EXPECT_THROW(Client{options}, OptionError);
   options = client_options();
   options.domain_id = 300;
-  EXPECT_THROW(Client{options}, ClientError);
+  EXPECT_THROW(Client{options}, OptionError);
+}
+
+// $PANOPTES_DOMAIN goes through the same check as every program's (dds::resolve_domain): a typo
+// is an OptionError naming the variable and the value, never domain 0.
+TEST(Client, BadDomainVariableIsAnOptionErrorNamingIt) {
+  const char* old = std::getenv("PANOPTES_DOMAIN");
+  const std::string saved = old != nullptr ? old : "";
+  for (const char* bad : {"abc", "300"}) {
+    ::setenv("PANOPTES_DOMAIN", bad, 1);
+    ClientOptions options = client_options();
+    options.domain_id = -1;
+    try {
+      Client client(options);
+      ADD_FAILURE() << "no OptionError for PANOPTES_DOMAIN=" << bad;
+    } catch (const OptionError& e) {
+      EXPECT_EQ(std::string(e.what()),
+                std::string("PANOPTES_DOMAIN=") + bad + ": not a DDS domain id (an integer 0..232)");
+    }
+  }
+  if (old != nullptr) {
+    ::setenv("PANOPTES_DOMAIN", saved.c_str(), 1);
+  } else {
+    ::unsetenv("PANOPTES_DOMAIN");
+  }
 }
 
 // Surface mode (docs/surface.md): stroke events to the pull queue and the stroke callbacks, in

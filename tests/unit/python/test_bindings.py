@@ -41,8 +41,8 @@ def wait_for(condition, timeout=10.0):
 class BadInput(unittest.TestCase):
     def test_bad_options_raise_client_error_with_the_library_message(self):
         cases = [
-            (dict(domain=500), "domain 500: not a domain id"),
-            (dict(domain=-3), "domain -3: not a domain id"),
+            (dict(domain=500), "domain=500: not a DDS domain id (an integer 0..232)"),
+            (dict(domain=-3), "domain=-3: not a DDS domain id (an integer 0..232)"),
             (dict(profile="/nonexistent/profile.xml"), "/nonexistent/profile.xml"),
             (dict(profile=pathlib.Path("/nonexistent/p.xml")), "/nonexistent/p.xml"),
             (dict(queue_depth=0), "queue_depth must be at least 1"),
@@ -85,13 +85,17 @@ class BadInput(unittest.TestCase):
                 cls()
 
     def test_bad_environment_domain(self):
-        os.environ["PANOPTES_DOMAIN"] = "lots"
-        try:
-            with self.assertRaises(panoptes.ClientError) as raised:
-                panoptes.Client()
-            self.assertIn("PANOPTES_DOMAIN=lots", str(raised.exception))
-        finally:
-            os.environ["PANOPTES_DOMAIN"] = str(DOMAIN)
+        # The library's check (dds::resolve_domain), the same as every program's.
+        for bad in ("lots", "300", "-1"):
+            os.environ["PANOPTES_DOMAIN"] = bad
+            try:
+                with self.subTest(value=bad):
+                    with self.assertRaises(panoptes.ClientError) as raised:
+                        panoptes.Client()
+                    self.assertEqual(str(raised.exception),
+                                     f"PANOPTES_DOMAIN={bad}: not a DDS domain id (an integer 0..232)")
+            finally:
+                os.environ["PANOPTES_DOMAIN"] = str(DOMAIN)
 
 
 class EmptyDomain(unittest.TestCase):

@@ -32,6 +32,7 @@
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
+#include "panoptes/dds/domain.h"
 #include "panoptes/eval/evaluation.h"
 #include "panoptes/process.h"
 #include "panoptes/simulator.h"
@@ -176,6 +177,8 @@ int run(int argc, char** argv) {
       "--check", check,
       "exit 1 unless every marker meets the demo's targets (RMSE < 2 mm, >= 95% tracked, 0 ID switches)");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+  // A bad $PANOPTES_DOMAIN is a usage error (exit 2) here, not an early exit of every child.
+  panoptes::dds::resolve_domain();
 
   panoptes::install_stop_handlers();
   std::optional<panoptes::Scene> scene;

@@ -9,6 +9,7 @@
 
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/domain.h"
 #include "panoptes/process.h"
 #include "panoptes/recorder/replayer.h"
 #include "panoptes/recording/mcap_types.h"
@@ -52,6 +53,7 @@ int run(int argc, char** argv) {
       }))
     return *code;
 
+  panoptes::dds::resolve_domain();  // a bad $PANOPTES_DOMAIN is refused before the recording is read
   panoptes::install_stop_handlers();
   rec::Replayer replayer(input, options);
   for (const auto& problem : replayer.problems())

@@ -44,7 +44,8 @@ client::ClientOptions make_options(const std::optional<std::filesystem::path>& p
   client::ClientOptions options;
   options.profile_file = profile ? profile->string() : std::string();
   if (domain && *domain < 0)
-    throw client::ClientError("domain " + std::to_string(*domain) + ": not a domain id (0..232)");
+    throw client::ClientError("domain=" + std::to_string(*domain) +
+                              ": not a DDS domain id (an integer 0..232)");
   options.domain_id = domain.value_or(-1);
   if (!std::isfinite(stale_after_s) || stale_after_s > 1e6)
     throw client::ClientError("stale_after must be a positive number of seconds (at most 1e6)");

@@ -8,7 +8,8 @@
 //
 // No DDS and no generated types in this header: it depends on the C++ standard library only.
 // Errors: the constructor throws ClientError (the bus cannot be opened: a bad profile, domain or
-// option); body_description() throws UnknownBody. Nothing else throws: other failures are reported
+// option), OptionError when an option or $PANOPTES_DOMAIN is invalid; body_description() throws
+// UnknownBody. Nothing else throws: other failures are reported
 // in Status and Stats. Every member function is thread-safe.
 #pragma once
 
@@ -38,6 +39,14 @@ using Quat = std::array<double, 4>;  // x, y, z, w
 class PANOPTES_CLIENT_API ClientError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+// An invalid option, or an invalid $PANOPTES_DOMAIN (not an integer 0..232): found before anything
+// is opened; what() names the option or variable and the value ("PANOPTES_DOMAIN=abc: not a DDS
+// domain id (an integer 0..232)"). A usage error: the Panoptes programs exit 2 on it.
+class PANOPTES_CLIENT_API OptionError : public ClientError {
+ public:
+  using ClientError::ClientError;
 };
 
 // A body name that no BodyDescription carries; what() names it.

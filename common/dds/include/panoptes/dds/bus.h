@@ -30,7 +30,9 @@ struct BusOptions {
   // to start, so Fast DDS's default multicast discovery never runs by accident.
   std::filesystem::path profile_file;
   std::string participant_profile = "panoptes_participant";
-  int domain_id = -1;  // -1: $PANOPTES_DOMAIN, else the profile's domain, else 0
+  // 0..232; -1: $PANOPTES_DOMAIN, else 0. Checked by resolve_domain (domain.h): the Bus throws its
+  // DomainError (a ConfigError naming the variable or "domain") for anything else.
+  int domain_id = -1;
   std::string participant_name = "panoptes";
   // DDS Security (docs/security.md). Empty: $PANOPTES_SECURITY_DIR and $PANOPTES_SECURITY_IDENTITY;
   // neither set: an unsecured participant, unless the profile requires security (deploy/dds/secure.xml

@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: Apache-2.0
+// Topics and QoS: the writer QoS of a topic and the table of raw (serialized) topics.
+#include "topics.h"
+
+namespace panoptes::dds {
+
+// The writer QoS of a topic (docs/protocol.md), for typed and raw writers alike.
+fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos) {
+  fdds::DataWriterQos writer_qos = fdds::DATAWRITER_QOS_DEFAULT;
+  apply_spec(writer_qos, spec, qos);
+  if (spec.offer_reliable && !spec.reliable && qos == Qos::kDefault) {
+    writer_qos.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+    writer_qos.history().depth = kOfferedReliableDepth;
+    writer_qos.resource_limits().max_samples_per_instance = kOfferedReliableDepth;
+    writer_qos.resource_limits().max_samples = kMaxInstances * kOfferedReliableDepth;
+    writer_qos.reliable_writer_qos().times.heartbeatPeriod =
+        eprosima::fastrtps::Duration_t(0, kOfferedHeartbeatNs);
+  }
+  writer_qos.reliable_writer_qos().times.nackSupressionDuration =
+      eprosima::fastrtps::Duration_t(0, static_cast<std::uint32_t>(spec.nack_suppression_ms) * 1'000'000U);
+  // Evaluate the content filter of every matched reader (default: at most 32 readers per writer).
+  writer_qos.writer_resource_limits().reader_filters_allocation =
+      eprosima::fastrtps::ResourceLimitedContainerConfig(0, kMaxInstances, 1);
+  return writer_qos;
+}
+
+namespace {
+
+template <class T>
+RawTopicEntry raw_entry(const char* ros_type) {
+  const TopicSpec spec = TopicTraits<T>::spec();
+  typename TopicTraits<T>::PubSubType real;
+  return {{spec.name, real.getName(), ros_type, spec.durability == Durability::kTransientLocal}, spec, [] {
+            return new typename TopicTraits<T>::PubSubType();
+          }};
+}
+
+const std::vector<RawTopicEntry>& raw_entries() {
+  static const std::vector<RawTopicEntry> entries = {
+      raw_entry<msg::CameraInfo>("panoptes/msg/CameraInfo"),
+      raw_entry<msg::FeatureFrame>("panoptes/msg/FeatureFrame"),
+      raw_entry<msg::CameraStatus>("panoptes/msg/CameraStatus"),
+      raw_entry<msg::CameraCommand>("panoptes/msg/CameraCommand"),
+      raw_entry<msg::CameraPreview>("panoptes/msg/CameraPreview"),
+      raw_entry<msg::Predictions>("panoptes/msg/Predictions"),
+      raw_entry<msg::TimeSync>("panoptes/msg/TimeSync"),
+      raw_entry<msg::EstimatorStatus>("panoptes/msg/EstimatorStatus"),
+      raw_entry<msg::TrackFrame>("panoptes/msg/TrackFrame"),
+      raw_entry<msg::BodyPose>("panoptes/msg/BodyPose"),
+      raw_entry<msg::SystemCalibration>("panoptes/msg/SystemCalibration"),
+      raw_entry<msg::MocapFrame>("panoptes/msg/MocapFrame"),
+      raw_entry<msg::BodyDescriptions>("panoptes/msg/BodyDescriptions"),
+  };
+  return entries;
+}
+
+// Topics a raw writer may write although panoptes_record does not record them (panoptes_rogue).
+const std::vector<RawTopicEntry>& unrecorded_raw_entries() {
+  static const std::vector<RawTopicEntry> entries = {
+      raw_entry<msg::RecorderCommand>("panoptes/msg/RecorderCommand"),
+      raw_entry<msg::RecorderStatus>("panoptes/msg/RecorderStatus"),
+  };
+  return entries;
+}
+
+}  // namespace
+
+const RawTopicEntry& raw_entry_named(const std::string& topic) {
+  for (const auto* entries : {&raw_entries(), &unrecorded_raw_entries()}) {
+    for (const auto& entry : *entries) {
+      if (entry.topic.topic == topic) return entry;
+    }
+  }
+  throw DdsError("'" + topic + "' is not a Panoptes topic (docs/protocol.md)");
+}
+
+std::vector<RawTopic> panoptes_raw_topics() {
+  std::vector<RawTopic> topics;
+  for (const auto& entry : raw_entries()) topics.push_back(entry.topic);
+  return topics;
+}
+
+}  // namespace panoptes::dds

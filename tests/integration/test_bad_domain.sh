@@ -1,0 +1,96 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# A bad PANOPTES_DOMAIN (issue 31, docs/protocol.md "The domain"): every program in build/bin that
+# opens DDS, run with PANOPTES_DOMAIN=abc and =300, exits 2 with one line naming the variable and
+# the value, before any participant exists (the bus used to read it with atoi: "abc" joined domain
+# 0, and Fast DDS exited the process by itself for 300). The C++ client (panoptes_client_probe and
+# the examples) and the Python client throw naming it. A program in build/bin that links Fast DDS
+# or the client library but is missing from the table below fails the test. About 20 s.
+source "$(dirname "$0")/lib.sh"
+
+scene="$source_dir/deploy/scenes/demo.yaml"
+ptz="$source_dir/deploy/ptz/walk_side.yaml"
+
+# program|arguments that would run it on the bus (the domain is refused first; nothing else may fail)
+programs=(
+  "camera_node|--source sim:$scene#cam0 --duration 1 --quiet"
+  "estimator_node|--duration 1 --quiet"
+  "estimator_node|calibrate capture --out $work/capture.jsonl --duration 1"
+  "panoptes_console|--bind 127.0.0.1:0 --calibration-dir $work/calibration"
+  "panoptes_record|--out $work/out.mcap --duration 1 --quiet"
+  "panoptes_record|--command stop"
+  "panoptes_replay|$work/missing.mcap"
+  "panoptes_ctl|status --count 1"
+  "panoptes_demo|--duration 2 --log-dir $work/demo"
+  "panoptes_feature_flood|--duration 1"
+  "panoptes_rogue|--duration 1"
+  "panoptes_track_probe|--out $work/tracks.jsonl --duration 1"
+  "panoptes_feature_probe|--out $work/features.jsonl --duration 1"
+  "panoptes_ros2_probe|--out $work/ros2.jsonl --duration 1"
+  "panoptes_client_probe|--out $work/client.jsonl --duration 1"
+  "panoptes_cyclone_probe|--bodies rigid_a --duration 1"
+  "sample_client|--timeout-s 1"
+  "ptz_guide|--ptz $ptz --track-near 0,0,1 --duration 1"
+  "lumipoint_board|--out $work/board.ppm --duration 1"
+  "grab_objects|--duration 1"
+  "bench_client|--duration 1"
+  "bench_ros2_outputs|--seconds 1"
+)
+# Programs that open DDS in a domain of their own choosing and never read PANOPTES_DOMAIN.
+own_domain=(bench_latency)
+
+listed() {  # NAME: whether NAME is in the table or in own_domain
+  local entry
+  for entry in "${programs[@]}" "${own_domain[@]}"; do [ "${entry%%|*}" = "$1" ] && return 0; done
+  return 1
+}
+
+# Every executable in build/bin that links Fast DDS or the client library is in the table.
+for program in "$bin"/*; do
+  name=$(basename "$program")
+  [ -x "$program" ] && [ -f "$program" ] || continue
+  case "$name" in *_tests) continue ;; esac
+  libraries=$(ldd "$program" 2>/dev/null)  # not piped into grep -q: with pipefail, ldd's SIGPIPE fails it
+  grep -qE 'libfastrtps|libpanoptes_client|libddsc' <<<"$libraries" || continue
+  listed "$name" && pass "$name is checked" || fail "$name opens DDS but is not in test_bad_domain.sh's table"
+done
+
+for entry in "${programs[@]}"; do
+  name="${entry%%|*}"
+  read -r -a args <<<"${entry#*|}"
+  if [ ! -x "$bin/$name" ]; then
+    echo "SKIP: $name is not built"
+    continue
+  fi
+  for bad in abc 300; do
+    expect_exit 2 "PANOPTES_DOMAIN=$bad $name ${args[*]:0:2}" -- \
+      env PANOPTES_DOMAIN="$bad" timeout 30 "$bin/$name" "${args[@]}"
+    message="PANOPTES_DOMAIN=$bad: not a DDS domain id (an integer 0..232)"
+    if [ "$(grep -cF -- "$message" "$work/last.err")" -eq 1 ]; then
+      pass "$name says '$message' once"
+    else
+      fail "$name: stderr lacks one line '$message'"
+      cat "$work/last.err"
+    fi
+  done
+done
+
+# The Python client raises panoptes.ClientError with the same message.
+python=$(cat "$build_dir/python/INTERPRETER" 2>/dev/null)
+if [ -n "$python" ] && [ -d "$build_dir/python/panoptes" ]; then
+  for bad in abc 300; do
+    expect_exit 0 "Python: PANOPTES_DOMAIN=$bad raises ClientError naming it" -- \
+      env PANOPTES_DOMAIN="$bad" PYTHONPATH="$build_dir/python" "$python" -c "
+import panoptes
+try:
+    panoptes.Client()
+except panoptes.ClientError as error:
+    assert str(error) == 'PANOPTES_DOMAIN=$bad: not a DDS domain id (an integer 0..232)', str(error)
+else:
+    raise SystemExit('no ClientError')"
+  done
+else
+  echo "SKIP: the Python bindings are not built"
+fi
+
+finish
