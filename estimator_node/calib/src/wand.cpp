@@ -66,76 +66,73 @@ double continuity_cost(const std::vector<Eigen::Vector2d>& a, const std::vector<
   return cost;
 }
 
-}  // namespace
-
-std::optional<std::vector<Eigen::Vector2d>> identify_wand(
-    const std::vector<Blob>& blobs, const CameraIntrinsics& intrinsics, const WandDefinition& wand,
-    const IdentifyOptions& options, const WandFrame* previous, IdentifyCounters* counters) {
-  IdentifyCounters scratch;
-  IdentifyCounters& count = counters != nullptr ? *counters : scratch;
-  ++count.frames;
-  const std::size_t marker_count = wand.marker_count();
-  if (marker_count == 0 || blobs.size() < marker_count) return std::nullopt;
-  ++count.frames_with_enough_blobs;
+// A single LED or a 2-marker bar has no shape to recognise: take the frame only when it shows
+// exactly the wand, or the blobs nearest to the previous frame's.
+std::optional<std::vector<Eigen::Vector2d>> identify_short_wand(const std::vector<Blob>& blobs,
+                                                                std::size_t marker_count,
+                                                                const IdentifyOptions& options,
+                                                                const WandFrame* previous,
+                                                                IdentifyCounters& count) {
   const auto raw = [&](int i) { return Eigen::Vector2d(blobs[i].x, blobs[i].y); };
   const int n = static_cast<int>(blobs.size());
-
-  if (marker_count <= 2) {
-    // A single LED or a 2-marker bar has no shape to recognise: take the frame only when it shows
-    // exactly the wand, or the blobs nearest to the previous frame's.
-    std::vector<int> picked;
-    if (n == static_cast<int>(marker_count)) {
-      for (int i = 0; i < n; ++i) picked.push_back(i);
-    } else if (previous != nullptr && n <= 64) {
-      for (const auto& last : previous->pixels) {
-        int best = -1;
-        double best_distance = options.max_jump_px;
-        for (int i = 0; i < n; ++i) {
-          const double distance = (raw(i) - last).norm();
-          if (distance < best_distance && std::find(picked.begin(), picked.end(), i) == picked.end()) {
-            best = i;
-            best_distance = distance;
-          }
+  std::vector<int> picked;
+  if (n == static_cast<int>(marker_count)) {
+    for (int i = 0; i < n; ++i) picked.push_back(i);
+  } else if (previous != nullptr && n <= 64) {
+    for (const auto& last : previous->pixels) {
+      int best = -1;
+      double best_distance = options.max_jump_px;
+      for (int i = 0; i < n; ++i) {
+        const double distance = (raw(i) - last).norm();
+        if (distance < best_distance && std::find(picked.begin(), picked.end(), i) == picked.end()) {
+          best = i;
+          best_distance = distance;
         }
-        if (best < 0) return std::nullopt;
-        picked.push_back(best);
       }
-    } else {
-      return std::nullopt;
+      if (best < 0) return std::nullopt;
+      picked.push_back(best);
     }
-    ++count.collinear_candidates;
-    std::vector<Eigen::Vector2d> pixels;
-    pixels.reserve(picked.size());
-    for (int i : picked) pixels.push_back(raw(i));
-    if (marker_count == 2) {
-      std::vector<Eigen::Vector2d> swapped{pixels[1], pixels[0]};
-      if (previous != nullptr && previous->pixels.size() == 2) {
-        if (continuity_cost(swapped, previous->pixels) < continuity_cost(pixels, previous->pixels))
-          pixels = swapped;
-      } else if (pixels[1].x() < pixels[0].x()) {
-        pixels = swapped;
-      }
-    }
-    if (previous != nullptr && previous->pixels.size() == pixels.size() &&
-        continuity_cost(pixels, previous->pixels) > options.max_jump_px * static_cast<double>(marker_count) &&
-        n != static_cast<int>(marker_count))
-      return std::nullopt;
-    ++count.identified;
-    return pixels;
+  } else {
+    return std::nullopt;
   }
+  ++count.collinear_candidates;
+  std::vector<Eigen::Vector2d> pixels;
+  pixels.reserve(picked.size());
+  for (int i : picked) pixels.push_back(raw(i));
+  if (marker_count == 2) {
+    std::vector<Eigen::Vector2d> swapped{pixels[1], pixels[0]};
+    if (previous != nullptr && previous->pixels.size() == 2) {
+      if (continuity_cost(swapped, previous->pixels) < continuity_cost(pixels, previous->pixels))
+        pixels = swapped;
+    } else if (pixels[1].x() < pixels[0].x()) {
+      pixels = swapped;
+    }
+  }
+  if (previous != nullptr && previous->pixels.size() == pixels.size() &&
+      continuity_cost(pixels, previous->pixels) > options.max_jump_px * static_cast<double>(marker_count) &&
+      n != static_cast<int>(marker_count))
+    return std::nullopt;
+  ++count.identified;
+  return pixels;
+}
 
-  if (n > 48) return std::nullopt;  // a flood of blobs: not a wand frame
-  const CameraModel model(intrinsics, RigidTransform{});
-  std::vector<Eigen::Vector2d> u(n);
-  for (int i = 0; i < n; ++i) u[i] = undistorted_pixel(model, blobs[i]);
+// Every pair of blobs as the ends of the bar: the candidates whose inner blobs lie on the line
+// between them at the wand's relative positions (undistorted pixels `u`).
+struct Candidates {
+  std::vector<Candidate> fitting;
+  bool any_collinear = false;
+  double mismatch_spacing = 0;  // relative position of the 2nd marker of the best mismatch
+};
 
+Candidates collinear_candidates(const std::vector<Eigen::Vector2d>& u, const WandDefinition& wand,
+                                const IdentifyOptions& options) {
+  const std::size_t marker_count = wand.marker_count();
+  const int n = static_cast<int>(u.size());
   std::vector<double> relative(marker_count);
   for (std::size_t m = 0; m < marker_count; ++m)
     relative[m] = (wand.positions[m] - wand.positions[0]) / wand.length();
-
-  std::vector<Candidate> candidates;
-  bool any_collinear = false;
-  double best_mismatch = 1e9, mismatch_spacing = 0;
+  Candidates out;
+  double best_mismatch = 1e9;
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j) {
       const Eigen::Vector2d axis = u[j] - u[i];
@@ -151,7 +148,7 @@ std::optional<std::vector<Eigen::Vector2d>> identify_wand(
         if (across < options.collinearity_px && along > 0.0 && along < 1.0) inner.emplace_back(along, k);
       }
       if (inner.size() != marker_count - 2) continue;
-      any_collinear = true;
+      out.any_collinear = true;
       std::sort(inner.begin(), inner.end());
       double forward = 0, backward = 0;
       for (std::size_t m = 1; m + 1 < marker_count; ++m) {
@@ -162,7 +159,7 @@ std::optional<std::vector<Eigen::Vector2d>> identify_wand(
       if (error > options.spacing_tolerance) {
         if (error < best_mismatch) {
           best_mismatch = error;
-          mismatch_spacing = inner[0].first;
+          out.mismatch_spacing = inner[0].first;
         }
         continue;
       }
@@ -173,15 +170,38 @@ std::optional<std::vector<Eigen::Vector2d>> identify_wand(
       for (const auto& [along, k] : inner) candidate.blobs.push_back(k);
       candidate.blobs.push_back(j);
       if (backward < forward) std::reverse(candidate.blobs.begin(), candidate.blobs.end());
-      candidates.push_back(std::move(candidate));
+      out.fitting.push_back(std::move(candidate));
     }
   }
-  if (any_collinear) ++count.collinear_candidates;
+  return out;
+}
+
+}  // namespace
+
+std::optional<std::vector<Eigen::Vector2d>> identify_wand(
+    const std::vector<Blob>& blobs, const CameraIntrinsics& intrinsics, const WandDefinition& wand,
+    const IdentifyOptions& options, const WandFrame* previous, IdentifyCounters* counters) {
+  IdentifyCounters scratch;
+  IdentifyCounters& count = counters != nullptr ? *counters : scratch;
+  ++count.frames;
+  const std::size_t marker_count = wand.marker_count();
+  if (marker_count == 0 || blobs.size() < marker_count) return std::nullopt;
+  ++count.frames_with_enough_blobs;
+  if (marker_count <= 2) return identify_short_wand(blobs, marker_count, options, previous, count);
+
+  const int n = static_cast<int>(blobs.size());
+  if (n > 48) return std::nullopt;  // a flood of blobs: not a wand frame
+  const CameraModel model(intrinsics, RigidTransform{});
+  std::vector<Eigen::Vector2d> u(n);
+  for (int i = 0; i < n; ++i) u[i] = undistorted_pixel(model, blobs[i]);
+  Candidates found = collinear_candidates(u, wand, options);
+  auto& candidates = found.fitting;
+  if (found.any_collinear) ++count.collinear_candidates;
   if (candidates.empty()) {
-    if (any_collinear) {
+    if (found.any_collinear) {
       ++count.spacing_mismatches;
-      count.mean_mismatch_spacing +=
-          (mismatch_spacing - count.mean_mismatch_spacing) / static_cast<double>(count.spacing_mismatches);
+      count.mean_mismatch_spacing += (found.mismatch_spacing - count.mean_mismatch_spacing) /
+                                     static_cast<double>(count.spacing_mismatches);
     }
     return std::nullopt;
   }
@@ -192,7 +212,7 @@ std::optional<std::vector<Eigen::Vector2d>> identify_wand(
     return std::nullopt;
   }
   std::vector<Eigen::Vector2d> pixels;
-  for (int index : candidates[0].blobs) pixels.push_back(raw(index));
+  for (int index : candidates[0].blobs) pixels.emplace_back(blobs[index].x, blobs[index].y);
   if (candidates[0].symmetric) {
     // A symmetric bar: the image cannot tell its ends apart, the previous frame can. Without one,
     // a wand symmetric by definition starts a new label run (resolved across cameras later); an

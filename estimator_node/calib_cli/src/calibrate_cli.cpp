@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -338,84 +339,59 @@ int run_wand_floor(const std::string& program, SystemCalibration& calibration,
   return kExitOk;
 }
 
-int run_world(int argc, char** argv) {
+// `calibrate world`'s command line.
+struct WorldArgs {
+  std::string program;
   std::string calibration_file, out, lframe, wand_text;
   std::vector<std::string> feature_files;
   bool floor = false, wand_floor = false;
   WandFloorOptions wand_floor_options;
+};
+
+// Parses `calibrate world`; an exit code if the program should stop (--help, a bad option).
+std::optional<int> parse_world_args(int argc, char** argv, WorldArgs& args) {
   CLI::App app{
       "calibrate world: world frame (z up) from an L-frame, markers on the floor, or the wand laid on the "
       "floor",
       "estimator_node calibrate world"};
   app.option_defaults()->always_capture_default();  // --help shows every default
-  app.add_option("--calibration", calibration_file, "calibration YAML from `calibrate solve`")->required();
-  app.add_option("--in-features", feature_files,
+  app.add_option("--calibration", args.calibration_file, "calibration YAML from `calibrate solve`")
+      ->required();
+  app.add_option("--in-features", args.feature_files,
                  "a short recording of the static markers, or of the wand on the floor (JSONL)")
       ->required()
       ->expected(1, -1);
   auto* lframe_option =
-      app.add_option("--lframe", lframe,
+      app.add_option("--lframe", args.lframe,
                      "L-frame of 3 markers: '<x arm m>,<y arm m>' (or 'auto': the longer arm "
                      "is x); on an unscaled (single-light) calibration the arms set the scale");
   auto* floor_option =
-      app.add_flag("--floor", floor, "markers (>= 3) lying on the floor: z = their plane's normal");
+      app.add_flag("--floor", args.floor, "markers (>= 3) lying on the floor: z = their plane's normal");
   auto* wand_floor_option = app.add_flag(
-      "--wand-floor", wand_floor,
+      "--wand-floor", args.wand_floor,
       "the wand (--wand) laid on the floor at several places: z = the plane of its positions, origin = "
       "its first marker at the first rest, x = along it; on an unscaled calibration its length sets the "
       "scale");
   auto* wand_option =
-      app.add_option("--wand", wand_text, "with --wand-floor: marker positions along the wand, m");
-  app.add_option("--floor-offset", wand_floor_options.floor_offset_m,
+      app.add_option("--wand", args.wand_text, "with --wand-floor: marker positions along the wand, m");
+  app.add_option("--floor-offset", args.wand_floor_options.floor_offset_m,
                  "with --wand-floor: height of the marker centres above the floor, m (a marker's radius)")
       ->capture_default_str();
   lframe_option->excludes(floor_option);
   wand_floor_option->excludes(lframe_option)->excludes(floor_option)->needs(wand_option);
   wand_option->needs(wand_floor_option);
-  app.add_option("--out", out, "calibration YAML to write")->required();
-  if (auto exit = parse_command_line(app, argc, argv, [&] {
-        if (lframe.empty() && !floor && !wand_floor)
-          throw CLI::ValidationError("--lframe, --floor or --wand-floor", "one of them is required");
-      }))
-    return *exit;
-  const std::string program = app.get_name();
-  WandDefinition wand;
-  if (wand_floor) {
-    try {
-      wand = parse_wand(wand_text);
-    } catch (const std::exception& e) {
-      return bad_input(program, e.what());
-    }
-    if (wand.marker_count() < 2)
-      return bad_input(program,
-                       "--wand-floor needs a wand of two or more markers (its direction sets x, its "
-                       "length the scale of an unscaled calibration); --wand '" +
-                           wand_text + "' is a single light");
-  }
-  SystemCalibration calibration;
-  bool unscaled = false;
-  try {
-    calibration = load_calibration(calibration_file);
-    unscaled = calibration_file_is_unscaled(calibration_file);
-  } catch (const std::exception& e) {
-    return bad_input(program, e.what());
-  }
-  // A single-light calibration has no metric scale: the L-frame's known arms or the wand's known
-  // length give it.
-  if (unscaled && (floor || lframe == "auto"))
-    return bad_input(program,
-                     calibration_file +
-                         " is unscaled (a single-light calibration): give the L-frame's arm lengths, "
-                         "--lframe <x arm m>,<y arm m>, or lay a wand of known length on the floor "
-                         "(--wand-floor --wand ...), which set its metric scale");
-  std::string error;
-  auto by_camera = read_features(feature_files, error);
-  if (!error.empty()) return bad_input(program, error);
-  std::vector<FeatureFrame> frames;
-  for (auto& [id, list] : by_camera) frames.insert(frames.end(), list.begin(), list.end());
-  if (wand_floor)
-    return run_wand_floor(program, calibration, calibration_file, feature_files, frames, wand, unscaled,
-                          wand_floor_options, out);
+  app.add_option("--out", args.out, "calibration YAML to write")->required();
+  args.program = app.get_name();
+  return parse_command_line(app, argc, argv, [&] {
+    if (args.lframe.empty() && !args.floor && !args.wand_floor)
+      throw CLI::ValidationError("--lframe, --floor or --wand-floor", "one of them is required");
+  });
+}
+
+// `calibrate world --lframe` or `--floor`: static markers triangulated, the frame fitted to them.
+int run_static_marker_world(const WorldArgs& args, SystemCalibration& calibration, bool unscaled,
+                            const std::vector<FeatureFrame>& frames) {
+  const std::string& program = args.program;
   const auto points = triangulate_static_markers(calibration, frames);
   say("triangulated " + std::to_string(points.size()) + " static markers");
   Eigen::Vector3d up_hint = Eigen::Vector3d::Zero();
@@ -425,17 +401,19 @@ int run_world(int argc, char** argv) {
       up_hint += camera.T_world_cam->t;
       ++count;
     }
-  if (count == 0) return bad_input(program, calibration_file + ": no camera has T_world_cam");
+  if (count == 0) return bad_input(program, args.calibration_file + ": no camera has T_world_cam");
   up_hint /= count;
   std::optional<RigidTransform> T_new_old;
   double scale = 1.0;
-  if (floor) {
+  std::string error;
+  if (args.floor) {
     T_new_old = floor_frame(points, up_hint, &error);
   } else {
     double x_arm = 0, y_arm = 0;
-    if (lframe != "auto" &&
-        (std::sscanf(lframe.c_str(), "%lf,%lf", &x_arm, &y_arm) != 2 || x_arm <= 0 || y_arm <= 0))
-      return bad_input(program, "--lframe: expected '<x arm m>,<y arm m>' or 'auto', got '" + lframe + "'");
+    if (args.lframe != "auto" &&
+        (std::sscanf(args.lframe.c_str(), "%lf,%lf", &x_arm, &y_arm) != 2 || x_arm <= 0 || y_arm <= 0))
+      return bad_input(program,
+                       "--lframe: expected '<x arm m>,<y arm m>' or 'auto', got '" + args.lframe + "'");
     T_new_old = lframe_frame(points, up_hint, x_arm, y_arm, &error, unscaled ? &scale : nullptr);
   }
   if (!T_new_old) {
@@ -443,15 +421,59 @@ int run_world(int argc, char** argv) {
     return kExitFailure;
   }
   apply_world_transform(calibration, *T_new_old, scale);
-  save_calibration(calibration, out);
-  std::printf("world frame set from %s (%zu markers); wrote %s\n", floor ? "the floor" : "the L-frame",
-              points.size(), out.c_str());
+  save_calibration(calibration, args.out);
+  std::printf("world frame set from %s (%zu markers); wrote %s\n", args.floor ? "the floor" : "the L-frame",
+              points.size(), args.out.c_str());
   if (unscaled) std::printf("metric scale set from the L-frame's arms: %.6f m per unit\n", scale);
   for (const auto& p : points) {
     const Eigen::Vector3d q = scale * T_new_old->apply(p);
     std::printf("  marker at [%.4f, %.4f, %.4f] m\n", q.x(), q.y(), q.z());
   }
   return kExitOk;
+}
+
+int run_world(int argc, char** argv) {
+  WorldArgs args;
+  if (auto exit = parse_world_args(argc, argv, args)) return *exit;
+  const std::string& program = args.program;
+  WandDefinition wand;
+  if (args.wand_floor) {
+    try {
+      wand = parse_wand(args.wand_text);
+    } catch (const std::exception& e) {
+      return bad_input(program, e.what());
+    }
+    if (wand.marker_count() < 2)
+      return bad_input(program,
+                       "--wand-floor needs a wand of two or more markers (its direction sets x, its "
+                       "length the scale of an unscaled calibration); --wand '" +
+                           args.wand_text + "' is a single light");
+  }
+  SystemCalibration calibration;
+  bool unscaled = false;
+  try {
+    calibration = load_calibration(args.calibration_file);
+    unscaled = calibration_file_is_unscaled(args.calibration_file);
+  } catch (const std::exception& e) {
+    return bad_input(program, e.what());
+  }
+  // A single-light calibration has no metric scale: the L-frame's known arms or the wand's known
+  // length give it.
+  if (unscaled && (args.floor || args.lframe == "auto"))
+    return bad_input(program,
+                     args.calibration_file +
+                         " is unscaled (a single-light calibration): give the L-frame's arm lengths, "
+                         "--lframe <x arm m>,<y arm m>, or lay a wand of known length on the floor "
+                         "(--wand-floor --wand ...), which set its metric scale");
+  std::string error;
+  auto by_camera = read_features(args.feature_files, error);
+  if (!error.empty()) return bad_input(program, error);
+  std::vector<FeatureFrame> frames;
+  for (auto& [id, list] : by_camera) frames.insert(frames.end(), list.begin(), list.end());
+  if (args.wand_floor)
+    return run_wand_floor(program, calibration, args.calibration_file, args.feature_files, frames, wand,
+                          unscaled, args.wand_floor_options, args.out);
+  return run_static_marker_world(args, calibration, unscaled, frames);
 }
 
 }  // namespace

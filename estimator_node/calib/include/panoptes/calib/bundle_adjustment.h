@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: Apache-2.0
+// Stage 3 of the wand solver: one bundle adjustment over cameras (pose, intrinsics, clock offset)
+// and wand instants (all markers of an instant in one block), with the wand's lengths as
+// residuals (seed 000 eq. 4.76), in passes that drop outliers and decide what intrinsics move; or
+// seed 003 §3.3.2's alternation. docs/calibration.md, "Stages". No Ceres type in this header.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "panoptes/calib/wand_samples.h"
+#include "panoptes/calib/wand_solver.h"
+#include "panoptes/calibration.h"
+
+namespace panoptes::calib {
+
+// One camera as the adjustment holds it.
+struct CameraParameters {
+  std::array<double, 6> pose{};        // T_cam_world: angle-axis, translation
+  std::array<double, 9> intrinsics{};  // fx, fy, cx, cy, k1, k2, p1, p2, k3 (OpenCV, as CameraModel)
+  double offset_s = 0;                 // camera clock minus reference clock
+  bool registered = false;             // placed, and taking part
+};
+
+// `given` into parameters; registered (with its pose) iff T_world_cam is given.
+CameraParameters camera_parameters(const CameraIntrinsics& given,
+                                   const std::optional<RigidTransform>& T_world_cam);
+RigidTransform T_world_cam_of(const CameraParameters& camera);
+// `given` with the nine parameters replaced (its image size and other fields kept).
+CameraIntrinsics intrinsics_of(const CameraParameters& camera, const CameraIntrinsics& given);
+CameraModel model_of(const CameraParameters& camera, const CameraIntrinsics& given);
+
+// What the adjustment moves: cameras, which observations take part, and the wand.
+struct BundleState {
+  std::vector<CameraParameters> cameras;
+  std::vector<WandInstant> instants;
+  std::vector<double> points;  // instants x markers x 3: marker positions in the world, m
+};
+
+// The wand at every instant triangulated from its registered cameras; observations of cameras not
+// registered are deactivated, and all of an instant's when one of its markers cannot be triangulated.
+BundleState triangulate_instants(BundleState state, const std::vector<CameraIntrinsics>& given,
+                                 std::size_t markers);
+
+// kNominal: the focal length (fx and fy together, keeping their ratio) and k1, k2. kSuspect: fx,
+// fy, cx, cy, k1, k2 each. kAll: all nine (--refine-intrinsics).
+enum class IntrinsicsRefinement { kNone, kNominal, kSuspect, kAll };
+
+struct PassOptions {
+  int reference = 0;  // camera whose pose (and clock) is the gauge
+  IntrinsicsRefinement refinement = IntrinsicsRefinement::kNone;
+  bool time_offsets = false;
+  double huber_px = 1.0;           // robust loss (robust passes only)
+  double length_sigma_m = 0.0005;  // weight of the wand-length residuals
+  int max_iterations = 100;
+  int threads = 2;
+  int alternation_iterations = 0;  // for alternate()
+};
+
+struct PassReport {
+  double rms_px = 0;        // reprojection RMS after the pass (2D norm, robust loss applied)
+  int iterations = 0;       // counted into SolveResult::iterations
+  int steps = 0;            // Ceres iterations after the initial evaluation
+  bool converged = false;   // Ceres CONVERGENCE
+  std::string termination;  // Ceres's message
+  std::string summary;      // "bundle adjustment: n iterations, ..." for progress
+};
+
+struct PassResult {
+  BundleState state;
+  PassReport report;
+};
+
+// One Levenberg-Marquardt pass over the active observations. A robust pass (Huber loss) stops at a
+// relative cost change of 1e-6 (it only seeds the outlier test), a plain one at 1e-10.
+PassResult adjust_pass(BundleState state, const WandDefinition& wand, const PassOptions& options,
+                       bool robust);
+// Seed 003 §3.3.2: cameras resected on the fixed trace, then the trace rebuilt, alternation_iterations times.
+PassResult alternate(BundleState state, const WandDefinition& wand, const PassOptions& options);
+
+// Every raw (not interpolated) wand frame of every registered camera against the solved wand path at
+// the frame's instant on the reference clock: 2D errors per camera, px, per marker observation.
+// `tracks` one per camera.
+std::vector<std::vector<double>> raw_frame_errors(const BundleState& state,
+                                                  const std::vector<CameraModel>& models,
+                                                  const std::vector<CameraWandTrack>& tracks,
+                                                  std::size_t markers);
+ErrorStats error_stats(std::vector<double> errors);
+// Models of the registered cameras (default models elsewhere).
+std::vector<CameraModel> registered_models(const BundleState& state,
+                                           const std::vector<CameraIntrinsics>& given);
+
+struct BundleAdjustmentResult {
+  BundleState state;
+  std::vector<std::string> failures;     // per camera: a refined focal length far from the given, or ""
+  std::vector<bool> intrinsics_refined;  // per camera
+  IntrinsicsRefinement refinement = IntrinsicsRefinement::kNone;
+  std::string intrinsics_refined_why;  // SolveResult::intrinsics_refined
+  bool converged = false;              // every pass
+  std::string convergence;             // SolveResult::convergence
+  int iterations = 0;
+};
+
+// The whole stage from the view graph's cameras: triangulation, intrinsics decision, the passes
+// with outlier removal (and clock-offset re-lookups), the focal-length check; or the alternation
+// when options.alternation_iterations > 0. `cameras` supplies ids, given intrinsics and whether they
+// are nominal; `tracks` one per camera.
+BundleAdjustmentResult bundle_adjust(BundleState state, int reference,
+                                     const std::vector<CameraCalibration>& cameras,
+                                     const std::vector<CameraWandTrack>& tracks, const WandDefinition& wand,
+                                     const SolveOptions& options,
+                                     const std::function<void(const std::string&)>& progress = {});
+
+}  // namespace panoptes::calib
