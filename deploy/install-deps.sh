@@ -14,6 +14,7 @@ packages=(
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format clang-tidy python3-yaml
+  universal-ctags  # lint.function_length (tests/lint/function_length.sh)
   clang  # libFuzzer targets (tests/fuzz, docs/hostile_input.md)
   cyclonedds-dev cyclonedds-tools pybind11-dev python3-dev python3-numpy python3-matplotlib
   iproute2 procps nftables tcpdump openssl libtinyxml2-dev

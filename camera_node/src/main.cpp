@@ -6,7 +6,6 @@
 //   offline: --source <spec> --no-dds --out-features <file.jsonl>  (architecture.md, Contracts)
 // Live, the node synchronises its clock with the estimator's time service (rt/panoptes/time_sync)
 // and publishes every stamp on the common time base.
-#include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -118,24 +117,29 @@ void validate(Options& options) {
   options.live.out_features = options.out_features;
 }
 
-// Opens the source with the settings of --config; fills `detector_config`. Throws on bad input.
+// Opens the source with the settings of --config; fills `detector_config`. Anything that goes wrong
+// here is the input's fault (a missing device or file, a bad source or configuration): InputError.
 std::unique_ptr<cam::FrameSource> open_source(const Options& options, cam::DetectorConfig& detector_config) {
-  cam::SourceOptions source_options;
-  if (!options.config_file.empty()) {
-    const panoptes::YamlReader config(options.config_file, panoptes::load_yaml_file(options.config_file));
-    config.expect_only({"detector", "source"});
-    if (config.has("detector")) detector_config = cam::DetectorConfig::from_yaml(config.child("detector"));
-    if (config.has("source"))
-      source_options.settings = cam::SourceSettings::from_yaml(config.child("source"));
-  }
-  source_options.camera_id = options.camera_id;
-  source_options.sim_epoch_ns = options.sim_epoch_ns;
-  source_options.paced = !options.unpaced;
-  source_options.max_frames = options.max_frames;
-  source_options.rate_scale = options.rate_scale;
-  return cam::open_source(options.source, source_options);
+  return panoptes::as_input_error([&] {
+    cam::SourceOptions source_options;
+    if (!options.config_file.empty()) {
+      const panoptes::YamlReader config(options.config_file, panoptes::load_yaml_file(options.config_file));
+      config.expect_only({"detector", "source"});
+      if (config.has("detector")) detector_config = cam::DetectorConfig::from_yaml(config.child("detector"));
+      if (config.has("source"))
+        source_options.settings = cam::SourceSettings::from_yaml(config.child("source"));
+    }
+    source_options.camera_id = options.camera_id;
+    source_options.sim_epoch_ns = options.sim_epoch_ns;
+    source_options.paced = !options.unpaced;
+    source_options.max_frames = options.max_frames;
+    source_options.rate_scale = options.rate_scale;
+    return cam::open_source(options.source, source_options);
+  });
 }
 
+// Errors escape to run_program: a bad source or config and refused DDS Security files exit 2,
+// anything failing later 1.
 int run_camera_node(int argc, char** argv) {
   Options options;
   CLI::App app{"camera_node: detects IR blobs in camera frames and publishes 2D features (Panoptes)",
@@ -146,47 +150,21 @@ int run_camera_node(int argc, char** argv) {
   }
 
   panoptes::install_stop_handlers();
-  cam::NodeLog log;
-  std::unique_ptr<cam::FrameSource> source;
   cam::DetectorConfig detector_config;
-  try {
-    source = open_source(options, detector_config);
-  } catch (const std::exception& error) {
-    log(error.what());
-    return panoptes::kExitBadInput;
-  }
+  const std::unique_ptr<cam::FrameSource> source = open_source(options, detector_config);
   const std::string camera_id = options.camera_id.empty() ? source->info().camera_id : options.camera_id;
-  log.rename("camera_node[" + camera_id + "]");
+  cam::NodeLog log("camera_node[" + camera_id + "]");
   cam::Detector detector(detector_config);
-
-  try {
-    if (options.no_dds) {
-      const cam::OfflineOptions offline{options.out_features, options.live.queue_capacity,
-                                        options.live.quiet};
-      return cam::run_offline(offline, *source, detector, camera_id, log);
-    }
-    panoptes::camera_app::LiveCamera live(options.live, *source, detector, camera_id, log);
-    return live.run();
-  } catch (const panoptes::ConfigError& error) {  // e.g. DDS Security files: refused before joining
-    log(error.what());
-    return panoptes::kExitBadInput;
-  } catch (const std::exception& error) {
-    log(error.what());
-    return panoptes::kExitFailure;
+  if (options.no_dds) {
+    const cam::OfflineOptions offline{options.out_features, options.live.queue_capacity, options.live.quiet};
+    return cam::run_offline(offline, *source, detector, camera_id, log);
   }
+  panoptes::camera_app::LiveCamera live(options.live, *source, detector, camera_id, log);
+  return live.run();
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  // run_camera_node reports the errors it expects; anything else escaping is a bug, named here
-  // rather than left to std::terminate.
-  try {
-    return run_camera_node(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "camera_node: unexpected error: %s\n", error.what());
-  } catch (...) {
-    std::fprintf(stderr, "camera_node: unexpected error\n");
-  }
-  return panoptes::kExitFailure;
+  return panoptes::run_program("camera_node", [&] { return run_camera_node(argc, argv); });
 }

@@ -9,7 +9,6 @@
 // The work is in libraries: session/ (EstimatorSession, offline replay, settings YAML) and app/
 // (command line, live DDS loop).
 #include <cstdio>
-#include <exception>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -93,13 +92,8 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
   std::optional<session::ChainStage> chains = chain_stage(command_line);
   if (chains) replay.chains = &*chains;
   if (!command_line.in_recording.empty()) {
-    session::FeatureFiles input;
-    try {
-      input = app::read_recording_features(command_line.in_recording);
-    } catch (const std::exception& error) {
-      session::log(error.what());
-      return panoptes::kExitBadInput;
-    }
+    session::FeatureFiles input =
+        panoptes::as_input_error([&] { return app::read_recording_features(command_line.in_recording); });
     return session::run_offline(estimator, std::move(input), replay, command_line.out_tracks,
                                 command_line.out_poses);
   }
@@ -139,18 +133,24 @@ std::optional<panoptes::surface_app::SurfaceSettings> surface_settings(
   return surface_app::load_surface_settings(command_line.config_file);
 }
 
+// Reading the calibration, building the surface and reading offline input fail only on bad input
+// (exit 2); the run itself fails as its errors say (a DDS failure live: exit 1).
 int run_surface_mode(const app::NodeCommandLine& command_line,
                      const panoptes::surface_app::SurfaceSettings& settings,
                      session::EstimatorSession& estimator) {
   namespace surface_app = panoptes::surface_app;
-  std::optional<panoptes::SystemCalibration> calibration;
-  if (!command_line.calibration_file.empty())
-    calibration = panoptes::load_calibration(command_line.calibration_file);
-  auto setup = surface_app::build_surface(settings, calibration ? &*calibration : nullptr,
-                                          command_line.calibration_file);
+  auto setup = panoptes::as_input_error([&] {
+    std::optional<panoptes::SystemCalibration> calibration;
+    if (!command_line.calibration_file.empty())
+      calibration = panoptes::load_calibration(command_line.calibration_file);
+    return surface_app::build_surface(settings, calibration ? &*calibration : nullptr,
+                                      command_line.calibration_file);
+  });
   if (command_line.no_dds || !command_line.in_recording.empty()) {
-    auto input = command_line.in_recording.empty() ? session::read_feature_files(command_line.in_features)
-                                                   : app::read_recording_features(command_line.in_recording);
+    auto input = panoptes::as_input_error([&] {
+      return command_line.in_recording.empty() ? session::read_feature_files(command_line.in_features)
+                                               : app::read_recording_features(command_line.in_recording);
+    });
     return surface_app::run_surface_offline(setup, std::move(input), command_line.out_strokes,
                                             command_line.quiet);
   }
@@ -164,9 +164,9 @@ int run_surface_mode(const app::NodeCommandLine& command_line,
   return surface_app::run_surface_live(live, setup, estimator);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+// Errors escape to run_program, which picks the exit code by their type (panoptes/errors.h);
+// reading the settings, the surface, the calibration and the bodies is the input's part (exit 2).
+int run_estimator_node(int argc, char** argv) {
   if (argc >= 3 && std::string_view(argv[1]) == "calibrate" && std::string_view(argv[2]) == "surface")
     return panoptes::surface_app::run_calibrate_surface(argc - 2, argv + 2);
   if (argc >= 2 && std::string_view(argv[1]) == "calibrate")
@@ -176,13 +176,8 @@ int main(int argc, char** argv) {
   app::NodeCommandLine command_line;
   if (const auto exit_code = app::parse_node_command_line(argc, argv, command_line)) return *exit_code;
 
-  session::EstimatorConfig config;
-  try {
-    config = command_line.effective_config();
-  } catch (const std::exception& error) {
-    session::log(error.what());
-    return panoptes::kExitBadInput;
-  }
+  const session::EstimatorConfig config =
+      panoptes::as_input_error([&] { return command_line.effective_config(); });
   if (command_line.print_config) {
     std::fputs(session::estimator_config_to_yaml(config).c_str(), stdout);
     return panoptes::kExitOk;
@@ -190,28 +185,15 @@ int main(int argc, char** argv) {
 
   panoptes::install_stop_handlers();
   session::EstimatorSession estimator(config);
-  try {
-    if (const auto surface = surface_settings(command_line))
-      return run_surface_mode(command_line, *surface, estimator);
-  } catch (const std::exception& error) {
-    session::log(error.what());
-    return panoptes::kExitBadInput;
-  }
+  if (const auto surface = panoptes::as_input_error([&] { return surface_settings(command_line); }))
+    return run_surface_mode(command_line, *surface, estimator);
   session::BodyFile body_file(command_line.bodies_file);
-  try {
-    prepare(command_line, estimator, body_file);
-  } catch (const std::exception& error) {
-    session::log(error.what());
-    return panoptes::kExitBadInput;
-  }
+  panoptes::as_input_error([&] { prepare(command_line, estimator, body_file); });
+  return run(command_line, estimator, body_file);
+}
 
-  try {
-    return run(command_line, estimator, body_file);
-  } catch (const panoptes::ConfigError& error) {
-    session::log(error.what());
-    return panoptes::kExitBadInput;
-  } catch (const std::exception& error) {
-    session::log(error.what());
-    return panoptes::kExitFailure;
-  }
+}  // namespace
+
+int main(int argc, char** argv) {
+  return panoptes::run_program("estimator_node", [&] { return run_estimator_node(argc, argv); });
 }

@@ -388,10 +388,5 @@ int run_command_line(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run_command_line(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory: exit 1, never an abort
-    std::fprintf(stderr, "bench_estimator: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_estimator", [&] { return run_command_line(argc, argv); });
 }

@@ -152,10 +152,5 @@ static int run_main(int argc, char** argv) {
 }
 
 int main(int argc, char** argv) {
-  try {
-    return run_main(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
-    std::fprintf(stderr, "%s: %s\n", "bench_export", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_export", [&] { return run_main(argc, argv); });
 }

@@ -150,10 +150,5 @@ static int run_command_line(int argc, char** argv) {
 }
 
 int main(int argc, char** argv) {
-  try {
-    return run_command_line(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "bench_planner: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_planner", [&] { return run_command_line(argc, argv); });
 }

@@ -314,10 +314,5 @@ int run_command_line(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run_command_line(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "bench_reorder: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("bench_reorder", [&] { return run_command_line(argc, argv); });
 }

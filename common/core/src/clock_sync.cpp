@@ -5,6 +5,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdlib>
+#include <vector>
 
 namespace panoptes {
 namespace {
@@ -22,6 +23,114 @@ double median(std::vector<double> values) {
   const double upper = *middle;
   const double lower = *std::max_element(values.begin(), middle);
   return 0.5 * (lower + upper);
+}
+
+// The kept samples as a weighted line fit, in numbers kept small: x = local − reference (s),
+// y = offset − the newest sample's offset (ns).
+struct LineData {
+  std::vector<double> x;
+  std::vector<double> y;
+  std::vector<double> sigma;     // ns
+  std::vector<double> weight;    // age decay / σ²
+  double prior_information = 0;  // of the Gaussian prior on the drift, (ns/s)⁻²
+  double max_drift = 0;          // ns/s
+  std::size_t size() const { return x.size(); }
+};
+
+// offset = a + b·x, and the normal equations' sums that give its standard errors.
+struct Line {
+  double a = 0;  // ns
+  double b = 0;  // ns/s
+  double sum_w = 0;
+  double sum_wx = 0;
+  double sum_wxx = 0;
+  double determinant = 1;
+};
+
+// Weighted least squares over the samples marked in `fitted`, with the drift prior; a drift beyond
+// max_drift is clamped and the offset refitted.
+Line least_squares_line(const LineData& data, const std::vector<bool>& fitted) {
+  Line line;
+  double sum_wy = 0, sum_wxy = 0;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    if (!fitted[i]) continue;
+    line.sum_w += data.weight[i];
+    line.sum_wx += data.weight[i] * data.x[i];
+    line.sum_wxx += data.weight[i] * data.x[i] * data.x[i];
+    sum_wy += data.weight[i] * data.y[i];
+    sum_wxy += data.weight[i] * data.x[i] * data.y[i];
+  }
+  line.determinant = line.sum_w * (line.sum_wxx + data.prior_information) - line.sum_wx * line.sum_wx;
+  line.a = ((line.sum_wxx + data.prior_information) * sum_wy - line.sum_wx * sum_wxy) / line.determinant;
+  line.b = (line.sum_w * sum_wxy - line.sum_wx * sum_wy) / line.determinant;
+  if (std::abs(line.b) > data.max_drift) {
+    line.b = std::copysign(data.max_drift, line.b);
+    line.a = (sum_wy - line.sum_wx * line.b) / line.sum_w;
+  }
+  return line;
+}
+
+// Every sample's normalised residual |y − a − b·x| / σ about a line, into `z`; returns their median.
+double median_residual(const LineData& data, double a, double b, std::vector<double>& z) {
+  for (std::size_t i = 0; i < data.size(); ++i)
+    z[i] = std::abs(data.y[i] - a - b * data.x[i]) / data.sigma[i];
+  return median(z);
+}
+
+// Robust start (least median of residuals): a least-squares line can be dragged onto an outlier
+// that has a short round trip and hence a large weight, and then hide it. Candidate lines go
+// through the best-timed samples, singly with the previous drift and in pairs; the one with the
+// smallest median normalised residual replaces `line`'s a and b.
+void robust_start(const LineData& data, double previous_drift, Line& line) {
+  constexpr std::size_t kRobustStartCandidates = 16;
+  const std::size_t n = data.size();
+  std::vector<std::size_t> best(n);
+  for (std::size_t i = 0; i < n; ++i) best[i] = i;
+  const std::size_t m = std::min<std::size_t>(n, kRobustStartCandidates);
+  std::partial_sort(best.begin(), best.begin() + static_cast<std::ptrdiff_t>(m), best.end(),
+                    [&data](std::size_t i, std::size_t j) { return data.sigma[i] < data.sigma[j]; });
+  std::vector<double> z(n);
+  double best_cost = median_residual(data, line.a, line.b, z);
+  const auto consider = [&](double line_a, double line_b) {
+    const double cost = median_residual(data, line_a, line_b, z);
+    if (cost < best_cost) {
+      best_cost = cost;
+      line.a = line_a;
+      line.b = line_b;
+    }
+  };
+  const auto& x = data.x;
+  const auto& y = data.y;
+  for (std::size_t j = 0; j < m; ++j) {
+    const std::size_t p = best[j];
+    consider(y[p] - previous_drift * x[p], previous_drift);
+    for (std::size_t k = j + 1; k < m; ++k) {
+      const std::size_t q = best[k];
+      if (x[p] == x[q]) continue;
+      const double slope = std::clamp((y[q] - y[p]) / (x[q] - x[p]), -data.max_drift, data.max_drift);
+      consider(y[p] - slope * x[p], slope);
+    }
+  }
+}
+
+// Rejection from the start line: samples beyond `outlier_sigmas` robust standard deviations of the
+// current line are left out and the line refitted, until the set is stable. 1.4826 · median |z|
+// estimates the standard deviation of Gaussian residuals; below 1 the assumed sigmas are already
+// pessimistic and are kept. Returns the samples to fit.
+std::vector<bool> reject_outliers(const LineData& data, double outlier_sigmas, Line line) {
+  constexpr int kMaxRejectionRounds = 6;
+  const std::size_t n = data.size();
+  std::vector<bool> fitted(n, true);
+  std::vector<double> z(n);
+  for (int round = 0; round < kMaxRejectionRounds; ++round) {
+    const double scale = std::max(1.0, 1.4826 * median_residual(data, line.a, line.b, z));
+    std::vector<bool> next(n);
+    for (std::size_t i = 0; i < n; ++i) next[i] = z[i] <= outlier_sigmas * scale;
+    if (next == fitted) break;
+    fitted = next;
+    line = least_squares_line(data, fitted);
+  }
+  return fitted;
 }
 
 }  // namespace
@@ -155,92 +264,31 @@ void ClockSync::fit() {
   const double best_sigma = std::max(static_cast<double>(options_.min_sigma_ns),
                                      options_.sigma_per_round_trip * static_cast<double>(min_round_trip));
   const std::size_t n = all.size();
-  std::vector<double> x(n), y(n), sigma(n), weight(n);
+  LineData data;
+  data.x.resize(n);
+  data.y.resize(n);
+  data.sigma.resize(n);
+  data.weight.resize(n);
   const double half_life = static_cast<double>(options_.age_half_life_ns);
   for (std::size_t i = 0; i < n; ++i) {
-    x[i] = static_cast<double>(all[i].local_ns - reference) * 1e-9;  // s
-    y[i] = static_cast<double>(all[i].offset_ns - offset_base);      // ns
-    sigma[i] = best_sigma + 0.5 * static_cast<double>(all[i].round_trip_ns - min_round_trip);
+    data.x[i] = static_cast<double>(all[i].local_ns - reference) * 1e-9;  // s
+    data.y[i] = static_cast<double>(all[i].offset_ns - offset_base);      // ns
+    data.sigma[i] = best_sigma + 0.5 * static_cast<double>(all[i].round_trip_ns - min_round_trip);
     const double age = static_cast<double>(reference - all[i].local_ns);
-    weight[i] = std::exp2(-age / half_life) / (sigma[i] * sigma[i]);
+    data.weight[i] = std::exp2(-age / half_life) / (data.sigma[i] * data.sigma[i]);
   }
   const double drift_prior = options_.drift_prior_ppm * 1e3;  // ns/s
-  const double prior_information = 1.0 / (drift_prior * drift_prior);
-  const double max_drift = options_.max_drift_ppm * 1e3;
+  data.prior_information = 1.0 / (drift_prior * drift_prior);
+  data.max_drift = options_.max_drift_ppm * 1e3;
 
-  constexpr int kMaxRejectionRounds = 6;
   constexpr std::size_t kMinSamplesToReject = 4;
-  constexpr std::size_t kRobustStartCandidates = 16;
   std::vector<bool> fitted(n, true);
-  double a = 0, b = 0, sum_w = 0, sum_wx = 0, sum_wxx = 0, determinant = 1;
-  const auto solve = [&] {
-    sum_w = sum_wx = sum_wxx = 0;
-    double sum_wy = 0, sum_wxy = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!fitted[i]) continue;
-      sum_w += weight[i];
-      sum_wx += weight[i] * x[i];
-      sum_wxx += weight[i] * x[i] * x[i];
-      sum_wy += weight[i] * y[i];
-      sum_wxy += weight[i] * x[i] * y[i];
-    }
-    determinant = sum_w * (sum_wxx + prior_information) - sum_wx * sum_wx;
-    a = ((sum_wxx + prior_information) * sum_wy - sum_wx * sum_wxy) / determinant;
-    b = (sum_w * sum_wxy - sum_wx * sum_wy) / determinant;
-    if (std::abs(b) > max_drift) {
-      b = std::copysign(max_drift, b);
-      a = (sum_wy - sum_wx * b) / sum_w;
-    }
-  };
-
-  solve();
+  Line line = least_squares_line(data, fitted);
   if (n >= kMinSamplesToReject) {
-    // Robust start (least median of residuals): a least-squares line can be dragged onto an
-    // outlier that has a short round trip and hence a large weight, and then hide it. Candidate
-    // lines go through the best-timed samples, singly with the previous drift and in pairs; the
-    // one with the smallest median normalised residual starts the rejection.
-    std::vector<std::size_t> best(n);
-    for (std::size_t i = 0; i < n; ++i) best[i] = i;
-    const std::size_t m = std::min<std::size_t>(n, kRobustStartCandidates);
-    std::partial_sort(best.begin(), best.begin() + static_cast<std::ptrdiff_t>(m), best.end(),
-                      [&sigma](std::size_t i, std::size_t j) { return sigma[i] < sigma[j]; });
-    std::vector<double> z(n);
-    const auto median_z = [&](double line_a, double line_b) {
-      for (std::size_t i = 0; i < n; ++i) z[i] = std::abs(y[i] - line_a - line_b * x[i]) / sigma[i];
-      return median(z);
-    };
-    double best_cost = median_z(a, b);
-    const auto consider = [&](double line_a, double line_b) {
-      const double cost = median_z(line_a, line_b);
-      if (cost < best_cost) {
-        best_cost = cost;
-        a = line_a;
-        b = line_b;
-      }
-    };
-    for (std::size_t j = 0; j < m; ++j) {
-      const std::size_t p = best[j];
-      consider(y[p] - previous_drift * x[p], previous_drift);
-      for (std::size_t k = j + 1; k < m; ++k) {
-        const std::size_t q = best[k];
-        if (x[p] == x[q]) continue;
-        const double slope = std::clamp((y[q] - y[p]) / (x[q] - x[p]), -max_drift, max_drift);
-        consider(y[p] - slope * x[p], slope);
-      }
-    }
-    // Rejection: samples beyond `outlier_sigmas` robust standard deviations of the current line
-    // are left out and the line refitted, until the set is stable. 1.4826 · median |z| estimates
-    // the standard deviation of Gaussian residuals; below 1 the assumed sigmas are already
-    // pessimistic and are kept.
-    for (int round = 0; round < kMaxRejectionRounds; ++round) {
-      const double scale = std::max(1.0, 1.4826 * median_z(a, b));
-      std::vector<bool> next(n);
-      for (std::size_t i = 0; i < n; ++i) next[i] = z[i] <= options_.outlier_sigmas * scale;
-      if (next == fitted) break;
-      fitted = next;
-      solve();
-    }
-    solve();  // the start line is only a start: the estimate is the least-squares line
+    robust_start(data, previous_drift, line);
+    fitted = reject_outliers(data, options_.outlier_sigmas, line);
+    // The start line is only a start: the estimate is the least-squares line.
+    line = least_squares_line(data, fitted);
   }
 
   double chi2 = 0;
@@ -249,8 +297,8 @@ void ClockSync::fit() {
   TimeNs fitted_min_round_trip = -1;
   for (std::size_t i = 0; i < n; ++i) {
     if (!fitted[i]) continue;
-    const double residual = y[i] - a - b * x[i];
-    chi2 += weight[i] * residual * residual;
+    const double residual = data.y[i] - line.a - line.b * data.x[i];
+    chi2 += data.weight[i] * residual * residual;
     ++count;
     oldest = std::min(oldest, all[i].local_ns);
     if (fitted_min_round_trip < 0 || all[i].round_trip_ns < fitted_min_round_trip)
@@ -261,14 +309,15 @@ void ClockSync::fit() {
   const double inflation = count > 2 ? std::max(1.0, chi2 / static_cast<double>(count - 2)) : 1.0;
 
   estimate_.reference_ns = reference;
-  estimate_.offset_ns = static_cast<double>(offset_base) + a;
-  estimate_.drift = b * 1e-9;
+  estimate_.offset_ns = static_cast<double>(offset_base) + line.a;
+  estimate_.drift = line.b * 1e-9;
   estimate_.samples = count;
   estimate_.outliers = n - count;
   estimate_.span_ns = reference - oldest;
-  estimate_.residual_rms_ns = std::sqrt(chi2 / sum_w);
-  estimate_.offset_sigma_ns = std::sqrt((sum_wxx + prior_information) / determinant * inflation);
-  estimate_.drift_sigma_ppm = std::sqrt(sum_w / determinant * inflation) * 1e-3;
+  estimate_.residual_rms_ns = std::sqrt(chi2 / line.sum_w);
+  estimate_.offset_sigma_ns =
+      std::sqrt((line.sum_wxx + data.prior_information) / line.determinant * inflation);
+  estimate_.drift_sigma_ppm = std::sqrt(line.sum_w / line.determinant * inflation) * 1e-3;
   estimate_.min_round_trip_ns = fitted_min_round_trip;
   estimate_.synchronised = count >= options_.min_samples;
 }

@@ -13,6 +13,6 @@ std::string config_message(const std::string& file, const std::string& key, cons
 }  // namespace
 
 ConfigError::ConfigError(const std::string& file, const std::string& key, const std::string& reason)
-    : std::runtime_error(config_message(file, key, reason)), file_(file), key_(key) {}
+    : InputError(config_message(file, key, reason)), file_(file), key_(key) {}
 
 }  // namespace panoptes

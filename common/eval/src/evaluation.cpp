@@ -71,18 +71,23 @@ std::vector<std::pair<const IdSwitch*, const std::string*>> switches_in_time_ord
   return switches;
 }
 
-}  // namespace
-
-Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
-                    const EvaluationOptions& options) {
+// Records sorted by stamp (stable: a stamp's records keep their file order).
+std::vector<const TrackRecord*> sorted_by_stamp(const std::vector<TrackRecord>& tracks) {
   std::vector<const TrackRecord*> sorted;
   sorted.reserve(tracks.size());
   for (const auto& t : tracks) sorted.push_back(&t);
   std::stable_sort(sorted.begin(), sorted.end(),
                    [](const TrackRecord* a, const TrackRecord* b) { return a->stamp_ns < b->stamp_ns; });
+  return sorted;
+}
 
-  // Judged instants: [begin, end) ranges of records sharing a stamp.
-  std::vector<std::pair<std::size_t, std::size_t>> instants;
+// [begin, end) of the records sharing a stamp.
+using Instant = std::pair<std::size_t, std::size_t>;
+
+// The judged instants: those after the warm-up and within the scene.
+std::vector<Instant> judged_instants(const std::vector<const TrackRecord*>& sorted, const Scene& scene,
+                                     const EvaluationOptions& options) {
+  std::vector<Instant> instants;
   for (std::size_t begin = 0; begin < sorted.size();) {
     std::size_t end = begin;
     while (end < sorted.size() && sorted[end]->stamp_ns == sorted[begin]->stamp_ns) ++end;
@@ -91,17 +96,160 @@ Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
       instants.emplace_back(begin, end);
     begin = end;
   }
+  return instants;
+}
 
+// An evaluation with every scene marker named and nothing counted yet.
+Evaluation empty_evaluation(const Scene& scene, const EvaluationOptions& options, std::size_t instant_count) {
   const auto& names = scene.marker_names();
   Evaluation result;
   result.options = options;
   result.markers.resize(names.size());
   for (std::size_t m = 0; m < names.size(); ++m) result.markers[m].name = names[m];
   if (options.keep_series) {
-    result.series.scene_time_ns.reserve(instants.size());
-    result.series.error_m.assign(names.size(), std::vector<float>(instants.size(), NAN));
-    result.series.flags.assign(names.size(), std::vector<std::uint8_t>(instants.size(), 0));
+    result.series.scene_time_ns.reserve(instant_count);
+    result.series.error_m.assign(names.size(), std::vector<float>(instant_count, NAN));
+    result.series.flags.assign(names.size(), std::vector<std::uint8_t>(instant_count, 0));
   }
+  return result;
+}
+
+// What evaluate() adds up over the instants besides the counts an Evaluation holds.
+struct Totals {
+  explicit Totals(std::size_t markers) : sum2(markers, 0.0), last_id(markers, 0) {}
+  std::vector<double> sum2;                                   // per marker: matched errors squared
+  std::vector<std::int64_t> last_id;                          // per marker: track last matched (0: none)
+  std::map<std::int64_t, std::pair<int, int>> track_matches;  // id -> (samples, matched)
+  double total_sum2 = 0;
+  std::size_t total_matched = 0;
+};
+
+// One instant's matching, indexed by marker and by record (k - begin).
+struct InstantMatch {
+  std::vector<bool> marker_taken;
+  std::vector<bool> track_taken;
+  std::vector<bool> near_a_marker;
+};
+
+// Greedy nearest pairs within the match distance, each marker and track used once; every pair's
+// error and id switch is counted.
+InstantMatch match_instant(const std::vector<const TrackRecord*>& sorted, Instant records,
+                           const std::vector<MarkerTruth>& truth, std::size_t instant,
+                           const EvaluationOptions& options, Evaluation& result, Totals& totals) {
+  const auto [begin, end] = records;
+  std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
+  for (std::size_t m = 0; m < truth.size(); ++m) {
+    if (!truth[m].valid) continue;
+    for (std::size_t k = begin; k < end; ++k) {
+      const double d = (sorted[k]->p - truth[m].p).norm();
+      if (d < options.match_distance_m) pairs.emplace_back(d, m, k);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  InstantMatch match{std::vector<bool>(truth.size(), false), std::vector<bool>(end - begin, false),
+                     std::vector<bool>(end - begin, false)};
+  for (const auto& [d, m, k] : pairs) {
+    match.near_a_marker[k - begin] = true;
+    if (match.marker_taken[m] || match.track_taken[k - begin]) continue;
+    match.marker_taken[m] = true;
+    match.track_taken[k - begin] = true;
+    auto& marker = result.markers[m];
+    ++marker.tracked;
+    totals.sum2[m] += d * d;
+    totals.total_sum2 += d * d;
+    ++totals.total_matched;
+    marker.max_error_m = std::max(marker.max_error_m, d);
+    const std::int64_t id = sorted[k]->id;
+    if (totals.last_id[m] != 0 && totals.last_id[m] != id) {
+      marker.id_switches.push_back({sorted[k]->stamp_ns, totals.last_id[m], id,
+                                    seconds_since_start(sorted[k]->stamp_ns, options.epoch_ns)});
+    }
+    totals.last_id[m] = id;
+    if (options.keep_series) result.series.error_m[m][instant] = static_cast<float>(d);
+  }
+  return match;
+}
+
+// Every marker with truth at this instant: a step, trackable or not, tracked or not.
+void count_markers(const std::vector<MarkerTruth>& truth, const InstantMatch& match,
+                   const Visibility& visibility, TimeNs scene_time, std::size_t instant,
+                   const EvaluationOptions& options, Evaluation& result) {
+  for (std::size_t m = 0; m < truth.size(); ++m) {
+    if (!truth[m].valid) continue;
+    auto& marker = result.markers[m];
+    ++marker.steps;
+    const int cameras = visibility.cameras_showing(m, scene_time, options.trackable_window_ns);
+    const bool trackable = cameras >= options.trackable_min_cameras;
+    if (trackable) {
+      ++marker.trackable;
+      if (match.marker_taken[m]) ++marker.tracked_trackable;
+    }
+    if (cameras == options.trackable_min_cameras) {
+      ++result.edge_trackable;
+      if (match.marker_taken[m]) ++result.edge_tracked;
+    }
+    if (options.keep_series) {
+      result.series.flags[m][instant] = static_cast<std::uint8_t>(
+          EvaluationSeries::kHasTruth | (trackable ? EvaluationSeries::kTrackable : 0) |
+          (match.marker_taken[m] ? EvaluationSeries::kTracked : 0));
+    }
+  }
+}
+
+// Every record at this instant: matched, false, or a duplicate near a marker.
+void count_records(const std::vector<const TrackRecord*>& sorted, Instant records, const InstantMatch& match,
+                   Evaluation& result, Totals& totals) {
+  const auto [begin, end] = records;
+  for (std::size_t k = begin; k < end; ++k) {
+    auto& counts = totals.track_matches[sorted[k]->id];
+    ++counts.first;
+    ++result.records;
+    if (match.track_taken[k - begin]) {
+      ++counts.second;
+    } else {
+      ++result.false_records;
+      if (match.near_a_marker[k - begin]) ++result.duplicate_records;
+    }
+  }
+}
+
+// The figures over all instants: RMSEs, worst cases, switches and false tracks.
+void summarise(const Totals& totals, const EvaluationOptions& options, Evaluation& result) {
+  result.min_tracked_fraction = result.markers.empty() ? 0.0 : 1.0;
+  for (std::size_t m = 0; m < result.markers.size(); ++m) {
+    auto& marker = result.markers[m];
+    marker.rmse_m =
+        marker.tracked == 0 ? 0.0 : std::sqrt(totals.sum2[m] / static_cast<double>(marker.tracked));
+    result.worst_marker_rmse_m = std::max(result.worst_marker_rmse_m, marker.rmse_m);
+    result.max_error_m = std::max(result.max_error_m, marker.max_error_m);
+    result.min_tracked_fraction = std::min(result.min_tracked_fraction, marker.tracked_fraction());
+    result.id_switch_count += marker.id_switches.size();
+    result.trackable += marker.trackable;
+    result.tracked_trackable += marker.tracked_trackable;
+    if (marker.trackable > 0) result.min_coverage = std::min(result.min_coverage, marker.coverage());
+  }
+  result.rmse_m = totals.total_matched == 0
+                      ? 0.0
+                      : std::sqrt(totals.total_sum2 / static_cast<double>(totals.total_matched));
+  result.track_ids = totals.track_matches.size();
+  for (const auto& [id, counts] : totals.track_matches) {
+    const auto [samples, matched] = counts;
+    if (samples >= options.false_track_min_samples && 2 * matched < samples)
+      result.false_tracks.push_back(id);
+    if (matched < samples) {
+      result.false_record_ids.push_back(
+          {id, static_cast<std::size_t>(samples), static_cast<std::size_t>(samples - matched)});
+    }
+  }
+}
+
+}  // namespace
+
+Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
+                    const EvaluationOptions& options) {
+  const std::vector<const TrackRecord*> sorted = sorted_by_stamp(tracks);
+  const std::vector<Instant> instants = judged_instants(sorted, scene, options);
+  Evaluation result = empty_evaluation(scene, options, instants.size());
   if (instants.empty()) {
     result.min_tracked_fraction = result.markers.empty() ? 0.0 : 1.0;
     for (const auto& marker : result.markers) {
@@ -113,111 +261,21 @@ Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
   const TimeNs first_time = sorted[instants.front().first]->stamp_ns - options.epoch_ns;
   const TimeNs last_time = sorted[instants.back().first]->stamp_ns - options.epoch_ns;
   const Visibility visibility(scene, first_time - options.trackable_window_ns, last_time);
-
-  std::vector<double> sum2(names.size(), 0.0);
-  std::vector<std::int64_t> last_id(names.size(), 0);
-  std::map<std::int64_t, std::pair<int, int>> track_matches;  // id -> (samples, matched)
-  double total_sum2 = 0;
-  std::size_t total_matched = 0;
+  Totals totals(result.markers.size());
   TimeNs previous_time = first_time;
-
   for (std::size_t instant = 0; instant < instants.size(); ++instant) {
-    const auto [begin, end] = instants[instant];
-    const TimeNs scene_time = sorted[begin]->stamp_ns - options.epoch_ns;
+    const TimeNs scene_time = sorted[instants[instant].first]->stamp_ns - options.epoch_ns;
     result.max_instant_gap_ns = std::max(result.max_instant_gap_ns, scene_time - previous_time);
     previous_time = scene_time;
     ++result.instants;
     if (options.keep_series) result.series.scene_time_ns.push_back(scene_time);
     const auto truth = scene.markers_at(scene_time);
-
-    // Greedy nearest pairs within the match distance, each marker and track used once.
-    std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
-    for (std::size_t m = 0; m < truth.size(); ++m) {
-      if (!truth[m].valid) continue;
-      for (std::size_t k = begin; k < end; ++k) {
-        const double d = (sorted[k]->p - truth[m].p).norm();
-        if (d < options.match_distance_m) pairs.emplace_back(d, m, k);
-      }
-    }
-    std::sort(pairs.begin(), pairs.end());
-    std::vector<bool> marker_taken(truth.size(), false);
-    std::vector<bool> track_taken(end - begin, false);
-    std::vector<bool> near_a_marker(end - begin, false);
-    for (const auto& [d, m, k] : pairs) {
-      near_a_marker[k - begin] = true;
-      if (marker_taken[m] || track_taken[k - begin]) continue;
-      marker_taken[m] = true;
-      track_taken[k - begin] = true;
-      auto& marker = result.markers[m];
-      ++marker.tracked;
-      sum2[m] += d * d;
-      total_sum2 += d * d;
-      ++total_matched;
-      marker.max_error_m = std::max(marker.max_error_m, d);
-      const std::int64_t id = sorted[k]->id;
-      if (last_id[m] != 0 && last_id[m] != id) {
-        marker.id_switches.push_back({sorted[k]->stamp_ns, last_id[m], id,
-                                      seconds_since_start(sorted[k]->stamp_ns, options.epoch_ns)});
-      }
-      last_id[m] = id;
-      if (options.keep_series) result.series.error_m[m][instant] = static_cast<float>(d);
-    }
-    for (std::size_t m = 0; m < truth.size(); ++m) {
-      if (!truth[m].valid) continue;
-      auto& marker = result.markers[m];
-      ++marker.steps;
-      const int cameras = visibility.cameras_showing(m, scene_time, options.trackable_window_ns);
-      const bool trackable = cameras >= options.trackable_min_cameras;
-      if (trackable) {
-        ++marker.trackable;
-        if (marker_taken[m]) ++marker.tracked_trackable;
-      }
-      if (cameras == options.trackable_min_cameras) {
-        ++result.edge_trackable;
-        if (marker_taken[m]) ++result.edge_tracked;
-      }
-      if (options.keep_series) {
-        result.series.flags[m][instant] = static_cast<std::uint8_t>(
-            EvaluationSeries::kHasTruth | (trackable ? EvaluationSeries::kTrackable : 0) |
-            (marker_taken[m] ? EvaluationSeries::kTracked : 0));
-      }
-    }
-    for (std::size_t k = begin; k < end; ++k) {
-      auto& counts = track_matches[sorted[k]->id];
-      ++counts.first;
-      ++result.records;
-      if (track_taken[k - begin]) {
-        ++counts.second;
-      } else {
-        ++result.false_records;
-        if (near_a_marker[k - begin]) ++result.duplicate_records;
-      }
-    }
+    const InstantMatch match =
+        match_instant(sorted, instants[instant], truth, instant, options, result, totals);
+    count_markers(truth, match, visibility, scene_time, instant, options, result);
+    count_records(sorted, instants[instant], match, result, totals);
   }
-
-  result.min_tracked_fraction = result.markers.empty() ? 0.0 : 1.0;
-  for (std::size_t m = 0; m < result.markers.size(); ++m) {
-    auto& marker = result.markers[m];
-    marker.rmse_m = marker.tracked == 0 ? 0.0 : std::sqrt(sum2[m] / static_cast<double>(marker.tracked));
-    result.worst_marker_rmse_m = std::max(result.worst_marker_rmse_m, marker.rmse_m);
-    result.max_error_m = std::max(result.max_error_m, marker.max_error_m);
-    result.min_tracked_fraction = std::min(result.min_tracked_fraction, marker.tracked_fraction());
-    result.id_switch_count += marker.id_switches.size();
-    result.trackable += marker.trackable;
-    result.tracked_trackable += marker.tracked_trackable;
-    if (marker.trackable > 0) result.min_coverage = std::min(result.min_coverage, marker.coverage());
-  }
-  result.rmse_m = total_matched == 0 ? 0.0 : std::sqrt(total_sum2 / static_cast<double>(total_matched));
-  result.track_ids = track_matches.size();
-  for (const auto& [id, counts] : track_matches) {
-    const auto [samples, matched] = counts;
-    if (samples >= options.false_track_min_samples && 2 * matched < samples)
-      result.false_tracks.push_back(id);
-    if (matched < samples) {
-      result.false_record_ids.push_back(
-          {id, static_cast<std::size_t>(samples), static_cast<std::size_t>(samples - matched)});
-    }
-  }
+  summarise(totals, options, result);
   return result;
 }
 

@@ -470,26 +470,59 @@ struct Scene::Impl {
   std::vector<LandmarkGroup> landmarks;
 
   void parse(const YamlReader& root, const std::filesystem::path& base_dir);
+
+ private:
+  // parse()'s steps, in the order the markers are numbered (markers_at fills them so).
+  void parse_cameras(const YamlReader& root);
+  void parse_markers(const YamlReader& root, std::set<std::string>& names);
+  void parse_landmarks(const YamlReader& root, std::set<std::string>& names);
+  void parse_trc(const YamlReader& root, const std::filesystem::path& base_dir, std::set<std::string>& names);
+  void parse_bodies(const YamlReader& root, std::set<std::string>& names, std::set<std::string>& body_names);
+  void add_rig_marker_names(const YamlReader& root, std::set<std::string>& names);
+  void parse_chains(const YamlReader& root, std::set<std::string>& names, std::set<std::string>& body_names);
+  // A marker's name, unique among `names`, and its radius.
+  void add_marker_name(std::set<std::string>& names, const YamlReader& reader, const std::string& key,
+                       const std::string& name, double radius);
 };
 
 void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& base_dir) {
-  Impl& scene = *this;
   reject_unknown_keys(root, {"seed", "duration", "description", "defaults", "cameras", "markers", "trc",
                              "bodies", "landmarks", "chains"});
-  scene.seed = static_cast<std::uint64_t>(root.get_int("seed", 0));
+  seed = static_cast<std::uint64_t>(root.get_int("seed", 0));
   const double duration_s = root.get_double("duration", kDefaultDurationS);
   if (!(duration_s > 0.0) || !std::isfinite(duration_s)) root.fail("duration", "must be > 0 s");
-  scene.duration_ns = seconds_to_ns(duration_s);
+  duration_ns = seconds_to_ns(duration_s);
 
+  parse_cameras(root);
+  std::set<std::string> names;
+  std::set<std::string> body_names;
+  parse_markers(root, names);
+  parse_landmarks(root, names);
+  parse_trc(root, base_dir, names);
+  parse_bodies(root, names, body_names);
+  add_rig_marker_names(root, names);
+  parse_chains(root, names, body_names);
+  if (marker_names.empty())
+    root.fail("markers", "the scene has no markers (give markers, trc, bodies, landmarks or chains)");
+}
+
+void Scene::Impl::add_marker_name(std::set<std::string>& names, const YamlReader& reader,
+                                  const std::string& key, const std::string& name, double radius) {
+  if (!names.insert(name).second) reader.fail(key, "duplicate marker name '" + name + "'");
+  marker_names.push_back(name);
+  marker_radii.push_back(radius);
+}
+
+void Scene::Impl::parse_cameras(const YamlReader& root) {
   std::optional<YamlReader> defaults;
   if (root.has("defaults")) {
     defaults.emplace(root.child("defaults"));
     reject_unknown_keys(*defaults, {PANOPTES_SIM_CAMERA_KEYS});
   }
-  const std::vector<YamlReader> cameras = root.sequence("cameras");
-  if (cameras.empty()) root.fail("cameras", "expected at least one camera");
+  const std::vector<YamlReader> camera_readers = root.sequence("cameras");
+  if (camera_readers.empty()) root.fail("cameras", "expected at least one camera");
   std::set<std::string> camera_ids;
-  for (const YamlReader& camera : cameras) {
+  for (const YamlReader& camera : camera_readers) {
     SimCameraConfig config = read_camera(camera, defaults);
     if (!camera_ids.insert(config.calibration.id).second) {
       camera.fail("id", "duplicate camera id '" + config.calibration.id + "'");
@@ -499,21 +532,15 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
       rig = read_rig(camera, config.calibration.id);
       config.calibration.rig = rig->name;
     }
-    scene.camera_rigs.push_back(std::move(rig));
-    scene.cameras.push_back(std::move(config));
+    camera_rigs.push_back(std::move(rig));
+    cameras.push_back(std::move(config));
   }
+}
 
-  std::set<std::string> names;
-  auto add_name = [&](const YamlReader& reader, const std::string& key, const std::string& name,
-                      double radius) {
-    if (!names.insert(name).second) reader.fail(key, "duplicate marker name '" + name + "'");
-    scene.marker_names.push_back(name);
-    scene.marker_radii.push_back(radius);
-  };
-
-  const std::vector<YamlReader> markers = root.sequence_or_empty("markers");
-  for (std::size_t i = 0; i < markers.size(); ++i) {
-    const YamlReader& marker = markers[i];
+void Scene::Impl::parse_markers(const YamlReader& root, std::set<std::string>& names) {
+  const std::vector<YamlReader> marker_readers = root.sequence_or_empty("markers");
+  for (std::size_t i = 0; i < marker_readers.size(); ++i) {
+    const YamlReader& marker = marker_readers[i];
     reject_unknown_keys(marker, {"name", "radius", "path", "pen_down"});
     MarkerSpec spec;
     // Appending rather than "m" + to_string(i) sidesteps a GCC 12 -Wrestrict false positive.
@@ -532,32 +559,57 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
         previous_end = interval[1];
       }
     }
-    add_name(marker, "name", spec.name, spec.radius);
-    scene.markers.push_back(std::move(spec));
+    add_marker_name(names, marker, "name", spec.name, spec.radius);
+    markers.push_back(std::move(spec));
   }
+}
 
-  if (root.has("landmarks")) {
-    // Fixed in the room: static markers "<name>/<index>" (a single one: "<name>"), after `markers`
-    // as markers_at() fills them.
-    scene.landmarks = read_landmarks(root);
-    for (const LandmarkGroup& group : scene.landmarks) {
-      for (std::size_t m = 0; m < group.points.size(); ++m) {
-        MarkerSpec spec;
-        spec.name = group.constellation ? group.name + "/" + std::to_string(m) : group.name;
-        spec.path = sim::StaticPath{group.points[m]};
-        add_name(root, "landmarks", spec.name, spec.radius);
-        scene.markers.push_back(std::move(spec));
-      }
+// Fixed in the room: static markers "<name>/<index>" (a single one: "<name>"), after `markers` as
+// markers_at() fills them.
+void Scene::Impl::parse_landmarks(const YamlReader& root, std::set<std::string>& names) {
+  if (!root.has("landmarks")) return;
+  landmarks = read_landmarks(root);
+  for (const LandmarkGroup& group : landmarks) {
+    for (std::size_t m = 0; m < group.points.size(); ++m) {
+      MarkerSpec spec;
+      spec.name = group.constellation ? group.name + "/" + std::to_string(m) : group.name;
+      spec.path = sim::StaticPath{group.points[m]};
+      add_marker_name(names, root, "landmarks", spec.name, spec.radius);
+      markers.push_back(std::move(spec));
     }
   }
-  if (root.has("trc")) {
-    const YamlReader trc = root.child("trc");
-    std::vector<std::string> trc_names;
-    scene.trc = read_trc(trc, base_dir, trc_names);
-    for (const std::string& name : trc_names) add_name(trc, "prefix", name, scene.trc->radius);
-  }
+}
 
-  std::set<std::string> body_names;
+void Scene::Impl::parse_trc(const YamlReader& root, const std::filesystem::path& base_dir,
+                            std::set<std::string>& names) {
+  if (!root.has("trc")) return;
+  const YamlReader trc_reader = root.child("trc");
+  std::vector<std::string> trc_names;
+  trc = read_trc(trc_reader, base_dir, trc_names);
+  for (const std::string& name : trc_names) add_marker_name(names, trc_reader, "prefix", name, trc->radius);
+}
+
+namespace {
+
+// A body's `occlusion:` section: markers hidden when seen from behind.
+void read_occlusion(const YamlReader& body, BodySpec& spec) {
+  const YamlReader occlusion = body.child("occlusion");
+  reject_unknown_keys(occlusion, {"facing_angle", "normal"});
+  const double degrees = occlusion.get_double("facing_angle");
+  if (!(degrees > 0.0 && degrees <= 180.0)) occlusion.fail("facing_angle", "must be in (0, 180] degrees");
+  spec.facing_angle_rad = degrees * std::numbers::pi / 180.0;
+  if (occlusion.has("normal")) {
+    const auto n = occlusion.get_doubles("normal", 3);
+    spec.normal = Eigen::Vector3d(n[0], n[1], n[2]);
+    if (!(spec.normal.norm() > 0.0)) occlusion.fail("normal", "must be a non-zero vector");
+    spec.normal.normalize();
+  }
+}
+
+}  // namespace
+
+void Scene::Impl::parse_bodies(const YamlReader& root, std::set<std::string>& names,
+                               std::set<std::string>& body_names) {
   for (const YamlReader& body : root.sequence_or_empty("bodies")) {
     reject_unknown_keys(body, {"name", "markers", "type", "marker_radius", "path", "rotation", "occlusion"});
     BodySpec spec;
@@ -565,41 +617,35 @@ void Scene::Impl::parse(const YamlReader& root, const std::filesystem::path& bas
     spec.name = std::move(definition.name);
     spec.markers = std::move(definition.markers);
     spec.kind = definition.kind;
-    if (body.has("occlusion")) {
-      const YamlReader occlusion = body.child("occlusion");
-      reject_unknown_keys(occlusion, {"facing_angle", "normal"});
-      const double degrees = occlusion.get_double("facing_angle");
-      if (!(degrees > 0.0 && degrees <= 180.0)) occlusion.fail("facing_angle", "must be in (0, 180] degrees");
-      spec.facing_angle_rad = degrees * std::numbers::pi / 180.0;
-      if (occlusion.has("normal")) {
-        const auto n = occlusion.get_doubles("normal", 3);
-        spec.normal = Eigen::Vector3d(n[0], n[1], n[2]);
-        if (!(spec.normal.norm() > 0.0)) occlusion.fail("normal", "must be a non-zero vector");
-        spec.normal.normalize();
-      }
-    }
+    if (body.has("occlusion")) read_occlusion(body, spec);
     spec.marker_radius = read_marker_radius(body, "marker_radius");
     spec.path = sim::read_path(body.child("path"));
     if (body.has("rotation")) spec.rotation = sim::read_rotation(body.child("rotation"));
     for (std::size_t m = 0; m < spec.markers.size(); ++m) {
-      add_name(body, "name", spec.name + "/" + std::to_string(m), spec.marker_radius);
+      add_marker_name(names, body, "name", spec.name + "/" + std::to_string(m), spec.marker_radius);
     }
-    scene.bodies.push_back(std::move(spec));
+    bodies.push_back(std::move(spec));
   }
-  for (const auto& rig : scene.camera_rigs) {
+}
+
+void Scene::Impl::add_rig_marker_names(const YamlReader& root, std::set<std::string>& names) {
+  for (const auto& rig : camera_rigs) {
     for (std::size_t m = 0; rig && m < rig->markers.size(); ++m)
-      add_name(root, "cameras", rig->name + "/" + std::to_string(m), kDefaultMarkerRadius);
+      add_marker_name(names, root, "cameras", rig->name + "/" + std::to_string(m), kDefaultMarkerRadius);
   }
+}
+
+void Scene::Impl::parse_chains(const YamlReader& root, std::set<std::string>& names,
+                               std::set<std::string>& body_names) {
   for (const YamlReader& chain : root.sequence_or_empty("chains")) {
     sim::ChainSpec spec = sim::read_chain_spec(chain, kDefaultMarkerRadius);
     if (!body_names.insert(spec.definition.name).second)
       chain.fail("name", "duplicate body or chain name '" + spec.definition.name + "'");
     for (int m = 0; m < spec.definition.marker_count(); ++m)
-      add_name(chain, "name", spec.definition.name + "/" + std::to_string(m), spec.marker_radius);
-    scene.chains.push_back(std::move(spec));
+      add_marker_name(names, chain, "name", spec.definition.name + "/" + std::to_string(m),
+                      spec.marker_radius);
+    chains.push_back(std::move(spec));
   }
-  if (scene.marker_names.empty())
-    root.fail("markers", "the scene has no markers (give markers, trc, bodies, landmarks or chains)");
 }
 
 Scene::Scene() : impl_(std::make_unique<Impl>()) {}

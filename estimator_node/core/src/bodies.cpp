@@ -321,10 +321,18 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
 
   std::vector<MeasuredPoint> measured(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) measured[i] = {points[i].p, points[i].sigma_m};
-
   // Points explained by tracked bodies are not offered to the others.
   std::vector<char> claimed(points.size(), 0);
-  std::vector<std::vector<int>> near_body(bodies_.size());  // points near each tracked body
+  std::vector<std::vector<int>> near_body(bodies_.size());
+  claim_points_of_tracked(stamp_ns, points, claimed, near_body);
+  if (verify_now) verify_tracked(stamp_ns, points, measured, near_body);
+  if (identify_now) acquire_untracked(stamp_ns, points, measured, claimed);
+}
+
+void BodySet::claim_points_of_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
+                                      std::vector<char>& claimed,
+                                      std::vector<std::vector<int>>& near_body) const {
+  const BodyTrackerOptions& o = shared_->options;
   const double near = 4.0 * o.identification.tolerance_floor_m;
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     if (!bodies_[b].tracked) continue;
@@ -337,50 +345,58 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
       }
     }
   }
+}
 
-  const auto start_body = [&](std::size_t b, const BodyMatch& match, const std::vector<int>& point_index) {
-    Body& body = bodies_[b];
-    BodyState state;
-    state.p = match.T_world_body.t;
-    state.q = match.T_world_body.q;
-    state.stamp_ns = stamp_ns;
-    std::vector<int> used;
-    for (const auto& pair : match.pairs) used.push_back(point_index[static_cast<std::size_t>(pair.first)]);
-    Eigen::Vector3d v = Eigen::Vector3d::Zero(), w_world = Eigen::Vector3d::Zero();
-    const bool have_velocity = rigid_velocity(points, used, state.p, v, w_world);
-    state.v = v;
-    state.w = state.q.conjugate() * w_world;
-    state.P = body_prior({std::max(o.init_position_sigma_m, match.rms_m),
-                          have_velocity ? o.init_velocity_sigma_mps : 2.0, o.init_accel_sigma_mps2,
-                          o.init_angle_sigma_rad, have_velocity ? o.init_angular_velocity_sigma : 5.0,
-                          initial_angular_accel_sigma(o)});
-    body.start(state, stamp_ns);
-    for (const auto& pair : match.pairs)
-      body.marker_last_seen[static_cast<std::size_t>(pair.second)] = stamp_ns;
-  };
+void BodySet::start_from_match(std::size_t b, const BodyMatch& match, const std::vector<int>& point_index,
+                               const std::vector<TrackedPoint>& points, TimeNs stamp_ns) {
+  const BodyTrackerOptions& o = shared_->options;
+  Body& body = bodies_[b];
+  BodyState state;
+  state.p = match.T_world_body.t;
+  state.q = match.T_world_body.q;
+  state.stamp_ns = stamp_ns;
+  std::vector<int> used;
+  for (const auto& pair : match.pairs) used.push_back(point_index[static_cast<std::size_t>(pair.first)]);
+  Eigen::Vector3d v = Eigen::Vector3d::Zero(), w_world = Eigen::Vector3d::Zero();
+  const bool have_velocity = rigid_velocity(points, used, state.p, v, w_world);
+  state.v = v;
+  state.w = state.q.conjugate() * w_world;
+  state.P = body_prior({std::max(o.init_position_sigma_m, match.rms_m),
+                        have_velocity ? o.init_velocity_sigma_mps : 2.0, o.init_accel_sigma_mps2,
+                        o.init_angle_sigma_rad, have_velocity ? o.init_angular_velocity_sigma : 5.0,
+                        initial_angular_accel_sigma(o)});
+  body.start(state, stamp_ns);
+  for (const auto& pair : match.pairs)
+    body.marker_last_seen[static_cast<std::size_t>(pair.second)] = stamp_ns;
+}
 
-  // Verification: a tracked body whose identification among nearby points disagrees with its
-  // filter pose (a wrong acquisition, or markers swapped) is restarted from the identification.
-  if (verify_now) {
-    for (std::size_t b = 0; b < bodies_.size(); ++b) {
-      if (!bodies_[b].tracked || near_body[b].size() < 3) continue;
-      std::vector<MeasuredPoint> local;
-      for (int i : near_body[b]) local.push_back(measured[static_cast<std::size_t>(i)]);
-      const auto& markers = shared_->definitions[b].markers;
-      const auto match = identify_body(markers, local, o.identification);
-      if (!match || match->pairs.size() < std::min<std::size_t>(4, markers.size())) continue;
-      const RigidTransform pose = predicted(bodies_[b].state, stamp_ns, o.noise).pose();
-      if ((match->T_world_body.t - pose.t).norm() > o.verify_position_m ||
-          angle_between(match->T_world_body.q, pose.q) > o.verify_angle_rad) {
-        start_body(b, *match, near_body[b]);
-        ++stats_.reidentified;
-      }
+// Verification: a tracked body whose identification among nearby points disagrees with its filter
+// pose (a wrong acquisition, or markers swapped) is restarted from the identification.
+void BodySet::verify_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
+                             const std::vector<MeasuredPoint>& measured,
+                             const std::vector<std::vector<int>>& near_body) {
+  const BodyTrackerOptions& o = shared_->options;
+  for (std::size_t b = 0; b < bodies_.size(); ++b) {
+    if (!bodies_[b].tracked || near_body[b].size() < 3) continue;
+    std::vector<MeasuredPoint> local;
+    for (int i : near_body[b]) local.push_back(measured[static_cast<std::size_t>(i)]);
+    const auto& markers = shared_->definitions[b].markers;
+    const auto match = identify_body(markers, local, o.identification);
+    if (!match || match->pairs.size() < std::min<std::size_t>(4, markers.size())) continue;
+    const RigidTransform pose = predicted(bodies_[b].state, stamp_ns, o.noise).pose();
+    if ((match->T_world_body.t - pose.t).norm() > o.verify_position_m ||
+        angle_between(match->T_world_body.q, pose.q) > o.verify_angle_rad) {
+      start_from_match(b, *match, near_body[b], points, stamp_ns);
+      ++stats_.reidentified;
     }
   }
+}
 
-  if (!identify_now) return;
-  // Acquisition: the best match over all untracked bodies first (most markers, then lowest RMS),
-  // its points claimed, then the next.
+// Acquisition: the best match over all untracked bodies first (most markers, then lowest RMS), its
+// points claimed, then the next.
+void BodySet::acquire_untracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
+                                const std::vector<MeasuredPoint>& measured, std::vector<char>& claimed) {
+  const BodyTrackerOptions& o = shared_->options;
   std::vector<char> pending(bodies_.size(), 0);
   for (std::size_t b = 0; b < bodies_.size(); ++b) pending[b] = !bodies_[b].tracked;
   for (;;) {
@@ -404,7 +420,7 @@ void BodySet::identify(TimeNs stamp_ns, const std::vector<TrackedPoint>& points)
       }
     }
     if (!best) break;
-    start_body(best_body, *best, free_index);
+    start_from_match(best_body, *best, free_index, points, stamp_ns);
     ++stats_.identified;
     pending[best_body] = 0;
     for (const auto& pair : best->pairs)

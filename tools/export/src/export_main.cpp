@@ -146,25 +146,9 @@ static int run_main(int argc, char** argv) {
     }
   });
   if (exit) return *exit;
-  try {
-    return run(options);
-  } catch (const ConfigError& error) {
-    std::fprintf(stderr, "panoptes_export: %s\n", error.what());
-    return kExitBadInput;
-  } catch (const std::invalid_argument& error) {
-    std::fprintf(stderr, "panoptes_export: %s\n", error.what());
-    return kExitBadInput;
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "panoptes_export: %s\n", error.what());
-    return kExitFailure;
-  }
+  return run(options);
 }
 
 int main(int argc, char** argv) {
-  try {
-    return run_main(argc, argv);
-  } catch (const std::exception& error) {  // e.g. out of memory while setting up the parser
-    std::fprintf(stderr, "%s: %s\n", "panoptes_export", error.what());
-    return 1;
-  }
+  return panoptes::run_program("panoptes_export", [&] { return run_main(argc, argv); });
 }

@@ -238,7 +238,8 @@ int run(const Arguments& args) {
 }  // namespace
 
 static int run_command_line(int argc, char** argv) {
-  CLI::App app{"panoptes_plan: camera placement for a studio, seed 003 Ch. 4 (docs/planner.md)"};
+  CLI::App app{"panoptes_plan: camera placement for a studio, seed 003 Ch. 4 (docs/planner.md)",
+               "panoptes_plan"};
   app.get_formatter()->column_width(34);
   Arguments args;
   app.add_option("--room", args.room,
@@ -296,23 +297,11 @@ static int run_command_line(int argc, char** argv) {
     return *code;
   try {
     return run(args);
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "panoptes_plan: %s\n", e.what());
-    return kExitBadInput;
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "panoptes_plan: %s: %s\n", args.room.string().c_str(), e.what());
-    return kExitBadInput;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "panoptes_plan: %s\n", e.what());
-    return kExitFailure;
+  } catch (const std::invalid_argument& error) {  // the planner refusing the room: name the file
+    throw ConfigError(args.room.string(), "", error.what());
   }
 }
 
 int main(int argc, char** argv) {
-  try {
-    return run_command_line(argc, argv);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "panoptes_plan: %s\n", error.what());
-    return 1;
-  }
+  return panoptes::run_program("panoptes_plan", [&] { return run_command_line(argc, argv); });
 }

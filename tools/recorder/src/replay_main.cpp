@@ -3,7 +3,6 @@
 // (docs/recording.md); says whether it kept up.
 #include <cstdio>
 #include <exception>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -88,6 +87,7 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return panoptes::run_program<panoptes::recording::RecordingError, std::invalid_argument>(
-      "panoptes_replay", [&] { return run(argc, argv); });
+  // panoptes_replay only reads recordings: every RecordingError is its input's.
+  return panoptes::run_program<panoptes::recording::RecordingError>("panoptes_replay",
+                                                                    [&] { return run(argc, argv); });
 }

@@ -186,7 +186,8 @@ int run_render(const Options& options) {
 
 int run(int argc, char** argv) {
   CLI::App app{
-      "Panoptes simulator: calibration, features, images and ground truth of a scene (docs/simulator.md)"};
+      "Panoptes simulator: calibration, features, images and ground truth of a scene (docs/simulator.md)",
+      "panoptes_sim"};
   app.require_subcommand(1);
   app.option_defaults()->always_capture_default();  // --help shows every default
   Options options;
@@ -218,13 +219,7 @@ int run(int argc, char** argv) {
   sim_tool::PtzRunOptions ptz_options;
   CLI::App* ptz = sim_tool::add_ptz_subcommand(app, ptz_options);
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& error) {
-    if (error.get_exit_code() == 0) return app.exit(error);  // --help
-    std::cerr << "panoptes_sim: " << error.what() << "\n";
-    return 2;
-  }
+  if (const auto exit_code = parse_command_line(app, argc, argv)) return *exit_code;
 
   if (calibration->parsed()) return run_calibration(options);
   if (features->parsed()) return run_features(options);

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
-// Small helpers every program shares: turning SIGINT/SIGTERM into a clean stop, and the one-line
-// error convention for bad command lines.
+// Small helpers every program shares: turning SIGINT/SIGTERM into a clean stop, child processes,
+// and run_program, which gives every main() the same error lines and exit codes.
 #pragma once
 
 #include <chrono>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -44,7 +45,7 @@ class ChildProcess {
   int exit_status_ = 0;
 };
 
-// Exit codes shared by every program.
+// Exit codes shared by every program (docs/architecture.md, "Configuration and errors").
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;   // a run-time failure
 inline constexpr int kExitBadInput = 2;  // bad arguments, config, calibration or input file
@@ -67,14 +68,21 @@ int run_catching_bad_input(const char* program, Body& body) {
 }
 }  // namespace detail
 
-// Every program's main(): runs `body` (returns the exit code) and turns an exception that escapes
-// it into one line "<program>: <what>" on stderr and an exit code: kExitBadInput for a ConfigError
-// and for the `BadInput` types given (e.g. a DDS error from a bad profile), kExitFailure for any
-// other exception (e.g. out of memory), never an abort.
+// Every program's main():
+//   int main(int argc, char** argv) {
+//     return panoptes::run_program("panoptes_x", [&] { return run(argc, argv); });
+//   }
+// runs `body` (which parses its command line with parse_command_line and returns the exit code)
+// and turns an exception that escapes it into one line "<program>: <what>" on stderr and an exit
+// code chosen by its type (panoptes/errors.h): kExitBadInput for an InputError (ConfigError among
+// them), a std::invalid_argument and the `BadInput` types given, kExitFailure for any other
+// exception, never an abort. `BadInput` is for a library's error type that, in this program, can
+// only mean bad input (panoptes_replay only reads, so every RecordingError is its input's).
 template <typename... BadInput, typename Body>
 int run_program(const char* program, Body&& body) {
   try {
-    return detail::run_catching_bad_input<Body, ConfigError, BadInput...>(program, body);
+    return detail::run_catching_bad_input<Body, InputError, std::invalid_argument, BadInput...>(program,
+                                                                                                body);
   } catch (const std::exception& error) {
     detail::report_program_error(program, error.what());
   } catch (...) {

@@ -104,6 +104,18 @@ class BodySet {
   void acquire_monocular(int camera_index, const CameraModel& camera, TimeNs stamp_ns,
                          const std::vector<Eigen::Vector2d>& pixels, const std::vector<char>& excluded,
                          std::vector<char>& taken);
+  // identify()'s steps. Points near a tracked body's predicted pose go to `near_body[b]`; those on
+  // one of its markers are marked in `claimed`.
+  void claim_points_of_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
+                               std::vector<char>& claimed, std::vector<std::vector<int>>& near_body) const;
+  void verify_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
+                      const std::vector<MeasuredPoint>& measured,
+                      const std::vector<std::vector<int>>& near_body);
+  void acquire_untracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
+                         const std::vector<MeasuredPoint>& measured, std::vector<char>& claimed);
+  // Restarts body `b` at an identification of it; `point_index` maps the match's points to `points`.
+  void start_from_match(std::size_t b, const BodyMatch& match, const std::vector<int>& point_index,
+                        const std::vector<TrackedPoint>& points, TimeNs stamp_ns);
   std::shared_ptr<const Shared> shared_;
   std::vector<Body> bodies_;
   BodyStats stats_;

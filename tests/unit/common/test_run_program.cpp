@@ -1,0 +1,99 @@
+// SPDX-License-Identifier: Apache-2.0
+// run_program: the exit code a main() returns is chosen by the type of the exception that escapes
+// it (panoptes/errors.h), with one line "<program>: <what>" on stderr.
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "panoptes/errors.h"
+#include "panoptes/process.h"
+
+namespace panoptes {
+namespace {
+
+// A library error that is not an InputError (like dds::DdsError): a run-time failure unless the
+// program names it as bad input.
+class LibraryError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class DerivedConfigError : public ConfigError {  // like dds::SecurityError
+ public:
+  using ConfigError::ConfigError;
+};
+
+struct Outcome {
+  int exit_code = -1;
+  std::string stderr_text;
+};
+
+template <typename... BadInput, typename Body>
+Outcome run(Body&& body) {
+  testing::internal::CaptureStderr();
+  const int exit_code = run_program<BadInput...>("panoptes_test", std::forward<Body>(body));
+  return {exit_code, testing::internal::GetCapturedStderr()};
+}
+
+TEST(RunProgram, ReturnsTheBodysExitCodeAndPrintsNothing) {
+  const Outcome ok = run([] { return kExitOk; });
+  EXPECT_EQ(ok.exit_code, kExitOk);
+  EXPECT_EQ(ok.stderr_text, "");
+  EXPECT_EQ(run([] { return 7; }).exit_code, 7);
+}
+
+TEST(RunProgram, BadInputExitsTwoWithOneLineNamingTheProgram) {
+  const Outcome config = run([]() -> int { throw ConfigError("room.yaml", "volume", "must not be empty"); });
+  EXPECT_EQ(config.exit_code, kExitBadInput);
+  EXPECT_EQ(config.stderr_text, "panoptes_test: room.yaml: volume: must not be empty\n");
+  EXPECT_EQ(run([]() -> int { throw InputError("v4l2:/dev/video9: cannot open"); }).exit_code, kExitBadInput);
+  EXPECT_EQ(run([]() -> int { throw DerivedConfigError("a.pem", "", "unreadable"); }).exit_code,
+            kExitBadInput);
+  EXPECT_EQ(run([]() -> int { throw std::invalid_argument("not a number"); }).exit_code, kExitBadInput);
+}
+
+TEST(RunProgram, OtherExceptionsAreRunTimeFailures) {
+  const Outcome failure = run([]() -> int { throw std::runtime_error("disk full"); });
+  EXPECT_EQ(failure.exit_code, kExitFailure);
+  EXPECT_EQ(failure.stderr_text, "panoptes_test: disk full\n");
+  EXPECT_EQ(run([]() -> int { throw LibraryError("cannot create DDS participant"); }).exit_code,
+            kExitFailure);
+  EXPECT_EQ(run([]() -> int { throw std::bad_alloc(); }).exit_code, kExitFailure);
+  const Outcome unknown = run([]() -> int { throw 42; });
+  EXPECT_EQ(unknown.exit_code, kExitFailure);
+  EXPECT_EQ(unknown.stderr_text, "panoptes_test: unknown error\n");
+}
+
+TEST(RunProgram, NamedLibraryErrorsAreBadInput) {
+  EXPECT_EQ(
+      run<LibraryError>([]() -> int { throw LibraryError("'rt/x' is not a Panoptes topic"); }).exit_code,
+      kExitBadInput);
+  EXPECT_EQ(run<LibraryError>([]() -> int { throw std::runtime_error("disk full"); }).exit_code,
+            kExitFailure);
+}
+
+TEST(AsInputError, TurnsAStepsFailuresIntoInputErrorsAndKeepsItsResult) {
+  EXPECT_EQ(as_input_error([] { return 5; }), 5);
+  auto moved = as_input_error([] { return std::make_unique<int>(3); });  // move-only results pass
+  EXPECT_EQ(*moved, 3);
+  try {
+    as_input_error([]() -> int { throw std::runtime_error("features:none.jsonl: no such file"); });
+    FAIL() << "no exception";
+  } catch (const InputError& error) {
+    EXPECT_STREQ(error.what(), "features:none.jsonl: no such file");
+  }
+  // An InputError keeps its own type (a ConfigError still names file and key).
+  try {
+    as_input_error([] { throw ConfigError("typo.yaml", "detector.treshold", "unknown key"); });
+    FAIL() << "no exception";
+  } catch (const ConfigError& error) {
+    EXPECT_EQ(error.key(), "detector.treshold");
+  }
+  const Outcome outcome = run([] { return as_input_error([]() -> int { throw std::runtime_error("x"); }); });
+  EXPECT_EQ(outcome.exit_code, kExitBadInput);
+}
+
+}  // namespace
+}  // namespace panoptes
