@@ -57,21 +57,21 @@ struct TopicTraits;
 
 // The camera-scoped topics (TopicSpec::camera_scoped).
 template <class T>
-constexpr bool kCameraScoped = false;
+inline constexpr bool kCameraScoped = false;
 template <>
-constexpr bool kCameraScoped<msg::CameraInfo> = true;
+inline constexpr bool kCameraScoped<msg::CameraInfo> = true;
 template <>
-constexpr bool kCameraScoped<msg::FeatureFrame> = true;
+inline constexpr bool kCameraScoped<msg::FeatureFrame> = true;
 template <>
-constexpr bool kCameraScoped<msg::CameraStatus> = true;
+inline constexpr bool kCameraScoped<msg::CameraStatus> = true;
 template <>
-constexpr bool kCameraScoped<msg::CameraCommand> = true;
+inline constexpr bool kCameraScoped<msg::CameraCommand> = true;
 template <>
-constexpr bool kCameraScoped<msg::CameraPreview> = true;
+inline constexpr bool kCameraScoped<msg::CameraPreview> = true;
 template <>
-constexpr bool kCameraScoped<msg::Predictions> = true;
+inline constexpr bool kCameraScoped<msg::Predictions> = true;
 template <>
-constexpr bool kCameraScoped<msg::TimeSync> = true;
+inline constexpr bool kCameraScoped<msg::TimeSync> = true;
 
 #define PANOPTES_TOPIC(Type, topic_name, reliable, durability, depth, offer_reliable, leading_id) \
   template <>                                                                                     \
