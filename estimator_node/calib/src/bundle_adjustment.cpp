@@ -353,7 +353,7 @@ CameraIntrinsics intrinsics_of(const CameraParameters& camera, const CameraIntri
   k.fy = v[1];
   k.cx = v[2];
   k.cy = v[3];
-  for (int i = 0; i < 5; ++i) k.distortion[static_cast<std::size_t>(i)] = v[static_cast<std::size_t>(4 + i)];
+  for (std::size_t i = 0; i < 5; ++i) k.distortion[i] = v[4 + i];
   return k;
 }
 

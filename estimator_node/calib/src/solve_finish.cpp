@@ -165,6 +165,7 @@ SolveResult finish_solution(SolveResult partial, const BundleState& adjusted,
                             const std::vector<CameraWandTrack>& tracks, const WandDefinition& wand) {
   SolveResult result = std::move(partial);
   std::vector<CameraIntrinsics> given;
+  given.reserve(cameras.size());
   for (const auto& camera : cameras) given.push_back(camera.intrinsics);
   const std::vector<CameraModel> models = registered_models(adjusted, given);
   const Reprojection reprojection = reproject(adjusted, models, wand, result);
