@@ -2,21 +2,21 @@
 # SPDX-License-Identifier: Apache-2.0
 # Lint test: every project .cpp/.h is formatted as the project's .clang-format says
 # (clang-format --dry-run --Werror). Build trees (any folder holding a CMakeCache.txt, or named
-# build*) and hidden folders are not ours and are skipped. To fix: clang-format -i <file>.
+# build*), npm's node_modules and hidden folders are not ours and are skipped (pruned before the
+# CMakeCache.txt probe, which otherwise runs once per npm folder). To fix: clang-format -i <file>.
 # Usage: clang_format.sh <source dir>
 set -uo pipefail
 source_dir="$(cd "$1" && pwd)"
 format="$(command -v clang-format || command -v clang-format-14 || true)"
 [ -n "$format" ] || { echo "FAIL: clang-format is not installed (deploy/install-deps.sh installs it)"; exit 1; }
 
-mapfile -t files < <(cd "$source_dir" && find . \( -name '.*' -o -name 'build*' -o -exec test -e '{}/CMakeCache.txt' \; \) \
+mapfile -t files < <(cd "$source_dir" && find . \( -name '.*' -o -name 'build*' -o -name node_modules -o -exec test -e '{}/CMakeCache.txt' \; \) \
   -mindepth 1 -type d -prune -o -type f \( -name '*.cpp' -o -name '*.h' \) -print | sed 's#^\./##' | sort)
 [ ${#files[@]} -gt 0 ] || { echo "FAIL: no .cpp/.h files under $source_dir"; exit 1; }
 
-unformatted=()
-for file in "${files[@]}"; do
-  "$format" --dry-run --Werror --style=file "$source_dir/$file" >/dev/null 2>&1 || unformatted+=("$file")
-done
+# One clang-format per file (its exit status names the file), on every core.
+mapfile -t unformatted < <(printf '%s\0' "${files[@]}" | (cd "$source_dir" && xargs -0 -P "$(nproc)" -n 1 \
+  sh -c '"$0" --dry-run --Werror --style=file "$1" >/dev/null 2>&1 || echo "$1"' "$format") | sort)
 echo "clang-format $("$format" --version | sed -n 's/.*version \([0-9.]*\).*/\1/p'): ${#files[@]} files"
 if [ ${#unformatted[@]} -ne 0 ]; then
   printf '  not formatted: %s\n' "${unformatted[@]}"
