@@ -1,14 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
-// Client: two Bus readers (rt/panoptes/frames, rt/panoptes/body_descriptions) feeding a queue, the
-// newest frame and the callbacks; on first use, readers of rt/panoptes/strokes and rt/panoptes/chains. The
-// DDS listener thread converts and checks each sample, then hands the same immutable Frame to all three.
+// Client: two Bus readers (rt/panoptes/frames, rt/panoptes/body_descriptions) feeding the frame
+// stream (queue and callbacks, stream.h) and the newest frame; on first use, readers of
+// rt/panoptes/strokes and rt/panoptes/chains feeding their streams. The DDS listener thread converts
+// and checks each sample, then hands the same immutable Frame to the queue, the newest and the callbacks.
 #include "panoptes/client/client.h"
 
 #include <algorithm>
 #include <array>
-#include <condition_variable>
 #include <cstdio>
-#include <deque>
 #include <mutex>
 #include <utility>
 
@@ -20,6 +19,7 @@
 #include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/surface.h"
+#include "stream.h"
 
 namespace panoptes::client {
 namespace {
@@ -31,10 +31,6 @@ std::string seconds_text(std::chrono::steady_clock::duration d) {
   std::snprintf(buffer, sizeof buffer, "%.1f", std::chrono::duration<double>(d).count());
   return buffer;
 }
-
-// The client whose callbacks this thread is running, if any: close() from a callback must not wait
-// for the callback to finish.
-thread_local const void* dispatching_client = nullptr;
 
 }  // namespace
 
@@ -60,71 +56,55 @@ const Chain* ChainUpdate::chain(const std::string& name) const {
 struct __attribute__((visibility("hidden"))) Client::Impl {
   using Clock = std::chrono::steady_clock;
 
+  explicit Impl(const ClientOptions& options_in)
+      : options(options_in),
+        callbacks([this](const std::string& what) { on_callback_error(what); }),
+        frames(callbacks, options_in.queue_depth, FrameStream::DropCounting::kOncePulled),
+        strokes(callbacks, options_in.queue_depth),
+        grabs(callbacks, options_in.queue_depth) {}
+
   ClientOptions options;
   int domain = 0;
   std::string profile;
   Clock::time_point started = Clock::now();
 
-  // Guards everything below up to the callbacks.
+  // Guards everything below up to the streams.
   mutable std::mutex mutex;
-  std::condition_variable frame_ready;
-  std::deque<std::shared_ptr<const Frame>> queue;
   std::shared_ptr<const Frame> newest;
-  bool pulling = false;  // wait_for_frame() was called: queue overflows count as drops
+  std::shared_ptr<const ChainUpdate> newest_chains;
   bool closed = false;
-  Stats stats;
+  Stats stats;  // the streams' counts are added by Client::stats()
   detail::FrameSequence sequence;
   std::vector<BodyDescription> descriptions;
   std::array<Clock::time_point, kRateWindow> arrivals{};
   Clock::time_point last_arrival;
 
-  // Held while callbacks run, so that remove_callback() returns only when its callback cannot run.
-  // Recursive: a callback may add or remove callbacks.
-  // The list is replaced, never changed in place, so that a frame's delivery takes a snapshot
-  // without copying or allocating.
-  using CallbackList = std::vector<std::pair<int, std::shared_ptr<const FrameCallback>>>;
-  std::recursive_mutex callbacks_mutex;
-  std::shared_ptr<const CallbackList> callbacks = std::make_shared<const CallbackList>();
-  int next_handle = 1;
+  // Frames (callbacks and pull), strokes (surface mode) and chains (callbacks get the update, the
+  // queue holds its grab events); each with its queue and lock, the callbacks under one lock.
+  using FrameStream = detail::Stream<std::shared_ptr<const Frame>, Frame>;
+  detail::CallbackGroup callbacks;
+  FrameStream frames;
+  detail::Stream<Stroke> strokes;
+  detail::Stream<GrabEvent, ChainUpdate> grabs;
 
-  // Serialises close(); the bus and readers go last, after delivery stopped.
+  // Serialises close(); the bus and readers go last, after delivery stopped. The stroke and chain
+  // readers are made on first use.
   std::mutex lifecycle_mutex;
   std::unique_ptr<dds::Bus> bus;
   std::unique_ptr<dds::Reader<msg::MocapFrame>> frame_reader;
   std::unique_ptr<dds::Reader<msg::BodyDescriptions>> description_reader;
-
-  // Surface mode: subscribed on first use (lifecycle_mutex); the queue and stats under `mutex`,
-  // the callbacks under callbacks_mutex like the frame callbacks.
   std::unique_ptr<dds::Reader<msg::StrokeEvents>> stroke_reader;
-  std::condition_variable stroke_ready;
-  std::deque<Stroke> strokes;
-  using StrokeCallbackList = std::vector<std::pair<int, std::shared_ptr<const StrokeCallback>>>;
-  std::shared_ptr<const StrokeCallbackList> stroke_callbacks = std::make_shared<const StrokeCallbackList>();
-
-  // Articulated chains: as the strokes (subscribed on first use); the newest update and the grab
-  // event queue under `mutex`.
   std::unique_ptr<dds::Reader<msg::ChainFrame>> chain_reader;
-  std::condition_variable grab_ready;
-  std::deque<GrabEvent> grabs;
-  std::shared_ptr<const ChainUpdate> newest_chains;
-  using ChainCallbackList = std::vector<std::pair<int, std::shared_ptr<const ChainCallback>>>;
-  std::shared_ptr<const ChainCallbackList> chain_callbacks = std::make_shared<const ChainCallbackList>();
 
   void on_frame(const msg::MocapFrame& message);
   void on_strokes(const msg::StrokeEvents& message);
-  void subscribe_strokes();
   void on_chains(const msg::ChainFrame& message);
-  void subscribe_chains();
-  // A callback list with `callback` added under a new handle (callbacks_mutex held).
-  template <class List, class Callback>
-  int added(std::shared_ptr<const List>& list, Callback callback);
-  template <class List>
-  void removed(std::shared_ptr<const List>& list, int handle);
-  // Runs `call` and counts what it throws.
-  template <class Call>
-  void guarded(const Call& call);
+  // Makes the reader of `Message` on first use.
+  template <class Message>
+  void subscribe(std::unique_ptr<dds::Reader<Message>>& reader, void (Impl::*handler)(const Message&),
+                 const char* what);
+  void on_callback_error(const std::string& what);
   void on_descriptions(const msg::BodyDescriptions& message);
-  void dispatch(const Frame& frame);
 };
 
 void Client::Impl::on_frame(const msg::MocapFrame& message) {
@@ -148,42 +128,17 @@ void Client::Impl::on_frame(const msg::MocapFrame& message) {
     arrivals[stats.frames_received % kRateWindow] = now;
     last_arrival = now;
     ++stats.frames_received;
-    if (queue.size() >= options.queue_depth) {
-      queue.pop_front();
-      if (pulling) ++stats.frames_dropped;
-    }
-    queue.push_back(frame);
     newest = frame;
   }
-  // Callbacks first: they are the low-latency way in, and waking a waiting thread costs a system call.
-  dispatch(*frame);
-  frame_ready.notify_one();
+  frames.push(frame);
+  frames.dispatch(*frame);
+  frames.notify();
 }
 
-template <class Call>
-void Client::Impl::guarded(const Call& call) {
-  std::string failure;
-  try {
-    call();
-  } catch (const std::exception& e) {
-    failure = e.what();
-  } catch (...) {
-    failure = "an exception that is not a std::exception";
-  }
-  if (!failure.empty()) {
-    std::lock_guard stats_lock(mutex);
-    ++stats.callback_errors;
-    stats.last_error = "callback: " + failure;
-  }
-}
-
-void Client::Impl::dispatch(const Frame& frame) {
-  std::lock_guard lock(callbacks_mutex);
-  if (callbacks->empty()) return;
-  const std::shared_ptr<const CallbackList> current = callbacks;  // a callback may add or remove callbacks
-  dispatching_client = this;
-  for (const auto& entry : *current) guarded([&] { (*entry.second)(frame); });
-  dispatching_client = nullptr;
+void Client::Impl::on_callback_error(const std::string& what) {
+  std::lock_guard stats_lock(mutex);
+  ++stats.callback_errors;
+  stats.last_error = "callback: " + what;
 }
 
 void Client::Impl::on_strokes(const msg::StrokeEvents& message) {
@@ -197,35 +152,10 @@ void Client::Impl::on_strokes(const msg::StrokeEvents& message) {
       stats.last_error = "strokes from '" + message.source_camera() + "': " + error;
       return;
     }
-    for (const Stroke& stroke : *converted) {
-      if (strokes.size() >= options.queue_depth) {
-        strokes.pop_front();
-        ++stats.strokes_dropped;
-      }
-      strokes.push_back(stroke);
-      ++stats.strokes_received;
-    }
   }
-  {
-    std::lock_guard lock(callbacks_mutex);
-    const std::shared_ptr<const StrokeCallbackList> current = stroke_callbacks;
-    dispatching_client = this;
-    for (const Stroke& stroke : *converted)
-      for (const auto& entry : *current) guarded([&] { (*entry.second)(stroke); });
-    dispatching_client = nullptr;
-  }
-  stroke_ready.notify_one();
-}
-
-void Client::Impl::subscribe_strokes() {
-  std::lock_guard lifecycle(lifecycle_mutex);
-  if (stroke_reader || !bus) return;
-  try {
-    stroke_reader = bus->make_reader<msg::StrokeEvents>(
-        [this](msg::StrokeEvents&& message) { on_strokes(message); }, dds::Qos::kReliable);
-  } catch (const std::exception& e) {
-    throw ClientError(std::string("panoptes client: strokes: ") + e.what());
-  }
+  for (const Stroke& stroke : *converted) strokes.push(stroke);
+  for (const Stroke& stroke : *converted) strokes.dispatch(stroke);
+  strokes.notify();
 }
 
 void Client::Impl::on_chains(const msg::ChainFrame& message) {
@@ -244,50 +174,23 @@ void Client::Impl::on_chains(const msg::ChainFrame& message) {
     }
     ++stats.chain_updates_received;
     newest_chains = update;
-    for (const GrabEvent& event : update->events) {
-      if (grabs.size() >= options.queue_depth) {
-        grabs.pop_front();
-        ++stats.grab_events_dropped;
-      }
-      grabs.push_back(event);
-      ++stats.grab_events_received;
-    }
   }
-  {
-    std::lock_guard lock(callbacks_mutex);
-    const std::shared_ptr<const ChainCallbackList> current = chain_callbacks;
-    dispatching_client = this;
-    for (const auto& entry : *current) guarded([&] { (*entry.second)(*update); });
-    dispatching_client = nullptr;
-  }
-  if (!update->events.empty()) grab_ready.notify_one();
+  for (const GrabEvent& event : update->events) grabs.push(event);
+  grabs.dispatch(*update);
+  if (!update->events.empty()) grabs.notify();
 }
 
-void Client::Impl::subscribe_chains() {
+template <class Message>
+void Client::Impl::subscribe(std::unique_ptr<dds::Reader<Message>>& reader,
+                             void (Impl::*handler)(const Message&), const char* what) {
   std::lock_guard lifecycle(lifecycle_mutex);
-  if (chain_reader || !bus) return;
+  if (reader || !bus) return;
   try {
-    chain_reader = bus->make_reader<msg::ChainFrame>(
-        [this](msg::ChainFrame&& message) { on_chains(message); }, dds::Qos::kReliable);
+    reader = bus->make_reader<Message>([this, handler](Message&& message) { (this->*handler)(message); },
+                                       dds::Qos::kReliable);
   } catch (const std::exception& e) {
-    throw ClientError(std::string("panoptes client: chains: ") + e.what());
+    throw ClientError(std::string("panoptes client: ") + what + ": " + e.what());
   }
-}
-
-template <class List, class Callback>
-int Client::Impl::added(std::shared_ptr<const List>& list, Callback callback) {
-  const int handle = next_handle++;
-  auto copy = std::make_shared<List>(*list);
-  copy->emplace_back(handle, std::make_shared<const Callback>(std::move(callback)));
-  list = std::move(copy);
-  return handle;
-}
-
-template <class List>
-void Client::Impl::removed(std::shared_ptr<const List>& list, int handle) {
-  auto copy = std::make_shared<List>(*list);
-  std::erase_if(*copy, [&](const auto& entry) { return entry.first == handle; });
-  list = std::move(copy);
 }
 
 void Client::Impl::on_descriptions(const msg::BodyDescriptions& message) {
@@ -306,10 +209,10 @@ void Client::Impl::on_descriptions(const msg::BodyDescriptions& message) {
   ++stats.descriptions_received;
 }
 
-Client::Client(const ClientOptions& options) : impl_(std::make_unique<Impl>()) {
+Client::Client(const ClientOptions& options) {
   if (options.queue_depth == 0) throw OptionError("queue_depth must be at least 1");
   if (options.stale_after.count() <= 0) throw OptionError("stale_after must be positive");
-  impl_->options = options;
+  impl_ = std::make_unique<Impl>(options);
   try {
     impl_->domain = dds::resolve_domain(options.domain_id);  // the check every program makes
   } catch (const dds::DomainError& e) {
@@ -341,62 +244,44 @@ Client::~Client() {
 }
 
 int Client::add_callback(FrameCallback callback) {
-  std::lock_guard lock(impl_->callbacks_mutex);
-  return impl_->added(impl_->callbacks, std::move(callback));
+  return impl_->frames.add_callback(std::move(callback));
 }
 
 void Client::remove_callback(int handle) {
-  std::lock_guard lock(impl_->callbacks_mutex);
-  impl_->removed(impl_->callbacks, handle);
+  impl_->frames.remove_callback(handle);
 }
 
 int Client::add_stroke_callback(StrokeCallback callback) {
-  int handle = 0;
-  {
-    std::lock_guard lock(impl_->callbacks_mutex);
-    handle = impl_->added(impl_->stroke_callbacks, std::move(callback));
-  }
-  impl_->subscribe_strokes();
+  const int handle = impl_->strokes.add_callback(std::move(callback));
+  impl_->subscribe(impl_->stroke_reader, &Impl::on_strokes, "strokes");
   return handle;
 }
 
 void Client::remove_stroke_callback(int handle) {
-  std::lock_guard lock(impl_->callbacks_mutex);
-  impl_->removed(impl_->stroke_callbacks, handle);
+  impl_->strokes.remove_callback(handle);
 }
 
 int Client::add_chain_callback(ChainCallback callback) {
-  int handle = 0;
-  {
-    std::lock_guard lock(impl_->callbacks_mutex);
-    handle = impl_->added(impl_->chain_callbacks, std::move(callback));
-  }
-  impl_->subscribe_chains();
+  const int handle = impl_->grabs.add_callback(std::move(callback));
+  impl_->subscribe(impl_->chain_reader, &Impl::on_chains, "chains");
   return handle;
 }
 
 void Client::remove_chain_callback(int handle) {
-  std::lock_guard lock(impl_->callbacks_mutex);
-  impl_->removed(impl_->chain_callbacks, handle);
+  impl_->grabs.remove_callback(handle);
 }
 
 GrabResult Client::wait_for_grab_event(std::chrono::milliseconds timeout) {
-  impl_->subscribe_chains();
-  std::unique_lock lock(impl_->mutex);
-  impl_->grab_ready.wait_for(lock, timeout, [&] { return impl_->closed || !impl_->grabs.empty(); });
+  impl_->subscribe(impl_->chain_reader, &Impl::on_chains, "chains");
+  auto pulled = impl_->grabs.wait(timeout);
   GrabResult result;
-  if (impl_->closed) {
-    result.status = Status::kClosed;
-  } else if (!impl_->grabs.empty()) {
-    result.status = Status::kOk;
-    result.event = std::move(impl_->grabs.front());
-    impl_->grabs.pop_front();
-  }
+  result.status = pulled.status;
+  if (pulled.item) result.event = std::move(*pulled.item);
   return result;
 }
 
 std::optional<ChainUpdate> Client::latest_chains() {
-  impl_->subscribe_chains();
+  impl_->subscribe(impl_->chain_reader, &Impl::on_chains, "chains");
   std::shared_ptr<const ChainUpdate> update;
   {
     std::lock_guard lock(impl_->mutex);
@@ -407,34 +292,19 @@ std::optional<ChainUpdate> Client::latest_chains() {
 }
 
 StrokeResult Client::wait_for_stroke(std::chrono::milliseconds timeout) {
-  impl_->subscribe_strokes();
-  std::unique_lock lock(impl_->mutex);
-  impl_->stroke_ready.wait_for(lock, timeout, [&] { return impl_->closed || !impl_->strokes.empty(); });
+  impl_->subscribe(impl_->stroke_reader, &Impl::on_strokes, "strokes");
+  auto pulled = impl_->strokes.wait(timeout);
   StrokeResult result;
-  if (impl_->closed) {
-    result.status = Status::kClosed;
-  } else if (!impl_->strokes.empty()) {
-    result.status = Status::kOk;
-    result.stroke = std::move(impl_->strokes.front());
-    impl_->strokes.pop_front();
-  }
+  result.status = pulled.status;
+  if (pulled.item) result.stroke = std::move(*pulled.item);
   return result;
 }
 
 FrameResult Client::wait_for_frame(std::chrono::milliseconds timeout) {
-  std::unique_lock lock(impl_->mutex);
-  impl_->pulling = true;
-  impl_->frame_ready.wait_for(lock, timeout, [&] { return impl_->closed || !impl_->queue.empty(); });
+  const auto pulled = impl_->frames.wait(timeout);
   FrameResult result;
-  if (impl_->closed) {
-    result.status = Status::kClosed;
-  } else if (!impl_->queue.empty()) {
-    const std::shared_ptr<const Frame> frame = std::move(impl_->queue.front());
-    impl_->queue.pop_front();
-    lock.unlock();
-    result.status = Status::kOk;
-    result.frame = *frame;
-  }
+  result.status = pulled.status;
+  if (pulled.item) result.frame = **pulled.item;
   return result;
 }
 
@@ -490,8 +360,19 @@ std::string Client::status_text() const {
 }
 
 Stats Client::stats() const {
-  std::lock_guard lock(impl_->mutex);
-  return impl_->stats;
+  Stats stats;
+  {
+    std::lock_guard lock(impl_->mutex);
+    stats = impl_->stats;
+  }
+  stats.frames_dropped = impl_->frames.counts().dropped;
+  const auto strokes = impl_->strokes.counts();
+  stats.strokes_received = strokes.pushed;
+  stats.strokes_dropped = strokes.dropped;
+  const auto grabs = impl_->grabs.counts();
+  stats.grab_events_received = grabs.pushed;
+  stats.grab_events_dropped = grabs.dropped;
+  return stats;
 }
 
 std::string Client::profile_file() const {
@@ -508,12 +389,12 @@ void Client::close() {
     std::lock_guard lock(impl_->mutex);
     impl_->closed = true;
   }
-  impl_->frame_ready.notify_all();
-  impl_->stroke_ready.notify_all();
-  impl_->grab_ready.notify_all();
+  impl_->frames.close();
+  impl_->strokes.close();
+  impl_->grabs.close();
   // From a callback the readers stay until the destructor: removing a reader waits for its
   // listener, which is this very thread.
-  if (dispatching_client == impl_.get()) return;
+  if (impl_->callbacks.dispatching_on_this_thread()) return;
   impl_->stroke_reader.reset();
   impl_->chain_reader.reset();
   impl_->frame_reader.reset();

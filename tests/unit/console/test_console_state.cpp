@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "console_test_records.h"
 #include "panoptes/console/console_state.h"
 
 namespace panoptes::console {
@@ -14,18 +15,12 @@ namespace {
 using nlohmann::json;
 constexpr TimeNs kT0 = 1'700'000'000'000'000'000;
 
-CameraInfoRecord vga_info() {
-  CameraInfoRecord info;
-  info.nominal_rate_hz = 100;
-  info.geometry.width = 640;
-  info.geometry.height = 480;
-  return info;
-}
+using test::vga_info;
 
 TEST(CameraHealth, NamesTheReason) {
   StateOptions options;
   HealthInputs in;
-  EXPECT_EQ(camera_health(in, options).light, "red");
+  EXPECT_EQ(camera_health(in, options).light, Light::kRed);
   in.has_frames = true;
   in.since_frame_ns = 2 * kNsPerSecond;
   EXPECT_EQ(camera_health(in, options).reason, "no frames for 2.0 s");
@@ -33,9 +28,9 @@ TEST(CameraHealth, NamesTheReason) {
   in.has_status = true;
   in.camera_fps = 100;
   in.nominal_rate_hz = 100;
-  EXPECT_EQ(camera_health(in, options).light, "green");
+  EXPECT_EQ(camera_health(in, options).light, Light::kGreen);
   in.camera_fps = 70;
-  EXPECT_EQ(camera_health(in, options).light, "amber");
+  EXPECT_EQ(camera_health(in, options).light, Light::kAmber);
   EXPECT_EQ(camera_health(in, options).reason, "70.0 fps, nominal 100.0");
   in.camera_fps = 100;
   in.drops_last_period = 3;
@@ -105,14 +100,14 @@ TEST(ConsoleState, CommandOutcomesFromTheCamerasCounters) {
   const auto outcomes = state.take_outcomes(kT0 + kNsPerSecond);
   ASSERT_EQ(outcomes.size(), 2u);
   EXPECT_EQ(outcomes[0].request, 10);
-  EXPECT_EQ(outcomes[0].result, "applied");
+  EXPECT_EQ(outcomes[0].result, CommandResult::kApplied);
   EXPECT_EQ(outcomes[1].request, 11);
-  EXPECT_EQ(outcomes[1].result, "rejected");
+  EXPECT_EQ(outcomes[1].result, CommandResult::kRejected);
   EXPECT_EQ(outcomes[1].reason, "set_gain: gain is not supported");
   const auto timed_out = state.take_outcomes(kT0 + 4 * kNsPerSecond);
   ASSERT_EQ(timed_out.size(), 1u);
   EXPECT_EQ(timed_out[0].client, 2u);
-  EXPECT_EQ(timed_out[0].result, "no_ack");
+  EXPECT_EQ(timed_out[0].result, CommandResult::kNoAck);
 }
 
 TEST(ConsoleState, RecordingsAreListedWhenTheirRecorderStopsAndCommandsResolveFromItsStatus) {
@@ -128,7 +123,7 @@ TEST(ConsoleState, RecordingsAreListedWhenTheirRecorderStopsAndCommandsResolveFr
   auto outcomes = state.take_outcomes(kT0 + 2 * kNsPerSecond);
   ASSERT_EQ(outcomes.size(), 1u);
   EXPECT_EQ(outcomes[0].request, 5);
-  EXPECT_EQ(outcomes[0].result, "applied");
+  EXPECT_EQ(outcomes[0].result, CommandResult::kApplied);
   EXPECT_TRUE(state.snapshot(kT0 + 2 * kNsPerSecond, true)["recordings"].empty());
   state.on_recorder_command_sent({1, 6, "studio", false, kT0 + 3 * kNsPerSecond});
   RecorderRecord stopped{false, "/data/take_1.mcap", 3, 300, 8192, 0, "", {{"id_outside_partition", 7}}};
@@ -145,7 +140,7 @@ TEST(ConsoleState, RecordingsAreListedWhenTheirRecorderStopsAndCommandsResolveFr
   state.on_recorder_command_sent({1, 7, "studio", true, kT0 + 5 * kNsPerSecond});
   outcomes = state.take_outcomes(kT0 + 9 * kNsPerSecond);
   ASSERT_EQ(outcomes.size(), 1u);
-  EXPECT_EQ(outcomes[0].result, "no_ack");
+  EXPECT_EQ(outcomes[0].result, CommandResult::kNoAck);
   // A recorder silent for 5 s is no longer listed; its recordings stay.
   const json later = state.snapshot(kT0 + 10 * kNsPerSecond, true);
   EXPECT_TRUE(later["recorders"].empty());
@@ -160,7 +155,7 @@ TEST(ConsoleState, DetailsOfATrackAndABody) {
   track.velocity = {0.3, 0.4, 0};
   track.covariance = {4e-6, 0, 0, 9e-6, 0, 1e-6};
   track.cameras = 3;
-  track.status = 1;
+  track.status = TrackStatus::kConfirmed;
   state.on_tracks({track}, kT0);
   state.on_tracks({track}, kT0 + kNsPerSecond / 4);
   json figures = state.details("track", "42", kT0 + kNsPerSecond / 4);
@@ -190,7 +185,7 @@ ChainRecord tracking_finger() {
   ChainRecord chain;
   chain.name = "index";
   chain.chain_id = 1;
-  chain.status = 0;
+  chain.status = ChainStatus::kTracking;
   chain.stamp_ns = kT0;
   chain.angles = {0.5, 1.0};
   chain.markers = {{0, 0, 1}, {0.045, 0, 1}, {0.075, 0, 0.99}, {0.09, 0, 0.97}};
@@ -207,8 +202,9 @@ TEST(ConsoleState, ChainsInTheSnapshotAndTheirDetails) {
   ChainRecord lost;
   lost.name = "thumb";
   lost.chain_id = 2;
-  lost.status = 1;
-  ChainFrameRecord frame{kT0, {tracking_finger(), lost}, {{"index", 0, kT0, {0.1, 0, 0.96}, 1.7}}};
+  lost.status = ChainStatus::kAmbiguous;
+  ChainFrameRecord frame{
+      kT0, {tracking_finger(), lost}, {{"index", ChainEventKind::kGrab, kT0, {0.1, 0, 0.96}, 1.7}}};
   ASSERT_TRUE(state.on_chains(frame, kT0));
   const json live = state.snapshot(kT0 + kNsPerSecond / 10, false);
   ASSERT_EQ(live["chains"].size(), 2u);
@@ -242,10 +238,11 @@ TEST(ConsoleState, AMalformedChainSampleIsCountedAndDropped) {
   ChainRecord not_finite = tracking_finger();
   not_finite.predicted_tip[1] = std::nan("");
   ChainRecord bad_status = tracking_finger();
-  bad_status.status = 7;
+  bad_status.status = static_cast<ChainStatus>(7);  // as a message may carry it
   for (const ChainRecord& bad : {short_of_angles, not_finite, bad_status})
     EXPECT_FALSE(state.on_chains({kT0, {bad}, {}}, kT0 + 1));
-  EXPECT_FALSE(state.on_chains({kT0, {tracking_finger()}, {{"index", 3, kT0, {}, 0}}}, kT0 + 1));
+  EXPECT_FALSE(state.on_chains(
+      {kT0, {tracking_finger()}, {{"index", static_cast<ChainEventKind>(3), kT0, {}, 0}}}, kT0 + 1));
   EXPECT_EQ(
       chain_frame_error({kT0, {short_of_angles}, {}}),
       "chain 'index': markers: 4 markers, 4 valid flags and 1 angles (wants 3..5 markers, one flag each, "

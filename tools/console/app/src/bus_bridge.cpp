@@ -81,7 +81,7 @@ TrackPoint track_of(const msg::Track& track) {
   std::copy(track.position().begin(), track.position().end(), out.position.begin());
   std::copy(track.velocity().begin(), track.velocity().end(), out.velocity.begin());
   std::copy(track.covariance().begin(), track.covariance().end(), out.covariance.begin());
-  out.status = track.status();
+  out.status = static_cast<TrackStatus>(track.status());
   out.cameras = track.cameras();
   return out;
 }
@@ -104,7 +104,7 @@ ChainFrameRecord chains_of(const msg::ChainFrame& frame) {
     ChainRecord chain;
     chain.name = in.name();
     chain.chain_id = in.chain_id();
-    chain.status = in.status();
+    chain.status = static_cast<ChainStatus>(in.status());  // an unknown value is checked on receipt
     chain.stamp_ns = in.stamp_ns();
     chain.angles = in.angles();
     for (const msg::ChainMarker& marker : in.markers()) chain.markers.push_back(marker.position());
@@ -116,7 +116,8 @@ ChainFrameRecord chains_of(const msg::ChainFrame& frame) {
     out.chains.push_back(std::move(chain));
   }
   for (const msg::ChainEvent& in : frame.events())
-    out.events.push_back({in.chain(), in.kind(), in.stamp_ns(), in.tip(), in.bend()});
+    out.events.push_back(
+        {in.chain(), static_cast<ChainEventKind>(in.kind()), in.stamp_ns(), in.tip(), in.bend()});
   return out;
 }
 

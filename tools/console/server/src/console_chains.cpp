@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "panoptes/chain_definition.h"
-#include "panoptes/console/console_state.h"
+#include "panoptes/console/scene_model.h"
 
 namespace panoptes::console {
 
@@ -29,19 +29,15 @@ json point_json(const std::array<double, 3>& p) {
   return json::array({round(p[0]), round(p[1]), round(p[2])});
 }
 
-const char* status_name(int status) {
-  return status == 0 ? "tracking" : status == 1 ? "ambiguous" : "not_identified";
-}
-
 std::string chain_error(const ChainRecord& chain) {
   const std::string what = "chain '" + chain.name.substr(0, kMaxNameLength) + "'";
   if (chain.name.empty() || chain.name.size() > kMaxNameLength || chain.chain_id == 0)
     return what + ": name: empty or longer than " + std::to_string(kMaxNameLength) +
            " characters, or chain_id 0";
-  if (chain.status < 0 || chain.status > 2)
-    return what + ": status " + std::to_string(chain.status) +
+  if (!known(chain.status))
+    return what + ": status " + std::to_string(static_cast<int>(chain.status)) +
            " is not tracking (0), ambiguous (1) or not identified (2)";
-  if (chain.status != 0) return {};
+  if (chain.status != ChainStatus::kTracking) return {};
   const std::size_t markers = chain.markers.size();
   if (markers < static_cast<std::size_t>(kMinChainMarkers) ||
       markers > static_cast<std::size_t>(kMaxChainMarkers) || chain.marker_valid.size() != markers ||
@@ -72,8 +68,9 @@ std::string chain_frame_error(const ChainFrameRecord& frame) {
   for (std::size_t i = 0; i < frame.events.size(); ++i) {
     const ChainEventRecord& event = frame.events[i];
     const std::string what = "events[" + std::to_string(i) + "]";
-    if (event.kind != 0 && event.kind != 1)
-      return what + ": kind " + std::to_string(event.kind) + " is not grab (0) or release (1)";
+    if (!known(event.kind))
+      return what + ": kind " + std::to_string(static_cast<int>(event.kind)) +
+             " is not grab (0) or release (1)";
     if (event.chain.empty() || event.chain.size() > kMaxNameLength)
       return what + ": chain: empty or too long";
     if (!finite3(event.tip) || !std::isfinite(event.bend)) return what + ": tip or bend: not finite";
@@ -81,9 +78,8 @@ std::string chain_frame_error(const ChainFrameRecord& frame) {
   return {};
 }
 
-bool ConsoleState::on_chains(ChainFrameRecord frame, TimeNs now) {
+bool SceneModel::on_chains(ChainFrameRecord frame, TimeNs now) {
   std::string error = chain_frame_error(frame);
-  std::lock_guard lock(mutex_);
   ++chain_samples_.received;
   if (error.empty()) {
     std::size_t unknown = 0;
@@ -106,21 +102,21 @@ bool ConsoleState::on_chains(ChainFrameRecord frame, TimeNs now) {
   for (ChainEventRecord& event : frame.events) {
     const auto found = chains_.find(event.chain);
     if (found == chains_.end()) continue;  // an event of a chain the sample does not carry
-    ++(event.kind == 0 ? found->second.grabs : found->second.releases);
+    ++(event.kind == ChainEventKind::kGrab ? found->second.grabs : found->second.releases);
     found->second.last_event = std::move(event);
   }
   return true;
 }
 
-// Called with the lock held. Per live chain: what the 3D view draws (markers only while tracking).
-json ConsoleState::chains_json(TimeNs now) const {
+// Per live chain: what the 3D view draws (markers only while tracking).
+json SceneModel::chains_json(TimeNs now) const {
   json chains = json::array();
   for (const auto& [name, entry] : chains_) {
     if (now - entry.received_ns > options_.chain_timeout_ns) continue;
     const ChainRecord& c = entry.latest;
-    json out = {{"name", name},         {"status", status_name(c.status)}, {"grabbing", c.grabbing},
-                {"grabs", entry.grabs}, {"releases", entry.releases},      {"stamp_ns", c.stamp_ns}};
-    if (c.status == 0) {
+    json out = {{"name", name},         {"status", c.status},         {"grabbing", c.grabbing},
+                {"grabs", entry.grabs}, {"releases", entry.releases}, {"stamp_ns", c.stamp_ns}};
+    if (c.status == ChainStatus::kTracking) {
       json markers = json::array();
       for (const auto& marker : c.markers) markers.push_back(point_json(marker));
       out["markers"] = std::move(markers);
@@ -134,8 +130,7 @@ json ConsoleState::chains_json(TimeNs now) const {
   return chains;
 }
 
-// Called with the lock held.
-json ConsoleState::chain_details(const std::string& name, TimeNs now) const {
+json SceneModel::chain_details(const std::string& name, TimeNs now) const {
   const auto found = chains_.find(name);
   if (found == chains_.end() || now - found->second.received_ns > options_.chain_timeout_ns) return nullptr;
   const Chain& entry = found->second;
@@ -143,13 +138,13 @@ json ConsoleState::chain_details(const std::string& name, TimeNs now) const {
   const auto round = [](double value, double scale) { return std::round(value * scale) / scale; };
   json out = {{"kind", "chain"},
               {"name", name},
-              {"status", status_name(c.status)},
+              {"status", c.status},
               {"grabbing", c.grabbing},
               {"grabs", entry.grabs},
               {"releases", entry.releases},
               {"age_s", round(static_cast<double>(now - entry.first_seen_ns) * 1e-9, 100)},
               {"since_update_ms", round(static_cast<double>(now - entry.received_ns) * 1e-6, 10)}};
-  if (c.status == 0) {
+  if (c.status == ChainStatus::kTracking) {
     json angles = json::array();
     for (const double angle : c.angles) angles.push_back(round(angle * 180 / M_PI, 100));
     out["joint_angles_deg"] = std::move(angles);
@@ -164,9 +159,9 @@ json ConsoleState::chain_details(const std::string& name, TimeNs now) const {
   }
   if (entry.last_event) {
     const ChainEventRecord& event = *entry.last_event;
-    out["last_event"] = std::string(event.kind == 0 ? "grab" : "release") + " at " +
-                        point_json(event.tip).dump() + ", bend " +
-                        std::to_string(static_cast<int>(std::lround(event.bend * 180 / M_PI))) + "°";
+    out["last_event"] = std::string(to_string(event.kind)) + " at " + point_json(event.tip).dump() +
+                        ", bend " + std::to_string(static_cast<int>(std::lround(event.bend * 180 / M_PI))) +
+                        "°";
   }
   return out;
 }

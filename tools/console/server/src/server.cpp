@@ -606,10 +606,7 @@ void ConsoleServer::Impl::tick() {
     for (const CommandOutcome& outcome : state.take_outcomes(now)) {
       for (const auto& session : sessions) {
         if (session->id() != outcome.client) continue;
-        session->reply(json{{"type", "command_result"},
-                            {"id", outcome.request},
-                            {"result", outcome.result},
-                            {"reason", outcome.reason}});
+        session->reply(json(outcome));
       }
     }
     ++ticks;
