@@ -38,10 +38,13 @@ programs=(
 )
 # Programs that open DDS in a domain of their own choosing and never read PANOPTES_DOMAIN.
 own_domain=(bench_latency)
+# Link Fast DDS through the recording library (its CDR and topic types) but open no participant:
+# they read and write MCAP files only.
+no_participant=(bench_recorder panoptes_mcap_probe)
 
 listed() {  # NAME: whether NAME is in the table or in own_domain
   local entry
-  for entry in "${programs[@]}" "${own_domain[@]}"; do [ "${entry%%|*}" = "$1" ] && return 0; done
+  for entry in "${programs[@]}" "${own_domain[@]}" "${no_participant[@]}"; do [ "${entry%%|*}" = "$1" ] && return 0; done
   return 1
 }
 

@@ -154,6 +154,35 @@ int watch(const std::string& dds_profile, const std::vector<std::unique_ptr<Chil
   return exit_code;
 }
 
+// The accuracy against the scene's ground truth, printed and optionally written as JSON; exit 1
+// under --check unless the demo's targets are met.
+int report_accuracy(const panoptes::Scene& scene, const std::vector<panoptes::TrackRecord>& tracks,
+                    TimeNs epoch, const std::string& scene_file, double duration_s,
+                    const std::string& summary_json, bool check) {
+  panoptes::estimator::EvaluationOptions options;
+  options.epoch_ns = epoch;
+  const auto evaluation = panoptes::estimator::evaluate(scene, tracks, options);
+  std::printf("\nAccuracy against ground truth (after the first second, tracks as received over DDS):\n%s",
+              evaluation.summary().c_str());
+  const bool pass = evaluation.worst_marker_rmse_m < 0.002 && evaluation.min_tracked_fraction >= 0.95 &&
+                    evaluation.id_switch_count == 0 && evaluation.instants > 0;
+  std::printf("demo targets (RMSE < 2 mm, tracked >= 95%%, 0 ID switches): %s\n", pass ? "met" : "NOT met");
+  if (!summary_json.empty()) {
+    auto json = nlohmann::json::parse(evaluation.to_json());
+    json["scene"] = scene_file;
+    json["duration_s"] = duration_s;
+    json["cameras"] = scene.cameras().size();
+    json["targets_met"] = pass;
+    std::ofstream out(summary_json);
+    out << json.dump(2) << "\n";
+    if (!out) {
+      std::fprintf(stderr, "panoptes_demo: cannot write %s\n", summary_json.c_str());
+      return panoptes::kExitFailure;
+    }
+  }
+  return check && !pass ? panoptes::kExitFailure : panoptes::kExitOk;
+}
+
 int run(int argc, char** argv) {
   const fs::path bin_dir = executable_dir();
   std::string scene_file = (bin_dir / "../../deploy/scenes/demo.yaml").lexically_normal().string();
@@ -233,28 +262,7 @@ int run(int argc, char** argv) {
   children.clear();
   if (exit_code != panoptes::kExitOk) return exit_code;
 
-  panoptes::estimator::EvaluationOptions options;
-  options.epoch_ns = epoch;
-  const auto evaluation = panoptes::estimator::evaluate(*scene, tracks, options);
-  std::printf("\nAccuracy against ground truth (after the first second, tracks as received over DDS):\n%s",
-              evaluation.summary().c_str());
-  const bool pass = evaluation.worst_marker_rmse_m < 0.002 && evaluation.min_tracked_fraction >= 0.95 &&
-                    evaluation.id_switch_count == 0 && evaluation.instants > 0;
-  std::printf("demo targets (RMSE < 2 mm, tracked >= 95%%, 0 ID switches): %s\n", pass ? "met" : "NOT met");
-  if (!summary_json.empty()) {
-    auto json = nlohmann::json::parse(evaluation.to_json());
-    json["scene"] = scene_file;
-    json["duration_s"] = duration_s;
-    json["cameras"] = scene->cameras().size();
-    json["targets_met"] = pass;
-    std::ofstream out(summary_json);
-    out << json.dump(2) << "\n";
-    if (!out) {
-      std::fprintf(stderr, "panoptes_demo: cannot write %s\n", summary_json.c_str());
-      return panoptes::kExitFailure;
-    }
-  }
-  return check && !pass ? panoptes::kExitFailure : panoptes::kExitOk;
+  return report_accuracy(*scene, tracks, epoch, scene_file, duration_s, summary_json, check);
 }
 
 }  // namespace
