@@ -202,7 +202,7 @@ TEST(RecorderModel, KeepsTheNewestRecordingsAndRestartsTheClockOnANewFile) {
   EXPECT_FALSE(recorders.knows("studio"));
   for (int take = 1; take <= 3; ++take) {
     RecorderRecord status{true, "take_" + std::to_string(take) + ".mcap", 1, 10, 100, 0, "", {}};
-    recorders.on_status("studio", status, kT0 + take * 1000 * kMs);
+    recorders.on_status("studio", status, kT0 + static_cast<TimeNs>(take) * 1000 * kMs);
   }
   // Each new file closed the previous one; the third is still open.
   ASSERT_EQ(recorders.recordings().size(), 2U);

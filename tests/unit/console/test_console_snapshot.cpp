@@ -65,8 +65,9 @@ std::string outputs() {
   status.drops_queue = 5;
   state.on_status("cam0", status, t0 + 500'000'000);
   for (int i = 0; i < 150; ++i)
-    state.on_features("cam0", {i + 1, t0 + i * 10'000'000, {{10.123f, 20.456f, 5.55f}, {300, 200, 7}}},
-                      t0 + i * 10'000'000 + 2'000'000);
+    state.on_features(
+        "cam0", {i + 1, t0 + static_cast<TimeNs>(i) * 10'000'000, {{10.123f, 20.456f, 5.55f}, {300, 200, 7}}},
+        t0 + static_cast<TimeNs>(i) * 10'000'000 + 2'000'000);
   state.on_features("cam1", {5, t0, {{1, 2, 3}}}, t0 + 1'400'000'000);
   state.on_predictions("cam0", {{100.04F, 200.0F, 6.0F, 7.5F}}, t0 + 1'450'000'000);
   state.on_preview("cam1", t0 + 3, 2, 1, std::string("\x01\x02", 2));
