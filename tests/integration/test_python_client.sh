@@ -112,10 +112,10 @@ check_descriptions(checks, run, f"{work}/sim/bodies.yaml")
 # log_poses_csv.py: the header, two bodies per frame, values equal to the estimator's poses.
 rows = list(csv.DictReader(open(f"{work}/poses.csv")))
 check(len(rows) > 1000 and {r["body"] for r in rows} == {"head", "tool"}, f"the CSV has {len(rows)} rows of head and tool")
-matched = [(r, estimator.get((int(r["stamp_ns"]), r["body"]))) for r in rows if r["valid"] == "1"]
-matched = [(r, p) for r, p in matched if p is not None]
-same = sum(1 for r, p in matched if [float(r[k]) for k in ("x", "y", "z")] == p["p"]
-           and [float(r[k]) for k in ("qx", "qy", "qz", "qw")] == p["q"])
+matched = [(r, estimator.get((int(r["stamp_ns"]), r["body"]), [])) for r in rows if r["valid"] == "1"]
+matched = [(r, published) for r, published in matched if published]  # a replayed stamp has two
+same = sum(1 for r, published in matched if any([float(r[k]) for k in ("x", "y", "z")] == p["p"]
+           and [float(r[k]) for k in ("qx", "qy", "qz", "qw")] == p["q"] for p in published))
 check(len(matched) > 0.95 * len(rows) and same == len(matched),
       f"{same} of {len(matched)} CSV poses (of {len(rows)} rows) equal the estimator's exactly")
 sys.exit(1 if checks.failures else 0)

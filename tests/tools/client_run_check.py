@@ -68,7 +68,9 @@ def check_restart_delivery(checks, run, restart_ns, published2):
 
 
 def read_estimator_poses(work):
-    """Both estimator runs' --out-poses, keyed by (stamp_ns, body)."""
+    """Both estimator runs' --out-poses, keyed by (stamp_ns, body): a list each, because a frame
+    replayed late republishes the instants after it, so one stamp can carry two published poses
+    (the client may have received either)."""
     poses = {}
     for number in (1, 2):
         for line in open(f"{work}/poses{number}.jsonl"):
@@ -76,7 +78,7 @@ def read_estimator_poses(work):
                 pose = json.loads(line)
             except ValueError:
                 continue  # the killed run's last line may be cut
-            poses[(pose["stamp_ns"], pose["body"])] = pose
+            poses.setdefault((pose["stamp_ns"], pose["body"]), []).append(pose)
     return poses
 
 
@@ -89,15 +91,15 @@ def check_poses_exact(checks, run, poses, number):
     for frame in run.frames:
         for body in frame["bodies"]:
             names.add(body["name"])
-            pose = poses.get((frame["stamp_ns"], body["name"])) if body["valid"] else None
-            if pose is None:
+            published = poses.get((frame["stamp_ns"], body["name"]), []) if body["valid"] else []
+            if not published:
                 continue
             compared += 1
-            if all(same(body[k], pose[k]) for k in ("p", "q", "v", "w", "sigma")) and \
-                    body["horizon_ns"] == pose["horizon_ns"]:
+            if any(all(same(body[k], pose[k]) for k in ("p", "q", "v", "w", "sigma")) and
+                   body["horizon_ns"] == pose["horizon_ns"] for pose in published):
                 equal += 1
             elif compared - equal <= 3:
-                print("  differs:", frame["stamp_ns"], body, pose)
+                print("  differs:", frame["stamp_ns"], body, published)
     valid = sum(1 for frame in run.frames for body in frame["bodies"] if body["valid"])
     checks.check(compared >= 0.95 * valid and compared > 5000,
                  f"{compared} of {checks.who}'s {valid} tracked poses found in the estimator's --out-poses")
