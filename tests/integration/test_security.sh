@@ -52,6 +52,20 @@ cp -r "$studio/identities/leaver" "$leaver/identities/"
 [ ! -e "$studio/identities/leaver" ] && grep -q "BEGIN X509 CRL" "$studio/identity_crl.pem" &&
   pass "panoptes-security: studio CA, governance and 11 identities; the leaver revoked" ||
   fail "panoptes-security setup"
+# Every document the tool writes is well-formed XML (issue 32: a comment held '--', which XML
+# forbids; Fast DDS tolerated it, xmllint, Python and Cyclone DDS do not): every protection kind,
+# and an identity whose name holds '--'.
+for protection in sign payload submessage; do "$tool" init "$work/studio-$protection" --protection "$protection" >/dev/null; done
+"$tool" issue "$work/studio-sign" application "a--b" >/dev/null
+malformed=$(find "$studio" "$work"/studio-* -name '*.xml' -print0 | xargs -0 python3 -c '
+import sys, xml.dom.minidom
+for path in sys.argv[1:]:
+    try:
+        xml.dom.minidom.parse(path)
+    except Exception as error:
+        print(f"{path}: {error}")')
+[ -z "$malformed" ] && pass "every governance and permissions document is well-formed XML" ||
+  fail "malformed XML from panoptes-security: $malformed"
 # Another studio: its CA signed nothing of ours.
 "$tool" init "$work/rogue" >/dev/null
 "$tool" issue "$work/rogue" application rogue >/dev/null
