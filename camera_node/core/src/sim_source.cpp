@@ -30,7 +30,9 @@ class SimSource final : public FrameSource {
         simulator_(scene_, camera_id),
         epoch_ns_(options.sim_epoch_ns != 0 ? options.sim_epoch_ns : next_whole_second(wall_now_ns())),
         paced_(options.paced),
-        max_frames_(options.max_frames) {
+        max_frames_(options.max_frames),
+        frames_(simulator_.frames_in(0, scene_.duration_ns())),
+        next_k_(frames_.first) {
     static_assert(!std::is_copy_constructible_v<SimSource> && !std::is_move_constructible_v<SimSource>);
     const SimCameraConfig& config = simulator_.config();
     info_.camera_id = options.camera_id.empty() ? camera_id : options.camera_id;
@@ -50,7 +52,7 @@ class SimSource final : public FrameSource {
     if (stop_.stopped()) return std::nullopt;
     if (max_frames_ >= 0 && delivered_ >= max_frames_) return std::nullopt;
     if (paced_) skip_frames_already_read_out();
-    if (simulator_.frame_time_ns(next_k_) > scene_.duration_ns()) return std::nullopt;
+    if (next_k_ >= frames_.end) return std::nullopt;
     if (paced_ && !stop_.sleep_until_wall(readout_wall_ns(next_k_))) return std::nullopt;
 
     CapturedFrame frame;
@@ -102,7 +104,9 @@ class SimSource final : public FrameSource {
   TimeNs epoch_ns_;
   bool paced_;
   std::int64_t max_frames_;
-  std::int64_t next_k_ = 0;
+  // Mid-exposure in [0, duration), like panoptes_sim features (docs/simulator.md).
+  CameraSimulator::FrameRange frames_;
+  std::int64_t next_k_;
   std::int64_t delivered_ = 0;
   SourceInfo info_;
   StopSignal stop_;

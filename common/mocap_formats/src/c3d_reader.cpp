@@ -269,6 +269,35 @@ void read_points(const ByteReader& in, std::size_t data_start, std::size_t frame
   }
 }
 
+// The data section's first block. The header (word 9, offset 16) and POINT:DATA_START both hold
+// it. Several vendors' files leave the parameter at 0 or 1 and the header right (issue 32), so a
+// value that cannot be the data section (before the end of the parameters, or past the end of the
+// file) yields to the other; the parameter wins when both are possible, as the C3D guide says.
+std::size_t data_section_block(const ByteReader& in, const C3dFile& file, std::size_t parameter_block,
+                               std::size_t header_block) {
+  const std::size_t first_possible = parameter_block + 1;
+  const auto possible = [&](std::size_t block) {
+    return block >= first_possible && (block - 1) * kBlockBytes < in.size();
+  };
+  const C3dParameter* parameter = file.find("POINT", "DATA_START");
+  if (parameter == nullptr || parameter->numbers.empty()) {
+    if (!possible(header_block)) {
+      in.fail(16, "the header puts the data section at block " + std::to_string(header_block) +
+                      " and there is no POINT:DATA_START; it must be a block from " +
+                      std::to_string(first_possible) + " to the end of the file");
+    }
+    return header_block;
+  }
+  // Stored as a signed 16-bit word; blocks above 32767 appear negative.
+  const auto parameter_value = static_cast<std::size_t>(static_cast<std::uint16_t>(parameter->numbers.front()));
+  if (possible(parameter_value)) return parameter_value;
+  if (possible(header_block)) return header_block;
+  in.fail(16, "the header puts the data section at block " + std::to_string(header_block) +
+                  " and POINT:DATA_START at block " + std::to_string(parameter_value) +
+                  "; neither can be: it must be a block from " + std::to_string(first_possible) +
+                  " (after the parameters) to the end of the file");
+}
+
 }  // namespace
 
 const C3dParameter* C3dFile::find(const std::string& group, const std::string& name) const {
@@ -329,12 +358,7 @@ C3dFile parse_c3d(std::span<const std::uint8_t> bytes, const std::string& name_f
     in.fail(section, "POINT:UNITS '" + points.units + "' (expected mm, cm or m)");
   points.marker_names = point_labels(file, marker_count);
   file.first_frame = std::max(1, header_first);
-  const double data_block = first_number(file, "POINT", "DATA_START", static_cast<double>(header_data_block));
-  const auto data_start_block = static_cast<std::size_t>(static_cast<std::uint16_t>(data_block));
-  if (data_start_block < parameter_block + 1) {
-    in.fail(16, "data section at block " + std::to_string(data_start_block) +
-                    ", before the end of the parameters");
-  }
+  const std::size_t data_start_block = data_section_block(in, file, parameter_block, header_data_block);
   const std::size_t frames = frame_count(file, header_first, header_last);
   if (frames == 0)
     in.fail(8, "no frames (last frame " + std::to_string(header_last) + " < first " +

@@ -235,6 +235,15 @@ TimeNs CameraSimulator::frame_time_ns(std::int64_t k) const {
   return config_->phase_ns + frame_offset_ns(k, config_->rate_hz);
 }
 
+CameraSimulator::FrameRange CameraSimulator::frames_in(TimeNs from_ns, TimeNs to_ns) const {
+  FrameRange range;
+  while (frame_time_ns(range.first) < from_ns) ++range.first;
+  while (range.first > 0 && frame_time_ns(range.first - 1) >= from_ns) --range.first;
+  range.end = range.first;
+  while (frame_time_ns(range.end) < to_ns) ++range.end;
+  return range;
+}
+
 TimeNs CameraSimulator::frame_stamp_ns(std::int64_t k) const {
   return frame_time_ns(k) + config_->clock_offset_ns;
 }

@@ -303,8 +303,11 @@ TrcSource read_trc(const YamlReader& reader, const std::filesystem::path& base_d
     // A +90 degree turn about x: file (x, y, z) -> world (x, -z, y). Keeps the frame right-handed
     // and the file's x (usually the walking direction) as world x.
     source.R_world_file << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+  } else if (up_axis == "x") {
+    // A cyclic turn: file (x, y, z) -> world (y, z, x), so that the file's up axis is our z.
+    source.R_world_file << 0, 1, 0, 0, 0, 1, 1, 0, 0;
   } else if (up_axis != "z") {
-    reader.fail("up_axis", "expected y or z, got '" + up_axis + "'");
+    reader.fail("up_axis", "expected x, y or z, got '" + up_axis + "'");
   }
   source.loop = read_trc_loop(reader);
   const double length = source.data.times_s.back() - source.data.times_s.front();

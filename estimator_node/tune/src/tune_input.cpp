@@ -25,9 +25,8 @@ TuneInput simulated_input(const Scene& scene, TimeNs epoch_ns) {
   input.calibration = scene.calibration();
   for (const SimCameraConfig& config : scene.cameras()) {
     const CameraSimulator camera(scene, config.calibration.id);
-    std::int64_t k = 0;
-    while (camera.frame_time_ns(k) < 0) ++k;
-    for (; camera.frame_time_ns(k) < scene.duration_ns(); ++k) {
+    const CameraSimulator::FrameRange range = camera.frames_in(0, scene.duration_ns());
+    for (std::int64_t k = range.first; k < range.end; ++k) {
       FeatureFrame frame = camera.features(k);
       frame.stamp_ns += epoch_ns;
       frame.received_ns += epoch_ns;

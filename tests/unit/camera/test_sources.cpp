@@ -10,6 +10,8 @@
 #include <fstream>
 #include <optional>
 #include <random>
+#include <regex>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -227,6 +229,38 @@ TEST(SimSource, FramesMatchTheSimulatorsFeatures) {
   EXPECT_GT(compared, 0);
   std::printf("[ sim      ] %d isolated features in 10 frames of %s: worst detector error %.4f px\n",
               compared, camera_id.c_str(), worst);
+}
+
+// Issue 32: the source delivered a frame at exactly t = duration (1201 frames of a 20 s scene at
+// 60 Hz), one more than panoptes_sim features writes; mid-exposure lies in [0, duration).
+TEST(SimSource, DeliversTheFramesOfZeroToDurationLikeTheSimulator) {
+  TempDir dir;
+  std::ifstream in(kDemoScene);
+  std::stringstream text;
+  text << in.rdbuf();
+  const fs::path path = dir.path() / "half_second.yaml";
+  std::ofstream(path) << std::regex_replace(text.str(), std::regex("\nduration: [0-9.]+"), "\nduration: 0.5");
+  const Scene scene = Scene::load(path.string());
+  ASSERT_EQ(scene.duration_ns(), kNsPerSecond / 2);
+  SourceOptions options;
+  options.paced = false;
+  for (const std::string camera_id : {"cam0", "cam3"}) {
+    const CameraSimulator simulator(scene, camera_id);
+    const CameraSimulator::FrameRange range = simulator.frames_in(0, scene.duration_ns());
+    auto source = open_source("sim:" + path.string() + "#" + camera_id, options);
+    std::int64_t frames = 0;
+    while (const std::optional<CapturedFrame> frame = source->next()) {
+      EXPECT_EQ(frame->sequence, range.first + frames);
+      EXPECT_LT(simulator.frame_time_ns(frame->sequence), scene.duration_ns());
+      ++frames;
+    }
+    EXPECT_EQ(frames, range.end - range.first) << camera_id;
+  }
+  // By hand: cam0 is 60 Hz from t = 0 (frames 0..29; frame 30 is at 0.5 s), cam3 120 Hz from
+  // 6.7 ms (0.0067 + 59/120 = 0.4984 s is the last).
+  EXPECT_EQ(CameraSimulator(scene, "cam0").frames_in(0, scene.duration_ns()).end, 30);
+  EXPECT_EQ(CameraSimulator(scene, "cam3").frames_in(0, scene.duration_ns()).end, 60);
+  EXPECT_EQ(CameraSimulator(scene, "cam3").frames_in(kNsPerSecond / 4, scene.duration_ns()).first, 30);
 }
 
 TEST(SimSource, BadSpecsNameWhatIsWrong) {

@@ -38,6 +38,9 @@ struct HandBuiltC3d {
   bool point_group = true;
   bool used_parameter = true;
   int analog_per_frame = 0;
+  // Where the header (offset 16) and POINT:DATA_START put the data section: block 3 is right.
+  int header_data_start = 3;
+  int parameter_data_start = 3;
   // Point m of frame f: (100 f + m, -10 m, 0.5 f) mm; invalid where (f + m) % 3 == 2.
   static bool valid(int f, int m) { return (f + m) % 3 != 2; }
   static double coordinate(int f, int m, int axis) {
@@ -79,7 +82,7 @@ struct HandBuiltC3d {
     put16(out, 6, 1);
     put16(out, 8, static_cast<std::int16_t>(frames));
     putf(out, 12, float_storage ? -scale : scale);
-    put16(out, 16, 3);
+    put16(out, 16, static_cast<std::int16_t>(header_data_start));
     putf(out, 20, rate);
     out[512 + 2] = 1;
     out[512 + 3] = static_cast<std::uint8_t>(processor);
@@ -109,7 +112,7 @@ struct HandBuiltC3d {
     if (used_parameter) record(group, "USED", int_body(points));
     record(group, "SCALE", float_body(float_storage ? -scale : scale));
     record(group, "RATE", float_body(rate));
-    record(group, "DATA_START", int_body(3));
+    record(group, "DATA_START", int_body(parameter_data_start));
     std::vector<std::uint8_t> labels = {0xff, 2, 4, static_cast<std::uint8_t>(points)};
     for (int m = 0; m < points; ++m) {
       const std::string label = "M" + std::to_string(m) + "  ";

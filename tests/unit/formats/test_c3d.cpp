@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -278,6 +279,28 @@ TEST(C3dBadInput, EachDefectIsNamedWithFileAndOffset) {
       error_of(truncated),
       "bad.c3d: offset 1088: data section truncated: 3 frames of 32 bytes need 96 bytes from offset 1024, "
       "the file has 74");
+
+  // Issue 32: files from several vendors hold 0 or 1 in POINT:DATA_START and the right block in
+  // the header; an impossible value yields to the other one, and only two impossible ones fail.
+  const C3dFile right = parse_c3d(good.build(), "good.c3d");
+  for (const auto& [header_block, parameter_block] :
+       std::vector<std::pair<int, int>>{{3, 0}, {3, 1}, {3, 2}, {3, 40}, {0, 3}, {2, 3}}) {
+    HandBuiltC3d vendor = good;
+    vendor.header_data_start = header_block;
+    vendor.parameter_data_start = parameter_block;
+    const std::string what = "header " + std::to_string(header_block) + ", DATA_START " + std::to_string(parameter_block);
+    ASSERT_EQ(error_of(vendor.build()), "") << what;
+    const C3dFile read = parse_c3d(vendor.build(), "vendor.c3d");
+    ASSERT_EQ(read.points.positions.size(), right.points.positions.size()) << what;
+    for (std::size_t i = 0; i < right.points.positions.size(); ++i)
+      EXPECT_EQ(read.points.positions[i], right.points.positions[i]) << what << ", sample " << i;
+  }
+  HandBuiltC3d neither = good;
+  neither.header_data_start = 8;  // past the end of this 1120-byte file
+  neither.parameter_data_start = 1;
+  EXPECT_EQ(error_of(neither.build()),
+            "bad.c3d: offset 16: the header puts the data section at block 8 and POINT:DATA_START at block "
+            "1; neither can be: it must be a block from 3 (after the parameters) to the end of the file");
 
   EXPECT_EQ(error_of({}),
             "bad.c3d: offset 0: file ends inside the header block (a C3D file starts with a 512-byte "

@@ -111,6 +111,23 @@ TEST(Trc, RelativePathsResolveAgainstTheSceneFile) {
   EXPECT_LT((scene.markers_at(0)[1].p - Eigen::Vector3d(0.10, 0.20, 0.30)).norm(), 1e-12);
 }
 
+// Issue 32: x-up files exist (some C3D exports); up_axis x turns file (x, y, z) into world
+// (y, z, x), a rotation, so the file's up axis becomes our z. Anything else names the key.
+TEST(Trc, UpAxisXTurnsTheFilesXIntoWorldZ) {
+  const TempDir dir;
+  dir.write("gappy.trc", kGappyTrc);
+  const Scene scene = Scene::load(dir.write("x_up.yaml", kCamera + "trc: {file: gappy.trc, up_axis: x}\n"));
+  // B is at (10, 20, 30) cm in the file.
+  EXPECT_LT((scene.markers_at(0)[1].p - Eigen::Vector3d(0.20, 0.30, 0.10)).norm(), 1e-12);
+  try {
+    Scene::load(dir.write("w_up.yaml", kCamera + "trc: {file: gappy.trc, up_axis: w}\n"));
+    ADD_FAILURE() << "up_axis: w was accepted";
+  } catch (const std::exception& error) {
+    EXPECT_NE(std::string(error.what()).find("up_axis"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("expected x, y or z, got 'w'"), std::string::npos) << error.what();
+  }
+}
+
 TEST(Trc, GapsMakeMarkersInvalidWhereTheyHaveNoData) {
   const TempDir dir;
   const fs::path trc_path = dir.write("gappy.trc", kGappyTrc);

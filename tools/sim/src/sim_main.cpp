@@ -40,13 +40,6 @@ JsonlWriter fresh_jsonl(const fs::path& path) {
 }
 
 // Frames whose mid-exposure lies in [0, duration) of scene time.
-std::int64_t first_frame(const CameraSimulator& camera) {
-  std::int64_t k = 0;
-  while (camera.frame_time_ns(k) < 0) ++k;
-  while (k > 0 && camera.frame_time_ns(k - 1) >= 0) --k;
-  return k;
-}
-
 nlohmann::json truth_line(const Scene& scene, TimeNs scene_time_ns, TimeNs epoch_ns) {
   nlohmann::json line;
   line["stamp_ns"] = epoch_ns + scene_time_ns;
@@ -118,7 +111,8 @@ int run_features(const Options& options) {
     std::size_t false_blobs = 0;
     std::size_t late = 0;
     const TimeNs on_time_delay = config.exposure_ns / 2 + config.latency_ns;
-    for (std::int64_t k = first_frame(camera); camera.frame_time_ns(k) < duration_ns; ++k) {
+    const CameraSimulator::FrameRange range = camera.frames_in(0, duration_ns);
+    for (std::int64_t k = range.first; k < range.end; ++k) {
       FeatureFrame frame = camera.features(k);
       frame.stamp_ns += options.epoch_ns;
       frame.received_ns += options.epoch_ns;

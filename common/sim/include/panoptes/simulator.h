@@ -125,6 +125,13 @@ class CameraSimulator {
   const SimCameraConfig& config() const { return *config_; }
   // True scene time of frame k's mid-exposure.
   TimeNs frame_time_ns(std::int64_t k) const;
+  // The frames whose mid-exposure lies in [from_ns, to_ns) of scene time: k in [first, end).
+  // Every program that runs a scene takes its frames from here (docs/simulator.md: `duration`).
+  struct FrameRange {
+    std::int64_t first = 0;
+    std::int64_t end = 0;
+  };
+  FrameRange frames_in(TimeNs from_ns, TimeNs to_ns) const;
   // Stamp frame k carries on the camera's own clock (scene time + clock offset).
   TimeNs frame_stamp_ns(std::int64_t k) const;
   // Renders frame k: Gaussian spots integrated over each pixel, background, sensor noise.
