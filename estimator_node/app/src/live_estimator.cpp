@@ -106,6 +106,8 @@ class LiveEstimator {
   bool finish_processed(bool force);
   void publish_predictions(const FeatureFrame& frame);
   void publish_status(TimeNs now, TimeNs start);
+  // No frame for longer than a track lives without one (every camera stopped): the tracks go.
+  void expire_idle_tracks(TimeNs now);
   void publish_descriptions_if_changed();
   void publish_chains(const FeatureFrame& frame);
 
@@ -150,6 +152,7 @@ class LiveEstimator {
     double cpu_s = 0;
   } last_status_;  // for the rates over the last status period
   std::size_t finished_ = 0;
+  TimeNs last_frame_wall_ns_ = 0;  // when frames were last taken from the inbox
 };
 
 void LiveEstimator::announce(const msg::CameraInfo& info) {
@@ -321,6 +324,17 @@ void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
   log(line);
 }
 
+void LiveEstimator::expire_idle_tracks(TimeNs now) {
+  // The tracker's time only moves with frames; without this, the last tracks stayed confirmed in
+  // the status and the console for as long as the estimator ran (issue 32). The wall time since
+  // the last frame is added to the newest stamp, so camera clocks need not match this one.
+  const TimeNs idle_ns = now - last_frame_wall_ns_;
+  if (last_frame_wall_ns_ == 0 || idle_ns <= session_.config().tracker.delete_after_ns) return;
+  if (tracker_.live_track_count() == 0) return;
+  if (const std::size_t deleted = tracker_.expire(tracker_.last_stamp_ns() + idle_ns); deleted > 0 && !options_.quiet)
+    log("no frame for " + std::to_string(idle_ns / 1'000'000) + " ms: " + std::to_string(deleted) + " track(s) deleted");
+}
+
 int LiveEstimator::run() {
   auto& inbox = session_.inbox();
   const TimeNs start = wall_now_ns();
@@ -330,7 +344,10 @@ int LiveEstimator::run() {
   while (!stop_requested()) {
     apply_announced_cameras();
     const TimeNs now = wall_now_ns();
-    if (auto due = inbox.pop_due(now); !due.empty()) update(due);
+    if (auto due = inbox.pop_due(now); !due.empty()) {
+      last_frame_wall_ns_ = now;
+      update(due);
+    }
     if (!finish_processed(false)) continue;  // a frame is due: its update first
     if (latency_probe_) latency_probe_->flush(now, false);
     if (now >= next_body_poll) {
@@ -338,6 +355,7 @@ int LiveEstimator::run() {
       body_file_.reload_if_changed(tracker_);
     }
     publish_descriptions_if_changed();
+    expire_idle_tracks(now);
     if (now >= next_status) {
       next_status += seconds_to_ns(node_.status_period_s);
       publish_status(now, start);

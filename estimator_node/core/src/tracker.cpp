@@ -819,6 +819,12 @@ std::size_t Tracker::live_track_count() const {
   return impl_->core.tracks.size();
 }
 
+std::size_t Tracker::expire(TimeNs stamp_ns) {
+  const std::size_t before = impl_->core.tracks.size();
+  impl_->prune(std::max(stamp_ns, last_stamp_ns()));
+  return before - impl_->core.tracks.size();
+}
+
 std::array<std::size_t, 3> Tracker::track_counts(TimeNs stamp_ns) const {
   std::array<std::size_t, 3> counts{};
   for (const auto& track : impl_->core.tracks) {

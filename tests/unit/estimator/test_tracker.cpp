@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -161,6 +162,31 @@ TEST(Tracker, KeepsIdentityThroughShortOcclusionAndDeletesAfterTimeout) {
   // Marker 2's track is gone 0.3 s after it disappeared; two remain.
   EXPECT_EQ(tracker.current_tracks().size(), 2u);
   EXPECT_GE(tracker.stats().tracks_deleted, 1u);
+}
+
+// Issue 32: when every camera stops, no frame moves the tracker's time and the last tracks stayed
+// confirmed for as long as the estimator ran. expire() deletes them at a later time; a time
+// within delete_after of the last update keeps them, and a late frame still replays.
+TEST(Tracker, ExpireDeletesTracksThatNoFrameKeptAlive) {
+  auto always = [](int, double) { return true; };
+  const auto run = make_run(1.0, always, 3);
+  Tracker tracker;
+  tracker.set_calibration(SystemCalibration{run.cameras});
+  for (std::size_t i = 0; i + 1 < run.frames.size(); ++i) tracker.process(run.frames[i]);
+  ASSERT_EQ(tracker.current_tracks().size(), 3u);
+  const TimeNs last = tracker.last_stamp_ns();
+  const TimeNs limit = TrackerOptions{}.delete_after_ns;
+  EXPECT_EQ(tracker.expire(last + limit / 2), 0u);
+  EXPECT_EQ(tracker.expire(last - limit), 0u);  // never before the newest frame
+  EXPECT_EQ(tracker.track_counts(last)[1], 3u);
+  EXPECT_EQ(tracker.expire(last + limit + 1'000'000), 3u);
+  EXPECT_EQ(tracker.live_track_count(), 0u);
+  EXPECT_TRUE(tracker.current_tracks().empty());
+  EXPECT_EQ(tracker.track_counts(last), (std::array<std::size_t, 3>{0, 0, 0}));
+  EXPECT_EQ(tracker.last_stamp_ns(), last);  // the tracker's time is still the newest frame's
+  // The camera that was last to send replays its frame into the kept history.
+  EXPECT_EQ(tracker.process(run.frames.back()), run.frames.back().stamp_ns > last ? FrameOutcome::kProcessed
+                                                                                    : FrameOutcome::kLateReplayed);
 }
 
 // Issue 16, edges of the volume: a marker that only one camera sees has no depth. Its track is

@@ -138,6 +138,12 @@ class Tracker {
   std::vector<TrackRecord> current_tracks() const { return tracks_at(last_stamp_ns()); }
   TimeNs last_stamp_ns() const;
   std::size_t live_track_count() const;
+  // Deletes the tracks that no frame has updated for their delete_after (tentative ones: their
+  // tentative_delete_after) at `stamp_ns`, a time after the newest frame's. When frames stop
+  // arriving, the live estimator calls it with the newest stamp plus the time since the last frame,
+  // so that tracks do not outlive their cameras (issue 32). The rewind history is kept: a late frame
+  // still replays from it. Returns the number deleted.
+  std::size_t expire(TimeNs stamp_ns);
   // Live tracks by status at `stamp_ns`: {tentative, confirmed, coasting}.
   std::array<std::size_t, 3> track_counts(TimeNs stamp_ns) const;
 
