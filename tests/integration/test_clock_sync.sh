@@ -54,6 +54,12 @@ for pid in "${camera_pids[@]}"; do
 done
 timeout 30 tail --pid="$estimator" -f /dev/null
 wait "$estimator" && pass "estimator_node stopped cleanly" || fail "estimator_node exit $?"
+# Issue 32: once every camera has stopped, the estimator deletes the tracks no frame keeps alive
+# (they stayed confirmed in its status for as long as it ran). It runs 3 s past the cameras.
+last_tracks=$(grep -o 'tracks [0-9]*+[0-9]* coasting' "$work/estimator.log" | tail -1)
+grep -q "no frame for [0-9]* ms: [0-9]* track(s) deleted" "$work/estimator.log" && [ "$last_tracks" = "tracks 0+0 coasting" ] &&
+  pass "after the cameras stopped, the estimator deleted its tracks (last status: $last_tracks)" ||
+  fail "tracks outlived the cameras: $(grep -E 'tracks [0-9]|no frame for' "$work/estimator.log" | tail -3)"
 
 # Every second each camera logs its estimate against the truth:
 #   clock sync at <t> s: offset X ms (true Y ms, error E us), drift D ppm (true T), ...
