@@ -289,7 +289,8 @@ std::size_t data_section_block(const ByteReader& in, const C3dFile& file, std::s
     return header_block;
   }
   // Stored as a signed 16-bit word; blocks above 32767 appear negative.
-  const auto parameter_value = static_cast<std::size_t>(static_cast<std::uint16_t>(parameter->numbers.front()));
+  const auto parameter_value =
+      static_cast<std::size_t>(static_cast<std::uint16_t>(parameter->numbers.front()));
   if (possible(parameter_value)) return parameter_value;
   if (possible(header_block)) return header_block;
   in.fail(16, "the header puts the data section at block " + std::to_string(header_block) +

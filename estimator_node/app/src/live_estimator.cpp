@@ -331,8 +331,10 @@ void LiveEstimator::expire_idle_tracks(TimeNs now) {
   const TimeNs idle_ns = now - last_frame_wall_ns_;
   if (last_frame_wall_ns_ == 0 || idle_ns <= session_.config().tracker.delete_after_ns) return;
   if (tracker_.live_track_count() == 0) return;
-  if (const std::size_t deleted = tracker_.expire(tracker_.last_stamp_ns() + idle_ns); deleted > 0 && !options_.quiet)
-    log("no frame for " + std::to_string(idle_ns / 1'000'000) + " ms: " + std::to_string(deleted) + " track(s) deleted");
+  if (const std::size_t deleted = tracker_.expire(tracker_.last_stamp_ns() + idle_ns);
+      deleted > 0 && !options_.quiet)
+    log("no frame for " + std::to_string(idle_ns / 1'000'000) + " ms: " + std::to_string(deleted) +
+        " track(s) deleted");
 }
 
 int LiveEstimator::run() {

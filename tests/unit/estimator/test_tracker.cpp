@@ -185,8 +185,8 @@ TEST(Tracker, ExpireDeletesTracksThatNoFrameKeptAlive) {
   EXPECT_EQ(tracker.track_counts(last), (std::array<std::size_t, 3>{0, 0, 0}));
   EXPECT_EQ(tracker.last_stamp_ns(), last);  // the tracker's time is still the newest frame's
   // The camera that was last to send replays its frame into the kept history.
-  EXPECT_EQ(tracker.process(run.frames.back()), run.frames.back().stamp_ns > last ? FrameOutcome::kProcessed
-                                                                                    : FrameOutcome::kLateReplayed);
+  EXPECT_EQ(tracker.process(run.frames.back()),
+            run.frames.back().stamp_ns > last ? FrameOutcome::kProcessed : FrameOutcome::kLateReplayed);
 }
 
 // Issue 16, edges of the volume: a marker that only one camera sees has no depth. Its track is

@@ -288,7 +288,8 @@ TEST(C3dBadInput, EachDefectIsNamedWithFileAndOffset) {
     HandBuiltC3d vendor = good;
     vendor.header_data_start = header_block;
     vendor.parameter_data_start = parameter_block;
-    const std::string what = "header " + std::to_string(header_block) + ", DATA_START " + std::to_string(parameter_block);
+    const std::string what =
+        "header " + std::to_string(header_block) + ", DATA_START " + std::to_string(parameter_block);
     ASSERT_EQ(error_of(vendor.build()), "") << what;
     const C3dFile read = parse_c3d(vendor.build(), "vendor.c3d");
     ASSERT_EQ(read.points.positions.size(), right.points.positions.size()) << what;

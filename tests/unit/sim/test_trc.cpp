@@ -124,7 +124,8 @@ TEST(Trc, UpAxisXTurnsTheFilesXIntoWorldZ) {
     ADD_FAILURE() << "up_axis: w was accepted";
   } catch (const std::exception& error) {
     EXPECT_NE(std::string(error.what()).find("up_axis"), std::string::npos) << error.what();
-    EXPECT_NE(std::string(error.what()).find("expected x, y or z, got 'w'"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("expected x, y or z, got 'w'"), std::string::npos)
+        << error.what();
   }
 }
 
