@@ -58,6 +58,16 @@ bad bad_objective '$a objective: fastest' "bad_objective.yaml: objective"
 bad negative_planes 's/^occlusion: {planes: 64}/occlusion: {planes: -3}/' "negative_planes.yaml: occlusion.planes"
 bad subject_size 's/^occlusion: {planes: 64}/occlusion: {planes: 64}\nsubject: {markers: 41, size: [0.7, 0, 1.5]}/' \
   "subject_size.yaml: subject.size"
+# Issue 32: only regions take a weight; the documented metric.min_triangulation_deg is read.
+bad weighted_volume 's/^volume: {min: \[-2.0, -2.0, 0.0\], max: \[2.0, 2.0, 2.0\]}/volume: {min: [-2, -2, 0], max: [2, 2, 2], weight: 2}/' \
+  "weighted_volume.yaml: volume.weight"
+bad weighted_obstacle 's/^  - {min: \[2.3, 2.3, 0.0\], max: \[2.7, 2.7, 3.0\]}/  - {min: [2.3, 2.3, 0], max: [2.7, 2.7, 3], weight: 1}/' \
+  "weighted_obstacle.yaml: obstacles[0].weight"
+bad triangulation_range 's/k_cameras: 2}/k_cameras: 2, min_triangulation_deg: 95}/' \
+  "triangulation_range.yaml: metric.min_triangulation_deg"
+sed 's/k_cameras: 2}/k_cameras: 2, min_triangulation_deg: 0}/' "$work/room.yaml" >"$work/seed_metric.yaml"
+expect_exit 0 "metric.min_triangulation_deg is accepted (0: the seed's metric)" -- \
+  "$plan" --room "$work/seed_metric.yaml" --cameras 2 --evaluations 50 --quiet
 # A volume no mount position can see: the lenses reach 0.5 m only.
 sed 's/max_depth_m: 1[04]/max_depth_m: 0.5/g' "$work/room.yaml" >"$work/blind.yaml"
 expect_exit 2 "a volume no camera can see" -- "$plan" --room "$work/blind.yaml" --cameras 2 --evaluations 50 --quiet

@@ -21,8 +21,14 @@ Eigen::Vector3d vector3(const YamlReader& reader, const std::string& key) {
   return {v[0], v[1], v[2]};
 }
 
-Box read_box(const YamlReader& reader) {
-  reader.expect_only({"min", "max", "weight"});
+// A box; only regions carry a weight (issue 32: a weight on the volume or an obstacle was accepted
+// and ignored).
+Box read_box(const YamlReader& reader, bool weighted = false) {
+  if (weighted) {
+    reader.expect_only({"min", "max", "weight"});
+  } else {
+    reader.expect_only({"min", "max"});
+  }
   Box box{vector3(reader, "min"), vector3(reader, "max")};
   if ((box.max.array() <= box.min.array()).any())
     reader.fail("max", "must be greater than min on every axis (an inverted or empty box)");
@@ -84,7 +90,7 @@ Norm read_norm(const YamlReader& reader, const std::string& key) {
 
 void read_metric(const YamlReader& reader, MetricOptions& metric) {
   reader.expect_only({"resolution", "over_directions", "over_planes", "over_points", "pixel_sigma",
-                      "unseen_m", "k_cameras"});
+                      "unseen_m", "k_cameras", "min_triangulation_deg"});
   const std::string model = reader.get_string("resolution", "covariance");
   if (model == "covariance") {
     metric.resolution = ResolutionModel::kCovariance;
@@ -156,7 +162,7 @@ RoomFile load_room(const std::filesystem::path& path) {
   RoomFile file;
   file.room.volume = read_box(reader.child("volume"));
   for (const YamlReader& region : reader.sequence_or_empty("regions")) {
-    const Box box = read_box(region);
+    const Box box = read_box(region, true);
     const double weight = region.get_double("weight", 1.0);
     if (!(weight >= 0.0) || !std::isfinite(weight)) region.fail("weight", "must be a finite number >= 0");
     file.room.regions.push_back({box, weight});
