@@ -58,6 +58,15 @@ bad bad_objective '$a objective: fastest' "bad_objective.yaml: objective"
 bad negative_planes 's/^occlusion: {planes: 64}/occlusion: {planes: -3}/' "negative_planes.yaml: occlusion.planes"
 bad subject_size 's/^occlusion: {planes: 64}/occlusion: {planes: 64}\nsubject: {markers: 41, size: [0.7, 0, 1.5]}/' \
   "subject_size.yaml: subject.size"
+# Issue 32: --scene-out kept a trc.file of "${VAR}" only as "<template dir>/${VAR}", which no
+# environment can make a path; a file that starts with a variable is written as it was.
+sed "s#^  file: .*#  file: \"\${PANOPTES_PLAN_TEST_TRC}\"#" "$source_dir/deploy/scenes/walk.yaml" >"$work/env_template.yaml"
+expect_exit 0 "plan with a scene template whose trc.file is \${VAR}" -- "$plan" --room "$work/room.yaml" --cameras 2 \
+  --evaluations 50 --quiet --out "$work/env.cal.yaml" --scene-template "$work/env_template.yaml" --scene-out "$work/env.scene.yaml"
+grep -qF 'file: ${PANOPTES_PLAN_TEST_TRC}' "$work/env.scene.yaml" && pass "--scene-out keeps trc.file \${VAR} as written" ||
+  fail "--scene-out rewrote trc.file: $(grep 'file:' "$work/env.scene.yaml")"
+expect_exit 0 "the written scene runs with the variable set" -- env PANOPTES_PLAN_TEST_TRC="$source_dir/tests/data/walk_41markers_100hz.trc" \
+  "$bin/panoptes_sim" calibration --scene "$work/env.scene.yaml" --out "$work/env.sim.cal.yaml"
 # Issue 32: only regions take a weight; the documented metric.min_triangulation_deg is read.
 bad weighted_volume 's/^volume: {min: \[-2.0, -2.0, 0.0\], max: \[2.0, 2.0, 2.0\]}/volume: {min: [-2, -2, 0], max: [2, 2, 2], weight: 2}/' \
   "weighted_volume.yaml: volume.weight"

@@ -84,7 +84,8 @@ void save_plan(const std::vector<PlannedCamera>& cameras, const fs::path& path) 
 
 // The template scene (docs/simulator.md) with its cameras replaced by `cameras`: the planned studio
 // as panoptes_sim runs it. Rates and the other camera keys come from the template's first camera;
-// phases are spread over one frame period; a relative trc.file is made absolute.
+// phases are spread over one frame period; a relative trc.file is made absolute, unless it starts
+// with an environment variable.
 void save_scene(const std::vector<PlannedCamera>& cameras, const fs::path& template_path,
                 const fs::path& path) {
   YAML::Node scene = YAML::Clone(load_yaml_file(template_path));
@@ -113,8 +114,11 @@ void save_scene(const std::vector<PlannedCamera>& cameras, const fs::path& templ
   }
   scene["cameras"] = list;
   if (scene["trc"] && scene["trc"]["file"]) {
-    const fs::path trc = scene["trc"]["file"].as<std::string>();
-    if (trc.is_relative())
+    const std::string file = scene["trc"]["file"].as<std::string>();
+    const fs::path trc = file;
+    // A file that starts with ${NAME} is whatever the environment says when the scene is run
+    // (docs/simulator.md): often an absolute path, so it is kept as written (issue 32).
+    if (trc.is_relative() && !file.starts_with("${"))
       scene["trc"]["file"] = fs::absolute(template_path.parent_path() / trc).lexically_normal().string();
   }
   std::ofstream out(path, std::ios::trunc);
