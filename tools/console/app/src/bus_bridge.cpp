@@ -81,7 +81,7 @@ TrackPoint track_of(const msg::Track& track) {
   std::copy(track.position().begin(), track.position().end(), out.position.begin());
   std::copy(track.velocity().begin(), track.velocity().end(), out.velocity.begin());
   std::copy(track.covariance().begin(), track.covariance().end(), out.covariance.begin());
-  out.status = static_cast<TrackStatus>(track.status());
+  out.status = track_status_of(track.status());
   out.cameras = track.cameras();
   return out;
 }
