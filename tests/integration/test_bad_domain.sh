@@ -5,7 +5,10 @@
 # the value, before any participant exists (the bus used to read it with atoi: "abc" joined domain
 # 0, and Fast DDS exited the process by itself for 300). The C++ client (panoptes_client_probe and
 # the examples) and the Python client throw naming it. A program in build/bin that links Fast DDS
-# or the client library but is missing from the table below fails the test. About 20 s.
+# or the client library but is missing from the table below fails the test.
+# A missing DDS profile (PANOPTES_DDS_PROFILE naming no file) is bad input too: every program in
+# the table that loads a Fast DDS profile exits 2 naming the file (it used to exit 1 in some and 2
+# in others: dds::DdsInputError, docs/architecture.md "Configuration and errors"). About 30 s.
 source "$(dirname "$0")/lib.sh"
 
 scene="$source_dir/deploy/scenes/demo.yaml"
@@ -58,6 +61,20 @@ for program in "$bin"/*; do
   listed "$name" && pass "$name is checked" || fail "$name opens DDS but is not in test_bad_domain.sh's table"
 done
 
+# expect_refused SETTING MESSAGE NAME ARGS...: NAME run with the environment SETTING (VAR=value)
+# exits 2 with exactly one stderr line that contains MESSAGE.
+expect_refused() {
+  local setting="$1" message="$2" name="$3"
+  shift 3
+  expect_exit 2 "$setting $name ${*:1:2}" -- env "$setting" timeout 30 "$bin/$name" "$@"
+  if [ "$(grep -cF -- "$message" "$work/last.err")" -eq 1 ]; then
+    pass "$name says '$message' once"
+  else
+    fail "$name: stderr lacks one line '$message'"
+    cat "$work/last.err"
+  fi
+}
+
 for entry in "${programs[@]}"; do
   name="${entry%%|*}"
   read -r -a args <<<"${entry#*|}"
@@ -66,16 +83,21 @@ for entry in "${programs[@]}"; do
     continue
   fi
   for bad in abc 300; do
-    expect_exit 2 "PANOPTES_DOMAIN=$bad $name ${args[*]:0:2}" -- \
-      env PANOPTES_DOMAIN="$bad" timeout 30 "$bin/$name" "${args[@]}"
-    message="PANOPTES_DOMAIN=$bad: not a DDS domain id (an integer 0..232)"
-    if [ "$(grep -cF -- "$message" "$work/last.err")" -eq 1 ]; then
-      pass "$name says '$message' once"
-    else
-      fail "$name: stderr lacks one line '$message'"
-      cat "$work/last.err"
-    fi
+    expect_refused "PANOPTES_DOMAIN=$bad" "PANOPTES_DOMAIN=$bad: not a DDS domain id (an integer 0..232)" \
+      "$name" "${args[@]}"
   done
+done
+
+# A missing profile file, named by the variable every program reads.
+missing_profile="$work/missing-profile.xml"
+no_fast_dds_profile=(panoptes_cyclone_probe)  # Cyclone DDS: no Fast DDS profile to load
+for entry in "${programs[@]}"; do
+  name="${entry%%|*}"
+  read -r -a args <<<"${entry#*|}"
+  [ -x "$bin/$name" ] || continue
+  [[ " ${no_fast_dds_profile[*]} " == *" $name "* ]] && continue
+  expect_refused "PANOPTES_DDS_PROFILE=$missing_profile" "PANOPTES_DDS_PROFILE=$missing_profile: no such file" \
+    "$name" "${args[@]}"
 done
 
 # The Python client raises panoptes.ClientError with the same message.

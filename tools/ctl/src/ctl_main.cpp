@@ -396,7 +396,8 @@ int run(int argc, char** argv) {
     if (*status) return show_status(options);
     if (*preview) return get_preview(options);
     return publish_predictions(options);
-  } catch (const panoptes::ConfigError& error) {  // e.g. DDS Security files: refused before joining
+  } catch (
+      const panoptes::InputError& error) {  // e.g. the DDS profile or Security files: refused before joining
     std::fprintf(stderr, "panoptes_ctl: %s\n", error.what());
     return panoptes::kExitBadInput;
   } catch (const std::exception& error) {

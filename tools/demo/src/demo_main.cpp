@@ -206,8 +206,10 @@ int run(int argc, char** argv) {
       "--check", check,
       "exit 1 unless every marker meets the demo's targets (RMSE < 2 mm, >= 95% tracked, 0 ID switches)");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
-  // A bad $PANOPTES_DOMAIN is a usage error (exit 2) here, not an early exit of every child.
+  // A bad $PANOPTES_DOMAIN or DDS profile is a usage error (exit 2) here, not an early exit of
+  // every child.
   panoptes::dds::resolve_domain();
+  panoptes::dds::resolve_profile_file(dds_profile);
 
   panoptes::install_stop_handlers();
   std::optional<panoptes::Scene> scene;

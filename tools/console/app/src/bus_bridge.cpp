@@ -230,8 +230,10 @@ void BusBridge::poll() {
     std::unique_ptr<dds::Writer<msg::CameraCommand>> writer;
     try {
       writer = impl_->bus.make_writer<msg::CameraCommand>(dds::Qos::kDefault, {}, camera);
-    } catch (const dds::DdsError&) {
+    } catch (const dds::DdsInputError&) {
       // An id that cannot name a partition: its commands go out through the writer for every camera.
+    } catch (const dds::DdsError&) {
+      // Nor for a writer DDS refused.
     }
     impl_->camera_commands.emplace(camera, std::move(writer));
   }
