@@ -101,6 +101,21 @@ for entry in "${programs[@]}"; do
     "$name" "${args[@]}"
 done
 
+# The client programs take --domain: only 0..232; a negative id is an error (the environment is
+# read when the option is absent), not a way to ask for $PANOPTES_DOMAIN.
+for name in sample_client lumipoint_board grab_objects panoptes_client_probe; do
+  [ -x "$bin/$name" ] || continue
+  for bad in -1 300; do
+    args=(--domain "$bad")
+    case "$name" in
+      lumipoint_board) args+=(--out "$work/board.ppm") ;;
+      panoptes_client_probe) args+=(--out "$work/client.jsonl") ;;
+    esac
+    expect_exit 2 "$name --domain $bad" -- timeout 30 "$bin/$name" "${args[@]}"
+    expect_stderr_contains "--domain" "$name --domain $bad names the option"
+  done
+done
+
 # The Python client raises panoptes.ClientError with the same message.
 python=$(cat "$build_dir/python/INTERPRETER" 2>/dev/null)
 if [ -n "$python" ] && [ -d "$build_dir/python/panoptes" ]; then
