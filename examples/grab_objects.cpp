@@ -222,14 +222,14 @@ int parse(int argc, char** argv, Arguments& args) {
   app.add_option("--idle-exit", args.idle_exit_s,
                  "Stop when no chain update came for this long after the first, s")
       ->check(CLI::PositiveNumber);
-  app.add_option("--domain", args.options.domain_id, "DDS domain (default: $PANOPTES_DOMAIN, else 0)")
-      ->check(CLI::Range(0, 232));
+  app.add_option("--domain", args.options.domain_id, "DDS domain, 0..232 (default: $PANOPTES_DOMAIN, else 0)")
+      ->check(CLI::Range(0, 232));  // a negative id does not mean "the environment": that is leaving it out
   app.add_option("--profile", args.options.profile_file,
                  "DDS XML profile (default: the installed loopback.xml)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
-    return app.exit(error);
+    return app.exit(error) == 0 ? 0 : 2;  // --help, or a usage error (CLI11's own codes are 100 and up)
   }
   if (objects.empty()) objects = {"pawn=0.08,0.00,0.96", "rook=0.06,0.04,0.95", "knight=0.06,-0.04,0.95"};
   for (const auto& text : objects) {

@@ -31,7 +31,7 @@ const char* const kUsage =
     "  --width PX      image width; the height follows the wall's aspect ratio (default 900)\n"
     "  --duration S    stop after S seconds (default 0: until --idle-exit)\n"
     "  --idle-exit S   stop when no event has arrived for S s after the first (default 3)\n"
-    "  --domain N      DDS domain (default: $PANOPTES_DOMAIN, else 0)\n"
+    "  --domain N      DDS domain, 0..232 (default: $PANOPTES_DOMAIN, else 0)\n"
     "  --profile FILE  DDS XML profile (default: the installed loopback.xml)\n";
 
 struct Arguments {
@@ -132,6 +132,14 @@ int usage_error(const std::string& reason) {
   return 2;
 }
 
+// --domain's value: a DDS domain id, 0..232 (the ids whose ports fit Fast DDS's port mapping);
+// -1 for anything else (a sign, spaces, a fraction, a larger number).
+int domain_id_of(const std::string& text) {
+  if (text.empty() || text.size() > 3 || text.find_first_not_of("0123456789") != std::string::npos) return -1;
+  const int id = std::stoi(text);
+  return id <= 232 ? id : -1;
+}
+
 // Returns the exit code to leave with, or -1 to go on.
 int parse(int argc, char** argv, Arguments& args) {
   for (int i = 1; i < argc; ++i) {
@@ -148,6 +156,10 @@ int parse(int argc, char** argv, Arguments& args) {
       args.events = value;
     } else if (arg == "--profile") {
       args.options.profile_file = value;
+    } else if (arg == "--domain") {
+      args.options.domain_id = domain_id_of(value);
+      if (args.options.domain_id < 0)
+        return usage_error("--domain " + value + ": not a DDS domain id (an integer 0..232)");
     } else if (!numeric) {
       return usage_error(arg.append(" ").append(value).append(": not a number >= 0"));
     } else if (arg == "--width" && number >= 16 && number <= 8192) {
@@ -156,8 +168,6 @@ int parse(int argc, char** argv, Arguments& args) {
       args.duration_s = number;
     } else if (arg == "--idle-exit" && number > 0) {
       args.idle_exit_s = number;
-    } else if (arg == "--domain" && number <= 232) {
-      args.options.domain_id = static_cast<int>(number);
     } else {
       return usage_error(
           std::string("unknown or out-of-range argument ").append(arg).append(" ").append(value));

@@ -13,7 +13,7 @@ namespace {
 
 const char* const kUsage =
     "usage: sample_client [--domain N] [--profile FILE] [--frames N] [--timeout-s S]\n"
-    "  --domain N     DDS domain (default: $PANOPTES_DOMAIN, else 0)\n"
+    "  --domain N     DDS domain, 0..232 (default: $PANOPTES_DOMAIN, else 0)\n"
     "  --profile FILE DDS XML profile (default: $PANOPTES_DDS_PROFILE, else the installed loopback.xml)\n"
     "  --frames N     exit after N frames (default 0: run until interrupted)\n"
     "  --timeout-s S  give up when no frame arrives for S seconds (default 5)\n";
@@ -21,6 +21,14 @@ const char* const kUsage =
 int usage_error(const std::string& reason) {
   std::fprintf(stderr, "sample_client: %s\n%s", reason.c_str(), kUsage);
   return 2;
+}
+
+// --domain's value: a DDS domain id, 0..232 (the ids whose ports fit Fast DDS's port mapping);
+// -1 for anything else (a sign, spaces, a fraction, a larger number).
+int domain_id_of(const std::string& text) {
+  if (text.empty() || text.size() > 3 || text.find_first_not_of("0123456789") != std::string::npos) return -1;
+  const int id = std::stoi(text);
+  return id <= 232 ? id : -1;
 }
 
 void print_frame(const panoptes::client::Frame& frame) {
@@ -57,9 +65,9 @@ int main(int argc, char** argv) {
     if (arg == "--profile") {
       options.profile_file = value;
     } else if (arg == "--domain") {
-      options.domain_id = static_cast<int>(std::strtol(value.c_str(), &end, 10));
-      if (*end != '\0' || options.domain_id < 0)
-        return usage_error("--domain " + value + ": not a domain id");
+      options.domain_id = domain_id_of(value);
+      if (options.domain_id < 0)
+        return usage_error("--domain " + value + ": not a DDS domain id (an integer 0..232)");
     } else if (arg == "--frames") {
       frames_wanted = std::strtol(value.c_str(), &end, 10);
       if (*end != '\0' || frames_wanted < 0) return usage_error("--frames " + value + ": not a count");

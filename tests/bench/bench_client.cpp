@@ -241,6 +241,9 @@ int run(int argc, char** argv) {
     if (publisher) return publish(rate_hz, duration_s, readers);
     return measure(rate_hz, duration_s, warmup_s, client_first,
                    std::filesystem::read_symlink("/proc/self/exe").string());
+  } catch (const panoptes::InputError& e) {  // e.g. the DDS profile
+    std::fprintf(stderr, "bench_client: %s\n", e.what());
+    return panoptes::kExitBadInput;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_client: %s\n", e.what());
     return panoptes::kExitFailure;

@@ -15,14 +15,16 @@
 //        hops with the pipeline's payloads between the pipeline's processes, at the same time as
 //        the pipeline, plus that frame's detection time.
 //   ratio_vs_dds_floor_p99 = p99(i) / p99(ii). TrackFrame (rt/panoptes/tracks) is a secondary row.
-// Every process runs in a DDS domain of the run's own (--domain), so other pipelines on the host
-// cannot mix in. All stamps are wall-clock ns on one host (camera nodes synchronise to the estimator's clock,
-// the same clock here, so the correction is microseconds).
+// Every process runs in the run's DDS domain: --domain, else $PANOPTES_DOMAIN when set (as every
+// program reads it; the test harness gives each test its own), else one of the run's own, so that
+// other pipelines on the host cannot mix in. All stamps are wall-clock ns on one host (camera nodes
+// synchronise to the estimator's clock, the same clock here, so the correction is microseconds).
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <deque>
 #include <exception>
 #include <filesystem>
@@ -244,6 +246,14 @@ Results join(const Recorder& recorded, TimeNs from_ns, TimeNs to_ns) {
   return results;
 }
 
+// The run's domain without --domain: $PANOPTES_DOMAIN when set (checked as every program checks it:
+// DomainError, exit 2, for a bad value), else one of the run's own.
+int run_domain() {
+  const char* variable = std::getenv(panoptes::dds::kDomainVariable);
+  if (variable != nullptr && *variable != '\0') return panoptes::dds::resolve_domain();
+  return 100 + static_cast<int>(getpid() % 100);
+}
+
 int run(int argc, char** argv) {
   const fs::path bin_dir = executable_path().parent_path();
   std::string scene_file = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/latency240.yaml";
@@ -254,7 +264,7 @@ int run(int argc, char** argv) {
   double duration_s = 10;
   double warmup_s = 2;
   double latency_window_ms = -1;  // < 0: not passed, the estimator's default
-  int domain = 100 + static_cast<int>(getpid() % 100);
+  int domain = -1;                // not given: $PANOPTES_DOMAIN when set, else 100 + pid % 100
   bool json_output = false;
   bool subscribe_tracks = true;
   CLI::App app{
@@ -282,9 +292,10 @@ int run(int argc, char** argv) {
   app.add_flag("!--no-tracks", subscribe_tracks,
                "do not subscribe to rt/panoptes/tracks (the secondary TrackFrame row)");
   app.add_option("--domain", domain,
-                 "DDS domain of the run (so that other pipelines on this host do not mix in)")
+                 "DDS domain of the run, for every process (so that other pipelines on this host do not "
+                 "mix in)")
       ->check(CLI::Range(0, panoptes::dds::kMaxDomainId))
-      ->default_str("100 + pid % 100 ($PANOPTES_DOMAIN is not read)");
+      ->default_str("$PANOPTES_DOMAIN when set (a bad value exits 2 naming it), else 100 + pid % 100");
   app.add_option("--dds-profile", profile, "Fast DDS profile for every process")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
@@ -299,6 +310,7 @@ int run(int argc, char** argv) {
                  "process) and one camera identity per camera id of the scene")
       ->check(CLI::ExistingDirectory);
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+  if (domain < 0) domain = run_domain();
   panoptes::install_stop_handlers();
   // The security options of a child with `identity`; none for a plain run.
   const auto security_argv = [&](const std::string& identity) {

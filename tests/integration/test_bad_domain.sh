@@ -5,7 +5,10 @@
 # the value, before any participant exists (the bus used to read it with atoi: "abc" joined domain
 # 0, and Fast DDS exited the process by itself for 300). The C++ client (panoptes_client_probe and
 # the examples) and the Python client throw naming it. A program in build/bin that links Fast DDS
-# or the client library but is missing from the table below fails the test. About 20 s.
+# or the client library but is missing from the table below fails the test.
+# A missing DDS profile (PANOPTES_DDS_PROFILE naming no file) is bad input too: every program in
+# the table that loads a Fast DDS profile exits 2 naming the file (it used to exit 1 in some and 2
+# in others: dds::DdsInputError, docs/architecture.md "Configuration and errors"). About 30 s.
 source "$(dirname "$0")/lib.sh"
 
 scene="$source_dir/deploy/scenes/demo.yaml"
@@ -35,16 +38,15 @@ programs=(
   "grab_objects|--duration 1"
   "bench_client|--duration 1"
   "bench_ros2_outputs|--seconds 1"
+  "bench_latency|--duration 2"
 )
-# Programs that open DDS in a domain of their own choosing and never read PANOPTES_DOMAIN.
-own_domain=(bench_latency)
 # Link Fast DDS through the recording library (its CDR and topic types) but open no participant:
 # they read and write MCAP files only.
 no_participant=(bench_recorder panoptes_mcap_probe)
 
-listed() {  # NAME: whether NAME is in the table or in own_domain
+listed() {  # NAME: whether NAME is in the table or opens no participant
   local entry
-  for entry in "${programs[@]}" "${own_domain[@]}" "${no_participant[@]}"; do [ "${entry%%|*}" = "$1" ] && return 0; done
+  for entry in "${programs[@]}" "${no_participant[@]}"; do [ "${entry%%|*}" = "$1" ] && return 0; done
   return 1
 }
 
@@ -58,6 +60,20 @@ for program in "$bin"/*; do
   listed "$name" && pass "$name is checked" || fail "$name opens DDS but is not in test_bad_domain.sh's table"
 done
 
+# expect_refused SETTING MESSAGE NAME ARGS...: NAME run with the environment SETTING (VAR=value)
+# exits 2 with exactly one stderr line that contains MESSAGE.
+expect_refused() {
+  local setting="$1" message="$2" name="$3"
+  shift 3
+  expect_exit 2 "$setting $name ${*:1:2}" -- env "$setting" timeout 30 "$bin/$name" "$@"
+  if [ "$(grep -cF -- "$message" "$work/last.err")" -eq 1 ]; then
+    pass "$name says '$message' once"
+  else
+    fail "$name: stderr lacks one line '$message'"
+    cat "$work/last.err"
+  fi
+}
+
 for entry in "${programs[@]}"; do
   name="${entry%%|*}"
   read -r -a args <<<"${entry#*|}"
@@ -66,15 +82,37 @@ for entry in "${programs[@]}"; do
     continue
   fi
   for bad in abc 300; do
-    expect_exit 2 "PANOPTES_DOMAIN=$bad $name ${args[*]:0:2}" -- \
-      env PANOPTES_DOMAIN="$bad" timeout 30 "$bin/$name" "${args[@]}"
-    message="PANOPTES_DOMAIN=$bad: not a DDS domain id (an integer 0..232)"
-    if [ "$(grep -cF -- "$message" "$work/last.err")" -eq 1 ]; then
-      pass "$name says '$message' once"
-    else
-      fail "$name: stderr lacks one line '$message'"
-      cat "$work/last.err"
-    fi
+    expect_refused "PANOPTES_DOMAIN=$bad" "PANOPTES_DOMAIN=$bad: not a DDS domain id (an integer 0..232)" \
+      "$name" "${args[@]}"
+  done
+done
+
+# A missing profile file, named by the variable every program reads.
+missing_profile="$work/missing-profile.xml"
+# Cyclone DDS: no Fast DDS profile to load. bench_latency: its --dds-profile (default the source
+# tree's loopback.xml, checked by its parser) for every process, so that its runs compare.
+no_fast_dds_profile=(panoptes_cyclone_probe bench_latency)
+for entry in "${programs[@]}"; do
+  name="${entry%%|*}"
+  read -r -a args <<<"${entry#*|}"
+  [ -x "$bin/$name" ] || continue
+  [[ " ${no_fast_dds_profile[*]} " == *" $name "* ]] && continue
+  expect_refused "PANOPTES_DDS_PROFILE=$missing_profile" "PANOPTES_DDS_PROFILE=$missing_profile: no such file" \
+    "$name" "${args[@]}"
+done
+
+# The client programs take --domain: only 0..232; a negative id is an error (the environment is
+# read when the option is absent), not a way to ask for $PANOPTES_DOMAIN.
+for name in sample_client lumipoint_board grab_objects panoptes_client_probe; do
+  [ -x "$bin/$name" ] || continue
+  for bad in -1 300; do
+    args=(--domain "$bad")
+    case "$name" in
+      lumipoint_board) args+=(--out "$work/board.ppm") ;;
+      panoptes_client_probe) args+=(--out "$work/client.jsonl") ;;
+    esac
+    expect_exit 2 "$name --domain $bad" -- timeout 30 "$bin/$name" "${args[@]}"
+    expect_stderr_contains "--domain" "$name --domain $bad names the option"
   done
 done
 

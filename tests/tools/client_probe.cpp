@@ -84,7 +84,9 @@ int run(int argc, char** argv) {
   app.option_defaults()->always_capture_default();
   app.add_option("--out", out_file, "JSONL file to write")->required();
   app.add_option("--duration", duration_s, "stop after this many seconds")->check(CLI::PositiveNumber);
-  app.add_option("--domain", options.domain_id, "DDS domain (-1: $PANOPTES_DOMAIN, else 0)");
+  app.add_option("--domain", options.domain_id, "DDS domain")
+      ->check(CLI::Range(0, 232))  // the client library's ids; a negative one is not "the environment"
+      ->default_str("$PANOPTES_DOMAIN, else 0");
   app.add_option("--dds-profile", options.profile_file, "Fast DDS XML profile (empty: the client's default)");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();

@@ -88,7 +88,7 @@ int run(int argc, char** argv) {
       out << line.dump() << '\n';
       out.flush();
     }
-  } catch (const panoptes::ConfigError& error) {  // e.g. $PANOPTES_DOMAIN=abc, DDS Security files
+  } catch (const panoptes::InputError& error) {  // e.g. $PANOPTES_DOMAIN=abc, the DDS profile, Security files
     std::fprintf(stderr, "panoptes_feature_probe: %s\n", error.what());
     return panoptes::kExitBadInput;
   } catch (const std::exception& error) {

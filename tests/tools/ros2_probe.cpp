@@ -162,7 +162,7 @@ int run(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       recorder.flush();
     }
-  } catch (const panoptes::ConfigError& error) {  // e.g. $PANOPTES_DOMAIN=abc, DDS Security files
+  } catch (const panoptes::InputError& error) {  // e.g. $PANOPTES_DOMAIN=abc, the DDS profile, Security files
     std::fprintf(stderr, "panoptes_ros2_probe: %s\n", error.what());
     return panoptes::kExitBadInput;
   } catch (const std::exception& error) {

@@ -96,7 +96,8 @@ int run(int argc, char** argv) {
     }
     std::fprintf(stderr, "panoptes_track_probe: %llu track frames received\n",
                  static_cast<unsigned long long>(tracks->received()));
-  } catch (const panoptes::ConfigError& error) {  // e.g. DDS Security files: refused before joining
+  } catch (
+      const panoptes::InputError& error) {  // e.g. the DDS profile or Security files: refused before joining
     std::fprintf(stderr, "panoptes_track_probe: %s\n", error.what());
     return panoptes::kExitBadInput;
   } catch (const std::exception& error) {

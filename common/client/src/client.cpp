@@ -15,6 +15,7 @@
 #include "frame_sequence.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/domain.h"
+#include "panoptes/errors.h"
 #include "panoptes/time.h"
 #include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
@@ -231,6 +232,9 @@ Client::Client(const ClientOptions& options) {
     impl->frame_reader = impl->bus->make_reader<msg::MocapFrame>(
         [impl](msg::MocapFrame&& message) { impl->on_frame(message); },
         options.reliable ? dds::Qos::kReliable : dds::Qos::kDefault);
+  } catch (const InputError& e) {  // the profile file or the security files: the options' fault
+    impl->bus.reset();
+    throw OptionError(std::string("panoptes client: ") + e.what());
   } catch (const std::exception& e) {
     impl->frame_reader.reset();
     impl->description_reader.reset();

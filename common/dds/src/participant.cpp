@@ -42,13 +42,13 @@ std::filesystem::path module_dir() {
 std::filesystem::path resolve_profile_file(const std::filesystem::path& requested) {
   if (!requested.empty()) {
     if (!std::filesystem::is_regular_file(requested)) {
-      throw DdsError("DDS profile " + requested.string() + ": no such file");
+      throw DdsInputError("DDS profile " + requested.string() + ": no such file");
     }
     return requested;
   }
   if (const char* env = std::getenv("PANOPTES_DDS_PROFILE"); env != nullptr && *env != '\0') {
     if (!std::filesystem::is_regular_file(env)) {
-      throw DdsError(std::string("PANOPTES_DDS_PROFILE=") + env + ": no such file");
+      throw DdsInputError(std::string("PANOPTES_DDS_PROFILE=") + env + ": no such file");
     }
     return env;
   }
@@ -65,7 +65,8 @@ std::filesystem::path resolve_profile_file(const std::filesystem::path& requeste
   }
   std::string tried;
   for (const auto& candidate : candidates) tried += " " + candidate.lexically_normal().string();
-  throw DdsError("no DDS profile given (--dds-profile or PANOPTES_DDS_PROFILE) and none found at:" + tried);
+  throw DdsInputError("no DDS profile given (--dds-profile or PANOPTES_DDS_PROFILE) and none found at:" +
+                      tried);
 }
 
 ReturnCode return_code_ok() {
@@ -159,12 +160,12 @@ BusCore::BusCore(const BusOptions& options) {
   profile_file_ = resolve_profile_file(options.profile_file);
   auto* factory = fdds::DomainParticipantFactory::get_instance();
   if (factory->load_XML_profiles_file(profile_file_.string()) != return_code_ok()) {
-    throw DdsError("DDS profile " + profile_file_.string() + ": cannot be parsed");
+    throw DdsInputError("DDS profile " + profile_file_.string() + ": cannot be parsed");
   }
   fdds::DomainParticipantQos qos;
   if (factory->get_participant_qos_from_profile(options.participant_profile, qos) != return_code_ok()) {
-    throw DdsError("DDS profile " + profile_file_.string() + ": no participant profile named '" +
-                   options.participant_profile + "'");
+    throw DdsInputError("DDS profile " + profile_file_.string() + ": no participant profile named '" +
+                        options.participant_profile + "'");
   }
   qos.name(options.participant_name);
   security_files_ = apply_security(options, profile_file_, qos);

@@ -32,7 +32,7 @@ ReturnCode return_code_ok();
 
 class BusCore {
  public:
-  // Throws DdsError, SecurityError or DomainError naming what is wrong.
+  // Throws DdsInputError (the profile), SecurityError, DomainError or DdsError naming what is wrong.
   explicit BusCore(const BusOptions& options);
   ~BusCore() { teardown(); }
   BusCore(const BusCore&) = delete;

@@ -12,7 +12,7 @@ namespace panoptes::dds {
 
 std::string scoped_partitions(const std::string& scope, bool reader) {
   if (scope.find(';') != std::string::npos)
-    throw DdsError("camera or client id '" + scope + "': ';' cannot name a DDS partition");
+    throw DdsInputError("camera or client id '" + scope + "': ';' cannot name a DDS partition");
   if (!scope.empty()) return scope;
   return reader ? std::string(";") + kEveryCamera : std::string(kEveryCamera);
 }

@@ -52,7 +52,7 @@ struct TimeSyncServer::Impl {
       std::unique_ptr<Writer<msg::TimeSync>> client_writer;
       try {
         client_writer = bus->make_writer<msg::TimeSync>(Qos::kDefault, {}, client_id);
-      } catch (const DdsError&) {
+      } catch (const DdsError&) {  // DDS refused the writer
         // Kept empty: this client's replies go to "*", and the writer is not tried again.
       }
       found = client_writers.emplace(client_id, std::move(client_writer)).first;

@@ -71,7 +71,7 @@ const RawTopicEntry& raw_entry_named(const std::string& topic) {
       if (entry.topic.topic == topic) return entry;
     }
   }
-  throw DdsError("'" + topic + "' is not a Panoptes topic (docs/protocol.md)");
+  throw DdsInputError("'" + topic + "' is not a Panoptes topic (docs/protocol.md)");
 }
 
 std::vector<RawTopic> panoptes_raw_topics() {

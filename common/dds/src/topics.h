@@ -226,7 +226,7 @@ struct RawTopicEntry {
   std::function<fdds::TopicDataType*()> make_real;
 };
 
-// The entry of `topic`: a recorded one or one only panoptes_rogue writes; DdsError for another name.
+// The entry of `topic`: a recorded one or one only panoptes_rogue writes; DdsInputError for another name.
 const RawTopicEntry& raw_entry_named(const std::string& topic);
 
 }  // namespace panoptes::dds

@@ -12,6 +12,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
 
+#include "panoptes/calib/triangulate.h"
 #include "panoptes/distortion.h"
 
 namespace panoptes::calib {

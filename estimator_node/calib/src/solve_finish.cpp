@@ -6,6 +6,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "panoptes/calib/triangulate.h"
 #include "panoptes/calib/world_frame.h"
 
 namespace panoptes::calib {

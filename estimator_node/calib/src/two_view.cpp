@@ -10,6 +10,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
+#include "panoptes/calib/triangulate.h"
+
 namespace panoptes::calib {
 
 namespace {

@@ -14,25 +14,8 @@
 #include "panoptes/calib/two_view.h"
 #include "panoptes/calib/view_graph.h"
 #include "panoptes/calib/wand_samples.h"
-#include "panoptes/triangulation.h"
 
 namespace panoptes::calib {
-
-int SolveResult::calibrated_count() const {
-  return static_cast<int>(std::count_if(cameras.begin(), cameras.end(),
-                                        [](const CameraResult& c) { return c.T_world_cam.has_value(); }));
-}
-
-std::optional<Eigen::Vector3d> triangulate(const std::vector<CameraModel>& models,
-                                           const std::vector<Eigen::Vector2d>& pixels) {
-  if (models.size() != pixels.size()) return std::nullopt;
-  std::vector<PixelObservation> observations;
-  observations.reserve(models.size());
-  for (std::size_t i = 0; i < models.size(); ++i) observations.push_back({&models[i], pixels[i]});
-  const auto triangulated = panoptes::triangulate(observations);
-  if (!triangulated) return std::nullopt;
-  return triangulated->point;
-}
 
 namespace {
 

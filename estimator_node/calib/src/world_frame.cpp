@@ -11,7 +11,8 @@
 
 #include <Eigen/Dense>
 
-#include "panoptes/calib/wand_solver.h"
+#include "panoptes/calib/solve_result.h"
+#include "panoptes/calib/triangulate.h"
 
 namespace panoptes::calib {
 

@@ -495,7 +495,7 @@ int run_calibrate(int argc, char** argv) {
     if (sub == "world") return run_world(argc - 1, argv + 1);
     if (sub == "capture") return run_calibrate_capture(argc - 1, argv + 1);
     if (sub == "marker") return panoptes::estimator::run_calibrate_marker(argc - 1, argv + 1);
-  } catch (const ConfigError& e) {  // a bad file, key or value, e.g. $PANOPTES_DOMAIN=abc
+  } catch (const InputError& e) {  // a bad file, key or value, e.g. $PANOPTES_DOMAIN=abc, the DDS profile
     std::fprintf(stderr, "estimator_node calibrate %s: %s\n", std::string(sub).c_str(), e.what());
     return kExitBadInput;
   } catch (const std::exception& e) {

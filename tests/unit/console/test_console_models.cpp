@@ -46,7 +46,12 @@ TEST(ConsoleEnums, KeepTheMessagesNumbersAndCheckUnknownOnes) {
   EXPECT_TRUE(known(ChainStatus::kAmbiguous));
   EXPECT_FALSE(known(static_cast<ChainStatus>(3)));
   EXPECT_FALSE(known(static_cast<ChainEventKind>(2)));
-  EXPECT_EQ(to_string(static_cast<TrackStatus>(9)), "coasting");  // as the page always read it
+  // A track's octet outside 0..2 reads as coasting, as the page always read it.
+  EXPECT_EQ(track_status_of(0), TrackStatus::kTentative);
+  EXPECT_EQ(track_status_of(1), TrackStatus::kConfirmed);
+  EXPECT_EQ(track_status_of(2), TrackStatus::kCoasting);
+  EXPECT_EQ(track_status_of(9), TrackStatus::kCoasting);
+  EXPECT_EQ(to_string(track_status_of(255)), "coasting");
 }
 
 TEST(ConsoleEnums, ACommandOutcomeIsThePagesCommandResult) {

@@ -354,7 +354,7 @@ int run_action(Action action, const CtlOptions& options) {
         break;
     }
     return publish_predictions(options);
-  } catch (const ConfigError&) {  // e.g. DDS Security files: refused before joining
+  } catch (const InputError&) {  // e.g. the DDS profile or Security files: refused before joining
     throw;
   } catch (const std::exception& error) {  // anything else is a run-time failure (exit 1)
     throw std::runtime_error(error.what());

@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "panoptes/cli.h"
+#include "panoptes/dds/bus.h"
 #include "panoptes/dds/domain.h"
 #include "panoptes/demo_run/demo_run.h"
 #include "panoptes/process.h"
@@ -43,8 +44,10 @@ int run(int argc, char** argv) {
       "--check", options.check,
       "exit 1 unless every marker meets the demo's targets (RMSE < 2 mm, >= 95% tracked, 0 ID switches)");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
-  // A bad $PANOPTES_DOMAIN is a usage error (exit 2) here, not an early exit of every child.
+  // A bad $PANOPTES_DOMAIN or DDS profile is a usage error (exit 2) here, not an early exit of
+  // every child.
   panoptes::dds::resolve_domain();
+  panoptes::dds::resolve_profile_file(options.dds_profile);
   panoptes::install_stop_handlers();
   return panoptes::demo_run::run_demo(options);
 }

@@ -315,5 +315,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return panoptes::run_program<dds::DdsError>("panoptes_record", [&] { return run(argc, argv); });
+  return panoptes::run_program("panoptes_record", [&] { return run(argc, argv); });
 }

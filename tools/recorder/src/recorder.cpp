@@ -28,7 +28,7 @@ Recorder::Recorder(dds::Bus& bus, RecorderOptions options) : bus_(bus), options_
   for (const auto& name : options_.topics) {
     bool known = false;
     for (const auto& raw : all) known = known || raw.topic == name;
-    if (!known) throw dds::DdsError("'" + name + "' is not a Panoptes topic (docs/protocol.md)");
+    if (!known) throw dds::DdsInputError("'" + name + "' is not a Panoptes topic (docs/protocol.md)");
   }
 }
 

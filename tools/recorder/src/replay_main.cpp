@@ -52,7 +52,9 @@ int run(int argc, char** argv) {
       }))
     return *code;
 
-  panoptes::dds::resolve_domain();  // a bad $PANOPTES_DOMAIN is refused before the recording is read
+  // A bad $PANOPTES_DOMAIN or DDS profile is refused before the recording is read.
+  panoptes::dds::resolve_domain();
+  panoptes::dds::resolve_profile_file(dds_profile);
   panoptes::install_stop_handlers();
   rec::Replayer replayer(input, options);
   for (const auto& problem : replayer.problems())

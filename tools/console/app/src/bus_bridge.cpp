@@ -81,7 +81,7 @@ TrackPoint track_of(const msg::Track& track) {
   std::copy(track.position().begin(), track.position().end(), out.position.begin());
   std::copy(track.velocity().begin(), track.velocity().end(), out.velocity.begin());
   std::copy(track.covariance().begin(), track.covariance().end(), out.covariance.begin());
-  out.status = static_cast<TrackStatus>(track.status());
+  out.status = track_status_of(track.status());
   out.cameras = track.cameras();
   return out;
 }
@@ -230,8 +230,10 @@ void BusBridge::poll() {
     std::unique_ptr<dds::Writer<msg::CameraCommand>> writer;
     try {
       writer = impl_->bus.make_writer<msg::CameraCommand>(dds::Qos::kDefault, {}, camera);
-    } catch (const dds::DdsError&) {
+    } catch (const dds::DdsInputError&) {
       // An id that cannot name a partition: its commands go out through the writer for every camera.
+    } catch (const dds::DdsError&) {
+      // Nor for a writer DDS refused.
     }
     impl_->camera_commands.emplace(camera, std::move(writer));
   }

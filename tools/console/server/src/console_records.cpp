@@ -29,18 +29,6 @@ std::string_view to_string(CommandResult result) {
   return "no_ack";
 }
 
-std::string_view to_string(TrackStatus status) {
-  switch (status) {
-    case TrackStatus::kTentative:
-      return "tentative";
-    case TrackStatus::kConfirmed:
-      return "confirmed";
-    case TrackStatus::kCoasting:
-      break;
-  }
-  return "coasting";
-}
-
 std::string_view to_string(ChainStatus status) {
   switch (status) {
     case ChainStatus::kTracking:

@@ -7,8 +7,8 @@
 //     for (const auto& body : result.frame.bodies) ...
 //
 // No DDS and no generated types in this header: it depends on the C++ standard library only.
-// Errors: the constructor throws ClientError (the bus cannot be opened: a bad profile, domain or
-// option), OptionError when an option or $PANOPTES_DOMAIN is invalid; body_description() throws
+// Errors: the constructor throws ClientError (the bus cannot be opened), OptionError when an
+// option, $PANOPTES_DOMAIN or the DDS profile is invalid; body_description() throws
 // UnknownBody. Nothing else throws: other failures are reported
 // in Status and Stats. Every member function is thread-safe.
 #pragma once
@@ -41,9 +41,11 @@ class PANOPTES_CLIENT_API ClientError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// An invalid option, or an invalid $PANOPTES_DOMAIN (not an integer 0..232): found before anything
-// is opened; what() names the option or variable and the value ("PANOPTES_DOMAIN=abc: not a DDS
-// domain id (an integer 0..232)"). A usage error: the Panoptes programs exit 2 on it.
+// An invalid option, an invalid $PANOPTES_DOMAIN (not an integer 0..232), a DDS profile or DDS
+// Security file that is missing or cannot be used: found before any participant exists; what()
+// names the option, variable or file ("PANOPTES_DOMAIN=abc: not a DDS domain id (an integer
+// 0..232)", "panoptes client: DDS profile x.xml: no such file"). A usage error: the Panoptes
+// programs exit 2 on it.
 class PANOPTES_CLIENT_API OptionError : public ClientError {
  public:
   using ClientError::ClientError;

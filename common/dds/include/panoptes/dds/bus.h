@@ -16,12 +16,24 @@
 #include <vector>
 
 #include "panoptes/dds/security.h"
+#include "panoptes/errors.h"
 
 namespace panoptes::dds {
 
+// DDS failed at run time: a participant, topic, reader or writer it would not create (exit 1,
+// panoptes/errors.h).
 class DdsError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+// What the bus was given cannot be used: the DDS profile file (missing, not a profile Fast DDS can
+// load, without the participant profile asked for), a topic name that is not a Panoptes topic, a
+// camera or client id that cannot name a partition. An InputError (exit 2); what() names the file
+// or the name. DDS Security files and the domain have their own (SecurityError, DomainError).
+class DdsInputError : public InputError {
+ public:
+  using InputError::InputError;
 };
 
 struct BusOptions {
@@ -40,7 +52,7 @@ struct BusOptions {
   SecurityOptions security;
 };
 
-// Resolves the profile file as BusOptions describes; throws DdsError naming what was tried.
+// Resolves the profile file as BusOptions describes; throws DdsInputError naming what was tried.
 std::filesystem::path resolve_profile_file(const std::filesystem::path& requested);
 
 enum class Qos {
@@ -144,6 +156,8 @@ bool names_one_partition(std::string_view id);
 
 class Bus {
  public:
+  // Throws DdsInputError (the profile), SecurityError, DomainError, or DdsError when DDS refuses
+  // the participant.
   explicit Bus(const BusOptions& options = {});
   ~Bus();
   Bus(const Bus&) = delete;
@@ -157,7 +171,8 @@ class Bus {
   // camera_command, predictions, time_sync): the camera (or time-sync client) id the writer speaks
   // for or writes to, the DDS partition it joins, which DDS Security permissions restrict
   // (docs/security.md, "Camera-scoped permissions"); the readers drop its samples that name another
-  // id ("id_outside_partition"). Empty or "*": every camera (the estimator, operators, tools).
+  // id ("id_outside_partition"). Empty or "*": every camera (the estimator, operators, tools). An id
+  // that cannot name a partition (with ';') is a DdsInputError; DDS refusing the writer a DdsError.
   template <class T>
   std::unique_ptr<Writer<T>> make_writer(Qos qos = Qos::kDefault, const std::string& topic_name = {},
                                          const std::string& scope = {});
@@ -175,7 +190,8 @@ class Bus {
 
   // Serialized samples of one of panoptes_raw_topics(). The reader asks for reliability where the
   // topic's writers offer it (so a recorder gets repairs) and for the history of transient-local
-  // topics; the writer has the QoS of make_writer. DdsError for a topic that is not a Panoptes topic.
+  // topics; the writer has the QoS of make_writer. DdsInputError for a topic that is not a Panoptes
+  // topic.
   std::unique_ptr<RawReader> make_raw_reader(const std::string& topic, RawReader::Callback on_sample);
   std::unique_ptr<RawWriter> make_raw_writer(const std::string& topic);
 

@@ -12,8 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "panoptes/calib/solve_options.h"
+#include "panoptes/calib/solve_stats.h"
 #include "panoptes/calib/wand_samples.h"
-#include "panoptes/calib/wand_solver.h"
 #include "panoptes/calibration.h"
 
 namespace panoptes::calib {

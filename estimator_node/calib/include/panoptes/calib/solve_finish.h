@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "panoptes/calib/bundle_adjustment.h"
-#include "panoptes/calib/wand_solver.h"
+#include "panoptes/calib/solve_result.h"
 
 namespace panoptes::calib {
 

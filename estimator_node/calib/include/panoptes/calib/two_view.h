@@ -13,8 +13,8 @@
 
 #include <Eigen/Core>
 
+#include "panoptes/calib/solve_stats.h"
 #include "panoptes/calib/wand_samples.h"
-#include "panoptes/calib/wand_solver.h"
 #include "panoptes/calibration.h"
 
 namespace panoptes::calib {

@@ -34,7 +34,7 @@ struct RecorderProgress {
 
 class Recorder {
  public:
-  // Throws DdsError for a topic that is not a Panoptes topic.
+  // Throws DdsInputError for a topic that is not a Panoptes topic.
   Recorder(dds::Bus& bus, RecorderOptions options);
   ~Recorder();
   Recorder(const Recorder&) = delete;

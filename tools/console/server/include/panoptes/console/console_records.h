@@ -14,6 +14,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "panoptes/records.h"
 #include "panoptes/time.h"
 
 namespace panoptes::console {
@@ -26,8 +27,6 @@ namespace panoptes::console {
 enum class Light : std::uint8_t { kGreen, kAmber, kRed };  // "green" | "amber" | "red"
 // What became of a command sent to a camera or a recorder.
 enum class CommandResult : std::uint8_t { kApplied, kRejected, kNoAck };  // "applied" | "rejected" | "no_ack"
-// A track's state (rt/panoptes/tracks, idl/panoptes.idl); in the snapshot's track arrays as its number.
-enum class TrackStatus : std::uint8_t { kTentative = 0, kConfirmed = 1, kCoasting = 2 };  // "tentative" | ...
 // A chain's state (idl/chains.idl).
 enum class ChainStatus : std::uint8_t { kTracking = 0, kAmbiguous = 1, kNotIdentified = 2 };
 // "tracking" | "ambiguous" | "not_identified"
@@ -35,7 +34,6 @@ enum class ChainEventKind : std::uint8_t { kGrab = 0, kRelease = 1 };  // "grab"
 
 std::string_view to_string(Light light);
 std::string_view to_string(CommandResult result);
-std::string_view to_string(TrackStatus status);  // any value other than 0 and 1 reads "coasting"
 std::string_view to_string(ChainStatus status);  // any value other than 0 and 1 reads "not_identified"
 std::string_view to_string(ChainEventKind kind);
 void to_json(nlohmann::json& out, Light light);
@@ -49,6 +47,14 @@ constexpr bool known(ChainStatus status) {
 }
 constexpr bool known(ChainEventKind kind) {
   return kind == ChainEventKind::kGrab || kind == ChainEventKind::kRelease;
+}
+// A track's state is the core's TrackStatus (panoptes/records.h, named by its to_string), in the
+// snapshot's track arrays as its number, which is the message's octet (idl/panoptes.idl: 0
+// tentative, 1 confirmed, 2 coasting). Any other octet reads as coasting, as the page always
+// showed it: a track the estimator did not call tentative or confirmed is not drawn as certain.
+constexpr TrackStatus track_status_of(std::uint8_t octet) {
+  return octet <= static_cast<std::uint8_t>(TrackStatus::kCoasting) ? static_cast<TrackStatus>(octet)
+                                                                    : TrackStatus::kCoasting;
 }
 
 struct Pose {

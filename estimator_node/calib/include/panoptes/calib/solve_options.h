@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: Apache-2.0
+// What the wand solver is asked to do (solve_wand_calibration, wand_solver.h); the bundle-adjustment
+// stage reads its part of it (bundle_adjustment.h).
+#pragma once
+
+#include <functional>
+#include <string>
+
+namespace panoptes::calib {
+
+struct SolveOptions {
+  bool refine_intrinsics = false;  // fx, fy, cx, cy and the five distortion terms per camera
+  // Without refine_intrinsics, intrinsics are refined automatically: when a camera's intrinsics
+  // are nominal (`nominal: true`) the focal length (fx, fy keeping their ratio), k1 and k2 of every
+  // camera; when, after the first adjustment, the raw-frame error is far above any centroid noise
+  // (median 2D error above intrinsics_suspect_px), fx, fy, cx, cy, k1 and k2. The tangential terms
+  // and k3 stay as given. docs/calibration.md, "Intrinsics: what is automatic".
+  bool auto_intrinsics = true;
+  double intrinsics_suspect_px = 0.5;
+  // A refined focal length more than this factor from the given one fails the camera: the given
+  // intrinsics were wrong (wrong pixel pitch, lens or image size), not just imprecise.
+  double max_focal_factor = 2.0;
+  bool time_offsets = false;    // one clock offset per camera (the reference camera's is 0)
+  double sample_rate_hz = 0.0;  // instants at which the wand is estimated; 0: fastest camera
+  double max_gap_frames = 1.6;  // a track is interpolated only between frames this close
+  int min_camera_frames = 20;   // identified wand frames a camera needs
+  int min_pair_samples = 25;    // common samples for a pairwise relative pose
+  int max_pair_samples = 400;   // subsampled for the five-point RANSAC
+  double ransac_threshold_px = 1.0;
+  double huber_px = 1.0;           // robust loss on reprojection residuals
+  double length_sigma_m = 0.0005;  // weight of the wand-length residuals
+  int max_iterations = 100;        // per bundle-adjustment pass
+  int threads = 2;
+  // Seed 003 §3.3.2 alternation (resect every camera on the triangulated trace, re-triangulate)
+  // run for this many iterations instead of the joint bundle adjustment; 0: bundle adjustment.
+  int alternation_iterations = 0;
+  std::string reference_camera;  // gauge: its pose is the initial world frame; "" = best-connected
+  std::function<void(const std::string&)> progress;  // long steps report here
+};
+
+}  // namespace panoptes::calib
