@@ -7,6 +7,7 @@
 #include <mutex>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "panoptes/dds/convert.h"
 #include "panoptes/time.h"
@@ -224,9 +225,17 @@ BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_uniqu
 BusBridge::~BusBridge() = default;
 
 void BusBridge::poll() {
-  std::lock_guard lock(impl_->camera_mutex);
-  for (const std::string& camera : impl_->cameras_seen) {
-    if (impl_->camera_commands.count(camera) != 0) continue;
+  // The writers are made without camera_mutex held: a DDS listener thread takes that lock (saw())
+  // while Fast DDS holds its own locks, and making a writer takes Fast DDS's locks, so holding
+  // camera_mutex here can deadlock this thread with the listener (issue 37: the console's watcher
+  // thread stopped as six cameras appeared, and the calibration page froze).
+  std::vector<std::string> wanted;
+  {
+    std::lock_guard lock(impl_->camera_mutex);
+    for (const std::string& camera : impl_->cameras_seen)
+      if (impl_->camera_commands.count(camera) == 0) wanted.push_back(camera);
+  }
+  for (const std::string& camera : wanted) {
     std::unique_ptr<dds::Writer<msg::CameraCommand>> writer;
     try {
       writer = impl_->bus.make_writer<msg::CameraCommand>(dds::Qos::kDefault, {}, camera);
@@ -235,6 +244,7 @@ void BusBridge::poll() {
     } catch (const dds::DdsError&) {
       // Nor for a writer DDS refused.
     }
+    std::lock_guard lock(impl_->camera_mutex);
     impl_->camera_commands.emplace(camera, std::move(writer));
   }
 }
