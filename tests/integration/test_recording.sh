@@ -9,12 +9,14 @@
 #     recovered, by our reader and by @mcap/core;
 #   C is driven by DDS commands (start, stop, quit);
 #   D runs under a 300 KiB file size limit: it stops with a clear error and a valid file.
+# Foxglove's own decoders (@foxglove/ros2idl-parser, @foxglove/rosmsg2-serialization) read every
+# channel of A as its schema's type, and what they decode is what was published (issue 32).
 # Then panoptes_replay publishes A's features into a live estimator (same tracks as the original
 # run), and at --rate 10 says whether it kept up. Bad input: empty and foreign files.
 source "$(dirname "$0")/lib.sh"
 check_mcap() { node "$source_dir/tests/mcap/check_mcap.mjs" "$@"; }
 json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
-if [ ! -d "$source_dir/tests/mcap/node_modules/@mcap/core" ]; then
+if [ ! -d "$source_dir/tests/mcap/node_modules/@mcap/core" ] || [ ! -d "$source_dir/tests/mcap/node_modules/@foxglove/rosmsg2-serialization" ]; then
   if [ -n "${CI:-}" ]; then fail "tests/mcap/node_modules missing (deploy/install-deps.sh runs npm ci)"; finish; fi
   echo "SKIP: tests/mcap/node_modules missing (run npm ci in tests/mcap)"
   exit 77
@@ -87,6 +89,21 @@ if [ "$(wc -l <"$work/tracks_rec.jsonl")" -gt 3000 ] && cmp -s "$work/tracks_rec
   pass "estimator_node --in-recording: $(wc -l <"$work/tracks_rec.jsonl") track lines bit-identical to --in-features"
 else
   fail "--in-recording tracks differ from the JSONL path"; tail -3 "$work/est_rec.log"
+fi
+
+# Foxglove's decoders: every channel of A read as its schema's type, every message decoded, and the
+# fields equal to what was published (tests/tools/check_foxglove_decode.py says what is compared).
+if node "$source_dir/tests/mcap/decode_ros2.mjs" "$work/A.mcap" --dump-dir "$work/A_foxglove" >"$work/A_foxglove.json"; then
+  pass "Foxglove's ros2idl parser and CDR reader decode all $(json "$work/A_foxglove.json" "len(d['channels'])") channels of A as their schemas' types ($(json "$work/A_foxglove.json" "sum(c['decoded'] for c in d['channels'])") messages)"
+else
+  fail "Foxglove's decoders on A: $(json "$work/A_foxglove.json" "'; '.join(c['topic'] + ' ' + ', '.join(c['errors']) for c in d.get('channels', []) if c['errors']) or d.get('error')")"
+fi
+if /usr/bin/python3 "$source_dir/tests/tools/check_foxglove_decode.py" "$work/A_foxglove" --out-tracks "$work/logs/tracks.jsonl" \
+  --features "$work/A_features.jsonl" --features-published "$published" --frames-published "$frames" \
+  --calibration "$work/logs/calibration.yaml" --cameras cam0 cam1 cam2 cam3 --markers 3 >"$work/A_foxglove_check.txt"; then
+  pass "Foxglove-decoded fields = what was published: $(grep -c '^ok' "$work/A_foxglove_check.txt") topics compared"
+else
+  fail "Foxglove-decoded fields differ from what was published"; cat "$work/A_foxglove_check.txt"
 fi
 
 # The filter tuner reads the recording directly (docs/recording.md, "Tune the filter").

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 namespace panoptes::recorder {
@@ -22,43 +23,58 @@ std::optional<std::string> dds_topic_name(const std::string& ros_topic) {
 
 namespace {
 
+constexpr const char* kPackagePrefix = "panoptes/msg/";
+constexpr const char* kScope = "panoptes::msg::";
+
 struct Definition {
   std::size_t order = 0;
-  std::string text;                   // annotations, "struct Name {" ... "};"
-  std::set<std::string> identifiers;  // every word of the body
+  std::vector<std::string> lines;     // annotations, "struct Name {" ... "};"
+  std::set<std::string> identifiers;  // every word of the body's code (comments left out)
 };
+
+bool is_word_char(char ch) {
+  return std::isalnum(static_cast<unsigned char>(ch)) != 0 || ch == '_';
+}
+
+// The words of a line's code, before any "//" comment.
+std::vector<std::string> code_words(const std::string& line) {
+  std::vector<std::string> words;
+  std::string word;
+  for (const char ch : line.substr(0, line.find("//")) + " ") {
+    if (is_word_char(ch)) {
+      word += ch;
+    } else if (!word.empty()) {
+      words.push_back(word);
+      word.clear();
+    }
+  }
+  return words;
+}
 
 // The structs of module panoptes::msg in idl/panoptes.idl, by name.
 std::map<std::string, Definition> idl_structs(const std::string& idl) {
   std::map<std::string, Definition> structs;
   std::istringstream lines(idl);
   std::string line;
-  std::string annotations;
+  std::vector<std::string> annotations;
   Definition* open = nullptr;
   while (std::getline(lines, line)) {
     if (open != nullptr) {
-      open->text += line + "\n";
-      std::string word;
-      for (const char ch : line + " ") {
-        if (std::isalnum(static_cast<unsigned char>(ch)) != 0 || ch == '_') {
-          word += ch;
-        } else if (!word.empty()) {
-          open->identifiers.insert(word);
-          word.clear();
-        }
-      }
+      open->lines.push_back(line);
+      for (auto& word : code_words(line)) open->identifiers.insert(std::move(word));
       if (line.rfind("};", 0) == 0) open = nullptr;
       continue;
     }
     if (line.rfind('@', 0) == 0) {
-      annotations += line + "\n";
+      annotations.push_back(line);
     } else if (line.rfind("struct ", 0) == 0) {
       std::istringstream words(line.substr(7));
       std::string name;
       words >> name;
       open = &structs[name];
       open->order = structs.size();
-      open->text = annotations + line + "\n";
+      open->lines = annotations;
+      open->lines.push_back(line);
       annotations.clear();
     } else if (!line.empty() && line.rfind("//", 0) != 0) {
       annotations.clear();
@@ -67,13 +83,31 @@ std::map<std::string, Definition> idl_structs(const std::string& idl) {
   return structs;
 }
 
-}  // namespace
+// A body line with every reference to another struct of the module written in full
+// ("Pose3 pose;" -> "panoptes::msg::Pose3 pose;"), as rosidl writes them; comments unchanged.
+std::string qualified(const std::string& line, const std::map<std::string, Definition>& structs) {
+  const std::size_t comment = std::min(line.find("//"), line.size());
+  std::string out;
+  std::size_t i = 0;
+  while (i < comment) {
+    if (!is_word_char(line[i])) {
+      out += line[i++];
+      continue;
+    }
+    std::size_t end = i;
+    while (end < comment && is_word_char(line[end])) ++end;
+    const std::string word = line.substr(i, end - i);
+    const bool scoped = i >= 2 && line.compare(i - 2, 2, "::") == 0;
+    if (!scoped && structs.count(word) != 0) out += kScope;
+    out += word;
+    i = end;
+  }
+  return out + line.substr(comment);
+}
 
-std::string ros2idl_schema(const std::string& ros_type) {
-  const std::string prefix = "panoptes/msg/";
-  const auto structs = idl_structs(panoptes_idl_text());
-  const std::string name = ros_type.rfind(prefix, 0) == 0 ? ros_type.substr(prefix.size()) : ros_type;
-  if (structs.count(name) == 0) return panoptes_idl_text();
+// The dependencies of `name`, transitively, in the order idl/panoptes.idl defines them.
+std::vector<std::string> dependencies(const std::string& name,
+                                      const std::map<std::string, Definition>& structs) {
   std::set<std::string> needed;
   std::vector<std::string> todo{name};
   while (!todo.empty()) {
@@ -84,13 +118,36 @@ std::string ros2idl_schema(const std::string& ros_type) {
       if (word != next && structs.count(word) != 0) todo.push_back(word);
     }
   }
-  std::vector<const Definition*> ordered;
-  ordered.reserve(needed.size());
-  for (const auto& each : needed) ordered.push_back(&structs.at(each));
-  std::sort(ordered.begin(), ordered.end(), [](const auto* a, const auto* b) { return a->order < b->order; });
-  std::string text = "module panoptes {\nmodule msg {\n\n";
-  for (const auto* definition : ordered) text += definition->text + "\n";
+  needed.erase(name);
+  std::vector<std::string> ordered(needed.begin(), needed.end());
+  std::sort(ordered.begin(), ordered.end(),
+            [&](const auto& a, const auto& b) { return structs.at(a).order < structs.at(b).order; });
+  return ordered;
+}
+
+// One section of a ros2idl schema: the delimiter, then the struct inside its modules.
+std::string idl_section(const std::string& name, const std::map<std::string, Definition>& structs) {
+  std::string text =
+      std::string(80, '=') + "\nIDL: " + kPackagePrefix + name + "\nmodule panoptes {\nmodule msg {\n";
+  for (const auto& line : structs.at(name).lines) {
+    // The struct's own line keeps its short name; its members name other structs in full.
+    text += (line.rfind("struct ", 0) == 0 ? line : qualified(line, structs)) + "\n";
+  }
   return text + "};  // module msg\n};  // module panoptes\n";
+}
+
+}  // namespace
+
+std::string ros2idl_schema(const std::string& ros_type) {
+  const auto structs = idl_structs(panoptes_idl_text());
+  const std::string prefix = kPackagePrefix;
+  const std::string name = ros_type.rfind(prefix, 0) == 0 ? ros_type.substr(prefix.size()) : "";
+  if (structs.count(name) == 0) {
+    throw std::invalid_argument("ros2idl_schema: " + ros_type + " is not a type of idl/panoptes.idl");
+  }
+  std::string text = idl_section(name, structs);
+  for (const auto& dependency : dependencies(name, structs)) text += idl_section(dependency, structs);
+  return text;
 }
 
 }  // namespace panoptes::recorder

@@ -17,8 +17,12 @@ std::string ros_topic_name(const std::string& dds_topic);
 std::optional<std::string> dds_topic_name(const std::string& ros_topic);
 // idl/panoptes.idl as it was at build time.
 const char* panoptes_idl_text();
-// The ros2idl schema of "panoptes/msg/<Type>": its struct and those it uses, from idl/panoptes.idl,
-// inside their modules (the whole file for a type it does not define).
+// The ros2idl schema of "panoptes/msg/<Type>" as rosbag2's message-definition encoding has it: one
+// section per struct, the type's own first, then every struct it uses (transitively) in the order of
+// idl/panoptes.idl. Each section is a line of 80 '=', a line "IDL: panoptes/msg/<Name>", and the
+// struct inside "module panoptes { module msg { ... }; };" with references to other structs written
+// in full (panoptes::msg::Pose3). Readers such as Foxglove decode with the first section's struct.
+// Throws std::invalid_argument for a type idl/panoptes.idl does not define.
 std::string ros2idl_schema(const std::string& ros_type);
 
 }  // namespace panoptes::recorder
