@@ -327,9 +327,13 @@ void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
 void LiveEstimator::expire_idle_tracks(TimeNs now) {
   // The tracker's time only moves with frames; without this, the last tracks stayed confirmed in
   // the status and the console for as long as the estimator ran (issue 32). The wall time since
-  // the last frame is added to the newest stamp, so camera clocks need not match this one.
+  // the last frame is added to the newest stamp, so camera clocks need not match this one. A frame
+  // up to the rewind horizon late is still applied, so a pause in delivery that short (a loaded
+  // machine, a camera node starved for a moment) must not delete tracks the late frames keep alive:
+  // they would come back under new ids (issue 32).
+  const auto& tracker = session_.config().tracker;
   const TimeNs idle_ns = now - last_frame_wall_ns_;
-  if (last_frame_wall_ns_ == 0 || idle_ns <= session_.config().tracker.delete_after_ns) return;
+  if (last_frame_wall_ns_ == 0 || idle_ns <= tracker.delete_after_ns + tracker.rewind_horizon_ns) return;
   if (tracker_.live_track_count() == 0) return;
   if (const std::size_t deleted = tracker_.expire(tracker_.last_stamp_ns() + idle_ns);
       deleted > 0 && !options_.quiet)

@@ -108,6 +108,29 @@ TEST(CameraModel, ToJsonAddsTheSlowPartsAndTheUsageWhenFull) {
   EXPECT_EQ(cameras.to_json(kT0, true, {})[0]["geometry"]["width"], 320);
 }
 
+TEST(CameraModel, ReceivedRateFallsToZeroWhenFramesStopAndStatusHasAnAge) {
+  CameraModel cameras{StateOptions{}};
+  cameras.on_info("cam0", vga_info());
+  TimeNs t = kT0;
+  for (std::uint64_t frame = 0; frame <= 120; ++frame, t += 10 * kMs)
+    cameras.on_features("cam0", {frame, t, {}}, t);
+  const TimeNs last = t - 10 * kMs;
+  EXPECT_NEAR(cameras.to_json(last, false, {})[0]["rx_fps"].get<double>(), 100.0, 0.5);
+  CameraStatusRecord status;
+  status.fps = 100;
+  cameras.on_status("cam0", status, last);
+  EXPECT_DOUBLE_EQ(cameras.to_json(last + 400 * kMs, true, {})[0]["status_age_s"].get<double>(), 0.4);
+  // Frames stopped: the last whole second's 100 fps is no longer what is received.
+  EXPECT_EQ(cameras.to_json(last + 1500 * kMs, false, {})[0]["rx_fps"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(cameras.to_json(last + 16000 * kMs, true, {})[0]["status_age_s"].get<double>(), 16.0);
+  // A slow camera: the window its first frame opened is still open after 1.5 s with one more
+  // frame in it, and says so before a frame closes it.
+  cameras.on_features("cam1", {1, kT0, {}}, kT0);
+  cameras.on_features("cam1", {2, kT0 + 900 * kMs, {}}, kT0 + 900 * kMs);
+  EXPECT_NEAR(cameras.to_json(kT0 + 1500 * kMs, false, {})[1]["rx_fps"].get<double>(), 0.7, 0.05);
+  EXPECT_EQ(cameras.to_json(kT0 + 1950 * kMs, false, {})[1]["rx_fps"].get<double>(), 0.0);
+}
+
 TEST(CameraModel, ABadPreviewIsRefusedAndKeepsThePreviousOne) {
   CameraModel cameras{StateOptions{}};
   EXPECT_TRUE(cameras.on_preview("cam0", kT0, 2, 1, "ab"));

@@ -10,6 +10,8 @@
 #include <map>
 #include <thread>
 
+#include <zlib.h>
+
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -67,12 +69,13 @@ class ConsoleServerTest : public ::testing::Test {
     std::filesystem::remove_all(web_root_);
   }
 
-  http::response<http::string_body> get(const std::string& target) {
+  http::response<http::string_body> get(const std::string& target, const std::string& accept_encoding = {}) {
     net::io_context io;
     beast::tcp_stream stream(io);
     stream.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), server_->port()));
     http::request<http::string_body> request(http::verb::get, target, 11);
     request.set(http::field::host, "127.0.0.1");
+    if (!accept_encoding.empty()) request.set(http::field::accept_encoding, accept_encoding);
     http::write(stream, request);
     beast::flat_buffer buffer;
     http::response<http::string_body> response;
@@ -135,6 +138,43 @@ TEST_F(ConsoleServerTest, EveryRequestNeedsTheToken) {
   auto ws = open_socket(io, "/ws?token=" + kToken);
   EXPECT_EQ(read_json(*ws)["type"], "hello");
   EXPECT_GE(server_->counters()["clients_refused"].get<int>(), 2);
+}
+
+// zlib's own inflate of a gzip member: what a browser does with Content-Encoding: gzip.
+std::string gunzip(const std::string& gz) {
+  z_stream stream{};
+  EXPECT_EQ(inflateInit2(&stream, 15 + 16), Z_OK);
+  std::string out(1 << 20, '\0');
+  stream.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(gz.data()));  // NOLINT
+  stream.avail_in = static_cast<uInt>(gz.size());
+  stream.next_out = reinterpret_cast<Bytef*>(out.data());
+  stream.avail_out = static_cast<uInt>(out.size());
+  EXPECT_EQ(inflate(&stream, Z_FINISH), Z_STREAM_END);
+  out.resize(stream.total_out);
+  inflateEnd(&stream);
+  return out;
+}
+
+TEST_F(ConsoleServerTest, LargeFilesAreGzippedForBrowsersThatAcceptIt) {
+  std::string library;
+  for (int i = 0; i < 4000; ++i)
+    library += "export const value" + std::to_string(i) + " = " + std::to_string(i * 7) + ";\n";
+  std::ofstream(web_root_ / "node_modules/three/build/three.module.js") << library;
+  start();
+  const std::string target = "/vendor/three.module.js?token=" + kToken;
+  const auto plain = get(target);
+  EXPECT_EQ(plain.body(), library);
+  EXPECT_EQ(plain[http::field::content_encoding], "");
+  for (const std::string accept : {"gzip", "gzip, deflate, br", "br;q=1.0, gzip;q=0.8"}) {
+    const auto gz = get(target, accept);
+    EXPECT_EQ(gz[http::field::content_encoding], "gzip") << accept;
+    EXPECT_LT(gz.body().size(), library.size() / 4) << accept;
+    EXPECT_EQ(gunzip(gz.body()), library) << accept;
+  }
+  EXPECT_EQ(get(target, "gzip;q=0").body(), library);
+  EXPECT_EQ(get(target, "br").body(), library);
+  // Small files are sent as they are.
+  EXPECT_EQ(get("/app.js?token=" + kToken, "gzip")[http::field::content_encoding], "");
 }
 
 TEST_F(ConsoleServerTest, CommandsPassTheGateOrAreRejectedAndCounted) {

@@ -4,8 +4,10 @@
 // a body; a tracking and an ambiguous chain with a grab; bad chain samples; a recorder that
 // recorded and records again; a capture's coverage; commands applied, rejected and unanswered).
 // data/snapshot_golden.txt is what the single-mutex ConsoleState (before the per-area models)
-// wrote for the same calls, plus the body details' `stamp_ns` (added for issue 37): the page and
-// /api/state see no other change.
+// wrote for the same calls, plus the body details' `stamp_ns` (added for issue 37) and, for issue
+// 32, each camera's `status_age_s` and a received rate that counts frame intervals (100 fps for
+// 101 frames 10 ms apart, where the first frame was counted too): the page and /api/state see no
+// other change.
 #include <gtest/gtest.h>
 
 #include <fstream>

@@ -105,8 +105,10 @@ function cardFor(camera) {
     const input = card.querySelector(`input.${cls}`);
     const output = input.nextElementSibling;
     output.textContent = input.value;
-    input.addEventListener('input', () => { output.textContent = input.value; });
-    input.addEventListener('change', () => send(card, command, [Number(input.value)]));
+    // While the user moves a slider (and for a while after, until the camera's status reports the
+    // new value) the status does not move it back.
+    input.addEventListener('input', () => { output.textContent = input.value; input.touchedAt = performance.now(); });
+    input.addEventListener('change', () => { input.touchedAt = performance.now(); send(card, command, [Number(input.value)]); });
   }
   for (const command of ['clear_masks', 'capture_background', 'clear_background', 'restart']) {
     card.querySelector(`button.${command}`).addEventListener('click', () => {
@@ -199,19 +201,74 @@ function updateCard(camera) {
   card.querySelector('.reason').textContent = camera.health.reason;
   if (camera.status) card.status = camera.status;
   if (camera.usage) card.usage = camera.usage;
-  const status = card.status || {};
+  if (camera.status_age_s !== undefined) card.statusAge = camera.status_age_s;
   const usage = card.usage || {};
   const now = performance.now();
   if (card.figuresAt && now - card.figuresAt < 500) { finishCard(card, camera); return; }
   card.figuresAt = now;
-  card.querySelector('.figures').textContent =
-    `${fixed(status.fps, 1)} fps (received ${fixed(camera.rx_fps, 1)}) · drops ${status.drops_queue ?? '—'}+${status.drops_source ?? '—'}` +
-    ` · detect p99 ${fixed(status.detect_p99_ms, 2)} ms · latency ${fixed(camera.latency_ms, 1)} ms` +
-    ` · clock ${fixed(status.clock_offset_ms, 2)} ms ${fixed(status.clock_drift_ppm, 1)} ppm` +
-    ` · used ${usage.utilisation === undefined ? '—' : (100 * usage.utilisation).toFixed(0) + '%'}` +
-    ` (p99 ${fixed(usage.latency_p99_ms, 1)} ms) · threshold ${status.threshold ?? '—'}` +
-    (status.last_error ? ` · last error: ${status.last_error}` : '');
+  // A camera's own figures come with its status, once a second: older than 3 s they are not
+  // what the camera does now and are not shown as if they were.
+  const stale = card.statusAge !== undefined && card.statusAge > 3;
+  const status = stale ? {} : card.status || {};
+  if (!stale) syncSliders(card, status);
+  const figures = card.querySelector('.figures');
+  figures.replaceChildren(...cardFigures(camera, status, usage).map(([text, help]) => {
+    const span = document.createElement('span');
+    span.textContent = text;
+    span.title = help;
+    return span;
+  }));
+  if (stale) figures.prepend(Object.assign(document.createElement('b'), { className: 'stale', textContent: `status ${card.statusAge.toFixed(0)} s old · `, title: figureHelp.stale[1] }));
   finishCard(card, camera);
+}
+
+// What each figure on a camera card means: its tooltip, and the legend under the page.
+const figureHelp = {
+  fps: ['fps (received)', 'frames per second the camera detects, and that reach this console over DDS'],
+  drops: ['drops a+b', 'frames the camera node dropped since it started: because its detector queue was full + because the source (driver) lost them'],
+  detect: ['detect p99', "99th percentile of the camera node's threshold-and-centroid time per frame"],
+  latency: ['latency', "a frame's arrival at this console minus its exposure stamp, smoothed"],
+  clock: ['clock', "the camera clock's offset (ms) and drift (ppm) against the estimator's time base"],
+  used: ['used (p99)', "share of this camera's frames the estimator used in its update (the rest came too late or were dropped), and the 99th percentile of their stamp-to-update latency"],
+  threshold: ['threshold', 'the blob threshold the camera reports using (0-255)'],
+  error: ['last error', "the camera node's last error"],
+  stale: ['status N s old', "the camera's own figures are older than 3 s (a stopped or unreachable node) and are not shown"],
+};
+
+function cardFigures(camera, status, usage) {
+  const used = usage.utilisation === undefined ? '—' : (100 * usage.utilisation).toFixed(0) + '%';
+  return [
+    [`${fixed(status.fps, 1)} fps (received ${fixed(camera.rx_fps, 1)})`, 'fps'],
+    [` · drops ${status.drops_queue ?? '—'}+${status.drops_source ?? '—'}`, 'drops'],
+    [` · detect p99 ${fixed(status.detect_p99_ms, 2)} ms`, 'detect'],
+    [` · latency ${fixed(camera.latency_ms, 1)} ms`, 'latency'],
+    [` · clock ${fixed(status.clock_offset_ms, 2)} ms ${fixed(status.clock_drift_ppm, 1)} ppm`, 'clock'],
+    [` · used ${used} (p99 ${fixed(usage.latency_p99_ms, 1)} ms)`, 'used'],
+    [` · threshold ${status.threshold ?? '—'}`, 'threshold'],
+    ...(status.last_error ? [[` · last error: ${status.last_error}`, 'error']] : []),
+  ].map(([text, key]) => [text, figureHelp[key][1]]);
+}
+
+function fillLegend() {
+  const list = document.querySelector('#legend dl');
+  for (const [term, help] of Object.values(figureHelp)) {
+    list.append(Object.assign(document.createElement('dt'), { textContent: term }),
+                Object.assign(document.createElement('dd'), { textContent: help }));
+  }
+}
+fillLegend();
+
+// The sliders show the camera's own settings, except one the user moved in the last 3 s.
+function syncSliders(card, status) {
+  for (const [cls, value] of [['threshold', status.threshold], ['exposure', status.exposure_us], ['gain', status.gain_db]]) {
+    if (value === undefined || value === null) continue;
+    const input = card.querySelector(`input.${cls}`);
+    if (document.activeElement === input || (input.touchedAt && performance.now() - input.touchedAt < 3000)) continue;
+    if (Number(input.value) !== Number(value)) {
+      input.value = String(value);
+      input.nextElementSibling.textContent = input.value;
+    }
+  }
 }
 
 function finishCard(card, camera) {
@@ -316,9 +373,12 @@ scene.add(new THREE.AxesHelper(0.5));  // the world frame
 const overlay = document.getElementById('overlay');
 const labels = new Set();
 let labelsDirty = true;  // redrawn when something moved, not every frame
-function label(text, color = '#dde3ea') {
+// A label of higher priority is drawn first; one that would overlap a label already drawn is left
+// out (issue 32: track ids were drawn over the body names).
+const labelPriority = { track: 0, camera: 1, body: 2, chain: 2 };
+function label(text, color = '#dde3ea', priority = labelPriority.camera) {
   const object = new THREE.Object3D();
-  object.userData.label = { text, color };
+  object.userData.label = { text, color, priority };
   labels.add(object);
   return object;
 }
@@ -332,12 +392,25 @@ function drawLabels() {
   const context = overlay.getContext('2d');
   context.clearRect(0, 0, width, height);
   context.font = '12px sans-serif';
-  for (const object of labels) {
-    if (!object.parent || !object.visible) continue;
+  context.lineWidth = 3;
+  context.strokeStyle = 'rgba(17, 20, 24, 0.85)';  // a dark outline keeps text readable over points
+  const ordered = [...labels].filter((object) => object.parent && object.visible)
+    .sort((a, b) => b.userData.label.priority - a.userData.label.priority);
+  const drawn = [];
+  page.labelsHidden = 0;
+  for (const object of ordered) {
     object.getWorldPosition(projected).project(camera3d);
     if (projected.z > 1 || Math.abs(projected.x) > 1 || Math.abs(projected.y) > 1) continue;
-    context.fillStyle = object.userData.label.color;
-    context.fillText(object.userData.label.text, (projected.x + 1) * width / 2 + 4, (1 - projected.y) * height / 2 - 4);
+    const { text, color } = object.userData.label;
+    const box = { x: (projected.x + 1) * width / 2 + 4, y: (1 - projected.y) * height / 2 - 4, w: context.measureText(text).width, h: 12 };
+    if (drawn.some((d) => box.x < d.x + d.w && d.x < box.x + box.w && box.y - box.h < d.y && d.y - d.h < box.y)) {
+      ++page.labelsHidden;
+      continue;
+    }
+    drawn.push(box);
+    context.strokeText(text, box.x, box.y);
+    context.fillStyle = color;
+    context.fillText(text, box.x, box.y);
   }
 }
 
@@ -372,7 +445,8 @@ function updateFrustum(camera) {
 const trailLength = 20;
 const trails = new Map();  // id -> { points: [Vector3], label, seen }
 const trackGeometry = new THREE.BufferGeometry();
-const trackPoints = new THREE.Points(trackGeometry, new THREE.PointsMaterial({ color: 0xffd166, size: 0.06 }));
+// A fixed size on screen: 6 cm attenuated by distance was 1-2 px from across a room (issue 32).
+const trackPoints = new THREE.Points(trackGeometry, new THREE.PointsMaterial({ color: 0xffd166, size: 7, sizeAttenuation: false }));
 trackPoints.frustumCulled = false;  // changes every update: no bounding sphere to keep
 scene.add(trackPoints);
 const trailGeometry = new THREE.BufferGeometry();
@@ -389,7 +463,7 @@ function updateTracks(tracks) {
     seen.add(id);
     let trail = trails.get(id);
     if (!trail) {
-      trail = { points: [], label: label(String(id), '#ffd166') };
+      trail = { points: [], label: label(String(id), '#ffd166', labelPriority.track) };
       scene.add(trail.label);
       trails.set(id, trail);
     }
@@ -424,7 +498,7 @@ function updateBodies(list) {
     if (!object) {
       object = new THREE.Group();
       object.add(new THREE.AxesHelper(0.4));
-      const name = label(body.name, '#ffffff');
+      const name = label(body.name, '#ffffff', labelPriority.body);
       name.position.set(0, 0, 0.2);
       object.add(name);
       scene.add(object);
@@ -457,7 +531,7 @@ function chainObject(name) {
     invalid: points(chainColours.invalid, 4, 11),
     predicted: points(chainColours.predicted, 8, 12),
     tip: points(chainColours.tip, 10, 13),
-    label: label(name, '#4dd0e1'),
+    label: label(name, '#4dd0e1', labelPriority.chain),
   };
   chain.group.add(chain.bones, chain.ahead, chain.valid, chain.invalid, chain.predicted, chain.tip, chain.label);
   scene.add(chain.group);
@@ -760,13 +834,19 @@ function onState(state) {
   if (state.console) {
     const c = state.console;
     document.getElementById('console-stats').textContent =
-      `console: ${c.clients} client(s) · ${c.snapshots_skipped} skipped · ${c.commands_forwarded} commands sent · rejected ${JSON.stringify(c.rejected)}` +
-      (c.bus_rejected && Object.keys(c.bus_rejected).length ? ` · bus dropped ${JSON.stringify(c.bus_rejected)}` : '') +
+      `console: ${c.clients} client(s) · ${c.snapshots_skipped} skipped · ${c.commands_forwarded} commands sent` +
+      counts(' · rejected', c.rejected) + counts(' · bus dropped', c.bus_rejected) +
       (chainSamples.dropped ? ` · chain samples dropped ${chainSamples.dropped} (last: ${chainSamples.last_error})` : '');
   }
 }
 
 let chainSamples = {};  // received and dropped rt/panoptes/chains samples (full snapshots)
+
+// Counters by reason as words ("rejected bad_arguments 2, unknown_camera 1"), nothing when none.
+function counts(title, counters) {
+  const entries = Object.entries(counters || {}).filter(([, n]) => n > 0);
+  return entries.length ? `${title} ${entries.map(([reason, n]) => `${reason} ${n}`).join(', ')}` : '';
+}
 
 // The point tracks a chain is made of are drawn as the chain: their 6 cm points would hide it.
 function withoutChainMarkers(tracks, chainList) {

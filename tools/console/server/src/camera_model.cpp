@@ -87,7 +87,11 @@ void CameraModel::on_features(const std::string& camera, FeatureRecord features,
   entry.features = std::move(features);
   entry.features_ns = now;
   ++entry.frames_received;
-  if (entry.rate_window_start_ns == 0) entry.rate_window_start_ns = now;
+  // The first frame opens the window; each later one ends a frame interval inside it.
+  if (entry.rate_window_start_ns == 0) {
+    entry.rate_window_start_ns = now;
+    return;
+  }
   ++entry.rate_window_frames;
   if (const TimeNs elapsed = now - entry.rate_window_start_ns; elapsed >= kNsPerSecond) {
     entry.received_fps = static_cast<double>(entry.rate_window_frames) * 1e9 / static_cast<double>(elapsed);
@@ -165,6 +169,16 @@ Health CameraModel::health_of(const Camera& camera, TimeNs now) const {
   return camera_health(in, options_);
 }
 
+double CameraModel::received_fps_at(const Camera& camera, TimeNs now) {
+  // Frames stopped: nothing is received now, whatever the last whole second counted.
+  if (camera.frames_received == 0 || now - camera.features_ns > kNsPerSecond) return 0;
+  // The window is closed by a frame; one left open past its second (frames slowed down) is the
+  // better figure.
+  if (const TimeNs open = now - camera.rate_window_start_ns; open > kNsPerSecond)
+    return static_cast<double>(camera.rate_window_frames) * 1e9 / static_cast<double>(open);
+  return camera.received_fps;
+}
+
 json CameraModel::camera_json(const std::string& id, const Camera& camera, TimeNs now, bool full,
                               const std::map<std::string, CameraUsageRecord>& usage) const {
   json blobs = json::array();
@@ -185,7 +199,7 @@ json CameraModel::camera_json(const std::string& id, const Camera& camera, TimeN
                 {"blobs", std::move(blobs)},
                 {"windows", std::move(windows)},
                 {"preview_stamp_ns", camera.preview_stamp_ns},
-                {"rx_fps", round_to(camera.received_fps, 1)},
+                {"rx_fps", round_to(received_fps_at(camera, now), 1)},
                 {"latency_ms", round_to(camera.latency_ms, 2)},
                 {"health", {{"light", health.light}, {"reason", health.reason}}}};
   if (!full) return entry;
@@ -198,7 +212,12 @@ json CameraModel::camera_json(const std::string& id, const Camera& camera, TimeN
                                    : camera.info     ? &camera.info->geometry
                                                      : nullptr;
   if (geometry) entry["geometry"] = geometry_json(*geometry);
-  if (camera.status) entry["status"] = status_json(*camera.status);
+  if (camera.status) {
+    entry["status"] = status_json(*camera.status);
+    // The page greys out a camera's own figures once they are this old (issue 32: a stopped
+    // camera's last "60.0 fps" stayed beside its red light).
+    entry["status_age_s"] = round_to(static_cast<double>(now - camera.status_ns) * 1e-9, 1);
+  }
   if (const auto found = usage.find(id); found != usage.end()) {
     entry["usage"] = {{"utilisation", round_to(found->second.utilisation, 3)},
                       {"latency_p99_ms", round_to(found->second.latency_p99_ms, 2)}};

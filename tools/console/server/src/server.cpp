@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cstdlib>
 #include <deque>
 #include <fstream>
 #include <mutex>
@@ -11,6 +12,8 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+
+#include <zlib.h>
 
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
@@ -100,6 +103,48 @@ std::string read_file(const std::filesystem::path& path) {
   return text.str();
 }
 
+// The gzip member (RFC 1952) of `text` at the best compression; "" if zlib fails.
+std::string gzip_of(std::string_view text) {
+  z_stream stream{};
+  constexpr int kGzipWindowBits = 15 + 16;  // zlib's way to ask for a gzip header and trailer
+  if (deflateInit2(&stream, Z_BEST_COMPRESSION, Z_DEFLATED, kGzipWindowBits, 9, Z_DEFAULT_STRATEGY) != Z_OK)
+    return {};
+  std::string out(deflateBound(&stream, static_cast<uLong>(text.size())), '\0');
+  // zlib's interface takes a non-const pointer; it does not write to the input.
+  stream.next_in = reinterpret_cast<Bytef*>(
+      const_cast<char*>(text.data()));  // NOLINT(cppcoreguidelines-pro-type-const-cast)
+  stream.avail_in = static_cast<uInt>(text.size());
+  stream.next_out = reinterpret_cast<Bytef*>(out.data());
+  stream.avail_out = static_cast<uInt>(out.size());
+  const int result = deflate(&stream, Z_FINISH);
+  out.resize(stream.total_out);
+  deflateEnd(&stream);
+  return result == Z_STREAM_END ? out : std::string{};
+}
+
+// The files worth compressing (three.module.js is 1.27 MB, 0.26 MB gzipped; issue 32), gzipped once.
+std::map<std::string, std::string> gzip_web_files(
+    const std::map<std::string, std::pair<std::string, std::string>>& files) {
+  constexpr std::size_t kWorthCompressing = 1024;
+  std::map<std::string, std::string> out;
+  for (const auto& [path, file] : files) {
+    if (file.first.size() < kWorthCompressing) continue;
+    if (std::string gz = gzip_of(file.first); !gz.empty() && gz.size() < file.first.size())
+      out.emplace(path, std::move(gz));
+  }
+  return out;
+}
+
+bool accepts_gzip(std::string_view accept_encoding) {
+  // "gzip", "gzip;q=1.0", "deflate, gzip": enough for browsers; "gzip;q=0" refuses it.
+  const auto at = accept_encoding.find("gzip");
+  if (at == std::string_view::npos) return false;
+  const auto end = accept_encoding.find(',', at);
+  const std::string_view entry = accept_encoding.substr(at, end == std::string_view::npos ? end : end - at);
+  const auto q = entry.find("q=");
+  return q == std::string_view::npos || std::strtod(std::string(entry.substr(q + 2)).c_str(), nullptr) > 0;
+}
+
 }  // namespace
 
 std::map<std::string, std::pair<std::string, std::string>> load_web_files(const std::filesystem::path& root) {
@@ -144,6 +189,7 @@ struct ConsoleServer::Impl {
         recorder_sink(std::move(recorder_sink_in)),
         calibration_sink(std::move(calibration_sink_in)),
         files(load_web_files(options.web_root)),
+        gzipped(gzip_web_files(files)),
         acceptor(io),
         timer(io) {}
 
@@ -171,6 +217,7 @@ struct ConsoleServer::Impl {
   RecorderSink recorder_sink;
   CalibrationSink calibration_sink;
   std::map<std::string, std::pair<std::string, std::string>> files;
+  std::map<std::string, std::string> gzipped;  // of `files`, by path: those worth compressing
   net::io_context io;
   tcp::acceptor acceptor;
   net::steady_timer timer;
@@ -523,7 +570,11 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     } else if (path.rfind("/calibration/", 0) == 0) {
       serve_calibration_file(request, path.substr(std::string("/calibration/").size()));
     } else if (const auto file = server_.files.find(path); file != server_.files.end()) {
-      respond(request, http::status::ok, file->second.second, file->second.first, path == "/");
+      const auto gz = server_.gzipped.find(path);
+      if (gz != server_.gzipped.end() && accepts_gzip(view_of(request[http::field::accept_encoding])))
+        respond(request, http::status::ok, file->second.second, gz->second, path == "/", "gzip");
+      else
+        respond(request, http::status::ok, file->second.second, file->second.first, path == "/");
     } else {
       respond(request, http::status::not_found, "text/plain", "not found\n", false);
     }
@@ -552,10 +603,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   void respond(const http::request<http::string_body>& request, http::status status, const std::string& type,
-               std::string body, bool set_cookie) {
+               std::string body, bool set_cookie, std::string_view encoding = {}) {
     auto response = std::make_shared<http::response<http::string_body>>(status, request.version());
     response->set(http::field::server, "panoptes_console");
     response->set(http::field::content_type, type);
+    if (!encoding.empty()) response->set(http::field::content_encoding, std::string(encoding));
+    response->set(http::field::vary, "Accept-Encoding");
     response->set(http::field::cache_control, "no-store");
     if (set_cookie)
       response->set(http::field::set_cookie, std::string(kCookieName) + "=" + server_.options.token +

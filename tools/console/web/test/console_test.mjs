@@ -31,7 +31,7 @@ for (const [path, what] of [['/', 'page'], ['/api/state', 'state'], ['/app.js', 
   check(response.status === 401, `${what}: HTTP ${response.status} (401 expected)`);
 }
 
-const { page, errors: consoleErrors, close } = await openBrowser({ width: 1600, height: 1000 });
+const { context, page, errors: consoleErrors, close } = await openBrowser({ width: 1600, height: 1000 });
 try {
   const started = Date.now();
   await page.goto(args.url);
@@ -106,6 +106,20 @@ try {
         `each body drawn where its pose projects: ${bodies.map((b) => `${b.name} at (${b.u}, ${b.v}) ${b.lit} axis px`).join(', ')}`);
   check(litPixels > 0.002, `3D canvas is not blank (${(100 * litPixels).toFixed(2)}% of pixels lit)`);
   check(consoleErrors.length === 0, `page loaded with no console errors (${consoleErrors.join(' | ') || 'none'})`);
+  // three.js (1.27 MB) comes gzipped to a browser that accepts it (issue 32).
+  const three = await page.evaluate(() => {
+    const entry = performance.getEntriesByType('resource').find((e) => e.name.includes('/vendor/three.module.js'));
+    return entry ? { encoded: entry.encodedBodySize, decoded: entry.decodedBodySize } : null;
+  });
+  check(three && three.decoded > 1e6 && three.encoded < 0.4 * three.decoded,
+        `three.module.js sent compressed: ${three ? `${three.encoded} bytes for ${three.decoded}` : 'not loaded'}`);
+  // Every figure on a card explains itself, and the legend lists them all.
+  const explained = await page.evaluate(() => ({
+    untitled: [...document.querySelectorAll('.card .figures span')].filter((span) => !span.title).length,
+    spans: document.querySelectorAll('.card .figures span').length,
+    legend: document.querySelectorAll('#legend dd').length }));
+  check(explained.spans >= 28 && explained.untitled === 0 && explained.legend >= 8,
+        `card figures explained: ${explained.spans} with a tooltip (${explained.untitled} without), ${explained.legend} in the legend`);
   await page.screenshot({ path: join(args.shots, 'console_overview.png') });
   await page.locator('#view3d-panel').screenshot({ path: join(args.shots, 'console_3d.png') });
 
@@ -129,6 +143,16 @@ try {
   const applied = await waitFor(page, () => document.querySelector('.card[data-camera="cam0"] .result').classList.contains('applied'), null, 12000);
   check(applied, `the card shows the camera's acknowledgement: "${await card0.locator('.result').textContent()}"`);
   await card0.screenshot({ path: join(args.shots, 'console_threshold.png') });
+  // A second tab opened now shows the camera's threshold, not the slider's default (issue 32).
+  const tab = await context.newPage();
+  await tab.goto(args.url);
+  const tabShows = await waitFor(tab, () => {
+    const input = document.querySelector('.card[data-camera="cam0"] input.threshold');
+    return input && input.value === '255' && input.nextElementSibling.textContent === '255';
+  }, null, 5000);
+  check(tabShows, `a new tab's cam0 threshold slider shows the camera's 255: ${await tab.evaluate(() =>
+    document.querySelector('.card[data-camera="cam0"] input.threshold')?.value)}`);
+  await tab.close();
   await sleep(Math.max(0, results.commands.threshold_max_ms + 1500 - Date.now()));  // 1.5 s at the maximum
   await card0.locator('input.threshold').fill('64');
   results.commands.threshold_restore_ms = await sentAt('set_threshold', '64');
@@ -313,6 +337,10 @@ try {
   await card2.locator('input.gain').fill('6');
   const rejected = await waitFor(page, () => document.querySelector('.card[data-camera="cam2"] .result').classList.contains('rejected'), null, 6000);
   check(rejected, `a gain the simulated camera lacks is shown rejected: "${await card2.locator('.result').textContent()}"`);
+  // The slider goes back to what the camera reports once the user leaves it (3 s).
+  await card2.locator('input.gain').blur();
+  const gainBack = await waitFor(page, () => document.querySelector('.card[data-camera="cam2"] input.gain').value === '0', null, 8000);
+  check(gainBack, `the rejected gain's slider shows the camera's gain again: ${await card2.locator('input.gain').inputValue()}`);
 
   // --- bad input over a second WebSocket -----------------------------------------------------
   const bad = await page.evaluate(async (wsUrl) => {
@@ -351,6 +379,16 @@ try {
     request.end();
   });
   check(refusedStatus === 401, `WebSocket handshake without the token: HTTP ${refusedStatus} (401 expected)`);
+  // The rejections counted in the header are words on one line that never hides the connection badge.
+  const header = await waitFor(page, () => document.getElementById('console-stats').textContent.includes('rejected'), null, 4000) &&
+    await page.evaluate(() => {
+      const stats = document.getElementById('console-stats').textContent;
+      const badge = document.getElementById('connection').getBoundingClientRect();
+      const bar = document.querySelector('header').getBoundingClientRect();
+      return { stats, json: /[{}"]/.test(stats), height: bar.height, badgeVisible: badge.width > 0 && badge.bottom <= bar.bottom };
+    });
+  check(header && !header.json && header.height < 40 && header.badgeVisible,
+        `header after rejections: one line (${header && header.height} px), no JSON: "${header && header.stats}"`);
 
   // --- the estimator killed and started again: the page shows it gone, then its tracks again -----
   if (args['estimator-pid']) {

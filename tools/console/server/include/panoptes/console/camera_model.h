@@ -84,6 +84,8 @@ class CameraModel {
   };
 
   Health health_of(const Camera& camera, TimeNs now) const;
+  // Frames per second received as of `now`: 0 once frames stopped for a second.
+  static double received_fps_at(const Camera& camera, TimeNs now);
   nlohmann::json camera_json(const std::string& id, const Camera& camera, TimeNs now, bool full,
                              const std::map<std::string, CameraUsageRecord>& usage) const;
 
