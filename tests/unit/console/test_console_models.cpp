@@ -112,7 +112,7 @@ TEST(CameraModel, ReceivedRateFallsToZeroWhenFramesStopAndStatusHasAnAge) {
   CameraModel cameras{StateOptions{}};
   cameras.on_info("cam0", vga_info());
   TimeNs t = kT0;
-  for (std::uint64_t frame = 0; frame <= 120; ++frame, t += 10 * kMs)
+  for (std::int64_t frame = 0; frame <= 120; ++frame, t += 10 * kMs)
     cameras.on_features("cam0", {frame, t, {}}, t);
   const TimeNs last = t - 10 * kMs;
   EXPECT_NEAR(cameras.to_json(last, false, {})[0]["rx_fps"].get<double>(), 100.0, 0.5);
