@@ -219,7 +219,7 @@ std::vector<std::pair<std::string, std::string>> security_properties(const Secur
       {auth + "identity_certificate", uri(files.certificate)},
       {auth + "private_key", uri(files.private_key)},
       // ECDH+prime256v1 for the handshakes this participant starts, which Cyclone DDS can read
-      // (docs/security.md, "Cyclone DDS"): Fast DDS 2.10.7, 2.14.5, 3.1.1 and 3.2 read it; Debian's
+      // (docs/security.md, "Cyclone DDS"): Fast DDS 2.10.7, 2.14.5, 3.0.2, 3.1.1 and 3.2 read it; Debian's
       // 2.9.1 ignores it and always starts with DH+MODP-2048-256.
       {auth + "preferred_key_agreement", "ECDH"},
       {"dds.sec.access.plugin", "builtin.Access-Permissions"},
