@@ -42,6 +42,10 @@ done)
 [ -z "$lower" ] && [[ "$robot_key" == 0000* ]] &&
   pass "robot (--cyclone) sorts before every identity (subject hash ${robot_key:0:12})" ||
   fail "robot's subject hash ${robot_key:0:12} is not below every other: $lower"
+listed=$("$tool" list "$studio")
+grep -q "^robot .*  cyclone$" <<<"$listed" && [ "$(grep -c "cyclone$" <<<"$listed")" -eq 1 ] &&
+  pass "panoptes-security list marks robot, and only robot, as a Cyclone DDS identity" ||
+  fail "panoptes-security list: $listed"
 # An identity issued without --cyclone sorts at or above 0001...; the one used here after the estimator's.
 estimator_key=$(subject_key "$studio/identities/estimator/cert.pem")
 first_key=0001
