@@ -86,7 +86,7 @@ bool profile_requires_security(const fdds::DomainParticipantQos& qos) {
 // files, after checking them; nullopt for an unsecured participant. SecurityError for bad files and
 // for a profile that requires security without them.
 std::optional<SecurityFiles> apply_security(const BusOptions& options, const std::filesystem::path& profile,
-                                            fdds::DomainParticipantQos& qos) {
+                                            int domain, fdds::DomainParticipantQos& qos) {
   std::optional<SecurityFiles> files = resolve_security_files(options.security);
   if (!files) {
     if (profile_requires_security(qos))
@@ -96,6 +96,7 @@ std::optional<SecurityFiles> apply_security(const BusOptions& options, const std
     return std::nullopt;
   }
   check_security_files(*files);
+  check_security_domain(*files, domain);
   for (const auto& [name, value] : security_properties(*files))
     qos.properties().properties().emplace_back(name, value);
   return files;
@@ -168,7 +169,7 @@ BusCore::BusCore(const BusOptions& options) {
                         options.participant_profile + "'");
   }
   qos.name(options.participant_name);
-  security_files_ = apply_security(options, profile_file_, qos);
+  security_files_ = apply_security(options, profile_file_, domain, qos);
   create_entities(domain, qos);
 }
 

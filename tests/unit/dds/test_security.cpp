@@ -79,6 +79,7 @@ TEST_F(SecurityFilesTest, WellFormedFilesPassAndBecomeTheBuiltinPluginProperties
   EXPECT_EQ(value_of("dds.sec.auth.plugin"), "builtin.PKI-DH");
   EXPECT_EQ(value_of("dds.sec.access.plugin"), "builtin.Access-Permissions");
   EXPECT_EQ(value_of("dds.sec.crypto.plugin"), "builtin.AES-GCM-GMAC");
+  EXPECT_EQ(value_of("dds.sec.auth.builtin.PKI-DH.preferred_key_agreement"), "ECDH");
   EXPECT_EQ(value_of("dds.sec.auth.builtin.PKI-DH.identity_certificate"),
             "file://" + (node() / "cert.pem").string());
   EXPECT_EQ(value_of("dds.sec.auth.builtin.PKI-DH.identity_crl"),
@@ -169,6 +170,57 @@ TEST(SecurityOptions, TheSecureProfileRefusesToStartUnsecured) {
   } catch (const SecurityError& error) {
     EXPECT_NE(std::string(error.what()).find("requires DDS Security"), std::string::npos) << error.what();
   }
+}
+
+// The domains a studio's documents cover, read as Fast DDS reads them: a node on a domain its
+// governance does not cover would join without the governance's protection (Fast DDS 2.9 creates
+// the participant and then refuses every topic), so it is refused before joining, naming the domain.
+TEST_F(SecurityFilesTest, ADomainTheDocumentsDoNotCoverIsRefusedBeforeJoining) {
+  const auto domain_error = [&](int domain) -> std::string {
+    try {
+      check_security_domain(files(), domain);
+    } catch (const SecurityError& error) {
+      return error.what();
+    }
+    return "";
+  };
+  const auto governance = [&](const std::string& domains) {
+    write(dir_ / "governance.p7s",
+          signed_document("<dds><domain_access_rules><domain_rule><domains>" + domains +
+                          "</domains></domain_rule></domain_access_rules></dds>"));
+  };
+  const auto permissions = [&](const std::string& domains) {
+    write(node() / "permissions.p7s",
+          signed_document("<dds><permissions><grant name=\"cam0\"><subject_name>CN=cam0</subject_name>"
+                          "<allow_rule><domains>" +
+                          domains + "</domains></allow_rule></grant></permissions></dds>"));
+  };
+  governance("<id_range><min>0</min><max>230</max></id_range>");
+  permissions("<id_range><min>0</min><max>230</max></id_range>");
+  EXPECT_EQ(domain_error(0), "");
+  EXPECT_EQ(domain_error(230), "");
+  EXPECT_EQ(domain_error(231),
+            (dir_ / "governance.p7s").string() +
+                ": governance: no domain_rule covers DDS domain 231 (it covers 0..230; Fast "
+                "DDS would join without the governance's protection). A studio made by "
+                "panoptes-security covers domains 0..230 (docs/security.md, \"Domains\")");
+  // <id>, a range from 0 without <min>, and <min> alone (Fast DDS reads it as that one id).
+  governance("<id>7</id><id_range><max>3</max></id_range><id_range><min>20</min></id_range>");
+  for (const int covered : {0, 3, 7, 20}) EXPECT_EQ(domain_error(covered), "") << covered;
+  for (const int outside : {4, 8, 21, 232})
+    EXPECT_NE(domain_error(outside).find("governance: no domain_rule covers DDS domain " +
+                                         std::to_string(outside) + " (it covers 7, 0..3, 20;"),
+              std::string::npos)
+        << domain_error(outside);
+  governance("<id_range><min>0</min><max>232</max></id_range>");
+  EXPECT_NE(
+      domain_error(232).find("permissions.p7s: permissions: no allow_rule covers DDS domain 232 (it covers "
+                             "0..230; Fast DDS would refuse every topic)"),
+      std::string::npos)
+      << domain_error(232);
+  permissions("");
+  EXPECT_NE(domain_error(0).find("no allow_rule covers DDS domain 0 (it covers none;"), std::string::npos)
+      << domain_error(0);
 }
 
 }  // namespace

@@ -52,6 +52,12 @@ std::optional<SecurityFiles> resolve_security_files(const SecurityOptions& optio
 // and the certificate chain are checked by Fast DDS when the participant is created.
 void check_security_files(const SecurityFiles& files);
 
+// Checks that the governance has a domain rule and the permissions an allow rule for `domain`
+// (0..232). Fast DDS 2.9 creates a participant on a domain its governance does not cover, without
+// the governance's protection, and then refuses its every topic as not granted. Throws
+// SecurityError naming the document, the domain and the domains the document covers.
+void check_security_domain(const SecurityFiles& files, int domain);
+
 // The participant properties that enable the builtin DDS Security plugins with `files`.
 std::vector<std::pair<std::string, std::string>> security_properties(const SecurityFiles& files);
 
