@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: Apache-2.0
+// panoptes_label's library (tools/label): `model` over the real Gait2392 static trial writes a
+// subject model that reads back, its report and summary line, and bad inputs naming the file.
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <nlohmann/json.hpp>
+
+#include "../shared_data.h"
+#include "panoptes/errors.h"
+#include "panoptes/label_job/label_job.h"
+#include "panoptes/labelling_files/subject_model_file.h"
+
+namespace panoptes::label_job {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch(const std::string& name) {
+  const auto dir = fs::temp_directory_path() / ("panoptes_label_job_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+ModelCommandOptions gait2392() {
+  ModelCommandOptions options;
+  options.static_trial = test::shared_data("static/gait2392_subject01_static.trc").string();
+  options.marker_set = (fs::path(PANOPTES_SOURCE_DIR) / "deploy" / "markersets" / "gait2392.yaml").string();
+  options.out = scratch("subject01.yaml").string();
+  return options;
+}
+
+TEST(LabelJob, SubjectNameDefaultsToTheStaticFilesStem) {
+  ModelCommandOptions options = gait2392();
+  EXPECT_EQ(subject_name(options), "gait2392_subject01_static");
+  options.subject = "subject01";
+  EXPECT_EQ(subject_name(options), "subject01");
+}
+
+TEST(LabelJob, ModelWritesASubjectModelAndReportsTheFlags) {
+  PANOPTES_REQUIRE_SHARED(test::shared_data("static/gait2392_subject01_static.trc"));
+  ModelCommandOptions options = gait2392();
+  options.min_tolerance_mm = 1.0;
+  const auto model = run_model(options);
+  const auto back = labelling::load_subject_model(options.out);
+  EXPECT_EQ(back.marker_count(), 49U);
+  EXPECT_DOUBLE_EQ(back.options.min_tolerance_m, 0.001);
+  const std::string report = model_report(model);
+  EXPECT_NE(report.find("flagged L.Temple: moved 21.1 mm RMS"), std::string::npos) << report;
+  EXPECT_NE(report.find("R.Thigh (parent Pelvis): 3 tracked markers + 2 calibration-only, rigid fit RMS"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("R.Forearm (parent R.UpperArm): 2 tracked markers, no pose"), std::string::npos)
+      << report;
+  const auto summary = nlohmann::json::parse(model_summary_line(model));
+  EXPECT_EQ(summary["markers"], 49);
+  EXPECT_EQ(summary["segments"], 13);
+  EXPECT_EQ(summary["joints"], 4);
+  EXPECT_EQ(summary["flagged"], 1);
+}
+
+TEST(LabelJob, ABadMarkerSetIsAConfigErrorNamingTheFileAndEntry) {
+  ModelCommandOptions options = gait2392();
+  options.marker_set = scratch("bad.yaml").string();
+  std::ofstream(options.marker_set) << "name: bad\nmarkers: [A, B, C]\nsegments:\n"
+                                       "  - {name: S, parent: T, markers: [A, B, C]}\n";
+  try {
+    run_model(options);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what())
+                  .find(options.marker_set + ": segments[0].parent: unknown parent segment 'T'"),
+              std::string::npos)
+        << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace panoptes::label_job

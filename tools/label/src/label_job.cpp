@@ -1,0 +1,88 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/label_job/label_job.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "panoptes/labelling_files/marker_set_file.h"
+#include "panoptes/labelling_files/static_trial.h"
+#include "panoptes/labelling_files/subject_model_file.h"
+
+namespace panoptes::label_job {
+
+namespace {
+
+std::string format(const char* pattern, double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, pattern, value);
+  return text;
+}
+
+std::string quoted(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+std::string subject_name(const ModelCommandOptions& options) {
+  if (!options.subject.empty()) return options.subject;
+  return std::filesystem::path(options.static_trial).stem().string();
+}
+
+labelling::SubjectModel run_model(const ModelCommandOptions& options) {
+  const labelling::MarkerSet set = labelling::load_marker_set(options.marker_set);
+  const labelling::MarkerSamples trial = labelling::load_marker_samples(options.static_trial);
+  labelling::ModelOptions model_options;
+  model_options.sigmas = options.sigmas;
+  model_options.min_tolerance_m = options.min_tolerance_mm / 1000.0;
+  model_options.still_m = options.still_mm / 1000.0;
+  labelling::SubjectModel model =
+      labelling::build_subject_model(set, trial, subject_name(options), model_options);
+  labelling::save_subject_model(model, options.out);
+  return model;
+}
+
+std::string model_report(const labelling::SubjectModel& model) {
+  std::string text = "subject '" + model.subject + "', marker set '" + model.marker_set + "', " +
+                     std::to_string(model.frames) + " frames of " + model.static_trial + "\n";
+  for (const auto& segment : model.segments) {
+    const std::size_t tracked = segment.tracked_marker_names().size();
+    text += "  " + segment.name + (segment.parent.empty() ? "" : " (parent " + segment.parent + ")") + ": " +
+            std::to_string(tracked) + " tracked markers";
+    if (segment.markers.size() > tracked)
+      text += " + " + std::to_string(segment.markers.size() - tracked) + " calibration-only";
+    text += segment.has_pose ? ", rigid fit RMS "
+                             : ", no pose (fewer than 3 tracked markers), translation fit RMS ";
+    text += format("%.2f mm", segment.static_fit_rms_m * 1000.0) + "\n";
+  }
+  for (const auto& joint : model.joints)
+    text += "  joint " + joint.name + ": " + joint.parent + " -> " + joint.child + "\n";
+  for (const auto& flag : model.flags) text += "  flagged " + flag.marker + ": " + flag.reason + "\n";
+  if (!model.ignored_points.empty()) {
+    text +=
+        "  ignored " + std::to_string(model.ignored_points.size()) + " points of the trial not in the set:";
+    for (const auto& name : model.ignored_points) text += " " + name;
+    text += "\n";
+  }
+  return text;
+}
+
+std::string model_summary_line(const labelling::SubjectModel& model) {
+  double worst_rms = 0.0;
+  for (const auto& segment : model.segments) worst_rms = std::max(worst_rms, segment.static_fit_rms_m);
+  return "{\"subject\":" + quoted(model.subject) + ",\"segments\":" + std::to_string(model.segments.size()) +
+         ",\"markers\":" + std::to_string(model.marker_count()) +
+         ",\"joints\":" + std::to_string(model.joints.size()) +
+         ",\"flagged\":" + std::to_string(model.flags.size()) +
+         ",\"ignored_points\":" + std::to_string(model.ignored_points.size()) +
+         ",\"worst_static_fit_rms_mm\":" + format("%.3f", worst_rms * 1000.0) + "}";
+}
+
+}  // namespace panoptes::label_job
