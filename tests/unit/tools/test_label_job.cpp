@@ -50,7 +50,7 @@ TEST(LabelJob, ModelWritesASubjectModelAndReportsTheFlags) {
   EXPECT_DOUBLE_EQ(back.options.min_tolerance_m, 0.001);
   const std::string report = model_report(model);
   EXPECT_NE(report.find("flagged L.Temple: moved 21.1 mm RMS"), std::string::npos) << report;
-  EXPECT_NE(report.find("R.Thigh (parent Pelvis): 3 tracked markers + 2 calibration-only, rigid fit RMS"),
+  EXPECT_NE(report.find("R.Thigh (parent Pelvis): 3 tracked markers + 2 calibration-only, static fit RMS"),
             std::string::npos)
       << report;
   EXPECT_NE(report.find("R.Forearm (parent R.UpperArm): 2 tracked markers, no pose"), std::string::npos)

@@ -58,8 +58,8 @@ std::string model_report(const labelling::SubjectModel& model) {
             std::to_string(tracked) + " tracked markers";
     if (segment.markers.size() > tracked)
       text += " + " + std::to_string(segment.markers.size() - tracked) + " calibration-only";
-    text += segment.has_pose ? ", rigid fit RMS "
-                             : ", no pose (fewer than 3 tracked markers), translation fit RMS ";
+    text += segment.has_pose ? ", static fit RMS "
+                             : ", no pose (fewer than 3 tracked markers), static fit RMS ";
     text += format("%.2f mm", segment.static_fit_rms_m * 1000.0) + "\n";
   }
   for (const auto& joint : model.joints)
