@@ -51,6 +51,11 @@ std::vector<std::optional<std::size_t>> match_markers(const MarkerSet& set, cons
                        " (mark it `optional: true` to build without it)");
     if (!seen)
       flags.push_back({MarkerFlag::Kind::kAbsent, marker.name, "optional marker " + why + ": left out"});
+    const auto repeats = std::count(trial.names.begin(), trial.names.end(), marker.name);
+    if (repeats > 1)
+      flags.push_back(
+          {MarkerFlag::Kind::kRepeated, marker.name,
+           "the static trial has " + std::to_string(repeats) + " points of this name: the first is used"});
     columns.push_back(seen ? column : std::nullopt);
   }
   return columns;

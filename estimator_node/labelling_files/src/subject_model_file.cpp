@@ -31,6 +31,8 @@ const char* kind_name(MarkerFlag::Kind kind) {
       return "missing_frames";
     case MarkerFlag::Kind::kMoved:
       return "moved";
+    case MarkerFlag::Kind::kRepeated:
+      return "repeated";
   }
   return "moved";
 }
@@ -120,11 +122,11 @@ std::array<std::string, 2> pair_of(const YamlReader& list) {
 
 MarkerFlag::Kind kind_of(const YamlReader& flag) {
   const std::string kind = flag.get_string("kind");
-  for (auto candidate :
-       {MarkerFlag::Kind::kAbsent, MarkerFlag::Kind::kMissingFrames, MarkerFlag::Kind::kMoved}) {
+  for (auto candidate : {MarkerFlag::Kind::kAbsent, MarkerFlag::Kind::kMissingFrames,
+                         MarkerFlag::Kind::kMoved, MarkerFlag::Kind::kRepeated}) {
     if (kind == kind_name(candidate)) return candidate;
   }
-  flag.fail("kind", "expected absent, missing_frames or moved, got '" + kind + "'");
+  flag.fail("kind", "expected absent, missing_frames, moved or repeated, got '" + kind + "'");
 }
 
 SegmentLayout read_segment(const YamlReader& item) {

@@ -152,6 +152,42 @@ TEST(SubjectModel, JointCentresReproduceTheStaticFilesPoints) {
   }
 }
 
+// A midpoint joint: the knee centre of Gait2392 from the thigh's and from the shank's layout lands
+// on the midpoint of the two knee markers in a frame of the trial.
+TEST(SubjectModel, MidpointJointCentresLandOnTheMidpoint) {
+  PANOPTES_REQUIRE_SHARED(test::gait2392_static());
+  const SubjectModel model = model_of("gait2392", test::gait2392_static());
+  const MarkerSamples trial = load_marker_samples(test::gait2392_static());
+  const std::size_t frame = 200;
+  const auto world = [&](const std::string& name) {
+    for (std::size_t i = 0; i < trial.point_count(); ++i) {
+      if (trial.names[i] == name) return trial.position(frame, i);
+    }
+    ADD_FAILURE() << name;
+    return Eigen::Vector3d(Eigen::Vector3d::Zero());
+  };
+  const auto pose = [&](const std::string& segment_name) {
+    const SegmentLayout& segment = *model.segment(segment_name);
+    std::vector<std::optional<Eigen::Vector3d>> points;
+    for (const auto& m : segment.markers) points.emplace_back(world(m.name));
+    return fit_layout(segment, points).value().T_world_segment;
+  };
+  for (const char* side : {"R", "L"}) {
+    const std::string s = side;
+    const JointCentre* knee = nullptr;
+    for (const auto& joint : model.joints) knee = joint.name == s + ".Knee" ? &joint : knee;
+    ASSERT_NE(knee, nullptr);
+    EXPECT_EQ(knee->parent, s + ".Thigh");
+    const Eigen::Vector3d truth = (world(s + ".Knee.Lat") + world(s + ".Knee.Med")) / 2.0;
+    const double from_thigh = (pose(knee->parent).apply(knee->in_parent_m) - truth).norm();
+    const double from_shank = (pose(knee->child).apply(knee->in_child_m) - truth).norm();
+    std::printf("%s knee centre: %.2f mm from the thigh, %.2f mm from the shank\n", side, from_thigh * 1000.0,
+                from_shank * 1000.0);
+    EXPECT_LT(from_thigh, 1 * kMillimetre);
+    EXPECT_LT(from_shank, 1 * kMillimetre);
+  }
+}
+
 // Rigid fit of each posed segment's layout to every frame of a walking trial: RMS over frames.
 std::map<std::string, double> walk_fit_rms(const SubjectModel& model, const MarkerSamples& walk,
                                            const std::map<std::string, std::string>& rename = {}) {

@@ -124,6 +124,27 @@ TEST_F(StaticTrialBadInput, ASubjectWhoMovesIsFlaggedAndTheLayoutsStaySharp) {
   }
 }
 
+TEST_F(StaticTrialBadInput, ANameTheTrialRepeatsIsFlaggedAndTheFirstUsed) {
+  const SubjectModel original = build_subject_model(set_, trial_, "s1");
+  trial_.names[column("R.Toe.Lat")] = "R.Heel";  // R.Heel comes first in the file
+  set_.markers[*set_.marker_index("R.Toe.Lat")].optional = true;
+  const SubjectModel model = build_subject_model(set_, trial_, "s1");
+  bool flagged = false;
+  for (const auto& flag : model.flags) {
+    if (flag.marker == "R.Heel" && flag.kind == MarkerFlag::Kind::kRepeated) {
+      flagged = true;
+      EXPECT_NE(flag.reason.find("2 points of this name"), std::string::npos) << flag.reason;
+    }
+  }
+  EXPECT_TRUE(flagged);
+  // The heel, not the toe marker that now has its name: the heel-midfoot distance is unchanged
+  // (to the hundredth of a millimetre: the foot's layout has one marker fewer).
+  const auto heel_to_midfoot = [&](const SubjectModel& m) {
+    return (model_marker(m, "R.Heel").position_m - model_marker(m, "R.Midfoot.Sup").position_m).norm();
+  };
+  EXPECT_NEAR(heel_to_midfoot(model), heel_to_midfoot(original), 0.01 * kMillimetre);
+}
+
 TEST_F(StaticTrialBadInput, AJointPointTheTrialLacksNamesTheJoint) {
   set_.joints.push_back({"R.Hip", "R.Thigh", {"R_HJC"}});
   const std::string message = error_of<InputError>([&] { build_subject_model(set_, trial_, "s1"); });

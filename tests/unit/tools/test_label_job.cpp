@@ -62,6 +62,23 @@ TEST(LabelJob, ModelWritesASubjectModelAndReportsTheFlags) {
   EXPECT_EQ(summary["flagged"], 1);
 }
 
+// A walking C3D trial given as the static one: built, every marker flagged, and the report says the
+// subject did not stand still.
+TEST(LabelJob, AWalkGivenAsTheStaticTrialIsReportedAsNotStandingStill) {
+  const auto walk = test::shared_data("c3d/Walk1.c3d");
+  PANOPTES_REQUIRE_SHARED(walk);
+  ModelCommandOptions options = gait2392();
+  options.static_trial = walk.string();
+  options.marker_set = scratch("pelvis.yaml").string();
+  std::ofstream(options.marker_set) << "name: pelvis\nmarkers: [RASI, LASI, VSAC]\n"
+                                       "segments: [{name: Pelvis, markers: [RASI, LASI, VSAC]}]\n";
+  const auto model = run_model(options);
+  const std::string report = model_report(model);
+  EXPECT_NE(report.find("the subject did not stand still: 3 of 3 markers moved"), std::string::npos)
+      << report;
+  EXPECT_LT(model.segments[0].static_fit_rms_m, 0.002);  // the pelvis stays rigid while walking
+}
+
 TEST(LabelJob, ABadMarkerSetIsAConfigErrorNamingTheFileAndEntry) {
   ModelCommandOptions options = gait2392();
   options.marker_set = scratch("bad.yaml").string();

@@ -58,13 +58,21 @@ std::string model_report(const labelling::SubjectModel& model) {
             std::to_string(tracked) + " tracked markers";
     if (segment.markers.size() > tracked)
       text += " + " + std::to_string(segment.markers.size() - tracked) + " calibration-only";
-    text += segment.has_pose ? ", static fit RMS "
-                             : ", no pose (fewer than 3 tracked markers), static fit RMS ";
+    text +=
+        segment.has_pose ? ", static fit RMS " : ", no pose (fewer than 3 tracked markers), static fit RMS ";
     text += format("%.2f mm", segment.static_fit_rms_m * 1000.0) + "\n";
   }
   for (const auto& joint : model.joints)
     text += "  joint " + joint.name + ": " + joint.parent + " -> " + joint.child + "\n";
   for (const auto& flag : model.flags) text += "  flagged " + flag.marker + ": " + flag.reason + "\n";
+  const std::size_t moved =
+      static_cast<std::size_t>(std::count_if(model.flags.begin(), model.flags.end(), [](const auto& flag) {
+        return flag.kind == labelling::MarkerFlag::Kind::kMoved;
+      }));
+  if (2 * moved > model.marker_count())
+    text += "  the subject did not stand still: " + std::to_string(moved) + " of " +
+            std::to_string(model.marker_count()) +
+            " markers moved; the layouts follow the motion (fit RMS above)\n";
   if (!model.ignored_points.empty()) {
     text +=
         "  ignored " + std::to_string(model.ignored_points.size()) + " points of the trial not in the set:";

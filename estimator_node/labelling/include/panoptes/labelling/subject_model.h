@@ -85,7 +85,8 @@ struct JointCentre {
 
 // A marker (or, for "absent", a marker set entry) the report must mention.
 struct MarkerFlag {
-  enum class Kind { kAbsent, kMissingFrames, kMoved };
+  // kRepeated: the trial has several points of the marker's name (C3D files can); the first is used.
+  enum class Kind { kAbsent, kMissingFrames, kMoved, kRepeated };
   Kind kind = Kind::kMoved;
   std::string marker;
   std::string reason;
