@@ -35,27 +35,35 @@ std::size_t seen_frames(const MarkerSamples& trial, std::size_t column) {
   return seen;
 }
 
+const char* trial_kind(const ModelOptions& options) {
+  return options.dynamic ? "labelled trial" : "static trial";
+}
+
 // The trial's column of every marker of the set; nullopt for an optional marker the trial lacks
 // (flagged). Throws for a marker that is not optional.
 std::vector<std::optional<std::size_t>> match_markers(const MarkerSet& set, const MarkerSamples& trial,
+                                                      const ModelOptions& options,
                                                       std::vector<MarkerFlag>& flags) {
   std::vector<std::optional<std::size_t>> columns;
   for (std::size_t i = 0; i < set.markers.size(); ++i) {
     const MarkerDefinition& marker = set.markers[i];
     const auto column = column_of(trial, marker.name);
     const bool seen = column && seen_frames(trial, *column) > 0;
-    std::string why = column ? "is never seen in the static trial" : "is not in the static trial";
-    if (!seen && !marker.optional)
+    std::string why = std::string(column ? "is never seen in the " : "is not in the ") + trial_kind(options);
+    const bool may_lack = marker.optional || (options.dynamic && marker.calibration_only);
+    if (!seen && !may_lack)
       throw InputError(trial.source + ": marker '" + marker.name + "' (marker set '" + set.name +
                        "', markers[" + std::to_string(i) + "]) " + why +
                        " (mark it `optional: true` to build without it)");
     if (!seen)
-      flags.push_back({MarkerFlag::Kind::kAbsent, marker.name, "optional marker " + why + ": left out"});
+      flags.push_back(
+          {MarkerFlag::Kind::kAbsent, marker.name,
+           std::string(marker.optional ? "optional" : "calibration-only") + " marker " + why + ": left out"});
     const auto repeats = std::count(trial.names.begin(), trial.names.end(), marker.name);
     if (repeats > 1)
-      flags.push_back(
-          {MarkerFlag::Kind::kRepeated, marker.name,
-           "the static trial has " + std::to_string(repeats) + " points of this name: the first is used"});
+      flags.push_back({MarkerFlag::Kind::kRepeated, marker.name,
+                       std::string("the ") + trial_kind(options) + " has " + std::to_string(repeats) +
+                           " points of this name: the first is used"});
     columns.push_back(seen ? column : std::nullopt);
   }
   return columns;
@@ -95,7 +103,7 @@ ModelMarker describe_marker(const MarkerSamples& trial, const MarkerDefinition& 
     flags.push_back({MarkerFlag::Kind::kMissingFrames, marker.name,
                      "missing in " + std::to_string(out.missing_frames) + " of " +
                          std::to_string(trial.frame_count()) + " frames of the static trial"});
-  if (out.spread_m > options.still_m)
+  if (out.spread_m > options.still_m && !options.dynamic)
     flags.push_back({MarkerFlag::Kind::kMoved, marker.name,
                      "moved " + millimetres(out.spread_m) +
                          " RMS during the static trial (still: " + millimetres(options.still_m) + ")"});
@@ -240,6 +248,8 @@ DistanceStatistics distance_statistics(const MarkerSamples& trial, const Segment
   out.mean_m = sum / n;
   out.sd_m = std::sqrt(std::max(0.0, squares / n - out.mean_m * out.mean_m));
   out.tolerance_m = std::max(options.sigmas * out.sd_m, options.min_tolerance_m);
+  if (options.dynamic)
+    out.tolerance_m = std::max({out.tolerance_m, out.max_m - out.mean_m, out.mean_m - out.min_m});
   return out;
 }
 
@@ -291,6 +301,14 @@ std::optional<Eigen::Vector3d> joint_point(const MarkerSamples& trial,
     sum += trial.position(f, column);
   }
   return sum / static_cast<double>(columns.size());
+}
+
+bool joint_points_seen(const JointDefinition& joint, const MarkerSamples& trial) {
+  for (const auto& point : joint.points) {
+    const auto column = column_of(trial, point);
+    if (!column || seen_frames(trial, *column) == 0) return false;
+  }
+  return true;
 }
 
 JointCentre build_joint(const MarkerSet& set, const JointDefinition& joint, const MarkerSamples& trial,
@@ -360,21 +378,39 @@ SubjectModel build_subject_model(const MarkerSet& set, const MarkerSamples& tria
   SubjectModel model;
   model.subject = subject;
   model.marker_set = set.name;
-  model.static_trial = trial.source;
+  model.trial_file = trial.source;
   model.frames = trial.frame_count();
   model.rate_hz = trial.rate_hz;
   model.options = options;
   model.sticks = set.sticks;
-  if (model.frames == 0) throw InputError(trial.source + ": the static trial has no frames");
-  const auto columns = match_markers(set, trial, model.flags);
+  if (model.frames == 0) throw InputError(trial.source + ": the " + trial_kind(options) + " has no frames");
+  const auto columns = match_markers(set, trial, options, model.flags);
   model.ignored_points = ignored_points(set, trial);
   std::vector<SegmentWork> works;
   for (const auto& segment : set.segments) {
     works.push_back(build_segment(set, segment, trial, columns, options, model.flags));
     model.segments.push_back(works.back().layout);
   }
-  for (const auto& joint : set.joints) model.joints.push_back(build_joint(set, joint, trial, works));
+  for (const auto& joint : set.joints) {
+    if (options.dynamic && !joint_points_seen(joint, trial)) {
+      model.flags.push_back(
+          {MarkerFlag::Kind::kAbsent, joint.name, "joint left out: the labelled trial lacks its points"});
+      continue;
+    }
+    model.joints.push_back(build_joint(set, joint, trial, works));
+  }
   return model;
+}
+
+MarkerSamples slice_frames(const MarkerSamples& samples, std::size_t first, std::size_t last) {
+  MarkerSamples out = samples;
+  last = std::min(last, samples.frame_count());
+  first = std::min(first, last);
+  const auto begin = static_cast<std::ptrdiff_t>(first * samples.point_count());
+  const auto end = static_cast<std::ptrdiff_t>(last * samples.point_count());
+  out.positions.assign(samples.positions.begin() + begin, samples.positions.begin() + end);
+  out.valid.assign(samples.valid.begin() + begin, samples.valid.begin() + end);
+  return out;
 }
 
 }  // namespace panoptes::labelling

@@ -76,8 +76,9 @@ void emit_header(YAML::Emitter& out, const SubjectModel& model) {
   out << YAML::Key << "subject_model" << YAML::Value << kFormatVersion;
   out << YAML::Key << "subject" << YAML::Value << YAML::DoubleQuoted << model.subject;
   out << YAML::Key << "marker_set" << YAML::Value << YAML::DoubleQuoted << model.marker_set;
-  out << YAML::Key << "static_trial" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "file"
-      << YAML::Value << YAML::DoubleQuoted << model.static_trial << YAML::Key << "frames" << YAML::Value
+  out << YAML::Key << "trial" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "file"
+      << YAML::Value << YAML::DoubleQuoted << model.trial_file << YAML::Key << "kind" << YAML::Value
+      << (model.options.dynamic ? "labelled" : "static") << YAML::Key << "frames" << YAML::Value
       << model.frames << YAML::Key << "rate_hz" << YAML::Value << model.rate_hz << YAML::EndMap;
   const ModelOptions& o = model.options;
   out << YAML::Key << "options" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigmas"
@@ -194,16 +195,21 @@ SubjectModel load_subject_model(const std::filesystem::path& path) {
   const YAML::Node root = load_yaml_file(path);
   const YamlReader reader(path.string(), root);
   if (!root.IsMap()) reader.fail("", "expected a subject model (a map)");
-  reader.expect_only({"subject_model", "subject", "marker_set", "static_trial", "options", "segments",
-                      "joints", "sticks", "flags", "ignored_points"});
+  reader.expect_only({"subject_model", "subject", "marker_set", "trial", "options", "segments", "joints",
+                      "sticks", "flags", "ignored_points"});
   if (reader.get_int("subject_model") != kFormatVersion)
     reader.fail("subject_model", "expected format version " + std::to_string(kFormatVersion));
   SubjectModel model;
   model.subject = reader.get_string("subject");
   model.marker_set = reader.get_string("marker_set");
-  if (reader.has("static_trial")) {
-    const YamlReader trial = reader.child("static_trial");
-    model.static_trial = trial.get_string("file", "");
+  if (reader.has("trial")) {
+    const YamlReader trial = reader.child("trial");
+    trial.expect_only({"file", "kind", "frames", "rate_hz"});
+    model.trial_file = trial.get_string("file", "");
+    const std::string kind = trial.get_string("kind", "static");
+    if (kind != "static" && kind != "labelled")
+      trial.fail("kind", "expected static or labelled, got '" + kind + "'");
+    model.options.dynamic = kind == "labelled";
     model.frames = static_cast<std::size_t>(trial.get_int("frames", 0));
     model.rate_hz = trial.get_double("rate_hz", 0.0);
   }

@@ -3,7 +3,9 @@
 // subject model that reads back, its report and summary line, and bad inputs naming the file.
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -38,6 +40,43 @@ TEST(LabelJob, SubjectNameDefaultsToTheStaticFilesStem) {
   EXPECT_EQ(subject_name(options), "gait2392_subject01_static");
   options.subject = "subject01";
   EXPECT_EQ(subject_name(options), "subject01");
+}
+
+TEST(LabelJob, NeedsExactlyOneTrialAndAFrameRange) {
+  ModelCommandOptions options = gait2392();
+  EXPECT_FALSE(find_problem(options));
+  options.labelled = "walk.trc";
+  ASSERT_TRUE(find_problem(options));
+  EXPECT_NE(find_problem(options)->find("exactly one of --static"), std::string::npos);
+  options.static_trial.clear();
+  EXPECT_FALSE(find_problem(options));
+  EXPECT_EQ(trial_file(options), "walk.trc");
+  EXPECT_EQ(subject_name(options), "walk");
+  for (const char* bad : {"10", "a:5", "5:5", "9:3", "1:2x"}) {
+    options.frames = bad;
+    ASSERT_TRUE(find_problem(options)) << bad;
+    EXPECT_NE(find_problem(options)->find("--frames"), std::string::npos) << bad;
+  }
+  EXPECT_EQ(frame_range("0:75"), std::make_pair(std::size_t{0}, std::size_t{75}));
+  EXPECT_EQ(frame_range(":75").second, 75U);
+  EXPECT_EQ(frame_range("75:").first, 75U);
+  EXPECT_EQ(frame_range("75:").second, std::numeric_limits<std::size_t>::max());
+}
+
+TEST(LabelJob, ModelFromHalfALabelledTrial) {
+  PANOPTES_REQUIRE_SHARED(test::shared_data("static/gait2392_subject01_walk1.trc"));
+  ModelCommandOptions options = gait2392();
+  options.static_trial.clear();
+  options.labelled = test::shared_data("static/gait2392_subject01_walk1.trc").string();
+  options.frames = ":75";
+  const auto model = run_model(options);
+  EXPECT_EQ(model.frames, 75U);
+  EXPECT_TRUE(model.options.dynamic);
+  EXPECT_EQ(labelling::load_subject_model(options.out).options.dynamic, true);
+  EXPECT_NE(
+      model_report(model).find("flagged R.Knee.Med: calibration-only marker is not in the labelled trial"),
+      std::string::npos)
+      << model_report(model);
 }
 
 TEST(LabelJob, ModelWritesASubjectModelAndReportsTheFlags) {

@@ -38,10 +38,14 @@ struct MarkerSamples {
 };
 
 struct ModelOptions {
-  double sigmas = 3.0;  // tolerance = max(sigmas * sd, min_tolerance_m)
+  double sigmas = 3.0;  // tolerance = max(sigmas * sd, min_tolerance_m), dynamic: and the range
   double min_tolerance_m = 0.002;
   double still_m = 0.020;  // a marker spreading more (RMS about its mean) has moved
   int procrustes_iterations = 3;
+  // Trained from an already-labelled dynamic trial instead of a static one (as AIM can): the
+  // subject moves (no `moved` flags), calibration-only markers and the joints that need them may be
+  // absent (left out and flagged), and each tolerance also covers the distance's whole range.
+  bool dynamic = false;
 };
 
 struct ModelMarker {
@@ -95,7 +99,7 @@ struct MarkerFlag {
 struct SubjectModel {
   std::string subject;
   std::string marker_set;
-  std::string static_trial;
+  std::string trial_file;  // the static (or, options.dynamic, labelled) trial it was built from
   std::size_t frames = 0;
   double rate_hz = 0.0;
   ModelOptions options;
@@ -111,9 +115,13 @@ struct SubjectModel {
 
 // Builds the model of `set` (valid: find_marker_set_problem) from `trial`. Throws InputError naming
 // the trial and the marker when a marker that is not optional is absent or never seen, and when a
-// joint's point is; an optional one is left out and flagged.
+// joint's point is; an optional one is left out and flagged (options.dynamic: calibration-only
+// markers and joints too).
 SubjectModel build_subject_model(const MarkerSet& set, const MarkerSamples& trial, const std::string& subject,
                                  const ModelOptions& options = {});
+
+// Frames [first, last) of `samples` (clamped to its length), e.g. half a trial to train on.
+MarkerSamples slice_frames(const MarkerSamples& samples, std::size_t first, std::size_t last);
 
 // The rigid fit of `layout`'s tracked markers to one frame of points: T_world_segment, its RMS
 // residual and how many markers were used. `frame_points[i]` is the observation of
