@@ -169,6 +169,12 @@ std::optional<std::size_t> MarkerSet::segment_of(const std::string& marker) cons
   return std::nullopt;
 }
 
+std::optional<MarkerSetProblem> find_segment_tree_problem(const std::vector<SegmentDefinition>& segments) {
+  MarkerSet tree;
+  tree.segments = segments;
+  return check_segment_tree(tree);
+}
+
 std::optional<MarkerSetProblem> find_marker_set_problem(const MarkerSet& set) {
   if (auto problem = check_markers(set)) return problem;
   if (auto problem = check_segment_tree(set)) return problem;

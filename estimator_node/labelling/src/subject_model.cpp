@@ -402,6 +402,64 @@ SubjectModel build_subject_model(const MarkerSet& set, const MarkerSamples& tria
   return model;
 }
 
+namespace {
+
+std::string entry(const char* list, std::size_t index) {
+  return std::string(list) + "[" + std::to_string(index) + "]";
+}
+
+std::optional<MarkerSetProblem> check_layout(const SegmentLayout& segment, const std::string& at,
+                                             std::map<std::string, std::string>& owner) {
+  for (std::size_t m = 0; m < segment.markers.size(); ++m) {
+    const ModelMarker& marker = segment.markers[m];
+    const std::string key = at + "." + entry("markers", m);
+    if (marker.name.empty()) return MarkerSetProblem{key, "a marker needs a name"};
+    if (!marker.position_m.allFinite())
+      return MarkerSetProblem{key + ".position_m", "expected finite numbers"};
+    const auto [where, inserted] = owner.emplace(marker.name, segment.name);
+    if (!inserted)
+      return MarkerSetProblem{key,
+                              "marker '" + marker.name + "' is already in segment '" + where->second + "'"};
+  }
+  for (std::size_t d = 0; d < segment.distances.size(); ++d) {
+    const DistanceStatistics& distance = segment.distances[d];
+    const std::string key = at + "." + entry("distances", d);
+    for (const auto& name : distance.markers) {
+      if (owner.contains(name) && owner.at(name) == segment.name) continue;
+      return MarkerSetProblem{key + ".markers",
+                              "marker '" + name + "' is not in segment '" + segment.name + "'"};
+    }
+    if (!(distance.tolerance_m > 0.0) || !std::isfinite(distance.tolerance_m) ||
+        !std::isfinite(distance.mean_m))
+      return MarkerSetProblem{key, "expected a finite mean and a positive tolerance"};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<MarkerSetProblem> find_subject_model_problem(const SubjectModel& model) {
+  // The segment tree has the marker set's rules.
+  MarkerSet tree;
+  for (const auto& segment : model.segments) tree.segments.push_back({segment.name, segment.parent, {}});
+  if (auto problem = find_segment_tree_problem(tree.segments)) return problem;
+  std::map<std::string, std::string> owner;  // marker -> segment
+  for (std::size_t s = 0; s < model.segments.size(); ++s) {
+    if (auto problem = check_layout(model.segments[s], entry("segments", s), owner)) return problem;
+  }
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const JointCentre& joint = model.joints[j];
+    const auto child = tree.segment_index(joint.child);
+    if (!child || tree.segments[*child].parent != joint.parent)
+      return MarkerSetProblem{entry("joints", j), "joint '" + joint.name + "': '" + joint.child +
+                                                      "' is not a segment whose parent is '" + joint.parent +
+                                                      "'"};
+    if (!joint.in_parent_m.allFinite() || !joint.in_child_m.allFinite())
+      return MarkerSetProblem{entry("joints", j), "expected finite numbers"};
+  }
+  return std::nullopt;
+}
+
 MarkerSamples slice_frames(const MarkerSamples& samples, std::size_t first, std::size_t last) {
   MarkerSamples out = samples;
   last = std::min(last, samples.frame_count());

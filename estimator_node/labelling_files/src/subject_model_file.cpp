@@ -221,6 +221,8 @@ SubjectModel load_subject_model(const std::filesystem::path& path) {
   }
   for (const auto& item : reader.sequence("segments")) model.segments.push_back(read_segment(item));
   read_lists(reader, model);
+  if (const auto problem = find_subject_model_problem(model))
+    throw ConfigError(path.string(), problem->entry, problem->reason);
   return model;
 }
 

@@ -58,4 +58,7 @@ struct MarkerSetProblem {
 // segment tree, not exactly one root, bad sticks and joints.
 std::optional<MarkerSetProblem> find_marker_set_problem(const MarkerSet& set);
 
+// The segment tree's part of it (names, parents, cycles, one root), for anything with segments.
+std::optional<MarkerSetProblem> find_segment_tree_problem(const std::vector<SegmentDefinition>& segments);
+
 }  // namespace panoptes::labelling

@@ -120,6 +120,12 @@ struct SubjectModel {
 SubjectModel build_subject_model(const MarkerSet& set, const MarkerSamples& trial, const std::string& subject,
                                  const ModelOptions& options = {});
 
+// What is wrong with a model read from a file (entry as in the file: "segments[2].distances[0]"),
+// or nullopt: duplicate segment or marker names, an unknown parent or a cycle, a distance between
+// markers not in its segment or a tolerance that is not positive, a joint on unknown segments,
+// non-finite numbers.
+std::optional<MarkerSetProblem> find_subject_model_problem(const SubjectModel& model);
+
 // Frames [first, last) of `samples` (clamped to its length), e.g. half a trial to train on.
 MarkerSamples slice_frames(const MarkerSamples& samples, std::size_t first, std::size_t last);
 
