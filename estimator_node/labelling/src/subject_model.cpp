@@ -102,7 +102,7 @@ ModelMarker describe_marker(const MarkerSamples& trial, const MarkerDefinition& 
   if (out.missing_frames > 0)
     flags.push_back({MarkerFlag::Kind::kMissingFrames, marker.name,
                      "missing in " + std::to_string(out.missing_frames) + " of " +
-                         std::to_string(trial.frame_count()) + " frames of the static trial"});
+                         std::to_string(trial.frame_count()) + " frames of the " + trial_kind(options)});
   if (out.spread_m > options.still_m && !options.dynamic)
     flags.push_back({MarkerFlag::Kind::kMoved, marker.name,
                      "moved " + millimetres(out.spread_m) +
