@@ -3,6 +3,7 @@
 #   <prefix>/bin                      camera_node, estimator_node and the tools
 #   <prefix>/share/panoptes/dds       DDS profiles (bus.cpp finds loopback.xml here by default)
 #   <prefix>/share/panoptes/scenes    simulator scenes
+#   <prefix>/share/panoptes/markersets  marker sets on people (docs/marker_sets.md)
 #   <prefix>/share/panoptes/examples  per-camera and estimator settings (4-camera lab, simulator)
 #   <prefix>/share/doc/panoptes       the guides
 #   /lib/systemd/system (deb) or <prefix>/lib/systemd/system: units whose paths point at the above
@@ -14,7 +15,7 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-install(TARGETS camera_node estimator_node panoptes_ctl panoptes_sim_tool panoptes_plan panoptes_export panoptes_record panoptes_replay panoptes_eval panoptes_demo
+install(TARGETS camera_node estimator_node panoptes_ctl panoptes_sim_tool panoptes_plan panoptes_export panoptes_record panoptes_replay panoptes_eval panoptes_demo panoptes_label
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
 # The client library and its CMake and pkg-config packages.
@@ -41,6 +42,8 @@ install(PROGRAMS ${PANOPTES_SOURCE_DIR}/deploy/security/panoptes-security DESTIN
 install(DIRECTORY ${PANOPTES_SOURCE_DIR}/deploy/scenes/ DESTINATION ${PANOPTES_DATA_DIR}/scenes
   FILES_MATCHING PATTERN "*.yaml" PATTERN "*.trc")
 install(DIRECTORY ${PANOPTES_SOURCE_DIR}/deploy/examples/ DESTINATION ${PANOPTES_DATA_DIR}/examples)
+install(DIRECTORY ${PANOPTES_SOURCE_DIR}/deploy/markersets/ DESTINATION ${PANOPTES_DATA_DIR}/markersets
+  FILES_MATCHING PATTERN "*.yaml")
 install(FILES ${PANOPTES_SOURCE_DIR}/README.md ${PANOPTES_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR})
 install(DIRECTORY ${PANOPTES_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR} FILES_MATCHING PATTERN "*.md")
 

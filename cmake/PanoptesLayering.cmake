@@ -21,6 +21,8 @@ set(PANOPTES_LAYERING_RULES
   "panoptes_calib|${_panoptes_pure_links}|${_panoptes_pure_sources}|calibration maths: no DDS, simulator, CLI or file I/O"
   "panoptes_planner|${_panoptes_pure_links}|opencv|Ceres|${_panoptes_pure_sources}|placement maths: no DDS, simulator, CLI or file I/O"
   "panoptes_surface|${_panoptes_pure_links}|opencv|Ceres|${_panoptes_pure_sources}|surface (LumiPoint) tracking runs identically live, offline and in tests: no DDS, simulator, CLI or file I/O"
+  "panoptes_labelling|${_panoptes_pure_links}|opencv|Ceres|${_panoptes_pure_sources}|marker sets and subject models run identically live, offline and in tests: no DDS, simulator, CLI or file I/O"
+  "panoptes_labelling_files|${_panoptes_dds_links}|panoptes_sim|CLI11||the marker set and subject model files are read without DDS (estimator session, panoptes_label)"
   "panoptes_ptz|${_panoptes_dds_links}|panoptes_sim|panoptes_evaluation|CLI11|opencv|Ceres|#include [<\"](fastdds/|fastrtps/|fastcdr/|panoptes_msgs/|panoptes/dds/|CLI/|panoptes/simulator\\.h)|PTZ guidance (model, prediction, simulated head) runs without DDS, simulator or CLI: ptz_guide and panoptes_sim adapt it"
   "panoptes_io|${_panoptes_dds_links}||only panoptes_dds knows DDS"
   "panoptes_sim|${_panoptes_dds_links}||only panoptes_dds knows DDS"

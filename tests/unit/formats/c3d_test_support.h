@@ -12,21 +12,16 @@
 
 #include <gtest/gtest.h>
 
+#include "../shared_data.h"
+
 namespace panoptes::test {
 
 namespace fs = std::filesystem;
 
 // ../shared/data/c3d beside the checkout (tests/data/README.md: fail under CI, skip elsewhere).
 inline fs::path shared_c3d(const std::string& name) {
-  return fs::path(PANOPTES_SOURCE_DIR) / ".." / "shared" / "data" / "c3d" / name;
+  return shared_data("c3d/" + name);
 }
-#define PANOPTES_REQUIRE_SHARED(path)                           \
-  do {                                                          \
-    if (!std::filesystem::exists(path)) {                       \
-      if (std::getenv("CI")) FAIL() << (path) << " is missing"; \
-      GTEST_SKIP() << (path) << " is missing (../shared/data)"; \
-    }                                                           \
-  } while (0)
 
 struct HandBuiltC3d {
   int processor = 84;  // 84 Intel, 85 DEC, 86 MIPS

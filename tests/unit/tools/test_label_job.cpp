@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: Apache-2.0
+// panoptes_label's library (tools/label): `model` over the real Gait2392 static trial writes a
+// subject model that reads back, its report and summary line, and bad inputs naming the file.
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <nlohmann/json.hpp>
+
+#include "../shared_data.h"
+#include "panoptes/errors.h"
+#include "panoptes/label_job/label_job.h"
+#include "panoptes/labelling_files/subject_model_file.h"
+
+namespace panoptes::label_job {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch(const std::string& name) {
+  const auto dir = fs::temp_directory_path() / ("panoptes_label_job_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+ModelCommandOptions gait2392() {
+  ModelCommandOptions options;
+  options.static_trial = test::shared_data("static/gait2392_subject01_static.trc").string();
+  options.marker_set = (fs::path(PANOPTES_SOURCE_DIR) / "deploy" / "markersets" / "gait2392.yaml").string();
+  options.out = scratch("subject01.yaml").string();
+  return options;
+}
+
+TEST(LabelJob, SubjectNameDefaultsToTheStaticFilesStem) {
+  ModelCommandOptions options = gait2392();
+  EXPECT_EQ(subject_name(options), "gait2392_subject01_static");
+  options.subject = "subject01";
+  EXPECT_EQ(subject_name(options), "subject01");
+}
+
+TEST(LabelJob, NeedsExactlyOneTrialAndAFrameRange) {
+  ModelCommandOptions options = gait2392();
+  EXPECT_FALSE(find_problem(options));
+  options.labelled = "walk.trc";
+  ASSERT_TRUE(find_problem(options));
+  EXPECT_NE(find_problem(options)->find("exactly one of --static"), std::string::npos);
+  options.static_trial.clear();
+  EXPECT_FALSE(find_problem(options));
+  EXPECT_EQ(trial_file(options), "walk.trc");
+  EXPECT_EQ(subject_name(options), "walk");
+  for (const char* bad : {"10", "a:5", "5:5", "9:3", "1:2x"}) {
+    options.frames = bad;
+    ASSERT_TRUE(find_problem(options)) << bad;
+    EXPECT_NE(find_problem(options)->find("--frames"), std::string::npos) << bad;
+  }
+  EXPECT_EQ(frame_range("0:75"), std::make_pair(std::size_t{0}, std::size_t{75}));
+  EXPECT_EQ(frame_range(":75").second, 75U);
+  EXPECT_EQ(frame_range("75:").first, 75U);
+  EXPECT_EQ(frame_range("75:").second, std::numeric_limits<std::size_t>::max());
+}
+
+TEST(LabelJob, ModelFromHalfALabelledTrial) {
+  PANOPTES_REQUIRE_SHARED(test::shared_data("static/gait2392_subject01_walk1.trc"));
+  ModelCommandOptions options = gait2392();
+  options.static_trial.clear();
+  options.labelled = test::shared_data("static/gait2392_subject01_walk1.trc").string();
+  options.frames = ":75";
+  const auto model = run_model(options);
+  EXPECT_EQ(model.frames, 75U);
+  EXPECT_TRUE(model.options.dynamic);
+  EXPECT_EQ(labelling::load_subject_model(options.out).options.dynamic, true);
+  EXPECT_NE(
+      model_report(model).find("flagged R.Knee.Med: calibration-only marker is not in the labelled trial"),
+      std::string::npos)
+      << model_report(model);
+}
+
+TEST(LabelJob, ModelWritesASubjectModelAndReportsTheFlags) {
+  PANOPTES_REQUIRE_SHARED(test::shared_data("static/gait2392_subject01_static.trc"));
+  ModelCommandOptions options = gait2392();
+  options.min_tolerance_mm = 1.0;
+  const auto model = run_model(options);
+  const auto back = labelling::load_subject_model(options.out);
+  EXPECT_EQ(back.marker_count(), 49U);
+  EXPECT_DOUBLE_EQ(back.options.min_tolerance_m, 0.001);
+  const std::string report = model_report(model);
+  EXPECT_NE(report.find("flagged L.Temple: moved 21.1 mm RMS"), std::string::npos) << report;
+  EXPECT_NE(report.find("R.Thigh (parent Pelvis): 3 tracked markers + 2 calibration-only, static fit RMS"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("R.Forearm (parent R.UpperArm): 2 tracked markers, no pose"), std::string::npos)
+      << report;
+  const auto summary = nlohmann::json::parse(model_summary_line(model));
+  EXPECT_EQ(summary["markers"], 49);
+  EXPECT_EQ(summary["segments"], 13);
+  EXPECT_EQ(summary["joints"], 4);
+  EXPECT_EQ(summary["flagged"], 1);
+}
+
+// A walking C3D trial given as the static one: built, every marker flagged, and the report says the
+// subject did not stand still.
+TEST(LabelJob, AWalkGivenAsTheStaticTrialIsReportedAsNotStandingStill) {
+  const auto walk = test::shared_data("c3d/Walk1.c3d");
+  PANOPTES_REQUIRE_SHARED(walk);
+  ModelCommandOptions options = gait2392();
+  options.static_trial = walk.string();
+  options.marker_set = scratch("pelvis.yaml").string();
+  std::ofstream(options.marker_set) << "name: pelvis\nmarkers: [RASI, LASI, VSAC]\n"
+                                       "segments: [{name: Pelvis, markers: [RASI, LASI, VSAC]}]\n";
+  const auto model = run_model(options);
+  const std::string report = model_report(model);
+  EXPECT_NE(report.find("the subject did not stand still: 3 of 3 markers moved"), std::string::npos)
+      << report;
+  EXPECT_LT(model.segments[0].static_fit_rms_m, 0.002);  // the pelvis stays rigid while walking
+}
+
+TEST(LabelJob, ABadMarkerSetIsAConfigErrorNamingTheFileAndEntry) {
+  ModelCommandOptions options = gait2392();
+  options.marker_set = scratch("bad.yaml").string();
+  std::ofstream(options.marker_set) << "name: bad\nmarkers: [A, B, C]\nsegments:\n"
+                                       "  - {name: S, parent: T, markers: [A, B, C]}\n";
+  try {
+    run_model(options);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what())
+                  .find(options.marker_set + ": segments[0].parent: unknown parent segment 'T'"),
+              std::string::npos)
+        << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace panoptes::label_job
