@@ -79,7 +79,9 @@ def check_estimator_status(d, a):
     confirmed = max(s["tracks_confirmed"] for s in d["estimator_status"])
     counts = [int(s["frames"]) for s in d["estimator_status"]]
     frames = counts[-1]
-    ok = confirmed == a.markers and counts == sorted(counts) and 0 < frames <= a.features_published
+    # A ghost or a second track on one marker may be confirmed for a moment (the tracker deletes it):
+    # the decoded count must reach the markers, not equal them in every status (issue 37: 4 of 3 once).
+    ok = confirmed >= a.markers and counts == sorted(counts) and 0 < frames <= a.features_published
     return ok, f"{len(d['estimator_status'])} statuses, tracks_confirmed up to {confirmed}, frames received counting up to {frames} ({a.features_published} published by the cameras)"
 
 
