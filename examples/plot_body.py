@@ -46,15 +46,11 @@ def main():
         print(f"plot_body: {error}", file=sys.stderr)
         return 1
     with client:
-        bodies = client.wait_for_descriptions(args.timeout)  # come with the first frames
-        if bodies is None:
-            print(f"plot_body: no body descriptions within {args.timeout} s: {client.status_text()} on domain "
-                  f"{client.domain_id} (is estimator_node running?)", file=sys.stderr)
-            return 1
-        names = [b.name for b in bodies]
-        args.body = args.body or (names[0] if names else None)
+        names = [b.name for b in client.wait_for_descriptions(args.timeout) or []]  # with the first frames
+        args.body = args.body or next(iter(names), None)
         if args.body not in names:
-            print(f"plot_body: no body '{args.body}' (bodies: {', '.join(names) or 'none'})", file=sys.stderr)
+            print(f"plot_body: no body '{args.body}' (described: {', '.join(names) or 'none'}); "
+                  f"{client.status_text()} on domain {client.domain_id}", file=sys.stderr)
             return 1
         figure, axes = plt.subplots()
         lines = [axes.plot([], [], label=axis)[0] for axis in "xyz"]
@@ -64,13 +60,10 @@ def main():
         end = time.monotonic() + args.duration if args.duration > 0 else float("inf")
         while time.monotonic() < end and (args.save or plt.fignum_exists(figure.number)):
             frame = client.wait_for_frame(args.timeout)
-            if frame is None:
-                print(f"plot_body: {client.status_text()} on domain {client.domain_id} "
+            body = frame.body(args.body) if frame is not None else None
+            if body is None:  # no frame in time, or the bodies file changed
+                print(f"plot_body: no '{args.body}': {client.status_text()} on domain {client.domain_id} "
                       "(is estimator_node running?)", file=sys.stderr)
-                return 1
-            body = frame.body(args.body)
-            if body is None:  # the bodies file changed
-                print(f"plot_body: body '{args.body}' is no longer tracked", file=sys.stderr)
                 return 1
             start_ns = start_ns or frame.stamp_ns
             if body.tracking_valid:
