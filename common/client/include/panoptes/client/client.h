@@ -221,8 +221,7 @@ struct FrameResult {
 
 struct DescriptionsResult {
   Status status = Status::kTimeout;
-  // The estimator's bodies, unless not kOk. kOk with none: the estimator runs without bodies.
-  std::vector<BodyDescription> descriptions;
+  std::vector<BodyDescription> descriptions;  // empty unless kOk (kOk and empty: no bodies defined)
 };
 
 struct StrokeResult {
