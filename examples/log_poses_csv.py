@@ -71,7 +71,8 @@ def main():
             print(f"log_poses_csv: {client.status_text()} on domain {client.domain_id} "
                   "(is estimator_node running?)", file=sys.stderr)
             return 1
-        print(f"log_poses_csv: {counts[0]} frames logged to {args.out}; {client.stats()}", file=sys.stderr)
+        print(f"log_poses_csv: {counts[0]} frames logged to {args.out} (panoptes {panoptes.__version__}); "
+              f"{client.stats()}", file=sys.stderr)
     return 0
 
 

@@ -20,7 +20,7 @@ import panoptes
 def parse_arguments():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0],
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    parser.add_argument("--body", default=None, help="body name (default: the first body of the first frame)")
+    parser.add_argument("--body", default=None, help="body name (default: the estimator's first body)")
     parser.add_argument("--duration", type=float, default=0.0, help="seconds to plot (0: until the window closes)")
     parser.add_argument("--save", default=None, help="write the plot to this PNG file instead of showing it")
     parser.add_argument("--window", type=float, default=10.0, help="seconds of history shown")
@@ -46,6 +46,12 @@ def main():
         print(f"plot_body: {error}", file=sys.stderr)
         return 1
     with client:
+        names = [b.name for b in client.wait_for_descriptions(args.timeout) or []]  # with the first frames
+        args.body = args.body or next(iter(names), None)
+        if args.body not in names:
+            print(f"plot_body: no body '{args.body}' (described: {', '.join(names) or 'none'}); "
+                  f"{client.status_text()} on domain {client.domain_id}", file=sys.stderr)
+            return 1
         figure, axes = plt.subplots()
         lines = [axes.plot([], [], label=axis)[0] for axis in "xyz"]
         axes.set_xlabel("time (s)")
@@ -54,15 +60,10 @@ def main():
         end = time.monotonic() + args.duration if args.duration > 0 else float("inf")
         while time.monotonic() < end and (args.save or plt.fignum_exists(figure.number)):
             frame = client.wait_for_frame(args.timeout)
-            if frame is None:
-                print(f"plot_body: {client.status_text()} on domain {client.domain_id} "
+            body = frame.body(args.body) if frame is not None else None
+            if body is None:  # no frame in time, or the bodies file changed
+                print(f"plot_body: no '{args.body}': {client.status_text()} on domain {client.domain_id} "
                       "(is estimator_node running?)", file=sys.stderr)
-                return 1
-            args.body = args.body or frame.bodies[0].name
-            body = frame.body(args.body)
-            if body is None:
-                print(f"plot_body: no body '{args.body}' (bodies: {', '.join(b.name for b in frame.bodies)})",
-                      file=sys.stderr)
                 return 1
             start_ns = start_ns or frame.stamp_ns
             if body.tracking_valid:
@@ -75,7 +76,8 @@ def main():
         draw(axes, lines, times, points, args.body, args.window if not args.save else None)
         if args.save:
             figure.savefig(args.save, dpi=100)
-            print(f"plot_body: {len(points)} positions of '{args.body}' plotted to {args.save}", file=sys.stderr)
+            print(f"plot_body: {len(points)} positions of '{args.body}' plotted to {args.save} "
+                  f"(panoptes {panoptes.__version__})", file=sys.stderr)
     return 0
 
 

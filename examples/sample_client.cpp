@@ -2,6 +2,7 @@
 // sample_client: prints every frame's bodies and markers, like NatNet's SampleClient
 // (docs/clients.md). Uses only the installed client library: panoptes/client/client.h.
 //   sample_client [--domain N] [--profile FILE] [--frames N] [--timeout-s S]
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -50,6 +51,20 @@ void print_frame(const panoptes::client::Frame& frame) {
   }
 }
 
+// The bodies the estimator describes, like NatNet's data descriptions. They come with the first
+// frames (docs/clients.md, "Start in any order"); a publisher of frames alone sends none.
+void print_descriptions(panoptes::client::Client& client) {
+  const auto result = client.wait_for_descriptions(std::chrono::seconds(1));
+  if (result.status != panoptes::client::Status::kOk) {
+    std::fprintf(stderr, "sample_client: no body descriptions within 1 s\n");
+    return;
+  }
+  std::printf("described bodies: %zu\n", result.descriptions.size());
+  for (const auto& d : result.descriptions)
+    std::printf("  description %d %-10s %s, %zu markers\n", d.id, d.name.c_str(), d.kind.c_str(),
+                d.markers.size());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -81,8 +96,8 @@ int main(int argc, char** argv) {
   }
   try {
     panoptes::client::Client client(options);
-    std::fprintf(stderr, "sample_client: domain %d, DDS profile %s\n", client.domain_id(),
-                 client.profile_file().c_str());
+    std::fprintf(stderr, "sample_client: panoptes client %s, domain %d, DDS profile %s\n",
+                 panoptes::client::version().c_str(), client.domain_id(), client.profile_file().c_str());
     const auto timeout = std::chrono::milliseconds(static_cast<long>(timeout_s * 1000));
     for (long received = 0; frames_wanted == 0 || received < frames_wanted; ++received) {
       const auto result = client.wait_for_frame(timeout);
@@ -91,6 +106,7 @@ int main(int argc, char** argv) {
                      client.status_text().c_str(), client.domain_id());
         return 1;
       }
+      if (received == 0) print_descriptions(client);
       print_frame(result.frame);
     }
     const auto stats = client.stats();

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // bench_client: the latency the client library adds on top of a raw DDS reader of the same topic
-// (issue 15, docs/benchmarks.md). A child process (this program with --publish) writes MocapFrames
-// (two tracked bodies, 8 labelled and 4 unlabelled markers) at --rate through a Bus writer, each
-// stamped publish_ns just before write(). This process reads them twice, on two participants:
+// (issue 15, docs/benchmarks.md). A child process (this program with --publish) writes the two
+// bodies' BodyDescriptions, then MocapFrames (two tracked bodies, 8 labelled and 4 unlabelled
+// markers) at --rate through a Bus writer, each stamped publish_ns just before write(). This process reads
+// them twice, on two participants:
 //   raw     a Bus::make_reader<msg::MocapFrame> (reliable, as the client by default): publish -> its callback
 //   client  a panoptes::client::Client: publish -> a callback added with add_callback, and
 //           publish -> wait_for_frame() returning in a thread that pulls
@@ -74,8 +75,29 @@ msg::MocapFrame synthetic_frame(std::uint64_t number, TimeNs now) {
   return f;
 }
 
+// The bodies of synthetic_frame, four markers each, as an estimator describes them.
+msg::BodyDescriptions synthetic_descriptions() {
+  msg::BodyDescriptions d;
+  d.generation(1);
+  for (int b = 0; b < 2; ++b) {
+    msg::BodyDescription body;
+    body.name(b == 0 ? "head" : "tool");
+    body.id(b + 1);
+    body.kind("passive");
+    for (int m = 0; m < 4; ++m) {
+      msg::MarkerPosition p;
+      p.position({0.05 * m, 0.03 * (m % 2), 0.0});
+      body.markers().push_back(p);
+    }
+    d.bodies().push_back(body);
+  }
+  return d;
+}
+
 int publish(double rate_hz, double duration_s, int readers) {
   panoptes::dds::Bus bus;
+  auto descriptions = bus.make_writer<msg::BodyDescriptions>();
+  descriptions->write(synthetic_descriptions());  // transient-local: readers get it when they match
   auto writer = bus.make_writer<msg::MocapFrame>();
   if (!writer->wait_for_readers(readers, std::chrono::seconds(10))) {
     std::fprintf(stderr, "bench_client --publish: %d readers did not match\n", readers);

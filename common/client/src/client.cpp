@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <condition_variable>
 #include <cstdio>
 #include <mutex>
 #include <utility>
@@ -53,6 +54,22 @@ const Chain* ChainUpdate::chain(const std::string& name) const {
   return it == chains.end() ? nullptr : &*it;
 }
 
+std::string version() {
+  return PANOPTES_CLIENT_VERSION;
+}
+
+int version_major() {
+  return PANOPTES_CLIENT_VERSION_MAJOR;
+}
+
+int version_minor() {
+  return PANOPTES_CLIENT_VERSION_MINOR;
+}
+
+int version_patch() {
+  return PANOPTES_CLIENT_VERSION_PATCH;
+}
+
 // Hidden: nested in the exported Client, it would otherwise be exported with it.
 struct __attribute__((visibility("hidden"))) Client::Impl {
   using Clock = std::chrono::steady_clock;
@@ -76,7 +93,8 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
   bool closed = false;
   Stats stats;  // the streams' counts are added by Client::stats()
   detail::FrameSequence sequence;
-  std::vector<BodyDescription> descriptions;
+  std::vector<BodyDescription> descriptions;     // valid once stats.descriptions_received > 0
+  std::condition_variable descriptions_arrived;  // or closed
   std::array<Clock::time_point, kRateWindow> arrivals{};
   Clock::time_point last_arrival;
 
@@ -208,6 +226,7 @@ void Client::Impl::on_descriptions(const msg::BodyDescriptions& message) {
   // again, and its transient-local sample must replace the old run's set.
   descriptions = std::move(*bodies);
   ++stats.descriptions_received;
+  descriptions_arrived.notify_all();
 }
 
 Client::Client(const ClientOptions& options) {
@@ -327,6 +346,20 @@ std::vector<BodyDescription> Client::body_descriptions() const {
   return impl_->descriptions;
 }
 
+DescriptionsResult Client::wait_for_descriptions(std::chrono::milliseconds timeout) {
+  std::unique_lock lock(impl_->mutex);
+  impl_->descriptions_arrived.wait_for(
+      lock, timeout, [this] { return impl_->closed || impl_->stats.descriptions_received > 0; });
+  DescriptionsResult result;
+  if (impl_->closed) {
+    result.status = Status::kClosed;
+  } else if (impl_->stats.descriptions_received > 0) {
+    result.status = Status::kOk;
+    result.descriptions = impl_->descriptions;
+  }
+  return result;
+}
+
 BodyDescription Client::body_description(const std::string& name) const {
   std::lock_guard lock(impl_->mutex);
   std::string known;
@@ -393,6 +426,7 @@ void Client::close() {
     std::lock_guard lock(impl_->mutex);
     impl_->closed = true;
   }
+  impl_->descriptions_arrived.notify_all();
   impl_->frames.close();
   impl_->strokes.close();
   impl_->grabs.close();

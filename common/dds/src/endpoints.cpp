@@ -166,8 +166,7 @@ std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_samp
       std::make_unique<ReaderListener<T>>(std::move(on_sample), core_->receive_counters(),
                                           spec.camera_scoped ? &core_->writer_partitions() : nullptr);
   fdds::TopicDescription* topic = core_->topic<T>(name);
-  fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
-  apply_spec(reader_qos, spec, qos);
+  fdds::DataReaderQos reader_qos = reader_qos_for(spec, qos);
   if (spec.camera_scoped)
     reader_qos.properties().properties().emplace_back(kPartitionsProperty, scoped_partitions(only_id, true));
   // A camera-scoped topic without a leading id (commands): the partition alone selects the samples.

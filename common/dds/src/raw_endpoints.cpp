@@ -152,9 +152,8 @@ std::unique_ptr<RawReader> Bus::make_raw_reader(const std::string& topic, RawRea
   impl->listener =
       std::make_unique<RawReaderListener>(std::move(on_sample), core_->receive_counters(),
                                           entry.spec.camera_scoped ? &core_->writer_partitions() : nullptr);
-  fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
   const bool offered = entry.spec.reliable || entry.spec.offer_reliable;
-  apply_spec(reader_qos, entry.spec, offered ? Qos::kReliable : Qos::kDefault);
+  fdds::DataReaderQos reader_qos = reader_qos_for(entry.spec, offered ? Qos::kReliable : Qos::kDefault);
   if (entry.spec.camera_scoped)
     reader_qos.properties().properties().emplace_back(kPartitionsProperty, scoped_partitions({}, true));
   impl->reader =

@@ -1,13 +1,22 @@
 // SPDX-License-Identifier: Apache-2.0
-// Topics and QoS: the writer QoS of a topic and the table of raw (serialized) topics.
+// Topics and QoS: the writer and reader QoS of a topic and the table of raw (serialized) topics.
 #include "topics.h"
 
 namespace panoptes::dds {
 
-// The writer QoS of a topic (docs/protocol.md), for typed and raw writers alike.
+// Transient-local topics (the samples a late joiner needs: body descriptions, calibration, camera
+// info) are repaired at once rather than on Fast DDS's timers. A reader that matches a writer asks
+// for the history after initialAcknackDelay (70 ms by default, then doubled until the writer's
+// first heartbeat) and the writer answers after nackResponseDelay (5 ms): a client started late got
+// the body descriptions 5-39 ms after its first frame, which has no such wait (docs/clients.md,
+// "Late joiners"). Not 0 ms for the reader: the doubling would then resend without pause.
+constexpr std::uint32_t kLateJoinerAcknackNs = 1'000'000;
+
 fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos) {
   fdds::DataWriterQos writer_qos = fdds::DATAWRITER_QOS_DEFAULT;
   apply_spec(writer_qos, spec, qos);
+  if (spec.durability == Durability::kTransientLocal)
+    writer_qos.reliable_writer_qos().times.nackResponseDelay = eprosima::fastrtps::Duration_t(0, 0);
   if (spec.offer_reliable && !spec.reliable && qos == Qos::kDefault) {
     writer_qos.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
     writer_qos.history().depth = kOfferedReliableDepth;
@@ -22,6 +31,15 @@ fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos) {
   writer_qos.writer_resource_limits().reader_filters_allocation =
       eprosima::fastrtps::ResourceLimitedContainerConfig(0, kMaxInstances, 1);
   return writer_qos;
+}
+
+fdds::DataReaderQos reader_qos_for(const TopicSpec& spec, Qos qos) {
+  fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
+  apply_spec(reader_qos, spec, qos);
+  if (spec.durability == Durability::kTransientLocal)
+    reader_qos.reliable_reader_qos().times.initialAcknackDelay =
+        eprosima::fastrtps::Duration_t(0, kLateJoinerAcknackNs);
+  return reader_qos;
 }
 
 namespace {

@@ -217,6 +217,8 @@ void apply_spec(Qos& qos, const TopicSpec& spec, panoptes::dds::Qos override_qos
 
 // The writer QoS of a topic (docs/protocol.md), for typed and raw writers alike.
 fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos);
+// The reader QoS of a topic, for typed and raw readers alike.
+fdds::DataReaderQos reader_qos_for(const TopicSpec& spec, Qos qos);
 
 // A topic panoptes_record and panoptes_replay (and panoptes_rogue) read and write as raw CDR: its
 // public description, its QoS, and a factory of the generated type support it is decoded with.

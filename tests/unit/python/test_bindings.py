@@ -98,6 +98,16 @@ class BadInput(unittest.TestCase):
                 os.environ["PANOPTES_DOMAIN"] = str(DOMAIN)
 
 
+class Version(unittest.TestCase):
+    def test_version_is_the_librarys(self):
+        self.assertEqual(panoptes.__version__, panoptes.version())
+        self.assertEqual(panoptes.version(), ".".join(str(part) for part in panoptes.version_info))
+        self.assertEqual(len(panoptes.version_info), 3)
+        expected = os.environ.get("PANOPTES_PROJECT_VERSION")  # set by ctest: CMake's project version
+        if expected:
+            self.assertEqual(panoptes.__version__, expected)
+
+
 class EmptyDomain(unittest.TestCase):
     def setUp(self):
         self.client = panoptes.Client(domain=EMPTY_DOMAIN, stale_after=0.2)
@@ -165,9 +175,10 @@ class EmptyDomain(unittest.TestCase):
                 raise ZeroDivisionError()
         self.assertTrue(client.closed)
 
-    def test_close_from_another_thread_wakes_the_waiter(self):
+    def assert_close_wakes(self, wait):
+        """close() from this thread wakes wait(30.0) running on another, which returns None."""
         results = []
-        waiter = threading.Thread(target=lambda: results.append(self.client.wait_for_frame(30.0)))
+        waiter = threading.Thread(target=lambda: results.append(wait(30.0)))
         waiter.start()
         time.sleep(0.2)
         start = time.monotonic()
@@ -176,6 +187,17 @@ class EmptyDomain(unittest.TestCase):
         self.assertFalse(waiter.is_alive())
         self.assertEqual(results, [None])
         self.assertLess(time.monotonic() - start, 1.0)
+
+    def test_close_from_another_thread_wakes_the_waiter(self):
+        self.assert_close_wakes(self.client.wait_for_frame)
+
+    def test_descriptions_wait_times_out_with_none_and_close_wakes_it(self):
+        start = time.monotonic()
+        self.assertIsNone(self.client.wait_for_descriptions(0.2))
+        self.assertGreaterEqual(time.monotonic() - start, 0.19)
+        with self.assertRaises(ValueError):
+            self.client.wait_for_descriptions(-1.0)
+        self.assert_close_wakes(self.client.wait_for_descriptions)
 
     def test_frames_generator_ends_on_timeout(self):
         start = time.monotonic()
@@ -245,6 +267,14 @@ class Live(unittest.TestCase):
         frame = self.client.wait_for_frame(10.0)
         self.assertIsNotNone(frame, self.client.status_text())
         return frame
+
+    def test_descriptions_come_with_the_first_frames(self):
+        bodies = self.client.wait_for_descriptions(10.0)
+        self.assertIsNotNone(bodies, self.client.status_text())
+        self.assertEqual([b.name for b in bodies], ["head", "tool"])
+        self.assertEqual(bodies[1].markers.shape, (4, 3))
+        self.first_frame()
+        self.assertEqual(len(self.client.wait_for_descriptions(0)), 2)  # known: at once
 
     def test_frame_contents_are_numpy(self):
         frame = self.first_frame()

@@ -22,7 +22,11 @@ from panoptes._panoptes import (
     RigidBody,
     Stats,
     UnknownBody,
+    version,
+    version_info,
 )
+
+__version__ = version()  # the client library's version ("0.1.0"); version_info: (0, 1, 0)
 
 __all__ = [
     "BodyDescription",
@@ -35,6 +39,8 @@ __all__ = [
     "Stats",
     "UnknownBody",
     "frames",
+    "version",
+    "version_info",
 ]
 
 

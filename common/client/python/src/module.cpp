@@ -372,6 +372,11 @@ PYBIND11_MODULE(_panoptes, m) {
   bind_chains(m);
   bind_client(m);
   forbid_new(m);
+  m.def("version", &panoptes::client::version,
+        "version() -> str: the client library's version, the Panoptes release (\"0.1.0\")");
+  m.attr("version_info") =
+      py::make_tuple(panoptes::client::version_major(), panoptes::client::version_minor(),
+                     panoptes::client::version_patch());
   // Users meet these classes as panoptes.X (help(), repr of the types, pickling errors).
   for (const char* name : {"Client", "Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats",
                            "Stroke", "Chain", "GrabEvent", "ChainUpdate"})

@@ -162,7 +162,7 @@ void PyClient::destroy() {
 }
 
 // Waits in slices of kSignalCheckS with the GIL released, so Ctrl-C interrupts; `wait` is the
-// library's wait_for_frame or wait_for_stroke.
+// library's wait_for_frame, wait_for_stroke, wait_for_grab_event or wait_for_descriptions.
 template <class Wait>
 py::object PyClient::wait_sliced(double timeout_s, const Wait& wait) {
   if (std::isnan(timeout_s) || timeout_s < 0)
@@ -241,6 +241,13 @@ void PyClient::remove_callback(int handle) {
 
 std::vector<client::BodyDescription> PyClient::body_descriptions() const {
   return client_->body_descriptions();
+}
+
+py::object PyClient::wait_for_descriptions(double timeout_s) {
+  return wait_sliced(timeout_s, [this](std::chrono::milliseconds slice) {
+    client::DescriptionsResult result = client_->wait_for_descriptions(slice);
+    return std::make_pair(result.status, std::move(result.descriptions));
+  });
 }
 
 client::BodyDescription PyClient::body_description(const std::string& name) const {
@@ -377,7 +384,13 @@ one's traceback is printed). No callback runs after close() or remove_callback()
            "ignored)")
       .def("body_descriptions", bound(&PyClient::body_descriptions),
            "body_descriptions() -> list of BodyDescription: the estimator's bodies (known to late joiners "
-           "too)")
+           "too); empty until the first set arrived, which may be after the first frame")
+      .def("wait_for_descriptions", bound(&PyClient::wait_for_descriptions), "timeout"_a,
+           R"doc(wait_for_descriptions(timeout) -> list of BodyDescription or None
+
+The estimator's bodies as soon as a set has arrived (at once if one has; an empty list: the estimator
+has no bodies), waiting up to `timeout` seconds with the GIL released. None on timeout (no estimator
+yet; status_text() says why) or when the client is closed. Ctrl-C interrupts the wait.)doc")
       .def("body_description", bound(&PyClient::body_description), "name"_a,
            "body_description(name) -> BodyDescription; raises UnknownBody (a KeyError) naming the body")
       .def("connected", bound(&PyClient::connected),
@@ -391,7 +404,8 @@ one's traceback is printed). No callback runs after close() or remove_callback()
       .def_property_readonly("domain_id", bound(&PyClient::domain_id), "the DDS domain the client opened")
       .def_property_readonly("closed", bound(&PyClient::closed), "close() was called")
       .def("close", bound(&PyClient::close),
-           "close(): stops delivery and wakes wait_for_frame (None). Idempotent; allowed from a callback.")
+           "close(): stops delivery and wakes wait_for_frame and the other waits (None). Idempotent; "
+           "allowed from a callback.")
       .def("__enter__", [](py::handle self) { return py::reinterpret_borrow<py::object>(self); })
       .def(
           "__exit__",

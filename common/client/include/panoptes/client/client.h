@@ -209,14 +209,19 @@ struct PANOPTES_CLIENT_API ChainUpdate {
 };
 
 enum class Status {
-  kOk,       // a frame
-  kTimeout,  // no frame within the timeout (see status_text())
+  kOk,       // what was waited for (a frame, a stroke, a grab event, the body descriptions)
+  kTimeout,  // nothing within the timeout (see status_text())
   kClosed,   // close() was called
 };
 
 struct FrameResult {
   Status status = Status::kTimeout;
   Frame frame;  // empty unless kOk
+};
+
+struct DescriptionsResult {
+  Status status = Status::kTimeout;
+  std::vector<BodyDescription> descriptions;  // empty unless kOk (kOk and empty: no bodies defined)
 };
 
 struct StrokeResult {
@@ -247,6 +252,13 @@ struct Stats {
   std::uint64_t grab_events_dropped = 0;  // overflowed the grab event queue
   std::string last_error;  // why the last malformed sample was ignored, or the last callback's exception
 };
+
+// The library's version, the Panoptes release it belongs to (CMake's project version, also that of
+// the CMake package Panoptes and of pkg-config's panoptes-client): "0.1.0".
+PANOPTES_CLIENT_API std::string version();
+PANOPTES_CLIENT_API int version_major();
+PANOPTES_CLIENT_API int version_minor();
+PANOPTES_CLIENT_API int version_patch();
 
 class PANOPTES_CLIENT_API Client {
  public:
@@ -290,8 +302,13 @@ class PANOPTES_CLIENT_API Client {
   // The newest chain update received, if any (subscribes on first use).
   std::optional<ChainUpdate> latest_chains();
 
-  // The estimator's bodies (from rt/panoptes/body_descriptions, known to late joiners too).
+  // The estimator's bodies (from rt/panoptes/body_descriptions, known to late joiners too); empty
+  // until the first set arrived, which may be after the first frame (docs/clients.md).
   std::vector<BodyDescription> body_descriptions() const;
+  // The estimator's bodies as soon as a set has arrived (at once if one has), waiting up to
+  // `timeout` for the first: kTimeout if none came (no estimator yet; see status_text()), kClosed
+  // if close() was called.
+  DescriptionsResult wait_for_descriptions(std::chrono::milliseconds timeout);
   BodyDescription body_description(const std::string& name) const;  // throws UnknownBody
 
   // A frame arrived within stale_after.
@@ -304,8 +321,8 @@ class PANOPTES_CLIENT_API Client {
   std::string profile_file() const;
   int domain_id() const;
 
-  // Stops delivery and wakes wait_for_frame (kClosed). Idempotent; may be called from a callback.
-  // After it returns (called from another thread) no callback is running or will run.
+  // Stops delivery and wakes wait_for_frame and the other waits (kClosed). Idempotent; may be called from a
+  // callback. After it returns (called from another thread) no callback is running or will run.
   void close();
 
  private:
