@@ -152,6 +152,8 @@ struct Labeller::State {
   std::unordered_map<std::uint64_t, std::pair<std::size_t, std::pair<std::size_t, std::size_t>>> labels;
   const std::vector<TrackPoint>* points = nullptr;
   std::vector<char> claimed;
+  std::vector<char> young;                      // per point: too new to be acquired
+  std::unordered_map<std::uint64_t, int> ages;  // instants each track has been seen
 
   const Eigen::Vector3d& at(std::size_t point) const { return (*points)[point].position_m; }
 
@@ -161,9 +163,17 @@ struct Labeller::State {
   void recover();
   void acquire(std::size_t subject_index);
   std::optional<Found> search_segment(const Subject& subject, std::size_t s,
-                                      const std::optional<RigidTransform>& parent_pose) const;
-  std::optional<Found> search_pair(const Subject& subject, std::size_t s,
-                                   const RigidTransform& parent_pose) const;
+                                      const std::optional<RigidTransform>& parent_pose,
+                                      const Points& parent_seen) const;
+  std::optional<double> child_marker_cost(const Subject& subject, std::size_t s, std::size_t m,
+                                          const RigidTransform& parent_pose, const Points& parent_seen,
+                                          std::size_t p) const;
+  Points seen_now(const SegmentState& segment) const;
+  bool keeps_handedness(const Subject& subject, std::size_t s, std::size_t a, std::size_t b,
+                        const Points& parent_seen, std::size_t i, std::size_t j) const;
+  Points seen_of(const Subject& subject, std::size_t s, const Hypothesis& h) const;
+  std::optional<Found> search_pair(const Subject& subject, std::size_t s, const RigidTransform& parent_pose,
+                                   const Points& parent_seen) const;
   std::optional<Found> search_rigid(const Subject& subject, std::size_t s,
                                     const std::optional<RigidTransform>& parent_pose,
                                     const std::vector<std::size_t>& candidates,
@@ -303,7 +313,7 @@ std::vector<std::size_t> Labeller::State::candidates_near(
   std::vector<std::size_t> out;
   const auto parent = subject.segments[s].parent;
   for (std::size_t p = 0; p < claimed.size(); ++p) {
-    if (claimed[p] != 0) continue;
+    if (claimed[p] != 0 || young[p] != 0) continue;
     if (parent_pose && parent) {
       const auto [offset, reach] = static_offset(subject.model, s, *parent, options);
       if ((at(p) - (parent_pose->t + parent_pose->q * offset)).norm() > reach) continue;
@@ -388,7 +398,7 @@ void Labeller::State::add_extras(const Subject& subject, std::size_t s, Found& f
     double best = options.loose_gate_m;
     for (std::size_t p = 0; p < claimed.size(); ++p) {
       const double d = (at(p) - predicted).norm();
-      if (claimed[p] != 0 || d >= best || used(p)) continue;
+      if (claimed[p] != 0 || young[p] != 0 || d >= best || used(p)) continue;
       best = d;
       nearest = p;
     }
@@ -400,31 +410,106 @@ void Labeller::State::add_extras(const Subject& subject, std::size_t s, Found& f
   if (const auto fit = fit_layout(layout, seen)) found.pose = fit->T_world_segment;
 }
 
-// Segments without a pose (one or two tracked markers): the candidates nearest where the parent's
-// pose and the static posture put them, their distance within tolerance.
+// Where a child's marker may be: on a shell about the parent's marker nearest to it in the static
+// pose (a joint sits near it, so the distance holds while the joint turns), else near where the
+// parent's pose and the static posture put it. Returns the cost of point `p` or nullopt.
+std::optional<double> Labeller::State::child_marker_cost(const Subject& subject, std::size_t s, std::size_t m,
+                                                         const RigidTransform& parent_pose,
+                                                         const Points& parent_seen, std::size_t p) const {
+  const auto& model = subject.model;
+  const std::size_t parent = *subject.segments[s].parent;
+  const auto [offset, reach] = static_offset(model, s, parent, options);
+  const Eigen::Vector3d marker_static = model.segments[s].origin_m + model.segments[s].markers[m].position_m;
+  std::optional<double> shell;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < parent_seen.size(); ++k) {
+    if (!parent_seen[k]) continue;
+    const double d =
+        (marker_static - (model.segments[parent].origin_m + model.segments[parent].markers[k].position_m))
+            .norm();
+    if (d >= nearest) continue;
+    nearest = d;
+    shell = std::abs((at(p) - *parent_seen[k]).norm() - d) / (options.shell_m + options.shell_fraction * d);
+  }
+  const double predicted =
+      (at(p) - (parent_pose.t + parent_pose.q * (offset + model.segments[s].markers[m].position_m))).norm();
+  if (shell) return *shell <= 1.0 ? std::optional(*shell + 0.1 * predicted / reach) : std::nullopt;
+  return predicted <= reach ? std::optional(predicted / reach) : std::nullopt;
+}
+
+namespace {
+
+// The signed volume of the tetrahedron (p0, p1, a, b), normalised by its edge lengths: four points
+// have a handedness that two markers and their parent's two nearest do not lose while the joint
+// turns (Gait2392's forearm: -0.08 static, -0.09..-0.12 walking on the right, +0.06 / +0.08..+0.12
+// on the left), so it orders a segment's two markers where distances cannot.
+double handedness(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& a,
+                  const Eigen::Vector3d& b) {
+  const Eigen::Vector3d u = p1 - p0;
+  const Eigen::Vector3d v = a - p1;
+  const Eigen::Vector3d w = b - p1;
+  return u.cross(v).dot(w) / (u.norm() * v.norm() * w.norm());
+}
+
+// The parent's two seen markers nearest to the child's origin in the static pose, farther first.
+std::optional<std::pair<std::size_t, std::size_t>> nearest_two(const SubjectModel& model, std::size_t s,
+                                                               std::size_t parent,
+                                                               const Points& parent_seen) {
+  std::vector<std::pair<double, std::size_t>> by_distance;
+  for (std::size_t k = 0; k < parent_seen.size(); ++k) {
+    if (!parent_seen[k]) continue;
+    const Eigen::Vector3d at = model.segments[parent].origin_m + model.segments[parent].markers[k].position_m;
+    by_distance.emplace_back((at - model.segments[s].origin_m).norm(), k);
+  }
+  if (by_distance.size() < 2) return std::nullopt;
+  std::sort(by_distance.begin(), by_distance.end());
+  return std::pair{by_distance[1].second, by_distance[0].second};
+}
+
+}  // namespace
+
+// Whether points (i, j) as markers (a, b) of segment s keep the static pose's handedness with the
+// parent's two nearest markers (when that handedness is clear).
+bool Labeller::State::keeps_handedness(const Subject& subject, std::size_t s, std::size_t a, std::size_t b,
+                                       const Points& parent_seen, std::size_t i, std::size_t j) const {
+  const auto& model = subject.model;
+  const std::size_t parent = *subject.segments[s].parent;
+  const auto pair = nearest_two(model, s, parent, parent_seen);
+  if (!pair) return true;
+  const auto world = [&](std::size_t seg, std::size_t m) {
+    return Eigen::Vector3d(model.segments[seg].origin_m + model.segments[seg].markers[m].position_m);
+  };
+  const double expected =
+      handedness(world(parent, pair->first), world(parent, pair->second), world(s, a), world(s, b));
+  if (std::abs(expected) < options.min_handedness) return true;
+  return handedness(*parent_seen[pair->first], *parent_seen[pair->second], at(i), at(j)) * expected > 0.0;
+}
+
+// Segments without a pose (one or two tracked markers): the candidates that fit child_marker_cost
+// best, a pair's distance within tolerance.
 std::optional<Found> Labeller::State::search_pair(const Subject& subject, std::size_t s,
-                                                  const RigidTransform& parent_pose) const {
+                                                  const RigidTransform& parent_pose,
+                                                  const Points& parent_seen) const {
   const SegmentState& segment = subject.segments[s];
   const SegmentLayout& layout = subject.model.segments[s];
   if (segment.tracked.empty() || !segment.parent) return std::nullopt;
-  const auto [offset, reach] = static_offset(subject.model, s, *segment.parent, options);
-  const auto predicted = [&](std::size_t m) {
-    return Eigen::Vector3d(parent_pose.t + parent_pose.q * (offset + layout.markers[m].position_m));
-  };
-  const auto candidates = candidates_near(subject, s, parent_pose);
+  const auto candidates = candidates_near(subject, s, std::nullopt);
   const std::size_t a = segment.tracked[0];
   std::optional<Found> best;
   for (std::size_t i : candidates) {
-    const double ei = (at(i) - predicted(a)).norm();
+    const auto ci = child_marker_cost(subject, s, a, parent_pose, parent_seen, i);
+    if (!ci) continue;
     if (segment.tracked.size() == 1) {
-      if (!best || ei < best->cost) best = Found{{{a, i}}, {}, true, ei};
+      if (!best || *ci < best->cost) best = Found{{{a, i}}, {}, true, *ci};
       continue;
     }
     const std::size_t b = segment.tracked[1];
     for (std::size_t j : candidates) {
-      if (j == i || !distance_fits(segment, a, b, at(i), at(j))) continue;
-      const double cost = ei + (at(j) - predicted(b)).norm();
-      if (!best || cost < best->cost) best = Found{{{a, i}, {b, j}}, {}, true, cost};
+      if (j == i || !distance_fits(segment, a, b, at(i), at(j)) ||
+          !keeps_handedness(subject, s, a, b, parent_seen, i, j))
+        continue;
+      const auto cj = child_marker_cost(subject, s, b, parent_pose, parent_seen, j);
+      if (cj && (!best || *ci + *cj < best->cost)) best = Found{{{a, i}, {b, j}}, {}, true, *ci + *cj};
     }
   }
   if (!best) return std::nullopt;
@@ -435,19 +520,36 @@ std::optional<Found> Labeller::State::search_pair(const Subject& subject, std::s
 }
 
 std::optional<Found> Labeller::State::search_segment(const Subject& subject, std::size_t s,
-                                                     const std::optional<RigidTransform>& parent_pose) const {
+                                                     const std::optional<RigidTransform>& parent_pose,
+                                                     const Points& parent_seen) const {
   const SegmentState& segment = subject.segments[s];
   if (segment.tracked.size() >= 3 && subject.model.segments[s].has_pose)
     return search_rigid(subject, s, parent_pose, candidates_near(subject, s, parent_pose));
-  if (parent_pose) return search_pair(subject, s, *parent_pose);
+  if (parent_pose) return search_pair(subject, s, *parent_pose, parent_seen);
   return std::nullopt;
+}
+
+Points Labeller::State::seen_now(const SegmentState& segment) const {
+  Points seen(segment.markers.size());
+  for (std::size_t m = 0; m < seen.size(); ++m) {
+    if (segment.markers[m].point) seen[m] = at(*segment.markers[m].point);
+  }
+  return seen;
+}
+
+Points Labeller::State::seen_of(const Subject& subject, std::size_t s, const Hypothesis& h) const {
+  Points seen(subject.segments[s].markers.size());
+  if (h.segments[s]) {
+    for (const auto& [m, p] : h.segments[s]->pairs) seen[m] = at(p);
+  }
+  return seen;
 }
 
 // Down the tree from a segment found at `pose`: each child searched where the pose puts it, its
 // points claimed for the rest of the hypothesis.
 void Labeller::State::grow(const Subject& subject, std::size_t s, const RigidTransform& pose, Hypothesis& h) {
   for (std::size_t child : subject.segments[s].children) {
-    auto found = search_segment(subject, child, pose);
+    auto found = search_segment(subject, child, pose, seen_of(subject, s, h));
     if (!found) continue;
     for (const auto& pair : found->pairs) claimed[pair.second] = 1;
     h.markers += found->pairs.size();
@@ -507,7 +609,8 @@ void Labeller::State::acquire(std::size_t subject_index) {
   for (std::size_t s : subject.order) {
     SegmentState& segment = subject.segments[s];
     if (has_track(segment) || !segment.parent || !subject.segments[*segment.parent].pose) continue;
-    const auto found = search_segment(subject, s, subject.segments[*segment.parent].pose);
+    const auto found = search_segment(subject, s, subject.segments[*segment.parent].pose,
+                                      seen_now(subject.segments[*segment.parent]));
     if (!found) continue;
     commit(subject_index, s, *found);
     segment.pose = found->pose;
@@ -530,7 +633,16 @@ void Labeller::update(const std::vector<TrackPoint>& points) {
   s.points = &points;
   s.claimed.assign(points.size(), 0);
   std::unordered_map<std::uint64_t, std::size_t> by_track;
-  for (std::size_t p = 0; p < points.size(); ++p) by_track.emplace(points[p].track, p);
+  std::unordered_map<std::uint64_t, int> ages;
+  s.young.assign(points.size(), 0);
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    by_track.emplace(points[p].track, p);
+    const auto age = s.ages.find(points[p].track);
+    const int seen = (age == s.ages.end() ? 0 : age->second) + 1;
+    ages[points[p].track] = seen;
+    s.young[p] = seen < s.options.min_track_age ? 1 : 0;
+  }
+  s.ages = std::move(ages);
   s.keep(by_track);
   for (auto& subject : s.subjects) {
     s.fit_poses(subject);

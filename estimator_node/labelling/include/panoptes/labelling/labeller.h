@@ -44,12 +44,22 @@ struct LabellerOptions {
   double reach_fraction = 0.6;
   double joint_gate_m = 0.05;
   double max_relative_rotation_rad = 1.8;
+  // A marker of a segment without a pose lies on a shell about its parent's marker nearest to it
+  // in the static pose: |distance - static distance| <= shell_m + shell_fraction * static distance.
+  double shell_m = 0.02;
+  double shell_fraction = 0.15;
+  // Two markers of a segment without a pose keep the static pose's handedness with their parent's
+  // two nearest markers when its magnitude (normalised signed volume) is at least this.
+  double min_handedness = 0.04;
   // A new track takes a waiting name when it lies within this of the name's prediction (the
   // segment's rigid fit from its other markers; `loose` when only a translation is known).
   double gate_m = 0.025;
   double loose_gate_m = 0.045;
   std::size_t root_hypotheses = 24;  // best-fitting root candidates grown over the tree
   std::size_t min_markers = 8;       // fewer markers found: the subject is not acquired
+  // A track seen for fewer instants is not used to acquire a subject or a segment (false blobs
+  // make short tracks); a waiting name may still go to it.
+  int min_track_age = 3;
 };
 
 class Labeller {
