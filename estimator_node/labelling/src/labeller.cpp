@@ -2,6 +2,7 @@
 #include "panoptes/labelling/labeller.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -178,6 +179,9 @@ struct Labeller::State {
                                     const std::optional<RigidTransform>& parent_pose,
                                     const std::vector<std::size_t>& candidates,
                                     std::vector<Found>* all = nullptr) const;
+  void search_anchors(const Subject& subject, std::size_t s, const std::optional<RigidTransform>& parent_pose,
+                      const std::vector<std::size_t>& candidates, const std::array<std::size_t, 3>& anchors,
+                      std::vector<Found>* all, std::optional<Found>& best) const;
   void add_extras(const Subject& subject, std::size_t s, Found& found) const;
   void grow(const Subject& subject, std::size_t s, const RigidTransform& pose, Hypothesis& h);
   void commit(std::size_t subject_index, std::size_t s, const Found& found);
@@ -342,18 +346,35 @@ bool Labeller::State::tree_accepts(const Subject& subject, std::size_t s, const 
   return error <= reach;
 }
 
-// Segments with a pose: ordered candidate triples for three anchor markers whose distances fit,
-// the layout fitted, the tree's constraints checked, the other markers taken near their prediction.
+// Segments with a pose: every choice of three anchor markers (a hidden one leaves the others),
+// until one finds them all; see search_anchors.
 std::optional<Found> Labeller::State::search_rigid(const Subject& subject, std::size_t s,
                                                    const std::optional<RigidTransform>& parent_pose,
                                                    const std::vector<std::size_t>& candidates,
                                                    std::vector<Found>* all) const {
+  const auto& tracked = subject.segments[s].tracked;
+  std::optional<Found> best;
+  for (std::size_t a = 0; a < tracked.size(); ++a) {
+    for (std::size_t b = a + 1; b < tracked.size(); ++b) {
+      for (std::size_t c = b + 1; c < tracked.size(); ++c) {
+        search_anchors(subject, s, parent_pose, candidates, {tracked[a], tracked[b], tracked[c]}, all, best);
+        if (all != nullptr || (best && best->pairs.size() == tracked.size())) return best;
+      }
+    }
+  }
+  return best;
+}
+
+// Ordered candidate triples for three anchor markers whose distances fit, the layout fitted, the
+// tree's constraints checked, the other markers taken near their prediction; the best kept.
+void Labeller::State::search_anchors(const Subject& subject, std::size_t s,
+                                     const std::optional<RigidTransform>& parent_pose,
+                                     const std::vector<std::size_t>& candidates,
+                                     const std::array<std::size_t, 3>& anchors, std::vector<Found>* all,
+                                     std::optional<Found>& best) const {
   const SegmentState& segment = subject.segments[s];
   const SegmentLayout& layout = subject.model.segments[s];
-  const std::size_t a = segment.tracked[0];
-  const std::size_t b = segment.tracked[1];
-  const std::size_t c = segment.tracked[2];
-  std::optional<Found> best;
+  const auto [a, b, c] = anchors;
   for (std::size_t i : candidates) {
     for (std::size_t j : candidates) {
       if (j == i || !distance_fits(segment, a, b, at(i), at(j))) continue;
@@ -377,7 +398,6 @@ std::optional<Found> Labeller::State::search_rigid(const Subject& subject, std::
       }
     }
   }
-  return best;
 }
 
 // The segment's other tracked markers: the unclaimed point nearest each prediction, within the gate;
