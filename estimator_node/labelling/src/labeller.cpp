@@ -162,6 +162,7 @@ struct Labeller::State {
   void fit_poses(Subject& subject);
   void predict(Subject& subject);
   void recover();
+  std::optional<double> recover_cost(const SegmentState& segment, std::size_t m, std::size_t p) const;
   void acquire(std::size_t subject_index);
   std::optional<Found> search_segment(const Subject& subject, std::size_t s,
                                       const std::optional<RigidTransform>& parent_pose,
@@ -270,6 +271,36 @@ void Labeller::State::predict(Subject& subject) {
   }
 }
 
+// The cost (< 1) of giving waiting marker m of `segment` to point p: its prediction's distance over the
+// gate; in a segment without a rigid fit, also the distances to its seen markers over their
+// tolerances (a track not too young), the lower of the two.
+std::optional<double> Labeller::State::recover_cost(const SegmentState& segment, std::size_t m,
+                                                    std::size_t p) const {
+  std::optional<double> cost;
+  const bool rigid = segment.pose && !segment.loose;
+  const double gate = rigid ? options.gate_m : options.loose_gate_m;
+  if (segment.markers[m].last) {
+    const double d2 = (at(p) - *segment.markers[m].last).squaredNorm() / (gate * gate);
+    if (d2 < 1.0) cost = d2;
+  }
+  if (rigid || young[p] != 0) return cost;
+  double sum = 0.0;
+  double seen = 0.0;
+  for (std::size_t k = 0; k < segment.markers.size(); ++k) {
+    const auto& other = segment.markers[k].point;
+    const double tolerance = segment.tolerance(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(k));
+    if (k == m || !other || tolerance <= 0.0) continue;
+    const double error = ((at(p) - at(*other)).norm() -
+                          segment.mean(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(k))) /
+                         tolerance;
+    if (std::abs(error) > 1.0) return cost;
+    sum += error * error;
+    seen += 1.0;
+  }
+  if (seen < 2.0) return cost;
+  return std::min(cost.value_or(1.0), sum / seen);
+}
+
 // New tracks take waiting names: gated on the predictions, assigned jointly (assign_gated).
 void Labeller::State::recover() {
   struct Row {
@@ -280,14 +311,11 @@ void Labeller::State::recover() {
   for (std::size_t i = 0; i < subjects.size(); ++i) {
     for (std::size_t s = 0; s < subjects[i].segments.size(); ++s) {
       const SegmentState& segment = subjects[i].segments[s];
-      const double gate = segment.pose && !segment.loose ? options.gate_m : options.loose_gate_m;
       for (std::size_t m : segment.tracked) {
-        const MarkerState& marker = segment.markers[m];
-        if (marker.point || !marker.last) continue;
+        if (segment.markers[m].point) continue;
         for (std::size_t p = 0; p < claimed.size(); ++p) {
           if (claimed[p] != 0) continue;
-          const double d2 = (at(p) - *marker.last).squaredNorm() / (gate * gate);
-          if (d2 < 1.0) pairs.push_back({rows.size(), p, d2});
+          if (const auto cost = recover_cost(segment, m, p)) pairs.push_back({rows.size(), p, *cost});
         }
         rows.push_back({i, s, m});
       }
