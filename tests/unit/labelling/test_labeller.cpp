@@ -20,8 +20,9 @@ namespace {
 
 struct Score {
   double visible = 0, right = 0, wrong = 0, swaps = 0, ghosts_named = 0;
-  std::vector<int> returns;               // frames until a reappearing marker has its name back
-  std::map<std::string, int> unlabelled;  // marker-frames without a name, by marker
+  double visible_after = 0, right_after = 0;  // from the first frame a track may be acquired on
+  std::vector<int> returns;                   // frames until a reappearing marker has its name back
+  std::map<std::string, int> unlabelled;      // marker-frames without a name, by marker
   int never_returned = 0;
   double microseconds_per_frame = 0;
 };
@@ -90,8 +91,10 @@ std::vector<TrackPoint> next_frame(const MarkerSamples& walk, std::size_t f, Rep
 void score_frame(const Labeller& labeller, const std::vector<TrackPoint>& points,
                  const std::map<std::uint64_t, std::string>& truth, std::map<std::uint64_t, int>& waiting,
                  int f, Score& score) {
+  std::map<std::string, int> names;  // a name is never on two tracks
   for (const auto& point : points) {
     const auto label = labeller.label_of(point.track);
+    if (label) EXPECT_EQ(++names[label->marker], 1) << label->marker << " on two tracks in frame " << f;
     const auto name = truth.find(point.track);
     if (name == truth.end()) {
       score.ghosts_named += label ? 1 : 0;
@@ -101,6 +104,10 @@ void score_frame(const Labeller& labeller, const std::vector<TrackPoint>& points
     score.visible += 1;
     const bool right = label && label->marker == name->second;
     score.right += right ? 1 : 0;
+    if (f + 1 >= LabellerOptions{}.min_track_age) {
+      score.visible_after += 1;
+      score.right_after += right ? 1 : 0;
+    }
     score.wrong += label && !right ? 1 : 0;
     if (!label) ++score.unlabelled[name->second];
     if (label && !right) ++score.unlabelled[name->second + " named " + label->marker];
@@ -171,9 +178,14 @@ TEST(Labeller, Gait2392WalkFromTheStaticModel) {
         100.0 * s.wrong / s.visible, s.swaps, s.ghosts_named, s.returns.size(), worst, s.never_returned,
         s.microseconds_per_frame);
     for (const auto& [name, frames] : s.unlabelled) {
-      if (frames > 0) std::printf("  %s: %d marker-frames\n", name.c_str(), frames);
+      if (frames > LabellerOptions{}.min_track_age)
+        std::printf("  %s: %d marker-frames\n", name.c_str(), frames);
     }
     total.visible += s.visible;
+    total.visible_after += s.visible_after;
+    total.right_after += s.right_after;
+    total.ghosts_named += s.ghosts_named;
+    total.microseconds_per_frame += s.microseconds_per_frame / kSeeds;
     total.right += s.right;
     total.wrong += s.wrong;
     total.swaps += s.swaps;
@@ -182,10 +194,44 @@ TEST(Labeller, Gait2392WalkFromTheStaticModel) {
   }
   int worst = 0;
   for (int r : total.returns) worst = std::max(worst, r);
-  std::printf("gait2392 walk1, %d seeds: %.2f %% right, %.3f %% wrong, %.0f swaps, worst return %d frames\n",
-              kSeeds, 100.0 * total.right / total.visible, 100.0 * total.wrong / total.visible, total.swaps,
-              worst);
+  const double right = 100.0 * total.right / total.visible;
+  const double right_after = 100.0 * total.right_after / total.visible_after;
+  const double wrong = 100.0 * total.wrong / total.visible;
+  std::printf(
+      "gait2392 walk1, %d seeds: %.2f %% right (%.2f %% from frame %d, when tracks are old enough to "
+      "acquire), "
+      "%.3f %% wrong, %.0f left/right swaps, %.0f ghost-frames named, %zu reappearances: worst %d frames "
+      "(%.0f ms at 60 Hz) to the name, %d never; %.1f us per subject-frame\n",
+      kSeeds, right, right_after, LabellerOptions{}.min_track_age - 1, wrong, total.swaps, total.ghosts_named,
+      total.returns.size(), worst, worst * 1000.0 / walk.rate_hz, total.never_returned,
+      total.microseconds_per_frame);
+  // Measured (10 seeds): 98.25 % right, 99.6 % from frame 2, 0.068 % wrong, 0 swaps, worst return 10 frames,
+  // 4 never (docs/marker_sets.md). The issue asks 99.5 % right and 0.1 % wrong live.
   EXPECT_EQ(total.swaps, 0.0);
+  EXPECT_GT(right, 97.8);
+  EXPECT_GT(right_after, 99.2);
+  EXPECT_LT(wrong, 0.12);
+  EXPECT_LE(worst, 12);
+  EXPECT_LE(total.never_returned, 6);
+  EXPECT_LT(total.ghosts_named, 40.0);
+}
+
+TEST(Labeller, PointsThatFitNothingStayUnlabelled) {
+  PANOPTES_REQUIRE_SHARED(test::gait2392_static());
+  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
+  Labeller labeller({build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1")},
+                    gait2392_options());
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> room(-1.5, 1.5);
+  std::size_t named = 0;
+  for (std::uint64_t frame = 0; frame < 60; ++frame) {  // 45 points in a 3 m room, each a second long
+    std::vector<TrackPoint> points;
+    for (std::uint64_t t = 0; t < 45; ++t)
+      points.push_back({t, Eigen::Vector3d(room(rng), room(rng), room(rng))});
+    labeller.update(points);
+    for (const auto& point : points) named += labeller.label_of(point.track) ? 1 : 0;
+  }
+  EXPECT_EQ(named, 0U);
 }
 
 }  // namespace
