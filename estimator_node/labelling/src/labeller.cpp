@@ -162,6 +162,7 @@ struct Labeller::State {
   void fit_poses(Subject& subject);
   void predict(Subject& subject);
   void recover();
+  bool pair_keeps_handedness(const Subject& subject, std::size_t s, std::size_t m, std::size_t p) const;
   std::optional<double> recover_cost(const SegmentState& segment, std::size_t m, std::size_t p) const;
   void acquire(std::size_t subject_index);
   std::optional<Found> search_segment(const Subject& subject, std::size_t s,
@@ -301,6 +302,20 @@ std::optional<double> Labeller::State::recover_cost(const SegmentState& segment,
   return std::min(cost.value_or(1.0), sum / seen);
 }
 
+// A waiting marker of a two-marker segment whose other marker is seen: point p keeps the pair's
+// handedness with the parent (keeps_handedness), so a name does not return to its neighbour.
+bool Labeller::State::pair_keeps_handedness(const Subject& subject, std::size_t s, std::size_t m,
+                                            std::size_t p) const {
+  const SegmentState& segment = subject.segments[s];
+  if (segment.tracked.size() != 2 || !segment.parent) return true;
+  const std::size_t other = segment.tracked[0] == m ? segment.tracked[1] : segment.tracked[0];
+  const auto& other_point = segment.markers[other].point;
+  if (!other_point) return true;
+  const Points parent_seen = seen_now(subject.segments[*segment.parent]);
+  return m == segment.tracked[0] ? keeps_handedness(subject, s, m, other, parent_seen, p, *other_point)
+                                 : keeps_handedness(subject, s, other, m, parent_seen, *other_point, p);
+}
+
 // New tracks take waiting names: gated on the predictions, assigned jointly (assign_gated).
 void Labeller::State::recover() {
   struct Row {
@@ -315,6 +330,7 @@ void Labeller::State::recover() {
         if (segment.markers[m].point) continue;
         for (std::size_t p = 0; p < claimed.size(); ++p) {
           if (claimed[p] != 0) continue;
+          if (!pair_keeps_handedness(subjects[i], s, m, p)) continue;
           if (const auto cost = recover_cost(segment, m, p)) pairs.push_back({rows.size(), p, *cost});
         }
         rows.push_back({i, s, m});
