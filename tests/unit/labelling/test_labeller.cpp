@@ -116,7 +116,8 @@ void score_frame(const Labeller& labeller, const std::vector<TrackPoint>& points
     const auto wait = waiting.find(point.track);
     if (wait != waiting.end() && right) {
       score.returns.push_back(f - wait->second);
-      if (f - wait->second > 4) std::printf("  %s came back after %d frames\n", name->second.c_str(), f - wait->second);
+      if (f - wait->second > 4)
+        std::printf("  %s came back after %d frames\n", name->second.c_str(), f - wait->second);
       waiting.erase(wait);
     }
   }
