@@ -36,6 +36,7 @@ struct SegmentState {
   Eigen::MatrixXd tolerance;           // with the motion allowance
   std::optional<RigidTransform> pose;  // this instant
   bool loose = false;                  // the pose is a translation only
+  bool soft = false;                   // LabellerOptions::soft_segments: its fit predicts loosely
 };
 
 struct Subject {
@@ -81,7 +82,8 @@ SegmentState make_segment(const SegmentLayout& layout, const LabellerOptions& op
   }
   s.mean = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   s.tolerance = Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n), -1.0);
-  const double fraction = is_soft(options, layout.name) ? options.soft_fraction : options.allowance_fraction;
+  s.soft = is_soft(options, layout.name);
+  const double fraction = s.soft ? options.soft_fraction : options.allowance_fraction;
   for (const auto& d : layout.distances) {
     const auto a = static_cast<Eigen::Index>(marker_in(layout, d.markers[0]));
     const auto b = static_cast<Eigen::Index>(marker_in(layout, d.markers[1]));
@@ -278,7 +280,7 @@ void Labeller::State::predict(Subject& subject) {
 std::optional<double> Labeller::State::recover_cost(const SegmentState& segment, std::size_t m,
                                                     std::size_t p) const {
   std::optional<double> cost;
-  const bool rigid = segment.pose && !segment.loose;
+  const bool rigid = segment.pose && !segment.loose && !segment.soft;
   const double gate = rigid ? options.gate_m : options.loose_gate_m;
   if (segment.markers[m].last) {
     const double d2 = (at(p) - *segment.markers[m].last).squaredNorm() / (gate * gate);
