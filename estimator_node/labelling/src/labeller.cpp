@@ -24,6 +24,7 @@ struct MarkerState {
   std::optional<Eigen::Vector3d> last;   // seen or predicted, the latest
   std::optional<std::size_t> point;      // this instant's point
   std::optional<Eigen::Vector3d> moved;  // since the previous instant, when seen in both
+  double residual_m = 0.0;               // running mean of its distance from the segment's rigid fit
 };
 
 struct SegmentState {
@@ -165,7 +166,10 @@ struct Labeller::State {
   void predict(Subject& subject);
   void recover();
   bool pair_keeps_handedness(const Subject& subject, std::size_t s, std::size_t m, std::size_t p) const;
-  std::optional<double> recover_cost(const SegmentState& segment, std::size_t m, std::size_t p) const;
+  std::optional<double> recover_cost(const Subject& subject, std::size_t s, std::size_t m,
+                                     std::size_t p) const;
+  std::optional<double> parent_shell(const Subject& subject, std::size_t s, std::size_t m,
+                                     std::size_t p) const;
   void acquire(std::size_t subject_index);
   std::optional<Found> search_segment(const Subject& subject, std::size_t s,
                                       const std::optional<RigidTransform>& parent_pose,
@@ -264,6 +268,11 @@ void Labeller::State::predict(Subject& subject) {
     if (count > 0.0) moved /= count;
     for (std::size_t m : segment.tracked) {
       MarkerState& marker = segment.markers[m];
+      const Eigen::Vector3d& in_segment = subject.model.segments[s].markers[m].position_m;
+      if (marker.point && segment.pose && !segment.loose) {
+        const double residual = (segment.pose->apply(in_segment) - at(*marker.point)).norm();
+        marker.residual_m += options.residual_rate * (residual - marker.residual_m);
+      }
       if (marker.point) continue;
       if (segment.pose && !segment.loose) {
         marker.last = segment.pose->apply(subject.model.segments[s].markers[m].position_m);
@@ -274,14 +283,40 @@ void Labeller::State::predict(Subject& subject) {
   }
 }
 
-// The cost (< 1) of giving waiting marker m of `segment` to point p: its prediction's distance over the
-// gate; in a segment without a rigid fit, also the distances to its seen markers over their
-// tolerances (a track not too young), the lower of the two.
-std::optional<double> Labeller::State::recover_cost(const SegmentState& segment, std::size_t m,
+// Point p as marker m of segment s against the shell about the parent's seen marker nearest to m in
+// the static pose (see child_marker_cost): the error over the shell's width, or nullopt.
+std::optional<double> Labeller::State::parent_shell(const Subject& subject, std::size_t s, std::size_t m,
                                                     std::size_t p) const {
+  const auto parent = subject.segments[s].parent;
+  if (!parent) return std::nullopt;
+  const auto& model = subject.model;
+  const Eigen::Vector3d marker_static = model.segments[s].origin_m + model.segments[s].markers[m].position_m;
+  std::optional<double> error;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < subject.segments[*parent].markers.size(); ++k) {
+    const auto& seen = subject.segments[*parent].markers[k].point;
+    if (!seen) continue;
+    const double d =
+        (marker_static - (model.segments[*parent].origin_m + model.segments[*parent].markers[k].position_m))
+            .norm();
+    if (d >= nearest) continue;
+    nearest = d;
+    error = ((at(p) - at(*seen)).norm() - d) / (options.shell_m + options.shell_fraction * d);
+  }
+  return error;
+}
+
+// The cost (< 1) of giving waiting marker m of segment s to point p: its prediction's distance over
+// the gate; in a segment without a rigid fit, also the distances to its seen markers over their
+// tolerances and to its parent's nearest marker over the shell (>= 2 of them, all within, a track
+// not too young), the lower of the two.
+std::optional<double> Labeller::State::recover_cost(const Subject& subject, std::size_t s, std::size_t m,
+                                                    std::size_t p) const {
+  const SegmentState& segment = subject.segments[s];
   std::optional<double> cost;
   const bool rigid = segment.pose && !segment.loose && !segment.soft;
-  const double gate = rigid ? options.gate_m : options.loose_gate_m;
+  const double gate =
+      rigid ? options.gate_m + options.residual_gate * segment.markers[m].residual_m : options.loose_gate_m;
   if (segment.markers[m].last) {
     const double d2 = (at(p) - *segment.markers[m].last).squaredNorm() / (gate * gate);
     if (d2 < 1.0) cost = d2;
@@ -298,6 +333,11 @@ std::optional<double> Labeller::State::recover_cost(const SegmentState& segment,
                          tolerance;
     if (std::abs(error) > 1.0) return cost;
     sum += error * error;
+    seen += 1.0;
+  }
+  if (const auto shell = parent_shell(subject, s, m, p)) {
+    if (std::abs(*shell) > 1.0) return cost;
+    sum += *shell * *shell;
     seen += 1.0;
   }
   if (seen < 2.0) return cost;
@@ -333,7 +373,7 @@ void Labeller::State::recover() {
         for (std::size_t p = 0; p < claimed.size(); ++p) {
           if (claimed[p] != 0) continue;
           if (!pair_keeps_handedness(subjects[i], s, m, p)) continue;
-          if (const auto cost = recover_cost(segment, m, p)) pairs.push_back({rows.size(), p, *cost});
+          if (const auto cost = recover_cost(subjects[i], s, m, p)) pairs.push_back({rows.size(), p, *cost});
         }
         rows.push_back({i, s, m});
       }

@@ -4,6 +4,7 @@
 // gaps after which a marker comes back under a new track id), scored against the held-back names.
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <random>
 #include <string>

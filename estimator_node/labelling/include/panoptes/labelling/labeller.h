@@ -55,6 +55,11 @@ struct LabellerOptions {
   // segment's rigid fit from its other markers; `loose` when only a translation is known).
   double gate_m = 0.025;
   double loose_gate_m = 0.045;
+  // The rigid gate widens per marker by residual_gate times its running distance from its
+  // segment's fit (learned while it is seen, rate residual_rate per instant): soft tissue and
+  // markers near joints (Rajagopal's knee and thigh markers) move away from the static layout.
+  double residual_gate = 3.0;
+  double residual_rate = 0.1;
   std::size_t root_hypotheses = 24;  // best-fitting root candidates grown over the tree
   std::size_t min_markers = 8;       // fewer markers found: the subject is not acquired
   // A track seen for fewer instants is not used to acquire a subject or a segment (false blobs
