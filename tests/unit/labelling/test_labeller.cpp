@@ -4,7 +4,6 @@
 // gaps after which a marker comes back under a new track id), scored against the held-back names.
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <map>
 #include <random>
 #include <string>
@@ -235,7 +234,12 @@ TEST(Labeller, RajagopalWalkFromItsStaticModel) {
   options.soft_segments = {"Torso"};
   const Score total =
       replay_seeds("rajagopal walk", model, load_marker_samples(test::rajagopal_walk()), options);
+  // Measured (10 seeds): 96.75 % right, 97.61 % from frame 2, no wrong name, 0 swaps, 2 never; the left
+  // arm is the weak part (docs/marker_sets.md).
   EXPECT_EQ(total.swaps, 0.0);
+  EXPECT_GT(100.0 * total.right / total.visible, 96.3);
+  EXPECT_LT(100.0 * total.wrong / total.visible, 0.05);
+  EXPECT_LE(total.never_returned, 5);
 }
 
 TEST(Labeller, PointsThatFitNothingStayUnlabelled) {
