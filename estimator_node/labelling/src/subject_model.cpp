@@ -266,6 +266,21 @@ void keep_mean_distance(SegmentLayout& layout) {
   b = middle + half;
 }
 
+// The segment frame's origin in the trial's world, averaged over frames: the layout's axes are the
+// lab's, so each seen marker's world position less its layout position estimates it.
+Eigen::Vector3d mean_origin(const MarkerSamples& trial, const SegmentWork& work) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double count = 0.0;
+  for (std::size_t f = 0; f < trial.frame_count(); ++f) {
+    for (std::size_t m = 0; m < work.columns.size(); ++m) {
+      if (work.layout.markers[m].calibration_only || !trial.is_valid(f, work.columns[m])) continue;
+      sum += trial.position(f, work.columns[m]) - work.layout.markers[m].position_m;
+      count += 1.0;
+    }
+  }
+  return count > 0.0 ? Eigen::Vector3d(sum / count) : Eigen::Vector3d::Zero();
+}
+
 SegmentWork build_segment(const MarkerSet& set, const SegmentDefinition& segment, const MarkerSamples& trial,
                           const std::vector<std::optional<std::size_t>>& columns, const ModelOptions& options,
                           std::vector<MarkerFlag>& flags) {
@@ -284,6 +299,7 @@ SegmentWork build_segment(const MarkerSet& set, const SegmentDefinition& segment
   work.static_rigid = markers_span_a_frame(work.layout, true);
   for (int pass = 0; pass < options.procrustes_iterations; ++pass) procrustes_pass(trial, work, true);
   work.layout.static_fit_rms_m = procrustes_pass(trial, work, false);
+  work.layout.origin_m = mean_origin(trial, work);
   for (std::size_t a = 0; a < work.layout.markers.size(); ++a) {
     for (std::size_t b = a + 1; b < work.layout.markers.size(); ++b)
       work.layout.distances.push_back(distance_statistics(trial, work, a, b, options));

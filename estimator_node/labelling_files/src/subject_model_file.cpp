@@ -65,6 +65,7 @@ void emit_segment(YAML::Emitter& out, const SegmentLayout& segment) {
   if (!segment.parent.empty()) out << YAML::Key << "parent" << YAML::Value << segment.parent;
   out << YAML::Key << "has_pose" << YAML::Value << segment.has_pose;
   out << YAML::Key << "static_fit_rms_m" << YAML::Value << metres(segment.static_fit_rms_m);
+  emit_vector(out, "origin_m", segment.origin_m);
   out << YAML::Key << "markers" << YAML::Value << YAML::BeginSeq;
   for (const auto& marker : segment.markers) emit_marker(out, marker);
   out << YAML::EndSeq << YAML::Key << "distances" << YAML::Value << YAML::BeginSeq;
@@ -131,12 +132,13 @@ MarkerFlag::Kind kind_of(const YamlReader& flag) {
 }
 
 SegmentLayout read_segment(const YamlReader& item) {
-  item.expect_only({"name", "parent", "has_pose", "static_fit_rms_m", "markers", "distances"});
+  item.expect_only({"name", "parent", "has_pose", "static_fit_rms_m", "origin_m", "markers", "distances"});
   SegmentLayout segment;
   segment.name = item.get_string("name");
   segment.parent = item.get_string("parent", "");
   segment.has_pose = item.get_bool("has_pose", false);
   segment.static_fit_rms_m = item.get_double("static_fit_rms_m", 0.0);
+  if (item.has("origin_m")) segment.origin_m = read_vector(item, "origin_m");
   for (const auto& m : item.sequence("markers")) {
     m.expect_only({"name", "calibration_only", "position_m", "missing_frames", "spread_m"});
     segment.markers.push_back(

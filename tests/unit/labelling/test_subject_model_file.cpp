@@ -43,6 +43,10 @@ TEST(SubjectModelFile, AToyModelReadsBack) {
   EXPECT_EQ(back.joints.size(), 1U);
   EXPECT_EQ(back.segment("Leaf")->parent, "Root");
   EXPECT_NEAR(back.segment("Root")->distances[0].mean_m, 0.1, 1e-6);
+  // The static origin (the labeller's tree search starts from it): the leaf's one tracked marker, D.
+  EXPECT_LT((model.segment("Leaf")->origin_m - Eigen::Vector3d(0.0045, 0, -0.3)).norm(), 1e-9);
+  EXPECT_LT((back.segment("Leaf")->origin_m - model.segment("Leaf")->origin_m).norm(), 1e-5);
+  EXPECT_LT((back.segment("Root")->origin_m - model.segment("Root")->origin_m).norm(), 1e-5);
 }
 
 struct BadModel {

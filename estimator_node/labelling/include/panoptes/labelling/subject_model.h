@@ -73,6 +73,9 @@ struct SegmentLayout {
   std::string parent;
   bool has_pose = false;          // >= 3 tracked markers, not collinear
   double static_fit_rms_m = 0.0;  // the static frames fitted with every marker (calibration-only too)
+  // The frame's origin in the trial's world, averaged: where the segment sat relative to the others in
+  // the static pose (the labeller's tree search starts from it).
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
   std::vector<ModelMarker> markers;
   std::vector<DistanceStatistics> distances;
 

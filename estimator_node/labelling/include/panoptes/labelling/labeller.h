@@ -1,0 +1,88 @@
+// SPDX-License-Identifier: Apache-2.0
+// Auto-labelling (issue 33 item 2, docs/marker_sets.md "Labelling"): per instant, the unlabelled
+// point tracks in, a map track id -> (subject, marker) kept. Maths only: no DDS, no files; the
+// estimator session (live) and panoptes_label run (offline) feed it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "panoptes/labelling/subject_model.h"
+
+namespace panoptes::labelling {
+
+struct TrackPoint {
+  std::uint64_t track = 0;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+};
+
+struct MarkerLabel {
+  std::size_t subject = 0;  // index into the labeller's models
+  std::string marker;
+};
+
+struct LabellerOptions {
+  // A marker-pair distance matches the model when |d - mean| <= tolerance + allowance_m +
+  // allowance_fraction * mean: the static model's tolerances (2-3 mm) hold only 56-63 % of a
+  // walk's distances, soft tissue moves the markers by 1-9 mm.
+  double allowance_m = 0.010;
+  double allowance_fraction = 0.06;
+  // Segments that deform while moving (the torso: the shoulders), with this fraction instead.
+  std::vector<std::string> soft_segments;
+  double soft_fraction = 0.30;
+  // A child segment is searched within reach_m + reach_fraction * |static offset| of where its
+  // parent's pose puts its origin; a joint centre seen from both segments must agree within
+  // joint_gate_m; a child turned more than max_relative_rotation_rad from its parent in the static
+  // pose is refused (the mirrored, upside-down hypotheses).
+  double reach_m = 0.10;
+  double reach_fraction = 0.6;
+  double joint_gate_m = 0.05;
+  double max_relative_rotation_rad = 1.8;
+  // A marker of a segment without a pose lies on a shell about its parent's marker nearest to it
+  // in the static pose: |distance - static distance| <= shell_m + shell_fraction * static distance.
+  double shell_m = 0.02;
+  double shell_fraction = 0.15;
+  // Two markers of a segment without a pose keep the static pose's handedness with their parent's
+  // two nearest markers when its magnitude (normalised signed volume) is at least this.
+  double min_handedness = 0.04;
+  // A new track takes a waiting name when it lies within this of the name's prediction (the
+  // segment's rigid fit from its other markers; `loose` when only a translation is known).
+  double gate_m = 0.025;
+  double loose_gate_m = 0.045;
+  // The rigid gate widens per marker by residual_gate times its running distance from its
+  // segment's fit (learned while it is seen, rate residual_rate per instant): soft tissue and
+  // markers near joints (Rajagopal's knee and thigh markers) move away from the static layout.
+  double residual_gate = 3.0;
+  double residual_rate = 0.1;
+  std::size_t root_hypotheses = 24;  // best-fitting root candidates grown over the tree
+  std::size_t min_markers = 8;       // fewer markers found: the subject is not acquired
+  // A track seen for fewer instants is not used to acquire a subject or a segment (false blobs
+  // make short tracks); a waiting name may still go to it.
+  int min_track_age = 3;
+};
+
+class Labeller {
+ public:
+  explicit Labeller(std::vector<SubjectModel> models, LabellerOptions options = {});
+  ~Labeller();
+  Labeller(Labeller&&) noexcept;
+  Labeller& operator=(Labeller&&) noexcept;
+
+  // One instant: every track seen now (unique ids). Tracks absent since the last call have ended.
+  void update(const std::vector<TrackPoint>& points);
+
+  std::optional<MarkerLabel> label_of(std::uint64_t track) const;
+  const SubjectModel& model(std::size_t subject) const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace panoptes::labelling

@@ -1,0 +1,777 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "panoptes/labelling/labeller.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <unordered_map>
+#include <utility>
+
+#include <Eigen/Geometry>
+
+#include "panoptes/estimator/assignment.h"
+
+namespace panoptes::labelling {
+
+namespace {
+
+using Points = std::vector<std::optional<Eigen::Vector3d>>;
+
+struct MarkerState {
+  std::optional<std::uint64_t> track;
+  std::optional<Eigen::Vector3d> last;   // seen or predicted, the latest
+  std::optional<std::size_t> point;      // this instant's point
+  std::optional<Eigen::Vector3d> moved;  // since the previous instant, when seen in both
+  double residual_m = 0.0;               // running mean of its distance from the segment's rigid fit
+};
+
+struct SegmentState {
+  std::vector<MarkerState> markers;
+  std::vector<std::size_t> tracked;  // markers that are not calibration-only
+  std::vector<std::size_t> children;
+  std::optional<std::size_t> parent;
+  const JointCentre* joint = nullptr;  // with this segment as child
+  Eigen::MatrixXd mean;                // marker-pair distances, metres
+  Eigen::MatrixXd tolerance;           // with the motion allowance
+  std::optional<RigidTransform> pose;  // this instant
+  bool loose = false;                  // the pose is a translation only
+  bool soft = false;                   // LabellerOptions::soft_segments: its fit predicts loosely
+};
+
+struct Subject {
+  SubjectModel model;
+  std::vector<SegmentState> segments;
+  std::size_t root = 0;
+  std::vector<std::size_t> order;  // breadth first from the root
+};
+
+// One segment's tentative assignment: (marker, point) pairs and the pose they give.
+struct Found {
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  RigidTransform pose;
+  bool loose = false;
+  double cost = 0.0;
+};
+
+// A tentative labelling of a subject: per segment what was found.
+struct Hypothesis {
+  std::vector<std::optional<Found>> segments;
+  std::size_t markers = 0;
+  double cost = 0.0;
+};
+
+std::size_t marker_in(const SegmentLayout& layout, const std::string& name) {
+  for (std::size_t m = 0; m < layout.markers.size(); ++m) {
+    if (layout.markers[m].name == name) return m;
+  }
+  return layout.markers.size();
+}
+
+bool is_soft(const LabellerOptions& options, const std::string& segment) {
+  return std::find(options.soft_segments.begin(), options.soft_segments.end(), segment) !=
+         options.soft_segments.end();
+}
+
+SegmentState make_segment(const SegmentLayout& layout, const LabellerOptions& options) {
+  SegmentState s;
+  const std::size_t n = layout.markers.size();
+  s.markers.resize(n);
+  for (std::size_t m = 0; m < n; ++m) {
+    if (!layout.markers[m].calibration_only) s.tracked.push_back(m);
+  }
+  s.mean = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  s.tolerance = Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n), -1.0);
+  s.soft = is_soft(options, layout.name);
+  const double fraction = s.soft ? options.soft_fraction : options.allowance_fraction;
+  for (const auto& d : layout.distances) {
+    const auto a = static_cast<Eigen::Index>(marker_in(layout, d.markers[0]));
+    const auto b = static_cast<Eigen::Index>(marker_in(layout, d.markers[1]));
+    if (a >= static_cast<Eigen::Index>(n) || b >= static_cast<Eigen::Index>(n)) continue;
+    s.mean(a, b) = s.mean(b, a) = d.mean_m;
+    s.tolerance(a, b) = s.tolerance(b, a) = d.tolerance_m + options.allowance_m + fraction * d.mean_m;
+  }
+  return s;
+}
+
+Subject make_subject(SubjectModel model, const LabellerOptions& options) {
+  Subject subject;
+  subject.model = std::move(model);
+  const auto& segments = subject.model.segments;
+  for (const auto& layout : segments) subject.segments.push_back(make_segment(layout, options));
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    if (segments[s].parent.empty()) {
+      subject.root = s;
+      continue;
+    }
+    for (std::size_t p = 0; p < segments.size(); ++p) {
+      if (segments[p].name != segments[s].parent) continue;
+      subject.segments[s].parent = p;
+      subject.segments[p].children.push_back(s);
+    }
+    for (const auto& joint : subject.model.joints) {
+      if (joint.child == segments[s].name) subject.segments[s].joint = &joint;
+    }
+  }
+  subject.order.push_back(subject.root);
+  for (std::size_t i = 0; i < subject.order.size(); ++i) {
+    for (std::size_t child : subject.segments[subject.order[i]].children) subject.order.push_back(child);
+  }
+  return subject;
+}
+
+bool distance_fits(const SegmentState& s, std::size_t a, std::size_t b, const Eigen::Vector3d& pa,
+                   const Eigen::Vector3d& pb) {
+  const double tolerance = s.tolerance(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+  if (tolerance < 0.0) return true;  // no statistics: no constraint
+  return std::abs((pa - pb).norm() - s.mean(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b))) <=
+         tolerance;
+}
+
+// The pose of a segment from its markers seen now: a rigid fit from three, else the translation
+// that puts the seen markers' layout on them with `rotation` (the parent's, or the lab's).
+std::optional<std::pair<RigidTransform, bool>> segment_pose(const SegmentLayout& layout, const Points& seen,
+                                                            const Eigen::Quaterniond& rotation) {
+  if (layout.has_pose) {
+    const auto fit = fit_layout(layout, seen);
+    if (fit) return std::pair{fit->T_world_segment, false};
+  }
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double count = 0.0;
+  for (std::size_t m = 0; m < seen.size(); ++m) {
+    if (!seen[m]) continue;
+    sum += *seen[m] - rotation * layout.markers[m].position_m;
+    count += 1.0;
+  }
+  if (count == 0.0) return std::nullopt;
+  return std::pair{RigidTransform{rotation, sum / count}, true};
+}
+
+}  // namespace
+
+struct Labeller::State {
+  LabellerOptions options;
+  std::vector<Subject> subjects;
+  std::unordered_map<std::uint64_t, std::pair<std::size_t, std::pair<std::size_t, std::size_t>>> labels;
+  const std::vector<TrackPoint>* points = nullptr;
+  std::vector<char> claimed;
+  std::vector<char> young;                      // per point: too new to be acquired
+  std::unordered_map<std::uint64_t, int> ages;  // instants each track has been seen
+
+  const Eigen::Vector3d& at(std::size_t point) const { return (*points)[point].position_m; }
+
+  void keep(const std::unordered_map<std::uint64_t, std::size_t>& by_track);
+  void fit_poses(Subject& subject);
+  void predict(Subject& subject);
+  void recover();
+  bool pair_keeps_handedness(const Subject& subject, std::size_t s, std::size_t m, std::size_t p) const;
+  std::optional<double> recover_cost(const Subject& subject, std::size_t s, std::size_t m,
+                                     std::size_t p) const;
+  std::optional<double> parent_shell(const Subject& subject, std::size_t s, std::size_t m,
+                                     std::size_t p) const;
+  void acquire(std::size_t subject_index);
+  std::optional<Found> search_segment(const Subject& subject, std::size_t s,
+                                      const std::optional<RigidTransform>& parent_pose,
+                                      const Points& parent_seen) const;
+  std::optional<double> child_marker_cost(const Subject& subject, std::size_t s, std::size_t m,
+                                          const RigidTransform& parent_pose, const Points& parent_seen,
+                                          std::size_t p) const;
+  Points seen_now(const SegmentState& segment) const;
+  bool keeps_handedness(const Subject& subject, std::size_t s, std::size_t a, std::size_t b,
+                        const Points& parent_seen, std::size_t i, std::size_t j) const;
+  Points seen_of(const Subject& subject, std::size_t s, const Hypothesis& h) const;
+  std::optional<Found> search_pair(const Subject& subject, std::size_t s, const RigidTransform& parent_pose,
+                                   const Points& parent_seen) const;
+  std::optional<Found> search_rigid(const Subject& subject, std::size_t s,
+                                    const std::optional<RigidTransform>& parent_pose,
+                                    const std::vector<std::size_t>& candidates,
+                                    std::vector<Found>* all = nullptr) const;
+  void search_anchors(const Subject& subject, std::size_t s, const std::optional<RigidTransform>& parent_pose,
+                      const std::vector<std::size_t>& candidates, const std::array<std::size_t, 3>& anchors,
+                      std::vector<Found>* all, std::optional<Found>& best) const;
+  void add_extras(const Subject& subject, std::size_t s, Found& found) const;
+  void grow(const Subject& subject, std::size_t s, const RigidTransform& pose, Hypothesis& h);
+  void commit(std::size_t subject_index, std::size_t s, const Found& found);
+  std::vector<std::size_t> candidates_near(const Subject& subject, std::size_t s,
+                                           const std::optional<RigidTransform>& parent_pose) const;
+  bool tree_accepts(const Subject& subject, std::size_t s, const RigidTransform& pose,
+                    const std::optional<RigidTransform>& parent_pose, double& cost) const;
+};
+
+namespace {
+
+// The origin of segment `s` in the static pose relative to its parent's, and how far from it the
+// search for `s` reaches (its markers included).
+std::pair<Eigen::Vector3d, double> static_offset(const SubjectModel& model, std::size_t s, std::size_t parent,
+                                                 const LabellerOptions& options) {
+  const Eigen::Vector3d offset = model.segments[s].origin_m - model.segments[parent].origin_m;
+  double radius = 0.0;
+  for (const auto& marker : model.segments[s].markers) radius = std::max(radius, marker.position_m.norm());
+  return {offset, options.reach_m + options.reach_fraction * offset.norm() + radius};
+}
+
+}  // namespace
+
+void Labeller::State::keep(const std::unordered_map<std::uint64_t, std::size_t>& by_track) {
+  for (std::size_t i = 0; i < subjects.size(); ++i) {
+    for (auto& segment : subjects[i].segments) {
+      for (auto& marker : segment.markers) {
+        marker.point.reset();
+        marker.moved.reset();
+        if (!marker.track) continue;
+        const auto found = by_track.find(*marker.track);
+        if (found == by_track.end()) {  // the track ended: the name waits
+          labels.erase(*marker.track);
+          marker.track.reset();
+          continue;
+        }
+        marker.point = found->second;
+        claimed[found->second] = 1;
+        if (marker.last) marker.moved = at(found->second) - *marker.last;
+        marker.last = at(found->second);
+      }
+    }
+  }
+}
+
+void Labeller::State::fit_poses(Subject& subject) {
+  for (std::size_t s : subject.order) {
+    SegmentState& segment = subject.segments[s];
+    Points seen(segment.markers.size());
+    for (std::size_t m = 0; m < seen.size(); ++m) {
+      if (segment.markers[m].point) seen[m] = at(*segment.markers[m].point);
+    }
+    Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+    if (segment.parent && subject.segments[*segment.parent].pose)
+      rotation = subject.segments[*segment.parent].pose->q;
+    const auto pose = segment_pose(subject.model.segments[s], seen, rotation);
+    segment.pose.reset();
+    if (!pose) continue;
+    segment.pose = pose->first;
+    segment.loose = pose->second;
+  }
+}
+
+// Waiting markers follow their segment: the rigid fit's prediction, else their last position moved
+// as the segment's seen markers moved.
+void Labeller::State::predict(Subject& subject) {
+  for (std::size_t s = 0; s < subject.segments.size(); ++s) {
+    SegmentState& segment = subject.segments[s];
+    Eigen::Vector3d moved = Eigen::Vector3d::Zero();
+    double count = 0.0;
+    for (const auto& marker : segment.markers) {
+      if (!marker.moved) continue;
+      moved += *marker.moved;
+      count += 1.0;
+    }
+    if (count > 0.0) moved /= count;
+    for (std::size_t m : segment.tracked) {
+      MarkerState& marker = segment.markers[m];
+      const Eigen::Vector3d& in_segment = subject.model.segments[s].markers[m].position_m;
+      if (marker.point && segment.pose && !segment.loose) {
+        const double residual = (segment.pose->apply(in_segment) - at(*marker.point)).norm();
+        marker.residual_m += options.residual_rate * (residual - marker.residual_m);
+      }
+      if (marker.point) continue;
+      if (segment.pose && !segment.loose) {
+        marker.last = segment.pose->apply(subject.model.segments[s].markers[m].position_m);
+      } else if (marker.last) {
+        marker.last = *marker.last + moved;
+      }
+    }
+  }
+}
+
+// Point p as marker m of segment s against the shell about the parent's seen marker nearest to m in
+// the static pose (see child_marker_cost): the error over the shell's width, or nullopt.
+std::optional<double> Labeller::State::parent_shell(const Subject& subject, std::size_t s, std::size_t m,
+                                                    std::size_t p) const {
+  const auto parent = subject.segments[s].parent;
+  if (!parent) return std::nullopt;
+  const auto& model = subject.model;
+  const Eigen::Vector3d marker_static = model.segments[s].origin_m + model.segments[s].markers[m].position_m;
+  std::optional<double> error;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < subject.segments[*parent].markers.size(); ++k) {
+    const auto& seen = subject.segments[*parent].markers[k].point;
+    if (!seen) continue;
+    const double d =
+        (marker_static - (model.segments[*parent].origin_m + model.segments[*parent].markers[k].position_m))
+            .norm();
+    if (d >= nearest) continue;
+    nearest = d;
+    error = ((at(p) - at(*seen)).norm() - d) / (options.shell_m + options.shell_fraction * d);
+  }
+  return error;
+}
+
+// The cost (< 1) of giving waiting marker m of segment s to point p: its prediction's distance over
+// the gate; in a segment without a rigid fit, also the distances to its seen markers over their
+// tolerances and to its parent's nearest marker over the shell (>= 2 of them, all within, a track
+// not too young), the lower of the two.
+std::optional<double> Labeller::State::recover_cost(const Subject& subject, std::size_t s, std::size_t m,
+                                                    std::size_t p) const {
+  const SegmentState& segment = subject.segments[s];
+  std::optional<double> cost;
+  const bool rigid = segment.pose && !segment.loose && !segment.soft;
+  const double gate =
+      rigid ? options.gate_m + options.residual_gate * segment.markers[m].residual_m : options.loose_gate_m;
+  if (segment.markers[m].last) {
+    const double d2 = (at(p) - *segment.markers[m].last).squaredNorm() / (gate * gate);
+    if (d2 < 1.0) cost = d2;
+  }
+  if (rigid || young[p] != 0) return cost;
+  double sum = 0.0;
+  double seen = 0.0;
+  for (std::size_t k = 0; k < segment.markers.size(); ++k) {
+    const auto& other = segment.markers[k].point;
+    const double tolerance = segment.tolerance(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(k));
+    if (k == m || !other || tolerance <= 0.0) continue;
+    const double error = ((at(p) - at(*other)).norm() -
+                          segment.mean(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(k))) /
+                         tolerance;
+    if (std::abs(error) > 1.0) return cost;
+    sum += error * error;
+    seen += 1.0;
+  }
+  if (const auto shell = parent_shell(subject, s, m, p)) {
+    if (std::abs(*shell) > 1.0) return cost;
+    sum += *shell * *shell;
+    seen += 1.0;
+  }
+  if (seen < 2.0) return cost;
+  return std::min(cost.value_or(1.0), sum / seen);
+}
+
+// A waiting marker of a two-marker segment whose other marker is seen: point p keeps the pair's
+// handedness with the parent (keeps_handedness), so a name does not return to its neighbour.
+bool Labeller::State::pair_keeps_handedness(const Subject& subject, std::size_t s, std::size_t m,
+                                            std::size_t p) const {
+  const SegmentState& segment = subject.segments[s];
+  if (segment.tracked.size() != 2 || !segment.parent) return true;
+  const std::size_t other = segment.tracked[0] == m ? segment.tracked[1] : segment.tracked[0];
+  const auto& other_point = segment.markers[other].point;
+  if (!other_point) return true;
+  const Points parent_seen = seen_now(subject.segments[*segment.parent]);
+  return m == segment.tracked[0] ? keeps_handedness(subject, s, m, other, parent_seen, p, *other_point)
+                                 : keeps_handedness(subject, s, other, m, parent_seen, *other_point, p);
+}
+
+// New tracks take waiting names: gated on the predictions, assigned jointly (assign_gated).
+void Labeller::State::recover() {
+  struct Row {
+    std::size_t subject, segment, marker;
+  };
+  std::vector<Row> rows;
+  std::vector<estimator::GatedPair> pairs;
+  for (std::size_t i = 0; i < subjects.size(); ++i) {
+    for (std::size_t s = 0; s < subjects[i].segments.size(); ++s) {
+      const SegmentState& segment = subjects[i].segments[s];
+      for (std::size_t m : segment.tracked) {
+        if (segment.markers[m].point) continue;
+        for (std::size_t p = 0; p < claimed.size(); ++p) {
+          if (claimed[p] != 0) continue;
+          if (!pair_keeps_handedness(subjects[i], s, m, p)) continue;
+          if (const auto cost = recover_cost(subjects[i], s, m, p)) pairs.push_back({rows.size(), p, *cost});
+        }
+        rows.push_back({i, s, m});
+      }
+    }
+  }
+  for (const auto& [row, p] : estimator::assign_gated(pairs, 0.5)) {
+    Found found;
+    found.pairs.emplace_back(rows[row].marker, p);
+    commit(rows[row].subject, rows[row].segment, found);
+  }
+}
+
+void Labeller::State::commit(std::size_t subject_index, std::size_t s, const Found& found) {
+  SegmentState& segment = subjects[subject_index].segments[s];
+  for (const auto& [m, p] : found.pairs) {
+    MarkerState& marker = segment.markers[m];
+    marker.track = (*points)[p].track;
+    marker.point = p;
+    marker.last = at(p);
+    claimed[p] = 1;
+    labels[(*points)[p].track] = {subject_index, {s, m}};
+  }
+}
+
+std::vector<std::size_t> Labeller::State::candidates_near(
+    const Subject& subject, std::size_t s, const std::optional<RigidTransform>& parent_pose) const {
+  std::vector<std::size_t> out;
+  const auto parent = subject.segments[s].parent;
+  for (std::size_t p = 0; p < claimed.size(); ++p) {
+    if (claimed[p] != 0 || young[p] != 0) continue;
+    if (parent_pose && parent) {
+      const auto [offset, reach] = static_offset(subject.model, s, *parent, options);
+      if ((at(p) - (parent_pose->t + parent_pose->q * offset)).norm() > reach) continue;
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
+// The tree's constraints on a child's pose: not turned over against its parent, its joint centre
+// where the parent's pose puts it, else its origin within reach of the static offset.
+bool Labeller::State::tree_accepts(const Subject& subject, std::size_t s, const RigidTransform& pose,
+                                   const std::optional<RigidTransform>& parent_pose, double& cost) const {
+  const auto& segment = subject.segments[s];
+  if (!parent_pose || !segment.parent) return true;
+  if (parent_pose->q.angularDistance(pose.q) > options.max_relative_rotation_rad) return false;
+  if (segment.joint != nullptr) {
+    const double error =
+        (parent_pose->apply(segment.joint->in_parent_m) - pose.apply(segment.joint->in_child_m)).norm();
+    cost += error;
+    return error <= options.joint_gate_m;
+  }
+  const auto [offset, reach] = static_offset(subject.model, s, *segment.parent, options);
+  const double error = (pose.t - (parent_pose->t + parent_pose->q * offset)).norm();
+  cost += error;
+  return error <= reach;
+}
+
+// Segments with a pose: every choice of three anchor markers (a hidden one leaves the others),
+// until one finds them all; see search_anchors.
+std::optional<Found> Labeller::State::search_rigid(const Subject& subject, std::size_t s,
+                                                   const std::optional<RigidTransform>& parent_pose,
+                                                   const std::vector<std::size_t>& candidates,
+                                                   std::vector<Found>* all) const {
+  const auto& tracked = subject.segments[s].tracked;
+  std::optional<Found> best;
+  for (std::size_t a = 0; a < tracked.size(); ++a) {
+    for (std::size_t b = a + 1; b < tracked.size(); ++b) {
+      for (std::size_t c = b + 1; c < tracked.size(); ++c) {
+        search_anchors(subject, s, parent_pose, candidates, {tracked[a], tracked[b], tracked[c]}, all, best);
+        if (all != nullptr || (best && best->pairs.size() == tracked.size())) return best;
+      }
+    }
+  }
+  return best;
+}
+
+// Ordered candidate triples for three anchor markers whose distances fit, the layout fitted, the
+// tree's constraints checked, the other markers taken near their prediction; the best kept.
+void Labeller::State::search_anchors(const Subject& subject, std::size_t s,
+                                     const std::optional<RigidTransform>& parent_pose,
+                                     const std::vector<std::size_t>& candidates,
+                                     const std::array<std::size_t, 3>& anchors, std::vector<Found>* all,
+                                     std::optional<Found>& best) const {
+  const SegmentState& segment = subject.segments[s];
+  const SegmentLayout& layout = subject.model.segments[s];
+  const auto [a, b, c] = anchors;
+  for (std::size_t i : candidates) {
+    for (std::size_t j : candidates) {
+      if (j == i || !distance_fits(segment, a, b, at(i), at(j))) continue;
+      for (std::size_t k : candidates) {
+        if (k == i || k == j || !distance_fits(segment, a, c, at(i), at(k)) ||
+            !distance_fits(segment, b, c, at(j), at(k)))
+          continue;
+        Points seen(layout.markers.size());
+        seen[a] = at(i);
+        seen[b] = at(j);
+        seen[c] = at(k);
+        const auto fit = fit_layout(layout, seen);
+        if (!fit) continue;
+        Found found{{{a, i}, {b, j}, {c, k}}, fit->T_world_segment, false, fit->rms_m};
+        if (!tree_accepts(subject, s, found.pose, parent_pose, found.cost)) continue;
+        add_extras(subject, s, found);
+        if (all != nullptr) all->push_back(found);
+        if (!best || found.pairs.size() > best->pairs.size() ||
+            (found.pairs.size() == best->pairs.size() && found.cost < best->cost))
+          best = std::move(found);
+      }
+    }
+  }
+}
+
+// The segment's other tracked markers: the unclaimed point nearest each prediction, within the gate;
+// the pose refitted to them all.
+void Labeller::State::add_extras(const Subject& subject, std::size_t s, Found& found) const {
+  const SegmentState& segment = subject.segments[s];
+  const SegmentLayout& layout = subject.model.segments[s];
+  const auto used = [&](std::size_t p) {
+    return std::any_of(found.pairs.begin(), found.pairs.end(),
+                       [p](const auto& pair) { return pair.second == p; });
+  };
+  Points seen(layout.markers.size());
+  for (const auto& [m, p] : found.pairs) seen[m] = at(p);
+  for (std::size_t m : segment.tracked) {
+    if (seen[m]) continue;
+    const Eigen::Vector3d predicted = found.pose.apply(layout.markers[m].position_m);
+    std::optional<std::size_t> nearest;
+    double best = options.loose_gate_m;
+    for (std::size_t p = 0; p < claimed.size(); ++p) {
+      const double d = (at(p) - predicted).norm();
+      if (claimed[p] != 0 || young[p] != 0 || d >= best || used(p)) continue;
+      best = d;
+      nearest = p;
+    }
+    if (!nearest) continue;
+    found.pairs.emplace_back(m, *nearest);
+    seen[m] = at(*nearest);
+    found.cost += best;
+  }
+  if (const auto fit = fit_layout(layout, seen)) found.pose = fit->T_world_segment;
+}
+
+// Where a child's marker may be: on a shell about the parent's marker nearest to it in the static
+// pose (a joint sits near it, so the distance holds while the joint turns), else near where the
+// parent's pose and the static posture put it. Returns the cost of point `p` or nullopt.
+std::optional<double> Labeller::State::child_marker_cost(const Subject& subject, std::size_t s, std::size_t m,
+                                                         const RigidTransform& parent_pose,
+                                                         const Points& parent_seen, std::size_t p) const {
+  const auto& model = subject.model;
+  const std::size_t parent = *subject.segments[s].parent;
+  const auto [offset, reach] = static_offset(model, s, parent, options);
+  const Eigen::Vector3d marker_static = model.segments[s].origin_m + model.segments[s].markers[m].position_m;
+  std::optional<double> shell;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < parent_seen.size(); ++k) {
+    if (!parent_seen[k]) continue;
+    const double d =
+        (marker_static - (model.segments[parent].origin_m + model.segments[parent].markers[k].position_m))
+            .norm();
+    if (d >= nearest) continue;
+    nearest = d;
+    shell = std::abs((at(p) - *parent_seen[k]).norm() - d) / (options.shell_m + options.shell_fraction * d);
+  }
+  const double predicted =
+      (at(p) - (parent_pose.t + parent_pose.q * (offset + model.segments[s].markers[m].position_m))).norm();
+  if (shell) return *shell <= 1.0 ? std::optional(*shell + 0.1 * predicted / reach) : std::nullopt;
+  return predicted <= reach ? std::optional(predicted / reach) : std::nullopt;
+}
+
+namespace {
+
+// The signed volume of the tetrahedron (p0, p1, a, b), normalised by its edge lengths: four points
+// have a handedness that two markers and their parent's two nearest do not lose while the joint
+// turns (Gait2392's forearm: -0.08 static, -0.09..-0.12 walking on the right, +0.06 / +0.08..+0.12
+// on the left), so it orders a segment's two markers where distances cannot.
+double handedness(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& a,
+                  const Eigen::Vector3d& b) {
+  const Eigen::Vector3d u = p1 - p0;
+  const Eigen::Vector3d v = a - p1;
+  const Eigen::Vector3d w = b - p1;
+  return u.cross(v).dot(w) / (u.norm() * v.norm() * w.norm());
+}
+
+// The parent's two seen markers nearest to the child's origin in the static pose, farther first.
+std::optional<std::pair<std::size_t, std::size_t>> nearest_two(const SubjectModel& model, std::size_t s,
+                                                               std::size_t parent,
+                                                               const Points& parent_seen) {
+  std::vector<std::pair<double, std::size_t>> by_distance;
+  for (std::size_t k = 0; k < parent_seen.size(); ++k) {
+    if (!parent_seen[k]) continue;
+    const Eigen::Vector3d at = model.segments[parent].origin_m + model.segments[parent].markers[k].position_m;
+    by_distance.emplace_back((at - model.segments[s].origin_m).norm(), k);
+  }
+  if (by_distance.size() < 2) return std::nullopt;
+  std::sort(by_distance.begin(), by_distance.end());
+  return std::pair{by_distance[1].second, by_distance[0].second};
+}
+
+}  // namespace
+
+// Whether points (i, j) as markers (a, b) of segment s keep the static pose's handedness with the
+// parent's two nearest markers (when that handedness is clear).
+bool Labeller::State::keeps_handedness(const Subject& subject, std::size_t s, std::size_t a, std::size_t b,
+                                       const Points& parent_seen, std::size_t i, std::size_t j) const {
+  const auto& model = subject.model;
+  const std::size_t parent = *subject.segments[s].parent;
+  const auto pair = nearest_two(model, s, parent, parent_seen);
+  if (!pair) return true;
+  const auto world = [&](std::size_t seg, std::size_t m) {
+    return Eigen::Vector3d(model.segments[seg].origin_m + model.segments[seg].markers[m].position_m);
+  };
+  const double expected =
+      handedness(world(parent, pair->first), world(parent, pair->second), world(s, a), world(s, b));
+  if (std::abs(expected) < options.min_handedness) return true;
+  return handedness(*parent_seen[pair->first], *parent_seen[pair->second], at(i), at(j)) * expected > 0.0;
+}
+
+// Segments without a pose (one or two tracked markers): the candidates that fit child_marker_cost
+// best, a pair's distance within tolerance.
+std::optional<Found> Labeller::State::search_pair(const Subject& subject, std::size_t s,
+                                                  const RigidTransform& parent_pose,
+                                                  const Points& parent_seen) const {
+  const SegmentState& segment = subject.segments[s];
+  const SegmentLayout& layout = subject.model.segments[s];
+  if (segment.tracked.empty() || !segment.parent) return std::nullopt;
+  const auto candidates = candidates_near(subject, s, std::nullopt);
+  const std::size_t a = segment.tracked[0];
+  std::optional<Found> best;
+  for (std::size_t i : candidates) {
+    const auto ci = child_marker_cost(subject, s, a, parent_pose, parent_seen, i);
+    if (!ci) continue;
+    if (segment.tracked.size() == 1) {
+      if (!best || *ci < best->cost) best = Found{{{a, i}}, {}, true, *ci};
+      continue;
+    }
+    const std::size_t b = segment.tracked[1];
+    for (std::size_t j : candidates) {
+      if (j == i || !distance_fits(segment, a, b, at(i), at(j)) ||
+          !keeps_handedness(subject, s, a, b, parent_seen, i, j))
+        continue;
+      const auto cj = child_marker_cost(subject, s, b, parent_pose, parent_seen, j);
+      if (cj && (!best || *ci + *cj < best->cost)) best = Found{{{a, i}, {b, j}}, {}, true, *ci + *cj};
+    }
+  }
+  if (!best) return std::nullopt;
+  Points seen(layout.markers.size());
+  for (const auto& [m, p] : best->pairs) seen[m] = at(p);
+  best->pose = segment_pose(layout, seen, parent_pose.q)->first;
+  return best;
+}
+
+std::optional<Found> Labeller::State::search_segment(const Subject& subject, std::size_t s,
+                                                     const std::optional<RigidTransform>& parent_pose,
+                                                     const Points& parent_seen) const {
+  const SegmentState& segment = subject.segments[s];
+  if (segment.tracked.size() >= 3 && subject.model.segments[s].has_pose)
+    return search_rigid(subject, s, parent_pose, candidates_near(subject, s, parent_pose));
+  if (parent_pose) return search_pair(subject, s, *parent_pose, parent_seen);
+  return std::nullopt;
+}
+
+Points Labeller::State::seen_now(const SegmentState& segment) const {
+  Points seen(segment.markers.size());
+  for (std::size_t m = 0; m < seen.size(); ++m) {
+    if (segment.markers[m].point) seen[m] = at(*segment.markers[m].point);
+  }
+  return seen;
+}
+
+Points Labeller::State::seen_of(const Subject& subject, std::size_t s, const Hypothesis& h) const {
+  Points seen(subject.segments[s].markers.size());
+  if (h.segments[s]) {
+    for (const auto& [m, p] : h.segments[s]->pairs) seen[m] = at(p);
+  }
+  return seen;
+}
+
+// Down the tree from a segment found at `pose`: each child searched where the pose puts it, its
+// points claimed for the rest of the hypothesis.
+void Labeller::State::grow(const Subject& subject, std::size_t s, const RigidTransform& pose, Hypothesis& h) {
+  for (std::size_t child : subject.segments[s].children) {
+    auto found = search_segment(subject, child, pose, seen_of(subject, s, h));
+    if (!found) continue;
+    for (const auto& pair : found->pairs) claimed[pair.second] = 1;
+    h.markers += found->pairs.size();
+    h.cost += found->cost;
+    const RigidTransform child_pose = found->pose;
+    h.segments[child] = std::move(found);
+    grow(subject, child, child_pose, h);
+  }
+}
+
+namespace {
+
+bool has_track(const SegmentState& segment) {
+  return std::any_of(segment.markers.begin(), segment.markers.end(),
+                     [](const MarkerState& marker) { return marker.track.has_value(); });
+}
+
+bool better(const Hypothesis& a, const Hypothesis& b) {
+  return a.markers > b.markers || (a.markers == b.markers && a.cost < b.cost);
+}
+
+}  // namespace
+
+// A subject with no name on any track: every root candidate grown over the tree, the hypothesis that
+// explains the most markers (then the lowest cost) taken. A mirrored root puts its children where
+// there are none, so left and right come from the tree. A subject with names: each segment that
+// lost them all is searched from its parent's pose.
+void Labeller::State::acquire(std::size_t subject_index) {
+  Subject& subject = subjects[subject_index];
+  if (std::none_of(subject.segments.begin(), subject.segments.end(), has_track)) {
+    std::vector<Found> roots;
+    search_rigid(subject, subject.root, std::nullopt, candidates_near(subject, subject.root, std::nullopt),
+                 &roots);
+    std::sort(roots.begin(), roots.end(), [](const Found& a, const Found& b) {
+      return a.pairs.size() > b.pairs.size() || (a.pairs.size() == b.pairs.size() && a.cost < b.cost);
+    });
+    if (roots.size() > options.root_hypotheses) roots.resize(options.root_hypotheses);
+    std::optional<Hypothesis> best;
+    const std::vector<char> before = claimed;
+    for (const Found& root : roots) {
+      Hypothesis h;
+      h.segments.resize(subject.segments.size());
+      for (const auto& pair : root.pairs) claimed[pair.second] = 1;
+      h.markers = root.pairs.size();
+      h.cost = root.cost;
+      h.segments[subject.root] = root;
+      grow(subject, subject.root, root.pose, h);
+      claimed = before;
+      if (!best || better(h, *best)) best = std::move(h);
+    }
+    if (!best || best->markers < options.min_markers) return;
+    for (std::size_t s = 0; s < best->segments.size(); ++s) {
+      if (best->segments[s]) commit(subject_index, s, *best->segments[s]);
+    }
+    return;
+  }
+  for (std::size_t s : subject.order) {
+    SegmentState& segment = subject.segments[s];
+    if (has_track(segment) || !segment.parent || !subject.segments[*segment.parent].pose) continue;
+    const auto found = search_segment(subject, s, subject.segments[*segment.parent].pose,
+                                      seen_now(subject.segments[*segment.parent]));
+    if (!found) continue;
+    commit(subject_index, s, *found);
+    segment.pose = found->pose;
+    segment.loose = found->loose;
+  }
+}
+
+Labeller::Labeller(std::vector<SubjectModel> models, LabellerOptions options)
+    : state_(std::make_unique<State>()) {
+  state_->options = std::move(options);
+  for (auto& model : models) state_->subjects.push_back(make_subject(std::move(model), state_->options));
+}
+
+Labeller::~Labeller() = default;
+Labeller::Labeller(Labeller&&) noexcept = default;
+Labeller& Labeller::operator=(Labeller&&) noexcept = default;
+
+void Labeller::update(const std::vector<TrackPoint>& points) {
+  State& s = *state_;
+  s.points = &points;
+  s.claimed.assign(points.size(), 0);
+  std::unordered_map<std::uint64_t, std::size_t> by_track;
+  std::unordered_map<std::uint64_t, int> ages;
+  s.young.assign(points.size(), 0);
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    by_track.emplace(points[p].track, p);
+    const auto age = s.ages.find(points[p].track);
+    const int seen = (age == s.ages.end() ? 0 : age->second) + 1;
+    ages[points[p].track] = seen;
+    s.young[p] = seen < s.options.min_track_age ? 1 : 0;
+  }
+  s.ages = std::move(ages);
+  s.keep(by_track);
+  for (auto& subject : s.subjects) {
+    s.fit_poses(subject);
+    s.predict(subject);
+  }
+  s.recover();
+  for (std::size_t i = 0; i < s.subjects.size(); ++i) {
+    s.fit_poses(s.subjects[i]);
+    s.acquire(i);
+  }
+  s.points = nullptr;
+}
+
+std::optional<MarkerLabel> Labeller::label_of(std::uint64_t track) const {
+  const auto found = state_->labels.find(track);
+  if (found == state_->labels.end()) return std::nullopt;
+  const auto& [subject, where] = found->second;
+  return MarkerLabel{subject,
+                     state_->subjects[subject].model.segments[where.first].markers[where.second].name};
+}
+
+const SubjectModel& Labeller::model(std::size_t subject) const {
+  return state_->subjects.at(subject).model;
+}
+
+}  // namespace panoptes::labelling

@@ -1,0 +1,264 @@
+// SPDX-License-Identifier: Apache-2.0
+// The labeller (issue 33 item 2) on the real Gait2392 walk: the model from the static trial, the
+// walk's markers as anonymous tracks (shuffled ids, 0.5 mm noise, 0.3 ghosts per frame, occlusion
+// gaps after which a marker comes back under a new track id), scored against the held-back names.
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <random>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "labelling_test_support.h"
+#include "panoptes/labelling/labeller.h"
+#include "panoptes/labelling_files/marker_set_file.h"
+#include "panoptes/labelling_files/static_trial.h"
+
+namespace panoptes::labelling {
+namespace {
+
+struct Score {
+  double visible = 0, right = 0, wrong = 0, swaps = 0, ghosts = 0, ghosts_named = 0;
+  double visible_after = 0, right_after = 0;  // from the first frame a track may be acquired on
+  std::vector<int> returns;                   // frames until a reappearing marker has its name back
+  std::map<std::string, int> unlabelled;      // marker-frames without a name, by marker
+  int never_returned = 0;
+  double microseconds_per_frame = 0;
+};
+
+std::string mirrored(const std::string& name) {
+  if (name.rfind("R.", 0) == 0) return "L." + name.substr(2);
+  if (name.rfind("L.", 0) == 0) return "R." + name.substr(2);
+  return name;
+}
+
+struct Replay {
+  std::mt19937_64 rng;
+  double gap_probability = 0.004;  // per visible marker-frame
+  double ghosts_per_frame = 0.3;
+};
+
+// One frame's points: the walk's markers (ids change after a gap), ghosts near the body.
+struct Stream {
+  std::vector<std::uint64_t> id;  // per marker, 0 while hidden
+  std::vector<int> hidden_for;
+  struct Ghost {
+    std::uint64_t id;
+    Eigen::Vector3d at;
+    int frames;
+  };
+  std::vector<Ghost> ghosts;
+};
+
+std::vector<TrackPoint> next_frame(const MarkerSamples& walk, std::size_t f, Replay& replay, Stream& stream,
+                                   std::map<std::uint64_t, std::string>& truth) {
+  std::normal_distribution<double> noise(0.0, 0.0005);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<TrackPoint> points;
+  for (std::size_t m = 0; m < walk.point_count(); ++m) {
+    if (stream.hidden_for[m] > 0) --stream.hidden_for[m];
+    if (!walk.is_valid(f, m) || stream.hidden_for[m] > 0) {
+      stream.id[m] = 0;
+      continue;
+    }
+    if (stream.id[m] != 0 && unit(replay.rng) < replay.gap_probability) {
+      stream.id[m] = 0;
+      stream.hidden_for[m] = 5 + static_cast<int>(unit(replay.rng) * 20);
+      continue;
+    }
+    if (stream.id[m] == 0) stream.id[m] = replay.rng();
+    truth[stream.id[m]] = walk.names[m];
+    const Eigen::Vector3d n(noise(replay.rng), noise(replay.rng), noise(replay.rng));
+    points.push_back({stream.id[m], walk.position(f, m) + n});
+  }
+  std::poisson_distribution<int> births(replay.ghosts_per_frame);
+  for (int g = births(replay.rng); g > 0 && !points.empty(); --g) {
+    const auto& near = points[static_cast<std::size_t>(unit(replay.rng) * points.size())].position_m;
+    const Eigen::Vector3d direction =
+        Eigen::Vector3d(noise(replay.rng), noise(replay.rng), noise(replay.rng)).normalized();
+    stream.ghosts.push_back({replay.rng(), near + direction * (0.03 + 0.22 * unit(replay.rng)),
+                             1 + static_cast<int>(unit(replay.rng) * 6)});
+  }
+  for (auto& ghost : stream.ghosts) {
+    if (ghost.frames-- > 0) points.push_back({ghost.id, ghost.at});
+  }
+  std::shuffle(points.begin(), points.end(), replay.rng);
+  return points;
+}
+
+// Scores one frame's labels; `waiting[track]` is the frame a reappearing marker's new track began.
+void score_frame(const Labeller& labeller, const std::vector<TrackPoint>& points,
+                 const std::map<std::uint64_t, std::string>& truth, std::map<std::uint64_t, int>& waiting,
+                 int f, Score& score) {
+  std::map<std::string, int> names;  // a name is never on two tracks
+  for (const auto& point : points) {
+    const auto label = labeller.label_of(point.track);
+    if (label) EXPECT_EQ(++names[label->marker], 1) << label->marker << " on two tracks in frame " << f;
+    const auto name = truth.find(point.track);
+    if (name == truth.end()) {
+      score.ghosts += 1;
+      score.ghosts_named += label ? 1 : 0;
+      if (label) ++score.unlabelled["a ghost named " + label->marker];
+      continue;
+    }
+    score.visible += 1;
+    const bool right = label && label->marker == name->second;
+    score.right += right ? 1 : 0;
+    if (f + 1 >= LabellerOptions{}.min_track_age) {
+      score.visible_after += 1;
+      score.right_after += right ? 1 : 0;
+    }
+    score.wrong += label && !right ? 1 : 0;
+    if (!label) ++score.unlabelled[name->second];
+    if (label && !right) ++score.unlabelled[name->second + " named " + label->marker];
+    score.swaps += label && !right && label->marker == mirrored(name->second) ? 1 : 0;
+    const auto wait = waiting.find(point.track);
+    if (wait != waiting.end() && right) {
+      score.returns.push_back(f - wait->second);
+      if (f - wait->second > 4)
+        std::printf("  %s came back after %d frames\n", name->second.c_str(), f - wait->second);
+      waiting.erase(wait);
+    }
+  }
+}
+
+Score replay_walk(const SubjectModel& model, const MarkerSamples& walk, std::uint64_t seed,
+                  const LabellerOptions& options) {
+  Labeller labeller({model}, options);
+  Replay replay{std::mt19937_64(seed)};
+  Stream stream{
+      std::vector<std::uint64_t>(walk.point_count(), 0), std::vector<int>(walk.point_count(), 0), {}};
+  std::map<std::uint64_t, std::string> truth;
+  std::map<std::uint64_t, int> waiting;
+  std::vector<char> seen_before(walk.point_count(), 0);
+  Score score;
+  double seconds = 0.0;
+  for (std::size_t f = 0; f < walk.frame_count(); ++f) {
+    const auto before = stream.id;
+    const auto points = next_frame(walk, f, replay, stream, truth);
+    for (std::size_t m = 0; m < walk.point_count(); ++m) {
+      if (stream.id[m] != 0 && stream.id[m] != before[m] && seen_before[m] != 0) {
+        waiting[stream.id[m]] = static_cast<int>(f);
+      }
+      if (stream.id[m] != 0) seen_before[m] = 1;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    labeller.update(points);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    score_frame(labeller, points, truth, waiting, static_cast<int>(f), score);
+  }
+  score.never_returned = static_cast<int>(waiting.size());
+  score.microseconds_per_frame = seconds * 1e6 / static_cast<double>(walk.frame_count());
+  return score;
+}
+
+LabellerOptions gait2392_options() {
+  LabellerOptions options;
+  options.soft_segments = {"Torso"};
+  return options;
+}
+
+constexpr int kSeeds = 10;
+
+// Every seed's figures printed, the total returned (printed too).
+Score replay_seeds(const std::string& title, const SubjectModel& model, const MarkerSamples& walk,
+                   const LabellerOptions& options) {
+  Score total;
+  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
+    const Score s = replay_walk(model, walk, seed, options);
+    int worst = 0;
+    for (int r : s.returns) worst = std::max(worst, r);
+    std::printf(
+        "%s seed %llu: %.0f visible marker-frames, %.2f %% right, %.3f %% wrong, %.0f left/right swaps, %.0f "
+        "ghost-frames named, %zu reappearances: worst %d frames to the name, %d never; %.1f us per "
+        "subject-frame\n",
+        title.c_str(), static_cast<unsigned long long>(seed), s.visible, 100.0 * s.right / s.visible,
+        100.0 * s.wrong / s.visible, s.swaps, s.ghosts_named, s.returns.size(), worst, s.never_returned,
+        s.microseconds_per_frame);
+    for (const auto& [name, frames] : s.unlabelled) {
+      if (frames > LabellerOptions{}.min_track_age)
+        std::printf("  %s: %d marker-frames\n", name.c_str(), frames);
+    }
+    total.visible += s.visible;
+    total.visible_after += s.visible_after;
+    total.right_after += s.right_after;
+    total.ghosts_named += s.ghosts_named;
+    total.ghosts += s.ghosts;
+    total.microseconds_per_frame += s.microseconds_per_frame / kSeeds;
+    total.right += s.right;
+    total.wrong += s.wrong;
+    total.swaps += s.swaps;
+    total.never_returned += s.never_returned;
+    total.returns.insert(total.returns.end(), s.returns.begin(), s.returns.end());
+  }
+  int worst = 0;
+  for (int r : total.returns) worst = std::max(worst, r);
+  std::printf(
+      "%s, %d seeds: %.2f %% right (%.2f %% from frame %d, when tracks are old enough to acquire), %.3f %% "
+      "wrong, %.0f left/right swaps, %.0f of %.0f false point-frames named, %zu reappearances: worst %d "
+      "frames "
+      "(%.0f ms at %.0f Hz) to the name, %d never; %.1f us per subject-frame\n",
+      title.c_str(), kSeeds, 100.0 * total.right / total.visible,
+      100.0 * total.right_after / total.visible_after, LabellerOptions{}.min_track_age - 1,
+      100.0 * total.wrong / total.visible, total.swaps, total.ghosts_named, total.ghosts,
+      total.returns.size(), worst, worst * 1000.0 / walk.rate_hz, walk.rate_hz, total.never_returned,
+      total.microseconds_per_frame);
+  total.returns = {worst};
+  return total;
+}
+
+TEST(Labeller, Gait2392WalkFromTheStaticModel) {
+  PANOPTES_REQUIRE_SHARED(test::gait2392_static());
+  PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
+  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
+  const SubjectModel model = build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1");
+  const Score total =
+      replay_seeds("gait2392 walk1", model, load_marker_samples(test::gait2392_walk()), gait2392_options());
+  // Measured (10 seeds): 98.25 % right, 99.64 % from frame 2, 0.068 % wrong, 0 swaps, worst return 10
+  // frames, 4 never (docs/marker_sets.md). The issue asks 99.5 % right and 0.1 % wrong live.
+  EXPECT_EQ(total.swaps, 0.0);
+  EXPECT_GT(100.0 * total.right / total.visible, 97.8);
+  EXPECT_GT(100.0 * total.right_after / total.visible_after, 99.2);
+  EXPECT_LT(100.0 * total.wrong / total.visible, 0.12);
+  EXPECT_LE(total.returns.front(), 12);
+  EXPECT_LE(total.never_returned, 6);
+  EXPECT_LT(total.ghosts_named, 40.0);
+}
+
+TEST(Labeller, RajagopalWalkFromItsStaticModel) {
+  PANOPTES_REQUIRE_SHARED(test::rajagopal_static());
+  const MarkerSet set = load_marker_set(test::marker_set_path("rajagopal"));
+  const SubjectModel model = build_subject_model(set, load_marker_samples(test::rajagopal_static()), "s1");
+  LabellerOptions options;
+  options.soft_segments = {"Torso"};
+  const Score total =
+      replay_seeds("rajagopal walk", model, load_marker_samples(test::rajagopal_walk()), options);
+  // Measured (10 seeds): 96.75 % right, 97.61 % from frame 2, no wrong name, 0 swaps, 2 never; the left
+  // arm is the weak part (docs/marker_sets.md).
+  EXPECT_EQ(total.swaps, 0.0);
+  EXPECT_GT(100.0 * total.right / total.visible, 96.3);
+  EXPECT_LT(100.0 * total.wrong / total.visible, 0.05);
+  EXPECT_LE(total.never_returned, 5);
+}
+
+TEST(Labeller, PointsThatFitNothingStayUnlabelled) {
+  PANOPTES_REQUIRE_SHARED(test::gait2392_static());
+  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
+  Labeller labeller({build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1")},
+                    gait2392_options());
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> room(-1.5, 1.5);
+  std::size_t named = 0;
+  for (std::uint64_t frame = 0; frame < 60; ++frame) {  // 45 points in a 3 m room, each a second long
+    std::vector<TrackPoint> points;
+    for (std::uint64_t t = 0; t < 45; ++t)
+      points.push_back({t, Eigen::Vector3d(room(rng), room(rng), room(rng))});
+    labeller.update(points);
+    for (const auto& point : points) named += labeller.label_of(point.track) ? 1 : 0;
+  }
+  EXPECT_EQ(named, 0U);
+}
+
+}  // namespace
+}  // namespace panoptes::labelling
