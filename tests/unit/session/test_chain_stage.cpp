@@ -36,7 +36,8 @@ TEST(ChainStage, HandSceneThroughTheOfflineSession) {
   session.tracker().set_calibration(scene.calibration());
   ChainStage chains(load_chains(kScenes / "hand_bodies.yaml"), scene.calibration(), out.string());
   chains.set_prediction_horizon(0.08);
-  OfflineReplayOptions options{false, false};
+  OfflineReplayOptions options;
+  options.show_progress = false;
   options.chains = &chains;
   ASSERT_EQ(run_offline(session, std::move(input), options, "", ""), 0);
 
