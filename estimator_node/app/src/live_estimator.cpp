@@ -232,6 +232,7 @@ void LiveEstimator::update(std::vector<FeatureFrame>& due) {
   TimeNs dequeued_ns = wall_now_ns();
   session_.process_due(due, [&](FeatureFrame& frame, est::FrameOutcome outcome) {
     if (outcome == est::FrameOutcome::kProcessed) publish_update(std::move(frame), dequeued_ns);
+    publish_fixed_frame();        // an instant that fell due during this update goes out before the next
     dequeued_ns = wall_now_ns();  // the next frame's update starts now
   });
 }
@@ -394,7 +395,6 @@ int LiveEstimator::run() {
     if (auto due = inbox.pop_due(now); !due.empty()) {
       last_frame_wall_ns_ = now;
       update(due);
-      publish_fixed_frame();
     }
     if (!finish_processed(false)) continue;  // a frame is due: its update first
     if (latency_probe_) latency_probe_->flush(now, false);

@@ -14,10 +14,13 @@
 
 #include <gtest/gtest.h>
 
+#include "panoptes/jsonl.h"
 #include "panoptes/session/estimator_session.h"
 #include "panoptes/session/frame_clock.h"
 #include "panoptes/session/frame_output.h"
+#include "panoptes/session/offline_replay.h"
 #include "panoptes/simulator.h"
+#include "scene_frames.h"
 
 namespace panoptes::session {
 namespace {
@@ -42,7 +45,8 @@ TEST(FrameClock, GridIsAlignedToWholeSecondsAndEveryTimeMapsToItsPeriod) {
     const std::int64_t first = clock.index_at(base);
     EXPECT_EQ(clock.instant(first), base) << rate;
     EXPECT_EQ(clock.instant(first + rate), base + kSecond) << rate;
-    for (std::int64_t k = first - 2 * rate; k < first + 2 * rate; ++k) {
+    const std::int64_t span = 2LL * rate;
+    for (std::int64_t k = first - span; k < first + span; ++k) {
       const TimeNs a = clock.instant(k), b = clock.instant(k + 1);
       // Periods are the nominal one rounded down or up: exactly one period apart at the ns.
       EXPECT_LE(std::abs(static_cast<double>(b - a) - clock.period_ns()), 1.0) << rate << " " << k;
@@ -104,19 +108,7 @@ TEST(FrameClock, TimecodeCountsFramesWithinTheSecondOfTheDay) {
   EXPECT_EQ(clock.timecode(instant + 10'000'000).frames, 0) << "next second";
 }
 
-// The first `seconds` of a scene's frames, in stamp order.
-std::vector<FeatureFrame> simulate(const Scene& scene, double seconds) {
-  std::vector<FeatureFrame> frames;
-  for (const auto& camera : scene.cameras()) {
-    CameraSimulator simulator(scene, camera.calibration.id);
-    for (std::int64_t k = 0; simulator.frame_time_ns(k) < seconds_to_ns(seconds); ++k)
-      frames.push_back(simulator.features(k));
-  }
-  std::stable_sort(frames.begin(), frames.end(), [](const FeatureFrame& a, const FeatureFrame& b) {
-    return std::tie(a.stamp_ns, a.camera_id) < std::tie(b.stamp_ns, b.camera_id);
-  });
-  return frames;
-}
+using testing::simulate;
 
 struct ErrorSum {
   double sum_sq = 0;
@@ -179,6 +171,43 @@ TEST(FixedRateFrames, EveryBodyInEveryFrameAtTheTrackersPredictionAndAccurate) {
   EXPECT_NEAR(static_cast<double>(fixed_frames), 3.0 * 120, 2.0);
   EXPECT_GT(fixed.n, static_cast<std::size_t>(0.95 * 3 * 120 * static_cast<double>(body_count)));
   EXPECT_LT(fixed.rmse_mm(), 2.0 * per_camera.rmse_mm() + 0.2) << "prediction over < one camera gap";
+}
+
+TEST(FixedRateFrames, OfflineRunWritesOneRecordSetPerInstantOnTheGrid) {
+  const Scene scene = Scene::load(std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/clients.yaml");
+  EstimatorConfig config;
+  config.node.frames = "fixed";
+  config.node.frame_rate_hz = 240;
+  EstimatorSession session(config);
+  session.tracker().set_calibration(scene.calibration());
+  session.tracker().set_bodies(scene.body_definitions());
+  FeatureFiles input;
+  input.frames = simulate(scene, 2.0);
+  const std::string poses_path = ::testing::TempDir() + "fixed_rate_poses.jsonl";
+  const std::string tracks_path = ::testing::TempDir() + "fixed_rate_tracks.jsonl";
+  OfflineReplayOptions options;
+  options.show_progress = false;
+  ASSERT_EQ(run_offline(session, std::move(input), options, tracks_path, poses_path), 0);
+
+  std::map<TimeNs, int> bodies_at;
+  for (const auto& pose : read_poses(poses_path)) ++bodies_at[pose.stamp_ns];
+  std::map<TimeNs, int> tracks_at;
+  for (const auto& track : read_tracks(tracks_path)) ++tracks_at[track.stamp_ns];
+  ASSERT_GT(bodies_at.size(), 450u) << "about 2 s at 240 Hz";
+  const FrameClock clock(240);
+  TimeNs previous = 0;
+  for (const auto& [stamp, count] : bodies_at) {
+    EXPECT_EQ(clock.instant(clock.index_at(stamp)), stamp) << "on the grid";
+    if (previous != 0) {
+      EXPECT_LE(std::abs(static_cast<double>(stamp - previous) - clock.period_ns()), 1.0);
+    }
+    previous = stamp;
+    if (stamp > kSecond / 2) {
+      EXPECT_EQ(count, 2) << "both bodies at every instant once identified";
+    }
+  }
+  ASSERT_GE(tracks_at.size(), bodies_at.size());
+  for (const auto& entry : tracks_at) EXPECT_EQ(clock.instant(clock.index_at(entry.first)), entry.first);
 }
 
 }  // namespace
