@@ -88,9 +88,7 @@ std::optional<session::ChainStage> chain_stage(const app::NodeCommandLine& comma
 
 int run(const app::NodeCommandLine& command_line, session::EstimatorSession& estimator,
         session::BodyFile& body_file) {
-  session::OfflineReplayOptions replay;
-  replay.by_arrival = command_line.replay_arrival;
-  replay.show_progress = !command_line.quiet;
+  session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
   std::optional<session::ChainStage> chains = chain_stage(command_line);
   if (chains) replay.chains = &*chains;
   if (!command_line.in_recording.empty()) {

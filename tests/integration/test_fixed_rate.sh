@@ -45,6 +45,9 @@ live_run per_camera per-camera
 skipped=$(sed -n 's/.*fixed-rate frames: [0-9]* published, \([0-9]*\) periods skipped.*/\1/p' "$work/fixed.estimator.log")
 rate=$(sed -n 's/.*rt\/panoptes\/frames at a fixed \([0-9]*\) Hz.*/\1/p' "$work/fixed.estimator.log")
 [ -n "$rate" ] && pass "the estimator announced the rate ($rate Hz)" || { fail "no rate announced"; rate=0; }
+# What the fixed rate adds, from the estimator's side: the age of the newest camera data at each
+# instant, and the write time minus the instant (docs/frames.md, "Measurements").
+grep "fixed-rate: " "$work/fixed.estimator.log" || fail "the estimator printed no fixed-rate summary"
 
 python3 - "$work" "$rate" "${skipped:-0}" "$work/sim/bodies.yaml" <<'PYTHON'
 import json, sys

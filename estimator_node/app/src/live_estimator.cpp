@@ -149,9 +149,10 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;  // with options_.chains
   session::FrameOutputBuilder frame_builder_;
   std::optional<session::FrameClock> frame_clock_;  // --frames fixed
-  session::FrameStages newest_stages_;              // of the newest processed frame (fixed-rate frames)
-  std::uint64_t descriptions_generation_ = 0;       // the bodies file's generation last published
-  std::uint64_t descriptions_sent_ = 0;             // BodyDescriptions.generation: 1, 2, ... per run
+  session::FixedRateStats fixed_rate_stats_;
+  session::FrameStages newest_stages_;         // of the newest processed frame (fixed-rate frames)
+  std::uint64_t descriptions_generation_ = 0;  // the bodies file's generation last published
+  std::uint64_t descriptions_sent_ = 0;        // BodyDescriptions.generation: 1, 2, ... per run
   std::optional<LatencyProbeEchoer> latency_probe_;
   std::optional<Ros2Outputs> ros2_;  // docs/ros2.md
   std::optional<session::JsonlOutputs> outputs_;
@@ -273,8 +274,10 @@ void LiveEstimator::publish_fixed_frame() {
   const auto poses = session_.poses_at(tick->instant_ns);
   const session::FrameOutput output =
       frame_builder_.build_at(tracker_, tick->frame_number, tick->instant_ns, newest_stages_, poses, tracks);
-  frame_writer_->write(to_frame_message(output, wall_now_ns()));
+  const TimeNs publish_ns = wall_now_ns();
+  frame_writer_->write(to_frame_message(output, publish_ns));
   if (ros2_) ros2_->publish(output);
+  fixed_rate_stats_.add(tick->instant_ns - tracker_.last_stamp_ns(), publish_ns - tick->instant_ns);
 }
 
 std::chrono::nanoseconds LiveEstimator::max_wait() const {
@@ -415,9 +418,11 @@ int LiveEstimator::run() {
   finish_processed(true);
   if (latency_probe_) latency_probe_->flush(wall_now_ns(), true);
   session_.print_summary(0);
-  if (frame_clock_)
+  if (frame_clock_) {
     log("fixed-rate frames: " + std::to_string(frame_clock_->published()) + " published, " +
         std::to_string(frame_clock_->skipped()) + " periods skipped (the estimator was behind)");
+    log(fixed_rate_stats_.summary());
+  }
   return kExitOk;
 }
 

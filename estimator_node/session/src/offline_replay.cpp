@@ -94,21 +94,6 @@ int run_offline(EstimatorSession& session, const std::vector<std::string>& featu
   return run_offline(session, std::move(input), options, out_tracks, out_poses);
 }
 
-std::string FixedRateStats::summary() const {
-  std::vector<TimeNs> ages = data_age_ns;
-  std::sort(ages.begin(), ages.end());
-  double mean = 0;
-  for (const TimeNs age : ages) mean += static_cast<double>(age);
-  mean = ages.empty() ? 0.0 : mean / static_cast<double>(ages.size());
-  const TimeNs p99 = ages.empty() ? 0 : ages[std::min(ages.size() - 1, ages.size() * 99 / 100)];
-  char line[160];
-  std::snprintf(line, sizeof line,
-                "fixed-rate: %llu frames; instant - newest stamp: mean %.3f ms, p99 %.3f ms, max %.3f ms",
-                static_cast<unsigned long long>(frames), mean * 1e-6, static_cast<double>(p99) * 1e-6,
-                ages.empty() ? 0.0 : static_cast<double>(ages.back()) * 1e-6);
-  return line;
-}
-
 int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineReplayOptions& options,
                 const std::string& out_tracks, const std::string& out_poses) {
   sort_by_stamp(input.frames);
@@ -123,8 +108,7 @@ int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineRepl
     replay.clock = [&](TimeNs now) {
       if (tracker.last_stamp_ns() == 0) return;  // nothing to predict from yet
       while (const auto tick = clock.next_due(now - 1)) {
-        ++stats.frames;
-        stats.data_age_ns.push_back(tick->instant_ns - tracker.last_stamp_ns());
+        stats.add(tick->instant_ns - tracker.last_stamp_ns());
         if (outputs.writes_tracks()) outputs.write_tracks(tracker.tracks_at(tick->instant_ns));
         if (outputs.writes_poses()) outputs.write_poses(session.poses_at(tick->instant_ns));
       }

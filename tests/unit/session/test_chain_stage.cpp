@@ -36,8 +36,7 @@ TEST(ChainStage, HandSceneThroughTheOfflineSession) {
   session.tracker().set_calibration(scene.calibration());
   ChainStage chains(load_chains(kScenes / "hand_bodies.yaml"), scene.calibration(), out.string());
   chains.set_prediction_horizon(0.08);
-  OfflineReplayOptions options;
-  options.show_progress = false;
+  OfflineReplayOptions options{false, false};
   options.chains = &chains;
   ASSERT_EQ(run_offline(session, std::move(input), options, "", ""), 0);
 

@@ -6,8 +6,11 @@
 // was not published (the estimator fell behind) leaves a gap, it is never sent late.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "panoptes/records.h"
 
@@ -60,6 +63,20 @@ class FrameClock {
   std::int64_t last_index_ = 0;
   std::uint64_t published_ = 0;
   std::uint64_t skipped_ = 0;
+};
+
+// What fixed-rate frames cost, for the end-of-run summary: per frame, its instant minus the
+// newest processed camera stamp (the age of the newest data, what a fixed rate adds to latency)
+// and, live, its write time minus its instant. The first kMaxSamples frames are kept.
+struct FixedRateStats {
+  static constexpr std::size_t kMaxSamples = 1 << 20;
+  std::uint64_t frames = 0;
+  std::vector<TimeNs> data_age_ns;
+  std::vector<TimeNs> publish_delay_ns;  // live only
+  void add(TimeNs data_age, TimeNs publish_delay = -1);
+  // "fixed-rate: N frames; instant - newest stamp: mean .. ms, p99 .. ms, max .. ms[; publish - instant:
+  // ...]"
+  std::string summary() const;
 };
 
 }  // namespace panoptes::session
