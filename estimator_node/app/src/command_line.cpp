@@ -64,6 +64,14 @@ struct SettingsFlags {
                         "distinct cameras that must see a new track before it is published")
              ->check(CLI::Range(2, 64)),
          [this](auto& c) { c.tracker.confirm_cameras = values.tracker.confirm_cameras; });
+    bind(app.add_option("--frames", node.frames,
+                        "rt/panoptes/frames, ROS 2 and --out-tracks/--out-poses: per-camera (one per camera "
+                        "frame) or fixed (--frame-rate-hz, on a grid; docs/frames.md)")
+             ->check(CLI::IsMember({"per-camera", "fixed"})),
+         [this](auto& c) { c.node.frames = values.node.frames; });
+    bind(app.add_option("--frame-rate-hz", node.frame_rate_hz, "rate of --frames fixed")
+             ->check(CLI::Range(1, 10000)),
+         [this](auto& c) { c.node.frame_rate_hz = values.node.frame_rate_hz; });
     bind(app.add_flag("--ros2,!--no-ros2", values.ros2.enabled,
                       "live: publish the ROS 2 topics (docs/ros2.md: rt/panoptes/<body>/pose, twist, rt/tf, "
                       "rt/rigid_bodies, rt/markers)"),

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/estimator_app/live_estimator.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -24,6 +25,7 @@
 #include "panoptes/estimator_app/ros2_outputs.h"
 #include "panoptes/estimator_app/status.h"
 #include "panoptes/process.h"
+#include "panoptes/session/frame_clock.h"
 #include "panoptes/session/log.h"
 #include "panoptes/session/output_sinks.h"
 
@@ -75,6 +77,11 @@ class LiveEstimator {
     }
     outputs_.emplace(options_.out_tracks, options_.out_poses);
     if (session.config().ros2.enabled) ros2_.emplace(*bus_, session.config().ros2);
+    if (node_.frames == "fixed") {
+      frame_clock_.emplace(node_.frame_rate_hz);
+      if (!options_.quiet)
+        log("rt/panoptes/frames at a fixed " + std::to_string(node_.frame_rate_hz) + " Hz (docs/frames.md)");
+    }
     if (!options_.calibration_file.empty()) {
       for (const auto& camera : load_calibration(options_.calibration_file).cameras)
         from_file_.insert(camera.id);
@@ -102,6 +109,10 @@ class LiveEstimator {
   void update(std::vector<FeatureFrame>& due);
   // The outputs of one in-order frame right after its update (taken from the inbox at `dequeued_ns`).
   void publish_update(FeatureFrame&& frame, TimeNs dequeued_ns);
+  // --frames fixed: the frame of the newest grid instant, once it is due (docs/frames.md).
+  void publish_fixed_frame();
+  // How long the loop may wait for frames: until the next fixed-rate instant, at most 1 ms.
+  std::chrono::nanoseconds max_wait() const;
   void finish(Processed& done);
   bool finish_processed(bool force);
   void publish_predictions(const FeatureFrame& frame);
@@ -137,6 +148,9 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
   std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;  // with options_.chains
   session::FrameOutputBuilder frame_builder_;
+  std::optional<session::FrameClock> frame_clock_;  // --frames fixed
+  session::FixedRateStats fixed_rate_stats_;
+  session::FrameStages newest_stages_;         // of the newest processed frame (fixed-rate frames)
   std::uint64_t descriptions_generation_ = 0;  // the bodies file's generation last published
   std::uint64_t descriptions_sent_ = 0;        // BodyDescriptions.generation: 1, 2, ... per run
   std::optional<LatencyProbeEchoer> latency_probe_;
@@ -219,6 +233,7 @@ void LiveEstimator::update(std::vector<FeatureFrame>& due) {
   TimeNs dequeued_ns = wall_now_ns();
   session_.process_due(due, [&](FeatureFrame& frame, est::FrameOutcome outcome) {
     if (outcome == est::FrameOutcome::kProcessed) publish_update(std::move(frame), dequeued_ns);
+    publish_fixed_frame();        // an instant that fell due during this update goes out before the next
     dequeued_ns = wall_now_ns();  // the next frame's update starts now
   });
 }
@@ -237,12 +252,39 @@ void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {
   auto tracks = tracker_.current_tracks();
   const session::FrameStages stages{frame.arrival_ns,  frame.processing_ns, frame.publish_ns,
                                     frame.received_ns, dequeued_ns,         updated_ns};
-  auto output = frame_builder_.build(tracker_, frame, stages, poses, tracks);
-  frame_writer_->write(to_frame_message(output, wall_now_ns()));
+  session::FrameOutput output;
+  if (frame_clock_) {
+    newest_stages_ = stages;
+  } else {
+    output = frame_builder_.build(tracker_, frame, stages, poses, tracks);
+    frame_writer_->write(to_frame_message(output, wall_now_ns()));
+  }
   const LatencyProbeEchoer::Stamps stamps{dequeued_ns, updated_ns, poses_published_ns,
                                           poses.empty() ? 0 : poses.front().stamp_ns,
                                           static_cast<std::uint32_t>(poses.size())};
   processed_.push_back({std::move(frame), std::move(tracks), std::move(poses), stamps, std::move(output)});
+}
+
+void LiveEstimator::publish_fixed_frame() {
+  // Instants are on the common time base, which is this process's clock (architecture.md "Time").
+  if (!frame_clock_ || tracker_.last_stamp_ns() == 0) return;
+  const auto tick = frame_clock_->latest_due(wall_now_ns());
+  if (!tick) return;
+  const auto tracks = tracker_.tracks_at(tick->instant_ns);
+  const auto poses = session_.poses_at(tick->instant_ns);
+  const session::FrameOutput output =
+      frame_builder_.build_at(tracker_, tick->frame_number, tick->instant_ns, newest_stages_, poses, tracks);
+  const TimeNs publish_ns = wall_now_ns();
+  frame_writer_->write(to_frame_message(output, publish_ns));
+  if (ros2_) ros2_->publish(output);
+  fixed_rate_stats_.add(tick->instant_ns - tracker_.last_stamp_ns(), publish_ns - tick->instant_ns);
+}
+
+std::chrono::nanoseconds LiveEstimator::max_wait() const {
+  const std::chrono::nanoseconds most = std::chrono::milliseconds(1);
+  if (!frame_clock_ || frame_clock_->next_instant() == 0) return most;
+  return std::clamp(std::chrono::nanoseconds(frame_clock_->next_instant() - wall_now_ns()),
+                    std::chrono::nanoseconds(0), most);
 }
 
 // Chains right after the poses: their grab events are what an application waits for.
@@ -270,7 +312,7 @@ void LiveEstimator::finish(Processed& done) {
   message.publish_ns(wall_now_ns());
   track_writer_->write(message);
   publish_predictions(done.frame);
-  if (ros2_) ros2_->publish(done.output);
+  if (ros2_ && !frame_clock_) ros2_->publish(done.output);
   outputs_->write_tracks(done.tracks);
   outputs_->write_poses(done.poses);
   if (latency_probe_) latency_probe_->trace(done.frame, done.stamps, message.publish_ns());
@@ -295,6 +337,8 @@ void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
     std::lock_guard<std::mutex> lock(info_mutex_);
     for (const auto& [reason, n] : info_rejections_) usage.counters[reason] += n;
   }
+  // Fixed-rate periods passed over while the estimator was behind (docs/frames.md).
+  if (frame_clock_) usage.counters["fixed_rate_periods_skipped"] = frame_clock_->skipped();
   const double cpu_s = process_cpu_seconds();
   if (const double period_s = ns_to_seconds(now - last_status_.wall_ns);
       last_status_.wall_ns != 0 && period_s > 0) {
@@ -349,6 +393,7 @@ int LiveEstimator::run() {
   TimeNs next_body_poll = start + seconds_to_ns(node_.bodies_poll_s);
   while (!stop_requested()) {
     apply_announced_cameras();
+    publish_fixed_frame();
     const TimeNs now = wall_now_ns();
     if (auto due = inbox.pop_due(now); !due.empty()) {
       last_frame_wall_ns_ = now;
@@ -367,12 +412,17 @@ int LiveEstimator::run() {
       publish_status(now, start);
     }
     if (options_.duration_s > 0 && now - start >= seconds_to_ns(options_.duration_s)) break;
-    inbox.wait(wall_now_ns(), std::chrono::milliseconds(1));  // wakes as frames arrive (issue 7)
+    inbox.wait(wall_now_ns(), max_wait());  // wakes as frames arrive (issue 7)
   }
   if (auto rest = inbox.drain(); !rest.empty()) update(rest);
   finish_processed(true);
   if (latency_probe_) latency_probe_->flush(wall_now_ns(), true);
   session_.print_summary(0);
+  if (frame_clock_) {
+    log("fixed-rate frames: " + std::to_string(frame_clock_->published()) + " published, " +
+        std::to_string(frame_clock_->skipped()) + " periods skipped (the estimator was behind)");
+    log(fixed_rate_stats_.summary());
+  }
   return kExitOk;
 }
 

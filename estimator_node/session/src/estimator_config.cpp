@@ -154,6 +154,14 @@ class FieldWriter {
   std::string text_;
 };
 
+}  // namespace
+
+std::string check_frames_mode(const std::string& mode) {
+  return mode == "per-camera" || mode == "fixed" ? "" : "'" + mode + "': must be per-camera or fixed";
+}
+
+namespace {
+
 template <class Fields>
 void visit_node(Fields& f, NodeSettings& o) {
   f.integer("inbox_capacity", o.inbox_capacity, 1, 1 << 24, "frames waiting to be ordered by stamp");
@@ -166,6 +174,9 @@ void visit_node(Fields& f, NodeSettings& o) {
            "body poses are published this far ahead of the newest frame (seed 000 Ch. 5)");
   f.number("status_period_s", o.status_period_s, kPositive, "live: seconds between status messages");
   f.number("bodies_poll_s", o.bodies_poll_s, kPositive, "live: how often the bodies file is checked");
+  f.text("frames", o.frames, check_frames_mode,
+         "per-camera: a frame per camera frame; fixed: frame_rate_hz (docs/frames.md)");
+  f.integer("frame_rate_hz", o.frame_rate_hz, 1, 10000, "rate of fixed-rate frames");
 }
 
 template <class Fields>

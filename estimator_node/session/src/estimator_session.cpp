@@ -52,4 +52,11 @@ std::vector<PoseRecord> EstimatorSession::current_poses() const {
   return poses;
 }
 
+std::vector<PoseRecord> EstimatorSession::poses_at(TimeNs instant_ns) const {
+  std::vector<PoseRecord> poses = tracker_.poses_at(instant_ns, pose_horizon_ns_);
+  if (inside_out_.empty()) return poses;
+  for (auto& pose : inside_out_.poses_at(instant_ns, pose_horizon_ns_)) poses.push_back(std::move(pose));
+  return poses;
+}
+
 }  // namespace panoptes::session

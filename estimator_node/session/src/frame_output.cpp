@@ -18,14 +18,33 @@ FrameOutput FrameOutputBuilder::build(const estimator::Tracker& tracker, const F
   out.source_camera = frame.camera_id;
   out.source_frame = frame.frame;
   out.stages = stages;
+  fill(out, tracker, frame.stamp_ns, poses, tracks);
+  return out;
+}
 
+FrameOutput FrameOutputBuilder::build_at(const estimator::Tracker& tracker, std::uint64_t frame_number,
+                                         TimeNs instant_ns, const FrameStages& stages,
+                                         const std::vector<PoseRecord>& poses,
+                                         const std::vector<TrackRecord>& tracks) const {
+  FrameOutput out;
+  out.frame_number = frame_number;
+  out.stamp_ns = instant_ns;
+  out.source_frame = -1;
+  out.stages = stages;
+  fill(out, tracker, instant_ns, poses, tracks);
+  return out;
+}
+
+void FrameOutputBuilder::fill(FrameOutput& out, const estimator::Tracker& tracker, TimeNs label_stamp_ns,
+                              const std::vector<PoseRecord>& poses,
+                              const std::vector<TrackRecord>& tracks) const {
   const std::vector<BodyDefinition>& definitions = tracker.body_definitions();
   // Markers are labelled with the bodies' filter poses at this frame, not predicted or smoothed ones.
   const bool elsewhere = std::any_of(poses.begin(), poses.end(), [&](const PoseRecord& p) {
-    return p.horizon_ns != 0 || p.stamp_ns != frame.stamp_ns;
+    return p.horizon_ns != 0 || p.stamp_ns != label_stamp_ns;
   });
   const estimator::MarkerLabelling labelling = estimator::label_markers(
-      tracks, elsewhere ? tracker.poses_at(frame.stamp_ns, 0, false) : poses, definitions, label_distance_m_);
+      tracks, elsewhere ? tracker.poses_at(label_stamp_ns, 0, false) : poses, definitions, label_distance_m_);
 
   std::map<std::string, const PoseRecord*> pose_of;
   for (const auto& pose : poses) pose_of.emplace(pose.body, &pose);
@@ -39,7 +58,7 @@ FrameOutput FrameOutputBuilder::build(const estimator::Tracker& tracker, const F
       body.pose = *it->second;
     } else {
       body.pose.body = body.name;
-      body.pose.stamp_ns = frame.stamp_ns;
+      body.pose.stamp_ns = label_stamp_ns;
     }
     body.mean_marker_error_m = labelling.mean_error_m[b];
     body.labelled_markers = labelling.labelled_markers[b];
@@ -55,7 +74,6 @@ FrameOutput FrameOutputBuilder::build(const estimator::Tracker& tracker, const F
     }
     out.markers.push_back(std::move(marker));
   }
-  return out;
 }
 
 }  // namespace panoptes::session

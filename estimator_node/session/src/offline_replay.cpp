@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "panoptes/process.h"
+#include "panoptes/session/frame_clock.h"
 #include "panoptes/session/log.h"
 
 namespace panoptes::session {
@@ -59,6 +60,7 @@ void replay_frames(EstimatorSession& session, std::vector<FeatureFrame>& frames,
     const std::size_t i = order[n];
     FeatureFrame& frame = frames[i];
     if (options.by_arrival && frame.received_ns == 0) frame.received_ns = frame.stamp_ns;
+    if (options.clock) options.clock(options.by_arrival ? frame.received_ns : frame.stamp_ns);
     if (session.admit(frame, references[i], false)) {
       if (options.by_arrival) {
         const TimeNs now = frame.received_ns;
@@ -97,15 +99,32 @@ int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineRepl
   sort_by_stamp(input.frames);
   JsonlOutputs outputs(out_tracks, out_poses);
   const est::Tracker& tracker = session.tracker();
-  replay_frames(session, input.frames, options, [&](const FeatureFrame& frame, est::FrameOutcome outcome) {
+  const bool fixed = session.config().node.frames == "fixed";
+  FrameClock clock(session.config().node.frame_rate_hz);
+  FixedRateStats stats;
+  OfflineReplayOptions replay = options;
+  if (fixed) {
+    // Instants strictly before the clock: a frame stamped at an instant is processed first.
+    replay.clock = [&](TimeNs now) {
+      if (tracker.last_stamp_ns() == 0) return;  // nothing to predict from yet
+      while (const auto tick = clock.next_due(now - 1)) {
+        stats.add(tick->instant_ns - tracker.last_stamp_ns());
+        if (outputs.writes_tracks()) outputs.write_tracks(tracker.tracks_at(tick->instant_ns));
+        if (outputs.writes_poses()) outputs.write_poses(session.poses_at(tick->instant_ns));
+      }
+    };
+  }
+  replay_frames(session, input.frames, replay, [&](const FeatureFrame& frame, est::FrameOutcome outcome) {
     // Tracks and poses are written when the newest stamp advances; a replayed late frame refines
     // the state that the next frame's output shows.
     if (outcome != est::FrameOutcome::kProcessed) return;
     if (options.chains) options.chains->observe(frame, tracker);
+    if (fixed) return;
     if (outputs.writes_tracks()) outputs.write_tracks(tracker.current_tracks());
     if (outputs.writes_poses()) outputs.write_poses(session.current_poses());
   });
   session.print_summary(input.bad_lines);
+  if (fixed) log(stats.summary());
   if (options.chains) {
     options.chains->flush();
     log(options.chains->summary());

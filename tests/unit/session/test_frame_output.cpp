@@ -14,23 +14,12 @@
 #include "panoptes/session/estimator_session.h"
 #include "panoptes/session/frame_output.h"
 #include "panoptes/simulator.h"
+#include "scene_frames.h"
 
 namespace panoptes::session {
 namespace {
 
-// The first `seconds` of a scene's frames, in stamp order.
-std::vector<FeatureFrame> simulate(const Scene& scene, double seconds) {
-  std::vector<FeatureFrame> frames;
-  for (const auto& camera : scene.cameras()) {
-    CameraSimulator simulator(scene, camera.calibration.id);
-    for (std::int64_t k = 0; simulator.frame_time_ns(k) < seconds_to_ns(seconds); ++k)
-      frames.push_back(simulator.features(k));
-  }
-  std::stable_sort(frames.begin(), frames.end(), [](const FeatureFrame& a, const FeatureFrame& b) {
-    return std::tie(a.stamp_ns, a.camera_id) < std::tie(b.stamp_ns, b.camera_id);
-  });
-  return frames;
-}
+using testing::simulate;
 
 TEST(FrameOutput, ListsEveryBodyAndLabelsBodyMarkersInARealRun) {
   const Scene scene = Scene::load(std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/clients.yaml");

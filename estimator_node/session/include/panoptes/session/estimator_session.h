@@ -69,6 +69,9 @@ class EstimatorSession {
   // Body poses at the newest frame, predicted node.prediction_horizon_ms ahead; then the poses of
   // the rigs of moving cameras at the newest frame of any camera.
   std::vector<PoseRecord> current_poses() const;
+  // The same at `instant_ns` (a fixed-rate frame's instant, docs/frames.md), predicted from the
+  // newest state.
+  std::vector<PoseRecord> poses_at(TimeNs instant_ns) const;
 
  private:
   EstimatorConfig config_;

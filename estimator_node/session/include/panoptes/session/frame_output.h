@@ -42,10 +42,10 @@ struct MarkerOutput {
 };
 
 struct FrameOutput {
-  std::uint64_t frame_number = 0;  // from 1 in each run
-  TimeNs stamp_ns = 0;             // mid-exposure capture time of the source frame
-  std::string source_camera;
-  std::int64_t source_frame = 0;
+  std::uint64_t frame_number = 0;  // from 1 in each run; fixed rate: + 1 per period (docs/frames.md)
+  TimeNs stamp_ns = 0;             // mid-exposure capture time of the source frame; fixed rate: the instant
+  std::string source_camera;       // fixed rate: "" (every camera)
+  std::int64_t source_frame = 0;   // fixed rate: -1
   FrameStages stages;
   std::vector<BodyOutput> bodies;  // every defined body, in the bodies file's order
   std::vector<MarkerOutput> markers;
@@ -62,9 +62,19 @@ class FrameOutputBuilder {
   FrameOutput build(const estimator::Tracker& tracker, const FeatureFrame& frame, const FrameStages& stages,
                     const std::vector<PoseRecord>& poses, const std::vector<TrackRecord>& tracks);
 
+  // A fixed-rate frame (docs/frames.md): every track and body at `tick.instant_ns`. `poses` and
+  // `tracks` are predicted to that instant; labels use the bodies' filter poses there.
+  FrameOutput build_at(const estimator::Tracker& tracker, std::uint64_t frame_number, TimeNs instant_ns,
+                       const FrameStages& stages, const std::vector<PoseRecord>& poses,
+                       const std::vector<TrackRecord>& tracks) const;
+
   std::uint64_t frames_built() const { return frame_number_; }
 
  private:
+  // Bodies and labelled markers of `out`, labels from the bodies' poses at `label_stamp_ns`.
+  void fill(FrameOutput& out, const estimator::Tracker& tracker, TimeNs label_stamp_ns,
+            const std::vector<PoseRecord>& poses, const std::vector<TrackRecord>& tracks) const;
+
   double label_distance_m_;
   std::uint64_t frame_number_ = 0;
 };

@@ -37,6 +37,9 @@ struct OfflineReplayOptions {
   // Articulated chains of the bodies file (docs/articulated.md; --out-chains): fed every frame
   // the tracker processed. Null: none.
   ChainStage* chains = nullptr;
+  // Called before each frame is offered with the replay's clock: the frame's arrival
+  // (received_ns) with by_arrival, else its stamp (the offline timing model of docs/frames.md).
+  std::function<void(TimeNs)> clock = nullptr;
 };
 
 // Every frame the tracker was given, with what it did with it.
@@ -53,6 +56,9 @@ void replay_frames(EstimatorSession& session, std::vector<FeatureFrame>& frames,
 int run_offline(EstimatorSession& session, const std::vector<std::string>& feature_files,
                 const OfflineReplayOptions& options, const std::string& out_tracks,
                 const std::string& out_poses);
+// Fixed-rate output offline (docs/frames.md): with node.frames "fixed", before each frame reaches
+// the tracker, every grid instant up to the replay's clock gets its tracks and poses predicted
+// from the newest state (FrameClock::next_due).
 // The same run over frames already read (estimator_node --in-recording reads them from MCAP).
 int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineReplayOptions& options,
                 const std::string& out_tracks, const std::string& out_poses);

@@ -1,0 +1,108 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Fixed-rate frames over DDS (issue 34 item 1, docs/frames.md): the clients scene (two bodies, two
+# loose markers, six free-running cameras at 90-120 Hz) through estimator_node --frames fixed at
+# the default rate, read by panoptes_client_probe. Checks: the intervals between consecutive
+# frames' publish_ns (and, reported, receive_ns) are within +-2 % of the period at p99; stamps lie
+# exactly on the grid (one period apart, +-1 ns, for consecutive frame numbers); frame numbers
+# advance by one per period, and any gap equals the periods the estimator reports skipped; every
+# defined body is in every frame and each is tracked in >= 99 % of the frames after warm-up. Then
+# the same scene per-camera, to print the latency side by side (receive - stamp, p50/p99).
+# A bad --frames or --frame-rate-hz exits 2 naming the option.
+source "$(dirname "$0")/lib.sh"
+scene="$source_dir/deploy/scenes/clients.yaml"
+for tool in panoptes_client_probe estimator_node camera_node panoptes_sim; do
+  [ -x "$bin/$tool" ] || { fail "$bin/$tool is not built"; finish; }
+done
+
+expect_exit 2 "a bad --frames is refused" -- "$bin/estimator_node" --frames sometimes --duration 1
+expect_stderr_contains "--frames" "the error names --frames"
+expect_exit 2 "a bad --frame-rate-hz is refused" -- "$bin/estimator_node" --frames fixed --frame-rate-hz 0 --duration 1
+expect_stderr_contains "--frame-rate-hz" "the error names --frame-rate-hz"
+
+expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
+
+# live_run NAME FRAMES_MODE: 16 s of the scene into estimator_node, the probe recording 14 s.
+live_run() {
+  local name=$1 mode=$2 epoch=$(( ($(date +%s) + 3) * 1000000000 ))
+  "$bin/panoptes_client_probe" --out "$work/$name.jsonl" --duration 18 >"$work/$name.probe.log" 2>&1 &
+  local probe=$!
+  pids+=("$probe")
+  "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
+    --frames "$mode" --duration 20 --status-period 1 >"$work/$name.estimator.log" 2>&1 &
+  local estimator=$!
+  pids+=("$estimator")
+  replay_cameras "$epoch" 16 c0 c1 c2 c3 c4 c5
+  timeout 40 tail --pid="$estimator" -f /dev/null
+  wait "$estimator" && pass "$name: the estimator exited cleanly" ||
+    { fail "$name: estimator exit"; tail -5 "$work/$name.estimator.log"; }
+  timeout 20 tail --pid="$probe" -f /dev/null
+  wait "$probe" || fail "$name: panoptes_client_probe exit"
+}
+
+live_run fixed fixed
+live_run per_camera per-camera
+skipped=$(sed -n 's/.*fixed-rate frames: [0-9]* published, \([0-9]*\) periods skipped.*/\1/p' "$work/fixed.estimator.log")
+rate=$(sed -n 's/.*rt\/panoptes\/frames at a fixed \([0-9]*\) Hz.*/\1/p' "$work/fixed.estimator.log")
+[ -n "$rate" ] && pass "the estimator announced the rate ($rate Hz)" || { fail "no rate announced"; rate=0; }
+# What the fixed rate adds, from the estimator's side: the age of the newest camera data at each
+# instant, and the write time minus the instant (docs/frames.md, "Measurements").
+grep "fixed-rate: " "$work/fixed.estimator.log" || fail "the estimator printed no fixed-rate summary"
+
+python3 - "$work" "$rate" "${skipped:-0}" "$work/sim/bodies.yaml" <<'PYTHON'
+import json, sys
+work, rate, skipped = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+failures = 0
+def check(ok, what):
+    global failures
+    print(("PASS: " if ok else "FAIL: ") + what)
+    failures += 0 if ok else 1
+def frames(name):
+    out = []
+    for line in open(f"{work}/{name}.jsonl"):
+        record = json.loads(line)
+        if record.get("type") == "frame":
+            out.append(record)
+    return out
+def pct(values, q):
+    values = sorted(values)
+    return values[min(len(values) - 1, int(q * len(values)))] if values else float("nan")
+
+fixed = frames("fixed")
+check(rate > 0 and len(fixed) > 10 * rate, f"the client received {len(fixed)} fixed-rate frames at {rate} Hz")
+if rate <= 0 or len(fixed) < 2:
+    sys.exit(1)
+period = 1e9 / rate
+warm = [f for f in fixed if f["stamp_ns"] - fixed[0]["stamp_ns"] > 2e9]
+# Consecutive frame numbers only: a skipped period (reported by the estimator) or a lost sample
+# is not an interval.
+pairs = [(a, b) for a, b in zip(fixed, fixed[1:]) if b["frame"] == a["frame"] + 1]
+publish = [abs(b["publish_ns"] - a["publish_ns"] - period) / period for a, b in pairs]
+receive = [abs(b["receive_ns"] - a["receive_ns"] - period) / period for a, b in pairs]
+stamps = [abs(b["stamp_ns"] - a["stamp_ns"] - period) for a, b in pairs]
+check(pct(publish, 0.99) <= 0.02,
+      f"publish intervals within +-2 % of the period at p99 ({100 * pct(publish, 0.99):.2f} %, "
+      f"p50 {100 * pct(publish, 0.5):.2f} %, {len(pairs)} intervals)")
+print(f"receive intervals: deviation p50 {100 * pct(receive, 0.5):.2f} %, p99 {100 * pct(receive, 0.99):.2f} %")
+check(max(stamps) <= 1, f"stamps one period apart on the grid (worst {max(stamps):.0f} ns off)")
+check(all(b["frame"] > a["frame"] for a, b in zip(fixed, fixed[1:])), "frame numbers increase")
+gaps = sum(b["frame"] - a["frame"] - 1 for a, b in zip(fixed, fixed[1:]))
+print(f"frame-number gaps: {gaps} periods; the estimator skipped {skipped}")
+check(gaps <= skipped + len(fixed) // 1000, "gaps are the periods the estimator skipped (lost samples <= 0.1 %)")
+names = {b["name"] for f in fixed for b in f["bodies"]}
+check(all(len(f["bodies"]) == len(names) for f in fixed) and len(names) >= 2,
+      f"every body ({len(names)}) listed in every frame")
+for name in sorted(names):
+    tracked = sum(1 for f in warm for b in f["bodies"] if b["name"] == name and b["valid"])
+    check(tracked >= 0.99 * len(warm), f"body {name} tracked in {tracked}/{len(warm)} frames after warm-up")
+
+per_camera = frames("per_camera")
+for label, run in (("per-camera", per_camera), (f"fixed {rate} Hz", fixed)):
+    latency = [(f["receive_ns"] - f["stamp_ns"]) * 1e-6 for f in run]
+    print(f"{label}: {len(run)} frames, receive - stamp p50 {pct(latency, 0.5):.2f} ms, p99 {pct(latency, 0.99):.2f} ms")
+print("(a fixed-rate frame's stamp is its instant, so its receive - stamp is delivery only; what a fixed rate adds is "
+      "the age of the newest camera data at the instant, docs/frames.md 'Measurements')")
+sys.exit(1 if failures else 0)
+PYTHON
+[ $? -eq 0 ] || failures=$((failures + 1))
+finish
