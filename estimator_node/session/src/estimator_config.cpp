@@ -166,6 +166,8 @@ void visit_node(Fields& f, NodeSettings& o) {
            "body poses are published this far ahead of the newest frame (seed 000 Ch. 5)");
   f.number("status_period_s", o.status_period_s, kPositive, "live: seconds between status messages");
   f.number("bodies_poll_s", o.bodies_poll_s, kPositive, "live: how often the bodies file is checked");
+  f.number("camera_lost_after_s", o.camera_lost_after_s, between(0.01, 3600),
+           "live: a camera without a frame for this long (wall time) is lost");
 }
 
 template <class Fields>

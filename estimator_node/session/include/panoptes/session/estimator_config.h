@@ -36,6 +36,7 @@ struct NodeSettings {
   double prediction_horizon_ms = 0.0;  // body poses are published this far ahead (seed 000 Ch. 5)
   double status_period_s = 1.0;        // live: seconds between status messages and progress lines
   double bodies_poll_s = 1.0;          // live: how often the bodies file is checked for changes
+  double camera_lost_after_s = 0.5;    // live: a camera without a frame this long is lost (wall time)
 };
 
 struct EstimatorConfig {
