@@ -266,6 +266,10 @@ client::Stats PyClient::stats() const {
   return client_->stats();
 }
 
+client::EstimatorHealth PyClient::estimator_health() const {
+  return client_->estimator_health();
+}
+
 std::string PyClient::profile_file() const {
   return client_->profile_file();
 }
@@ -399,6 +403,8 @@ yet; status_text() says why) or when the client is closed. Ctrl-C interrupts the
            "status_text() -> str: 'receiving (240 frames/s)', 'no data for 3.2 s (last frame 1234)', "
            "'closed', ...")
       .def("stats", bound(&PyClient::stats), "stats() -> Stats: counters since the client was opened")
+      .def("estimator_health", bound(&PyClient::estimator_health),
+           "estimator_health() -> EstimatorHealth: the cameras as the estimator's latest status reports them")
       .def_property_readonly("profile_file", bound(&PyClient::profile_file),
                              "the DDS profile file the client opened")
       .def_property_readonly("domain_id", bound(&PyClient::domain_id), "the DDS domain the client opened")
