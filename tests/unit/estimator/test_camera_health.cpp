@@ -28,8 +28,8 @@ TEST(CameraHealth, ACameraIsLostOnceItsLastFrameIsOlderThanTheThreshold) {
   UsageMonitor monitor;
   monitor.set_lost_after(500 * kMs);
   for (int k = 0; k <= 100; ++k) {  // 100 Hz for 1 s; c3 stops after 0.5 s
-    monitor.note_received("c0", 2.0, kWall + k * 10 * kMs);
-    if (k <= 50) monitor.note_received("c3", 2.0, kWall + k * 10 * kMs);
+    monitor.note_received("c0", 2.0, kWall + 10 * kMs * k);
+    if (k <= 50) monitor.note_received("c3", 2.0, kWall + 10 * kMs * k);
   }
   // 0.99 s after c3's last frame (at kWall + 0.5 s): c3 lost, c0 live (its last frame 0.49 s ago).
   const TimeNs now = kWall + 1490 * kMs;
@@ -112,7 +112,7 @@ TEST(CameraOwnership, ASecondWriterIsRefusedWhileTheOwnerSends) {
   int accepted = 0;
   int refusals_reported = 0;
   for (int k = 1; k <= 100; ++k) {
-    const TimeNs t = kWall + k * 10 * kMs;
+    const TimeNs t = kWall + 10 * kMs * k;
     accepted += ownership.claim("c0", "A", t).verdict == CameraOwnership::Verdict::kOwner;
     const auto b = ownership.claim("c0", "B", t + 5 * kMs);
     EXPECT_EQ(b.verdict, CameraOwnership::Verdict::kRefused);

@@ -28,7 +28,7 @@ EstimatorSession& feed(EstimatorSession& session) {
   for (int k = 0; k < 100; ++k) {
     for (const char* id : {"c0", "c1", "c2", "c3"}) {
       if (std::string(id) == "c3" && k > 40) continue;
-      session.offer(frame_at(id, k, kWall + k * 10 * kMs), kWall + k * 10 * kMs, false);
+      session.offer(frame_at(id, k, kWall + 10 * kMs * k), kWall + 10 * kMs * k, false);
     }
   }
   return session;

@@ -325,10 +325,9 @@ auto bound(Result (PyClient::*method)(Args...) const) {
 
 }  // namespace
 
-void bind_client(py::module_& m) {
-  using py::literals::operator""_a;
-  py::class_<PyClient>(
-      m, "Client", R"doc(Client(profile=None, domain=None, stale_after=1.0, queue_depth=1024, reliable=True)
+// The Client class's docstring.
+constexpr const char* kClientDoc =
+    R"doc(Client(profile=None, domain=None, stale_after=1.0, queue_depth=1024, reliable=True)
 
 Reads Panoptes frames (bodies, markers, latency) and body descriptions from the estimator.
 
@@ -348,7 +347,11 @@ Use it as a context manager, or call close():
         else:
             print(frame.body("head").position)
 
-Every method may be called from any thread. Clients still open when the interpreter exits are closed.)doc")
+Every method may be called from any thread. Clients still open when the interpreter exits are closed.)doc";
+
+void bind_client(py::module_& m) {
+  using py::literals::operator""_a;
+  py::class_<PyClient>(m, "Client", kClientDoc)
       .def(py::init<const std::optional<std::filesystem::path>&, std::optional<int>, double, long long,
                     bool>(),
            "profile"_a = py::none(), "domain"_a = py::none(), "stale_after"_a = 1.0, "queue_depth"_a = 1024,
