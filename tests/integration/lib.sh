@@ -71,6 +71,19 @@ finish() {
   exit 1
 }
 
+# start_console NAME: panoptes_console on a free loopback port with a new token in $work/token (log
+# $work/console.log, pid added); sets $url (with the token) and $port, or fails and finishes.
+start_console() {
+  printf '%s-test-%s\n' "$1" "$(head -c 12 /dev/urandom | od -An -tx1 | tr -d ' \n')" >"$work/token"
+  "$bin/panoptes_console" --bind 127.0.0.1:0 --token-file "$work/token" --url-file "$work/url" >"$work/console.log" 2>&1 &
+  pids+=("$!")
+  for _ in $(seq 50); do [ -s "$work/url" ] && break; sleep 0.1; done
+  url="$(cat "$work/url" 2>/dev/null)"
+  [ -n "$url" ] && pass "console serving at ${url%%\?*}" || { fail "console did not start: $(cat "$work/console.log")"; finish; }
+  port="${url#http://127.0.0.1:}"
+  port="${port%%/*}"
+}
+
 # replay_cameras EPOCH_NS SECONDS CAMERA...: one camera_node per CAMERA replaying
 # $work/sim/CAMERA.jsonl in real time from EPOCH_NS for SECONDS, logs in $work/CAMERA.log (pids added).
 replay_cameras() {

@@ -21,12 +21,7 @@ mkdir -p "$shots"
   --duration 50 --status-period 1 --out-chains "$work/live.jsonl" >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
-printf 'chains-test-%s\n' "$(head -c 12 /dev/urandom | od -An -tx1 | tr -d ' \n')" >"$work/token"
-"$bin/panoptes_console" --bind 127.0.0.1:0 --token-file "$work/token" --url-file "$work/url" >"$work/console.log" 2>&1 &
-pids+=("$!")
-for _ in $(seq 50); do [ -s "$work/url" ] && break; sleep 0.1; done
-url="$(cat "$work/url" 2>/dev/null)"
-[ -n "$url" ] && pass "console serving at ${url%%\?*}" || { fail "console did not start: $(cat "$work/console.log")"; finish; }
+start_console chains
 epoch=$(( ($(date +%s) + 2) * 1000000000 ))
 replay_cameras "$epoch" 40 c0 c1 c2 c3
 

@@ -73,8 +73,12 @@ int run(int argc, char** argv) {
       status = bus.make_reader<panoptes::msg::EstimatorStatus>([&](panoptes::msg::EstimatorStatus&& message) {
         nlohmann::json cameras = nlohmann::json::object();
         for (const auto& c : message.cameras()) {
-          cameras[c.camera_id()] = {
-              {"frames", c.frames()}, {"used", c.used()}, {"utilisation", c.utilisation()}};
+          cameras[c.camera_id()] = {{"frames", c.frames()},
+                                    {"used", c.used()},
+                                    {"utilisation", c.utilisation()},
+                                    {"state", c.state()},  // 0 live, 1 lost, 2 unknown (issue 34)
+                                    {"since_last_frame_s", c.since_last_frame_s()},
+                                    {"refused_frames", c.refused_frames()}};
         }
         nlohmann::json counters = nlohmann::json::object();
         for (const auto& c : message.counters()) counters[c.name()] = c.value();
@@ -82,6 +86,9 @@ int run(int argc, char** argv) {
                                      {"recv_ns", panoptes::wall_now_ns()},
                                      {"frames", message.frames()},
                                      {"cameras", cameras},
+                                     {"cameras_live", message.cameras_live()},
+                                     {"cameras_lost", message.cameras_lost()},
+                                     {"tracks_unobserved", message.tracks_unobserved()},
                                      {"counters", counters}};
         std::lock_guard lock(mutex);
         out << line.dump() << '\n';

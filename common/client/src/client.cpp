@@ -114,6 +114,9 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
   std::unique_ptr<dds::Reader<msg::BodyDescriptions>> description_reader;
   std::unique_ptr<dds::Reader<msg::StrokeEvents>> stroke_reader;
   std::unique_ptr<dds::Reader<msg::ChainFrame>> chain_reader;
+  std::unique_ptr<dds::Reader<msg::EstimatorStatus>> status_reader;
+  EstimatorHealth health;  // under `mutex`
+  Clock::time_point health_arrival;
 
   void on_frame(const msg::MocapFrame& message);
   void on_strokes(const msg::StrokeEvents& message);
@@ -124,7 +127,29 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
                  const char* what);
   void on_callback_error(const std::string& what);
   void on_descriptions(const msg::BodyDescriptions& message);
+  void on_status(const msg::EstimatorStatus& message);
 };
+
+void Client::Impl::on_status(const msg::EstimatorStatus& message) {
+  EstimatorHealth next;
+  next.received = true;
+  next.cameras_live = static_cast<int>(message.cameras_live());
+  next.cameras_lost = static_cast<int>(message.cameras_lost());
+  next.tracks_unobserved = static_cast<int>(message.tracks_unobserved());
+  for (const msg::CameraUsage& usage : message.cameras()) {
+    CameraHealth camera;
+    camera.camera_id = usage.camera_id();
+    camera.live = usage.state() == 0;
+    camera.since_last_frame_s = usage.since_last_frame_s();
+    camera.utilisation = usage.utilisation();
+    camera.refused_frames = usage.refused_frames();
+    next.cameras.push_back(std::move(camera));
+  }
+  std::lock_guard lock(mutex);
+  if (closed) return;
+  health = std::move(next);
+  health_arrival = Clock::now();
+}
 
 void Client::Impl::on_frame(const msg::MocapFrame& message) {
   const TimeNs receive_ns = wall_now_ns();
@@ -248,6 +273,8 @@ Client::Client(const ClientOptions& options) {
     impl->profile = impl->bus->profile_file().string();
     impl->description_reader = impl->bus->make_reader<msg::BodyDescriptions>(
         [impl](msg::BodyDescriptions&& message) { impl->on_descriptions(message); });
+    impl->status_reader = impl->bus->make_reader<msg::EstimatorStatus>(
+        [impl](msg::EstimatorStatus&& message) { impl->on_status(message); });
     impl->frame_reader = impl->bus->make_reader<msg::MocapFrame>(
         [impl](msg::MocapFrame&& message) { impl->on_frame(message); },
         options.reliable ? dds::Qos::kReliable : dds::Qos::kDefault);
@@ -256,6 +283,7 @@ Client::Client(const ClientOptions& options) {
     throw OptionError(std::string("panoptes client: ") + e.what());
   } catch (const std::exception& e) {
     impl->frame_reader.reset();
+    impl->status_reader.reset();
     impl->description_reader.reset();
     impl->bus.reset();
     throw ClientError(std::string("panoptes client: ") + e.what());
@@ -396,6 +424,14 @@ std::string Client::status_text() const {
   return buffer;
 }
 
+EstimatorHealth Client::estimator_health() const {
+  std::lock_guard lock(impl_->mutex);
+  EstimatorHealth health = impl_->health;
+  if (health.received)
+    health.age_s = std::chrono::duration<double>(Impl::Clock::now() - impl_->health_arrival).count();
+  return health;
+}
+
 Stats Client::stats() const {
   Stats stats;
   {
@@ -436,6 +472,7 @@ void Client::close() {
   impl_->stroke_reader.reset();
   impl_->chain_reader.reset();
   impl_->frame_reader.reset();
+  impl_->status_reader.reset();
   impl_->description_reader.reset();
   impl_->bus.reset();
 }

@@ -59,9 +59,9 @@ bool Writer<T>::wait_for_readers(int count, std::chrono::milliseconds timeout) c
 }
 
 template <class T>
-class ReaderListener : public GatedReaderListener<typename Reader<T>::Callback> {
+class ReaderListener : public GatedReaderListener<typename Reader<T>::SourcedCallback> {
  public:
-  using GatedReaderListener<typename Reader<T>::Callback>::GatedReaderListener;
+  using GatedReaderListener<typename Reader<T>::SourcedCallback>::GatedReaderListener;
 
   void on_data_available(fdds::DataReader* reader) override {
     std::lock_guard<std::mutex> lock(this->mutex_);
@@ -77,7 +77,7 @@ class ReaderListener : public GatedReaderListener<typename Reader<T>::Callback> 
       this->received.fetch_add(1);
       // Runs on a Fast DDS thread: whatever a sample makes the handler throw is counted, not fatal.
       try {
-        this->callback_(std::move(sample));
+        this->callback_(std::move(sample), SampleSource{writer_key(info.publication_handle)});
       } catch (const std::exception&) {
         this->counters_.note("handler_error");
       }
@@ -158,6 +158,15 @@ std::unique_ptr<Writer<T>> Bus::make_writer(Qos qos, const std::string& topic_na
 template <class T>
 std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_sample, Qos qos,
                                             const std::string& only_id, const std::string& topic_name) {
+  return make_sourced_reader<T>(
+      [callback = std::move(on_sample)](T&& sample, const SampleSource&) { callback(std::move(sample)); },
+      qos, only_id, topic_name);
+}
+
+template <class T>
+std::unique_ptr<Reader<T>> Bus::make_sourced_reader(typename Reader<T>::SourcedCallback on_sample, Qos qos,
+                                                    const std::string& only_id,
+                                                    const std::string& topic_name) {
   const TopicSpec spec = TopicTraits<T>::spec();
   const std::string name = topic_name_for<T>(topic_name);
   auto impl = std::make_unique<typename Reader<T>::Impl>();
@@ -187,13 +196,15 @@ std::unique_ptr<Reader<T>> Bus::make_reader(typename Reader<T>::Callback on_samp
 }
 
 // NOLINTBEGIN(bugprone-macro-parentheses): a type argument of a template cannot be parenthesised
-#define PANOPTES_INSTANTIATE_TYPE(Type)                                                      \
-  template class Writer<Type>;                                                               \
-  template class Reader<Type>;                                                               \
-  template std::unique_ptr<Writer<Type>> Bus::make_writer<Type>(Qos, const std::string&,     \
-                                                                const std::string&);         \
-  template std::unique_ptr<Reader<Type>> Bus::make_reader<Type>(Reader<Type>::Callback, Qos, \
-                                                                const std::string&, const std::string&);
+#define PANOPTES_INSTANTIATE_TYPE(Type)                                                                  \
+  template class Writer<Type>;                                                                           \
+  template class Reader<Type>;                                                                           \
+  template std::unique_ptr<Writer<Type>> Bus::make_writer<Type>(Qos, const std::string&,                 \
+                                                                const std::string&);                     \
+  template std::unique_ptr<Reader<Type>> Bus::make_reader<Type>(Reader<Type>::Callback, Qos,             \
+                                                                const std::string&, const std::string&); \
+  template std::unique_ptr<Reader<Type>> Bus::make_sourced_reader<Type>(                                 \
+      Reader<Type>::SourcedCallback, Qos, const std::string&, const std::string&);
 #define PANOPTES_INSTANTIATE(Type) PANOPTES_INSTANTIATE_TYPE(msg::Type)
 
 PANOPTES_INSTANTIATE(CameraInfo)

@@ -76,6 +76,18 @@ bool WriterPartitions::admits(const eprosima::fastrtps::rtps::InstanceHandle_t& 
   return false;
 }
 
+std::string SampleSource::writer() const {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string text;
+  text.reserve(33);
+  for (std::size_t i = 0; i < writer_guid.size(); ++i) {
+    if (i == 12) text += '.';
+    text += kHex[writer_guid[i] >> 4];
+    text += kHex[writer_guid[i] & 0xf];
+  }
+  return text;
+}
+
 bool names_one_partition(std::string_view id) {
   constexpr std::size_t kMaxPartitionName = 256;
   return !id.empty() && id.size() <= kMaxPartitionName && id.find_first_of(";*?[") == std::string_view::npos;

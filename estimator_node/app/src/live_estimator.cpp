@@ -3,8 +3,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
-#include <cstdio>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -18,6 +16,7 @@
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
 #include "panoptes/dds/time_sync.h"
+#include "panoptes/estimator/camera_ownership.h"
 #include "panoptes/estimator_app/chain_messages.h"
 #include "panoptes/estimator_app/frame_messages.h"
 #include "panoptes/estimator_app/frame_periods.h"
@@ -58,12 +57,15 @@ class LiveEstimator {
         body_file_(body_file),
         bus_(open_bus(options)),
         time_service_(*bus_),
-        info_reader_(bus_->make_reader<msg::CameraInfo>([this](msg::CameraInfo&& info) { announce(info); })),
-        feature_reader_(bus_->make_reader<msg::FeatureFrame>([this](msg::FeatureFrame&& message) {
-          auto frame = dds::from_message(message);
-          frame.received_ns = wall_now_ns();
-          session_.offer(std::move(frame), frame.received_ns, true);
-        })),
+        ownership_(seconds_to_ns(node_.camera_lost_after_s)),
+        info_reader_(bus_->make_sourced_reader<msg::CameraInfo>(
+            [this](msg::CameraInfo&& info, const dds::SampleSource& source) {
+              if (!refuses_info(info, source)) announce(info);
+            })),
+        feature_reader_(bus_->make_sourced_reader<msg::FeatureFrame>(
+            [this](msg::FeatureFrame&& message, const dds::SampleSource& source) {
+              receive(std::move(message), source);
+            })),
         track_writer_(bus_->make_writer<msg::TrackFrame>()),
         prediction_writer_(bus_->make_writer<msg::Predictions>()),
         status_writer_(bus_->make_writer<msg::EstimatorStatus>()),
@@ -103,6 +105,10 @@ class LiveEstimator {
     session::FrameOutput output;        // what rt/panoptes/frames carried
   };
 
+  // A DDS listener thread: a FeatureFrame goes to the session unless a second writer sent it.
+  void receive(msg::FeatureFrame&& message, const dds::SampleSource& source);
+  // CameraInfo from a writer other than the owner of its camera id (while the owner sends).
+  bool refuses_info(const msg::CameraInfo& info, const dds::SampleSource& source);
   void announce(const msg::CameraInfo& info);
   void apply_announced_cameras();
   // Updates the tracker with frames taken from the inbox together (late ones in one replay).
@@ -133,6 +139,8 @@ class LiveEstimator {
   std::mutex info_mutex_;
   std::vector<CameraCalibration> announced_;              // from CameraInfo, applied on the estimator thread
   std::map<std::string, std::uint64_t> info_rejections_;  // CameraInfo dropped, by reason
+  // Which DDS writer speaks for each camera id: a second one is refused (docs/estimator.md).
+  est::CameraOwnership ownership_;
   std::unique_ptr<dds::Reader<msg::CameraInfo>> info_reader_;
   std::unique_ptr<dds::Reader<msg::FeatureFrame>> feature_reader_;
   std::unique_ptr<dds::Writer<msg::TrackFrame>> track_writer_;
@@ -148,9 +156,13 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
   std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;  // with options_.chains
   session::FrameOutputBuilder frame_builder_;
+<<<<<<< HEAD
   std::optional<session::FrameClock> frame_clock_;  // --frames fixed
   session::FixedRateStats fixed_rate_stats_;
   session::FrameStages newest_stages_;         // of the newest processed frame (fixed-rate frames)
+=======
+  std::size_t cameras_lost_ = 0;  // at the last health check: a change publishes the status at once
+>>>>>>> camera-health
   std::uint64_t descriptions_generation_ = 0;  // the bodies file's generation last published
   std::uint64_t descriptions_sent_ = 0;        // BodyDescriptions.generation: 1, 2, ... per run
   std::optional<LatencyProbeEchoer> latency_probe_;
@@ -329,8 +341,39 @@ bool LiveEstimator::finish_processed(bool force) {
   return true;
 }
 
+void LiveEstimator::receive(msg::FeatureFrame&& message, const dds::SampleSource& source) {
+  const TimeNs now = wall_now_ns();
+  const std::string writer = source.writer();
+  const auto decision = ownership_.claim(message.camera_id(), writer, now);
+  if (decision.verdict == est::CameraOwnership::Verdict::kRefused) {
+    session_.note_refused(message.camera_id(), decision.first_refusal);
+    if (decision.first_refusal) {
+      log("camera '" + message.camera_id() + "': refusing the frames of a second writer " + writer +
+          ": the id belongs to writer " + decision.owner + ", which is still sending (counted as " +
+          "camera_id_claimed_by_second_writer)");
+    }
+    return;
+  }
+  if (decision.verdict == est::CameraOwnership::Verdict::kHandedOver && !options_.quiet) {
+    log("camera '" + message.camera_id() + "': now written by " + writer +
+        " (its previous writer sent nothing for " + std::to_string(node_.camera_lost_after_s) + " s)");
+  }
+  auto frame = dds::from_message(message);
+  frame.received_ns = now;
+  session_.offer(std::move(frame), frame.received_ns, true);
+}
+
+bool LiveEstimator::refuses_info(const msg::CameraInfo& info, const dds::SampleSource& source) {
+  const std::string owner = ownership_.owner(info.camera_id());
+  if (owner.empty() || owner == source.writer()) return false;
+  std::lock_guard<std::mutex> lock(info_mutex_);
+  ++info_rejections_["camera_info_from_second_writer"];
+  return true;
+}
+
 void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
-  est::EstimatorUsage usage = session_.usage(now);
+  est::EstimatorUsage usage = session_.usage(now, now);
+  cameras_lost_ = usage.cameras_lost;
   // Samples dropped before they reached the session (docs/hostile_input.md).
   for (const auto& [reason, n] : bus_->receive_rejections()) usage.counters[reason] += n;
   {
@@ -350,22 +393,12 @@ void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
   last_status_ = {now, usage.replays, usage.replayed_frames, cpu_s};
   status_writer_->write(to_status_message(usage));
   if (options_.quiet) return;
-  std::string line = "t=" + std::to_string(static_cast<int>(ns_to_seconds(now - start))) + "s";
-  for (const auto& c : usage.cameras) {
-    char buffer[96];
-    std::snprintf(buffer, sizeof buffer, " %s %.0f%%", c.camera_id.c_str(), 100.0 * c.utilisation);
-    line += buffer;
-  }
-  line += " | tracks " + std::to_string(usage.tracks_confirmed) + "+" +
-          std::to_string(usage.tracks_coasting) + " coasting" +
-          (tracker_.body_count() ? " | bodies " + std::to_string(tracker_.current_poses().size()) + "/" +
-                                       std::to_string(tracker_.body_count())
-                                 : "") +
-          " | replays " + std::to_string(usage.replays) + " (" +
-          std::to_string(std::lround(usage.replays_per_s)) + "/s) | cpu " +
-          std::to_string(std::lround(usage.cpu_percent)) + "% | time sync answered " +
-          std::to_string(time_service_.answered());
-  log(line);
+  StatusLineExtras extras;
+  extras.elapsed_ns = now - start;
+  extras.bodies = tracker_.body_count();
+  if (extras.bodies > 0) extras.bodies_tracked = tracker_.current_poses().size();
+  extras.time_sync_answered = time_service_.answered();
+  log(status_line(usage, extras));
 }
 
 void LiveEstimator::expire_idle_tracks(TimeNs now) {
@@ -391,6 +424,8 @@ int LiveEstimator::run() {
   last_status_ = {start, 0, 0, process_cpu_seconds()};
   TimeNs next_status = start + seconds_to_ns(node_.status_period_s);
   TimeNs next_body_poll = start + seconds_to_ns(node_.bodies_poll_s);
+  constexpr TimeNs kHealthCheckNs = 50'000'000;
+  TimeNs next_health_check = start;
   while (!stop_requested()) {
     apply_announced_cameras();
     publish_fixed_frame();
@@ -410,6 +445,10 @@ int LiveEstimator::run() {
     if (now >= next_status) {
       next_status += seconds_to_ns(node_.status_period_s);
       publish_status(now, start);
+    } else if (now >= next_health_check) {
+      // A camera lost (or back) is reported at once, not at the next period (issue 34: within 1 s).
+      next_health_check = now + kHealthCheckNs;
+      if (session_.cameras_lost(now) != cameras_lost_) publish_status(now, start);
     }
     if (options_.duration_s > 0 && now - start >= seconds_to_ns(options_.duration_s)) break;
     inbox.wait(wall_now_ns(), max_wait());  // wakes as frames arrive (issue 7)

@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/estimator_app/status.h"
 
+#include <cmath>
+#include <cstdio>
+
 namespace panoptes::estimator_app {
 
 msg::EstimatorStatus to_status_message(const estimator::EstimatorUsage& usage) {
@@ -18,6 +21,9 @@ msg::EstimatorStatus to_status_message(const estimator::EstimatorUsage& usage) {
   message.update_p50_ms(usage.update_p50_ms);
   message.update_p99_ms(usage.update_p99_ms);
   message.latency_window_ms(usage.latency_window_ms);
+  message.cameras_live(static_cast<uint32_t>(usage.cameras_live));
+  message.cameras_lost(static_cast<uint32_t>(usage.cameras_lost));
+  message.tracks_unobserved(static_cast<uint32_t>(usage.tracks_unobserved));
   for (const auto& c : usage.cameras) {
     msg::CameraUsage m;
     m.camera_id(c.camera_id);
@@ -32,6 +38,10 @@ msg::EstimatorStatus to_status_message(const estimator::EstimatorUsage& usage) {
     m.latency_p50_ms(c.latency_p50_ms);
     m.latency_p99_ms(c.latency_p99_ms);
     m.last_stamp_ns(c.last_stamp_ns);
+    m.state(static_cast<uint8_t>(c.state));
+    m.since_last_frame_s(c.since_last_frame_s);
+    m.refused_frames(c.refused_frames);
+    m.refused_writers(c.refused_writers);
     message.cameras().push_back(std::move(m));
   }
   for (const auto& [name, value] : usage.counters) {
@@ -41,6 +51,45 @@ msg::EstimatorStatus to_status_message(const estimator::EstimatorUsage& usage) {
     message.counters().push_back(std::move(counter));
   }
   return message;
+}
+
+namespace {
+
+// " c0 100%", " c3 lost 1.2 s", and what a second writer for the camera had refused.
+std::string camera_field(const estimator::CameraUsage& c) {
+  char buffer[160];
+  if (c.state == estimator::CameraState::kLost)
+    std::snprintf(buffer, sizeof buffer, " %s lost %.1f s", c.camera_id.c_str(), c.since_last_frame_s);
+  else
+    std::snprintf(buffer, sizeof buffer, " %s %.0f%%", c.camera_id.c_str(), 100.0 * c.utilisation);
+  std::string field = buffer;
+  if (c.refused_frames > 0) {
+    field += " (2nd writer refused: " + std::to_string(c.refused_frames) + " frames from " +
+             std::to_string(c.refused_writers) + ")";
+  }
+  return field;
+}
+
+}  // namespace
+
+std::string status_line(const estimator::EstimatorUsage& usage, const StatusLineExtras& extras) {
+  std::string line = "t=" + std::to_string(static_cast<long long>(ns_to_seconds(extras.elapsed_ns))) + "s";
+  if (usage.cameras_live + usage.cameras_lost > 0) {
+    line += " cameras " + std::to_string(usage.cameras_live) + "/" +
+            std::to_string(usage.cameras_live + usage.cameras_lost) + " live:";
+  }
+  for (const auto& c : usage.cameras) line += camera_field(c);
+  line += " | tracks " + std::to_string(usage.tracks_confirmed) + "+" +
+          std::to_string(usage.tracks_coasting) + " coasting";
+  if (usage.tracks_unobserved > 0)
+    line += " (no camera live: " + std::to_string(usage.tracks_unobserved) + " predicted only)";
+  if (extras.bodies > 0)
+    line += " | bodies " + std::to_string(extras.bodies_tracked) + "/" + std::to_string(extras.bodies);
+  line += " | replays " + std::to_string(usage.replays) + " (" +
+          std::to_string(std::lround(usage.replays_per_s)) + "/s) | cpu " +
+          std::to_string(std::lround(usage.cpu_percent)) + "% | time sync answered " +
+          std::to_string(extras.time_sync_answered);
+  return line;
 }
 
 }  // namespace panoptes::estimator_app

@@ -41,10 +41,52 @@ UsageMonitor::PerCamera& UsageMonitor::camera(const std::string& camera_id) {
   return cameras_[cameras_.size() >= kMaxCameras ? std::string("<other>") : camera_id];
 }
 
-void UsageMonitor::note_received(const std::string& camera_id, double latency_ms) {
+const char* to_string(CameraState state) {
+  switch (state) {
+    case CameraState::kLive:
+      return "live";
+    case CameraState::kLost:
+      return "lost";
+    case CameraState::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
+void UsageMonitor::note_received(const std::string& camera_id, double latency_ms, TimeNs arrival_ns) {
   auto& camera = this->camera(camera_id);
   ++camera.received;
   camera.latency.add(latency_ms);
+  camera.last_arrival_ns = std::max(camera.last_arrival_ns, arrival_ns);
+}
+
+void UsageMonitor::note_refused(const std::string& camera_id, bool new_writer) {
+  auto& camera = this->camera(camera_id);
+  ++camera.refused_frames;
+  if (new_writer) ++camera.refused_writers;
+  ++reasons_["camera_id_claimed_by_second_writer"];
+}
+
+std::size_t UsageMonitor::cameras_lost(TimeNs now_ns) const {
+  std::size_t lost = 0;
+  for (const auto& [id, camera] : cameras_) {
+    if (camera.last_arrival_ns != 0 && now_ns - camera.last_arrival_ns > lost_after_ns_) ++lost;
+  }
+  return lost;
+}
+
+void UsageMonitor::judge_health(EstimatorUsage& usage, TimeNs now_ns) const {
+  for (auto& u : usage.cameras) {
+    const auto found = cameras_.find(u.camera_id);
+    if (now_ns == 0 || found == cameras_.end() || found->second.last_arrival_ns == 0) continue;
+    const TimeNs since_ns = std::max<TimeNs>(0, now_ns - found->second.last_arrival_ns);
+    u.since_last_frame_s = static_cast<double>(since_ns) * 1e-9;
+    u.state = since_ns > lost_after_ns_ ? CameraState::kLost : CameraState::kLive;
+    ++(u.state == CameraState::kLive ? usage.cameras_live : usage.cameras_lost);
+  }
+  // Every camera whose health is known is lost: whatever the tracker holds is a prediction.
+  if (usage.cameras_live == 0 && usage.cameras_lost > 0)
+    usage.tracks_unobserved = usage.tracks_tentative + usage.tracks_confirmed + usage.tracks_coasting;
 }
 
 void UsageMonitor::note_dropped(const std::string& camera_id, const std::string& reason,
@@ -58,7 +100,8 @@ void UsageMonitor::note_reason(const std::string& reason, std::uint64_t n) {
 }
 
 EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns, double latency_window_ms,
-                                       const std::map<std::string, CameraCounters>& other_cameras) const {
+                                       const std::map<std::string, CameraCounters>& other_cameras,
+                                       TimeNs now_ns) const {
   EstimatorUsage usage;
   usage.stamp_ns = stamp_ns;
   const auto counts = tracker.track_counts(tracker.last_stamp_ns());
@@ -87,6 +130,8 @@ EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns, 
     u.dropped = camera.dropped_before_tracker;
     u.latency_p50_ms = camera.latency.quantile_ms(0.5);
     u.latency_p99_ms = camera.latency.quantile_ms(0.99);
+    u.refused_frames = camera.refused_frames;
+    u.refused_writers = camera.refused_writers;
   }
   const auto merge = [&merged](const std::string& id, const CameraCounters& counters) {
     auto& u = merged[id];
@@ -107,6 +152,7 @@ EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns, 
     u.utilisation = u.frames == 0 ? 0.0 : static_cast<double>(u.used) / static_cast<double>(u.frames);
     usage.cameras.push_back(u);
   }
+  judge_health(usage, now_ns);
   return usage;
 }
 
@@ -122,6 +168,10 @@ std::vector<std::string> EstimatorUsage::lines() const {
         static_cast<unsigned long long>(c.used), static_cast<unsigned long long>(c.late),
         static_cast<unsigned long long>(c.dropped), c.utilisation, c.latency_p50_ms, c.latency_p99_ms);
     out.emplace_back(buffer);
+    if (c.refused_frames > 0) {
+      out.back() += " refused " + std::to_string(c.refused_frames) + " from " +
+                    std::to_string(c.refused_writers) + " second writer(s)";
+    }
   }
   std::snprintf(buffer, sizeof buffer, "replays %llu (%llu frames replayed)",
                 static_cast<unsigned long long>(replays), static_cast<unsigned long long>(replayed_frames));

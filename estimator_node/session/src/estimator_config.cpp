@@ -177,6 +177,8 @@ void visit_node(Fields& f, NodeSettings& o) {
   f.text("frames", o.frames, check_frames_mode,
          "per-camera: a frame per camera frame; fixed: frame_rate_hz (docs/frames.md)");
   f.integer("frame_rate_hz", o.frame_rate_hz, 1, 10000, "rate of fixed-rate frames");
+  f.number("camera_lost_after_s", o.camera_lost_after_s, between(0.01, 3600),
+           "live: a camera without a frame for this long (wall time) is lost");
 }
 
 template <class Fields>

@@ -12,7 +12,9 @@ EstimatorSession::EstimatorSession(const EstimatorConfig& config)
       tracker_(config_.tracker),
       intake_(tracker_, config_.screen, config_.node.latency_window_ms),
       inbox_(config_.node.inbox_capacity, seconds_to_ns(config_.node.latency_window_ms * 1e-3)),
-      pose_horizon_ns_(seconds_to_ns(config_.node.prediction_horizon_ms * 1e-3)) {}
+      pose_horizon_ns_(seconds_to_ns(config_.node.prediction_horizon_ms * 1e-3)) {
+  intake_.set_lost_after(seconds_to_ns(config_.node.camera_lost_after_s));
+}
 
 void EstimatorSession::process_due(std::vector<FeatureFrame>& due,
                                    const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each) {

@@ -26,7 +26,7 @@ bool Intake::admit(FeatureFrame& frame, TimeNs reference_ns, bool live) {
           ? (static_cast<double>(frame.received_ns) - static_cast<double>(frame.stamp_ns)) * 1e-6
           : std::numeric_limits<double>::quiet_NaN();  // unknown
   std::lock_guard<std::mutex> lock(mutex_);
-  monitor_.note_received(frame.camera_id, latency_ms);
+  monitor_.note_received(frame.camera_id, latency_ms, frame.received_ns);
   if (live ? screen_.screen_live(frame, reference_ns) : screen_.screen(frame, reference_ns)) return true;
   monitor_.note_dropped(frame.camera_id, "", 1);  // the reason is in the screen's counts
   return false;
@@ -51,10 +51,26 @@ std::vector<est::FrameOutcome> Intake::process_batch(std::span<const FeatureFram
   return outcomes;
 }
 
-est::EstimatorUsage Intake::usage(TimeNs stamp_ns, std::uint64_t inbox_drops,
-                                  const std::map<std::string, est::CameraCounters>& other_cameras) const {
+void Intake::set_lost_after(TimeNs lost_after_ns) {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto usage = monitor_.summarize(tracker_, stamp_ns, latency_window_ms_, other_cameras);
+  monitor_.set_lost_after(lost_after_ns);
+}
+
+void Intake::note_refused(const std::string& camera_id, bool new_writer) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  monitor_.note_refused(camera_id, new_writer);
+}
+
+std::size_t Intake::cameras_lost(TimeNs wall_now_ns) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return monitor_.cameras_lost(wall_now_ns);
+}
+
+est::EstimatorUsage Intake::usage(TimeNs stamp_ns, std::uint64_t inbox_drops,
+                                  const std::map<std::string, est::CameraCounters>& other_cameras,
+                                  TimeNs wall_now_ns) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto usage = monitor_.summarize(tracker_, stamp_ns, latency_window_ms_, other_cameras, wall_now_ns);
   for (const auto& [reason, n] : screen_.counts()) usage.counters[reason] += n;
   if (inbox_drops) usage.counters["inbox_overflow"] += inbox_drops;
   return usage;

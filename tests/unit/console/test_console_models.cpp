@@ -145,10 +145,36 @@ TEST(EstimatorModel, NullUntilAStatusThenItsFiguresAndAge) {
   EXPECT_TRUE(estimator.to_json(kT0).is_null());
   EXPECT_TRUE(estimator.usage().empty());
   estimator.on_status({3, 1, 12.345, 0.67891, {{"cam0", {0.5, 2}}}}, kT0);
-  EXPECT_EQ(
-      estimator.to_json(kT0 + 1500 * kMs).dump(),
-      R"({"age_s":1.5,"cpu_percent":12.3,"tracks_confirmed":3,"tracks_tentative":1,"update_p99_ms":0.679})");
+  EXPECT_EQ(estimator.to_json(kT0 + 1500 * kMs).dump(),
+            R"({"age_s":1.5,"cameras_live":0,"cameras_lost":0,"cpu_percent":12.3,"lost":[],"refused":[],)"
+            R"("tracks_coasting":0,"tracks_confirmed":3,"tracks_tentative":1,"tracks_unobserved":0,)"
+            R"("update_p99_ms":0.679})");
   EXPECT_EQ(estimator.usage().count("cam0"), 1U);
+}
+
+// Issue 34: a camera the estimator lost is named with its silence; a second writer's refusals too.
+TEST(EstimatorModel, NamesLostCamerasAndRefusedSecondWriters) {
+  EstimatorModel estimator;
+  EstimatorRecord status;
+  status.tracks_confirmed = 3;
+  status.cameras_live = 3;
+  status.cameras_lost = 1;
+  status.cameras = {{"c0", {1.0, 2, "live", 0.01, 812}},
+                    {"c1", {1.0, 2, "live", 0.01, 0}},
+                    {"c2", {1.0, 2, "live", 0.0, 0}},
+                    {"c3", {0.0, 2, "lost", 1.234, 0}}};
+  estimator.on_status(status, kT0);
+  const json j = estimator.to_json(kT0);
+  EXPECT_EQ(j["cameras_live"], 3);
+  EXPECT_EQ(j["cameras_lost"], 1);
+  EXPECT_EQ(j["lost"].dump(), R"([{"id":"c3","since_s":1.2}])");
+  EXPECT_EQ(j["refused"].dump(), R"([{"frames":812,"id":"c0"}])");
+  // The camera card gets the estimator's view of its camera.
+  CameraModel cameras{StateOptions{}};
+  cameras.on_info("c3", vga_info());
+  const json card = cameras.to_json(kT0, true, estimator.usage())[0];
+  EXPECT_EQ(card["usage"]["state"], "lost");
+  EXPECT_DOUBLE_EQ(card["usage"]["since_last_frame_s"].get<double>(), 1.2);
 }
 
 TrackPoint track(std::int64_t id, TrackStatus status) {

@@ -6,8 +6,10 @@
 // data/snapshot_golden.txt is what the single-mutex ConsoleState (before the per-area models)
 // wrote for the same calls, plus the body details' `stamp_ns` (added for issue 37) and, for issue
 // 32, each camera's `status_age_s` and a received rate that counts frame intervals (100 fps for
-// 101 frames 10 ms apart, where the first frame was counted too): the page and /api/state see no
-// other change.
+// 101 frames 10 ms apart, where the first frame was counted too), and for issue 34 the estimator's
+// camera health (its "cameras_live", "cameras_lost", "lost", "refused", "tracks_coasting",
+// "tracks_unobserved"; a camera usage's "state", "since_last_frame_s", "refused_frames"): the page
+// and /api/state see no other change.
 #include <gtest/gtest.h>
 
 #include <fstream>

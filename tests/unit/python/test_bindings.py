@@ -128,6 +128,14 @@ class EmptyDomain(unittest.TestCase):
         self.assertEqual(self.client.domain_id, EMPTY_DOMAIN)
         self.assertEqual(self.client.stats().frames_received, 0)
 
+    def test_estimator_health_before_any_status(self):
+        health = self.client.estimator_health()
+        self.assertIsInstance(health, panoptes.EstimatorHealth)
+        self.assertFalse(health.received)
+        self.assertEqual(health.age_s, -1)
+        self.assertEqual((health.cameras_live, health.cameras_lost, health.tracks_unobserved), (0, 0, 0))
+        self.assertEqual(health.cameras, [])
+
     def test_stroke_wait_times_out_with_none(self):
         start = time.monotonic()
         self.assertIsNone(self.client.wait_for_stroke(0.2))

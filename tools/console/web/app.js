@@ -230,10 +230,24 @@ const figureHelp = {
   latency: ['latency', "a frame's arrival at this console minus its exposure stamp, smoothed"],
   clock: ['clock', "the camera clock's offset (ms) and drift (ppm) against the estimator's time base"],
   used: ['used (p99)', "share of this camera's frames the estimator used in its update (the rest came too late or were dropped), and the 99th percentile of their stamp-to-update latency"],
+  lost: ['estimator: lost N s', 'no frame from this camera has reached the estimator for N seconds (more than its node.camera_lost_after_s): it is not tracking with it'],
+  refused: ['2nd writer refused', "frames another camera node sent under this camera's id: the estimator refuses them (it keeps the first writer)"],
   threshold: ['threshold', 'the blob threshold the camera reports using (0-255)'],
   error: ['last error', "the camera node's last error"],
   stale: ['status N s old', "the camera's own figures are older than 3 s (a stopped or unreachable node) and are not shown"],
 };
+
+// The estimator's view of the cameras (issue 34): how many are live, which are lost and since when,
+// tracks it only predicts, and camera ids a second writer claimed.
+function estimatorCameras(e) {
+  const total = (e.cameras_live ?? 0) + (e.cameras_lost ?? 0);
+  if (!total) return '';
+  let text = ` · cameras ${e.cameras_live}/${total} live`;
+  if (e.lost?.length) text += ' (lost: ' + e.lost.map((c) => `${c.id} ${fixed(c.since_s, 1)} s`).join(', ') + ')';
+  if (e.tracks_unobserved) text += ` · no camera live: ${e.tracks_unobserved} tracks predicted only`;
+  if (e.refused?.length) text += ' · 2nd writer refused for ' + e.refused.map((c) => `${c.id} (${c.frames} frames)`).join(', ');
+  return text;
+}
 
 function cardFigures(camera, status, usage) {
   const used = usage.utilisation === undefined ? '—' : (100 * usage.utilisation).toFixed(0) + '%';
@@ -243,7 +257,9 @@ function cardFigures(camera, status, usage) {
     [` · detect p99 ${fixed(status.detect_p99_ms, 2)} ms`, 'detect'],
     [` · latency ${fixed(camera.latency_ms, 1)} ms`, 'latency'],
     [` · clock ${fixed(status.clock_offset_ms, 2)} ms ${fixed(status.clock_drift_ppm, 1)} ppm`, 'clock'],
-    [` · used ${used} (p99 ${fixed(usage.latency_p99_ms, 1)} ms)`, 'used'],
+    usage.state === 'lost' ? [` · estimator: lost ${fixed(usage.since_last_frame_s, 1)} s`, 'lost']
+      : [` · used ${used} (p99 ${fixed(usage.latency_p99_ms, 1)} ms)`, 'used'],
+    ...(usage.refused_frames ? [[` · 2nd writer refused (${usage.refused_frames} frames)`, 'refused']] : []),
     [` · threshold ${status.threshold ?? '—'}`, 'threshold'],
     ...(status.last_error ? [[` · last error: ${status.last_error}`, 'error']] : []),
   ].map(([text, key]) => [text, figureHelp[key][1]]);
@@ -824,9 +840,10 @@ function onState(state) {
     const element = document.getElementById('estimator');
     // Its status comes every second: silent for 3 s means the estimator is gone (it is picked up
     // again when it comes back).
-    element.className = e.age_s > 3 ? 'stale' : '';
+    element.className = e.age_s > 3 ? 'stale' : (e.cameras_lost ? 'degraded' : '');
     element.textContent = e.age_s > 3 ? `estimator: no status for ${e.age_s.toFixed(0)} s`
-      : `estimator: ${e.tracks_confirmed} tracks (+${e.tracks_tentative} tentative) · update p99 ${fixed(e.update_p99_ms, 2)} ms · cpu ${fixed(e.cpu_percent, 0)}%`;
+      : `estimator: ${e.tracks_confirmed} tracks (+${e.tracks_tentative} tentative) · update p99 ${fixed(e.update_p99_ms, 2)} ms · cpu ${fixed(e.cpu_percent, 0)}%` +
+        estimatorCameras(e);
   }
   if (state.recorders) updateRecorders(state.recorders, state.recordings);
   if (state.calibration) updateCalibration(state.calibration);

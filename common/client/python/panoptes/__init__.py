@@ -14,8 +14,10 @@ import numpy  # noqa: F401  (imported now rather than at the first frame's first
 
 from panoptes._panoptes import (
     BodyDescription,
+    CameraHealth,
     Client,
     ClientError,
+    EstimatorHealth,
     Frame,
     Latency,
     Marker,
@@ -30,8 +32,10 @@ __version__ = version()  # the client library's version ("0.1.0"); version_info:
 
 __all__ = [
     "BodyDescription",
+    "CameraHealth",
     "Client",
     "ClientError",
+    "EstimatorHealth",
     "Frame",
     "Latency",
     "Marker",

@@ -203,6 +203,31 @@ void bind_descriptions_and_stats(py::module_& m) {
       });
 }
 
+// Camera health as the estimator reports it (docs/clients.md, "Camera health").
+void bind_health(py::module_& m) {
+  py::class_<client::CameraHealth>(m, "CameraHealth", "One camera as the estimator sees it.")
+      .def_readonly("camera_id", &client::CameraHealth::camera_id)
+      .def_readonly("live", &client::CameraHealth::live,
+                    "a frame reached the estimator within its node.camera_lost_after_s")
+      .def_readonly("since_last_frame_s", &client::CameraHealth::since_last_frame_s,
+                    "wall time since its last frame reached the estimator; -1 unknown")
+      .def_readonly("utilisation", &client::CameraHealth::utilisation,
+                    "share of its frames the estimator used")
+      .def_readonly("refused_frames", &client::CameraHealth::refused_frames,
+                    "sent by a second writer claiming its id: refused")
+      .def("__repr__", [](const client::CameraHealth& c) {
+        return "<panoptes.CameraHealth " + c.camera_id + (c.live ? " live" : " lost") + ">";
+      });
+  py::class_<client::EstimatorHealth>(m, "EstimatorHealth", "The cameras in the estimator's latest status.")
+      .def_readonly("received", &client::EstimatorHealth::received, "False until the first status arrived")
+      .def_readonly("age_s", &client::EstimatorHealth::age_s, "seconds since that status arrived")
+      .def_readonly("cameras_live", &client::EstimatorHealth::cameras_live)
+      .def_readonly("cameras_lost", &client::EstimatorHealth::cameras_lost)
+      .def_readonly("tracks_unobserved", &client::EstimatorHealth::tracks_unobserved,
+                    "tracks held while every camera is lost: predictions only")
+      .def_readonly("cameras", &client::EstimatorHealth::cameras);
+}
+
 // Surface mode (docs/surface.md): one stroke event.
 void bind_stroke(py::module_& m) {
   py::class_<client::Stroke>(
@@ -368,6 +393,7 @@ PYBIND11_MODULE(_panoptes, m) {
   bind_marker(m);
   bind_frame(m);
   bind_descriptions_and_stats(m);
+  bind_health(m);
   bind_stroke(m);
   bind_chains(m);
   bind_client(m);

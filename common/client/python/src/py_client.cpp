@@ -266,6 +266,10 @@ client::Stats PyClient::stats() const {
   return client_->stats();
 }
 
+client::EstimatorHealth PyClient::estimator_health() const {
+  return client_->estimator_health();
+}
+
 std::string PyClient::profile_file() const {
   return client_->profile_file();
 }
@@ -321,10 +325,9 @@ auto bound(Result (PyClient::*method)(Args...) const) {
 
 }  // namespace
 
-void bind_client(py::module_& m) {
-  using py::literals::operator""_a;
-  py::class_<PyClient>(
-      m, "Client", R"doc(Client(profile=None, domain=None, stale_after=1.0, queue_depth=1024, reliable=True)
+// The Client class's docstring.
+constexpr const char* kClientDoc =
+    R"doc(Client(profile=None, domain=None, stale_after=1.0, queue_depth=1024, reliable=True)
 
 Reads Panoptes frames (bodies, markers, latency) and body descriptions from the estimator.
 
@@ -344,7 +347,11 @@ Use it as a context manager, or call close():
         else:
             print(frame.body("head").position)
 
-Every method may be called from any thread. Clients still open when the interpreter exits are closed.)doc")
+Every method may be called from any thread. Clients still open when the interpreter exits are closed.)doc";
+
+void bind_client(py::module_& m) {
+  using py::literals::operator""_a;
+  py::class_<PyClient>(m, "Client", kClientDoc)
       .def(py::init<const std::optional<std::filesystem::path>&, std::optional<int>, double, long long,
                     bool>(),
            "profile"_a = py::none(), "domain"_a = py::none(), "stale_after"_a = 1.0, "queue_depth"_a = 1024,
@@ -399,6 +406,8 @@ yet; status_text() says why) or when the client is closed. Ctrl-C interrupts the
            "status_text() -> str: 'receiving (240 frames/s)', 'no data for 3.2 s (last frame 1234)', "
            "'closed', ...")
       .def("stats", bound(&PyClient::stats), "stats() -> Stats: counters since the client was opened")
+      .def("estimator_health", bound(&PyClient::estimator_health),
+           "estimator_health() -> EstimatorHealth: the cameras as the estimator's latest status reports them")
       .def_property_readonly("profile_file", bound(&PyClient::profile_file),
                              "the DDS profile file the client opened")
       .def_property_readonly("domain_id", bound(&PyClient::domain_id), "the DDS domain the client opened")

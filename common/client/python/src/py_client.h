@@ -49,6 +49,7 @@ class PyClient {
   bool connected() const;
   std::string status_text() const;
   client::Stats stats() const;
+  client::EstimatorHealth estimator_health() const;
   std::string profile_file() const;
   int domain_id() const;
   bool closed() const { return state_->closed; }

@@ -71,8 +71,16 @@ EstimatorRecord estimator_of(const msg::EstimatorStatus& status) {
   out.tracks_tentative = status.tracks_tentative();
   out.cpu_percent = status.cpu_percent();
   out.update_p99_ms = status.update_p99_ms();
-  for (const msg::CameraUsage& usage : status.cameras())
-    out.cameras[usage.camera_id()] = {usage.utilisation(), usage.latency_p99_ms()};
+  out.tracks_coasting = status.tracks_coasting();
+  out.cameras_live = status.cameras_live();
+  out.cameras_lost = status.cameras_lost();
+  out.tracks_unobserved = status.tracks_unobserved();
+  static constexpr const char* kStates[] = {"live", "lost", "unknown"};
+  for (const msg::CameraUsage& usage : status.cameras()) {
+    out.cameras[usage.camera_id()] = {usage.utilisation(), usage.latency_p99_ms(),
+                                      kStates[std::min<unsigned>(usage.state(), 2)],
+                                      usage.since_last_frame_s(), usage.refused_frames()};
+  }
   return out;
 }
 

@@ -220,7 +220,10 @@ json CameraModel::camera_json(const std::string& id, const Camera& camera, TimeN
   }
   if (const auto found = usage.find(id); found != usage.end()) {
     entry["usage"] = {{"utilisation", round_to(found->second.utilisation, 3)},
-                      {"latency_p99_ms", round_to(found->second.latency_p99_ms, 2)}};
+                      {"latency_p99_ms", round_to(found->second.latency_p99_ms, 2)},
+                      {"state", found->second.state},
+                      {"since_last_frame_s", round_to(found->second.since_last_frame_s, 1)},
+                      {"refused_frames", found->second.refused_frames}};
   }
   return entry;
 }

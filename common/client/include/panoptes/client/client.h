@@ -253,6 +253,26 @@ struct Stats {
   std::string last_error;  // why the last malformed sample was ignored, or the last callback's exception
 };
 
+// One camera as the estimator sees it (rt/panoptes/estimator_status; docs/clients.md, "Camera health").
+struct CameraHealth {
+  std::string camera_id;
+  bool live = false;                 // a frame reached the estimator within its node.camera_lost_after_s
+  double since_last_frame_s = -1;    // wall time since its last frame reached the estimator; -1 unknown
+  double utilisation = 0;            // share of its frames the estimator used
+  std::uint64_t refused_frames = 0;  // sent by a second writer claiming its id: refused, never used
+};
+
+// The estimator's latest status as far as cameras go: how many it receives, which it lost, and
+// whether it still sees anything at all.
+struct EstimatorHealth {
+  bool received = false;  // false until the first estimator status arrived
+  double age_s = -1;      // since it arrived (the estimator publishes every second and on a change)
+  int cameras_live = 0;
+  int cameras_lost = 0;
+  int tracks_unobserved = 0;  // tracks held while every camera is lost: predictions only
+  std::vector<CameraHealth> cameras;
+};
+
 // The library's version, the Panoptes release it belongs to (CMake's project version, also that of
 // the CMake package Panoptes and of pkg-config's panoptes-client): "0.1.0".
 PANOPTES_CLIENT_API std::string version();
@@ -317,6 +337,8 @@ class PANOPTES_CLIENT_API Client {
   // "no data for 1.0 s (nothing received since the client started)"; "closed" after close().
   std::string status_text() const;
   Stats stats() const;
+  // The cameras as the estimator's latest status reports them (received == false before one).
+  EstimatorHealth estimator_health() const;
   // The DDS profile file and domain the client opened (for diagnostics: "which bus am I on?").
   std::string profile_file() const;
   int domain_id() const;

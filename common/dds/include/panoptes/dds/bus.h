@@ -4,6 +4,7 @@
 // checked in constructors and torn down with delete_contained_entities().
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -132,10 +133,20 @@ class Writer {
   std::unique_ptr<Impl> impl_;
 };
 
+// Who wrote a sample: its DDS writer's GUID (12-byte participant prefix, 4-byte entity id). Two
+// processes writing one camera's topic have different writers (docs/estimator.md, "Two writers for
+// one camera").
+struct SampleSource {
+  std::array<std::uint8_t, 16> writer_guid{};
+  // The GUID as 32 hex digits, "<prefix>.<entity>" (24 + 8 digits): the form logs name it by.
+  std::string writer() const;
+};
+
 template <class T>
 class Reader {
  public:
   using Callback = std::function<void(T&&)>;
+  using SourcedCallback = std::function<void(T&&, const SampleSource&)>;
   ~Reader();
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
@@ -187,6 +198,11 @@ class Bus {
   template <class T>
   std::unique_ptr<Reader<T>> make_reader(typename Reader<T>::Callback on_sample, Qos qos = Qos::kDefault,
                                          const std::string& only_id = {}, const std::string& topic_name = {});
+  // As make_reader, and `on_sample` also gets the sample's writer.
+  template <class T>
+  std::unique_ptr<Reader<T>> make_sourced_reader(typename Reader<T>::SourcedCallback on_sample,
+                                                 Qos qos = Qos::kDefault, const std::string& only_id = {},
+                                                 const std::string& topic_name = {});
 
   // Serialized samples of one of panoptes_raw_topics(). The reader asks for reliability where the
   // topic's writers offer it (so a recorder gets repairs) and for the history of transient-local

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // What the estimator did with each camera's frames: received, used (in order or replayed), late,
 // dropped by reason, latency from stamp to arrival, and the tracker's time per frame. The node
-// publishes it as rt/panoptes/estimator_status and prints it at exit. No DDS here.
+// publishes it as rt/panoptes/estimator_status and prints it at exit. Camera health (live or lost)
+// is judged from the wall time of each camera's last arrival, which the caller passes in: no DDS
+// and no clock reads here.
 #pragma once
 
 #include <array>
@@ -30,6 +32,14 @@ class DurationHistogram {
   std::uint64_t count_ = 0;
 };
 
+// Whether a camera's frames still reach the estimator (docs/estimator.md, "Camera health").
+enum class CameraState : std::uint8_t {
+  kLive = 0,     // a frame arrived within the lost threshold
+  kLost = 1,     // none for longer than the threshold
+  kUnknown = 2,  // no arrival times (offline runs) or no `now` given
+};
+const char* to_string(CameraState state);
+
 struct CameraUsage {
   std::string camera_id;
   std::uint64_t frames = 0;  // received by the estimator
@@ -43,11 +53,18 @@ struct CameraUsage {
   double latency_p50_ms = 0;
   double latency_p99_ms = 0;
   TimeNs last_stamp_ns = 0;
+  CameraState state = CameraState::kUnknown;
+  double since_last_frame_s = -1;     // wall time since its last arrival; -1: unknown
+  std::uint64_t refused_frames = 0;   // from a second writer claiming this id (camera_ownership.h)
+  std::uint32_t refused_writers = 0;  // such writers
 };
 
 struct EstimatorUsage {
   TimeNs stamp_ns = 0;
   std::size_t tracks_tentative = 0, tracks_confirmed = 0, tracks_coasting = 0;
+  // Cameras by state (health known only with a `now`), and the tracks held while every known
+  // camera is lost: predictions that no camera can confirm.
+  std::size_t cameras_live = 0, cameras_lost = 0, tracks_unobserved = 0;
   std::uint64_t frames = 0;
   std::uint64_t replays = 0;          // rewinds (one per burst of late frames)
   std::uint64_t replayed_frames = 0;  // frames applied again by them
@@ -67,27 +84,42 @@ class UsageMonitor {
  public:
   // A frame reached the estimator `latency_ms` after its stamp (negative: clocks disagree; NaN:
   // unknown, not part of the latency statistics).
-  void note_received(const std::string& camera_id, double latency_ms);
+  // `arrival_ns`: the wall time it arrived (0: unknown, as offline), for the camera's health.
+  void note_received(const std::string& camera_id, double latency_ms, TimeNs arrival_ns = 0);
+  // A frame refused because another writer owns its camera id; `new_writer`: the first from it.
+  void note_refused(const std::string& camera_id, bool new_writer);
+  // A camera is lost after this long without a frame (wall time).
+  void set_lost_after(TimeNs lost_after_ns) { lost_after_ns_ = lost_after_ns; }
+  // Cameras lost at wall time `now_ns` (cheap: no tracker), for prompt status on a loss.
+  std::size_t cameras_lost(TimeNs now_ns) const;
   // A frame or blob did not reach the tracker (screen, inbox overflow), by reason.
   void note_dropped(const std::string& camera_id, const std::string& reason, std::uint64_t frames = 1);
   void note_reason(const std::string& reason, std::uint64_t n);
   void note_update_time(double milliseconds) { update_.add(milliseconds); }
 
   // The tracker's per-camera counters, and `other_cameras`' (cameras whose frames bypass the
-  // point tracker: the moving cameras of inside-out mode) counted the same way.
+  // point tracker: the moving cameras of inside-out mode) counted the same way. `now_ns`: the wall
+  // time for the cameras' health (0: health unknown).
   EstimatorUsage summarize(const Tracker& tracker, TimeNs stamp_ns, double latency_window_ms,
-                           const std::map<std::string, CameraCounters>& other_cameras = {}) const;
+                           const std::map<std::string, CameraCounters>& other_cameras = {},
+                           TimeNs now_ns = 0) const;
 
  private:
   struct PerCamera {
     std::uint64_t received = 0;
     std::uint64_t dropped_before_tracker = 0;
+    std::uint64_t refused_frames = 0;
+    std::uint32_t refused_writers = 0;
+    TimeNs last_arrival_ns = 0;
     DurationHistogram latency;
   };
   PerCamera& camera(const std::string& camera_id);
+  // Fills the health of `usage`'s cameras and the counts by state at `now_ns`.
+  void judge_health(EstimatorUsage& usage, TimeNs now_ns) const;
   std::map<std::string, PerCamera> cameras_;
   std::map<std::string, std::uint64_t> reasons_;
   DurationHistogram update_;
+  TimeNs lost_after_ns_ = 500'000'000;
 };
 
 }  // namespace panoptes::estimator

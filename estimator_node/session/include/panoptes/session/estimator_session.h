@@ -61,9 +61,16 @@ class EstimatorSession {
   void process_due(std::vector<FeatureFrame>& due,
                    const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each);
 
-  estimator::EstimatorUsage usage(TimeNs stamp_ns) const {
-    return intake_.usage(stamp_ns, inbox_.drops(), inside_out_.camera_counters());
+  // `wall_now_ns`: the wall time for the cameras' health (0: unknown, offline).
+  estimator::EstimatorUsage usage(TimeNs stamp_ns, TimeNs wall_now_ns = 0) const {
+    return intake_.usage(stamp_ns, inbox_.drops(), inside_out_.camera_counters(), wall_now_ns);
   }
+  // Any thread. A frame refused because another writer owns its camera id (camera_ownership.h).
+  void note_refused(const std::string& camera_id, bool new_writer) {
+    intake_.note_refused(camera_id, new_writer);
+  }
+  // Any thread. Cameras lost at wall time `now_ns`.
+  std::size_t cameras_lost(TimeNs now_ns) const { return intake_.cameras_lost(now_ns); }
   void print_summary(std::size_t bad_lines) const;
 
   // Body poses at the newest frame, predicted node.prediction_horizon_ms ahead; then the poses of

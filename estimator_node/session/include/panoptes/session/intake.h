@@ -48,9 +48,14 @@ class Intake {
   // Usage so far: the monitor's summary plus the screen's drop reasons and inbox overflows (the
   // tracker's thread only: reads the tracker).
   // `other_cameras`: counters of cameras whose frames bypass the tracker (inside-out rigs).
-  estimator::EstimatorUsage usage(
-      TimeNs stamp_ns, std::uint64_t inbox_drops,
-      const std::map<std::string, estimator::CameraCounters>& other_cameras = {}) const;
+  // `wall_now_ns`: the wall time for the cameras' health (0: unknown).
+  estimator::EstimatorUsage usage(TimeNs stamp_ns, std::uint64_t inbox_drops,
+                                  const std::map<std::string, estimator::CameraCounters>& other_cameras = {},
+                                  TimeNs wall_now_ns = 0) const;
+  // Camera health (usage.h): the lost threshold, refused frames, and the lost count. Any thread.
+  void set_lost_after(TimeNs lost_after_ns);
+  void note_refused(const std::string& camera_id, bool new_writer);
+  std::size_t cameras_lost(TimeNs wall_now_ns) const;
 
   std::uint64_t frames_rejected() const;
 

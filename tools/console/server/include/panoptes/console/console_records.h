@@ -117,6 +117,9 @@ struct FeatureRecord {
 struct CameraUsageRecord {
   double utilisation = 0;
   double latency_p99_ms = 0;
+  std::string state = "unknown";     // the estimator's view: "live", "lost" or "unknown"
+  double since_last_frame_s = -1;    // wall time since its last frame reached the estimator
+  std::uint64_t refused_frames = 0;  // from a second writer claiming the camera's id
 };
 
 struct EstimatorRecord {
@@ -125,6 +128,10 @@ struct EstimatorRecord {
   double cpu_percent = 0;
   double update_p99_ms = 0;
   std::map<std::string, CameraUsageRecord> cameras;
+  unsigned tracks_coasting = 0;
+  unsigned cameras_live = 0;
+  unsigned cameras_lost = 0;
+  unsigned tracks_unobserved = 0;  // held while every camera is lost: predictions only
 };
 
 struct TrackPoint {
