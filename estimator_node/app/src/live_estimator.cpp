@@ -156,13 +156,10 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
   std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;  // with options_.chains
   session::FrameOutputBuilder frame_builder_;
-<<<<<<< HEAD
   std::optional<session::FrameClock> frame_clock_;  // --frames fixed
   session::FixedRateStats fixed_rate_stats_;
-  session::FrameStages newest_stages_;         // of the newest processed frame (fixed-rate frames)
-=======
-  std::size_t cameras_lost_ = 0;  // at the last health check: a change publishes the status at once
->>>>>>> camera-health
+  session::FrameStages newest_stages_;  // of the newest processed frame (fixed-rate frames)
+  std::size_t cameras_lost_ = 0;        // at the last health check: a change publishes the status at once
   std::uint64_t descriptions_generation_ = 0;  // the bodies file's generation last published
   std::uint64_t descriptions_sent_ = 0;        // BodyDescriptions.generation: 1, 2, ... per run
   std::optional<LatencyProbeEchoer> latency_probe_;

@@ -36,14 +36,11 @@ struct NodeSettings {
   double prediction_horizon_ms = 0.0;  // body poses are published this far ahead (seed 000 Ch. 5)
   double status_period_s = 1.0;        // live: seconds between status messages and progress lines
   double bodies_poll_s = 1.0;          // live: how often the bodies file is checked for changes
-<<<<<<< HEAD
   // rt/panoptes/frames, the ROS 2 outputs and --out-tracks/--out-poses (docs/frames.md):
   // "per-camera" (one per processed camera frame) or "fixed" (frame_rate_hz, on a grid).
   std::string frames = "per-camera";
-  int frame_rate_hz = 120;  // with frames: fixed
-=======
-  double camera_lost_after_s = 0.5;    // live: a camera without a frame this long is lost (wall time)
->>>>>>> camera-health
+  int frame_rate_hz = 120;           // with frames: fixed
+  double camera_lost_after_s = 0.5;  // live: a camera without a frame this long is lost (wall time)
 };
 
 // "" for "per-camera" or "fixed", else why not (the option or key is named by the caller).
