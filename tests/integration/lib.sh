@@ -98,19 +98,19 @@ replay_cameras() {
 
 # replay_clients_scene_with_restart: the client tests' live run (test_client.sh,
 # test_python_client.sh). The simulated clients scene in $work/sim replayed by six camera_nodes
-# (24 s) into estimator_node (run 1, --out-poses $work/poses1.jsonl), which is killed (-9) after
-# 12 s and started again 1 s later (run 2, 14 s, $work/poses2.jsonl). Sets $restart_ns (when run 2
+# (16 s) into estimator_node (run 1, --out-poses $work/poses1.jsonl), which is killed (-9) after
+# 8 s and started again 1 s later (run 2, 10 s, $work/poses2.jsonl). Sets $restart_ns (when run 2
 # started) and $estimator (its pid). Start the client under test first.
 replay_clients_scene_with_restart() {
   local epoch=$(( ($(date +%s) + 3) * 1000000000 ))
   start_clients_estimator 1 30
-  replay_cameras "$epoch" 24 c0 c1 c2 c3 c4 c5
-  sleep 12
+  replay_cameras "$epoch" 16 c0 c1 c2 c3 c4 c5
+  sleep 8
   kill -KILL "$estimator"
   wait "$estimator" 2>/dev/null
   sleep 1
   restart_ns=$(date +%s%N)
-  start_clients_estimator 2 14
+  start_clients_estimator 2 10
 }
 start_clients_estimator() {  # RUN DURATION
   "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \

@@ -144,8 +144,9 @@ run_estimator part2 $((seconds + 5))
 replay_cameras "$epoch" "$seconds" cam0 cam1 cam2 cam3
 # The impostor joins 1 s into the scene (cam0's own node owns the id by then) and sends cam1's
 # frames, on the same timeline, as cam0.
+sed 's/"camera_id":"cam1"/"camera_id":"cam0"/' "$work/sim/cam1.jsonl" >"$work/sim/impostor.jsonl"
 while [ "$(date +%s%N)" -lt $((epoch + 1000000000)) ]; do sleep 0.05; done
-"$bin/camera_node" --source "features:$work/sim/cam1.jsonl" --camera-id cam0 --sim-epoch-ns "$epoch" \
+"$bin/camera_node" --source "features:$work/sim/impostor.jsonl" --sim-epoch-ns "$epoch" \
   --duration "$seconds" --quiet >"$work/impostor.log" 2>&1 &
 pids+=("$!")
 timeout 40 tail --pid="$estimator" -f /dev/null

@@ -32,21 +32,21 @@ grep -q '"ok": false' "$work/last.out" && pass "its summary says so" || fail "no
 expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
 mkdir -p "$work/cyclone"
 epoch=$(($(date +%s) * 1000000000 + 4000000000))
-"$probe" --bodies head,tool --duration 27 --out-dir "$work/cyclone" "${ros2_flag[@]}" \
+"$probe" --bodies head,tool --duration 17 --out-dir "$work/cyclone" "${ros2_flag[@]}" \
   >"$work/cyclone_summary.json" 2>"$work/cyclone.log" &
 probe_pid=$!
 pids+=("$probe_pid")
 "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" "${ros2_flag[@]}" \
-  --out-poses "$work/own_poses.jsonl" --out-tracks "$work/own_tracks.jsonl" --duration 25 --status-period 5 \
+  --out-poses "$work/own_poses.jsonl" --out-tracks "$work/own_tracks.jsonl" --duration 15 --status-period 5 \
   >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
-replay_cameras "$epoch" 22 c0 c1 c2 c3 c4 c5
+replay_cameras "$epoch" 12 c0 c1 c2 c3 c4 c5
 # While they run, no UDP socket of theirs is bound to an address outside 127.0.0.0/8. Cyclone DDS binds
 # its two unicast receive sockets (the RTPS ports of its participant index) to the wildcard, as it
 # always does (Cyclone issues #1923, #2090); it advertises and sends from 127.0.0.1 only
 # (docs/interop.md), so those two are accepted, and nothing else.
-sleep 10
+sleep 8
 domain=$PANOPTES_DOMAIN
 first_port=$((7400 + 250 * domain + 10))
 sockets=$(ss -uanpH 2>/dev/null | grep -E "pid=($probe_pid|$estimator),") || true

@@ -80,7 +80,7 @@ expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --sce
 mkdir -p "$work/robot" "$work/plain"
 start=$(date +%s)
 epoch=$(((start + 9) * 1000000000))
-PANOPTES_SECURITY_IDENTITY=robot "$probe" --bodies head,tool --duration 32 --out-dir "$work/robot" --config "$cyclone" \
+PANOPTES_SECURITY_IDENTITY=robot "$probe" --bodies head,tool --duration 22 --out-dir "$work/robot" --config "$cyclone" \
   >"$work/robot.json" 2>"$work/robot.log" &
 robot=$!
 pids+=("$robot")
@@ -90,7 +90,7 @@ plain_pid=$!
 pids+=("$plain_pid")
 sleep 1
 PANOPTES_SECURITY_IDENTITY=estimator "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" \
-  --bodies "$work/sim/bodies.yaml" --out-poses "$work/own_poses.jsonl" --duration 30 --status-period 5 \
+  --bodies "$work/sim/bodies.yaml" --out-poses "$work/own_poses.jsonl" --duration 20 --status-period 5 \
   >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
@@ -98,7 +98,7 @@ pids+=("$estimator")
 # (docs/security.md, "What the secured mode does not prevent").
 for camera in c0 c1 c2 c3 c4 c5; do
   sleep 1
-  PANOPTES_SECURITY_IDENTITY="$camera" replay_cameras "$epoch" 20 "$camera"
+  PANOPTES_SECURITY_IDENTITY="$camera" replay_cameras "$epoch" 10 "$camera"
 done
 timeout 40 tail --pid="$robot" -f /dev/null
 wait "$plain_pid"

@@ -23,7 +23,7 @@ app_host=6
 profile="$source_dir/deploy/dds/lan.xml"
 netns_create_lan 6 || { fail "could not create the namespaces"; finish; }
 scene="$work/scene.yaml"
-sed 's/^duration: .*/duration: 34.0/' "$source_dir/deploy/scenes/demo.yaml" >"$scene"
+sed 's/^duration: .*/duration: 27.0/' "$source_dir/deploy/scenes/demo.yaml" >"$scene"
 "$bin/panoptes_sim" calibration --scene "$scene" --out "$work/calibration.yaml" >/dev/null
 
 now_ns() { date +%s%N; }
@@ -70,7 +70,7 @@ echo "lossy link: $lossy"
 
 start_estimator 1 24
 netns_spawn "$app_host" "$bin/panoptes_track_probe" --dds-profile "$profile" --out "$work/probe.jsonl" \
-  --duration 41 >"$work/probe.log" 2>&1 &
+  --duration 34 >"$work/probe.log" 2>&1 &
 probe=$!
 pids+=("$probe")
 start_camera 0 a
@@ -78,28 +78,28 @@ start_camera 1 a
 start_camera 2 a
 start_camera 3 a "${lossy_args[@]}"
 
-sleep_until 5
+sleep_until 4
 t_kill_camera=$(now_ns)
 kill -KILL "${camera_pid[1]}"
 wait "${camera_pid[1]}" 2>/dev/null || true
 kill -0 "${camera_pid[1]}" 2>/dev/null && fail "camera_node cam1 survived kill -9"
-sleep_until 6
+sleep_until 5
 t_restart_camera=$(now_ns)
 start_camera 1 b
 
-sleep_until 10
+sleep_until 8
 t_link_down=$(now_ns)
 netns_link 3 down
-sleep_until 15
+sleep_until 13
 t_link_up=$(now_ns)
 netns_link 3 up
 
-sleep_until 20
+sleep_until 17
 t_kill_estimator=$(now_ns)
 kill -KILL "$estimator"
 wait "$estimator" 2>/dev/null || true
 t_restart_estimator=$(now_ns)
-start_estimator 2 17
+start_estimator 2 14
 
 for i in 0 1 2 3; do
   if timeout 25 tail --pid="${camera_pid[$i]}" -f /dev/null && wait "${camera_pid[$i]}"; then
@@ -155,7 +155,7 @@ check_le estimator_resume_s 2.0 "estimator restarted: 3 confirmed tracks again a
 
 # The restarted estimator reloaded its calibration and tracks accurately from 4 s after restart to
 # the end, with camera 3 on the lossy link throughout.
-if "$bin/panoptes_eval" --scene "$scene" --tracks "$work/tracks_2.jsonl" --epoch-ns "$epoch" --warmup 24 \
+if "$bin/panoptes_eval" --scene "$scene" --tracks "$work/tracks_2.jsonl" --epoch-ns "$epoch" --warmup 21 \
   --require-rmse-mm 2 --require-tracked 0.95 >"$work/eval.txt" 2>&1; then
   pass "after the restart, with the lossy link: RMSE < 2 mm, >= 95% tracked ($(grep '^all:' "$work/eval.txt"))"
 else

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/prctl.h>
+
 #include "panoptes/calibration.h"
 #include "panoptes/calibration_file.h"
 #include "panoptes/dds/bus.h"
@@ -277,7 +279,14 @@ void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {
 void LiveEstimator::publish_fixed_frame() {
   // Instants are on the common time base, which is this process's clock (architecture.md "Time").
   if (!frame_clock_ || tracker_.last_stamp_ns() == 0) return;
-  const auto tick = frame_clock_->latest_due(wall_now_ns());
+  // No frames from any camera for camera_lost_after_s: no frames out either (a client sees the
+  // stream stop, as with a stopped commercial system, not coasting predictions that age).
+  const TimeNs now = wall_now_ns();
+  if (now - last_frame_wall_ns_ > seconds_to_ns(node_.camera_lost_after_s)) {
+    frame_clock_->idle_until(now);
+    return;
+  }
+  const auto tick = frame_clock_->latest_due(now);
   if (!tick) return;
   const auto tracks = tracker_.tracks_at(tick->instant_ns);
   const auto poses = session_.poses_at(tick->instant_ns);
@@ -292,8 +301,11 @@ void LiveEstimator::publish_fixed_frame() {
 std::chrono::nanoseconds LiveEstimator::max_wait() const {
   const std::chrono::nanoseconds most = std::chrono::milliseconds(1);
   if (!frame_clock_ || frame_clock_->next_instant() == 0) return most;
-  return std::clamp(std::chrono::nanoseconds(frame_clock_->next_instant() - wall_now_ns()),
-                    std::chrono::nanoseconds(0), most);
+  // The last 200 us before an instant are spun, not slept: a wake-up from a timed wait on a busy
+  // 2-core machine was measured up to 0.5 ms late (docs/frames.md, "Timing").
+  constexpr TimeNs kSpinNs = 200'000;
+  const TimeNs until = frame_clock_->next_instant() - wall_now_ns() - kSpinNs;
+  return std::clamp(std::chrono::nanoseconds(until), std::chrono::nanoseconds(0), most);
 }
 
 // Chains right after the poses: their grab events are what an application waits for.
@@ -417,6 +429,9 @@ void LiveEstimator::expire_idle_tracks(TimeNs now) {
 
 int LiveEstimator::run() {
   auto& inbox = session_.inbox();
+  // Fixed-rate frames wait for their instant in inbox.wait: the default 50 us timer slack of a
+  // normal thread would be most of the +-2 % of a 120 Hz period they may be late (docs/frames.md).
+  if (frame_clock_) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   const TimeNs start = wall_now_ns();
   last_status_ = {start, 0, 0, process_cpu_seconds()};
   TimeNs next_status = start + seconds_to_ns(node_.status_period_s);
@@ -430,8 +445,11 @@ int LiveEstimator::run() {
     if (auto due = inbox.pop_due(now); !due.empty()) {
       last_frame_wall_ns_ = now;
       update(due);
+      publish_fixed_frame();  // an instant that fell due during the update goes out now
     }
-    if (!finish_processed(false)) continue;  // a frame is due: its update first
+    const bool finished = finish_processed(false);
+    publish_fixed_frame();
+    if (!finished) continue;  // a frame is due: its update first
     if (latency_probe_) latency_probe_->flush(now, false);
     if (now >= next_body_poll) {
       next_body_poll = now + seconds_to_ns(node_.bodies_poll_s);
@@ -456,7 +474,8 @@ int LiveEstimator::run() {
   session_.print_summary(0);
   if (frame_clock_) {
     log("fixed-rate frames: " + std::to_string(frame_clock_->published()) + " published, " +
-        std::to_string(frame_clock_->skipped()) + " periods skipped (the estimator was behind)");
+        std::to_string(frame_clock_->skipped()) + " periods skipped (the estimator was behind), " +
+        std::to_string(frame_clock_->idle()) + " idle (no camera sending)");
     log(fixed_rate_stats_.summary());
   }
   return kExitOk;

@@ -52,6 +52,14 @@ std::optional<FrameTick> FrameClock::latest_due(TimeNs now_ns) {
   return emit(index);
 }
 
+void FrameClock::idle_until(TimeNs now_ns) {
+  if (!first_index_) return;
+  const std::int64_t index = index_at(now_ns);
+  if (index <= last_index_) return;
+  idle_ += static_cast<std::uint64_t>(index - last_index_);
+  last_index_ = index;
+}
+
 std::optional<FrameTick> FrameClock::next_due(TimeNs now_ns) {
   const std::int64_t newest = index_at(now_ns);
   if (!first_index_) return emit(newest);

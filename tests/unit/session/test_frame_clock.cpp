@@ -96,6 +96,23 @@ TEST(FrameClock, LiveSkipsPeriodsWhenBehindAndNeverBursts) {
   EXPECT_EQ(clock.published(), 3u);
 }
 
+TEST(FrameClock, IdlePeriodsAreNeitherPublishedNorSkippedAndFrameNumbersStayOnTheGrid) {
+  FrameClock clock(100);  // 10 ms
+  const TimeNs start = 3 * kSecond;
+  clock.idle_until(start + 50'000'000);
+  EXPECT_EQ(clock.idle(), 0u) << "nothing to be idle about before the first frame";
+  ASSERT_TRUE(clock.latest_due(start));
+  // Every camera silent for 1 s: 100 instants go by unpublished, and none counts as skipped.
+  for (TimeNs t = start + 5'000'000; t <= start + kSecond; t += 5'000'000) clock.idle_until(t);
+  EXPECT_EQ(clock.idle(), 100u);
+  EXPECT_FALSE(clock.latest_due(start + kSecond + 1)) << "the instant at 1 s went by idle";
+  const auto tick = clock.latest_due(start + kSecond + 10'000'000);
+  ASSERT_TRUE(tick);
+  EXPECT_EQ(tick->frame_number, 102u) << "frame numbers count grid periods, idle ones included";
+  EXPECT_EQ(clock.skipped(), 0u);
+  EXPECT_EQ(clock.published(), 2u);
+}
+
 TEST(FrameClock, TimecodeCountsFramesWithinTheSecondOfTheDay) {
   const FrameClock clock(120);
   const TimeNs day = 86'400 * kSecond;

@@ -44,6 +44,9 @@ class FrameClock {
   // Live: the newest instant at or before `now_ns` if not yet published. Periods passed over since
   // the last one are counted in skipped(), never published late (no bursts).
   std::optional<FrameTick> latest_due(TimeNs now_ns);
+  // Live, while no camera sends: the instants up to `now_ns` go by unpublished, counted in idle()
+  // rather than skipped() (the frame numbers stay on the grid, so they jump when frames resume).
+  void idle_until(TimeNs now_ns);
   // Offline: the next instant after the last one if it lies at or before `now_ns` (every period
   // in turn: the replay's clock never falls behind).
   std::optional<FrameTick> next_due(TimeNs now_ns);
@@ -52,6 +55,7 @@ class FrameClock {
 
   std::uint64_t published() const { return published_; }
   std::uint64_t skipped() const { return skipped_; }
+  std::uint64_t idle() const { return idle_; }
 
   Timecode timecode(TimeNs instant_ns) const;
 
@@ -63,6 +67,7 @@ class FrameClock {
   std::int64_t last_index_ = 0;
   std::uint64_t published_ = 0;
   std::uint64_t skipped_ = 0;
+  std::uint64_t idle_ = 0;
 };
 
 // What fixed-rate frames cost, for the end-of-run summary: per frame, its instant minus the
