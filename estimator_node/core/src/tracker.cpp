@@ -49,6 +49,9 @@ struct Track {
   int nis_updates = 0;
   int distinct_cameras = 0;                // cameras that ever updated it
   std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
+  // Whether the last record made of it was published (determined): then it stays published up to
+  // kKeepPublishedFactor × publish_max_sigma_m (hysteresis, issue 32 item 9). Set by tracks_at.
+  mutable bool published = false;
 
   Eigen::Vector3d position_at(TimeNs stamp_ns) const {
     return state.position() + ns_to_seconds(stamp_ns - state.stamp_ns) * state.velocity();
@@ -269,7 +272,8 @@ struct Tracker::Impl {
   void replay_with(std::vector<Entry> late);
   TrackRecord to_record(const Track& track, TimeNs stamp_ns) const;
   // Whether a record's position is known well enough to publish (publish_max_sigma_m).
-  bool determined(const TrackRecord& record) const;
+  // With `published` (the track's last record was), up to kKeepPublishedFactor times the limit.
+  bool determined(const TrackRecord& record, bool published) const;
 };
 
 void Tracker::Impl::apply(Entry& entry, bool replaying) {
@@ -626,14 +630,21 @@ TrackRecord Tracker::Impl::to_record(const Track& track, TimeNs stamp_ns) const 
   return record;
 }
 
-bool Tracker::Impl::determined(const TrackRecord& record) const {
+// A published track stays published until its uncertainty is twice the limit: without it, one
+// camera's frames processed alone while the others' were late (a loaded machine) grew every
+// track's depth uncertainty past the limit for a frame, and TrackFrames blinked to zero tracks
+// (issue 32 item 9). A track without depth still stops within about 46 ms instead of 29.
+constexpr double kKeepPublishedFactor = 2.0;
+
+bool Tracker::Impl::determined(const TrackRecord& record, bool published) const {
   if (options.publish_max_sigma_m <= 0) return true;
   const auto& c = record.position_covariance;
   Eigen::Matrix3d P;
   P << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
   const double largest =
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P, Eigen::EigenvaluesOnly).eigenvalues()(2);
-  return largest <= options.publish_max_sigma_m * options.publish_max_sigma_m;
+  const double limit = options.publish_max_sigma_m * (published ? kKeepPublishedFactor : 1.0);
+  return largest <= limit * limit;
 }
 
 Tracker::Tracker(TrackerOptions options) : impl_(std::make_unique<Impl>(options)) {}
@@ -839,7 +850,8 @@ std::vector<TrackRecord> Tracker::tracks_at(TimeNs stamp_ns) const {
   for (const auto& track : impl_->core.tracks) {
     if (!track.confirmed) continue;
     TrackRecord record = impl_->to_record(track, stamp_ns);
-    if (impl_->determined(record)) records.push_back(std::move(record));
+    track.published = impl_->determined(record, track.published);
+    if (track.published) records.push_back(std::move(record));
   }
   std::sort(records.begin(), records.end(),
             [](const TrackRecord& a, const TrackRecord& b) { return a.id < b.id; });
