@@ -4,7 +4,8 @@
 // Opening by IP address talks to that address only (GVCP unicast): no device-list update, hence
 // no discovery broadcast. Any other target is an Aravis device id ("<vendor>-<serial>", a USB3
 // Vision id, "Fake_1"), which Aravis resolves by enumerating every enabled interface; for GigE
-// Vision that broadcasts a discovery packet on every network interface.
+// Vision that broadcasts a discovery packet on every network interface. "Fake_<n>" (Aravis's
+// in-process fake camera) enables only the Fake interface, so it enumerates nothing real.
 //
 // Threads: next() runs on the capture thread and alone touches the stream; set_control(),
 // control(), counters() and restart() may come from other threads. Aravis camera objects are not
@@ -35,6 +36,7 @@
 #include <vector>
 
 #include "device_clock.h"
+#include "genicam_timing.h"
 
 namespace panoptes::camera {
 namespace {
@@ -202,6 +204,8 @@ class Connection {
     info.offset_x = x;
     info.offset_y = y;
     info.bits = format_->bits;
+    info.ptp_timed = timing_.ptp_timed;
+    info.timing_features = timing_.features;
     if (arv_camera_is_frame_rate_available(camera_, nullptr)) {
       const double rate = arv_camera_get_frame_rate(camera_, &error);
       if (error == nullptr && std::isfinite(rate)) info.nominal_rate_hz = rate;
@@ -230,6 +234,13 @@ class Connection {
                           take_message(error) + ")");
       }
       return;
+    }
+    if (target.starts_with("Fake_")) {
+      // Aravis's in-process fake camera (disabled by default in Aravis): reachable without
+      // enumerating, hence without broadcasting on, any real interface.
+      arv_disable_interface("GigEVision");
+      arv_disable_interface("USB3Vision");
+      arv_enable_interface("Fake");
     }
     // Enumerates the interfaces (GigE Vision discovery broadcasts): see the file comment.
     camera_ = arv_camera_new(target.c_str(), &error);
@@ -350,6 +361,12 @@ class Connection {
     if (settings.exposure_us > 0) set_exposure(settings.exposure_us);
     if (settings.gain_db > 0) set_gain(settings.gain_db);
     if (settings.frame_rate_hz > 0) set_frame_rate(settings.frame_rate_hz);
+    // After the frame rate: Aravis turns triggers off when it sets a frame rate.
+    try {
+      timing_ = apply_genicam_timing(camera_, settings);
+    } catch (const GenicamTimingError& error) {
+      throw AravisError(error.what());
+    }
   }
 
   void start_stream(int buffers) {
@@ -444,6 +461,7 @@ class Connection {
   gulong control_lost_handler_ = 0;
   std::atomic<bool> control_lost_{false};
   const MonoFormat* format_ = nullptr;
+  TimingApplied timing_;
 };
 
 const char* status_counter(ArvBufferStatus status) {
@@ -475,7 +493,8 @@ class AravisSource final : public FrameSource {
       : target_(target),
         spec_("aravis:" + target),
         settings_(options.settings),
-        max_frames_(options.max_frames) {
+        max_frames_(options.max_frames),
+        ptp_utc_offset_ns_(static_cast<TimeNs>(std::llround(options.settings.ptp_utc_offset_s * 1e9))) {
     try {
       connection_ = std::make_unique<Connection>(target_, settings_);
       connection_->fill_info(info_);
@@ -551,6 +570,9 @@ class AravisSource final : public FrameSource {
           connection_->set_gain(value);
           break;
         case Control::kFrameRateHz:
+          // Aravis would switch the trigger off to set a rate.
+          if (!settings_.trigger.empty())
+            return spec_ + ": frame rate is set by the hardware trigger (trigger " + settings_.trigger + ")";
           connection_->set_frame_rate(value);
           break;
       }
@@ -785,18 +807,28 @@ class AravisSource final : public FrameSource {
     const guint64 system_ns = arv_buffer_get_system_timestamp(buffer);
     frame.arrival_ns = system_ns != 0 ? static_cast<TimeNs>(system_ns) : received_ns;
     const auto half_exposure_ns = static_cast<TimeNs>(std::llround(frame.exposure_us * 500.0));
-    const guint64 device_ns = arv_buffer_get_timestamp(buffer);
-    if (device_ns != 0) {
-      const std::size_t resets = clock_.resets();
-      // SFNC: the timestamp is latched at frame (exposure) start on most cameras, so the middle
-      // of the exposure is half an exposure later.
-      frame.stamp_ns = clock_.add(static_cast<TimeNs>(device_ns), frame.arrival_ns) + half_exposure_ns;
-      if (clock_.resets() != resets) count("clock_reset");
-    } else {
-      // No device clock: the frame was read out by its arrival; its exposure ended before that.
-      frame.stamp_ns = frame.arrival_ns - half_exposure_ns;
-    }
+    frame.stamp_ns = capture_stamp(arv_buffer_get_timestamp(buffer), frame.arrival_ns, half_exposure_ns);
     return frame;
+  }
+
+  // Mid-exposure capture time from the buffer's device stamp (0 = none).
+  TimeNs capture_stamp(guint64 device_ns, TimeNs arrival_ns, TimeNs half_exposure_ns) {
+    if (device_ns == 0) {
+      if (settings_.ptp) count("ptp_missing_stamp");
+      // No device clock: the frame was read out by its arrival; its exposure ended before that.
+      return arrival_ns - half_exposure_ns;
+    }
+    // SFNC: the timestamp is latched at frame (exposure) start on most cameras, so the middle of
+    // the exposure is half an exposure later.
+    if (settings_.ptp) {
+      // PTP time is TAI, already common to every PTP-timed camera and host; the common time base
+      // is UTC (docs/camera_node.md, "PTP and hardware triggers").
+      return static_cast<TimeNs>(device_ns) - ptp_utc_offset_ns_ + half_exposure_ns;
+    }
+    const std::size_t resets = clock_.resets();
+    const TimeNs stamp_ns = clock_.add(static_cast<TimeNs>(device_ns), arrival_ns) + half_exposure_ns;
+    if (clock_.resets() != resets) count("clock_reset");
+    return stamp_ns;
   }
 
   static std::string format_hex(std::uint32_t value) {
@@ -809,6 +841,7 @@ class AravisSource final : public FrameSource {
   const std::string spec_;
   const SourceSettings settings_;
   const std::int64_t max_frames_;
+  const TimeNs ptp_utc_offset_ns_ = 0;
   SourceInfo info_;
 
   mutable std::mutex camera_mutex_;  // guards connection_ against feature access from other threads
