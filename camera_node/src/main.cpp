@@ -194,7 +194,10 @@ int run_camera_node(int argc, char** argv) {
   cam::NodeLog log("camera_node[" + camera_id + "]");
   if (const auto& features = source->info().timing_features; !features.empty()) {
     std::string line;
-    for (const auto& [name, value] : features) line += (line.empty() ? "" : " ") + name + "=" + value;
+    for (const auto& [name, value] : features) {
+      if (!line.empty()) line += ' ';
+      line.append(name).append("=").append(value);
+    }
     log("GenICam timing features as read back: " + line);
   }
   cam::Detector detector(detector_config);

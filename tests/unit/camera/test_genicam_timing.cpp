@@ -8,6 +8,7 @@
 #include <arv.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <yaml-cpp/yaml.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include "panoptes/camera/sources.h"
+#include "panoptes/config.h"
 #include "panoptes/time.h"
 
 namespace panoptes::camera {
@@ -226,6 +228,62 @@ TEST(GenicamTiming, TheFakeCameraOpensNoSocket) {
   const auto source = open_with(kTimingXml, options);
   ASSERT_TRUE(source->next().has_value());
   EXPECT_EQ(open_sockets(), before);
+}
+
+SourceSettings settings_of(const std::string& yaml) {
+  return SourceSettings::from_yaml(YamlReader("camera.yaml", YAML::Load(yaml)));
+}
+
+std::string settings_error(const std::string& yaml) {
+  try {
+    settings_of(yaml);
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return "no error";
+}
+
+TEST(GenicamTimingSettings, DefaultsAndKeys) {
+  const SourceSettings defaults = settings_of("{}");
+  EXPECT_FALSE(defaults.ptp);
+  EXPECT_DOUBLE_EQ(defaults.ptp_timeout_s, 30);
+  EXPECT_DOUBLE_EQ(defaults.ptp_utc_offset_s, 37);
+  EXPECT_EQ(defaults.trigger, "");
+  EXPECT_EQ(defaults.trigger_activation, "RisingEdge");
+  EXPECT_EQ(defaults.strobe, "");
+  const SourceSettings set = settings_of(
+      "ptp: on\nptp_timeout_s: 5\nptp_utc_offset_s: 0\ntrigger: Line1\ntrigger_activation: FallingEdge\n"
+      "strobe: Line2");
+  EXPECT_TRUE(set.ptp);
+  EXPECT_DOUBLE_EQ(set.ptp_timeout_s, 5);
+  EXPECT_DOUBLE_EQ(set.ptp_utc_offset_s, 0);
+  EXPECT_EQ(set.trigger, "Line1");
+  EXPECT_EQ(set.trigger_activation, "FallingEdge");
+  EXPECT_EQ(set.strobe, "Line2");
+  EXPECT_EQ(settings_of("trigger: off\nstrobe: off\nptp: off").trigger, "");
+}
+
+TEST(GenicamTimingSettings, BadValuesNameTheKey) {
+  EXPECT_TRUE(contains(settings_error("ptp: sometimes"), "camera.yaml: ptp: expected on or off"));
+  EXPECT_TRUE(contains(settings_error("ptp_utc_offset_s: 36.5"), "ptp_utc_offset_s: expected whole seconds"));
+  EXPECT_TRUE(contains(settings_error("ptp_timeout_s: -1"), "ptp_timeout_s: must be between 0 and 600"));
+  EXPECT_TRUE(contains(settings_error("trigger: Line0\ntrigger_activation: Both"),
+                       "trigger_activation: expected RisingEdge or FallingEdge"));
+  EXPECT_TRUE(
+      contains(settings_error("trigger_activation: FallingEdge"), "trigger_activation: needs a trigger"));
+  EXPECT_TRUE(contains(settings_error("trigger: Line0\nframe_rate_hz: 100"),
+                       "frame_rate_hz: a triggered camera runs at its trigger's rate"));
+}
+
+TEST(GenicamTimingSettings, OnlyAravisSourcesTakeThem) {
+  SourceOptions options;
+  options.settings.ptp = true;
+  try {
+    open_source("images:/nonexistent", options);
+    ADD_FAILURE() << "opened";
+  } catch (const std::runtime_error& error) {
+    EXPECT_TRUE(contains(error.what(), "only aravis: sources have them")) << error.what();
+  }
 }
 
 }  // namespace
