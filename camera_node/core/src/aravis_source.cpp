@@ -46,6 +46,8 @@ constexpr guint64 kPopSliceUs = 20'000;
 constexpr auto kReconnectWaitSlice = std::chrono::milliseconds(20);
 // This many frame timeouts in a row and the camera is treated as gone: closed and reopened.
 constexpr int kTimeoutsBeforeDisconnect = 5;
+// How often a PTP-timed camera's lock is checked while streaming.
+constexpr auto kPtpCheckInterval = std::chrono::seconds(1);
 
 // Failures inside this file carry the reason only; open_aravis_source() and the reconnect loop
 // prefix the spec.
@@ -443,6 +445,13 @@ class Connection {
     if (error != nullptr) throw AravisError("cannot set frame rate (" + take_message(error) + ")");
     check_read_back("frame rate", rate_hz, frame_rate(), " Hz");
   }
+  std::string ptp_status() const {
+    try {
+      return read_ptp_status(camera_);
+    } catch (const GenicamTimingError& error) {
+      throw AravisError(error.what());
+    }
+  }
   double exposure() const { return read_double(arv_camera_get_exposure_time, "exposure"); }
   double gain() const { return read_double(arv_camera_get_gain, "gain"); }
   double frame_rate() const { return read_double(arv_camera_get_frame_rate, "frame rate"); }
@@ -541,6 +550,7 @@ class AravisSource final : public FrameSource {
       auto frame = take_frame(buffer);
       arv_stream_push_buffer(connection_->stream(), buffer);
       update_stream_statistics();
+      if (settings_.ptp) check_ptp_lock();
       if (frame) {
         ++delivered_;
         return frame;
@@ -630,6 +640,25 @@ class AravisSource final : public FrameSource {
     connection_->read_stream_statistics(statistics);
     std::lock_guard lock(counters_mutex_);
     current_stream_ = std::move(statistics);
+  }
+
+  // Once a second: a camera that lost its PTP lock stamps frames off the common time base. They are
+  // still delivered (the lock usually returns), counted, and the status named in last_error.
+  void check_ptp_lock() {
+    const auto now = std::chrono::steady_clock::now();
+    if (now < next_ptp_check_) return;
+    next_ptp_check_ = now + kPtpCheckInterval;
+    std::string problem;
+    try {
+      std::lock_guard lock(camera_mutex_);
+      const std::string status = connection_->ptp_status();
+      if (status.empty() || ptp_locked(status)) return;
+      problem = "PTP status " + status + ", not Slave or Master: stamps may be off the common time base";
+    } catch (const AravisError& error) {
+      problem = error.what();
+    }
+    count("ptp_not_locked");
+    note_error(spec_ + ": " + problem);
   }
 
   void handle_pop_timeout() {
@@ -874,6 +903,7 @@ class AravisSource final : public FrameSource {
   guint64 last_frame_id_ = 0;
   std::int64_t sequence_ = -1;
   DeviceClockMapper clock_;
+  std::chrono::steady_clock::time_point next_ptp_check_{};
 };
 
 }  // namespace

@@ -116,13 +116,17 @@ struct PtpNames {
 constexpr PtpNames kPtpNames[] = {{"PtpEnable", "PtpStatus", "PtpDataSetLatch"},
                                   {"GevIEEE1588", "GevIEEE1588Status", "GevIEEE1588DataSetLatch"}};
 
+std::string latched_status(FeatureWriter& writer, const PtpNames& names) {
+  if (writer.has(names.latch)) writer.execute(names.latch);
+  return writer.read_string(names.status);
+}
+
 void wait_for_ptp_lock(FeatureWriter& writer, const PtpNames& names, double timeout_s) {
   const auto start = std::chrono::steady_clock::now();
   const auto deadline = start + std::chrono::duration<double>(timeout_s);
   for (;;) {
-    if (writer.has(names.latch)) writer.execute(names.latch);
-    const std::string status = writer.read_string(names.status);
-    if (status == "Slave" || status == "Master") {
+    const std::string status = latched_status(writer, names);
+    if (ptp_locked(status)) {
       writer.record(names.status, status);
       return;
     }
@@ -178,6 +182,15 @@ void configure_strobe(ArvCamera* camera, const SourceSettings& settings, TimingA
 }
 
 }  // namespace
+
+std::string read_ptp_status(ArvCamera* camera) {
+  TimingApplied unused;
+  FeatureWriter writer(camera, "ptp", unused);
+  for (const PtpNames& names : kPtpNames) {
+    if (writer.has(names.status)) return latched_status(writer, names);
+  }
+  return "";
+}
 
 TimingApplied apply_genicam_timing(ArvCamera* camera, const SourceSettings& settings) {
   TimingApplied applied;

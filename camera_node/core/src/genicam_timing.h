@@ -33,4 +33,13 @@ struct TimingApplied {
 // starts: cameras lock trigger features while acquiring.
 TimingApplied apply_genicam_timing(ArvCamera* camera, const SourceSettings& settings);
 
+// The camera's PTP status now (PtpStatus or GevIEEE1588Status, latched first when the camera has
+// a latch command); "" when it has no status feature. Throws GenicamTimingError if it cannot be read.
+std::string read_ptp_status(ArvCamera* camera);
+
+// Whether a PTP status means the camera's clock follows (or is) the grandmaster.
+inline bool ptp_locked(const std::string& status) {
+  return status == "Slave" || status == "Master";
+}
+
 }  // namespace panoptes::camera

@@ -134,6 +134,7 @@ TEST(GenicamTiming, PtpStampsBecomeCaptureTimes) {
   const Features expected = {{"PtpEnable", "true"}, {"PtpStatus", "Slave"}};
   EXPECT_EQ(source->info().timing_features, expected);
   EXPECT_TRUE(source->info().ptp_timed);
+  EXPECT_EQ(source->counters().count("ptp_not_locked"), 0u);
   for (int i = 0; i < 3; ++i) {
     const auto frame = source->next();
     ASSERT_TRUE(frame.has_value());
@@ -176,6 +177,24 @@ TEST(GenicamTiming, APtpStatusThatNeverLocksIsAnErrorAfterTheTimeout) {
   const std::string error = open_error(listening, options);
   fs::remove(listening);
   EXPECT_TRUE(contains(error, "aravis:Fake_1: ptp: PtpStatus is still Listening after 0.3 s")) << error;
+}
+
+TEST(GenicamTiming, ALockLostWhileStreamingIsCountedAndNamed) {
+  // Slave until acquisition starts, Listening from then on.
+  const std::string losing = variant("losing", {{"<Formula>ENABLED ? 4 : 1</Formula>",
+                                                 "<pVariable Name=\"RUNNING\">AcquisitionRunning</pVariable>"
+                                                 "<Formula>ENABLED ? (RUNNING ? 2 : 4) : 1</Formula>"}});
+  SourceOptions options = small_options();
+  options.settings.ptp = true;
+  options.settings.ptp_timeout_s = 2;
+  const auto source = open_with(losing, options);
+  fs::remove(losing);
+  ASSERT_TRUE(source->next().has_value()) << "frames still come";
+  const SourceCounters counters = source->counters();
+  ASSERT_EQ(counters.count("ptp_not_locked"), 1u);
+  EXPECT_EQ(counters.at("ptp_not_locked"), 1u) << "checked once a second, the first at the first frame";
+  EXPECT_TRUE(contains(source->last_error(), "aravis:Fake_1: PTP status Listening, not Slave or Master"))
+      << source->last_error();
 }
 
 TEST(GenicamTiming, FeaturesTheCameraLacksAreNamed) {
