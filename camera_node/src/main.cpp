@@ -39,8 +39,44 @@ struct Options {
   long long max_frames = -1;
   bool unpaced = false;
   double rate_scale = 1.0;
+  // GenICam timing flags; "" = as the config's `source:` section says (docs/camera_node.md).
+  std::string ptp;
+  std::string trigger;
+  std::string trigger_activation;
+  std::string strobe;
   panoptes::camera_app::LiveOptions live;
 };
+
+void add_timing_options(CLI::App& app, Options& options) {
+  app.add_option(
+         "--ptp", options.ptp,
+         "aravis: on = enable the camera's PTP (PtpEnable or GevIEEE1588), wait for PtpStatus Slave/Master "
+         "and take its PTP stamps as capture times, without software clock sync (config: source.ptp; "
+         "default off)")
+      ->check(CLI::IsMember({"on", "off"}));
+  app.add_option(
+      "--trigger", options.trigger,
+      "aravis: hardware frame trigger: the TriggerSource (Line0, Line1, Software, ...) or off (config: "
+      "source.trigger; default off = free-running)");
+  app.add_option("--trigger-activation", options.trigger_activation,
+                 "aravis: the trigger's edge (config: source.trigger_activation; default RisingEdge)")
+      ->check(CLI::IsMember({"RisingEdge", "FallingEdge"}));
+  app.add_option("--strobe", options.strobe,
+                 "aravis: output line (LineSelector, e.g. Line2) driven by ExposureActive, or off (config: "
+                 "source.strobe; default off)");
+}
+
+// The timing flags over the config's settings; throws std::invalid_argument (exit 2) naming the
+// option when they exclude each other.
+void apply_timing_flags(const Options& options, cam::SourceSettings& settings) {
+  if (!options.ptp.empty()) settings.ptp = options.ptp == "on";
+  if (!options.trigger.empty()) settings.trigger = options.trigger == "off" ? "" : options.trigger;
+  if (!options.trigger_activation.empty()) settings.trigger_activation = options.trigger_activation;
+  if (!options.strobe.empty()) settings.strobe = options.strobe == "off" ? "" : options.strobe;
+  cam::check_timing(settings, [](const std::string& key, const std::string& why) {
+    throw std::invalid_argument("source." + key + ": " + why);
+  });
+}
 
 void add_options(CLI::App& app, Options& options) {
   panoptes::camera_app::LiveOptions& live = options.live;
@@ -53,6 +89,7 @@ void add_options(CLI::App& app, Options& options) {
   app.add_option("--config", options.config_file,
                  "YAML with `detector:` (threshold, masks, ...) and `source:` (exposure_us, gain_db, "
                  "frame_rate_hz, roi, pixel_format, ...) sections; see docs/camera_node.md");
+  add_timing_options(app, options);
   app.add_flag("--no-dds", options.no_dds, "offline: no DDS; requires --out-features");
   app.add_option("--out-features", options.out_features, "write every FeatureFrame to this JSONL file");
   app.add_option("--dds-profile", live.dds_profile,
@@ -129,6 +166,7 @@ std::unique_ptr<cam::FrameSource> open_source(const Options& options, cam::Detec
       if (config.has("source"))
         source_options.settings = cam::SourceSettings::from_yaml(config.child("source"));
     }
+    apply_timing_flags(options, source_options.settings);
     source_options.camera_id = options.camera_id;
     source_options.sim_epoch_ns = options.sim_epoch_ns;
     source_options.paced = !options.unpaced;
@@ -154,6 +192,14 @@ int run_camera_node(int argc, char** argv) {
   const std::unique_ptr<cam::FrameSource> source = open_source(options, detector_config);
   const std::string camera_id = options.camera_id.empty() ? source->info().camera_id : options.camera_id;
   cam::NodeLog log("camera_node[" + camera_id + "]");
+  if (const auto& features = source->info().timing_features; !features.empty()) {
+    std::string line;
+    for (const auto& [name, value] : features) {
+      if (!line.empty()) line += ' ';
+      line.append(name).append("=").append(value);
+    }
+    log("GenICam timing features as read back: " + line);
+  }
   cam::Detector detector(detector_config);
   if (options.no_dds) {
     const cam::OfflineOptions offline{options.out_features, options.live.queue_capacity, options.live.quiet};

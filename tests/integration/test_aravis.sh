@@ -94,6 +94,29 @@ expect_exit 2 "an address with no route" -- timeout 30 "$bin/camera_node" --sour
   --out-features "$work/x.jsonl"
 expect_stderr_contains "aravis:10.255.0.1: no route to 10.255.0.1" "the unreachable address is named"
 
+# --- GenICam timing features over GVCP ------------------------------------------------------------
+# The fake serves Aravis's fake-camera description: triggers (rising edge only), no PTP, no lines.
+# The writes and PTP stamps themselves are checked in-process (camera_tests GenicamTiming.*); here
+# the refusals and a trigger configuration travel over the real control protocol.
+start_fake timing --rate 50 --seed 12 || finish
+expect_exit 2 "PTP on a GigE Vision camera without it" -- timeout 30 "$bin/camera_node" --source aravis:127.0.0.1 \
+  --ptp on --no-dds --out-features "$work/x.jsonl"
+expect_stderr_contains "aravis:127.0.0.1: ptp: the camera has neither PtpEnable nor GevIEEE1588" "camera and features named"
+expect_exit 2 "a strobe on a GigE Vision camera without output lines" -- timeout 30 "$bin/camera_node" \
+  --source aravis:127.0.0.1 --strobe Line1 --no-dds --out-features "$work/x.jsonl"
+expect_stderr_contains "aravis:127.0.0.1: strobe Line1: the camera has no LineSelector feature" "camera and feature named"
+# Triggered from Line0 the GigE Vision fake sends nothing (it sends free-running or on a software
+# trigger only), like a real camera with no trigger pulses: stop the node after 3 s and look at
+# what it read back at start.
+timeout -s INT 3 "$bin/camera_node" --source aravis:127.0.0.1 --trigger Line0 --no-dds \
+  --out-features "$work/x.jsonl" >/dev/null 2>"$work/trigger.err"
+if grep -qF "TriggerSelector=FrameStart TriggerMode=On TriggerSource=Line0 TriggerActivation=RisingEdge" "$work/trigger.err"; then
+  pass "a trigger is configured over GVCP and read back"
+else
+  fail "no trigger read-back line"; cat "$work/trigger.err"
+fi
+stop_fake
+
 # --- packet loss -----------------------------------------------------------------------------------
 # 2 per mille of the packets dropped: about a third of the 640x480 frames (220 packets) lose one.
 start_fake lossy --truth "$work/truth_lossy.jsonl" --rate 50 --loss 0.002 --seed 12 || finish

@@ -27,9 +27,10 @@ dds::Bus make_bus(const LiveOptions& options, const std::string& camera_id) {
 
 // Started first: the estimate converges while the rest starts up.
 std::unique_ptr<dds::TimeSyncClient> make_time_sync(dds::Bus& bus, const LiveOptions& options,
+                                                    const camera::SourceInfo& info,
                                                     const std::string& camera_id,
                                                     const camera::NodeClock& clock) {
-  if (options.no_clock_sync) return nullptr;
+  if (!uses_clock_sync(options, info)) return nullptr;
   dds::TimeSyncClientOptions sync_options;
   sync_options.client_id = camera_id;
   sync_options.local_clock = [clock] { return clock.now(); };
@@ -97,6 +98,10 @@ camera::CameraPipelineOptions pipeline_options(const LiveOptions& options, const
 
 }  // namespace
 
+bool uses_clock_sync(const LiveOptions& options, const camera::SourceInfo& info) {
+  return !options.no_clock_sync && !info.ptp_timed;
+}
+
 LiveCamera::LiveCamera(LiveOptions options, camera::FrameSource& source, camera::Detector& detector,
                        std::string camera_id, const camera::NodeLog& log)
     : options_(std::move(options)),
@@ -106,7 +111,7 @@ LiveCamera::LiveCamera(LiveOptions options, camera::FrameSource& source, camera:
       log_(log),
       clock_(wall_now_ns(), camera::source_clock_offset_ns(options_.source_spec), options_.clock_skew),
       bus_(make_bus(options_, camera_id_)),
-      time_sync_(make_time_sync(bus_, options_, camera_id_, clock_)),
+      time_sync_(make_time_sync(bus_, options_, source_.info(), camera_id_, clock_)),
       sync_view_(time_sync_ ? std::make_unique<TimeSyncClockView>(*time_sync_) : nullptr),
       stamps_(clock_, sync_view_.get()),
       // In this camera's DDS partition: what its permissions grant when secured (docs/security.md).
@@ -131,6 +136,9 @@ LiveCamera::LiveCamera(LiveOptions options, camera::FrameSource& source, camera:
       pipeline_(pipeline_options(options_, camera_id_), source_, detector_, stamps_, sink_, log_) {
   publish_camera_info();
   if (!options_.quiet) log_("publishing on DDS (profile " + bus_.profile_file().string() + ")");
+  if (source_.info().ptp_timed && !options_.no_clock_sync) {
+    log_("PTP-timed camera: its PTP stamps are published as capture times; software clock sync skipped");
+  }
   if (options_.inject_loss > 0 || options_.inject_jitter_ms > 0) {
     sink_.inject_faults(camera::FaultInjector(options_.inject_loss, options_.inject_jitter_ms,
                                               std::hash<std::string>{}(camera_id_)));
@@ -231,6 +239,7 @@ void LiveCamera::publish_status(TimeNs wall_now_ns) {
            " s: " + clock_sync_line(sync_status, clock_));
     }
   }
+  inputs.ptp_timed = source_.info().ptp_timed;
   inputs.camera_id = camera_id_;
   inputs.stamp_ns = stamps_.to_common(clock_.from_wall(wall_now_ns));
   inputs.frames = pipeline_.frames();

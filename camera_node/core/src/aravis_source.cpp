@@ -4,7 +4,8 @@
 // Opening by IP address talks to that address only (GVCP unicast): no device-list update, hence
 // no discovery broadcast. Any other target is an Aravis device id ("<vendor>-<serial>", a USB3
 // Vision id, "Fake_1"), which Aravis resolves by enumerating every enabled interface; for GigE
-// Vision that broadcasts a discovery packet on every network interface.
+// Vision that broadcasts a discovery packet on every network interface. "Fake_<n>" (Aravis's
+// in-process fake camera) enables only the Fake interface, so it enumerates nothing real.
 //
 // Threads: next() runs on the capture thread and alone touches the stream; set_control(),
 // control(), counters() and restart() may come from other threads. Aravis camera objects are not
@@ -35,6 +36,7 @@
 #include <vector>
 
 #include "device_clock.h"
+#include "genicam_timing.h"
 
 namespace panoptes::camera {
 namespace {
@@ -44,6 +46,8 @@ constexpr guint64 kPopSliceUs = 20'000;
 constexpr auto kReconnectWaitSlice = std::chrono::milliseconds(20);
 // This many frame timeouts in a row and the camera is treated as gone: closed and reopened.
 constexpr int kTimeoutsBeforeDisconnect = 5;
+// How often a PTP-timed camera's lock is checked while streaming.
+constexpr auto kPtpCheckInterval = std::chrono::seconds(1);
 
 // Failures inside this file carry the reason only; open_aravis_source() and the reconnect loop
 // prefix the spec.
@@ -202,6 +206,8 @@ class Connection {
     info.offset_x = x;
     info.offset_y = y;
     info.bits = format_->bits;
+    info.ptp_timed = timing_.ptp_timed;
+    info.timing_features = timing_.features;
     if (arv_camera_is_frame_rate_available(camera_, nullptr)) {
       const double rate = arv_camera_get_frame_rate(camera_, &error);
       if (error == nullptr && std::isfinite(rate)) info.nominal_rate_hz = rate;
@@ -230,6 +236,13 @@ class Connection {
                           take_message(error) + ")");
       }
       return;
+    }
+    if (target.starts_with("Fake_")) {
+      // Aravis's in-process fake camera (disabled by default in Aravis): reachable without
+      // enumerating, hence without broadcasting on, any real interface.
+      arv_disable_interface("GigEVision");
+      arv_disable_interface("USB3Vision");
+      arv_enable_interface("Fake");
     }
     // Enumerates the interfaces (GigE Vision discovery broadcasts): see the file comment.
     camera_ = arv_camera_new(target.c_str(), &error);
@@ -350,6 +363,12 @@ class Connection {
     if (settings.exposure_us > 0) set_exposure(settings.exposure_us);
     if (settings.gain_db > 0) set_gain(settings.gain_db);
     if (settings.frame_rate_hz > 0) set_frame_rate(settings.frame_rate_hz);
+    // After the frame rate: Aravis turns triggers off when it sets a frame rate.
+    try {
+      timing_ = apply_genicam_timing(camera_, settings);
+    } catch (const GenicamTimingError& error) {
+      throw AravisError(error.what());
+    }
   }
 
   void start_stream(int buffers) {
@@ -426,6 +445,13 @@ class Connection {
     if (error != nullptr) throw AravisError("cannot set frame rate (" + take_message(error) + ")");
     check_read_back("frame rate", rate_hz, frame_rate(), " Hz");
   }
+  std::string ptp_status() const {
+    try {
+      return read_ptp_status(camera_);
+    } catch (const GenicamTimingError& error) {
+      throw AravisError(error.what());
+    }
+  }
   double exposure() const { return read_double(arv_camera_get_exposure_time, "exposure"); }
   double gain() const { return read_double(arv_camera_get_gain, "gain"); }
   double frame_rate() const { return read_double(arv_camera_get_frame_rate, "frame rate"); }
@@ -444,6 +470,7 @@ class Connection {
   gulong control_lost_handler_ = 0;
   std::atomic<bool> control_lost_{false};
   const MonoFormat* format_ = nullptr;
+  TimingApplied timing_;
 };
 
 const char* status_counter(ArvBufferStatus status) {
@@ -475,7 +502,8 @@ class AravisSource final : public FrameSource {
       : target_(target),
         spec_("aravis:" + target),
         settings_(options.settings),
-        max_frames_(options.max_frames) {
+        max_frames_(options.max_frames),
+        ptp_utc_offset_ns_(static_cast<TimeNs>(std::llround(options.settings.ptp_utc_offset_s * 1e9))) {
     try {
       connection_ = std::make_unique<Connection>(target_, settings_);
       connection_->fill_info(info_);
@@ -522,6 +550,7 @@ class AravisSource final : public FrameSource {
       auto frame = take_frame(buffer);
       arv_stream_push_buffer(connection_->stream(), buffer);
       update_stream_statistics();
+      if (settings_.ptp) check_ptp_lock();
       if (frame) {
         ++delivered_;
         return frame;
@@ -551,6 +580,9 @@ class AravisSource final : public FrameSource {
           connection_->set_gain(value);
           break;
         case Control::kFrameRateHz:
+          // Aravis would switch the trigger off to set a rate.
+          if (!settings_.trigger.empty())
+            return spec_ + ": frame rate is set by the hardware trigger (trigger " + settings_.trigger + ")";
           connection_->set_frame_rate(value);
           break;
       }
@@ -608,6 +640,25 @@ class AravisSource final : public FrameSource {
     connection_->read_stream_statistics(statistics);
     std::lock_guard lock(counters_mutex_);
     current_stream_ = std::move(statistics);
+  }
+
+  // Once a second: a camera that lost its PTP lock stamps frames off the common time base. They are
+  // still delivered (the lock usually returns), counted, and the status named in last_error.
+  void check_ptp_lock() {
+    const auto now = std::chrono::steady_clock::now();
+    if (now < next_ptp_check_) return;
+    next_ptp_check_ = now + kPtpCheckInterval;
+    std::string problem;
+    try {
+      std::lock_guard lock(camera_mutex_);
+      const std::string status = connection_->ptp_status();
+      if (status.empty() || ptp_locked(status)) return;
+      problem = "PTP status " + status + ", not Slave or Master: stamps may be off the common time base";
+    } catch (const AravisError& error) {
+      problem = error.what();
+    }
+    count("ptp_not_locked");
+    note_error(spec_ + ": " + problem);
   }
 
   void handle_pop_timeout() {
@@ -785,18 +836,28 @@ class AravisSource final : public FrameSource {
     const guint64 system_ns = arv_buffer_get_system_timestamp(buffer);
     frame.arrival_ns = system_ns != 0 ? static_cast<TimeNs>(system_ns) : received_ns;
     const auto half_exposure_ns = static_cast<TimeNs>(std::llround(frame.exposure_us * 500.0));
-    const guint64 device_ns = arv_buffer_get_timestamp(buffer);
-    if (device_ns != 0) {
-      const std::size_t resets = clock_.resets();
-      // SFNC: the timestamp is latched at frame (exposure) start on most cameras, so the middle
-      // of the exposure is half an exposure later.
-      frame.stamp_ns = clock_.add(static_cast<TimeNs>(device_ns), frame.arrival_ns) + half_exposure_ns;
-      if (clock_.resets() != resets) count("clock_reset");
-    } else {
-      // No device clock: the frame was read out by its arrival; its exposure ended before that.
-      frame.stamp_ns = frame.arrival_ns - half_exposure_ns;
-    }
+    frame.stamp_ns = capture_stamp(arv_buffer_get_timestamp(buffer), frame.arrival_ns, half_exposure_ns);
     return frame;
+  }
+
+  // Mid-exposure capture time from the buffer's device stamp (0 = none).
+  TimeNs capture_stamp(guint64 device_ns, TimeNs arrival_ns, TimeNs half_exposure_ns) {
+    if (device_ns == 0) {
+      if (settings_.ptp) count("ptp_missing_stamp");
+      // No device clock: the frame was read out by its arrival; its exposure ended before that.
+      return arrival_ns - half_exposure_ns;
+    }
+    // SFNC: the timestamp is latched at frame (exposure) start on most cameras, so the middle of
+    // the exposure is half an exposure later.
+    if (settings_.ptp) {
+      // PTP time is TAI, already common to every PTP-timed camera and host; the common time base
+      // is UTC (docs/camera_node.md, "PTP and hardware triggers").
+      return static_cast<TimeNs>(device_ns) - ptp_utc_offset_ns_ + half_exposure_ns;
+    }
+    const std::size_t resets = clock_.resets();
+    const TimeNs stamp_ns = clock_.add(static_cast<TimeNs>(device_ns), arrival_ns) + half_exposure_ns;
+    if (clock_.resets() != resets) count("clock_reset");
+    return stamp_ns;
   }
 
   static std::string format_hex(std::uint32_t value) {
@@ -809,6 +870,7 @@ class AravisSource final : public FrameSource {
   const std::string spec_;
   const SourceSettings settings_;
   const std::int64_t max_frames_;
+  const TimeNs ptp_utc_offset_ns_ = 0;
   SourceInfo info_;
 
   mutable std::mutex camera_mutex_;  // guards connection_ against feature access from other threads
@@ -841,6 +903,7 @@ class AravisSource final : public FrameSource {
   guint64 last_frame_id_ = 0;
   std::int64_t sequence_ = -1;
   DeviceClockMapper clock_;
+  std::chrono::steady_clock::time_point next_ptp_check_{};
 };
 
 }  // namespace

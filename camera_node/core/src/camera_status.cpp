@@ -30,6 +30,7 @@ CameraStatusReport assemble_status(const StatusInputs& inputs) {
   all["drops_queue"] = inputs.queue_drops;
   all["guided_frames"] = inputs.guided_frames;
   if (inputs.injected_losses > 0) all["injected_losses"] = inputs.injected_losses;
+  if (inputs.ptp_timed) all["ptp_timed"] = 1;
   if (inputs.clock_sync) {
     const ClockSyncFigures& sync = *inputs.clock_sync;
     if (sync.synchronised) {

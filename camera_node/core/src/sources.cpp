@@ -35,6 +35,12 @@ std::unique_ptr<FrameSource> open_source(const std::string& spec, const SourceOp
       {"v4l2", "v4l2:/dev/videoN", open_v4l2_source},
       {"features", "features:<file.jsonl>", open_features_source},
   };
+  const SourceSettings& settings = options.settings;
+  if (kind != "aravis" && (settings.ptp || !settings.trigger.empty() || !settings.strobe.empty())) {
+    throw std::runtime_error(
+        "source '" + spec +
+        "': ptp, trigger and strobe are GenICam camera features; only aravis: sources have them");
+  }
   for (const Backend& backend : kBackends) {
     if (kind != backend.kind) continue;
     if (target.empty()) throw std::runtime_error(std::string(backend.kind) + ": expected " + backend.form);

@@ -52,6 +52,16 @@ TEST(StatusAssembly, TheNodesOwnErrorWinsOverTheSources) {
   EXPECT_EQ(assemble_status(inputs).last_error, "command #3 rejected");
 }
 
+TEST(StatusAssembly, APtpTimedCameraIsMarkedAndItsMarkIsNoDrop) {
+  StatusInputs inputs = typical_inputs();
+  EXPECT_EQ(assemble_status(inputs).counters.count("ptp_timed"), 0u);
+  const std::uint64_t drops = assemble_status(inputs).drops_source;
+  inputs.ptp_timed = true;
+  const CameraStatusReport report = assemble_status(inputs);
+  EXPECT_EQ(report.counters.at("ptp_timed"), 1u);
+  EXPECT_EQ(report.drops_source, drops);
+}
+
 TEST(StatusAssembly, ClockSyncCountersOnlyWithAClientAndOffsetOnlyWhenSynchronised) {
   StatusInputs inputs = typical_inputs();
   inputs.injected_losses = 5;

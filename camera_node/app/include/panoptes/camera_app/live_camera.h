@@ -43,6 +43,11 @@ struct LiveOptions {
   bool latency_probe = false;
 };
 
+// Whether the node runs the software clock synchronisation: not with --no-clock-sync, and not for
+// a PTP-timed camera, whose stamps are already on the common time base (docs/camera_node.md,
+// "PTP and hardware triggers").
+bool uses_clock_sync(const LiveOptions& options, const camera::SourceInfo& info);
+
 class LiveCamera final : public camera::PipelineObserver {
  public:
   // Throws dds::DdsError if DDS cannot start, ConfigError for a bad scene file.

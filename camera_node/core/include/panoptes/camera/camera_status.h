@@ -58,6 +58,7 @@ struct StatusInputs {
   CounterMap node_counters;
   CounterMap command_counters;
   std::optional<ClockSyncFigures> clock_sync;
+  bool ptp_timed = false;  // stamps are the camera's PTP time: no software clock sync (counter ptp_timed = 1)
   double detect_p50_ms = 0;
   double detect_p99_ms = 0;
   int threshold = 0;

@@ -5,10 +5,12 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "panoptes/calibration.h"
@@ -47,6 +49,12 @@ struct SourceInfo {
   int bits = 8;  // significant bits per pixel of the frames it delivers
   double nominal_rate_hz = 0;
   std::optional<CameraCalibration> calibration;  // known intrinsics/pose (the simulator knows them)
+  // The camera stamps frames with its PTP (IEEE 1588) clock, already on the common time base: the
+  // node's software clock synchronisation is skipped for it (docs/camera_node.md, "PTP").
+  bool ptp_timed = false;
+  // GenICam timing features as read back from the camera after they were set (PTP, trigger,
+  // strobe), in the order written: ("TriggerMode", "On"), ...
+  std::vector<std::pair<std::string, std::string>> timing_features;
 };
 
 // Camera settings from the node's config (`source:` section); 0 / empty = leave the device's own.
@@ -60,10 +68,23 @@ struct SourceSettings {
   double timeout_ms = 1000;             // a frame not arriving within this counts as a timeout
   double reconnect_interval_ms = 1000;  // between attempts to reopen a vanished device
 
+  // GenICam timing (aravis only; docs/camera_node.md, "PTP and hardware triggers").
+  bool ptp = false;              // enable PtpEnable/GevIEEE1588; the camera's stamps become capture times
+  double ptp_timeout_s = 30;     // wait this long for PtpStatus Slave or Master when opening
+  double ptp_utc_offset_s = 37;  // TAI − UTC: PTP stamps are TAI, the common time base is UTC
+  std::string trigger;           // "" = free-running; else the TriggerSource (Line0, Line1, Software, ...)
+  std::string trigger_activation = "RisingEdge";  // RisingEdge | FallingEdge
+  std::string strobe;  // "" = none; else the output line (LineSelector) driven by ExposureActive
+
   // Reads the `source:` section (keys above); unknown keys and out-of-range values throw
   // ConfigError naming the file and key.
   static SourceSettings from_yaml(const YamlReader& reader);
 };
+
+// Settings that exclude each other (trigger with frame_rate_hz, an activation without a trigger):
+// calls `fail(key, why)` for the first found. Shared by the config file and the command line.
+void check_timing(const SourceSettings& settings,
+                  const std::function<void(const std::string& key, const std::string& why)>& fail);
 
 enum class Control { kExposureUs, kGainDb, kFrameRateHz };
 const char* control_name(Control control);
