@@ -216,6 +216,20 @@ TEST(ExportRecording, EveryRecordEqualsWhatWasPublished) {
   for (const auto& path : {mcap.string(), options.out_tracks, options.out_poses}) fs::remove(path);
 }
 
+TEST(ExportRecording, QualityIsTheFractionOfTheLayoutNotItsFloat) {
+  Recording rec = per_camera_recording(2);
+  rec.frames[0].bodies()[0].quality(static_cast<float>(2.0 / 3.0));  // the wand has 3 markers
+  rec.frames[1].bodies()[0].quality(0.7F);                           // no fraction of 3: kept as sent
+  const fs::path mcap = temp_path("take.mcap");
+  write_recording(mcap, rec);
+  RecordingRecordSource source(mcap);
+  const ExportRecords records = source.read();
+  ASSERT_EQ(records.poses.size(), 2U);
+  EXPECT_EQ(records.poses[0].quality, 2.0 / 3.0);  // what the estimator wrote to --out-poses
+  EXPECT_EQ(records.poses[1].quality, static_cast<double>(0.7F));
+  fs::remove(mcap);
+}
+
 TEST(ExportRecording, LabelledMarkersAreNamedAfterTheirBodyMarker) {
   const Recording rec = per_camera_recording(3);
   const fs::path mcap = temp_path("take.mcap");

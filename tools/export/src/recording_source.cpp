@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/export_job/recording_source.h"
 
+#include <algorithm>
+#include <cmath>
+#include <memory>
 #include <set>
 #include <string_view>
 #include <utility>
@@ -61,6 +64,19 @@ void check_labels(ExportRecords& records, const RecordingContents& contents, con
       records.skipped.push_back(file + ": label " + body_marker_name(label.body, label.marker) +
                                 " is not a marker of the recorded body descriptions: left unlabelled");
     label = MarkerLabel{};
+  }
+}
+
+// FrameBody.quality is a float on the wire, the fraction seen / markers the estimator computed as
+// a double (and wrote to --out-poses). With the body's marker count from the descriptions, that
+// double is recovered exactly: the nearest fraction k / markers, when the float is that fraction.
+void restore_quality(ExportRecords& records, const RecordingContents& contents) {
+  for (PoseRecord& pose : records.poses) {
+    const auto layout = contents.layout_sizes.find(pose.body);
+    if (layout == contents.layout_sizes.end() || layout->second == 0) continue;
+    const auto markers = static_cast<double>(layout->second);
+    const double fraction = std::round(pose.quality * markers) / markers;
+    if (static_cast<float>(fraction) == static_cast<float>(pose.quality)) pose.quality = fraction;
   }
 }
 
@@ -128,6 +144,7 @@ ExportRecords RecordingRecordSource::read() {
                       std::string("no MocapFrame on ") + kFramesChannel + " could be read" +
                           (report.problems.empty() ? "" : " (" + report.problems.front() + ")"));
   check_labels(records, contents_, file);
+  restore_quality(records, contents_);
   return records;
 }
 
