@@ -6,6 +6,7 @@
 // the project's writer; panoptes_export --in-recording must give back exactly those records, and
 // names for the body-labelled markers. (The live check of the same is
 // tests/integration/test_export_recording.sh.)
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "panoptes/jsonl.h"
 #include "panoptes/recording/mcap_writer.h"
 #include "panoptes/session/estimator_session.h"
+#include "panoptes/session/frame_clock.h"
 #include "panoptes/session/frame_output.h"
 #include "panoptes/simulator.h"
 #include "scene_frames.h"
@@ -46,8 +48,36 @@ struct LiveRun {
   std::size_t frames = 0;
 };
 
-// The offline run, writing the MocapFrames and body descriptions to `mcap`.
-LiveRun run_and_record(const Scene& scene, double seconds, const fs::path& mcap) {
+// One published frame: its MocapFrame into the recording, its records as the JSONL lines.
+class Publisher {
+ public:
+  Publisher(recording::McapWriter& writer, std::uint16_t channel, LiveRun& run)
+      : writer_(writer), channel_(channel), run_(run) {}
+  void publish(const FrameOutput& out, const std::vector<TrackRecord>& tracks,
+               const std::vector<PoseRecord>& poses) {
+    const TimeNs publish_ns = out.stamp_ns + 3'000'000;
+    writer_.write(channel_, static_cast<std::uint32_t>(run_.frames++), static_cast<std::uint64_t>(publish_ns),
+                  static_cast<std::uint64_t>(publish_ns),
+                  dds::encode_sample(estimator_app::to_frame_message(out, publish_ns)));
+    for (const auto& track : tracks) run_.track_lines.push_back(to_json_line(track));
+    for (PoseRecord pose : poses) {
+      run_.pose_lines.push_back(to_json_line(pose));
+      // MocapFrame's FrameBody.quality is a float: the one field that cannot come back as the double.
+      pose.quality = static_cast<float>(pose.quality);
+      run_.pose_lines_float_quality.push_back(to_json_line(pose));
+    }
+  }
+
+ private:
+  recording::McapWriter& writer_;
+  std::uint16_t channel_;
+  LiveRun& run_;
+};
+
+// The offline run, writing the MocapFrames and body descriptions to `mcap`: one frame per processed
+// camera frame, or (`fixed_rate_hz` > 0) one per instant of the frame clock, as the live node
+// publishes them (docs/frames.md; offline timing model: instants before each frame's stamp).
+LiveRun run_and_record(const Scene& scene, double seconds, const fs::path& mcap, int fixed_rate_hz = 0) {
   EstimatorConfig config;
   EstimatorSession session(config);
   session.tracker().set_calibration(scene.calibration());
@@ -58,31 +88,41 @@ LiveRun run_and_record(const Scene& scene, double seconds, const fs::path& mcap)
                          export_job::kDescriptionsChannel, "cdr");
   const auto frames = writer.add_channel(writer.add_schema("panoptes/msg/MocapFrame", "ros2idl", ""),
                                          export_job::kFramesChannel, "cdr");
-  const auto first = simulate(scene, seconds);
+  const auto input = simulate(scene, seconds);
   writer.write(descriptions, 0, 1, 1,
                dds::encode_sample(estimator_app::to_descriptions_message(
-                   scene.body_definitions(), 1, "bodies.yaml", first.front().stamp_ns)));
+                   scene.body_definitions(), 1, "bodies.yaml", input.front().stamp_ns)));
   FrameOutputBuilder builder;
   LiveRun run;
-  for (const FeatureFrame& frame : first) {
-    if (session.process(frame) != estimator::FrameOutcome::kProcessed) continue;
-    const auto poses = session.current_poses();
-    const auto tracks = session.tracker().current_tracks();
-    const FrameOutput out = builder.build(session.tracker(), frame, {}, poses, tracks);
-    const TimeNs publish_ns = frame.stamp_ns + 3'000'000;
-    writer.write(frames, static_cast<std::uint32_t>(run.frames++), static_cast<std::uint64_t>(publish_ns),
-                 static_cast<std::uint64_t>(publish_ns),
-                 dds::encode_sample(estimator_app::to_frame_message(out, publish_ns)));
-    for (const auto& track : tracks) run.track_lines.push_back(to_json_line(track));
-    for (PoseRecord pose : poses) {
-      run.pose_lines.push_back(to_json_line(pose));
-      // MocapFrame's FrameBody.quality is a float: the one field that cannot come back as the double.
-      pose.quality = static_cast<float>(pose.quality);
-      run.pose_lines_float_quality.push_back(to_json_line(pose));
+  Publisher publisher(writer, frames, run);
+  FrameClock clock(std::max(fixed_rate_hz, 1));
+  const estimator::Tracker& tracker = session.tracker();
+  for (const FeatureFrame& frame : input) {
+    while (fixed_rate_hz > 0 && tracker.last_stamp_ns() != 0) {
+      const auto tick = clock.next_due(frame.stamp_ns - 1);
+      if (!tick) break;
+      const auto tracks = tracker.tracks_at(tick->instant_ns);
+      const auto poses = session.poses_at(tick->instant_ns);
+      publisher.publish(builder.build_at(tracker, tick->frame_number, tick->instant_ns, {}, poses, tracks),
+                        tracks, poses);
     }
+    if (session.process(frame) != estimator::FrameOutcome::kProcessed || fixed_rate_hz > 0) continue;
+    const auto poses = session.current_poses();
+    const auto tracks = tracker.current_tracks();
+    publisher.publish(builder.build(tracker, frame, {}, poses, tracks), tracks, poses);
   }
   writer.close();
   return run;
+}
+
+// panoptes_export --in-recording DIR/take.mcap --out-tracks --out-poses --out markers.csv, in DIR.
+export_job::ExportOptions export_options(const fs::path& dir) {
+  export_job::ExportOptions options;
+  options.in_recording = (dir / "take.mcap").string();
+  options.out_tracks = (dir / "tracks.jsonl").string();
+  options.out_poses = (dir / "poses.jsonl").string();
+  options.csv = (dir / "markers.csv").string();
+  return options;
 }
 
 TEST(ExportEquality, RecordingExportEqualsTheRecordsWrittenForTheSameFrames) {
@@ -93,11 +133,7 @@ TEST(ExportEquality, RecordingExportEqualsTheRecordsWrittenForTheSameFrames) {
   ASSERT_GT(run.frames, 500U);
   ASSERT_GT(run.pose_lines.size(), 500U);
 
-  export_job::ExportOptions options;
-  options.in_recording = (dir / "take.mcap").string();
-  options.out_tracks = (dir / "tracks.jsonl").string();
-  options.out_poses = (dir / "poses.jsonl").string();
-  options.csv = (dir / "markers.csv").string();
+  const export_job::ExportOptions options = export_options(dir);
   const export_job::ExportSummary summary = export_job::run_export(options);
   EXPECT_EQ(summary.recorded_frames, run.frames);
   EXPECT_EQ(summary.skipped_records, 0U);
@@ -131,6 +167,23 @@ TEST(ExportEquality, RecordingExportEqualsTheRecordsWrittenForTheSameFrames) {
       "hold); "
       "%zu labelled marker points of %zu\n",
       run.frames, tracks.size(), poses.size(), quality_rounded, summary.labelled_markers, summary.markers);
+  fs::remove_all(dir);
+}
+
+TEST(ExportEquality, FixedRateRecordingExportEqualsItsRecordsOnItsOwnInstants) {
+  const Scene scene = Scene::load(std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes/clients.yaml");
+  const fs::path dir = fs::temp_directory_path() / "panoptes_export_equality_fixed";
+  fs::create_directories(dir);
+  const LiveRun run = run_and_record(scene, 2.0, dir / "take.mcap", 120);
+  ASSERT_GT(run.frames, 200U);
+  const export_job::ExportOptions options = export_options(dir);
+  const export_job::ExportSummary summary = export_job::run_export(options);
+  EXPECT_EQ(summary.rate_hz, 120.0);
+  EXPECT_EQ(summary.frames, run.frames) << "one output frame per fixed-rate frame";
+  EXPECT_EQ(lines_of(options.out_tracks), run.track_lines);
+  EXPECT_EQ(lines_of(options.out_poses), run.pose_lines);
+  std::printf("fixed 120 Hz: %zu frames, %zu track and %zu pose records equal, %zu CSV frames\n", run.frames,
+              run.track_lines.size(), run.pose_lines.size(), summary.frames);
   fs::remove_all(dir);
 }
 

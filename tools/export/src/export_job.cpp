@@ -65,18 +65,17 @@ std::map<std::int64_t, std::string> label_tracks(const ExportRecords& records,
 }
 
 // The clock of a recording made only of fixed-rate frames (docs/frames.md): its rate (whole Hz,
-// from the median interval between stamps) and its first and last instants.
+// from the median interval between the frames' stamps) and its first and last instants (frames
+// without a track or body included).
 struct RecordedClock {
   int rate_hz = 0;
   TimeNs first_ns = 0;
   TimeNs last_ns = 0;
 };
 
-std::optional<RecordedClock> recorded_clock(const ExportRecords& records, const RecordingContents& contents) {
+std::optional<RecordedClock> recorded_clock(const RecordingContents& contents) {
   if (contents.frames < 2 || contents.fixed_rate_frames != contents.frames) return std::nullopt;
-  std::vector<TimeNs> stamps;
-  for (const TrackRecord& t : records.tracks) stamps.push_back(t.stamp_ns);
-  for (const PoseRecord& p : records.poses) stamps.push_back(p.stamp_ns);
+  std::vector<TimeNs> stamps = contents.frame_stamps;
   std::sort(stamps.begin(), stamps.end());
   stamps.erase(std::unique(stamps.begin(), stamps.end()), stamps.end());
   std::vector<TimeNs> intervals;
@@ -128,7 +127,7 @@ Exported from_records(const ExportOptions& options) {
   resample.marker_names = label_tracks(records, labelled);
   SampleGrid grid = make_grid(records.tracks, records.poses, resample);
   if (recording != nullptr && !options.rate_given) {
-    if (const auto clock = recorded_clock(records, recording->contents()))
+    if (const auto clock = recorded_clock(recording->contents()))
       grid = fixed_rate_grid(clock->first_ns, clock->last_ns, clock->rate_hz);
   }
   Exported out;

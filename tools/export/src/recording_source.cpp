@@ -119,6 +119,7 @@ ExportRecords RecordingRecordSource::read() {
       }
       if (contents_.frames++ == 0) contents_.first_frame_number = frame.frame_number();
       contents_.last_frame_number = frame.frame_number();
+      contents_.frame_stamps.push_back(frame.stamp_ns());
       if (frame.source_frame() == -1 && frame.source_camera().empty()) ++contents_.fixed_rate_frames;
       append_frame_records(frame, records);
     } else if (m.channel->topic == kDescriptionsChannel) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "panoptes/formats/record_source.h"
+#include "panoptes/time.h"
 #include "panoptes_msgs/panoptes.h"
 
 namespace panoptes::export_job {
@@ -31,6 +32,7 @@ struct RecordingContents {
   std::uint64_t fixed_rate_frames = 0;   // of them published at a fixed rate (source_frame -1)
   std::uint64_t first_frame_number = 0;  // MocapFrame.frame_number of the first and last frame
   std::uint64_t last_frame_number = 0;
+  std::vector<TimeNs> frame_stamps;                 // of every frame, in file order
   std::map<std::string, std::size_t> layout_sizes;  // markers per described body
 };
 
