@@ -76,6 +76,17 @@ printf '\x89MCAP0\r\n\x01' >"$work/cut.mcap"
 expect_exit 2 "--in-recording of a recording cut inside its header" -- "$bin/panoptes_export" --in-recording "$work/cut.mcap" \
   --out-tracks "$work/x.jsonl"
 expect_stderr_contains "cut.mcap" "the cut file is named"
+# A recording of features only (bench_recorder is built with PANOPTES_BUILD_BENCHMARKS).
+if [ -x "$bin/bench_recorder" ]; then
+  "$bin/bench_recorder" --cameras 1 --rate 10 --markers 2 --seconds 0.5 --fast-seconds 0.5 --keep "$work/features.mcap" \
+    >"$work/bench_recorder.out" 2>&1 || fail "bench_recorder --keep: $(tail -2 "$work/bench_recorder.out")"
+  expect_exit 2 "--in-recording of a recording without frames (features only)" -- "$bin/panoptes_export" \
+    --in-recording "$work/features.mcap" --out "$work/x.c3d"
+  expect_stderr_contains "features.mcap: no /panoptes/frames channel (the recording holds /panoptes/features)" \
+    "the error names the file, the missing channel and what it holds"
+else
+  echo "note: no bench_recorder (PANOPTES_BUILD_BENCHMARKS=OFF): the recording without frames is left to tools.ExportRecording"
+fi
 expect_exit 2 "--out with an unknown extension" -- "$bin/panoptes_export" --in-recording "$work/cut.mcap" --out "$work/x.mcap"
 expect_stderr_contains "--out" "the error names --out"
 expect_exit 2 "--out-tracks without a recording" -- "$bin/panoptes_export" --tracks "$work/bad.jsonl" --out-tracks "$work/x.jsonl"
