@@ -42,11 +42,11 @@ struct Exported {
 // unlabelled records stay their track. Returns the names of the labelled points by id.
 std::map<std::int64_t, std::string> label_tracks(const ExportRecords& records,
                                                  std::vector<TrackRecord>& tracks) {
-  std::map<std::pair<std::size_t, int>, std::string> points;  // (body rank, marker) -> name
+  // Bodies in the descriptions' order, then any other labelled body as first met.
   std::map<std::string, std::size_t> rank;
   for (const std::string& body : records.body_order) rank.emplace(body, rank.size());
   for (const MarkerLabel& label : records.labels)
-    if (!label.body.empty()) rank.emplace(label.body, records.body_order.size() + rank.size());
+    if (!label.body.empty()) rank.emplace(label.body, rank.size());
   constexpr std::int64_t kFirstLabelId = std::numeric_limits<std::int64_t>::min() / 2;
   constexpr std::int64_t kMarkersPerBody = 1 << 20;
   const auto id_of = [&](const MarkerLabel& label) {

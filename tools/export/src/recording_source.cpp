@@ -124,7 +124,12 @@ ExportRecords RecordingRecordSource::read() {
       append_frame_records(frame, records);
     } else if (m.channel->topic == kDescriptionsChannel) {
       msg::BodyDescriptions descriptions;
-      if (!decode(m, descriptions).empty()) return;  // the frames still name the bodies
+      if (const auto error = decode(m, descriptions); !error.empty()) {  // the frames still name the bodies
+        records.skipped.push_back(file + ": message " + std::to_string(index) + " on " +
+                                  kDescriptionsChannel + ": cannot decode its CDR (" + std::string(error) +
+                                  "): skipped");
+        return;
+      }
       records.body_order.clear();
       contents_.layout_sizes.clear();
       for (const auto& body : descriptions.bodies()) {
@@ -134,6 +139,9 @@ ExportRecords RecordingRecordSource::read() {
     }
   });
   for (const auto& problem : report.problems) records.skipped.push_back(problem);
+  if (report.problem_count > report.problems.size())
+    records.skipped.push_back(file + ": " + std::to_string(report.problem_count - report.problems.size()) +
+                              " more problems (not listed)");
   const bool has_channel = std::any_of(reader->channels().begin(), reader->channels().end(),
                                        [](const auto& c) { return c.second.topic == kFramesChannel; });
   if (!has_channel)
