@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 # panoptes_export (docs/recording.md, "Export"): the walking data to C3D and TRC re-read by a
 # second, independent C3D reader (tests/c3d/read_c3d.js, node) within 1e-6 m; a simulated session's
-# offline tracks and poses exported at a fixed rate; bad input named with file and offset.
+# offline tracks and poses exported at a fixed rate; bad input named with file and offset, also for
+# --in-recording.
 source "$(dirname "$0")/lib.sh"
 walk="$source_dir/tests/data/walk_41markers_100hz.trc"
 reader="$source_dir/tests/c3d/read_c3d.js"
@@ -64,5 +65,34 @@ expect_stderr_contains "cut.c3d: offset " "the error names the file and the offs
 printf 'not json\n' >"$work/bad.jsonl"
 expect_exit 2 "tracks file without a record" -- "$bin/panoptes_export" --tracks "$work/bad.jsonl" --c3d "$work/x.c3d"
 expect_stderr_contains "bad.jsonl:1:" "the skipped line is named with file and line"
+# A recording (--in-recording; its contents are checked by tools.ExportRecording.* and, live, by
+# integration.test_export_recording): files that are not one, and options that need one.
+expect_exit 2 "--in-recording of a JSON Lines file" -- "$bin/panoptes_export" --in-recording "$work/bad.jsonl" --out "$work/x.c3d"
+expect_stderr_contains "bad.jsonl: byte 0: not an MCAP file" "the error names the file and what is wrong"
+: >"$work/empty.mcap"
+expect_exit 2 "--in-recording of an empty file" -- "$bin/panoptes_export" --in-recording "$work/empty.mcap" --out "$work/x.csv"
+expect_stderr_contains "empty.mcap: empty file" "the empty file is named"
+printf '\x89MCAP0\r\n\x01' >"$work/cut.mcap"
+expect_exit 2 "--in-recording of a recording cut inside its header" -- "$bin/panoptes_export" --in-recording "$work/cut.mcap" \
+  --out-tracks "$work/x.jsonl"
+expect_stderr_contains "cut.mcap" "the cut file is named"
+# A recording of features only (bench_recorder is built with PANOPTES_BUILD_BENCHMARKS).
+if [ -x "$bin/bench_recorder" ]; then
+  "$bin/bench_recorder" --cameras 1 --rate 10 --markers 2 --seconds 0.5 --fast-seconds 0.5 --keep "$work/features.mcap" \
+    >"$work/bench_recorder.out" 2>&1 || fail "bench_recorder --keep: $(tail -2 "$work/bench_recorder.out")"
+  expect_exit 2 "--in-recording of a recording without frames (features only)" -- "$bin/panoptes_export" \
+    --in-recording "$work/features.mcap" --out "$work/x.c3d"
+  expect_stderr_contains "features.mcap: no /panoptes/frames channel (the recording holds /panoptes/features)" \
+    "the error names the file, the missing channel and what it holds"
+else
+  echo "note: no bench_recorder (PANOPTES_BUILD_BENCHMARKS=OFF): the recording without frames is left to tools.ExportRecording"
+fi
+expect_exit 2 "--out with an unknown extension" -- "$bin/panoptes_export" --in-recording "$work/cut.mcap" --out "$work/x.mcap"
+expect_stderr_contains "--out" "the error names --out"
+expect_exit 2 "--out-tracks without a recording" -- "$bin/panoptes_export" --tracks "$work/bad.jsonl" --out-tracks "$work/x.jsonl"
+expect_stderr_contains "--out-tracks" "the error names --out-tracks"
+expect_exit 2 "a recording and JSON Lines at once" -- "$bin/panoptes_export" --in-recording "$work/cut.mcap" \
+  --tracks "$work/bad.jsonl" --out "$work/x.c3d"
 expect_exit 0 "--help" -- "$bin/panoptes_export" --help
+grep -q -- "--in-recording" "$work/last.out" && pass "--help lists --in-recording" || fail "--help lacks --in-recording"
 finish

@@ -121,7 +121,32 @@ std::uint8_t camera_mask_of(const TrackRecord& track) {
 }  // namespace
 
 TimeNs SampleGrid::time_ns(std::size_t k) const {
+  if (!times.empty()) return times[k];
   return start_ns + static_cast<TimeNs>(std::llround(static_cast<double>(k) * 1e9 / rate_hz));
+}
+
+SampleGrid fixed_rate_grid(TimeNs first_ns, TimeNs last_ns, int rate_hz) {
+  if (rate_hz < 1 || rate_hz > 10000)
+    throw std::invalid_argument("fixed frame rate must be 1..10000 Hz, got " + std::to_string(rate_hz));
+  SampleGrid grid;
+  grid.rate_hz = rate_hz;
+  const TimeNs rate = rate_hz;
+  TimeNs second = first_ns / kNsPerSecond;
+  // The first period k of `second` whose instant is at or after first_ns.
+  TimeNs k = ((first_ns - second * kNsPerSecond) * rate + kNsPerSecond - 1) / kNsPerSecond;
+  for (;;) {
+    if (k == rate) {
+      ++second;
+      k = 0;
+    }
+    const TimeNs instant = second * kNsPerSecond + k * kNsPerSecond / rate;
+    if (instant > last_ns) break;
+    if (instant >= first_ns) grid.times.push_back(instant);
+    ++k;
+  }
+  grid.count = grid.times.size();
+  grid.start_ns = grid.times.empty() ? first_ns : grid.times.front();
+  return grid;
 }
 
 SampleGrid make_grid(const std::vector<TrackRecord>& tracks, const std::vector<PoseRecord>& poses,
@@ -162,8 +187,12 @@ MarkerTrajectories resample_tracks(const std::vector<TrackRecord>& tracks, const
   out.data_rate_hz = grid.rate_hz;
   out.units.assign(1, 'm');  // (a string literal here trips a GCC 12 -Wrestrict false positive)
   out.times_s = grid_times_s(grid);
-  for (const auto& [id, unused] : by_id)
-    out.marker_names.push_back(std::string("track_").append(std::to_string(id)));
+  for (const auto& [id, unused] : by_id) {
+    const auto named = options.marker_names.find(id);
+    out.marker_names.push_back(named != options.marker_names.end()
+                                   ? named->second
+                                   : std::string("track_").append(std::to_string(id)));
+  }
   const std::size_t markers = by_id.size();
   out.positions.assign(grid.count * markers, Eigen::Vector3d::Zero());
   out.valid.assign(grid.count * markers, 0);

@@ -40,7 +40,7 @@ TEST(ExportJob, RefusesNoInputOrBothInputs) {
   ExportOptions both = records_to_c3d();
   both.markers = "walk.trc";
   ASSERT_TRUE(find_problem(both));
-  EXPECT_EQ(find_problem(both)->reason, "give --tracks and/or --poses, or --markers");
+  EXPECT_EQ(find_problem(both)->reason, "give --tracks and/or --poses, --markers, or --in-recording");
 }
 
 TEST(ExportJob, RefusesNoOutput) {
@@ -56,7 +56,7 @@ TEST(ExportJob, RefusesBodiesFromAMarkerFile) {
   options.bodies_csv = "bodies.csv";
   ASSERT_TRUE(find_problem(options));
   EXPECT_EQ(find_problem(options)->option, "--bodies-csv");
-  EXPECT_EQ(find_problem(options)->reason, "needs --poses");
+  EXPECT_EQ(find_problem(options)->reason, "needs --poses or --in-recording");
 }
 
 TEST(ExportJob, MarkerFileFormatByExtensionInAnyCase) {

@@ -1,19 +1,28 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/export_job/export_job.h"
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
 #include <optional>
+#include <set>
 #include <string>
+#include <vector>
 
 #include "panoptes/errors.h"
+#include "panoptes/export_job/recording_source.h"
 #include "panoptes/formats/c3d.h"
 #include "panoptes/formats/csv.h"
 #include "panoptes/formats/record_source.h"
 #include "panoptes/formats/resample.h"
 #include "panoptes/formats/trc.h"
+#include "panoptes/jsonl.h"
 
 namespace fs = std::filesystem;
 
@@ -24,26 +33,112 @@ struct Exported {
   MarkerTrajectories markers;
   BodyTrajectories bodies;
   std::size_t skipped = 0;
+  std::size_t recorded_frames = 0;
+  std::size_t labelled_markers = 0;
 };
 
+// The tracks of the marker files: a track labelled as a body marker in a record becomes, for that
+// record, the point "<body>_<n>" (ids below every track id, in the bodies' order, then by marker);
+// unlabelled records stay their track. Returns the names of the labelled points by id.
+std::map<std::int64_t, std::string> label_tracks(const ExportRecords& records,
+                                                 std::vector<TrackRecord>& tracks) {
+  // Bodies in the descriptions' order, then any other labelled body as first met.
+  std::map<std::string, std::size_t> rank;
+  for (const std::string& body : records.body_order) rank.emplace(body, rank.size());
+  for (const MarkerLabel& label : records.labels)
+    if (!label.body.empty()) rank.emplace(label.body, rank.size());
+  constexpr std::int64_t kFirstLabelId = std::numeric_limits<std::int64_t>::min() / 2;
+  constexpr std::int64_t kMarkersPerBody = 1 << 20;
+  const auto id_of = [&](const MarkerLabel& label) {
+    return kFirstLabelId + static_cast<std::int64_t>(rank.at(label.body)) * kMarkersPerBody +
+           std::clamp<std::int64_t>(label.marker, 0, kMarkersPerBody - 1);
+  };
+  std::map<std::int64_t, std::string> names;
+  tracks = records.tracks;
+  for (std::size_t i = 0; i < records.labels.size() && i < tracks.size(); ++i) {
+    const MarkerLabel& label = records.labels[i];
+    if (label.body.empty()) continue;
+    tracks[i].id = id_of(label);
+    names.emplace(tracks[i].id, body_marker_name(label.body, label.marker));
+  }
+  return names;
+}
+
+// The clock of a recording made only of fixed-rate frames (docs/frames.md): its rate (whole Hz,
+// from the median interval between the frames' stamps) and its first and last instants (frames
+// without a track or body included).
+struct RecordedClock {
+  int rate_hz = 0;
+  TimeNs first_ns = 0;
+  TimeNs last_ns = 0;
+};
+
+std::optional<RecordedClock> recorded_clock(const RecordingContents& contents) {
+  if (contents.frames < 2 || contents.fixed_rate_frames != contents.frames) return std::nullopt;
+  std::vector<TimeNs> stamps = contents.frame_stamps;
+  std::sort(stamps.begin(), stamps.end());
+  stamps.erase(std::unique(stamps.begin(), stamps.end()), stamps.end());
+  std::vector<TimeNs> intervals;
+  for (std::size_t i = 1; i < stamps.size(); ++i) intervals.push_back(stamps[i] - stamps[i - 1]);
+  if (intervals.empty()) return std::nullopt;
+  const auto middle = intervals.begin() + static_cast<std::ptrdiff_t>(intervals.size() / 2);
+  std::nth_element(intervals.begin(), middle, intervals.end());
+  const auto rate = std::llround(1e9 / static_cast<double>(*middle));
+  if (rate < 1 || rate > 10000) return std::nullopt;
+  return RecordedClock{static_cast<int>(rate), stamps.front(), stamps.back()};
+}
+
+void write_records(const ExportOptions& options, const ExportRecords& records) {
+  if (!options.out_tracks.empty()) {
+    JsonlWriter writer(options.out_tracks);
+    for (const TrackRecord& track : records.tracks) writer.write(track);
+    writer.flush();
+  }
+  if (!options.out_poses.empty()) {
+    JsonlWriter writer(options.out_poses);
+    for (const PoseRecord& pose : records.poses) writer.write(pose);
+    writer.flush();
+  }
+}
+
 Exported from_records(const ExportOptions& options) {
-  JsonlRecordSource source(options.tracks.empty() ? std::nullopt : std::optional<fs::path>(options.tracks),
-                           options.poses.empty() ? std::nullopt : std::optional<fs::path>(options.poses));
-  ExportRecords records = source.read();
+  std::unique_ptr<RecordSource> source;
+  RecordingRecordSource* recording = nullptr;
+  if (!options.in_recording.empty()) {
+    auto owned = std::make_unique<RecordingRecordSource>(options.in_recording);
+    recording = owned.get();
+    source = std::move(owned);
+  } else {
+    source = std::make_unique<JsonlRecordSource>(
+        options.tracks.empty() ? std::nullopt : std::optional<fs::path>(options.tracks),
+        options.poses.empty() ? std::nullopt : std::optional<fs::path>(options.poses));
+  }
+  ExportRecords records = source->read();
   for (const std::string& error : records.skipped) std::fprintf(stderr, "skipped %s\n", error.c_str());
+  if (records.tracks.empty() && records.poses.empty()) {
+    throw ConfigError(source->describe(), "", "no track or pose records to export");
+  }
+  write_records(options, records);
   ResampleOptions resample;
   resample.rate_hz = options.rate_hz;
   resample.max_gap_ns = static_cast<TimeNs>(options.max_gap_ms * 1e6);
   resample.include_tentative = options.include_tentative;
-  if (records.tracks.empty() && records.poses.empty()) {
-    throw ConfigError(source.describe(), "", "no track or pose records to export");
+  std::vector<TrackRecord> labelled;
+  resample.marker_names = label_tracks(records, labelled);
+  SampleGrid grid = make_grid(records.tracks, records.poses, resample);
+  if (recording != nullptr && !options.rate_given) {
+    if (const auto clock = recorded_clock(recording->contents()))
+      grid = fixed_rate_grid(clock->first_ns, clock->last_ns, clock->rate_hz);
   }
-  const SampleGrid grid = make_grid(records.tracks, records.poses, resample);
   Exported out;
-  out.markers = resample_tracks(records.tracks, grid, resample);
+  out.markers = resample_tracks(labelled, grid, resample);
   out.bodies = resample_poses(records.poses, grid, resample);
   if (!options.no_body_points) append_body_origins(out.markers, out.bodies);
   out.skipped = records.skipped.size();
+  out.recorded_frames = recording != nullptr ? recording->contents().frames : 0;
+  std::set<std::string> labelled_names;
+  for (const auto& [id, name] : resample.marker_names) labelled_names.insert(name);
+  for (const std::string& name : out.markers.marker_names) out.labelled_markers += labelled_names.count(name);
   return out;
 }
 
@@ -51,19 +146,56 @@ Exported from_records(const ExportOptions& options) {
 
 std::optional<OptionsProblem> find_problem(const ExportOptions& options) {
   const bool records = !options.tracks.empty() || !options.poses.empty();
-  if (records == !options.markers.empty())
-    return OptionsProblem{"input", "give --tracks and/or --poses, or --markers"};
-  if (options.c3d.empty() && options.trc.empty() && options.csv.empty() && options.bodies_csv.empty())
-    return OptionsProblem{"output", "give at least one of --c3d, --trc, --csv, --bodies-csv"};
+  const int inputs =
+      (records ? 1 : 0) + (options.markers.empty() ? 0 : 1) + (options.in_recording.empty() ? 0 : 1);
+  if (inputs != 1)
+    return OptionsProblem{"input", "give --tracks and/or --poses, --markers, or --in-recording"};
+  if (options.c3d.empty() && options.trc.empty() && options.csv.empty() && options.bodies_csv.empty() &&
+      options.out_tracks.empty() && options.out_poses.empty())
+    return OptionsProblem{
+        "output", "give at least one of --out, --c3d, --trc, --csv, --bodies-csv, --out-tracks, --out-poses"};
   if (!options.markers.empty() && !options.bodies_csv.empty())
-    return OptionsProblem{"--bodies-csv", "needs --poses"};
+    return OptionsProblem{"--bodies-csv", "needs --poses or --in-recording"};
+  if (options.in_recording.empty() && !options.out_tracks.empty())
+    return OptionsProblem{"--out-tracks", "needs --in-recording"};
+  if (options.in_recording.empty() && !options.out_poses.empty())
+    return OptionsProblem{"--out-poses", "needs --in-recording"};
   return std::nullopt;
 }
 
-MarkerFileFormat marker_file_format(const std::string& path) {
+namespace {
+std::string lower_extension(const std::string& path) {
   std::string extension = fs::path(path).extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return extension == ".c3d" ? MarkerFileFormat::kC3d : MarkerFileFormat::kTrc;
+  return extension;
+}
+}  // namespace
+
+bool set_output(ExportOptions& options, const std::string& path) {
+  const std::string extension = lower_extension(path);
+  std::string* target = extension == ".c3d"   ? &options.c3d
+                        : extension == ".trc" ? &options.trc
+                        : extension == ".csv" ? &options.csv
+                                              : nullptr;
+  if (target == nullptr) return false;
+  *target = path;
+  return true;
+}
+
+bool set_poses_output(ExportOptions& options, const std::string& path) {
+  const std::string extension = lower_extension(path);
+  if (extension == ".jsonl") {
+    options.out_poses = path;
+  } else if (extension == ".csv") {
+    options.bodies_csv = path;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+MarkerFileFormat marker_file_format(const std::string& path) {
+  return lower_extension(path) == ".c3d" ? MarkerFileFormat::kC3d : MarkerFileFormat::kTrc;
 }
 
 ExportSummary run_export(const ExportOptions& options) {
@@ -78,8 +210,10 @@ ExportSummary run_export(const ExportOptions& options) {
   data.markers.units = options.units;
   const bool any_markers = data.markers.marker_count() > 0;
   if (!any_markers && (!options.c3d.empty() || !options.trc.empty() || !options.csv.empty())) {
-    throw ConfigError(options.tracks.empty() ? options.poses : options.tracks, "",
-                      "no confirmed tracks or bodies to write as markers");
+    throw ConfigError(!options.in_recording.empty() ? options.in_recording
+                      : options.tracks.empty()      ? options.poses
+                                                    : options.tracks,
+                      "", "no confirmed tracks or bodies to write as markers");
   }
   if (!options.c3d.empty())
     write_c3d(options.c3d, data.markers, C3dWriteOptions{options.units, "panoptes_export"});
@@ -92,19 +226,27 @@ ExportSummary run_export(const ExportOptions& options) {
   summary.bodies = data.bodies.body_count();
   summary.rate_hz = data.markers.data_rate_hz;
   summary.skipped_records = data.skipped;
+  summary.recorded_frames = data.recorded_frames;
+  summary.labelled_markers = data.labelled_markers;
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }
 
 std::string summary_line(const ExportSummary& summary) {
-  char line[256];
+  char line[320];
   std::snprintf(
       line, sizeof line,
       "{\"frames\": %zu, \"markers\": %zu, \"bodies\": %zu, \"rate_hz\": %.6g, \"skipped_records\": "
-      "%zu, \"seconds\": %.3f}",
+      "%zu, \"seconds\": %.3f",
       summary.frames, summary.markers, summary.bodies, summary.rate_hz, summary.skipped_records,
       summary.seconds);
-  return line;
+  std::string text = line;
+  if (summary.recorded_frames > 0) {
+    std::snprintf(line, sizeof line, ", \"recorded_frames\": %zu, \"labelled_markers\": %zu",
+                  summary.recorded_frames, summary.labelled_markers);
+    text += line;
+  }
+  return text + "}";
 }
 
 }  // namespace panoptes::export_job

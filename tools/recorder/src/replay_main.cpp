@@ -44,7 +44,8 @@ int run(int argc, char** argv) {
   app.add_option("--dds-profile", dds_profile, "DDS XML profile (default: deploy/dds/loopback.xml)");
   app.add_flag(
       "!--no-restamp", options.restamp,
-      "publish FeatureFrames with their recorded times (default: shifted to now, as a live estimator needs)");
+      "publish every message with its recorded times (default: every time shifted to now by one offset, as a "
+      "live estimator and clients need)");
   app.add_flag("--quiet", options.quiet, "no progress lines");
   if (const auto code = panoptes::parse_command_line(app, argc, argv, [&] {
         if (options.end_s >= 0 && options.end_s <= options.start_s)
@@ -67,7 +68,7 @@ int run(int argc, char** argv) {
                replayer.messages().size(), replayer.topics().size(), options.rate);
   const auto report = replayer.run(bus, discovery_s, [] { return panoptes::stop_requested(); });
   if (options.restamp)
-    std::fprintf(stderr, "panoptes_replay: FeatureFrame times shifted by %lld ns\n",
+    std::fprintf(stderr, "panoptes_replay: times of every topic shifted by %lld ns\n",
                  static_cast<long long>(report.first_shift_ns));
   for (const auto& [topic, count] : report.per_topic)
     std::fprintf(stderr, "  %s: %llu\n", topic.c_str(), static_cast<unsigned long long>(count));

@@ -89,8 +89,6 @@ ReplayReport Replayer::run(dds::Bus& bus, double discovery_s, const std::functio
   report.recorded_s = static_cast<double>(messages_.back().log_time - first) * 1e-9;
   const auto begin = Clock::now();
   auto next_progress = begin + std::chrono::seconds(1);
-  const auto features = std::find(topics_.begin(), topics_.end(), "rt/panoptes/features");
-  const std::size_t feature_topic = static_cast<std::size_t>(features - topics_.begin());
   std::vector<std::uint8_t> shifted;
   do {
     const auto pass_start = Clock::now();
@@ -113,9 +111,9 @@ ReplayReport Replayer::run(dds::Bus& bus, double discovery_s, const std::functio
           options_.rate > 0 ? std::chrono::duration<double, std::milli>(now - due).count() : 0;
       report.max_lag_ms = std::max(report.max_lag_ms, lag_ms);
       if (lag_ms > options_.late_ms) ++report.late;
-      if (options_.restamp && m.topic == feature_topic) {
+      if (options_.restamp) {
         shifted = m.cdr;
-        if (dds::shift_feature_frame_times(shifted, shift_ns)) writers[m.topic]->write(shifted);
+        if (dds::shift_sample_times(topics_[m.topic], shifted, shift_ns)) writers[m.topic]->write(shifted);
       } else {
         writers[m.topic]->write(m.cdr);
       }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Where an export reads the estimator's records from. Today: the offline JSON Lines outputs
-// (estimator_node --out-tracks / --out-poses); a recording reader implements the same interface.
+// (estimator_node --out-tracks / --out-poses) here; the MCAP recording reader
+// (panoptes_export_job's RecordingRecordSource) implements the same interface.
 #pragma once
 
 #include <filesystem>
@@ -12,9 +13,19 @@
 
 namespace panoptes {
 
+// The body marker a track was labelled as when it was published (MocapFrame's FrameMarker).
+struct MarkerLabel {
+  std::string body;  // "" : unlabelled
+  int marker = -1;   // index in the body's layout (BodyDescription.markers)
+};
+
 struct ExportRecords {
   std::vector<TrackRecord> tracks;
   std::vector<PoseRecord> poses;
+  // Empty (the JSON Lines carry no labels), or one per track: its label in that record.
+  std::vector<MarkerLabel> labels;
+  // The bodies in the order of their descriptions (the bodies file), when the source knows it.
+  std::vector<std::string> body_order;
   // Records that could not be read, skipped and counted: "<file>:<line or offset>: <reason>".
   std::vector<std::string> skipped;
 };

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // What panoptes_export does (docs/recording.md, "Export"), apart from its command line: the
-// estimator's tracks and body poses (JSON Lines) re-sampled to a fixed rate, or a marker file
-// (TRC, C3D) converted, and written as C3D, TRC and CSV.
+// estimator's tracks and body poses (JSON Lines, or the MocapFrames of an MCAP recording as they
+// were published) re-sampled to a fixed rate, or a marker file (TRC, C3D) converted, and written as
+// C3D, TRC and CSV; a recording's records also as the estimator's JSON Lines.
 #pragma once
 
 #include <cstddef>
@@ -11,19 +12,30 @@
 namespace panoptes::export_job {
 
 struct ExportOptions {
-  std::string tracks;   // tracks JSON Lines file (estimator_node --out-tracks)
-  std::string poses;    // body poses JSON Lines file (estimator_node --out-poses)
-  std::string markers;  // a TRC or C3D file to convert instead of records
+  std::string tracks;        // tracks JSON Lines file (estimator_node --out-tracks)
+  std::string poses;         // body poses JSON Lines file (estimator_node --out-poses)
+  std::string markers;       // a TRC or C3D file to convert instead of records
+  std::string in_recording;  // an MCAP recording (panoptes_record): its MocapFrames as published
   std::string c3d;
   std::string trc;
   std::string csv;
   std::string bodies_csv;
+  std::string out_tracks;  // JSON Lines of the recording's track records (as --out-tracks)
+  std::string out_poses;   // JSON Lines of the recording's pose records (as --out-poses)
   std::string units = "mm";
   double rate_hz = 100.0;
   double max_gap_ms = 100.0;
   bool include_tentative = false;
   bool no_body_points = false;
+  // Resampling rate given (--rate): a recording of fixed-rate frames is otherwise exported at its
+  // own rate.
+  bool rate_given = false;
 };
+
+// Sets the output named by `path` by its extension (any case): .c3d, .trc, .csv (markers), and for
+// `poses` .jsonl (pose records) or .csv (bodies CSV). Returns false for another extension.
+bool set_output(ExportOptions& options, const std::string& path);
+bool set_poses_output(ExportOptions& options, const std::string& path);
 
 // A combination of options that cannot be exported: `option` names it (as the command line's
 // check reports it), `reason` says why.
@@ -47,7 +59,9 @@ struct ExportSummary {
   std::size_t bodies = 0;
   double rate_hz = 0.0;
   std::size_t skipped_records = 0;
-  double seconds = 0.0;  // wall time of the export
+  double seconds = 0.0;              // wall time of the export
+  std::size_t recorded_frames = 0;   // MocapFrames read from a recording (0: not a recording)
+  std::size_t labelled_markers = 0;  // marker points named after a body marker
 };
 
 // Reads, re-samples and writes what `options` asks for. Each malformed record is reported on

@@ -22,8 +22,9 @@ struct ReplayOptions {
   double end_s = -1;   // from the first message; < 0: to the end
   std::vector<std::string>
       topics;  // DDS ("rt/panoptes/features") or ROS ("/panoptes/features") names; empty: all
-  // Shift FeatureFrame times so that the replay happens now: a live estimator rejects frames whose
-  // stamps are far from its clock. Each pass (--loop) is shifted anew.
+  // Shift every time of every message by one offset so that the replay happens now
+  // (dds::shift_sample_times): a live estimator rejects frames whose stamps are far from its clock,
+  // and clients measure latency against their clock. Each pass (--loop) is shifted anew.
   bool restamp = true;
   double late_ms = 20;  // a message published later than this behind its schedule counts as late
   bool quiet = false;
@@ -36,7 +37,7 @@ struct ReplayReport {
   double recorded_s = 0;  // span of the replayed messages (one pass)
   double wall_s = 0;
   int passes = 0;
-  std::int64_t first_shift_ns = 0;  // FeatureFrame time shift of the first pass (restamp)
+  std::int64_t first_shift_ns = 0;  // time shift of the first pass (restamp)
   std::map<std::string, std::uint64_t> per_topic;
   bool kept_up() const { return late == 0; }
 };
