@@ -43,6 +43,12 @@ std::size_t model_markers_in(const labelling::SubjectModel& model, const labelli
   return found;
 }
 
+// A right segment reported on the left means --forward or --up is wrong for the static trial.
+const char* side_name(int side) {
+  if (side == 0) return "midline";
+  return side > 0 ? "right side" : "left side";
+}
+
 }  // namespace
 
 Eigen::Vector3d parse_axis(const std::string& text, const std::string& option) {
@@ -144,7 +150,7 @@ std::string angles_report(const AnglesResult& result) {
     text += "segment " + kinematics.segments[s].name + ": pose in " + std::to_string(posed) + "/" +
             std::to_string(result.frames.size()) + " frames" +
             (posed > 0 ? ", mean fit RMS " + fixed(rms / posed * 1e3, 2) + " mm" : "") + ", Y axis " +
-            kinematics.segments[s].long_axis + "\n";
+            kinematics.segments[s].long_axis + ", " + side_name(kinematics.segments[s].side) + "\n";
   }
   for (std::size_t j = 0; j < kinematics.joints.size(); ++j) {
     double low = std::numeric_limits<double>::infinity();
