@@ -33,15 +33,20 @@ std::string read(const fs::path& path) {
   return text.str();
 }
 
-AnglesCommandOptions gait2392_walk() {
+// The subject model of a static trial of ../shared/data/static with a set of deploy/markersets.
+std::string subject_model(const std::string& static_trial, const std::string& set) {
   ModelCommandOptions model;
-  model.static_trial = test::shared_data("static/gait2392_subject01_static.trc").string();
-  model.marker_set = (fs::path(PANOPTES_SOURCE_DIR) / "deploy" / "markersets" / "gait2392.yaml").string();
-  model.out = scratch("subject01.yaml").string();
+  model.static_trial = test::shared_data("static/" + static_trial).string();
+  model.marker_set = (fs::path(PANOPTES_SOURCE_DIR) / "deploy" / "markersets" / (set + ".yaml")).string();
+  model.out = scratch(set + ".yaml").string();
   run_model(model);
+  return model.out;
+}
+
+AnglesCommandOptions gait2392_walk() {
   AnglesCommandOptions options;
   options.in = test::shared_data("static/gait2392_subject01_walk1.trc").string();
-  options.subjects = model.out;
+  options.subjects = subject_model("gait2392_subject01_static.trc", "gait2392");
   options.out = scratch("angles.csv").string();
   options.poses = scratch("poses.csv").string();
   return options;
@@ -70,6 +75,20 @@ TEST(LabelAngles, WritesAnglesAndPosesOfTheWalk) {
   const std::string report = angles_report(result);
   EXPECT_NE(report.find("segment R.UpperArm: pose in 0/151 frames"), std::string::npos) << report;
   EXPECT_NE(report.find("\"posed_segments\":9"), std::string::npos) << report;
+}
+
+TEST(LabelAngles, WarnsWhenTheAxesPutARightSegmentElsewhere) {
+  AnglesCommandOptions options;
+  options.in = (fs::path(PANOPTES_SOURCE_DIR) / "tests" / "data" / "walk_41markers_100hz.trc").string();
+  options.subjects = subject_model("rajagopal_static_walk_1.trc", "rajagopal");
+  options.out = scratch("rajagopal_angles.csv").string();
+  // The Rajagopal static trial faces +z: the default +x puts the thighs on the midline.
+  const std::string wrong = angles_report(run_angles(options));
+  EXPECT_NE(wrong.find("warning: R.Thigh lies on the midline"), std::string::npos) << wrong;
+  options.forward = "+z";
+  const std::string right = angles_report(run_angles(options));
+  EXPECT_EQ(right.find("warning"), std::string::npos) << right;
+  EXPECT_NE(right.find("segment L.Shank: pose in 238/238 frames"), std::string::npos) << right;
 }
 
 TEST(LabelAngles, RefusesBadAxesATrialWithoutTheModelsMarkersAndAnUnwritableOutput) {

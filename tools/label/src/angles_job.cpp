@@ -49,7 +49,26 @@ const char* side_name(int side) {
   return side > 0 ? "right side" : "left side";
 }
 
+// The side a segment's name says (a prefix "R." / "R_" / "Right", "L." / "L_" / "Left"), or 0.
+int named_side(const std::string& name) {
+  const auto starts = [&](const char* prefix) { return name.rfind(prefix, 0) == 0; };
+  if (starts("R.") || starts("R_") || starts("Right")) return 1;
+  if (starts("L.") || starts("L_") || starts("Left")) return -1;
+  return 0;
+}
+
 }  // namespace
+
+std::vector<std::string> side_warnings(const labelling::SegmentKinematics& kinematics) {
+  std::vector<std::string> warnings;
+  for (const auto& segment : kinematics.segments) {
+    const int named = named_side(segment.name);
+    if (named == 0 || named == segment.side) continue;
+    warnings.push_back("warning: " + segment.name + " lies on the " + side_name(segment.side) +
+                       " of the static pose: check --forward and --up (angles are meaningless otherwise)");
+  }
+  return warnings;
+}
 
 Eigen::Vector3d parse_axis(const std::string& text, const std::string& option) {
   std::string axis = text;
@@ -163,6 +182,7 @@ std::string angles_report(const AnglesResult& result) {
     text += "joint " + kinematics.joints[j].name + ": flexion " +
             (high >= low ? fixed(low, 1) + " .. " + fixed(high, 1) + " deg" : "never posed") + "\n";
   }
+  for (const auto& warning : side_warnings(kinematics)) text += warning + "\n";
   text += "{\"subject\":\"" + result.model.subject + "\",\"frames\":" + std::to_string(result.frames.size()) +
           ",\"segments\":" + std::to_string(kinematics.segments.size()) +
           ",\"posed_segments\":" + std::to_string(posed_segments) +

@@ -46,8 +46,12 @@ AnglesResult run_angles(const AnglesCommandOptions& options);
 std::string angles_csv(const AnglesResult& result);
 std::string poses_csv(const AnglesResult& result);
 
-// Per segment the frames with a pose and the mean fit RMS, per joint the flexion range; then one
-// JSON line.
+// A line per segment named right or left (R./R_/Right, L./L_/Left) that the static pose puts
+// elsewhere: --forward or --up do not match the static trial.
+std::vector<std::string> side_warnings(const labelling::SegmentKinematics& kinematics);
+
+// Per segment the frames with a pose and the mean fit RMS, per joint the flexion range, the side
+// warnings; then one JSON line.
 std::string angles_report(const AnglesResult& result);
 
 }  // namespace panoptes::label_job
