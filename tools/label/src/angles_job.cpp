@@ -17,6 +17,11 @@ namespace panoptes::label_job {
 
 namespace {
 
+void append_field(std::string& text, const std::string& value) {
+  text += ',';
+  text += value;
+}
+
 std::string fixed(double value, int decimals) {
   std::ostringstream out;
   out << std::fixed << std::setprecision(decimals) << value;
@@ -127,8 +132,8 @@ std::string angles_csv(const AnglesResult& result) {
         text += ",,,";
         continue;
       }
-      text += "," + fixed(angles.flexion_deg, 4) + "," + fixed(angles.adduction_deg, 4) + "," +
-              fixed(angles.internal_rotation_deg, 4);
+      for (const double v : {angles.flexion_deg, angles.adduction_deg, angles.internal_rotation_deg})
+        append_field(text, fixed(v, 4));
     }
     text += "\n";
   }
@@ -144,10 +149,12 @@ std::string poses_csv(const AnglesResult& result) {
       if (!pose.valid) continue;
       const auto& T = pose.T_world_anatomical;
       text += std::to_string(f) + "," + time + "," + result.kinematics.segments[s].name;
-      for (const double v : {T.t.x(), T.t.y(), T.t.z()}) text += "," + fixed(v, 6);
-      for (const double v : {T.q.w(), T.q.x(), T.q.y(), T.q.z()}) text += "," + fixed(v, 7);
-      text += "," + fixed(pose.rms_m * 1e3, 3) + "," + std::to_string(pose.markers_used) + "," +
-              (pose.used_joint_centre ? "1" : "0") + "\n";
+      for (const double v : {T.t.x(), T.t.y(), T.t.z()}) append_field(text, fixed(v, 6));
+      for (const double v : {T.q.w(), T.q.x(), T.q.y(), T.q.z()}) append_field(text, fixed(v, 7));
+      append_field(text, fixed(pose.rms_m * 1e3, 3));
+      append_field(text, std::to_string(pose.markers_used));
+      append_field(text, pose.used_joint_centre ? "1" : "0");
+      text += '\n';
     }
   }
   return text;
