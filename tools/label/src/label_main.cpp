@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "angles_command.h"
 #include "panoptes/cli.h"
 #include "panoptes/label_job/label_job.h"
 #include "panoptes/process.h"
@@ -43,10 +44,14 @@ static int run_main(int argc, char** argv) {
   model->add_option("--still-mm", options.still_mm, "a marker spreading more (RMS) is flagged as moved, mm")
       ->capture_default_str()
       ->check(panoptes::positive_number());
+  panoptes::label_job::AnglesCommandOptions angles_options;
+  CLI::App* angles = panoptes::label_job::add_angles_command(app, angles_options);
   const auto exit = panoptes::parse_command_line(app, argc, argv, [&] {
+    if (!model->parsed()) return;
     if (const auto problem = panoptes::label_job::find_problem(options)) throw CLI::ValidationError(*problem);
   });
   if (exit) return *exit;
+  if (angles->parsed()) return panoptes::label_job::run_angles_command(angles_options);
   const auto subject = panoptes::label_job::run_model(options);
   std::printf("%s", panoptes::label_job::model_report(subject).c_str());
   std::printf("wrote %s\n%s\n", options.out.c_str(),
