@@ -513,7 +513,12 @@ function updateBodies(list) {
     let object = bodies.get(body.name);
     if (!object) {
       object = new THREE.Group();
-      object.add(new THREE.AxesHelper(0.4));
+      // Drawn over the tracks' 7 px points: the body's own markers sit around its origin and hid
+      // most of its axes there (issue 37: the console test found 1 axis pixel near a body).
+      const axes = new THREE.AxesHelper(0.4);
+      axes.material.depthTest = false;
+      axes.renderOrder = 10;
+      object.add(axes);
       const name = label(body.name, '#ffffff', labelPriority.body);
       name.position.set(0, 0, 0.2);
       object.add(name);
