@@ -330,6 +330,7 @@ int run(int argc, char** argv) {
   options.participant_name = "bench_ros2_outputs";
   panoptes::dds::Bus bus(options);
   session::Ros2Settings settings;
+  settings.tf_rate_hz = 0;  // the worst case, and the figures of docs/ros2.md: /tf with every frame
   Publisher p{bus, bus.make_writer<panoptes::msg::MocapFrame>(), app::Ros2Outputs(bus, settings)};
   p.ros2.publish(make_frame(0, p.first_stamp_ns, cameras));  // creates the per-body writers
 

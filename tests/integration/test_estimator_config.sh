@@ -58,6 +58,30 @@ expect_stderr_contains "range.yaml: tracker.bodies.gate_chi2: must be a finite n
 [ "$(wc -l <"$work/last.err")" -eq 1 ] && pass "one line for an out-of-range value" || fail "out of range gave $(wc -l <"$work/last.err") lines"
 expect_exit 2 "missing configuration file" -- "$bin/estimator_node" --config "$work/none.yaml" --print-config
 expect_stderr_contains "none.yaml" "the missing file is named"
+# The ROS 2 options (docs/ros2.md, "Options"): flags and keys round-trip; bad values exit 2 naming them.
+expect_exit 0 "ROS 2 tf rate and namespace flags" -- "$bin/estimator_node" --ros2-tf-rate-hz 50 \
+  --ros2-namespace /lab1 --print-config
+grep -q 'tf_rate_hz: 50' "$work/last.out" && grep -q 'namespace: "/lab1"' "$work/last.out" &&
+  pass "--print-config shows ros2.tf_rate_hz and ros2.namespace" || fail "ros2 tf_rate_hz/namespace not printed"
+expect_exit 0 "ROS 2 defaults" -- "$bin/estimator_node" --print-config
+grep -q 'tf_rate_hz: 120' "$work/last.out" && grep -q 'namespace: ""' "$work/last.out" &&
+  pass "default ros2.tf_rate_hz 120, no namespace" || fail "ros2 defaults"
+expect_exit 2 "an out-of-range --ros2-tf-rate-hz" -- "$bin/estimator_node" --ros2-tf-rate-hz 20000 --print-config
+expect_stderr_contains "--ros2-tf-rate-hz" "the error names --ros2-tf-rate-hz"
+expect_exit 2 "a non-numeric --ros2-tf-rate-hz" -- "$bin/estimator_node" --ros2-tf-rate-hz fast --print-config
+expect_stderr_contains "--ros2-tf-rate-hz" "the error names --ros2-tf-rate-hz"
+expect_exit 2 "an invalid --ros2-namespace" -- "$bin/estimator_node" --ros2-namespace /lab-1 --print-config
+expect_stderr_contains "--ros2-namespace" "the error names --ros2-namespace"
+expect_stderr_contains "ROS 2 names hold only" "and says why"
+printf 'ros2:\n  namespace: "/lab1/"\n' >"$work/bad_ns.yaml"
+expect_exit 2 "an invalid ros2.namespace" -- "$bin/estimator_node" --config "$work/bad_ns.yaml" --print-config
+expect_stderr_contains "ros2.namespace" "the error names ros2.namespace"
+printf 'ros2:\n  tf_rate_hz: -5\n' >"$work/bad_tf.yaml"
+expect_exit 2 "a negative ros2.tf_rate_hz" -- "$bin/estimator_node" --config "$work/bad_tf.yaml" --print-config
+expect_stderr_contains "ros2.tf_rate_hz" "the error names ros2.tf_rate_hz"
+expect_exit 2 "an unknown ROS 2 option" -- "$bin/estimator_node" --ros2-tf-rate 50 --print-config
+expect_stderr_contains "--ros2-tf-rate" "the error names the unknown option"
+
 expect_exit 0 "--help" -- "$bin/estimator_node" --help
 grep -q -- '--process-noise.*50' "$work/last.out" && pass "--help shows defaults" || fail "--help lacks defaults"
 

@@ -6,7 +6,9 @@
 # SensorDataQoS) and a reliable (ROS 2 default QoS) reader. Checks: both readers receive every topic;
 # stamps are the capture stamps of the estimator's own poses and its values bit for bit; frame ids,
 # tf child frames, marker names and id types, frame numbers; poses agree with the simulator's truth;
-# the ros2: configuration keys and --no-ros2 take effect.
+# the ros2: configuration keys and --no-ros2 take effect; /tf at its rate limit (ros2.tf_rate_hz) +-5 %
+# in both frame modes; --ros2-namespace puts every ROS 2 topic but /tf under the namespace and
+# nothing under the bare names (issue 34 item 7).
 source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/clients.yaml"
 expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
@@ -21,7 +23,7 @@ run_live() {
   local estimator=$!
   pids+=("$estimator")
   "$bin/panoptes_ros2_probe" --out "$work/$name.ros2.jsonl" --body head --body tool --duration $((seconds + 5)) \
-    >"$work/$name.probe.log" 2>&1 &
+    "${probe_args[@]}" >"$work/$name.probe.log" 2>&1 &
   local probe=$!
   pids+=("$probe")
   for camera in c0 c1 c2 c3 c4 c5; do
@@ -36,8 +38,26 @@ run_live() {
   [ "$rc" -eq 0 ] && pass "$name: estimator exited cleanly" || { fail "$name: estimator exit $rc"; tail "$work/$name.log"; }
 }
 
+probe_args=()  # extra panoptes_ros2_probe arguments of the next run_live
+
+# tf_rate FILE LIMIT WHAT: /tf messages per second of header stamps (reliable reader) within 5 % of LIMIT.
+tf_rate() {
+  python3 - "$1" "$2" <<'EOF' && pass "$3: /tf at its limit of $2 Hz +-5 %" || fail "$3: /tf rate (limit $2 Hz)"
+import json, sys
+limit = float(sys.argv[2])
+stamps = sorted(s["transforms"][0]["header"]["sec"] * 1_000_000_000 + s["transforms"][0]["header"]["nanosec"]
+                for line in open(sys.argv[1]) for s in [json.loads(line)] if s["topic"] == "rt/tf" and s["qos"] == "reliable")
+rate = (len(stamps) - 1) / ((stamps[-1] - stamps[0]) * 1e-9) if len(stamps) > 1 else 0.0
+gaps = [(b - a) * 1e-6 for a, b in zip(stamps, stamps[1:])]
+print(f"/tf: {len(stamps)} messages, {rate:.2f} per second of stamps (limit {limit:g}); "
+      f"intervals min {min(gaps, default=0):.3f} max {max(gaps, default=0):.3f} ms")
+sys.exit(0 if abs(rate - limit) <= 0.05 * limit else 1)
+EOF
+}
+
 # --- default settings ---------------------------------------------------------------------------
 run_live default 12
+tf_rate "$work/default.ros2.jsonl" 120 "per-camera frames, default ros2.tf_rate_hz"
 grep -q "ROS 2: body" "$work/default.log" && fail "valid body names were renamed" || pass "head and tool keep their names"
 python3 - "$work/default.ros2.jsonl" "$work/default.poses.jsonl" "$work/ros2_poses.jsonl" <<'EOF' &&
 import collections, json, sys
@@ -63,7 +83,8 @@ check(frames > 2000, "thousands of frames on rt/rigid_bodies")
 for topic in topics:
     for qos in ("best_effort", "reliable"):
         n = len(samples[(topic, qos)])
-        check(n >= 0.95 * len(samples[(topic, "reliable")]) and n > 1000, f"{topic} {qos}: {n} samples")
+        least = 500 if topic == "rt/tf" else 1000  # /tf: 120 a second by default (ros2.tf_rate_hz)
+        check(n >= 0.95 * len(samples[(topic, "reliable")]) and n > least, f"{topic} {qos}: {n} samples")
 
 # Poses: the estimator's own Pose JSONL, bit for bit, stamped with its capture stamp.
 matched = total = 0
@@ -106,6 +127,21 @@ expect_exit 0 "poses read from the ROS 2 topics agree with the truth (<= 2 mm, n
   --require-pose-rmse-mm 2 --require-no-wrong-poses
 cat "$work/last.out"
 
+# --- fixed-rate frames, a tf limit and a namespace -------------------------------------------------
+probe_args=(--namespace /lab1 /)
+run_live namespaced 8 --frames fixed --frame-rate-hz 240 --ros2-tf-rate-hz 100 --ros2-namespace /lab1
+probe_args=()
+tf_rate "$work/namespaced.ros2.jsonl" 100 "fixed 240 Hz frames, --ros2-tf-rate-hz 100"
+python3 - "$work/namespaced.ros2.jsonl" <<'EOF' && pass "--ros2-namespace /lab1: every ROS 2 topic but /tf under /lab1, none bare" ||
+import collections, json, sys
+count = collections.Counter(s["topic"] for line in open(sys.argv[1]) for s in [json.loads(line)] if s["qos"] == "reliable")
+print(dict(count))
+namespaced = ["rt/lab1/rigid_bodies", "rt/lab1/markers"] + [f"rt/lab1/panoptes/{b}/{k}" for b in ("head", "tool") for k in ("pose", "twist")]
+bare = [t.replace("rt/lab1/", "rt/") for t in namespaced]
+sys.exit(0 if all(count[t] > 100 for t in namespaced) and count["rt/tf"] > 100 and all(count[t] == 0 for t in bare) else 1)
+EOF
+  fail "--ros2-namespace: topics (see above)"
+
 # --- the ros2: keys, and --no-ros2 ---------------------------------------------------------------
 printf 'ros2:\n  frame_id: map\n  child_frame_prefix: "mocap/"\n' >"$work/ros2.yaml"
 run_live configured 4 --config "$work/ros2.yaml"
@@ -126,4 +162,6 @@ grep -q 'enabled: false' "$work/last.out" && grep -q 'frame_id: "map"' "$work/la
 printf 'ros2:\n  frame_id: /world\n' >"$work/bad.yaml"
 expect_exit 2 "a bad ros2.frame_id is refused" -- "$bin/estimator_node" --config "$work/bad.yaml" --print-config
 expect_stderr_contains "ros2.frame_id" "the error names the key"
+expect_exit 2 "a bad --ros2-namespace is refused" -- "$bin/estimator_node" --ros2-namespace /lab1/ --print-config
+expect_stderr_contains "--ros2-namespace" "the error names the option"
 finish

@@ -126,6 +126,7 @@ int run(int argc, char** argv) {
   std::string dds_profile;
   double duration_s = 0;
   std::vector<std::string> bodies;
+  std::vector<std::string> namespaces = {"/"};
   CLI::App app{"panoptes_ros2_probe: records the estimator's ROS 2 topics (best-effort and reliable readers)",
                "panoptes_ros2_probe"};
   app.option_defaults()->always_capture_default();  // --help shows every default
@@ -135,6 +136,11 @@ int run(int argc, char** argv) {
       ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
   app.add_option("--duration", duration_s, "stop after this many seconds (0 = until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option(
+         "--namespace", namespaces,
+         "ROS 2 namespaces ('/' for none) whose rigid_bodies, markers and body topics to read; /tf is "
+         "global (estimator_node --ros2-namespace, docs/ros2.md)")
+      ->expected(1, -1);
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
 
@@ -150,11 +156,16 @@ int run(int argc, char** argv) {
     panoptes::dds::Bus bus(options);
     Recorder recorder(out);
     recorder.subscribe<tf2_msgs::msg::dds_::TFMessage_>(bus, "rt/tf");
-    recorder.subscribe<mocap::RigidBodies_>(bus, "rt/rigid_bodies");
-    recorder.subscribe<mocap::Markers_>(bus, "rt/markers");
-    for (const auto& body : bodies) {
-      recorder.subscribe<geometry::PoseStamped_>(bus, "rt/panoptes/" + body + "/pose");
-      recorder.subscribe<geometry::TwistStamped_>(bus, "rt/panoptes/" + body + "/twist");
+    for (const auto& ns : namespaces) {
+      const std::string prefix = ns == "/" ? "rt" : "rt" + ns;
+      recorder.subscribe<mocap::RigidBodies_>(bus, prefix + "/rigid_bodies");
+      recorder.subscribe<mocap::Markers_>(bus, prefix + "/markers");
+      for (const auto& body : bodies) {
+        std::string topic = prefix;
+        topic.append("/panoptes/").append(body);
+        recorder.subscribe<geometry::PoseStamped_>(bus, topic + "/pose");
+        recorder.subscribe<geometry::TwistStamped_>(bus, topic + "/twist");
+      }
     }
     std::fprintf(stderr, "panoptes_ros2_probe: recording to %s\n", out_file.c_str());
     const panoptes::TimeNs end = panoptes::wall_now_ns() + panoptes::seconds_to_ns(duration_s);

@@ -76,6 +76,17 @@ struct SettingsFlags {
                       "live: publish the ROS 2 topics (docs/ros2.md: rt/panoptes/<body>/pose, twist, rt/tf, "
                       "rt/rigid_bodies, rt/markers)"),
          [this](auto& c) { c.ros2.enabled = values.ros2.enabled; });
+    bind(app.add_option("--ros2-tf-rate-hz", values.ros2.tf_rate_hz,
+                        "live: /tf at most this often, one per period of a grid on the capture clock (0: "
+                        "with every output frame; docs/ros2.md)")
+             ->check(CLI::Range(0, session::kMaxTfRateHz)),
+         [this](auto& c) { c.ros2.tf_rate_hz = values.ros2.tf_rate_hz; });
+    bind(app.add_option(
+                "--ros2-namespace", values.ros2.topic_namespace,
+                "live: ROS 2 namespace of every ROS 2 topic but /tf, e.g. /lab1 gives /lab1/rigid_bodies "
+                "(docs/ros2.md)")
+             ->check(CLI::Validator(session::check_ros2_namespace, "NAMESPACE")),
+         [this](auto& c) { c.ros2.topic_namespace = values.ros2.topic_namespace; });
   }
 };
 

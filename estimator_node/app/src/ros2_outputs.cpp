@@ -179,15 +179,41 @@ void Ros2Messages::markers(const session::FrameOutput& frame, mocap::Markers_& o
 }
 
 // ---------------------------------------------------------------------------------------------
+// RateLimiter, Ros2TopicNames
+
+RateLimiter::RateLimiter(int rate_hz) {
+  if (rate_hz > 0) grid_.emplace(rate_hz);
+}
+
+bool RateLimiter::admit(TimeNs stamp_ns) {
+  if (!grid_) return true;
+  const std::int64_t period = grid_->index_at(stamp_ns);
+  if (last_period_ && period <= *last_period_ && period >= *last_period_ - grid_->rate_hz()) return false;
+  last_period_ = period;
+  return true;
+}
+
+Ros2TopicNames::Ros2TopicNames(const std::string& ros2_namespace)
+    : rigid_bodies("rt" + session::ros2_namespace_prefix(ros2_namespace) + "/rigid_bodies"),
+      markers("rt" + session::ros2_namespace_prefix(ros2_namespace) + "/markers"),
+      prefix("rt" + session::ros2_namespace_prefix(ros2_namespace)) {}
+
+std::string Ros2TopicNames::body(const std::string& token, const char* what) const {
+  return prefix + "/panoptes/" + token + "/" + what;
+}
+
+// ---------------------------------------------------------------------------------------------
 // Ros2Outputs
 
 Ros2Outputs::Ros2Outputs(dds::Bus& bus, const session::Ros2Settings& settings)
     : bus_(bus),
       settings_(settings),
+      names_(settings.topic_namespace),
+      tf_limit_(settings.tf_rate_hz),
       messages_(settings_),
-      tf_writer_(bus.make_writer<tf2_msgs::msg::dds_::TFMessage_>()),
-      rigid_bodies_writer_(bus.make_writer<mocap::RigidBodies_>()),
-      markers_writer_(bus.make_writer<mocap::Markers_>()) {}
+      tf_writer_(bus.make_writer<tf2_msgs::msg::dds_::TFMessage_>(dds::Qos::kDefault, names_.tf)),
+      rigid_bodies_writer_(bus.make_writer<mocap::RigidBodies_>(dds::Qos::kDefault, names_.rigid_bodies)),
+      markers_writer_(bus.make_writer<mocap::Markers_>(dds::Qos::kDefault, names_.markers)) {}
 
 Ros2Outputs::~Ros2Outputs() = default;
 
@@ -206,11 +232,11 @@ const std::string& Ros2Outputs::token_of(const session::BodyOutput& body) {
 
 Ros2Outputs::BodyWriters& Ros2Outputs::writers_of(const session::BodyOutput& body) {
   if (const auto it = body_writers_.find(body.name); it != body_writers_.end()) return it->second;
-  const std::string prefix = "rt/panoptes/" + token_of(body);
+  const std::string& token = token_of(body);
   BodyWriters writers;
   try {
-    writers.pose = bus_.make_writer<ros2::PoseStamped_>(dds::Qos::kDefault, prefix + "/pose");
-    writers.twist = bus_.make_writer<ros2::TwistStamped_>(dds::Qos::kDefault, prefix + "/twist");
+    writers.pose = bus_.make_writer<ros2::PoseStamped_>(dds::Qos::kDefault, names_.body(token, "pose"));
+    writers.twist = bus_.make_writer<ros2::TwistStamped_>(dds::Qos::kDefault, names_.body(token, "twist"));
   } catch (const dds::DdsError& error) {  // a topic DDS refuses costs this body its topics only
     session::log("ROS 2: body '" + body.name + "' has no pose and twist topics: " + error.what());
     writers = {};
@@ -247,9 +273,13 @@ void Ros2Outputs::publish(const session::FrameOutput& frame) {
       writers.twist->write(twist_message_);
     }
   }
-  if (tf_writer_->matched_readers() > 0) {
+  // The limit counts only frames that carry a transform (a tracked body), so a frame without one
+  // does not use up its period; a frame held back costs no message.
+  const bool any_tracked = std::any_of(frame.bodies.begin(), frame.bodies.end(),
+                                       [](const session::BodyOutput& body) { return body.tracking_valid; });
+  if (any_tracked && tf_writer_->matched_readers() > 0 && tf_limit_.admit(frame.stamp_ns)) {
     messages_.transforms(frame, frame_tokens_, tf_message_);
-    if (!tf_message_.transforms().empty()) tf_writer_->write(tf_message_);
+    tf_writer_->write(tf_message_);
   }
   if (rigid_bodies_writer_->matched_readers() > 0) {
     messages_.rigid_bodies(frame, rigid_bodies_message_);

@@ -3,6 +3,7 @@
 // and the writer, so every key that is printed can be read back and none is forgotten.
 #include "panoptes/session/estimator_config.h"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -316,12 +317,43 @@ std::string check_frame_prefix(const std::string& prefix) {
   return prefix.empty() ? "" : check_frame_id(prefix);
 }
 
+}  // namespace
+
+std::string check_ros2_namespace(const std::string& ns) {
+  if (ns.size() > kMaxRos2NamespaceLength)
+    return "must be at most " + std::to_string(kMaxRos2NamespaceLength) + " characters";
+  const std::string prefix = ros2_namespace_prefix(ns);
+  if (!prefix.empty() && prefix.back() == '/') return "'" + ns + "': must not end with '/'";
+  for (std::size_t i = 1; i < prefix.size(); ++i) {  // prefix[0] is '/'
+    const char c = prefix[i];
+    const char before = prefix[i - 1];
+    if (c == '/' && before == '/') return "'" + ns + "': must not contain '//'";
+    if (c != '/' && c != '_' && std::isalnum(static_cast<unsigned char>(c)) == 0)
+      return "'" + ns + "': ROS 2 names hold only A-Z, a-z, 0-9, '_' and '/'";
+    if (before == '/' && std::isdigit(static_cast<unsigned char>(c)) != 0)
+      return "'" + ns + "': a name token must not start with a digit";
+    if (c == '_' && before == '_') return "'" + ns + "': must not contain '__'";
+  }
+  return "";
+}
+
+std::string ros2_namespace_prefix(const std::string& ns) {
+  if (ns.empty() || ns == "/") return "";
+  return ns.front() == '/' ? ns : "/" + ns;
+}
+
+namespace {
+
 template <class Fields>
 void visit_ros2(Fields& f, Ros2Settings& o) {
   f.flag("enabled", o.enabled, "live: publish the ROS 2 topics (estimator_node --ros2 / --no-ros2)");
   f.text("frame_id", o.frame_id, check_frame_id, "header.frame_id: the world frame (tf parent)");
   f.text("child_frame_prefix", o.child_frame_prefix, check_frame_prefix,
          "tf child frame id = this + the body's name");
+  f.integer("tf_rate_hz", o.tf_rate_hz, 0, kMaxTfRateHz,
+            "/tf at most this often, on a grid of the capture clock (0: every output frame)");
+  f.text("namespace", o.topic_namespace, check_ros2_namespace,
+         "ROS 2 namespace of every topic but /tf, e.g. /lab1 (\"\": none)");
 }
 
 template <class Fields>

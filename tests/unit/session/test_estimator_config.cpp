@@ -52,6 +52,8 @@ EstimatorConfig unusual_config() {
   config.ros2.enabled = false;
   config.ros2.frame_id = "odom:#\"1\\'";    // YAML's special characters must survive the round trip
   config.ros2.child_frame_prefix = "true";  // a string, not a boolean
+  config.ros2.tf_rate_hz = 0;
+  config.ros2.topic_namespace = "/site_a/lab1";
   return config;
 }
 
@@ -75,6 +77,8 @@ TEST(EstimatorConfig, PrintedConfigurationLoadsBackEqual) {
   EXPECT_FALSE(loaded.ros2.enabled);
   EXPECT_EQ(loaded.ros2.frame_id, "odom:#\"1\\'");
   EXPECT_EQ(loaded.ros2.child_frame_prefix, "true");
+  EXPECT_EQ(loaded.ros2.tf_rate_hz, 0);
+  EXPECT_EQ(loaded.ros2.topic_namespace, "/site_a/lab1");
   EXPECT_FALSE(loaded == EstimatorConfig{});
 }
 
@@ -127,6 +131,23 @@ TEST(EstimatorConfig, BadRos2FrameIdsAreNamedWithTheirPath) {
   EXPECT_TRUE(
       load_error("ros2_ok.yaml", "ros2:\n  enabled: false\n  frame_id: map\n  child_frame_prefix: \"\"\n")
           .empty());
+}
+
+TEST(EstimatorConfig, BadRos2RatesAndNamespacesAreNamedWithTheirPath) {
+  std::string error = load_error("tf_rate.yaml", "ros2:\n  tf_rate_hz: 10001\n");
+  EXPECT_NE(error.find("tf_rate.yaml: ros2.tf_rate_hz: must be an integer in [0, 10000]"), std::string::npos)
+      << error;
+  error = load_error("tf_rate_neg.yaml", "ros2:\n  tf_rate_hz: -1\n");
+  EXPECT_NE(error.find("tf_rate_neg.yaml: ros2.tf_rate_hz:"), std::string::npos) << error;
+  error = load_error("ns.yaml", "ros2:\n  namespace: /lab-1\n");
+  EXPECT_NE(error.find("ns.yaml: ros2.namespace: '/lab-1': ROS 2 names hold only"), std::string::npos)
+      << error;
+  error = load_error("ns_slash.yaml", "ros2:\n  namespace: /lab1/\n");
+  EXPECT_NE(error.find("ns_slash.yaml: ros2.namespace: '/lab1/': must not end with '/'"), std::string::npos)
+      << error;
+  EXPECT_TRUE(load_error("ns_ok.yaml", "ros2:\n  tf_rate_hz: 50\n  namespace: lab1\n").empty());
+  EXPECT_EQ(EstimatorConfig{}.ros2.tf_rate_hz, 120);  // docs/ros2.md, "Options"
+  EXPECT_EQ(EstimatorConfig{}.ros2.topic_namespace, "");
 }
 
 TEST(EstimatorConfig, WrongTypesAreNamedWithTheirPath) {

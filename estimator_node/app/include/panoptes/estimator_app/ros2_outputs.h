@@ -8,11 +8,13 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "panoptes/dds/bus.h"
 #include "panoptes/session/estimator_config.h"
+#include "panoptes/session/frame_clock.h"
 #include "panoptes/session/frame_output.h"
 #include "panoptes_msgs/ros2.h"
 
@@ -32,6 +34,35 @@ builtin_interfaces::msg::dds_::Time_ to_ros2_time(TimeNs stamp_ns);
 // digit gets the prefix "body_" (an empty one is "body"). Names that are already tokens are returned
 // unchanged.
 std::string ros2_name_token(const std::string& body_name);
+
+// The /tf rate limit (ros2.tf_rate_hz): lets through at most one frame per period of a grid of
+// `rate_hz` periods on the capture clock, the fixed-rate frames' grid (session::FrameClock, aligned
+// to whole seconds). A frame is let through when its stamp lies in a later period than the last one
+// let through, so frames that come at least once per period give exactly `rate_hz` a second,
+// whatever their spacing; a frame older than the last one let through (cameras' frames may come out
+// of stamp order) is held back unless it is more than a second older (the clock was set back, a
+// replay started again), which starts the grid anew. 0: every frame.
+class RateLimiter {
+ public:
+  explicit RateLimiter(int rate_hz);
+  bool admit(TimeNs stamp_ns);
+
+ private:
+  std::optional<session::FrameClock> grid_;
+  std::optional<std::int64_t> last_period_;
+};
+
+// The DDS names of the ROS 2 topics for a namespace (ros2.namespace; "" for none): /tf stays
+// global, as tf2_ros's listeners subscribe to the absolute /tf (docs/ros2.md, "Namespace").
+struct Ros2TopicNames {
+  explicit Ros2TopicNames(const std::string& ros2_namespace);
+  std::string body(const std::string& token, const char* what) const;  // what: "pose", "twist"
+
+  std::string tf = "rt/tf";
+  std::string rigid_bodies;
+  std::string markers;
+  std::string prefix;  // "rt" + the namespace
+};
 
 // The message builders, apart from the writers so that tests and benchmarks can check them.
 // Only tracked bodies (tracking_valid) give poses, twists, transforms and rigid bodies.
@@ -82,6 +113,8 @@ class Ros2Outputs {
 
   dds::Bus& bus_;
   session::Ros2Settings settings_;
+  Ros2TopicNames names_;
+  RateLimiter tf_limit_;
   Ros2Messages messages_;
   std::map<std::string, std::string> tokens_;  // body name -> token
   std::map<std::string, BodyWriters> body_writers_;

@@ -24,7 +24,22 @@ struct Ros2Settings {
   bool enabled = true;             // publish them (estimator_node --ros2 / --no-ros2)
   std::string frame_id = "world";  // header.frame_id of every message: the world frame
   std::string child_frame_prefix;  // tf child frame = prefix + body name (e.g. "mocap/")
+  // /tf carries at most this many messages per second, one per period of a grid on the capture
+  // clock (the fixed-rate frames' grid); 0: one per output frame.
+  int tf_rate_hz = 120;
+  // ROS 2 namespace of every topic but /tf ("" or "/": none), e.g. "/lab1": /lab1/rigid_bodies.
+  std::string topic_namespace;
 };
+
+inline constexpr int kMaxTfRateHz = 10000;
+inline constexpr std::size_t kMaxRos2NamespaceLength = 200;
+
+// "" if `ns` is a ROS 2 namespace ("" and "/" for none; "lab1" is taken as "/lab1"), else why not:
+// tokens of [A-Za-z0-9_] separated by single '/', none starting with a digit, no "__", no trailing
+// '/', at most kMaxRos2NamespaceLength characters.
+std::string check_ros2_namespace(const std::string& ns);
+// The namespace as a DDS topic prefix: "" for none, else "/lab1" (absolute, no trailing '/').
+std::string ros2_namespace_prefix(const std::string& ns);
 
 // Settings of the session and the live node around the tracker.
 struct NodeSettings {
