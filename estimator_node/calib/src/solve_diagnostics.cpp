@@ -36,6 +36,7 @@ Eigen::Matrix<double, 3, 6> centre_jacobian(const std::array<double, 6>& pose) {
 // per axis, plus the (already weighted) constraint rows. A tiny damping keeps a direction the data
 // do not determine at all (--refine-intrinsics' p1, p2 against cx, cy) from breaking the factorisation.
 struct Information {
+  Eigen::SparseMatrix<double> normal;  // J_r^T J_r, unweighted
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor;
   double sigma_px = 0;  // reprojection RMS per axis
   double squared_sum = 0;
@@ -49,8 +50,8 @@ void factorise(const AdjustmentJacobian& jacobian, Information& out) {
   out.squared_sum = jacobian.reprojection_residuals.squaredNorm();
   out.sigma_px = std::sqrt(out.squared_sum / out.rows);
   const double weight = 1.0 / std::max(1e-6, out.sigma_px * out.sigma_px);
-  Eigen::SparseMatrix<double> H =
-      weight * Eigen::SparseMatrix<double>(jacobian.reprojection.transpose() * jacobian.reprojection);
+  out.normal = jacobian.reprojection.transpose() * jacobian.reprojection;
+  Eigen::SparseMatrix<double> H = weight * out.normal;
   if (jacobian.constraints.rows() > 0)
     H += Eigen::SparseMatrix<double>(jacobian.constraints.transpose() * jacobian.constraints);
   const double damping = 1e-12 * H.diagonal().maxCoeff();
@@ -131,7 +132,7 @@ FocalDepthStats camera_stats(const BundleState& state, const AdjustmentJacobian&
 double predicted_length_rms_mm(const BundleState& state, const AdjustmentJacobian& jacobian,
                                const Information& information, std::size_t markers) {
   if (markers < 2 || information.sigma_px <= 0) return 0;
-  const Eigen::SparseMatrix<double> normal = jacobian.reprojection.transpose() * jacobian.reprojection;
+  const Eigen::SparseMatrix<double>& normal = information.normal;
   const auto block = [&](int first) {
     Eigen::Matrix3d h;
     for (int i = 0; i < 3; ++i)

@@ -174,6 +174,7 @@ BundleState adjust(const std::vector<CameraCalibration>& cameras, const AlignedT
     const SolveDiagnostics diagnostics = solve_diagnostics(adjusted.state, wand, last);
     for (std::size_t c = 0; c < cameras.size(); ++c) result.cameras[c].focal_depth = diagnostics.cameras[c];
     result.predicted_length_rms_mm = diagnostics.predicted_length_rms_mm;
+    progress("solve diagnostics: focal length and depth from the final adjustment's normal equations");
   }
   return std::move(adjusted.state);
 }

@@ -23,7 +23,7 @@ struct SolveOptions {
   // Above this |correlation| of a camera's refined focal length with its distance to the wand volume
   // the result warns: the data hardly tell a longer focal length from a camera further away
   // (solve_diagnostics.h, docs/calibration.md "Focal length and depth").
-  double focal_depth_correlation_warning = 0.95;
+  double focal_depth_correlation_warning = 0.9;
   // Above this ratio of the free wand length's RMS error to the RMS the reprojection noise predicts
   // the result warns: the cameras measure lengths inconsistently (intrinsics that do not fit).
   double length_consistency_warning = 1.6;
