@@ -81,7 +81,9 @@ std::string focal_depth_lines(const SolveResult& result) {
   std::ostringstream out;
   out << "focal length and depth (1-sigma from the adjustment; depth = distance to the wand volume's "
          "centre)"
-      << (any_free ? ":\n" : ", intrinsics fixed:\n")
+      << (any_free ? "" : ", intrinsics fixed")
+      << (result.metric ? ":\n"
+                        : "; UNSCALED: m and mm are units and thousandths of the first pair's baseline:\n")
       << "camera        depth m  depth sigma mm  position sigma mm  focal sigma px  corr f/depth  "
          "1% focal: depth shift mm  rms rise px\n";
   for (const auto& camera : result.cameras) {
