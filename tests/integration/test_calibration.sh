@@ -161,6 +161,12 @@ cat "$work/last.out"
 expect_contains "4 placements" "$work/last.out" "the four placements were found"
 expect_contains "plane RMS" "$work/floor_world.world.txt" "wrote floor_world.world.txt with the plane RMS"
 expect_cameras_within "$work/floor_world.yaml" 0.001 "world frame from the wand on the floor matches the true frame within 1 mm"
+expect_contains "scale check (the wand's median length on the floor against --wand): the calibration's scale is" \
+  "$work/floor_world.world.txt" "--wand-floor checks the scale against the wand's length, in the report"
+if grep -q "WARNING: scale check" "$work/last.out"; then fail "--wand-floor: the right scale warned"; else pass "--wand-floor: the right scale does not warn"; fi
+expect_exit 0 "--wand-floor on a calibration 0.3% too large" -- "$en" calibrate world --calibration "$work/cal_scaled.yaml" \
+  --in-features "$work"/floor/cam*.jsonl --wand 0,0.18,0.5 --wand-floor --floor-offset 0.007 --out "$work/floor_scaled.yaml"
+expect_contains "WARNING: scale check (the wand's median length" "$work/last.out" "--wand-floor: a calibration 0.3% too large warns"
 expect_exit 0 "--wand-floor scales an unscaled (single-LED) calibration" -- "$en" calibrate world \
   --calibration "$work/led_cal.yaml" --in-features "$work"/floor/cam*.jsonl --wand 0,0.18,0.5 --wand-floor \
   --floor-offset 0.007 --out "$work/led_floor.yaml"
