@@ -96,6 +96,24 @@ expect_contains() {
   if grep -q -- "$1" "$2"; then pass "$3"; else fail "$3: $2 lacks '$1'"; fi
 }
 expect_cameras_within "$work/cal_world.yaml" 0.005 "world frame from the L-frame matches the true frame within 5 mm"
+expect_contains "scale check (the L-frame's arms against --lframe): the calibration's scale is" "$work/last.out" \
+  "calibrate world --lframe checks the calibration's scale against the arms"
+if grep -q "WARNING: scale check" "$work/last.out"; then fail "the right scale warned"; else pass "the right scale does not warn"; fi
+# The same calibration scaled by 0.3% about the origin (every camera centre): the arms measure 3000 ppm long.
+python3 - "$work/cal.yaml" "$work/cal_scaled.yaml" <<'PY'
+import re, sys
+scale = lambda m: "t: [" + ", ".join(repr(float(v) * 1.003) for v in m.group(1).split(",")) + "]"
+open(sys.argv[2], "w").write(re.sub(r"t: \[([^\]]*)\]", scale, open(sys.argv[1]).read()))
+PY
+expect_exit 0 "calibrate world --lframe on a calibration 0.3% too large" -- "$en" calibrate world \
+  --calibration "$work/cal_scaled.yaml" --in-features "$work"/lf/cam*.jsonl --lframe 0.5,0.3 --out "$work/cal_scaled_world.yaml"
+expect_contains "WARNING: scale check" "$work/last.out" "a calibration 0.3% too large warns"
+expect_exit 0 "--scale-tolerance 0.005 accepts it" -- "$en" calibrate world --calibration "$work/cal_scaled.yaml" \
+  --in-features "$work"/lf/cam*.jsonl --lframe 0.5,0.3 --out "$work/cal_scaled_world.yaml" --scale-tolerance 0.005
+if grep -q "WARNING: scale check" "$work/last.out"; then fail "--scale-tolerance 0.005 still warned"; else pass "--scale-tolerance 0.005 does not warn"; fi
+expect_contains "focal length and depth" "$work/cal.report.txt" "the solve report has the focal length and depth table"
+expect_contains '"focal_depth"' "$work/cal.report.json" "report.json has focal_depth per camera"
+expect_contains '"predicted_rms_error_mm"' "$work/cal.report.json" "report.json has the predicted wand-length RMS"
 
 # --- a 2-marker bar: its ends look alike; the cameras' label runs are reconciled ----------------
 sed 's/markers: \[\[-0.25, 0, 0\], \[-0.07, 0, 0\], \[0.25, 0, 0\]\]/markers: [[-0.25, 0, 0], [0.25, 0, 0]]/' \
@@ -143,6 +161,12 @@ cat "$work/last.out"
 expect_contains "4 placements" "$work/last.out" "the four placements were found"
 expect_contains "plane RMS" "$work/floor_world.world.txt" "wrote floor_world.world.txt with the plane RMS"
 expect_cameras_within "$work/floor_world.yaml" 0.001 "world frame from the wand on the floor matches the true frame within 1 mm"
+expect_contains "scale check (the wand's median length on the floor against --wand): the calibration's scale is" \
+  "$work/floor_world.world.txt" "--wand-floor checks the scale against the wand's length, in the report"
+if grep -q "WARNING: scale check" "$work/last.out"; then fail "--wand-floor: the right scale warned"; else pass "--wand-floor: the right scale does not warn"; fi
+expect_exit 0 "--wand-floor on a calibration 0.3% too large" -- "$en" calibrate world --calibration "$work/cal_scaled.yaml" \
+  --in-features "$work"/floor/cam*.jsonl --wand 0,0.18,0.5 --wand-floor --floor-offset 0.007 --out "$work/floor_scaled.yaml"
+expect_contains "WARNING: scale check (the wand's median length" "$work/last.out" "--wand-floor: a calibration 0.3% too large warns"
 expect_exit 0 "--wand-floor scales an unscaled (single-LED) calibration" -- "$en" calibrate world \
   --calibration "$work/led_cal.yaml" --in-features "$work"/floor/cam*.jsonl --wand 0,0.18,0.5 --wand-floor \
   --floor-offset 0.007 --out "$work/led_floor.yaml"

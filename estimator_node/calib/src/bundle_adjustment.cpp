@@ -207,6 +207,7 @@ struct Problem {
   ceres::Problem problem;
   std::vector<double*> point_blocks;
   std::set<int> cameras;
+  std::vector<ceres::ResidualBlockId> reprojection_blocks, constraint_blocks;
 
   static ceres::Problem::Options problem_options() {
     ceres::Problem::Options options;
@@ -234,18 +235,18 @@ void add_residuals(BundleState& state, const WandDefinition& wand, const PassOpt
       CameraParameters& camera = state.cameras[observation.camera];
       out.cameras.insert(observation.camera);
       for (std::size_t m = 0; m < markers; ++m)
-        out.problem.AddResidualBlock(make_reprojection(markers, marker_segment(observation.segment, m),
-                                                       observation.shift_s, static_cast<int>(m)),
-                                     loss, camera.pose.data(), camera.intrinsics.data(), &camera.offset_s,
-                                     point);
+        out.reprojection_blocks.push_back(out.problem.AddResidualBlock(
+            make_reprojection(markers, marker_segment(observation.segment, m), observation.shift_s,
+                              static_cast<int>(m)),
+            loss, camera.pose.data(), camera.intrinsics.data(), &camera.offset_s, point));
     }
     out.point_blocks.push_back(point);
     for (std::size_t i = 0; i < markers; ++i)
       for (std::size_t j = i + 1; j < markers; ++j)
-        out.problem.AddResidualBlock(
+        out.constraint_blocks.push_back(out.problem.AddResidualBlock(
             make_length(markers, static_cast<int>(i), static_cast<int>(j),
                         wand.positions[j] - wand.positions[i], 1.0 / options.length_sigma_m),
-            nullptr, point);
+            nullptr, point));
   }
 }
 
@@ -263,9 +264,9 @@ void add_single_light_gauge(BundleState& state, const PassOptions& options, Prob
     }
   }
   if (nearest >= 0)
-    out.problem.AddResidualBlock(
+    out.constraint_blocks.push_back(out.problem.AddResidualBlock(
         new ceres::AutoDiffCostFunction<DistanceCost, 1, 6, 6>(new DistanceCost{best}), nullptr,
-        state.cameras[options.reference].pose.data(), state.cameras[nearest].pose.data());
+        state.cameras[options.reference].pose.data(), state.cameras[nearest].pose.data()));
 }
 
 void set_camera_blocks(BundleState& state, const PassOptions& options, Problem& out) {
@@ -308,6 +309,44 @@ void summarise(const ceres::Solver::Summary& summary, PassReport& report) {
                    std::to_string(summary.num_residual_blocks) + " residual blocks, cost " +
                    std::to_string(summary.initial_cost) + " -> " + std::to_string(summary.final_cost) + " (" +
                    summary.message + ")";
+}
+
+// `crs` (Ceres's row-compressed Jacobian) as an Eigen sparse matrix.
+Eigen::SparseMatrix<double> to_sparse(const ceres::CRSMatrix& crs) {
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(crs.values.size());
+  for (int row = 0; row < crs.num_rows; ++row)
+    for (int k = crs.rows[row]; k < crs.rows[row + 1]; ++k)
+      entries.emplace_back(row, crs.cols[k], crs.values[k]);
+  Eigen::SparseMatrix<double> out(crs.num_rows, crs.num_cols);
+  out.setFromTriplets(entries.begin(), entries.end());
+  return out;
+}
+
+// The blocks the adjustment moves, cameras first: their order is the Jacobian's columns.
+std::vector<double*> varying_blocks(BundleState& state, Problem& problem, AdjustmentJacobian& out) {
+  std::vector<double*> blocks;
+  const auto add = [&](double* block) {
+    if (!problem.problem.HasParameterBlock(block) || problem.problem.IsParameterBlockConstant(block))
+      return -1;
+    blocks.push_back(block);
+    const int first = out.columns;
+    out.columns += problem.problem.ParameterBlockTangentSize(block);
+    return first;
+  };
+  out.cameras.assign(state.cameras.size(), {});
+  for (int c : problem.cameras) {
+    CameraParameters& camera = state.cameras[static_cast<std::size_t>(c)];
+    auto& columns = out.cameras[static_cast<std::size_t>(c)];
+    columns.pose = add(camera.pose.data());
+    columns.intrinsics = add(camera.intrinsics.data());
+    columns.offset = add(&camera.offset_s);
+  }
+  out.instant_columns.assign(state.instants.size(), -1);
+  const std::size_t stride = state.instants.empty() ? 0 : state.points.size() / state.instants.size();
+  for (double* point : problem.point_blocks)
+    out.instant_columns[static_cast<std::size_t>(point - state.points.data()) / stride] = add(point);
+  return blocks;
 }
 
 }  // namespace
@@ -416,6 +455,33 @@ PassResult adjust_pass(BundleState state, const WandDefinition& wand, const Pass
   summarise(summary, result.report);
   result.state = std::move(state);
   return result;
+}
+
+AdjustmentJacobian adjustment_jacobian(BundleState state, const WandDefinition& wand,
+                                       const PassOptions& options) {
+  AdjustmentJacobian out;
+  out.refinement = options.refinement;
+  Problem problem;
+  build_problem(state, wand, options, false, problem);
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = varying_blocks(state, problem, out);
+  evaluate.apply_loss_function = false;
+  evaluate.num_threads = options.threads;
+  ceres::CRSMatrix crs;
+  std::vector<double> residuals;
+  evaluate.residual_blocks = problem.reprojection_blocks;
+  if (evaluate.parameter_blocks.empty() || evaluate.residual_blocks.empty()) return out;
+  problem.problem.Evaluate(evaluate, nullptr, &residuals, nullptr, &crs);
+  out.reprojection = to_sparse(crs);
+  out.reprojection_residuals =
+      Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(residuals.size()));
+  out.constraints.resize(0, out.columns);
+  evaluate.residual_blocks = problem.constraint_blocks;
+  if (!evaluate.residual_blocks.empty()) {
+    problem.problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &crs);
+    out.constraints = to_sparse(crs);
+  }
+  return out;
 }
 
 PassResult alternate(BundleState state, const WandDefinition& wand, const PassOptions& options) {

@@ -89,6 +89,16 @@ LengthStats length_stats(const std::vector<double>& length_errors) {
     stats.max_abs_error_mm = std::max(stats.max_abs_error_mm, std::abs(e));
   }
   stats.sigma_mm = std::sqrt(variance / std::max(1, stats.count - 1));
+  double squared = 0;
+  for (double e : length_errors) squared += e * e;
+  stats.rms_error_mm = std::sqrt(squared / stats.count);
+  std::vector<double> sorted = length_errors;
+  const auto half = static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), sorted.begin() + half, sorted.end());
+  stats.median_error_mm = sorted[static_cast<std::size_t>(half)];
+  if (sorted.size() % 2 == 0)
+    stats.median_error_mm =
+        0.5 * (stats.median_error_mm + *std::max_element(sorted.begin(), sorted.begin() + half));
   return stats;
 }
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "panoptes/calib/bundle_adjustment.h"
+#include "panoptes/calib/solve_diagnostics.h"
 #include "panoptes/calib/solve_finish.h"
 #include "panoptes/calib/two_view.h"
 #include "panoptes/calib/view_graph.h"
@@ -163,6 +164,18 @@ BundleState adjust(const std::vector<CameraCalibration>& cameras, const AlignedT
     if (!adjusted.failures[c].empty() && result.cameras[c].failure.empty())
       result.cameras[c].failure = adjusted.failures[c];
   }
+  if (options.alternation_iterations == 0) {
+    PassOptions last;  // the final pass's problem: plain least squares, the chosen refinement
+    last.reference = graph.reference;
+    last.refinement = adjusted.refinement;
+    last.time_offsets = options.time_offsets;
+    last.length_sigma_m = options.length_sigma_m;
+    last.threads = options.threads;
+    const SolveDiagnostics diagnostics = solve_diagnostics(adjusted.state, wand, last);
+    for (std::size_t c = 0; c < cameras.size(); ++c) result.cameras[c].focal_depth = diagnostics.cameras[c];
+    result.predicted_length_rms_mm = diagnostics.predicted_length_rms_mm;
+    progress("solve diagnostics: focal length and depth from the final adjustment's normal equations");
+  }
   return std::move(adjusted.state);
 }
 
@@ -199,6 +212,7 @@ SolveResult solve(const std::vector<CameraCalibration>& cameras, const std::vect
     const BundleState adjusted =
         adjust(cameras, aligned, std::move(instants), graph, wand, options, progress, result);
     result = finish_solution(std::move(result), adjusted, cameras, aligned.tracks, wand);
+    result.warnings = solve_warnings(result, options);
   }
   for (const auto& camera : result.cameras)
     if (!camera.failure.empty()) result.errors.push_back(camera.id + ": " + camera.failure);

@@ -19,6 +19,7 @@
 #include "panoptes/calib/intrinsics.h"
 #include "panoptes/calib/point_import.h"
 #include "panoptes/calib/report.h"
+#include "panoptes/calib/scale_check.h"
 #include "panoptes/calib/wand.h"
 #include "panoptes/calib/wand_solver.h"
 #include "panoptes/calib/world_frame.h"
@@ -309,9 +310,13 @@ int run_solve(int argc, char** argv) {
 int run_wand_floor(const std::string& program, SystemCalibration& calibration,
                    const std::string& calibration_file, const std::vector<std::string>& feature_files,
                    const std::vector<FeatureFrame>& frames, const WandDefinition& wand, bool unscaled,
-                   const WandFloorOptions& options, const std::string& out) {
+                   const WandFloorOptions& options, const std::string& out, double scale_tolerance) {
   const WandFloorResult result = wand_floor_frame(calibration, frames, wand, unscaled, options);
-  const std::string summary = wand_floor_summary(result);
+  std::string summary = wand_floor_summary(result);
+  // On a metric calibration the wand's known length checks its scale (an unscaled one takes it).
+  if (!unscaled && result.T_new_old)
+    summary += scale_check_summary(check_scale({result.median_length_m}, {wand.length()}, scale_tolerance),
+                                   "the wand's median length on the floor against --wand", scale_tolerance);
   if (!result.T_new_old) {
     std::fprintf(stderr, "%s", summary.c_str());
     std::string files;
@@ -346,6 +351,7 @@ struct WorldArgs {
   std::vector<std::string> feature_files;
   bool floor = false, wand_floor = false;
   WandFloorOptions wand_floor_options;
+  double scale_tolerance = kScaleTolerance;
 };
 
 // Parses `calibrate world`; an exit code if the program should stop (--help, a bad option).
@@ -377,6 +383,11 @@ std::optional<int> parse_world_args(int argc, char** argv, WorldArgs& args) {
   app.add_option("--floor-offset", args.wand_floor_options.floor_offset_m,
                  "with --wand-floor: height of the marker centres above the floor, m (a marker's radius)")
       ->capture_default_str();
+  app.add_option("--scale-tolerance", args.scale_tolerance,
+                 "relative: warn when the L-frame's arms (--lframe x,y) or the wand's length (--wand-floor) "
+                 "as the calibration measures them are off their known lengths by more (0.001 = 1000 ppm)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   lframe_option->excludes(floor_option);
   wand_floor_option->excludes(lframe_option)->excludes(floor_option)->needs(wand_option);
   wand_option->needs(wand_floor_option);
@@ -429,6 +440,15 @@ int run_static_marker_world(const WorldArgs& args, SystemCalibration& calibratio
     const Eigen::Vector3d q = scale * T_new_old->apply(p);
     std::printf("  marker at [%.4f, %.4f, %.4f] m\n", q.x(), q.y(), q.z());
   }
+  if (!unscaled && !args.floor && args.lframe != "auto") {
+    double x_arm = 0, y_arm = 0;
+    std::sscanf(args.lframe.c_str(), "%lf,%lf", &x_arm, &y_arm);
+    const ScaleCheck check = check_scale(lframe_arm_lengths(points, *T_new_old, x_arm, y_arm), {x_arm, y_arm},
+                                         args.scale_tolerance);
+    std::printf(
+        "%s",
+        scale_check_summary(check, "the L-frame's arms against --lframe", args.scale_tolerance).c_str());
+  }
   return kExitOk;
 }
 
@@ -472,7 +492,7 @@ int run_world(int argc, char** argv) {
   for (auto& [id, list] : by_camera) frames.insert(frames.end(), list.begin(), list.end());
   if (args.wand_floor)
     return run_wand_floor(program, calibration, args.calibration_file, args.feature_files, frames, wand,
-                          unscaled, args.wand_floor_options, args.out);
+                          unscaled, args.wand_floor_options, args.out, args.scale_tolerance);
   return run_static_marker_world(args, calibration, unscaled, frames);
 }
 

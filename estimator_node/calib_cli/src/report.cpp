@@ -70,6 +70,36 @@ std::string raw_error_line(const char* name, const ErrorStats& all, const ErrorS
       inliers.mean_px, inliers.median_px);
 }
 
+// Per camera: how well the adjustment separates focal length and depth (solve_diagnostics.h).
+std::string focal_depth_lines(const SolveResult& result) {
+  bool any_free = false, any = false;
+  for (const auto& camera : result.cameras) {
+    any = any || camera.focal_depth.available;
+    any_free = any_free || camera.focal_depth.focal_free;
+  }
+  if (!any) return "";
+  std::ostringstream out;
+  out << "focal length and depth (1-sigma from the adjustment; depth = distance to the wand volume's "
+         "centre)"
+      << (any_free ? "" : ", intrinsics fixed")
+      << (result.metric ? ":\n"
+                        : "; UNSCALED: m and mm are units and thousandths of the first pair's baseline:\n")
+      << "camera        depth m  depth sigma mm  position sigma mm  focal sigma px  corr f/depth  "
+         "1% focal: depth shift mm  rms rise px\n";
+  for (const auto& camera : result.cameras) {
+    const auto& stats = camera.focal_depth;
+    if (!stats.available) continue;
+    out << format("%-12s  %7.3f  %14.3f  %17.3f", camera.id.c_str(), stats.depth_m, stats.depth_sigma_mm,
+                  stats.position_sigma_mm);
+    if (stats.focal_free)
+      out << format("  %14.3f  %+12.3f  %24.2f  %11.4f\n", stats.focal_sigma_px, stats.correlation,
+                    stats.shift_per_percent_mm, stats.rms_increase_per_percent_px);
+    else
+      out << "               -             -                         -            -\n";
+  }
+  return out.str();
+}
+
 }  // namespace
 
 std::string report_summary(const SolveResult& result) {
@@ -111,9 +141,12 @@ std::string report_summary(const SolveResult& result) {
   if (result.lengths.count > 0)
     out << format(
         "wand length (triangulated without the length constraint, %d samples): error mean %+.3f mm, "
-        "sigma %.3f mm, max %.3f mm\n",
-        result.lengths.count, result.lengths.mean_error_mm, result.lengths.sigma_mm,
+        "median %+.3f mm, RMS %.3f mm (the reprojection error predicts %.3f mm), sigma %.3f mm, max %.3f "
+        "mm\n",
+        result.lengths.count, result.lengths.mean_error_mm, result.lengths.median_error_mm,
+        result.lengths.rms_error_mm, result.predicted_length_rms_mm, result.lengths.sigma_mm,
         result.lengths.max_abs_error_mm);
+  out << focal_depth_lines(result);
   if (!result.metric && result.calibrated_count() > 0)
     out << "UNSCALED: a single light gives no metric scale; set it with `calibrate world --lframe <x arm "
            "m>,<y arm m>`\n";
@@ -123,6 +156,7 @@ std::string report_summary(const SolveResult& result) {
         "runs dropped (%d frames); %d of %d votes against the labelling\n",
         result.bar_labels->runs, result.bar_labels->flipped_runs, result.bar_labels->dropped_runs,
         result.bar_labels->dropped_frames, result.bar_labels->conflicting_votes, result.bar_labels->votes);
+  for (const auto& warning : result.warnings) out << "WARNING: " << warning << "\n";
   for (const auto& error : result.errors) out << "error: " << error << "\n";
   return out.str();
 }
@@ -182,6 +216,20 @@ nlohmann::json stats_json(const ErrorStats& stats) {
           {"within_5px", stats.within_5px}};
 }
 
+nlohmann::json focal_depth_json(const FocalDepthStats& stats) {
+  nlohmann::json json{{"depth_m", stats.depth_m},
+                      {"depth_sigma_mm", stats.depth_sigma_mm},
+                      {"position_sigma_mm", stats.position_sigma_mm},
+                      {"focal_refined", stats.focal_free}};
+  if (stats.focal_free) {
+    json["focal_sigma_px"] = stats.focal_sigma_px;
+    json["correlation"] = stats.correlation;
+    json["depth_shift_per_percent_focal_mm"] = stats.shift_per_percent_mm;
+    json["rms_rise_per_percent_focal_px"] = stats.rms_increase_per_percent_px;
+  }
+  return json;
+}
+
 // Everything a script may want to check, machine-readable.
 nlohmann::json report_json(const SolveResult& result) {
   nlohmann::json json;
@@ -199,7 +247,11 @@ nlohmann::json report_json(const SolveResult& result) {
   json["wand_length"] = {{"samples", result.lengths.count},
                          {"mean_error_mm", result.lengths.mean_error_mm},
                          {"sigma_mm", result.lengths.sigma_mm},
+                         {"median_error_mm", result.lengths.median_error_mm},
+                         {"rms_error_mm", result.lengths.rms_error_mm},
+                         {"predicted_rms_error_mm", result.predicted_length_rms_mm},
                          {"max_abs_error_mm", result.lengths.max_abs_error_mm}};
+  json["warnings"] = result.warnings;
   json["metric"] = result.metric;
   if (result.bar_labels) {
     const auto& labels = *result.bar_labels;
@@ -233,6 +285,7 @@ nlohmann::json report_json(const SolveResult& result) {
                         {"cx", camera.intrinsics.cx},
                         {"cy", camera.intrinsics.cy},
                         {"distortion", camera.intrinsics.distortion}};
+    if (camera.focal_depth.available) item["focal_depth"] = focal_depth_json(camera.focal_depth);
     json["cameras"].push_back(item);
   }
   json["pairs"] = nlohmann::json::array();

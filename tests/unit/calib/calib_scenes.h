@@ -16,6 +16,7 @@
 #include "panoptes/calib/report.h"
 #include "panoptes/calib/wand.h"
 #include "panoptes/calib/wand_solver.h"
+#include "panoptes/calib/world_frame.h"
 #include "panoptes/rigid_fit.h"
 #include "panoptes/simulator.h"
 
@@ -124,6 +125,29 @@ inline SceneSpec studio8(const StudioLayout& layout = {}) {
   }
   spec.wand_path = "{type: lissajous, center: " + v3(layout.centre) + ", amplitude: " + v3(layout.amplitude) +
                    ", frequency: [0.13, 0.171, 0.23]}";
+  spec.wand_rotation = "{type: oscillate, amplitude: [1.3, 1.1, 3.0], frequency: [0.29, 0.37, 0.083]}";
+  return spec;
+}
+
+// deploy/scenes/wand_room.yaml: six 1280x1024 cameras (f = 700 px, principal point 3 px right and 2 px
+// up of the image centre, phases 0-9 ms) round a 4 x 4 m room, aimed at (0, 0, 0.9), the wand
+// waved through it for 8 s (issue 34's calibration finding was made on it).
+inline SceneSpec wand_room6() {
+  SceneSpec spec;
+  const double eyes[6][3] = {{1.95, 0.2, 2.35}, {1.8, 1.8, 2.3},     {-0.2, 1.95, 2.35},
+                             {-1.8, 1.8, 2.3},  {-1.95, -0.2, 2.35}, {0.2, -1.95, 2.3}};
+  const double phases[6] = {0.0, 0.003, 0.006, 0.009, 0.002, 0.005};
+  for (int i = 0; i < 6; ++i) {
+    CameraSpec camera;
+    camera.eye = Eigen::Vector3d(eyes[i][0], eyes[i][1], eyes[i][2]);
+    camera.target = Eigen::Vector3d(0, 0, 0.9);
+    camera.phase_s = phases[i];
+    spec.cameras.push_back(camera);
+  }
+  spec.seed = 3;
+  spec.duration_s = 8;
+  spec.wand_path =
+      "{type: lissajous, center: [0, 0, 1.15], amplitude: [1.2, 1.2, 0.7], frequency: [0.13, 0.171, 0.23]}";
   spec.wand_rotation = "{type: oscillate, amplitude: [1.3, 1.1, 3.0], frequency: [0.29, 0.37, 0.083]}";
   return spec;
 }
@@ -266,6 +290,33 @@ inline std::vector<FeatureFrame> simulate_frames(const Scene& scene, std::size_t
   return frames;
 }
 
+// An L-frame at the true origin (0.5 m arm along x, 0.3 m along y) seen by `spec`'s cameras for
+// `duration_s`, triangulated with `result`'s cameras (in the solve's frame).
+struct LFrameRecording {
+  SystemCalibration solved;                           // `result`'s cameras
+  Eigen::Vector3d up_hint = Eigen::Vector3d::Zero();  // their mean centre
+  std::vector<Eigen::Vector3d> points;
+};
+
+inline LFrameRecording record_lframe(const SolveResult& result, SceneSpec spec, double duration_s) {
+  LFrameRecording out;
+  for (const auto& camera : result.cameras) {
+    out.solved.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam, false});
+    out.up_hint += camera.T_world_cam->t / static_cast<double>(result.cameras.size());
+  }
+  spec.wand_path.clear();
+  spec.static_markers = {{0, 0, 0}, {0.5, 0, 0}, {0, 0.3, 0}};
+  spec.duration_s = duration_s;
+  const Scene lframe = Scene::from_yaml_string(scene_yaml(spec));
+  std::vector<FeatureFrame> frames;
+  for (std::size_t c = 0; c < lframe.cameras().size(); ++c) {
+    auto camera_frames = simulate_frames(lframe, c);
+    frames.insert(frames.end(), camera_frames.begin(), camera_frames.end());
+  }
+  out.points = triangulate_static_markers(out.solved, frames);
+  return out;
+}
+
 inline std::vector<CameraWandTrack> simulate_tracks(const Scene& scene, const WandDefinition& wand,
                                                     const std::vector<CameraIntrinsics>& intrinsics) {
   std::vector<CameraWandTrack> tracks;
@@ -276,10 +327,12 @@ inline std::vector<CameraWandTrack> simulate_tracks(const Scene& scene, const Wa
 }
 
 // Solves and compares with the truth. `intrinsics_error` perturbs the intrinsics given to the
-// solver; `edit`, if given, changes the simulated tracks before the solve (deliberate damage).
+// solver; `edit`, if given, changes the simulated tracks before the solve (deliberate damage);
+// `edit_camera`, if given, changes each camera as given to the solver (e.g. nominal intrinsics).
 inline Measured solve_and_measure(const Scene& scene, const WandDefinition& wand, const SolveOptions& options,
                                   double intrinsics_error = 0.0,
-                                  const std::function<void(std::vector<CameraWandTrack>&)>& edit = {}) {
+                                  const std::function<void(std::vector<CameraWandTrack>&)>& edit = {},
+                                  const std::function<void(CameraCalibration&)>& edit_camera = {}) {
   std::vector<CameraCalibration> given;
   std::vector<CameraIntrinsics> intrinsics;
   for (const auto& config : scene.cameras()) {
@@ -291,6 +344,7 @@ inline Measured solve_and_measure(const Scene& scene, const WandDefinition& wand
     k.cx += intrinsics_error * k.width * 0.2;
     k.cy -= intrinsics_error * k.height * 0.2;
     for (auto& d : k.distortion) d *= 1 + intrinsics_error;
+    if (edit_camera) edit_camera(camera);
     given.push_back(camera);
     intrinsics.push_back(k);
   }

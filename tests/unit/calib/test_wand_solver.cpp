@@ -101,24 +101,11 @@ TEST(WandSolver, SingleLedIsScaledByAnLFrame) {
   EXPECT_FALSE(m.result.metric);
   EXPECT_LE(m.result.raw_rms_axis_px, 0.11);
   EXPECT_NE(calibration_yaml(m.result).find(kUnscaledMarker), std::string::npos);
-  SystemCalibration solved;
-  Eigen::Vector3d up_hint = Eigen::Vector3d::Zero();
-  for (const auto& camera : m.result.cameras) {
-    solved.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam, false});
-    up_hint += camera.T_world_cam->t / static_cast<double>(m.result.cameras.size());
-  }
   // The L-frame lies at the true origin, x arm 0.5 m along x, y arm 0.3 m along y.
-  SceneSpec floor = spec;
-  floor.wand_path.clear();
-  floor.static_markers = {{0, 0, 0}, {0.5, 0, 0}, {0, 0.3, 0}};
-  floor.duration_s = 0.5;
-  const Scene lframe = Scene::from_yaml_string(scene_yaml(floor));
-  std::vector<FeatureFrame> frames;
-  for (std::size_t c = 0; c < lframe.cameras().size(); ++c) {
-    auto camera_frames = simulate_frames(lframe, c);
-    frames.insert(frames.end(), camera_frames.begin(), camera_frames.end());
-  }
-  const auto points = triangulate_static_markers(solved, frames);
+  LFrameRecording lframe = record_lframe(m.result, spec, 0.5);
+  SystemCalibration& solved = lframe.solved;
+  const Eigen::Vector3d& up_hint = lframe.up_hint;
+  const auto& points = lframe.points;
   ASSERT_EQ(points.size(), 3u);
   double scale = 0;
   std::string error;

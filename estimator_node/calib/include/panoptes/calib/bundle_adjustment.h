@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/SparseCore>
+
 #include "panoptes/calib/solve_options.h"
 #include "panoptes/calib/solve_stats.h"
 #include "panoptes/calib/wand_samples.h"
@@ -94,6 +96,27 @@ ErrorStats error_stats(std::vector<double> errors);
 // Models of the registered cameras (default models elsewhere).
 std::vector<CameraModel> registered_models(const BundleState& state,
                                            const std::vector<CameraIntrinsics>& given);
+
+// The adjustment's Jacobian at `state` (no robust loss), for the solve's diagnostics
+// (solve_diagnostics.h): the reprojection rows (px) apart from the other rows (wand lengths and the
+// single-light gauge, already weighted), over the same columns: the tangent space of every block
+// the adjustment moves, cameras first, then the wand instants.
+struct AdjustmentJacobian {
+  Eigen::SparseMatrix<double> reprojection, constraints;
+  Eigen::VectorXd reprojection_residuals;  // px
+  struct CameraColumns {
+    int pose = -1;        // first of 6 (angle-axis, translation of T_cam_world); -1: constant
+    int intrinsics = -1;  // first of the intrinsics' tangent; -1: constant
+    int offset = -1;      // the clock offset; -1: constant
+  };
+  std::vector<CameraColumns> cameras;  // per camera of the state
+  std::vector<int> instant_columns;    // per instant: first of its 3 x markers, -1: not adjusted
+  IntrinsicsRefinement refinement = IntrinsicsRefinement::kNone;
+  int columns = 0;
+};
+
+AdjustmentJacobian adjustment_jacobian(BundleState state, const WandDefinition& wand,
+                                       const PassOptions& options);
 
 struct BundleAdjustmentResult {
   BundleState state;

@@ -20,6 +20,13 @@ struct SolveOptions {
   // A refined focal length more than this factor from the given one fails the camera: the given
   // intrinsics were wrong (wrong pixel pitch, lens or image size), not just imprecise.
   double max_focal_factor = 2.0;
+  // Above this |correlation| of a camera's refined focal length with its distance to the wand volume
+  // the result warns: the data hardly tell a longer focal length from a camera further away
+  // (solve_diagnostics.h, docs/calibration.md "Focal length and depth").
+  double focal_depth_correlation_warning = 0.9;
+  // Above this ratio of the free wand length's RMS error to the RMS the reprojection noise predicts
+  // the result warns: the cameras measure lengths inconsistently (intrinsics that do not fit).
+  double length_consistency_warning = 1.6;
   bool time_offsets = false;    // one clock offset per camera (the reference camera's is 0)
   double sample_rate_hz = 0.0;  // instants at which the wand is estimated; 0: fastest camera
   double max_gap_frames = 1.6;  // a track is interpolated only between frames this close

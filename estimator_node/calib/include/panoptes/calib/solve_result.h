@@ -37,6 +37,7 @@ struct CameraResult {
   bool intrinsics_refined = false;
   CameraIntrinsics given_intrinsics;  // as the cameras file gave them
   IdentifyCounters counters;
+  FocalDepthStats focal_depth;  // focal length against depth (solve_diagnostics.h)
 };
 
 // A wand sample as finally estimated: marker positions in the world.
@@ -76,6 +77,8 @@ struct SolveResult {
   // Samples are the cameras' own frames (synchronised cameras: the same stamps), not interpolated.
   bool synchronised = false;
   LengthStats lengths;  // end-to-end length of the wand triangulated freely from the result
+  // The RMS of `lengths` the reprojection noise alone predicts (solve_diagnostics.h), mm; 0: unknown.
+  double predicted_length_rms_mm = 0;
   // False for a single light: positions are in units of the first pair's baseline until `calibrate
   // world --lframe <x>,<y>` scales them (docs/calibration.md, "Single LED").
   bool metric = true;
@@ -83,6 +86,9 @@ struct SolveResult {
   std::optional<BarLabelReport> bar_labels;
   int iterations = 0;
   double seconds = 0;
+  // Figures that call the result into doubt although it was solved (focal length and depth not
+  // separated, solve_diagnostics.h): each names the camera and says what to do.
+  std::vector<std::string> warnings;
   std::vector<std::string> errors;  // each names the cameras and the reason
   bool ok() const { return errors.empty(); }
   int calibrated_count() const;
