@@ -37,6 +37,7 @@ std::optional<MarkerInModel> find_marker(const SubjectModel& model, const std::s
 std::vector<Eigen::Vector3d> positions_at(const MarkerSamples& samples,
                                           const std::vector<std::size_t>& columns, std::size_t f) {
   std::vector<Eigen::Vector3d> points;
+  points.reserve(columns.size());
   for (std::size_t c : columns) points.push_back(samples.position(f, c));
   return points;
 }

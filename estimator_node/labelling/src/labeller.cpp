@@ -287,12 +287,13 @@ void Labeller::State::predict(Subject& subject) {
         marker.residual_m += options.residual_rate * (residual - marker.residual_m);
       }
       if (marker.point) continue;
-      if (segment.pose && !segment.loose) {
+      // A loose pose is a translation only: a marker with a place follows its seen neighbours'
+      // motion, one never placed takes its layout place.
+      const bool follows_seen = segment.loose && marker.last && count > 0.0;
+      if (segment.pose && !follows_seen) {
         marker.last = segment.pose->apply(in_segment);
-      } else if (marker.last && count > 0.0) {
+      } else if (follows_seen) {
         marker.last = *marker.last + moved;
-      } else if (segment.pose) {  // loose, and the marker never seen: its layout place
-        marker.last = segment.pose->apply(in_segment);
       } else {
         marker.last = with_parent(subject, s, m, marker.last);
       }

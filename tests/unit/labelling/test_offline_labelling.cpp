@@ -198,7 +198,7 @@ TEST(GapFill, HeldBackGapsOfTheGait2392Walk) {
       for (std::size_t f = gap.first; f < gap.last; ++f) held.valid[f * truth.point_count() + gap.marker] = 0;
       const std::string part = part_of(model, truth.names[gap.marker]);
       const auto accumulate = [&](const std::string& method, const std::vector<Eigen::Vector3d>& fill) {
-        for (const std::string& key : {method, method + ", " + part}) {
+        for (const std::string& key : {method, std::string(method).append(", ").append(part)}) {
           for (std::size_t f = gap.first; f < gap.last; ++f) {
             error[key].first += (fill[f - gap.first] - truth.position(f, gap.marker)).squaredNorm();
             error[key].second += 1.0;
