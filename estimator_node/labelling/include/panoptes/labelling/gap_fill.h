@@ -51,12 +51,14 @@ std::vector<Eigen::Vector3d> linear_fill(const MarkerSamples& samples, const Gap
 // neighbours (one-sided differences; a lone sample gives the linear tangent).
 std::vector<Eigen::Vector3d> spline_fill(const MarkerSamples& samples, const Gap& gap);
 // Rigid-body fill from the marker's segment in `model` (its donors: the segment's other tracked
-// markers seen from the frame before the gap to the frame after it, >= 3 not collinear): in every
-// frame of the gap the donors' rigid motion from the frame before (fit_rigid_transform) carries the
+// markers seen from the frame before the gap to the frame after it). With >= 3 donors (the subset
+// whose motion across the gap best carries the marker to where it is seen after it): in every frame
+// of the gap the donors' rigid motion from the frame before (fit_rigid_transform) carries the
 // marker's position there, and the motion from the frame after carries the position there; the two
 // are blended linearly across the gap, so the fill meets the samples at both ends. The layout comes
 // from the neighbouring frames, not the static model (soft tissue moves markers from the static
-// layout by 1-9 mm). nullopt with fewer donors.
+// layout by 1-9 mm). With 2 donors the marker's distances along and off their axis are blended so,
+// its turn about the axis taken from spline_fill. nullopt with fewer donors.
 std::optional<std::vector<Eigen::Vector3d>> relational_fill(const SubjectModel& model,
                                                             const MarkerSamples& samples, const Gap& gap);
 
