@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "labelling_replay.h"
 #include "labelling_test_support.h"
 #include "panoptes/labelling/labeller.h"
 #include "panoptes/labelling_files/marker_set_file.h"
@@ -25,66 +26,13 @@ struct Score {
   std::map<std::string, int> unlabelled;      // marker-frames without a name, by marker
   int never_returned = 0;
   double microseconds_per_frame = 0;
+  double worst_return_ms = 0;  // over every seed
 };
 
 std::string mirrored(const std::string& name) {
   if (name.rfind("R.", 0) == 0) return "L." + name.substr(2);
   if (name.rfind("L.", 0) == 0) return "R." + name.substr(2);
   return name;
-}
-
-struct Replay {
-  std::mt19937_64 rng;
-  double gap_probability = 0.004;  // per visible marker-frame
-  double ghosts_per_frame = 0.3;
-};
-
-// One frame's points: the walk's markers (ids change after a gap), ghosts near the body.
-struct Stream {
-  std::vector<std::uint64_t> id;  // per marker, 0 while hidden
-  std::vector<int> hidden_for;
-  struct Ghost {
-    std::uint64_t id;
-    Eigen::Vector3d at;
-    int frames;
-  };
-  std::vector<Ghost> ghosts;
-};
-
-std::vector<TrackPoint> next_frame(const MarkerSamples& walk, std::size_t f, Replay& replay, Stream& stream,
-                                   std::map<std::uint64_t, std::string>& truth) {
-  std::normal_distribution<double> noise(0.0, 0.0005);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::vector<TrackPoint> points;
-  for (std::size_t m = 0; m < walk.point_count(); ++m) {
-    if (stream.hidden_for[m] > 0) --stream.hidden_for[m];
-    if (!walk.is_valid(f, m) || stream.hidden_for[m] > 0) {
-      stream.id[m] = 0;
-      continue;
-    }
-    if (stream.id[m] != 0 && unit(replay.rng) < replay.gap_probability) {
-      stream.id[m] = 0;
-      stream.hidden_for[m] = 5 + static_cast<int>(unit(replay.rng) * 20);
-      continue;
-    }
-    if (stream.id[m] == 0) stream.id[m] = replay.rng();
-    truth[stream.id[m]] = walk.names[m];
-    const Eigen::Vector3d n(noise(replay.rng), noise(replay.rng), noise(replay.rng));
-    points.push_back({stream.id[m], walk.position(f, m) + n});
-  }
-  std::poisson_distribution<int> births(replay.ghosts_per_frame);
-  for (int g = births(replay.rng); g > 0 && !points.empty(); --g) {
-    const auto& near = points[static_cast<std::size_t>(unit(replay.rng) * points.size())].position_m;
-    const Eigen::Vector3d direction =
-        Eigen::Vector3d(noise(replay.rng), noise(replay.rng), noise(replay.rng)).normalized();
-    stream.ghosts.push_back({replay.rng(), near + direction * (0.03 + 0.22 * unit(replay.rng)),
-                             1 + static_cast<int>(unit(replay.rng) * 6)});
-  }
-  for (auto& ghost : stream.ghosts) {
-    if (ghost.frames-- > 0) points.push_back({ghost.id, ghost.at});
-  }
-  std::shuffle(points.begin(), points.end(), replay.rng);
-  return points;
 }
 
 // Scores one frame's labels; `waiting[track]` is the frame a reappearing marker's new track began.
@@ -205,6 +153,7 @@ Score replay_seeds(const std::string& title, const SubjectModel& model, const Ma
       total.returns.size(), worst, worst * 1000.0 / walk.rate_hz, walk.rate_hz, total.never_returned,
       total.microseconds_per_frame);
   total.returns = {worst};
+  total.worst_return_ms = worst * 1000.0 / walk.rate_hz;
   return total;
 }
 
@@ -215,13 +164,14 @@ TEST(Labeller, Gait2392WalkFromTheStaticModel) {
   const SubjectModel model = build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1");
   const Score total =
       replay_seeds("gait2392 walk1", model, load_marker_samples(test::gait2392_walk()), gait2392_options());
-  // Measured (10 seeds): 98.25 % right, 99.64 % from frame 2, 0.068 % wrong, 0 swaps, worst return 10
-  // frames, 4 never (docs/marker_sets.md). The issue asks 99.5 % right and 0.1 % wrong live.
+  // Measured (10 seeds): 98.44 % right, 99.83 % from frame 2, 0.068 % wrong, 0 swaps, worst return 2
+  // frames (33 ms), 4 never (docs/marker_sets.md). The issue asks 99.5 % right, 0.1 % wrong and every
+  // name back within 100 ms live.
   EXPECT_EQ(total.swaps, 0.0);
-  EXPECT_GT(100.0 * total.right / total.visible, 97.8);
-  EXPECT_GT(100.0 * total.right_after / total.visible_after, 99.2);
-  EXPECT_LT(100.0 * total.wrong / total.visible, 0.12);
-  EXPECT_LE(total.returns.front(), 12);
+  EXPECT_GT(100.0 * total.right / total.visible, 98.0);
+  EXPECT_GT(100.0 * total.right_after / total.visible_after, 99.5);
+  EXPECT_LT(100.0 * total.wrong / total.visible, 0.1);
+  EXPECT_LE(total.worst_return_ms, 100.0);
   EXPECT_LE(total.never_returned, 6);
   EXPECT_LT(total.ghosts_named, 40.0);
 }
@@ -234,12 +184,14 @@ TEST(Labeller, RajagopalWalkFromItsStaticModel) {
   options.soft_segments = {"Torso"};
   const Score total =
       replay_seeds("rajagopal walk", model, load_marker_samples(test::rajagopal_walk()), options);
-  // Measured (10 seeds): 96.75 % right, 97.61 % from frame 2, no wrong name, 0 swaps, 2 never; the left
-  // arm is the weak part (docs/marker_sets.md).
+  // Measured (10 seeds): 99.02 % right, 99.90 % from frame 2, no wrong name, 0 swaps, worst return 2
+  // frames (20 ms), 1 never (docs/marker_sets.md).
   EXPECT_EQ(total.swaps, 0.0);
-  EXPECT_GT(100.0 * total.right / total.visible, 96.3);
+  EXPECT_GT(100.0 * total.right / total.visible, 98.5);
+  EXPECT_GT(100.0 * total.right_after / total.visible_after, 99.5);
   EXPECT_LT(100.0 * total.wrong / total.visible, 0.05);
-  EXPECT_LE(total.never_returned, 5);
+  EXPECT_LE(total.worst_return_ms, 100.0);
+  EXPECT_LE(total.never_returned, 3);
 }
 
 TEST(Labeller, PointsThatFitNothingStayUnlabelled) {

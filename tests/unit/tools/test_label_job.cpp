@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // panoptes_label's library (tools/label): `model` over the real Gait2392 static trial writes a
-// subject model that reads back, its report and summary line, and bad inputs naming the file.
+// subject model that reads back, its report and summary line, and bad inputs naming the file;
+// `run` labels walk1 given as anonymous columns, writes every name right and reports the fill.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -13,6 +15,7 @@
 
 #include "../shared_data.h"
 #include "panoptes/errors.h"
+#include "panoptes/formats/trc.h"
 #include "panoptes/label_job/label_job.h"
 #include "panoptes/labelling_files/subject_model_file.h"
 
@@ -132,6 +135,88 @@ TEST(LabelJob, ABadMarkerSetIsAConfigErrorNamingTheFileAndEntry) {
               std::string::npos)
         << error.what();
   }
+}
+
+TEST(LabelJob, RunOptionsAreChecked) {
+  RunCommandOptions options;
+  options.subjects = {"s1.yaml"};
+  options.out = "labelled.c3d";
+  EXPECT_FALSE(find_problem(options));
+  for (const char* out : {"labelled.TRC", "labelled.csv"}) {
+    options.out = out;
+    EXPECT_FALSE(find_problem(options)) << out;
+  }
+  options.out = "labelled.mp4";
+  ASSERT_TRUE(find_problem(options));
+  EXPECT_NE(find_problem(options)->find("--out"), std::string::npos);
+  options.out = "labelled.trc";
+  options.fill = "cubic";
+  ASSERT_TRUE(find_problem(options));
+  EXPECT_NE(find_problem(options)->find("--fill"), std::string::npos);
+  options.fill = "spline";
+  options.max_gap_s = -1.0;
+  ASSERT_TRUE(find_problem(options));
+  EXPECT_NE(find_problem(options)->find("--max-gap-s"), std::string::npos);
+}
+
+// walk1 as anonymous columns (the TRC's names are not read) with a hole cut into R.ASIS: every
+// sample comes out under the name of the walk's own marker, the hole filled and counted.
+TEST(LabelJob, RunLabelsWalk1AndFillsAHole) {
+  const auto walk_path = test::shared_data("static/gait2392_subject01_walk1.trc");
+  PANOPTES_REQUIRE_SHARED(walk_path);
+  PANOPTES_REQUIRE_SHARED(test::shared_data("static/gait2392_subject01_static.trc"));
+  ModelCommandOptions model = gait2392();
+  model.subject = "s1";
+  run_model(model);
+  MarkerTrajectories walk = load_trc(walk_path);
+  for (std::size_t f = 60; f < 70; ++f) walk.valid[f * walk.marker_count()] = 0;  // R.ASIS, 167 ms
+  const auto holed = scratch("holed.trc");
+  write_trc(holed, walk);
+  RunCommandOptions options;
+  options.tracks = holed.string();
+  options.subjects = {model.out};
+  options.out = scratch("labelled.trc").string();
+  options.report = scratch("labelled.json").string();
+  const RunSummary summary = run_labelling(options);
+  EXPECT_EQ(summary.labelling.labelled_frames, summary.labelling.run_frames);
+  ASSERT_EQ(summary.subjects.size(), 1U);
+  EXPECT_EQ(summary.subjects[0].fill.spline.gaps + summary.subjects[0].fill.relational.gaps, 1U);
+  EXPECT_EQ(summary.subjects[0].fill.spline.frames + summary.subjects[0].fill.relational.frames, 10U);
+  const MarkerTrajectories out = load_trc(options.out);
+  const MarkerTrajectories truth = load_trc(walk_path);
+  std::size_t compared = 0;
+  for (std::size_t m = 0; m < truth.marker_count(); ++m) {
+    const auto column = std::find(out.marker_names.begin(), out.marker_names.end(), truth.marker_names[m]);
+    ASSERT_NE(column, out.marker_names.end()) << truth.marker_names[m];
+    const auto o = static_cast<std::size_t>(column - out.marker_names.begin());
+    for (std::size_t f = 0; f < truth.frame_count(); ++f) {
+      if (!truth.is_valid(f, m)) continue;
+      ASSERT_TRUE(out.is_valid(f, o)) << truth.marker_names[m] << " frame " << f;
+      const double tolerance = m == 0 && f >= 60 && f < 70 ? 0.01 : 1e-6;  // filled: within 10 mm
+      EXPECT_LT((out.position(f, o) - truth.position(f, m)).norm(), tolerance) << truth.marker_names[m] << f;
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 41U * 151U);
+  const auto report = nlohmann::json::parse(std::ifstream(options.report));
+  EXPECT_EQ(report["subjects"][0]["filled"]["relational"]["frames"].get<int>() +
+                report["subjects"][0]["filled"]["spline"]["frames"].get<int>(),
+            10);
+  EXPECT_EQ(report["track_frames_labelled"], report["track_frames"]);
+}
+
+TEST(LabelJob, RunWithAMarkerSetAsTheSubjectIsAConfigErrorNamingIt) {
+  RunCommandOptions options;
+  options.tracks = (fs::path(PANOPTES_SOURCE_DIR) / "tests" / "data" / "walk_41markers_100hz.trc").string();
+  options.subjects = {(fs::path(PANOPTES_SOURCE_DIR) / "deploy" / "markersets" / "gait2392.yaml").string()};
+  options.out = scratch("never.c3d").string();
+  try {
+    run_labelling(options);
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find(options.subjects[0]), std::string::npos) << error.what();
+  }
+  EXPECT_FALSE(fs::exists(options.out));
 }
 
 }  // namespace

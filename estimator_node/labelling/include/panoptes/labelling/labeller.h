@@ -67,6 +67,10 @@ struct LabellerOptions {
   int min_track_age = 3;
 };
 
+// The tolerance of a marker-pair distance of `segment` while the subject moves (see allowance_m).
+double moving_tolerance(const LabellerOptions& options, const std::string& segment,
+                        const DistanceStatistics& distance);
+
 class Labeller {
  public:
   explicit Labeller(std::vector<SubjectModel> models, LabellerOptions options = {});
@@ -76,6 +80,11 @@ class Labeller {
 
   // One instant: every track seen now (unique ids). Tracks absent since the last call have ended.
   void update(const std::vector<TrackPoint>& points);
+
+  // Before the next update: `track` carries `label` (a name known from elsewhere: offline, the other
+  // pass's names at the instant this pass starts from). The name leaves the track it was on, the
+  // track its own name. An unknown subject or marker (or a calibration-only one) is ignored.
+  void name_track(std::uint64_t track, const MarkerLabel& label);
 
   std::optional<MarkerLabel> label_of(std::uint64_t track) const;
   const SubjectModel& model(std::size_t subject) const;

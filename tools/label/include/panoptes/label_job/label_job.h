@@ -1,13 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
 // What panoptes_label does (docs/marker_sets.md), apart from its command line: `model` reads a
-// marker set and a static trial, builds the subject model, writes it and reports on it.
+// marker set and a static trial, builds the subject model, writes it and reports on it; `run`
+// labels a trial's tracks offline, fills gaps and writes the labelled trajectories.
 #pragma once
 
 #include <cstddef>
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
+#include "panoptes/formats/marker_trajectories.h"
+#include "panoptes/labelling/gap_fill.h"
+#include "panoptes/labelling/offline_labelling.h"
 #include "panoptes/labelling/subject_model.h"
 
 namespace panoptes::label_job {
@@ -46,5 +51,42 @@ std::string model_report(const labelling::SubjectModel& model);
 
 // The one JSON line at the end of the report.
 std::string model_summary_line(const labelling::SubjectModel& model);
+
+struct RunCommandOptions {
+  std::string tracks;                 // .c3d, .trc, or the estimator's track JSON Lines (--out-tracks)
+  std::vector<std::string> subjects;  // subject model YAML files (panoptes_label model)
+  std::string out;                    // .c3d, .trc or .csv
+  std::string report;                 // optional JSON report
+  double max_gap_s = 0.3;             // longer gaps stay open
+  std::string fill = "relational";    // linear, spline, relational, none
+  double rate_hz = 100.0;             // the grid track JSON Lines are resampled to
+  std::vector<std::string> soft_segments{"Torso"};
+};
+
+// A bad --fill or --max-gap-s, an output that is not .c3d/.trc/.csv (naming the option), or nullopt.
+std::optional<std::string> find_problem(const RunCommandOptions& options);
+
+struct SubjectFill {
+  std::string subject;
+  labelling::FillReport fill;
+  std::size_t marker_frames = 0;  // the subject's labelled marker-frames before filling
+};
+
+struct RunSummary {
+  std::string input_format;  // "c3d", "trc", "tracks"
+  std::size_t tracks = 0;    // input columns (track ids)
+  labelling::OfflineLabelling labelling;
+  std::vector<SubjectFill> subjects;
+  MarkerTrajectories output;  // as written
+  std::size_t skipped_records = 0;
+};
+
+// Reads the tracks and the models, labels (forward and backward), fills gaps, writes --out (and
+// --report). Throws ConfigError/InputError naming the file on bad input.
+RunSummary run_labelling(const RunCommandOptions& options);
+
+// The report: a human-readable text and its JSON (written to --report, and as the last line).
+std::string run_report(const RunCommandOptions& options, const RunSummary& summary);
+std::string run_report_json(const RunCommandOptions& options, const RunSummary& summary);
 
 }  // namespace panoptes::label_job
