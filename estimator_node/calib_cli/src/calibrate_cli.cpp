@@ -127,7 +127,7 @@ int run_intrinsics(int argc, char** argv) {
       camera.T_world_cam.reset();
       replaced = true;
     }
-  if (!replaced) calibration.cameras.push_back({id, result.intrinsics, std::nullopt});
+  if (!replaced) calibration.cameras.push_back({id, result.intrinsics, std::nullopt, false, false, {}});
   save_calibration(calibration, out);
   const auto& k = result.intrinsics;
   std::printf("%s: board found in %zu of %zu images; RMS reprojection error %.4f px\n", id.c_str(),

@@ -172,7 +172,7 @@ std::string calibration_yaml(const SolveResult& result) {
               "baseline.\n# Set the scale with `estimator_node calibrate world --lframe <x arm m>,<y arm m>` "
               "(docs/calibration.md, \"Single LED\").\n";
   for (const auto& camera : result.cameras) {
-    calibration.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam, false});
+    calibration.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam, false, false, {}});
     if (!camera.T_world_cam)
       header << "# NOT CALIBRATED (no T_world_cam): " << camera.id << ": " << camera.failure << "\n";
   }

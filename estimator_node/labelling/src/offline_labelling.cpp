@@ -138,7 +138,6 @@ void assign(const std::vector<Votes>& votes, std::vector<TrackRun>& runs) {
     const auto& held = votes[candidate.run].at(candidate.name);
     run.forward_frames = held.forward;
     run.backward_frames = held.backward;
-    const std::size_t length = run.last - run.first;
     run.passes_disagreed = votes[candidate.run].size() > 1;
   }
 }

@@ -301,7 +301,7 @@ struct LFrameRecording {
 inline LFrameRecording record_lframe(const SolveResult& result, SceneSpec spec, double duration_s) {
   LFrameRecording out;
   for (const auto& camera : result.cameras) {
-    out.solved.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam, false});
+    out.solved.cameras.push_back({camera.id, camera.intrinsics, camera.T_world_cam, false, false, {}});
     out.up_hint += camera.T_world_cam->t / static_cast<double>(result.cameras.size());
   }
   spec.wand_path.clear();

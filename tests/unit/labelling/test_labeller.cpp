@@ -42,7 +42,9 @@ void score_frame(const Labeller& labeller, const std::vector<TrackPoint>& points
   std::map<std::string, int> names;  // a name is never on two tracks
   for (const auto& point : points) {
     const auto label = labeller.label_of(point.track);
-    if (label) EXPECT_EQ(++names[label->marker], 1) << label->marker << " on two tracks in frame " << f;
+    if (label) {
+      EXPECT_EQ(++names[label->marker], 1) << label->marker << " on two tracks in frame " << f;
+    }
     const auto name = truth.find(point.track);
     if (name == truth.end()) {
       score.ghosts += 1;
