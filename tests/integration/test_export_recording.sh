@@ -80,7 +80,7 @@ sleep 1
 kill -INT "$r"
 wait "$r" || fail "replay recorder exit $?"
 now_ns=$(date +%s%N)
-shift=$(sed -n 's/.*times shifted by \(-\?[0-9]*\) ns.*/\1/p' "$work/replay.log")
+shift=$(sed -n 's/.*shifted by \(-\?[0-9]*\) ns.*/\1/p' "$work/replay.log")
 expect_exit 0 "export the recording of the replay" -- "$bin/panoptes_export" --in-recording "$work/R.mcap" \
   --out-tracks "$work/r_tracks.jsonl" --out-poses "$work/r_poses.jsonl"
 /usr/bin/python3 - "$work/tracks.jsonl" "$work/r_tracks.jsonl" "$work/poses.jsonl" "$work/r_poses.jsonl" "${shift:-0}" "$now_ns" \

@@ -148,7 +148,7 @@ pids+=("$live")
   { fail "replay at 1x"; cat "$work/replay1.log"; }
 kill -INT "$live"
 wait "$live"
-shift=$(sed -n 's/.*times shifted by \(-\?[0-9]*\) ns.*/\1/p' "$work/replay1.log")
+shift=$(sed -n 's/.*shifted by \(-\?[0-9]*\) ns.*/\1/p' "$work/replay1.log")
 /usr/bin/python3 - "$work/logs/tracks.jsonl" "$work/tracks_replay.jsonl" "${shift:-0}" >"$work/compare.txt" <<'PY'
 import json, sys, math
 def load(path, shift=0):
