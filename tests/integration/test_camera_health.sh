@@ -13,8 +13,8 @@ source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/demo.yaml"
 export PYTHONPATH="$build_dir/python"
 python=/usr/bin/python3
-seconds=14     # each part's replay
-kill_after=7   # part 1: cam3 is killed this long after the scene starts
+seconds=10     # each part's replay
+kill_after=5   # part 1: cam3 is killed this long after the scene starts
 
 expect_exit 0 "simulate the demo scene's features" -- "$bin/panoptes_sim" features --scene "$scene" \
   --out-dir "$work/sim" --duration "$seconds"

@@ -2,8 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 # Fixed-rate frames over DDS (issue 34 item 1, docs/frames.md): the clients scene (two bodies, two
 # loose markers, six free-running cameras at 90-120 Hz) through estimator_node --frames fixed at
-# the default rate, read by panoptes_client_probe. Checks: the intervals between consecutive
-# frames' publish_ns (and, reported, receive_ns) are within +-2 % of the period at p99; stamps lie
+# the default rate, read by panoptes_client_probe. Checks: each frame is published within 0.5 ms of
+# its instant at p90 (the intervals' distribution is printed, docs/frames.md "Timing"); stamps lie
 # exactly on the grid (one period apart, +-1 ns, for consecutive frame numbers); frame numbers
 # advance by one per period, and any gap equals the periods the estimator reports skipped; every
 # defined body is in every frame and each is tracked in >= 99 % of the frames after warm-up. Then
@@ -22,17 +22,17 @@ expect_stderr_contains "--frame-rate-hz" "the error names --frame-rate-hz"
 
 expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
 
-# live_run NAME FRAMES_MODE: 16 s of the scene into estimator_node, the probe recording 14 s.
+# live_run NAME FRAMES_MODE: 10 s of the scene into estimator_node, the probe recording 12 s.
 live_run() {
   local name=$1 mode=$2 epoch=$(( ($(date +%s) + 3) * 1000000000 ))
-  "$bin/panoptes_client_probe" --out "$work/$name.jsonl" --duration 18 >"$work/$name.probe.log" 2>&1 &
+  "$bin/panoptes_client_probe" --out "$work/$name.jsonl" --duration 12 >"$work/$name.probe.log" 2>&1 &
   local probe=$!
   pids+=("$probe")
   "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
-    --frames "$mode" --duration 20 --status-period 1 >"$work/$name.estimator.log" 2>&1 &
+    --frames "$mode" --duration 14 --status-period 1 >"$work/$name.estimator.log" 2>&1 &
   local estimator=$!
   pids+=("$estimator")
-  replay_cameras "$epoch" 16 c0 c1 c2 c3 c4 c5
+  replay_cameras "$epoch" 10 c0 c1 c2 c3 c4 c5
   timeout 40 tail --pid="$estimator" -f /dev/null
   wait "$estimator" && pass "$name: the estimator exited cleanly" ||
     { fail "$name: estimator exit"; tail -5 "$work/$name.estimator.log"; }
@@ -69,7 +69,7 @@ def pct(values, q):
     return values[min(len(values) - 1, int(q * len(values)))] if values else float("nan")
 
 fixed = frames("fixed")
-check(rate > 0 and len(fixed) > 10 * rate, f"the client received {len(fixed)} fixed-rate frames at {rate} Hz")
+check(rate > 0 and len(fixed) > 7 * rate, f"the client received {len(fixed)} fixed-rate frames at {rate} Hz")
 if rate <= 0 or len(fixed) < 2:
     sys.exit(1)
 period = 1e9 / rate
