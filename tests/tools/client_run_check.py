@@ -57,7 +57,7 @@ def check_restart_delivery(checks, run, restart_ns, published2):
     span_s = (frames[-1]["receive_ns"] - frames[0]["receive_ns"]) * 1e-9
     checks.check(published2 > 0 and runs[1][-1]["frame"] == published2,
                  f"{checks.who} has the restarted estimator's last frame ({runs[1][-1]['frame']} of {published2})")
-    checks.check(span_s >= 14 and received >= 0.99 * matched,
+    checks.check(span_s >= 12 and received >= 0.99 * matched,
                  f"received {received} of {matched} frames published while matched "
                  f"({100.0 * received / max(matched, 1):.2f}%) over {span_s:.1f} s; "
                  f"{first2['frame'] - 1} written by the new estimator before discovery")
