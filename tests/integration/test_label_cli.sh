@@ -16,8 +16,8 @@ walk="$data/gait2392_subject01_walk1.trc"
 expect_exit 0 "model from the static trial" -- "$bin/panoptes_label" model --static "$data/gait2392_subject01_static.trc" \
   --markerset "$set_yaml" --out "$work/s1.yaml" --subject s1
 expect_exit 0 "run --help shows the defaults" -- "$bin/panoptes_label" run --help
-grep -q "max-gap-s FLOAT=0.3" "$work/last.out" && grep -q "fill TEXT=relational" "$work/last.out" \
-  && pass "--help: --max-gap-s 0.3, --fill relational" || fail "--help lacks the defaults: $(cat "$work/last.out")"
+grep -q "max-gap-s FLOAT=0.3" "$work/last.out" && grep -q "fill TEXT=pattern" "$work/last.out" \
+  && pass "--help: --max-gap-s 0.3, --fill pattern" || fail "--help lacks the defaults: $(cat "$work/last.out")"
 
 # --- the walk's markers as anonymous columns (a TRC: its names are not read) ---------------------
 expect_exit 0 "label walk1 (TRC in, C3D out)" -- "$bin/panoptes_label" run --tracks "$walk" --subjects "$work/s1.yaml" \
@@ -97,7 +97,7 @@ with open(sys.argv[2], "w") as out:
         if random.random() < 0.3:  # a false point for one frame
             out.write(json.dumps({"stamp_ns": stamp, "id": 100000 + f, "p": [0.5, 0.5, 2.5], "v": [0, 0, 0]}) + "\n")
 PY
-for fill in linear spline relational none; do
+for fill in linear spline relational pattern none; do
   expect_exit 0 "label the tracks, --fill $fill" -- "$bin/panoptes_label" run --tracks "$work/tracks.jsonl" \
     --subjects "$work/s1.yaml" --rate-hz 60 --fill "$fill" --out "$work/tracks_$fill.trc" --report "$work/tracks_$fill.json"
 done
@@ -106,7 +106,7 @@ expect_exit 0 "CSV output" -- "$bin/panoptes_label" run --tracks "$work/tracks.j
 /usr/bin/python3 - "$work" <<'PY' && pass "JSON Lines tracks: labelled, gaps filled and counted per method, none with --fill none" || fail "JSON Lines run: see the reports in $work"
 import json, sys
 work = sys.argv[1]
-r = {m: json.load(open(f"{work}/tracks_{m}.json")) for m in ("linear", "spline", "relational", "none")}
+r = {m: json.load(open(f"{work}/tracks_{m}.json")) for m in ("linear", "spline", "relational", "pattern", "none")}
 for m, rep in r.items():
     assert rep["format"] == "tracks" and rep["frames"] in (151, 152), rep
     assert rep["track_frames_labelled"] >= 0.999 * rep["track_frames"] - 60, rep  # the false points stay unnamed
@@ -116,6 +116,9 @@ assert s["linear"]["linear"]["gaps"] > 0 and s["linear"]["spline"]["gaps"] == 0 
 assert s["spline"]["spline"]["gaps"] > 0 and s["spline"]["linear"]["gaps"] == 0 == s["spline"]["relational"]["gaps"]
 assert s["relational"]["relational"]["gaps"] > 0
 assert s["relational"]["relational"]["gaps"] + s["relational"]["spline"]["gaps"] == s["linear"]["linear"]["gaps"]
+assert s["pattern"]["pattern"]["gaps"] > 0 and s["pattern"]["linear"]["gaps"] == 0
+assert sum(v["gaps"] for v in s["pattern"].values()) == s["linear"]["linear"]["gaps"]
+assert s["relational"]["pattern"]["gaps"] == 0 == s["spline"]["pattern"]["gaps"]
 assert all(v["gaps"] == 0 for v in s["none"].values())
 PY
 /usr/bin/python3 - "$work/tracks_none.trc" "$walk" "$work/tracks.jsonl" <<'PY' && pass "JSON Lines tracks: every named sample is the walk's marker of that name, >= 99 % named" || fail "JSON Lines tracks named wrong"

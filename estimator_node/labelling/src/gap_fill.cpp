@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/labelling/gap_fill.h"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <string>
+
+#include <Eigen/Cholesky>
 
 #include "panoptes/interpolation.h"
 #include "panoptes/rigid_fit.h"
@@ -103,6 +107,64 @@ std::vector<Eigen::Vector3d> two_donor_fill(const MarkerSamples& samples, const 
   return out;
 }
 
+// The markers seen in every frame from the one before the gap to the one after it (the pattern
+// fill's donors), and the frames where they and the gap's marker are all seen (its training set).
+// Where other markers have gaps too, few frames show them all: donors are dropped, the one missing
+// from most of the marker's frames first, until the training set holds `wanted` frames.
+struct PatternData {
+  std::vector<std::size_t> columns;  // the gap's marker first, then the donors
+  std::vector<std::size_t> frames;
+};
+
+PatternData pattern_data(const MarkerSamples& samples, const Gap& gap, std::size_t wanted) {
+  PatternData data;
+  data.columns.push_back(gap.marker);
+  for (std::size_t c = 0; c < samples.point_count(); ++c) {
+    bool seen = c != gap.marker;
+    for (std::size_t f = gap.first - 1; f <= gap.last && seen; ++f) seen = samples.is_valid(f, c);
+    if (seen) data.columns.push_back(c);
+  }
+  std::vector<std::size_t> marker_frames;
+  for (std::size_t f = 0; f < samples.frame_count(); ++f) {
+    if (samples.is_valid(f, gap.marker)) marker_frames.push_back(f);
+  }
+  wanted = std::min(wanted, marker_frames.size());
+  while (true) {
+    data.frames.clear();
+    std::vector<std::size_t> missing(data.columns.size(), 0);
+    for (std::size_t f : marker_frames) {
+      bool seen = true;
+      for (std::size_t j = 1; j < data.columns.size(); ++j) {
+        if (!samples.is_valid(f, data.columns[j])) {
+          seen = false;
+          ++missing[j];
+        }
+      }
+      if (seen) data.frames.push_back(f);
+    }
+    if (data.frames.size() >= wanted || data.columns.size() <= 4) return data;
+    const auto worst = std::max_element(missing.begin() + 1, missing.end()) - missing.begin();
+    data.columns.erase(data.columns.begin() + worst);
+  }
+}
+
+// Each column's weight: exp(-(d / weight_distance_m)^2) of its marker's mean distance d to the
+// gap's marker over the training frames (the gap's marker itself: 1), so that the principal
+// components describe the marker's neighbourhood first.
+Eigen::VectorXd pattern_weights(const MarkerSamples& samples, const PatternData& data,
+                                double weight_distance_m) {
+  Eigen::VectorXd weights(3 * data.columns.size());
+  for (std::size_t j = 0; j < data.columns.size(); ++j) {
+    double distance = 0.0;
+    for (std::size_t f : data.frames)
+      distance += (samples.position(f, data.columns[j]) - samples.position(f, data.columns[0])).norm();
+    distance /= static_cast<double>(data.frames.size());
+    const double ratio = distance / weight_distance_m;
+    weights.segment<3>(static_cast<Eigen::Index>(3 * j)).setConstant(std::exp(-ratio * ratio));
+  }
+  return weights;
+}
+
 void add(FillCount& count, const Gap& gap) {
   ++count.gaps;
   count.frames += gap.last - gap.first;
@@ -197,6 +259,79 @@ std::optional<std::vector<Eigen::Vector3d>> relational_fill(const SubjectModel& 
   return out;
 }
 
+std::optional<std::vector<Eigen::Vector3d>> pattern_fill(const MarkerSamples& samples, const Gap& gap,
+                                                         const PatternOptions& options) {
+  const PatternData data = pattern_data(samples, gap, options.wanted_training_frames);
+  if (data.columns.size() < 4 || data.frames.size() < options.min_training_frames) return std::nullopt;
+  const auto dims = static_cast<Eigen::Index>(3 * data.columns.size());
+  const auto rows = static_cast<Eigen::Index>(data.frames.size());
+  const Eigen::VectorXd weights = pattern_weights(samples, data, options.weight_distance_m);
+  const auto weighted_row = [&](std::size_t f) {
+    Eigen::VectorXd row(dims);
+    for (std::size_t j = 0; j < data.columns.size(); ++j)
+      row.segment<3>(static_cast<Eigen::Index>(3 * j)) = samples.position(f, data.columns[j]);
+    return Eigen::VectorXd(row.cwiseProduct(weights));
+  };
+  Eigen::MatrixXd X(rows, dims);
+  for (Eigen::Index r = 0; r < rows; ++r)
+    X.row(r) = weighted_row(data.frames[static_cast<std::size_t>(r)]).transpose();
+  const Eigen::VectorXd mean = X.colwise().mean().transpose();
+  X.rowwise() -= mean.transpose();
+  // The marker's coordinates given the donors' under the trial's Gaussian: mean + S_md (S_dd +
+  // noise^2 I)^-1 (donors - mean). The noise term keeps the weak components (tissue wobble, noise)
+  // from being fitted: the principal components' regression with a soft cut.
+  const Eigen::MatrixXd covariance = X.transpose() * X / static_cast<double>(rows);
+  const Eigen::Index donor_dims = dims - 3;
+  Eigen::MatrixXd donors = covariance.bottomRightCorner(donor_dims, donor_dims);
+  donors.diagonal().array() += options.noise_m * options.noise_m;
+  const Eigen::LDLT<Eigen::MatrixXd> factor(donors);
+  if (factor.info() != Eigen::Success) return std::nullopt;
+  const Eigen::MatrixXd gain = factor.solve(covariance.bottomLeftCorner(donor_dims, 3)).transpose();
+  const auto reconstruct = [&](std::size_t f) -> Eigen::Vector3d {
+    const Eigen::VectorXd centred = weighted_row(f) - mean;
+    return (mean.head<3>() + gain * centred.tail(donor_dims)).cwiseQuotient(weights.head<3>());
+  };
+  // The reconstruction's error where the marker is seen, either side of the gap, is taken off
+  // linearly across it, so the fill meets the samples at both ends.
+  const std::size_t before = gap.first - 1;
+  const Eigen::Vector3d error_before = reconstruct(before) - samples.position(before, gap.marker);
+  const Eigen::Vector3d error_after = reconstruct(gap.last) - samples.position(gap.last, gap.marker);
+  const double span = static_cast<double>(gap.last - gap.first + 1);
+  std::vector<Eigen::Vector3d> out;
+  for (std::size_t f = gap.first; f < gap.last; ++f) {
+    const double along = static_cast<double>(f - before) / span;
+    out.push_back(reconstruct(f) - (1.0 - along) * error_before - along * error_after);
+  }
+  return out;
+}
+
+namespace {
+
+// One gap by `method`, falling back (pattern -> relational -> spline), counted by the method used.
+std::vector<Eigen::Vector3d> fill_one(const SubjectModel& model, const MarkerSamples& samples, const Gap& gap,
+                                      FillMethod method, FillReport& report) {
+  if (method == FillMethod::kPattern) {
+    if (auto fill = pattern_fill(samples, gap)) {
+      add(report.pattern, gap);
+      return std::move(*fill);
+    }
+  }
+  if (method == FillMethod::kPattern || method == FillMethod::kRelational) {
+    if (auto fill = relational_fill(model, samples, gap)) {
+      add(report.relational, gap);
+      return std::move(*fill);
+    }
+  }
+  if (method == FillMethod::kLinear) {
+    add(report.linear, gap);
+    return linear_fill(samples, gap);
+  }
+  add(report.spline, gap);
+  return spline_fill(samples, gap);
+}
+
+}  // namespace
+
 FillReport fill_gaps(const SubjectModel& model, MarkerSamples& samples, std::vector<std::uint8_t>& filled,
                      const FillOptions& options) {
   FillReport report;
@@ -211,18 +346,7 @@ FillReport fill_gaps(const SubjectModel& model, MarkerSamples& samples, std::vec
       add(report.too_long, gap);
       continue;
     }
-    std::optional<std::vector<Eigen::Vector3d>> fill;
-    if (options.method == FillMethod::kRelational) fill = relational_fill(model, samples, gap);
-    if (fill) {
-      add(report.relational, gap);
-    } else if (options.method == FillMethod::kLinear) {
-      fill = linear_fill(samples, gap);
-      add(report.linear, gap);
-    } else {
-      fill = spline_fill(samples, gap);
-      add(report.spline, gap);
-    }
-    fills.emplace_back(gap, std::move(*fill));
+    fills.emplace_back(gap, fill_one(model, samples, gap, options.method, report));
   }
   const std::size_t markers = samples.point_count();
   for (const auto& [gap, points] : fills) {

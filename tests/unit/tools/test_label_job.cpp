@@ -180,8 +180,9 @@ TEST(LabelJob, RunLabelsWalk1AndFillsAHole) {
   const RunSummary summary = run_labelling(options);
   EXPECT_EQ(summary.labelling.labelled_frames, summary.labelling.run_frames);
   ASSERT_EQ(summary.subjects.size(), 1U);
-  EXPECT_EQ(summary.subjects[0].fill.spline.gaps + summary.subjects[0].fill.relational.gaps, 1U);
-  EXPECT_EQ(summary.subjects[0].fill.spline.frames + summary.subjects[0].fill.relational.frames, 10U);
+  EXPECT_EQ(summary.subjects[0].fill.pattern.gaps,
+            1U);  // the default fill, with the whole walk to learn from
+  EXPECT_EQ(summary.subjects[0].fill.pattern.frames, 10U);
   const MarkerTrajectories out = load_trc(options.out);
   const MarkerTrajectories truth = load_trc(walk_path);
   std::size_t compared = 0;
@@ -199,9 +200,7 @@ TEST(LabelJob, RunLabelsWalk1AndFillsAHole) {
   }
   EXPECT_EQ(compared, 41U * 151U);
   const auto report = nlohmann::json::parse(std::ifstream(options.report));
-  EXPECT_EQ(report["subjects"][0]["filled"]["relational"]["frames"].get<int>() +
-                report["subjects"][0]["filled"]["spline"]["frames"].get<int>(),
-            10);
+  EXPECT_EQ(report["subjects"][0]["filled"]["pattern"]["frames"].get<int>(), 10);
   EXPECT_EQ(report["track_frames_labelled"], report["track_frames"]);
 }
 

@@ -30,8 +30,9 @@ static void add_run_options(CLI::App& run, RunCommandOptions& options) {
   run.add_option("--report", options.report, "also write the report as JSON here");
   run.add_option("--max-gap-s", options.max_gap_s, "longest gap filled, seconds")->capture_default_str();
   run.add_option("--fill", options.fill,
-                 "gap filling: linear, spline, relational (rigid body from the segment's other markers, "
-                 "spline where they are missing) or none")
+                 "gap filling: pattern (from how the trial's markers move together; relational where "
+                 "too few frames show them), relational (rigid body from the segment's other markers, "
+                 "spline where they are missing), spline, linear or none")
       ->capture_default_str();
   run.add_option("--rate-hz", options.rate_hz, "sample rate for JSON Lines tracks (resampled)")
       ->capture_default_str()

@@ -40,6 +40,7 @@ std::optional<labelling::FillMethod> fill_method(const std::string& name) {
   if (name == "linear") return labelling::FillMethod::kLinear;
   if (name == "spline") return labelling::FillMethod::kSpline;
   if (name == "relational") return labelling::FillMethod::kRelational;
+  if (name == "pattern") return labelling::FillMethod::kPattern;
   return std::nullopt;
 }
 
@@ -122,7 +123,7 @@ void write_output(const std::string& path, const MarkerTrajectories& data) {
 
 std::optional<std::string> find_problem(const RunCommandOptions& options) {
   if (!fill_method(options.fill))
-    return "--fill: expected linear, spline, relational or none, got '" + options.fill + "'";
+    return "--fill: expected pattern, relational, spline, linear or none, got '" + options.fill + "'";
   if (!(options.max_gap_s >= 0.0) || !std::isfinite(options.max_gap_s))
     return "--max-gap-s: expected a number of seconds >= 0";
   const std::string out = extension_of(options.out);
@@ -183,7 +184,8 @@ std::string run_report_json(const RunCommandOptions& options, const RunSummary& 
          {"filled",
           {{"linear", count_json(s.fill.linear)},
            {"spline", count_json(s.fill.spline)},
-           {"relational", count_json(s.fill.relational)}}},
+           {"relational", count_json(s.fill.relational)},
+           {"pattern", count_json(s.fill.pattern)}}},
          {"left_open",
           {{"too_long", count_json(s.fill.too_long)}, {"at_ends", count_json(s.fill.open_end)}}}});
   }
@@ -221,14 +223,16 @@ std::string run_report(const RunCommandOptions& options, const RunSummary& summa
                 l.disagreements);
   std::string text = line;
   for (const auto& s : summary.subjects) {
-    std::snprintf(line, sizeof line,
-                  "  %s: %zu labelled marker-frames; filled (--fill %s, max %.3g s): linear %zu gaps / %zu "
-                  "frames, spline %zu / %zu, relational %zu / %zu; left open: %zu gaps longer, %zu at the "
-                  "ends\n",
-                  s.subject.c_str(), s.marker_frames, options.fill.c_str(), options.max_gap_s,
-                  s.fill.linear.gaps, s.fill.linear.frames, s.fill.spline.gaps, s.fill.spline.frames,
-                  s.fill.relational.gaps, s.fill.relational.frames, s.fill.too_long.gaps,
-                  s.fill.open_end.gaps);
+    std::snprintf(
+        line, sizeof line,
+        "  %s: %zu labelled marker-frames; filled (--fill %s, max %.3g s): linear %zu gaps / %zu "
+        "frames, spline %zu / %zu, relational %zu / %zu, pattern %zu / %zu; left open: %zu gaps longer, "
+        "%zu at the "
+        "ends\n",
+        s.subject.c_str(), s.marker_frames, options.fill.c_str(), options.max_gap_s, s.fill.linear.gaps,
+        s.fill.linear.frames, s.fill.spline.gaps, s.fill.spline.frames, s.fill.relational.gaps,
+        s.fill.relational.frames, s.fill.pattern.gaps, s.fill.pattern.frames, s.fill.too_long.gaps,
+        s.fill.open_end.gaps);
     text += line;
   }
   return text;

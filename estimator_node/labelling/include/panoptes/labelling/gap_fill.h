@@ -16,10 +16,10 @@
 
 namespace panoptes::labelling {
 
-enum class FillMethod { kNone, kLinear, kSpline, kRelational };
+enum class FillMethod { kNone, kLinear, kSpline, kRelational, kPattern };
 
 struct FillOptions {
-  FillMethod method = FillMethod::kRelational;
+  FillMethod method = FillMethod::kPattern;
   std::size_t max_gap_frames = 18;  // 0.3 s at 60 Hz
 };
 
@@ -29,7 +29,7 @@ struct FillCount {
 };
 
 struct FillReport {
-  FillCount linear, spline, relational;
+  FillCount linear, spline, relational, pattern;
   FillCount too_long;  // gaps left open: longer than the maximum
   FillCount open_end;  // gaps left open: at the start or end of the trial
 };
@@ -62,9 +62,30 @@ std::vector<Eigen::Vector3d> spline_fill(const MarkerSamples& samples, const Gap
 std::optional<std::vector<Eigen::Vector3d>> relational_fill(const SubjectModel& model,
                                                             const MarkerSamples& samples, const Gap& gap);
 
-// Fills every gap up to options.max_gap_frames with options.method (relational falls back to
-// spline where the segment cannot be fitted), on the samples as given (filled samples do not feed
-// other fills). `filled` gets 1 per filled sample (same layout as samples.valid).
+// Pattern fill, from how this subject's markers move together over the whole trial (the idea of
+// PCA gap filling, Federolf 2013, and its distance-weighted form, Gloersen & Federolf 2016, as a
+// regularised Gaussian regression): the marker and every marker seen throughout the gap (the
+// donors), over the trial's frames where all of them are seen, each marker's coordinates weighted
+// by its closeness to the marker; in each gap frame the marker's coordinates are their conditional
+// mean given the donors' (the donors' covariance plus noise_m^2, which keeps the weakest components
+// out). The reconstruction's error at the samples either side is taken off linearly across the
+// gap, so the fill meets them. Needs no segment model. Where other markers have gaps too, the
+// donors missing from most frames are left out until enough frames show the rest. nullopt with
+// fewer than 3 donors or min_training_frames frames.
+struct PatternOptions {
+  double weight_distance_m = 0.4;  // a donor this far from the marker (mean distance) weighs exp(-1)
+  double noise_m = 0.001;          // the regulariser, in weighted metres
+  std::size_t min_training_frames = 20;
+  // Donors missing from many frames are dropped until the training frames reach this (or every
+  // frame where the marker is seen).
+  std::size_t wanted_training_frames = 40;
+};
+std::optional<std::vector<Eigen::Vector3d>> pattern_fill(const MarkerSamples& samples, const Gap& gap,
+                                                         const PatternOptions& options = {});
+// Fills every gap up to options.max_gap_frames with options.method (pattern falls back to
+// relational, relational to spline where the segment cannot be fitted), on the samples as given
+// (filled samples do not feed other fills). `filled` gets 1 per filled sample (same layout as
+// samples.valid).
 FillReport fill_gaps(const SubjectModel& model, MarkerSamples& samples, std::vector<std::uint8_t>& filled,
                      const FillOptions& options);
 

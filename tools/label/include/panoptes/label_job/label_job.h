@@ -58,7 +58,7 @@ struct RunCommandOptions {
   std::string out;                    // .c3d, .trc or .csv
   std::string report;                 // optional JSON report
   double max_gap_s = 0.3;             // longer gaps stay open
-  std::string fill = "relational";    // linear, spline, relational, none
+  std::string fill = "pattern";       // pattern, relational, spline, linear, none
   double rate_hz = 100.0;             // the grid track JSON Lines are resampled to
   std::vector<std::string> soft_segments{"Torso"};
 };
