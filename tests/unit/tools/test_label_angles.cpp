@@ -75,6 +75,30 @@ TEST(LabelAngles, WritesAnglesAndPosesOfTheWalk) {
   const std::string report = angles_report(result);
   EXPECT_NE(report.find("segment R.UpperArm: pose in 0/151 frames"), std::string::npos) << report;
   EXPECT_NE(report.find("\"posed_segments\":9"), std::string::npos) << report;
+  // The defaults: gaps filled by pattern (walk1 has none), markers low-passed at 6 Hz.
+  EXPECT_NE(report.find("markers: 0 samples gap-filled, low-pass 6.000 Hz (zero lag)"), std::string::npos)
+      << report;
+  EXPECT_NE(report.find("\"filled_samples\":0,\"lowpass_hz\":6.000}"), std::string::npos) << report;
+}
+
+TEST(LabelAngles, RefusesAFillMethodOrACutoffItCannotUse) {
+  AnglesCommandOptions options = gait2392_walk();
+  const auto error_of = [&] {
+    try {
+      run_angles(options);
+    } catch (const InputError& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  options.fill = "cubic";
+  EXPECT_NE(error_of().find("--fill: expected pattern, relational, spline, linear or none, got 'cubic'"),
+            std::string::npos);
+  options.fill = "none";
+  options.lowpass_hz = 30.0;  // walk1 is 60 Hz: the cutoff must be below 30
+  EXPECT_NE(error_of().find("--lowpass-hz: low-pass cutoff 30"), std::string::npos) << error_of();
+  options.lowpass_hz = 0.0;
+  EXPECT_EQ(angles_report(run_angles(options)).find("low-pass"), std::string::npos);
 }
 
 TEST(LabelAngles, WarnsWhenTheAxesPutARightSegmentElsewhere) {

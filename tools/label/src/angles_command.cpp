@@ -50,6 +50,16 @@ CLI::App* add_angles_command(CLI::App& app, AnglesCommandOptions& options) {
       "--joint-centres", options.joint_centres,
       "fit each segment to its markers and its proximal joint centre placed by the parent's pose "
       "(default: its markers only; the joint centre only when two markers are seen)");
+  angles
+      ->add_option("--fill", options.fill,
+                   "gaps filled first: pattern, relational, spline, linear or none (as run)")
+      ->capture_default_str();
+  angles->add_option("--max-gap-s", options.max_gap_s, "longest gap filled, seconds")->capture_default_str();
+  angles
+      ->add_option(
+          "--lowpass-hz", options.lowpass_hz,
+          "then the markers low-passed without lag (Butterworth, forwards and backwards); 0: unfiltered")
+      ->capture_default_str();
   return angles;
 }
 

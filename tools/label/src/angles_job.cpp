@@ -2,14 +2,21 @@
 #include "panoptes/label_job/angles_job.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "panoptes/errors.h"
+#include "panoptes/label_job/label_job.h"
+#include "panoptes/labelling/gap_fill.h"
+#include "panoptes/labelling/lowpass.h"
 #include "panoptes/labelling_files/static_trial.h"
 #include "panoptes/labelling_files/subject_model_file.h"
 
@@ -62,6 +69,29 @@ int named_side(const std::string& name) {
   return 0;
 }
 
+// Gap filling, then the low-pass filter, as --fill and --lowpass-hz ask.
+void prepare_markers(const AnglesCommandOptions& options, AnglesResult& result,
+                     labelling::MarkerSamples& samples) {
+  const auto method = parse_fill_method(options.fill);
+  if (!method)
+    throw InputError("--fill: expected pattern, relational, spline, linear or none, got '" + options.fill +
+                     "'");
+  if (!(options.max_gap_s >= 0.0)) throw InputError("--max-gap-s: must be 0 or more");
+  labelling::FillOptions fill;
+  fill.method = *method;
+  fill.max_gap_frames = static_cast<std::size_t>(std::floor(options.max_gap_s * samples.rate_hz + 1e-9));
+  std::vector<std::uint8_t> filled;
+  labelling::fill_gaps(result.model, samples, filled, fill);
+  for (const auto flag : filled) result.filled_samples += flag;
+  if (options.lowpass_hz == 0.0) return;
+  try {
+    labelling::lowpass_filter(samples, options.lowpass_hz);
+  } catch (const std::invalid_argument& error) {
+    throw InputError(std::string("--lowpass-hz: ") + error.what());
+  }
+  result.lowpass_hz = options.lowpass_hz;
+}
+
 }  // namespace
 
 std::vector<std::string> side_warnings(const labelling::SegmentKinematics& kinematics) {
@@ -98,12 +128,13 @@ AnglesResult run_angles(const AnglesCommandOptions& options) {
   kinematics_options.joint_centres_in_fit = options.joint_centres;
   AnglesResult result;
   result.model = labelling::load_subject_model(options.subjects);
-  const labelling::MarkerSamples samples = labelling::load_marker_samples(options.in);
+  labelling::MarkerSamples samples = labelling::load_marker_samples(options.in);
   result.rate_hz = samples.rate_hz;
   result.model_markers_in_trial = model_markers_in(result.model, samples);
   if (result.model_markers_in_trial == 0)
     throw InputError(options.in + ": none of the markers of subject model " + options.subjects +
                      " (subject " + result.model.subject + ") is in the trial");
+  prepare_markers(options, result, samples);
   try {
     result.kinematics = labelling::build_segment_kinematics(result.model, kinematics_options);
   } catch (const InputError& error) {
@@ -190,11 +221,17 @@ std::string angles_report(const AnglesResult& result) {
             (high >= low ? fixed(low, 1) + " .. " + fixed(high, 1) + " deg" : "never posed") + "\n";
   }
   for (const auto& warning : side_warnings(kinematics)) text += warning + "\n";
+  text += "markers: " + std::to_string(result.filled_samples) + " samples gap-filled, " +
+          (result.lowpass_hz > 0.0 ? "low-pass " + fixed(result.lowpass_hz, 3) + " Hz (zero lag)"
+                                   : "unfiltered") +
+          "\n";
   text += "{\"subject\":\"" + result.model.subject + "\",\"frames\":" + std::to_string(result.frames.size()) +
           ",\"segments\":" + std::to_string(kinematics.segments.size()) +
           ",\"posed_segments\":" + std::to_string(posed_segments) +
           ",\"joints\":" + std::to_string(kinematics.joints.size()) +
-          ",\"model_markers_in_trial\":" + std::to_string(result.model_markers_in_trial) + "}\n";
+          ",\"model_markers_in_trial\":" + std::to_string(result.model_markers_in_trial) +
+          ",\"filled_samples\":" + std::to_string(result.filled_samples) +
+          ",\"lowpass_hz\":" + fixed(result.lowpass_hz, 3) + "}\n";
   return text;
 }
 

@@ -35,15 +35,6 @@ std::string extension_of(const std::string& path) {
   return extension;
 }
 
-std::optional<labelling::FillMethod> fill_method(const std::string& name) {
-  if (name == "none") return labelling::FillMethod::kNone;
-  if (name == "linear") return labelling::FillMethod::kLinear;
-  if (name == "spline") return labelling::FillMethod::kSpline;
-  if (name == "relational") return labelling::FillMethod::kRelational;
-  if (name == "pattern") return labelling::FillMethod::kPattern;
-  return std::nullopt;
-}
-
 labelling::MarkerSamples to_samples(MarkerTrajectories data, const std::string& source) {
   labelling::MarkerSamples samples;
   samples.source = source;
@@ -122,7 +113,7 @@ void write_output(const std::string& path, const MarkerTrajectories& data) {
 }  // namespace
 
 std::optional<std::string> find_problem(const RunCommandOptions& options) {
-  if (!fill_method(options.fill))
+  if (!parse_fill_method(options.fill))
     return "--fill: expected pattern, relational, spline, linear or none, got '" + options.fill + "'";
   if (!(options.max_gap_s >= 0.0) || !std::isfinite(options.max_gap_s))
     return "--max-gap-s: expected a number of seconds >= 0";
@@ -145,7 +136,7 @@ RunSummary run_labelling(const RunCommandOptions& options) {
   labeller.soft_segments = options.soft_segments;
   summary.labelling = labelling::label_offline(models, tracks, labeller);
   labelling::FillOptions fill;
-  fill.method = *fill_method(options.fill);
+  fill.method = *parse_fill_method(options.fill);
   fill.max_gap_frames = static_cast<std::size_t>(std::floor(options.max_gap_s * tracks.rate_hz + 1e-9));
   std::vector<labelling::MarkerSamples> labelled;
   std::vector<std::vector<std::uint8_t>> filled(models.size());
@@ -173,6 +164,15 @@ nlohmann::json count_json(const labelling::FillCount& count) {
 }
 
 }  // namespace
+
+std::optional<labelling::FillMethod> parse_fill_method(const std::string& name) {
+  if (name == "none") return labelling::FillMethod::kNone;
+  if (name == "linear") return labelling::FillMethod::kLinear;
+  if (name == "spline") return labelling::FillMethod::kSpline;
+  if (name == "relational") return labelling::FillMethod::kRelational;
+  if (name == "pattern") return labelling::FillMethod::kPattern;
+  return std::nullopt;
+}
 
 std::string run_report_json(const RunCommandOptions& options, const RunSummary& summary) {
   const auto& l = summary.labelling;

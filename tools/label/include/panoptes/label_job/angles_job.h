@@ -16,13 +16,16 @@
 namespace panoptes::label_job {
 
 struct AnglesCommandOptions {
-  std::string in;              // labelled trial: .trc or .c3d
-  std::string subjects;        // subject model YAML (panoptes_label model)
-  std::string out;             // joint angles CSV
-  std::string poses;           // segment poses CSV (optional)
-  std::string up = "+y";       // the static trial's vertical
-  std::string forward = "+x";  // the direction the subject faces in the static trial
-  bool joint_centres = false;  // fit segments with their proximal joint centres (KinematicsOptions)
+  std::string in;                // labelled trial: .trc or .c3d
+  std::string subjects;          // subject model YAML (panoptes_label model)
+  std::string out;               // joint angles CSV
+  std::string poses;             // segment poses CSV (optional)
+  std::string up = "+y";         // the static trial's vertical
+  std::string forward = "+x";    // the direction the subject faces in the static trial
+  bool joint_centres = false;    // fit segments with their proximal joint centres (KinematicsOptions)
+  std::string fill = "pattern";  // gaps filled before the kinematics (as `run --fill`), or none
+  double max_gap_s = 0.3;        // longer gaps stay open
+  double lowpass_hz = 6.0;       // zero-lag Butterworth low-pass of the markers first; 0: none
 };
 
 // "+x", "-y", "z" … as a unit lab axis; throws InputError naming `option` (when not empty) otherwise.
@@ -34,6 +37,8 @@ struct AnglesResult {
   std::vector<labelling::KinematicsFrame> frames;
   double rate_hz = 0.0;
   std::size_t model_markers_in_trial = 0;
+  std::size_t filled_samples = 0;  // marker samples filled before the kinematics
+  double lowpass_hz = 0.0;         // the markers' low-pass cutoff, 0: unfiltered
 };
 
 // Reads, computes and writes. Throws ConfigError/InputError naming the file or option: a trial or

@@ -66,6 +66,9 @@ struct RunCommandOptions {
 // A bad --fill or --max-gap-s, an output that is not .c3d/.trc/.csv (naming the option), or nullopt.
 std::optional<std::string> find_problem(const RunCommandOptions& options);
 
+// "pattern", "relational", "spline", "linear" or "none" as a fill method; nullopt otherwise.
+std::optional<labelling::FillMethod> parse_fill_method(const std::string& name);
+
 struct SubjectFill {
   std::string subject;
   labelling::FillReport fill;
