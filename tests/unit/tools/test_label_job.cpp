@@ -3,6 +3,8 @@
 // subject model that reads back, its report and summary line, and bad inputs naming the file;
 // `run` labels walk1 given as anonymous columns, writes every name right and reports the fill.
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -14,10 +16,14 @@
 #include <nlohmann/json.hpp>
 
 #include "../shared_data.h"
+#include "panoptes/dds/decode.h"
 #include "panoptes/errors.h"
+#include "panoptes/export_job/recording_source.h"
 #include "panoptes/formats/trc.h"
 #include "panoptes/label_job/label_job.h"
 #include "panoptes/labelling_files/subject_model_file.h"
+#include "panoptes/recording/mcap_writer.h"
+#include "panoptes_msgs/panoptes.h"
 
 namespace panoptes::label_job {
 namespace {
@@ -141,6 +147,15 @@ TEST(LabelJob, RunOptionsAreChecked) {
   RunCommandOptions options;
   options.subjects = {"s1.yaml"};
   options.out = "labelled.c3d";
+  ASSERT_TRUE(find_problem(options));  // no input
+  EXPECT_NE(find_problem(options)->find("--tracks or --in-recording"), std::string::npos);
+  options.tracks = "tracks.jsonl";
+  options.in_recording = "session.mcap";
+  ASSERT_TRUE(find_problem(options));  // two inputs
+  options.tracks.clear();
+  EXPECT_FALSE(find_problem(options));
+  options.in_recording.clear();
+  options.tracks = "tracks.jsonl";
   EXPECT_FALSE(find_problem(options));
   for (const char* out : {"labelled.TRC", "labelled.csv"}) {
     options.out = out;
@@ -202,6 +217,72 @@ TEST(LabelJob, RunLabelsWalk1AndFillsAHole) {
   const auto report = nlohmann::json::parse(std::ifstream(options.report));
   EXPECT_EQ(report["subjects"][0]["filled"]["pattern"]["frames"].get<int>(), 10);
   EXPECT_EQ(report["track_frames_labelled"], report["track_frames"]);
+}
+
+// walk1 recorded as the estimator publishes it (a MocapFrame per sample, every marker a track with
+// an id of its own, one track's id changing after a 150 ms occlusion), labelled from the recording
+// with --in-recording: every marker named as the walk's own, the occlusion filled.
+TEST(LabelJob, RunLabelsARecordingAsPublishedLive) {
+  const auto walk_path = test::shared_data("static/gait2392_subject01_walk1.trc");
+  PANOPTES_REQUIRE_SHARED(walk_path);
+  PANOPTES_REQUIRE_SHARED(test::shared_data("static/gait2392_subject01_static.trc"));
+  ModelCommandOptions model = gait2392();
+  model.subject = "s1";
+  run_model(model);
+  const MarkerTrajectories walk = load_trc(walk_path);
+  const auto mcap = scratch("walk1.mcap");
+  {
+    recording::McapWriter writer(mcap);
+    const auto channel = writer.add_channel(writer.add_schema("panoptes/msg/MocapFrame", "ros2idl", ""),
+                                            export_job::kFramesChannel, "cdr");
+    const std::int64_t t0 = 1'764'000'000'000'000'000;
+    for (std::size_t f = 0; f < walk.frame_count(); ++f) {
+      msg::MocapFrame frame;
+      frame.frame_number(f + 1);
+      frame.stamp_ns(t0 + static_cast<std::int64_t>(std::llround(1e9 * f / walk.data_rate_hz)));
+      frame.publish_ns(frame.stamp_ns() + 1'000'000);
+      frame.source_frame(static_cast<std::int64_t>(f));
+      for (std::size_t m = 0; m < walk.marker_count(); ++m) {
+        if (!walk.is_valid(f, m) || (m == 3 && f >= 60 && f < 69)) continue;
+        msg::FrameMarker marker;
+        marker.state().id(static_cast<std::int64_t>(m == 3 && f >= 69 ? 1000 : 100 + m));
+        const Eigen::Vector3d& p = walk.position(f, m);
+        marker.state().position({p.x(), p.y(), p.z()});
+        marker.state().status(1);
+        frame.markers().push_back(marker);
+      }
+      const auto t = static_cast<std::uint64_t>(frame.publish_ns());
+      writer.write(channel, static_cast<std::uint32_t>(f), t, t, dds::encode_sample(frame));
+    }
+    writer.close();
+  }
+  RunCommandOptions options;
+  options.in_recording = mcap.string();
+  options.subjects = {model.out};
+  options.rate_hz = walk.data_rate_hz;
+  options.out = scratch("from_recording.trc").string();
+  ASSERT_FALSE(find_problem(options));
+  const RunSummary summary = run_labelling(options);
+  EXPECT_EQ(summary.input_format, "recording");
+  EXPECT_EQ(summary.tracks, 42U);  // 41 markers, one of them under a new id after its occlusion
+  EXPECT_EQ(summary.labelling.labelled_frames, summary.labelling.run_frames);
+  ASSERT_EQ(summary.subjects.size(), 1U);
+  EXPECT_EQ(summary.subjects[0].fill.pattern.frames, 9U);
+  const MarkerTrajectories out = load_trc(options.out);
+  std::size_t compared = 0;
+  for (std::size_t m = 0; m < walk.marker_count(); ++m) {
+    const auto column = std::find(out.marker_names.begin(), out.marker_names.end(), walk.marker_names[m]);
+    ASSERT_NE(column, out.marker_names.end()) << walk.marker_names[m];
+    const auto o = static_cast<std::size_t>(column - out.marker_names.begin());
+    for (std::size_t f = 0; f < std::min(walk.frame_count(), out.frame_count()); ++f) {
+      if (!walk.is_valid(f, m)) continue;
+      ASSERT_TRUE(out.is_valid(f, o)) << walk.marker_names[m] << " frame " << f;
+      const double tolerance = m == 3 && f >= 60 && f < 69 ? 0.01 : 1e-6;  // filled: within 10 mm
+      EXPECT_LT((out.position(f, o) - walk.position(f, m)).norm(), tolerance) << walk.marker_names[m] << f;
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 41U * 150U);
 }
 
 TEST(LabelJob, RunWithAMarkerSetAsTheSubjectIsAConfigErrorNamingIt) {

@@ -21,7 +21,10 @@ static void add_run_options(CLI::App& run, RunCommandOptions& options) {
   run.add_option("--tracks", options.tracks,
                  "the trial's tracks: estimator_node --out-tracks JSON Lines, or a .c3d/.trc file (its names "
                  "are not read)")
-      ->required()
+      ->check(CLI::ExistingFile);
+  run.add_option(
+         "--in-recording", options.in_recording,
+         "or an MCAP recording (panoptes_record): the tracks of its /panoptes/frames as published live")
       ->check(CLI::ExistingFile);
   run.add_option("--subjects", options.subjects, "subject model YAML (panoptes_label model), one per subject")
       ->required()

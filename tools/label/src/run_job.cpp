@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "panoptes/errors.h"
+#include "panoptes/export_job/recording_source.h"
 #include "panoptes/formats/c3d.h"
 #include "panoptes/formats/csv.h"
 #include "panoptes/formats/record_source.h"
@@ -48,22 +49,28 @@ labelling::MarkerSamples to_samples(MarkerTrajectories data, const std::string& 
 // The input as anonymous columns: a labelled file's markers, or the estimator's tracks resampled to
 // options.rate_hz (a track updated less often than every two samples has a gap there).
 labelling::MarkerSamples read_tracks(const RunCommandOptions& options, RunSummary& summary) {
-  const std::string extension = extension_of(options.tracks);
-  if (extension == ".c3d" || extension == ".trc") {
+  const std::string& input = input_of(options);
+  const std::string extension = extension_of(input);
+  if (options.in_recording.empty() && (extension == ".c3d" || extension == ".trc")) {
     summary.input_format = extension.substr(1);
-    return labelling::load_marker_samples(options.tracks);
+    return labelling::load_marker_samples(input);
   }
-  summary.input_format = "tracks";
-  JsonlRecordSource source(fs::path(options.tracks), std::nullopt);
-  ExportRecords records = source.read();
+  ExportRecords records;
+  if (!options.in_recording.empty()) {
+    summary.input_format = "recording";
+    records = export_job::RecordingRecordSource(fs::path(options.in_recording)).read();
+  } else {
+    summary.input_format = "tracks";
+    records = JsonlRecordSource(fs::path(options.tracks), std::nullopt).read();
+  }
   for (const std::string& error : records.skipped) std::fprintf(stderr, "skipped %s\n", error.c_str());
   summary.skipped_records = records.skipped.size();
-  if (records.tracks.empty()) throw ConfigError(options.tracks, "", "no track records to label");
+  if (records.tracks.empty()) throw ConfigError(input, "", "no track records to label");
   ResampleOptions resample;
   resample.rate_hz = options.rate_hz;
   resample.max_gap_ns = static_cast<TimeNs>(2.0e9 / options.rate_hz);
   const SampleGrid grid = make_grid(records.tracks, {}, resample);
-  return to_samples(resample_tracks(records.tracks, grid, resample), options.tracks);
+  return to_samples(resample_tracks(records.tracks, grid, resample), input);
 }
 
 // The subjects' labelled, filled trajectories side by side; names "subject:marker" for several.
@@ -112,7 +119,13 @@ void write_output(const std::string& path, const MarkerTrajectories& data) {
 
 }  // namespace
 
+const std::string& input_of(const RunCommandOptions& options) {
+  return options.in_recording.empty() ? options.tracks : options.in_recording;
+}
+
 std::optional<std::string> find_problem(const RunCommandOptions& options) {
+  if (options.tracks.empty() == options.in_recording.empty())
+    return "input: give --tracks or --in-recording (one of them)";
   if (!parse_fill_method(options.fill))
     return "--fill: expected pattern, relational, spline, linear or none, got '" + options.fill + "'";
   if (!(options.max_gap_s >= 0.0) || !std::isfinite(options.max_gap_s))
@@ -130,7 +143,7 @@ RunSummary run_labelling(const RunCommandOptions& options) {
   for (const auto& path : options.subjects) models.push_back(labelling::load_subject_model(path));
   const labelling::MarkerSamples tracks = read_tracks(options, summary);
   if (tracks.frame_count() == 0 || !(tracks.rate_hz > 0.0))
-    throw ConfigError(options.tracks, "", "no frames at a known rate to label");
+    throw ConfigError(input_of(options), "", "no frames at a known rate to label");
   summary.tracks = tracks.point_count();
   labelling::LabellerOptions labeller;
   labeller.soft_segments = options.soft_segments;
@@ -191,7 +204,7 @@ std::string run_report_json(const RunCommandOptions& options, const RunSummary& 
   }
   std::size_t runs_labelled = 0;
   for (const auto& run : l.runs) runs_labelled += run.label ? 1 : 0;
-  const nlohmann::json report = {{"input", options.tracks},
+  const nlohmann::json report = {{"input", input_of(options)},
                                  {"format", summary.input_format},
                                  {"out", options.out},
                                  {"frames", l.frames},
@@ -215,8 +228,8 @@ std::string run_report(const RunCommandOptions& options, const RunSummary& summa
   std::snprintf(line, sizeof line,
                 "%s (%s): %zu frames at %.6g Hz, %zu tracks in %zu runs; %zu of %zu track-frames labelled "
                 "(%.2f %%), the passes disagreed on %zu runs\n",
-                options.tracks.c_str(), summary.input_format.c_str(), l.frames, summary.output.data_rate_hz,
-                summary.tracks, l.runs.size(), l.labelled_frames, l.run_frames,
+                input_of(options).c_str(), summary.input_format.c_str(), l.frames,
+                summary.output.data_rate_hz, summary.tracks, l.runs.size(), l.labelled_frames, l.run_frames,
                 l.run_frames == 0
                     ? 0.0
                     : 100.0 * static_cast<double>(l.labelled_frames) / static_cast<double>(l.run_frames),

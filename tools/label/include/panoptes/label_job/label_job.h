@@ -54,6 +54,7 @@ std::string model_summary_line(const labelling::SubjectModel& model);
 
 struct RunCommandOptions {
   std::string tracks;                 // .c3d, .trc, or the estimator's track JSON Lines (--out-tracks)
+  std::string in_recording;           // or an MCAP recording: the tracks as published live
   std::vector<std::string> subjects;  // subject model YAML files (panoptes_label model)
   std::string out;                    // .c3d, .trc or .csv
   std::string report;                 // optional JSON report
@@ -65,6 +66,9 @@ struct RunCommandOptions {
 
 // A bad --fill or --max-gap-s, an output that is not .c3d/.trc/.csv (naming the option), or nullopt.
 std::optional<std::string> find_problem(const RunCommandOptions& options);
+
+// The run's input: --tracks or --in-recording.
+const std::string& input_of(const RunCommandOptions& options);
 
 // "pattern", "relational", "spline", "linear" or "none" as a fill method; nullopt otherwise.
 std::optional<labelling::FillMethod> parse_fill_method(const std::string& name);
