@@ -66,6 +66,7 @@ YAML
 expect_exit 0 "simulate the L-frame" -- "$bin/panoptes_sim" features --scene "$work/lframe.yaml" --out-dir "$work/lf" --duration 0.5
 expect_exit 0 "calibrate world --lframe" -- "$en" calibrate world --calibration "$work/cal.yaml" \
   --in-features "$work"/lf/cam*.jsonl --lframe 0.5,0.3 --out "$work/cal_world.yaml"
+
 cat "$work/last.out"
 # largest_position_error CALIBRATION TRUTH LIMIT_M: prints the largest camera-centre distance and
 # succeeds if it is below LIMIT_M.
@@ -223,5 +224,25 @@ expect_exit 1 "calibrate solve refuses a focal length 3x wrong" -- "$en" calibra
   --cameras "$work/points_x3.yaml" --in-features "$work/points3.jsonl" --wand 0 --out "$work/x3.yaml"
 expect_stderr_contains "cam2: focal length" "the error names the camera"
 expect_stderr_contains "check K" "the error says what to check"
+
+# --- versions (issue 36 item 5, docs/calibration.md "Versions") ----------------------------------
+cp "$work/cal.yaml" "$work/versioned.yaml"
+cp "$work/cal.yaml" "$work/before.yaml"
+expect_exit 0 "calibrate history --start" -- "$en" calibrate history --calibration "$work/versioned.yaml" --start
+expect_exit 0 "calibrate world onto a file with a history" -- "$en" calibrate world --calibration "$work/versioned.yaml" \
+  --in-features "$work"/lf/cam*.jsonl --lframe 0.5,0.3 --out "$work/versioned.yaml"
+expect_exit 0 "calibrate history --json" -- "$en" calibrate history --calibration "$work/versioned.yaml" --json
+python3 - "$work/last.out" <<'PY' && pass "two versions: initial, then calibrate world touching every camera" || fail "history: $(cat "$work/last.out")"
+import json, sys
+v = [json.loads(line) for line in open(sys.argv[1]) if line.strip()]
+sys.exit(0 if [x["reason"] for x in v] == ["initial", "calibrate world"] and len(v[1]["cameras"]) >= 4 else 1)
+PY
+cmp -s "$work/versioned.yaml" "$work/cal_world.yaml" && pass "the versioned file equals the plain calibrate world output" ||
+  fail "versioned calibrate world differs from the plain one"
+expect_exit 0 "calibrate revert --version 1" -- "$en" calibrate revert --calibration "$work/versioned.yaml" --version 1
+cmp -s "$work/versioned.yaml" "$work/before.yaml" && pass "revert restores the exact earlier file" || fail "revert: bytes differ"
+grep -Eq "^v2 .* reverted +calibrate world" "$work/last.out" && pass "the reverted version is marked" || fail "no reverted v2: $(cat "$work/last.out")"
+expect_exit 2 "a version that does not exist" -- "$en" calibrate revert --calibration "$work/versioned.yaml" --version 9
+expect_stderr_contains "history.jsonl: version: no version 9 (3 stored)" "the error names the history and the version"
 
 finish

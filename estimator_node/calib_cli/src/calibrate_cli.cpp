@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "calibrate_history_cli.h"
 #include "calibrate_marker_cli.h"
 #include "panoptes/calib/intrinsics.h"
 #include "panoptes/calib/point_import.h"
@@ -25,6 +26,7 @@
 #include "panoptes/calib/world_frame.h"
 #include "panoptes/calibration.h"
 #include "panoptes/calibration_file.h"
+#include "panoptes/calibration_history.h"
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
 #include "panoptes/glob.h"
@@ -48,6 +50,9 @@ constexpr const char* kUsage =
     "              features and nominal cameras for `solve --wand 0`\n"
     "  marker      self-calibration of a 7-LED marker (seed 004 §3)\n"
     "  surface     homographies of a wall's cameras for surface mode (docs/surface.md)\n"
+    "  history     the versions of a calibration file (kept beside it in <file>.history/)\n"
+    "  revert      restore an earlier version of a calibration file, byte for byte\n"
+    "  accept      mark an automatic change to a calibration file as reviewed\n"
     "\n"
     "Each subcommand answers --help.\n";
 
@@ -286,15 +291,14 @@ int run_solve(int argc, char** argv) {
   options.progress = say;
   const SolveResult result = solve_wand_calibration(given.cameras, tracks, wand, options);
   try {
-    std::ofstream yaml(out);
-    if (!yaml) return bad_input(program, out + ": cannot write");
-    yaml << calibration_yaml(result);
-    yaml.close();
+    write_calibration_text(out, calibration_yaml(result), change_because("calibrate solve"));
     const auto files = write_report(result, out);
     std::cout << report_summary(result);
     std::cout << "wrote " << out;
     for (const auto& file : files) std::cout << ", " << file.filename().string();
     std::cout << "\n";
+  } catch (const InputError& e) {  // the calibration file cannot be written
+    return bad_input(program, e.what());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: %s\n", program.c_str(), e.what());
     return kExitFailure;
@@ -329,7 +333,8 @@ int run_wand_floor(const std::string& program, SystemCalibration& calibration,
   const std::filesystem::path out_path(out);
   const auto report_path = out_path.parent_path() / (out_path.stem().string() + ".world.txt");
   try {
-    save_calibration(calibration, out);
+    write_calibration_text(out, calibration_to_yaml(calibration),
+                           change_because("calibrate world (wand on the floor)"));
     std::ofstream report(report_path);
     if (!report) throw std::runtime_error(report_path.string() + ": cannot write");
     report << "calibrate world --wand-floor: " << calibration_file << " -> " << out << "\n"
@@ -432,7 +437,7 @@ int run_static_marker_world(const WorldArgs& args, SystemCalibration& calibratio
     return kExitFailure;
   }
   apply_world_transform(calibration, *T_new_old, scale);
-  save_calibration(calibration, args.out);
+  write_calibration_text(args.out, calibration_to_yaml(calibration), change_because("calibrate world"));
   std::printf("world frame set from %s (%zu markers); wrote %s\n", args.floor ? "the floor" : "the L-frame",
               points.size(), args.out.c_str());
   if (unscaled) std::printf("metric scale set from the L-frame's arms: %.6f m per unit\n", scale);
@@ -515,6 +520,8 @@ int run_calibrate(int argc, char** argv) {
     if (sub == "world") return run_world(argc - 1, argv + 1);
     if (sub == "capture") return run_calibrate_capture(argc - 1, argv + 1);
     if (sub == "marker") return panoptes::estimator::run_calibrate_marker(argc - 1, argv + 1);
+    if (sub == "history" || sub == "revert" || sub == "accept")
+      return run_calibrate_history(argc - 1, argv + 1);
   } catch (const InputError& e) {  // a bad file, key or value, e.g. $PANOPTES_DOMAIN=abc, the DDS profile
     std::fprintf(stderr, "estimator_node calibrate %s: %s\n", std::string(sub).c_str(), e.what());
     return kExitBadInput;
