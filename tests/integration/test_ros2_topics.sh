@@ -26,6 +26,15 @@ run_live() {
     "${probe_args[@]}" >"$work/$name.probe.log" 2>&1 &
   local probe=$!
   pids+=("$probe")
+  local recorder=""
+  if [ "${#record_topics[@]}" -gt 0 ]; then  # also panoptes_record: its default topics ("all") or these
+    local topic_args=()
+    for topic in "${record_topics[@]}"; do [ "$topic" = all ] || topic_args+=(--topics "$topic"); done
+    "$bin/panoptes_record" --out "$work/$name.mcap" --duration $((seconds + 4)) --quiet ${topic_args[@]+"${topic_args[@]}"} \
+      >"$work/$name.record.log" 2>&1 &
+    recorder=$!
+    pids+=("$recorder")
+  fi
   for camera in c0 c1 c2 c3 c4 c5; do
     "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration "$seconds" \
       --quiet >"$work/$name.$camera.log" 2>&1 &
@@ -35,10 +44,30 @@ run_live() {
   wait "$estimator"
   local rc=$?
   timeout 30 tail --pid="$probe" -f /dev/null
+  [ -z "$recorder" ] || timeout 30 tail --pid="$recorder" -f /dev/null
   [ "$rc" -eq 0 ] && pass "$name: estimator exited cleanly" || { fail "$name: estimator exit $rc"; tail "$work/$name.log"; }
 }
 
 probe_args=()  # extra panoptes_ros2_probe arguments of the next run_live
+record_topics=()  # topics panoptes_record records during the next run_live ("all": its defaults); none: no recorder
+
+# recorded_ros2 MCAP PROBE_JSONL TOPIC...: the recording's ROS 2 channels decode with Foxglove's own
+# decoders (@foxglove/ros2idl-parser, @foxglove/rosmsg2-serialization, @mcap/core) as their ROS 2
+# types, and their messages are the ones the probe received (frame numbers or stamps), issue 34 item 7.
+recorded_ros2() {
+  local mcap="$1" probe="$2"
+  shift 2
+  if [ ! -d "$source_dir/tests/mcap/node_modules/@mcap/core" ]; then
+    [ -n "${CI:-}" ] && fail "tests/mcap/node_modules missing (deploy/install-deps.sh runs npm ci)" ||
+      echo "SKIP: recorded ROS 2 topics: tests/mcap/node_modules missing (run npm ci in tests/mcap)"
+    return
+  fi
+  rm -rf "$mcap.dump"
+  node "$source_dir/tests/mcap/decode_ros2.mjs" "$mcap" --dump-dir "$mcap.dump" >"$mcap.json" 2>&1
+  python3 "$source_dir/tests/tools/check_recorded_ros2.py" "$mcap.json" "$mcap.dump" "$probe" "$@" &&
+    pass "recorded ROS 2 topics decode with Foxglove's decoders as their ROS 2 types: $*" ||
+    fail "recorded ROS 2 topics (see above; $mcap.json)"
+}
 
 # tf_rate FILE LIMIT WHAT: /tf messages per second of header stamps (reliable reader) within 5 % of LIMIT.
 tf_rate() {
@@ -56,7 +85,10 @@ EOF
 }
 
 # --- default settings ---------------------------------------------------------------------------
+record_topics=(all)
 run_live default 8
+record_topics=()
+recorded_ros2 "$work/default.mcap" "$work/default.ros2.jsonl" /tf /rigid_bodies /markers
 tf_rate "$work/default.ros2.jsonl" 120 "per-camera frames, default ros2.tf_rate_hz"
 grep -q "ROS 2: body" "$work/default.log" && fail "valid body names were renamed" || pass "head and tool keep their names"
 python3 - "$work/default.ros2.jsonl" "$work/default.poses.jsonl" "$work/ros2_poses.jsonl" <<'EOF' &&
@@ -131,7 +163,11 @@ cat "$work/last.out"
 # (One run for these and the ros2: keys of a configuration file, to keep the test short: issue 31.)
 printf 'ros2:\n  frame_id: map\n  child_frame_prefix: "mocap/"\n' >"$work/ros2.yaml"
 probe_args=(--namespace /lab1 /)
+record_topics=(rt/lab1/rigid_bodies rt/lab1/markers rt/lab1/panoptes/head/pose rt/lab1/panoptes/tool/twist)
 run_live namespaced 8 --frames fixed --frame-rate-hz 240 --ros2-tf-rate-hz 100 --ros2-namespace /lab1 --config "$work/ros2.yaml"
+record_topics=()
+recorded_ros2 "$work/namespaced.mcap" "$work/namespaced.ros2.jsonl" /lab1/rigid_bodies /lab1/markers \
+  /lab1/panoptes/head/pose /lab1/panoptes/tool/twist
 probe_args=()
 tf_rate "$work/namespaced.ros2.jsonl" 100 "fixed 240 Hz frames, --ros2-tf-rate-hz 100"
 python3 - "$work/namespaced.ros2.jsonl" <<'EOF' && pass "--ros2-namespace /lab1: every ROS 2 topic but /tf under /lab1, none bare" ||

@@ -146,7 +146,7 @@ fdds::Topic* raw_topic(BusCore& core, const RawTopicEntry& entry) {
 }  // namespace
 
 std::unique_ptr<RawReader> Bus::make_raw_reader(const std::string& topic, RawReader::Callback on_sample) {
-  const RawTopicEntry& entry = raw_entry_named(topic);
+  const RawTopicEntry entry = raw_entry_named(topic);
   auto impl = std::make_unique<RawReader::Impl>();
   impl->core = core_;
   impl->listener =
@@ -163,7 +163,7 @@ std::unique_ptr<RawReader> Bus::make_raw_reader(const std::string& topic, RawRea
 }
 
 std::unique_ptr<RawWriter> Bus::make_raw_writer(const std::string& topic) {
-  const RawTopicEntry& entry = raw_entry_named(topic);
+  const RawTopicEntry entry = raw_entry_named(topic);
   auto impl = std::make_unique<RawWriter::Impl>();
   impl->core = core_;
   fdds::DataWriterQos writer_qos = writer_qos_for(entry.spec, Qos::kDefault);

@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 // Moving every absolute time of a recorded sample by one offset (panoptes_replay's restamp).
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "panoptes/dds/bus.h"
 #include "panoptes/dds/cdr.h"
 #include "panoptes/dds/decode.h"
 #include "panoptes_msgs/panoptes.h"
+#include "panoptes_msgs/ros2.h"
 #include "topics.h"
 
 namespace panoptes::dds {
@@ -55,6 +58,42 @@ void shift_mocap_frame(msg::MocapFrame& m, const Shift& at) {
   s.updated_ns(at(s.updated_ns()));
 }
 
+// A ROS 2 header's stamp (sec, nanosec) moved as one time in ns; an all-zero stamp stays.
+void shift_header(std_msgs::msg::dds_::Header_& header, const Shift& at) {
+  auto& stamp = header.stamp();
+  const std::int64_t ns = std::int64_t{stamp.sec()} * 1'000'000'000 + std::int64_t{stamp.nanosec()};
+  const std::int64_t moved = at(ns);
+  std::int64_t sec = moved / 1'000'000'000;
+  std::int64_t nanosec = moved % 1'000'000'000;
+  if (nanosec < 0) {
+    nanosec += 1'000'000'000;
+    --sec;
+  }
+  stamp.sec(static_cast<std::int32_t>(sec));
+  stamp.nanosec(static_cast<std::uint32_t>(nanosec));
+}
+
+// The ROS 2 topics (docs/ros2.md), by the type their name resolves to: every header stamp moved.
+std::optional<bool> shift_ros2(const std::string& topic, std::vector<std::uint8_t>& cdr, const Shift& at) {
+  const auto raw = recordable_topic(topic);
+  if (!raw) return std::nullopt;
+  const std::string& type = raw->type_name;
+  const auto header_of = [&](auto& m) { shift_header(m.header(), at); };
+  if (type == "tf2_msgs::msg::dds_::TFMessage_")
+    return shift_as<tf2_msgs::msg::dds_::TFMessage_>(cdr, [&](auto& m) {
+      for (auto& transform : m.transforms()) shift_header(transform.header(), at);
+    });
+  if (type == "mocap4r2_msgs::msg::dds_::RigidBodies_")
+    return shift_as<mocap4r2_msgs::msg::dds_::RigidBodies_>(cdr, header_of);
+  if (type == "mocap4r2_msgs::msg::dds_::Markers_")
+    return shift_as<mocap4r2_msgs::msg::dds_::Markers_>(cdr, header_of);
+  if (type == "geometry_msgs::msg::dds_::PoseStamped_")
+    return shift_as<geometry_msgs::msg::dds_::PoseStamped_>(cdr, header_of);
+  if (type == "geometry_msgs::msg::dds_::TwistStamped_")
+    return shift_as<geometry_msgs::msg::dds_::TwistStamped_>(cdr, header_of);
+  return std::nullopt;
+}
+
 }  // namespace
 
 bool shift_sample_times(const std::string& topic, std::vector<std::uint8_t>& cdr, std::int64_t offset_ns) {
@@ -88,6 +127,7 @@ bool shift_sample_times(const std::string& topic, std::vector<std::uint8_t>& cdr
   if (is_topic<msg::CameraPreview>(topic)) return shift_stamp<msg::CameraPreview>(cdr, at);
   if (is_topic<msg::Predictions>(topic)) return shift_stamp<msg::Predictions>(cdr, at);
   if (is_topic<msg::SystemCalibration>(topic)) return shift_stamp<msg::SystemCalibration>(cdr, at);
+  if (const auto ros2 = shift_ros2(topic, cdr, at)) return *ros2;
   return true;  // no times (camera commands) or not a recorded topic: unchanged
 }
 

@@ -2,6 +2,10 @@
 // Topics and QoS: the writer and reader QoS of a topic and the table of raw (serialized) topics.
 #include "topics.h"
 
+#include <optional>
+#include <string>
+#include <utility>
+
 namespace panoptes::dds {
 
 // Transient-local topics (the samples a late joiner needs: body descriptions, calibration, camera
@@ -72,6 +76,45 @@ const std::vector<RawTopicEntry>& raw_entries() {
   return entries;
 }
 
+template <class T>
+RawTopicEntry ros2_entry(std::string name, const char* ros_type) {
+  typename TopicTraits<T>::PubSubType real;
+  return {{std::move(name), real.getName(), ros_type, false}, TopicTraits<T>::spec(), [] {
+            return new typename TopicTraits<T>::PubSubType();
+          }};
+}
+
+// The ROS 2 topics of docs/ros2.md recorded by default (their names without a namespace).
+const std::vector<RawTopicEntry>& ros2_entries() {
+  static const std::vector<RawTopicEntry> entries = {
+      ros2_entry<tf2_msgs::msg::dds_::TFMessage_>("rt/tf", "tf2_msgs/msg/TFMessage"),
+      ros2_entry<mocap4r2_msgs::msg::dds_::RigidBodies_>("rt/rigid_bodies", "mocap4r2_msgs/msg/RigidBodies"),
+      ros2_entry<mocap4r2_msgs::msg::dds_::Markers_>("rt/markers", "mocap4r2_msgs/msg/Markers"),
+  };
+  return entries;
+}
+
+bool ends_with(const std::string& text, const std::string& tail) {
+  return text.size() > tail.size() && text.compare(text.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+// A ROS 2 topic whose name depends on the configuration: rt/<namespace>/rigid_bodies and
+// rt/<namespace>/markers (ros2.namespace), rt/[<namespace>/]panoptes/<body>/pose and twist.
+std::optional<RawTopicEntry> ros2_entry_by_pattern(const std::string& topic) {
+  if (topic.rfind("rt/", 0) != 0) return std::nullopt;
+  if (ends_with(topic, "/rigid_bodies"))
+    return ros2_entry<mocap4r2_msgs::msg::dds_::RigidBodies_>(topic, "mocap4r2_msgs/msg/RigidBodies");
+  if (ends_with(topic, "/markers"))
+    return ros2_entry<mocap4r2_msgs::msg::dds_::Markers_>(topic, "mocap4r2_msgs/msg/Markers");
+  const auto body = topic.find("/panoptes/");
+  if (body == std::string::npos || topic.find('/', body + 10) == std::string::npos) return std::nullopt;
+  if (ends_with(topic, "/pose"))
+    return ros2_entry<geometry_msgs::msg::dds_::PoseStamped_>(topic, "geometry_msgs/msg/PoseStamped");
+  if (ends_with(topic, "/twist"))
+    return ros2_entry<geometry_msgs::msg::dds_::TwistStamped_>(topic, "geometry_msgs/msg/TwistStamped");
+  return std::nullopt;
+}
+
 // Topics a raw writer may write although panoptes_record does not record them (panoptes_rogue).
 const std::vector<RawTopicEntry>& unrecorded_raw_entries() {
   static const std::vector<RawTopicEntry> entries = {
@@ -83,18 +126,34 @@ const std::vector<RawTopicEntry>& unrecorded_raw_entries() {
 
 }  // namespace
 
-const RawTopicEntry& raw_entry_named(const std::string& topic) {
-  for (const auto* entries : {&raw_entries(), &unrecorded_raw_entries()}) {
+std::optional<RawTopicEntry> find_raw_entry(const std::string& topic) {
+  for (const auto* entries : {&raw_entries(), &ros2_entries(), &unrecorded_raw_entries()}) {
     for (const auto& entry : *entries) {
       if (entry.topic.topic == topic) return entry;
     }
   }
-  throw DdsInputError("'" + topic + "' is not a Panoptes topic (docs/protocol.md)");
+  return ros2_entry_by_pattern(topic);
+}
+
+RawTopicEntry raw_entry_named(const std::string& topic) {
+  if (auto entry = find_raw_entry(topic)) return std::move(*entry);
+  throw DdsInputError(
+      "'" + topic +
+      "' is not a Panoptes topic (docs/protocol.md) nor one of its ROS 2 topics (docs/ros2.md)");
+}
+
+std::optional<RawTopic> recordable_topic(const std::string& topic) {
+  for (const auto& entry : unrecorded_raw_entries()) {
+    if (entry.topic.topic == topic) return std::nullopt;
+  }
+  if (auto entry = find_raw_entry(topic)) return entry->topic;
+  return std::nullopt;
 }
 
 std::vector<RawTopic> panoptes_raw_topics() {
   std::vector<RawTopic> topics;
   for (const auto& entry : raw_entries()) topics.push_back(entry.topic);
+  for (const auto& entry : ros2_entries()) topics.push_back(entry.topic);
   return topics;
 }
 

@@ -228,7 +228,9 @@ struct RawTopicEntry {
   std::function<fdds::TopicDataType*()> make_real;
 };
 
-// The entry of `topic`: a recorded one or one only panoptes_rogue writes; DdsInputError for another name.
-const RawTopicEntry& raw_entry_named(const std::string& topic);
+// The entry of `topic`: a recorded one (a Panoptes topic or a ROS 2 one, whose name may carry a
+// namespace or a body: rt/lab1/markers, rt/panoptes/head/pose) or one only panoptes_rogue writes;
+// DdsInputError for another name.
+RawTopicEntry raw_entry_named(const std::string& topic);
 
 }  // namespace panoptes::dds

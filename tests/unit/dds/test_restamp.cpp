@@ -10,6 +10,7 @@
 #include "panoptes/dds/cdr.h"
 #include "panoptes/dds/decode.h"
 #include "panoptes_msgs/panoptes.h"
+#include "panoptes_msgs/ros2.h"
 
 namespace panoptes::dds {
 namespace {
@@ -135,6 +136,51 @@ TEST(Restamp, EveryStampedTopicMovesByTheSameOffset) {
   EXPECT_EQ(f.stamp_ns(), 100 + kShift);
   EXPECT_EQ(f.arrival_ns(), 110 + kShift);
   EXPECT_EQ(f.processing_ns(), 5);
+}
+
+// The ROS 2 topics (recorded since issue 34 item 7): every header stamp moves, also under a
+// namespace or a body's name; sec/nanosec carry and borrow; an all-zero stamp stays.
+TEST(Restamp, Ros2HeaderStampsMoveOnEveryRos2Topic) {
+  const auto stamp_ns = [](const std_msgs::msg::dds_::Header_& h) {
+    return std::int64_t{h.stamp().sec()} * 1'000'000'000 + std::int64_t{h.stamp().nanosec()};
+  };
+  std_msgs::msg::dds_::Header_ header;
+  header.stamp().sec(1'764'000'000);
+  header.stamp().nanosec(999'999'000);
+  header.frame_id("world");
+  const std::int64_t before = stamp_ns(header);
+
+  tf2_msgs::msg::dds_::TFMessage_ tf;
+  tf.transforms().resize(2);
+  tf.transforms()[0].header(header);
+  tf.transforms()[0].child_frame_id("head");
+  tf.transforms()[1].header(header);
+  const auto t = shifted("rt/tf", tf, 5'000);  // carries into the next second
+  EXPECT_EQ(stamp_ns(t.transforms()[0].header()), before + 5'000);
+  EXPECT_EQ(t.transforms()[1].header().stamp().sec(), 1'764'000'001);
+  EXPECT_EQ(t.transforms()[0].child_frame_id(), "head");
+
+  geometry_msgs::msg::dds_::PoseStamped_ pose;
+  pose.header(header);
+  pose.pose().position().x(0.25);
+  const auto p = shifted("rt/lab1/panoptes/head/pose", pose, -1'000'000'000'000);  // borrows
+  EXPECT_EQ(stamp_ns(p.header()), before - 1'000'000'000'000);
+  EXPECT_EQ(p.pose().position().x(), 0.25);
+  EXPECT_EQ(p.header().frame_id(), "world");
+
+  geometry_msgs::msg::dds_::TwistStamped_ twist;
+  twist.header(header);
+  EXPECT_EQ(stamp_ns(shifted("rt/panoptes/tool/twist", twist).header()), before + kShift);
+  mocap4r2_msgs::msg::dds_::RigidBodies_ bodies;
+  bodies.header(header);
+  bodies.frame_number(9);
+  const auto b = shifted("rt/rigid_bodies", bodies);
+  EXPECT_EQ(stamp_ns(b.header()), before + kShift);
+  EXPECT_EQ(b.frame_number(), 9U);
+  mocap4r2_msgs::msg::dds_::Markers_ markers;
+  EXPECT_EQ(stamp_ns(shifted("rt/lab1/markers", markers).header()), 0);  // unknown stays unknown
+  markers.header(header);
+  EXPECT_EQ(stamp_ns(shifted("rt/lab1/markers", markers).header()), before + kShift);
 }
 
 TEST(Restamp, SamplesWithoutTimesPassAndMalformedOnesAreRefused) {

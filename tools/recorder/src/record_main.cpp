@@ -273,7 +273,10 @@ int run(int argc, char** argv) {
   app.add_flag("--idle", options.idle, "wait for a 'start' RecorderCommand instead of recording at once");
   app.add_option("--id", options.id, "recorder id that RecorderCommand.target addresses")
       ->capture_default_str();
-  app.add_option("--topics", options.topics, "DDS topics to record (default: every Panoptes topic)");
+  app.add_option(
+      "--topics", options.topics,
+      "DDS topics to record (default: every Panoptes topic and rt/tf, rt/rigid_bodies, rt/markers); also "
+      "namespaced or per-body ROS 2 topics (rt/lab1/markers, rt/panoptes/head/pose)");
   app.add_option("--compression", options.compression, "chunk compression")
       ->check(CLI::IsMember({"zstd", "lz4", "none"}))
       ->capture_default_str();

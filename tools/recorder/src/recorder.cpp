@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/recorder/recorder.h"
 
+#include <algorithm>
 #include <chrono>
 #include <utility>
 
@@ -19,16 +20,18 @@ std::uint64_t wall_ns() {
 }  // namespace
 
 Recorder::Recorder(dds::Bus& bus, RecorderOptions options) : bus_(bus), options_(std::move(options)) {
-  const auto all = dds::panoptes_raw_topics();
-  for (const auto& raw : all) {
-    bool wanted = options_.topics.empty();
-    for (const auto& name : options_.topics) wanted = wanted || name == raw.topic;
-    if (wanted) topics_.push_back({raw});
+  if (options_.topics.empty()) {
+    for (const auto& raw : dds::panoptes_raw_topics()) topics_.push_back({raw});
+    return;
   }
   for (const auto& name : options_.topics) {
-    bool known = false;
-    for (const auto& raw : all) known = known || raw.topic == name;
-    if (!known) throw dds::DdsInputError("'" + name + "' is not a Panoptes topic (docs/protocol.md)");
+    const auto raw = dds::recordable_topic(name);
+    if (!raw)
+      throw dds::DdsInputError(
+          "'" + name +
+          "' is not a Panoptes topic (docs/protocol.md) nor one of its ROS 2 topics (docs/ros2.md)");
+    if (std::none_of(topics_.begin(), topics_.end(), [&](const Topic& t) { return t.raw.topic == name; }))
+      topics_.push_back({*raw});
   }
 }
 

@@ -25,16 +25,14 @@ std::int64_t wall_ns() {
       .count();
 }
 
-// The DDS names of the Panoptes topics in `wanted` (either naming); every Panoptes topic if empty.
+// The DDS names of the topics in `wanted` (either naming); empty (every recordable topic) if none.
 std::set<std::string> wanted_topics(const std::vector<std::string>& wanted) {
-  std::set<std::string> known;
-  for (const auto& raw : dds::panoptes_raw_topics()) known.insert(raw.topic);
-  if (wanted.empty()) return known;
   std::set<std::string> out;
   for (const auto& name : wanted) {
     const std::string dds_name = name.rfind("rt/", 0) == 0 ? name : dds_topic_name(name).value_or(name);
-    if (known.count(dds_name) == 0)
-      throw std::invalid_argument("--topics: '" + name + "' is not a Panoptes topic");
+    if (!dds::recordable_topic(dds_name))
+      throw std::invalid_argument("--topics: '" + name +
+                                  "' is not a Panoptes topic nor one of its ROS 2 topics");
     out.insert(dds_name);
   }
   return out;
@@ -50,7 +48,9 @@ Replayer::Replayer(const std::filesystem::path& path, ReplayOptions options) : o
     auto [it, added] = channel_topic.try_emplace(m.channel->id, SIZE_MAX);
     if (added) {
       const auto name = dds_topic_name(m.channel->topic);
-      if (name && wanted.count(*name) != 0 && m.channel->message_encoding == kMessageEncoding) {
+      const bool chosen =
+          name && (wanted.empty() ? dds::recordable_topic(*name).has_value() : wanted.count(*name) != 0);
+      if (chosen && m.channel->message_encoding == kMessageEncoding) {
         const auto found = std::find(topics_.begin(), topics_.end(), *name);
         it->second = static_cast<std::size_t>(found - topics_.begin());
         if (found == topics_.end()) topics_.push_back(*name);

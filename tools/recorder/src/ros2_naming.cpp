@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -136,6 +137,90 @@ std::string idl_section(const std::string& name, const std::map<std::string, Def
   return text + "};  // module msg\n};  // module panoptes\n";
 }
 
+// --- the ROS 2 types of idl/ros2.idl ----------------------------------------------------------
+
+struct RosStruct {
+  std::size_t order = 0;
+  std::string package;
+  std::vector<std::string> lines;  // annotations, "struct Name {" ... "};", in ROS naming
+  std::set<std::string> uses;      // the ROS types its members name ("geometry_msgs/msg/Point")
+};
+
+const std::regex& wire_name() {
+  static const std::regex pattern(R"((\w+)::msg::dds_::(\w+)_\b)");
+  return pattern;
+}
+
+// "geometry_msgs::msg::dds_::Point_" -> "geometry_msgs::msg::Point" in a line of idl/ros2.idl.
+std::string ros_naming(const std::string& line) {
+  return std::regex_replace(line, wire_name(), "$1::msg::$2");
+}
+
+// The structs of idl/ros2.idl by ROS type ("tf2_msgs/msg/TFMessage").
+std::map<std::string, RosStruct> ros2_structs(const std::string& idl) {
+  std::map<std::string, RosStruct> structs;
+  std::istringstream lines(idl);
+  std::string line, package;
+  std::vector<std::string> annotations;
+  RosStruct* open = nullptr;
+  while (std::getline(lines, line)) {
+    if (open != nullptr) {
+      open->lines.push_back(ros_naming(line));
+      const std::string code = line.substr(0, line.find("//"));
+      for (std::sregex_iterator it(code.begin(), code.end(), wire_name()), end; it != end; ++it)
+        open->uses.insert((*it)[1].str() + "/msg/" + (*it)[2].str());
+      if (line.rfind("};", 0) == 0) open = nullptr;
+    } else if (line.rfind("module ", 0) == 0) {
+      std::istringstream words(line.substr(7));
+      words >> package;
+    } else if (line.rfind('@', 0) == 0) {
+      annotations.push_back(line);
+    } else if (line.rfind("struct ", 0) == 0) {
+      std::istringstream words(line.substr(7));
+      std::string name;
+      words >> name;
+      if (!name.empty() && name.back() == '_') name.pop_back();
+      std::string type = package;
+      type.append("/msg/").append(name);
+      open = &structs[type];
+      open->order = structs.size();
+      open->package = package;
+      open->lines = annotations;
+      open->lines.push_back("struct " + name + " {");
+      annotations.clear();
+    } else if (!line.empty() && line.rfind("//", 0) != 0) {
+      annotations.clear();
+    }
+  }
+  return structs;
+}
+
+std::string ros2_section(const std::string& type, const RosStruct& s) {
+  std::string text = std::string(80, '=') + "\nIDL: " + type + "\nmodule " + s.package + " {\nmodule msg {\n";
+  for (const auto& line : s.lines) text += line + "\n";
+  return text + "};  // module msg\n};  // module " + s.package + "\n";
+}
+
+std::string ros2_types_schema(const std::string& ros_type) {
+  const auto structs = ros2_structs(ros2_idl_text());
+  if (structs.count(ros_type) == 0) return "";
+  std::set<std::string> needed;
+  std::vector<std::string> todo{ros_type};
+  while (!todo.empty()) {
+    const std::string next = todo.back();
+    todo.pop_back();
+    if (!needed.insert(next).second) continue;
+    for (const auto& used : structs.at(next).uses) todo.push_back(used);
+  }
+  needed.erase(ros_type);
+  std::vector<std::string> ordered(needed.begin(), needed.end());
+  std::sort(ordered.begin(), ordered.end(),
+            [&](const auto& a, const auto& b) { return structs.at(a).order < structs.at(b).order; });
+  std::string text = ros2_section(ros_type, structs.at(ros_type));
+  for (const auto& type : ordered) text += ros2_section(type, structs.at(type));
+  return text;
+}
+
 }  // namespace
 
 std::string ros2idl_schema(const std::string& ros_type) {
@@ -143,7 +228,9 @@ std::string ros2idl_schema(const std::string& ros_type) {
   const std::string prefix = kPackagePrefix;
   const std::string name = ros_type.rfind(prefix, 0) == 0 ? ros_type.substr(prefix.size()) : "";
   if (structs.count(name) == 0) {
-    throw std::invalid_argument("ros2idl_schema: " + ros_type + " is not a type of idl/panoptes.idl");
+    if (auto ros = ros2_types_schema(ros_type); !ros.empty()) return ros;
+    throw std::invalid_argument("ros2idl_schema: " + ros_type +
+                                " is not a type of idl/panoptes.idl nor idl/ros2.idl");
   }
   std::string text = idl_section(name, structs);
   for (const auto& dependency : dependencies(name, structs)) text += idl_section(dependency, structs);

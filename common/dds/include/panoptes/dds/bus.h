@@ -11,6 +11,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -74,8 +75,13 @@ struct RawTopic {
   std::string ros_type;   // "panoptes/msg/FeatureFrame" (ROS 2 naming: rosbag2 schemas)
   bool transient_local = false;
 };
-// Every Panoptes topic of docs/protocol.md, in a fixed order (the latency probes are left out).
+// Every topic panoptes_record records by default, in a fixed order: the Panoptes topics of
+// docs/protocol.md (the latency probes and the recorder's own left out), then the ROS 2 topics of
+// docs/ros2.md with fixed names (rt/tf, rt/rigid_bodies, rt/markers).
 std::vector<RawTopic> panoptes_raw_topics();
+// `topic` if it can be recorded: one of the above, or a ROS 2 topic named after a namespace or a
+// body (rt/lab1/rigid_bodies, rt/lab1/markers, rt/[lab1/]panoptes/<body>/pose|twist).
+std::optional<RawTopic> recordable_topic(const std::string& topic);
 
 // One serialized sample: the CDR payload as on the wire, its 4-byte encapsulation header included.
 struct RawSample {

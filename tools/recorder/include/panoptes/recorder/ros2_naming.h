@@ -15,14 +15,19 @@ inline constexpr const char* kMessageEncoding = "cdr";
 std::string ros_topic_name(const std::string& dds_topic);
 // "/panoptes/features" -> "rt/panoptes/features"; nullopt for a name without the leading '/'.
 std::optional<std::string> dds_topic_name(const std::string& ros_topic);
-// idl/panoptes.idl as it was at build time.
+// idl/panoptes.idl and idl/ros2.idl as they were at build time.
 const char* panoptes_idl_text();
+const char* ros2_idl_text();
 // The ros2idl schema of "panoptes/msg/<Type>" as rosbag2's message-definition encoding has it: one
 // section per struct, the type's own first, then every struct it uses (transitively) in the order of
 // idl/panoptes.idl. Each section is a line of 80 '=', a line "IDL: panoptes/msg/<Name>", and the
 // struct inside "module panoptes { module msg { ... }; };" with references to other structs written
 // in full (panoptes::msg::Pose3). Readers such as Foxglove decode with the first section's struct.
-// Throws std::invalid_argument for a type idl/panoptes.idl does not define.
+// The ROS 2 types of idl/ros2.idl ("tf2_msgs/msg/TFMessage", "geometry_msgs/msg/PoseStamped", ...)
+// likewise, under their ROS names: "IDL: tf2_msgs/msg/TFMessage", "module tf2_msgs { module msg {
+// struct TFMessage {...}", references as geometry_msgs::msg::TransformStamped (the wire's dds_
+// module and trailing '_' taken away, as rosidl's own .idl files name them).
+// Throws std::invalid_argument for a type neither file defines.
 std::string ros2idl_schema(const std::string& ros_type);
 
 }  // namespace panoptes::recorder
