@@ -72,6 +72,12 @@ struct SettingsFlags {
     bind(app.add_option("--frame-rate-hz", node.frame_rate_hz, "rate of --frames fixed")
              ->check(CLI::Range(1, 10000)),
          [this](auto& c) { c.node.frame_rate_hz = values.node.frame_rate_hz; });
+    bind(app.add_option(
+                "--realtime-priority", node.realtime_priority,
+                "live: run the estimator thread (which publishes fixed-rate frames) at this SCHED_FIFO "
+                "priority, 1-99 (0: the normal scheduler; needs root or CAP_SYS_NICE; docs/frames.md)")
+             ->check(CLI::Range(0, 99)),
+         [this](auto& c) { c.node.realtime_priority = values.node.realtime_priority; });
     bind(app.add_flag("--ros2,!--no-ros2", values.ros2.enabled,
                       "live: publish the ROS 2 topics (docs/ros2.md: rt/panoptes/<body>/pose, twist, rt/tf, "
                       "rt/rigid_bodies, rt/markers)"),

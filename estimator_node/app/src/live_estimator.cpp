@@ -2,7 +2,9 @@
 #include "panoptes/estimator_app/live_estimator.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -11,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <pthread.h>
+#include <sched.h>
 #include <sys/prctl.h>
 
 #include "panoptes/calibration.h"
@@ -119,6 +123,7 @@ class LiveEstimator {
   void publish_update(FeatureFrame&& frame, TimeNs dequeued_ns);
   // --frames fixed: the frame of the newest grid instant, once it is due (docs/frames.md).
   void publish_fixed_frame();
+  void use_realtime_priority();
   // How long the loop may wait for frames: until the next fixed-rate instant, at most 1 ms.
   std::chrono::nanoseconds max_wait() const;
   void finish(Processed& done);
@@ -427,11 +432,31 @@ void LiveEstimator::expire_idle_tracks(TimeNs now) {
         " track(s) deleted");
 }
 
+// --realtime-priority: this thread (which fuses and publishes) under SCHED_FIFO, so that a frame's
+// instant is not missed because another process holds the core (docs/frames.md). Refused without
+// CAP_SYS_NICE: said once, and the thread stays under the normal scheduler.
+void LiveEstimator::use_realtime_priority() {
+  if (node_.realtime_priority <= 0) return;
+  sched_param param{};
+  param.sched_priority = node_.realtime_priority;
+  const int error = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
+  if (error == 0) {
+    if (!options_.quiet)
+      log("estimator thread at SCHED_FIFO priority " + std::to_string(node_.realtime_priority));
+    return;
+  }
+  log("warning: --realtime-priority " + std::to_string(node_.realtime_priority) + ": " +
+      std::strerror(error) +
+      (error == EPERM ? " (needs root or CAP_SYS_NICE: setcap cap_sys_nice+ep estimator_node)" : "") +
+      "; the normal scheduler is used");
+}
+
 int LiveEstimator::run() {
   auto& inbox = session_.inbox();
   // Fixed-rate frames wait for their instant in inbox.wait: the default 50 us timer slack of a
   // normal thread would be most of the +-2 % of a 120 Hz period they may be late (docs/frames.md).
   if (frame_clock_) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+  use_realtime_priority();
   const TimeNs start = wall_now_ns();
   last_status_ = {start, 0, 0, process_cpu_seconds()};
   TimeNs next_status = start + seconds_to_ns(node_.status_period_s);

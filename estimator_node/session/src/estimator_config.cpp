@@ -180,6 +180,8 @@ void visit_node(Fields& f, NodeSettings& o) {
   f.integer("frame_rate_hz", o.frame_rate_hz, 1, 10000, "rate of fixed-rate frames");
   f.number("camera_lost_after_s", o.camera_lost_after_s, between(0.01, 3600),
            "live: a camera without a frame for this long (wall time) is lost");
+  f.integer("realtime_priority", o.realtime_priority, 0, 99,
+            "live: SCHED_FIFO priority of the estimator thread (0: normal; needs CAP_SYS_NICE)");
 }
 
 template <class Fields>

@@ -56,6 +56,9 @@ struct NodeSettings {
   std::string frames = "per-camera";
   int frame_rate_hz = 120;           // with frames: fixed
   double camera_lost_after_s = 0.5;  // live: a camera without a frame this long is lost (wall time)
+  // live: SCHED_FIFO priority (1-99) of the estimator thread, which publishes fixed-rate frames;
+  // 0: the normal scheduler (docs/frames.md, "Timing of the live loop"). Needs CAP_SYS_NICE.
+  int realtime_priority = 0;
 };
 
 // "" for "per-camera" or "fixed", else why not (the option or key is named by the caller).
