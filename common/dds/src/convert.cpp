@@ -162,6 +162,29 @@ std::optional<CameraCalibration> calibration_from(const msg::CameraInfo& info) {
   return calibration;
 }
 
+msg::SystemCalibration to_message(const SystemCalibration& calibration, TimeNs stamp_ns) {
+  msg::SystemCalibration message;
+  message.stamp_ns(stamp_ns);
+  for (const auto& camera : calibration.cameras) {
+    msg::CameraCalibration out;
+    out.camera_id(camera.id);
+    out.width(static_cast<std::uint32_t>(camera.intrinsics.width));
+    out.height(static_cast<std::uint32_t>(camera.intrinsics.height));
+    out.K({camera.intrinsics.fx, camera.intrinsics.fy, camera.intrinsics.cx, camera.intrinsics.cy});
+    out.distortion(camera.intrinsics.distortion);
+    out.has_pose(camera.T_world_cam.has_value());
+    if (camera.T_world_cam) {
+      msg::Pose3 pose;
+      const auto& T = *camera.T_world_cam;
+      pose.position({T.t.x(), T.t.y(), T.t.z()});
+      pose.orientation({T.q.x(), T.q.y(), T.q.z(), T.q.w()});
+      out.T_world_cam(pose);
+    }
+    message.cameras().push_back(out);
+  }
+  return message;
+}
+
 msg::BodyPose to_message(const PoseRecord& pose) {
   msg::BodyPose message;
   message.name(pose.body);

@@ -77,7 +77,8 @@ class LiveEstimator {
         status_writer_(bus_->make_writer<msg::EstimatorStatus>()),
         body_writer_(bus_->make_writer<msg::BodyPose>()),
         frame_writer_(bus_->make_writer<msg::MocapFrame>()),
-        descriptions_writer_(bus_->make_writer<msg::BodyDescriptions>()) {
+        descriptions_writer_(bus_->make_writer<msg::BodyDescriptions>()),
+        calibration_writer_(bus_->make_writer<msg::SystemCalibration>()) {
     if (options_.chains) chain_writer_ = bus_->make_writer<msg::ChainFrame>();
     if (options_.latency_probe) {
       latency_probe_.emplace(*bus_);
@@ -91,9 +92,10 @@ class LiveEstimator {
         log("rt/panoptes/frames at a fixed " + std::to_string(node_.frame_rate_hz) + " Hz (docs/frames.md)");
     }
     if (!options_.calibration_file.empty()) {
-      for (const auto& camera : load_calibration(options_.calibration_file).cameras)
-        from_file_.insert(camera.id);
+      in_use_ = load_calibration(options_.calibration_file);
+      for (const auto& camera : in_use_.cameras) from_file_.insert(camera.id);
     }
+    publish_calibration();
   }
 
   int run();
@@ -123,6 +125,9 @@ class LiveEstimator {
   void publish_update(FeatureFrame&& frame, TimeNs dequeued_ns);
   // --frames fixed: the frame of the newest grid instant, once it is due (docs/frames.md).
   void publish_fixed_frame();
+  // The calibration in use (the file's cameras and those calibrated from their CameraInfo) on
+  // rt/panoptes/calibration, transient-local: late joiners (the console, clients) get it at once.
+  void publish_calibration() { calibration_writer_->write(dds::to_message(in_use_, wall_now_ns())); }
   void use_realtime_priority();
   // How long the loop may wait for frames: until the next fixed-rate instant, at most 1 ms.
   std::chrono::nanoseconds max_wait() const;
@@ -161,6 +166,8 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::BodyPose>> body_writer_;
   std::unique_ptr<dds::Writer<msg::MocapFrame>> frame_writer_;
   std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
+  std::unique_ptr<dds::Writer<msg::SystemCalibration>> calibration_writer_;
+  SystemCalibration in_use_;
   std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;  // with options_.chains
   session::FrameOutputBuilder frame_builder_;
   std::optional<session::FrameClock> frame_clock_;  // --frames fixed
@@ -214,6 +221,8 @@ void LiveEstimator::apply_announced_cameras() {
       tracker_.set_camera(camera);
       if (options_.chains) options_.chains->add_camera(camera);
       log("camera '" + camera.id + "' calibrated from its CameraInfo");
+      in_use_.cameras.push_back(camera);
+      publish_calibration();
     }
   }
   announced_.clear();

@@ -10,7 +10,9 @@
 #include <gtest/gtest.h>
 
 #include "../dds_test_support.h"
+#include "panoptes/calibration.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/cdr.h"
 #include "panoptes/dds/convert.h"
 #include "panoptes/dds/decode.h"
 #include "panoptes_msgs/panoptes.h"
@@ -132,6 +134,39 @@ TEST(Decode, CameraInfoCarriesMoving) {
   const auto fixed = calibration_from(to_camera_info("cam0", intrinsics, mount));
   ASSERT_TRUE(fixed.has_value());
   EXPECT_FALSE(fixed->moving);
+}
+
+// The calibration in use as rt/panoptes/calibration carries it (issue 36 item 5): every camera,
+// intrinsics, distortion and pose ([x, y, z, w] quaternion), has_pose false without a pose; and it
+// survives the wire (CDR) unchanged.
+TEST(Decode, SystemCalibrationCarriesEveryCamera) {
+  SystemCalibration calibration;
+  CameraCalibration posed;
+  posed.id = "cam0";
+  posed.intrinsics = {1280, 1024, 1000.5, 1001.5, 640.25, 511.75, {0.1, -0.2, 0.001, -0.002, 0.03}};
+  RigidTransform T;
+  T.t = Eigen::Vector3d(1.0, -2.0, 2.5);
+  T.q = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  posed.T_world_cam = T;
+  CameraCalibration bare = posed;
+  bare.id = "cam1";
+  bare.T_world_cam.reset();
+  calibration.cameras = {posed, bare};
+  const msg::SystemCalibration message = to_message(calibration, 123);
+  const auto bytes = encode_sample(message);
+  msg::SystemCalibration m;
+  ASSERT_EQ(decode_sample(bytes.data(), bytes.size(), m), DecodeError::kNone);
+  EXPECT_EQ(m.stamp_ns(), 123);
+  ASSERT_EQ(m.cameras().size(), 2U);
+  EXPECT_EQ(m.cameras()[0].camera_id(), "cam0");
+  EXPECT_EQ(m.cameras()[0].width(), 1280U);
+  EXPECT_EQ(m.cameras()[0].K()[1], 1001.5);
+  EXPECT_EQ(m.cameras()[0].distortion()[4], 0.03);
+  EXPECT_TRUE(m.cameras()[0].has_pose());
+  EXPECT_EQ(m.cameras()[0].T_world_cam().position()[1], -2.0);
+  EXPECT_DOUBLE_EQ(m.cameras()[0].T_world_cam().orientation()[2], std::sin(0.15));
+  EXPECT_DOUBLE_EQ(m.cameras()[0].T_world_cam().orientation()[3], std::cos(0.15));
+  EXPECT_FALSE(m.cameras()[1].has_pose());
 }
 
 // A reader on the bus: malformed samples from a raw writer are counted by reason and never reach

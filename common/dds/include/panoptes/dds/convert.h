@@ -31,5 +31,8 @@ bool plausible_id(const std::string& id);
 std::string_view camera_info_problem(const msg::CameraInfo& info);
 // Calibration carried by a CameraInfo; nullopt if it has no intrinsics (fx == 0) or a problem.
 std::optional<CameraCalibration> calibration_from(const msg::CameraInfo& info);
+// The calibration in use as rt/panoptes/calibration carries it (every camera; has_pose false for
+// intrinsics only).
+msg::SystemCalibration to_message(const SystemCalibration& calibration, TimeNs stamp_ns);
 
 }  // namespace panoptes::dds
