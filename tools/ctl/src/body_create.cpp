@@ -37,6 +37,7 @@ std::vector<std::int64_t> tracks_near(const BodyRequest& request, const TrackPos
   }
   std::sort(within.begin(), within.end());
   std::vector<std::int64_t> ids;
+  ids.reserve(within.size());
   for (const auto& [distance, id] : within) ids.push_back(id);
   return ids;
 }
