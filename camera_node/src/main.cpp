@@ -21,6 +21,7 @@
 #include "panoptes/camera_app/live_camera.h"
 #include "panoptes/cli.h"
 #include "panoptes/config.h"
+#include "panoptes/dds/domain_option.h"
 #include "panoptes/dds/security_options.h"
 #include "panoptes/process.h"
 
@@ -183,6 +184,7 @@ int run_camera_node(int argc, char** argv) {
   CLI::App app{"camera_node: detects IR blobs in camera frames and publishes 2D features (Panoptes)",
                "camera_node"};
   add_options(app, options);
+  panoptes::dds::add_domain_option(app);
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv, [&] { validate(options); })) {
     return *exit_code;
   }

@@ -116,6 +116,30 @@ for name in sample_client lumipoint_board grab_objects panoptes_client_probe; do
   done
 done
 
+# Every program and tool that opens DDS takes --domain N (issue 34 item 10): checked like
+# $PANOPTES_DOMAIN (a typo exits 2 naming --domain, never domain 0, even with a good variable set),
+# and --help shows it with its default.
+flag_programs=(camera_node estimator_node panoptes_console panoptes_record panoptes_replay panoptes_ctl panoptes_demo)
+for entry in "${programs[@]}"; do
+  name="${entry%%|*}"
+  [[ " ${flag_programs[*]} " == *" $name "* ]] || continue
+  [ -x "$bin/$name" ] || continue
+  read -r -a args <<<"${entry#*|}"
+  for bad in 8x9 300 -1; do
+    expect_refused "PANOPTES_DOMAIN=89" "--domain=$bad: not a DDS domain id (an integer 0..232)" \
+      "$name" "${args[@]}" --domain "$bad"
+  done
+done
+for name in "${flag_programs[@]}"; do
+  [ -x "$bin/$name" ] || continue
+  expect_exit 0 "$name --help" -- "$bin/$name" --help
+  grep -qF -- '--domain' "$work/last.out" && grep -qF 'default: $PANOPTES_DOMAIN, else 0' "$work/last.out" \
+    && pass "$name --help shows --domain and its default" || fail "$name --help lacks --domain with its default"
+done
+expect_exit 0 "estimator_node calibrate capture --help" -- "$bin/estimator_node" calibrate capture --help
+grep -qF -- '--domain' "$work/last.out" && pass "calibrate capture --help shows --domain" \
+  || fail "calibrate capture --help lacks --domain"
+
 # The Python client raises panoptes.ClientError with the same message.
 python=$(cat "$build_dir/python/INTERPRETER" 2>/dev/null)
 if [ -n "$python" ] && [ -d "$build_dir/python/panoptes" ]; then

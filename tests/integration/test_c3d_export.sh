@@ -56,6 +56,61 @@ for r in rows:
     assert abs(n - 1) < 1e-6, r
 PY
 
+# --- y up (issue 34 item 2, docs/clients.md "Axis conventions") ----------------------------------
+# The y-up files are the z-up files turned -90 degrees about x: (x, y, z) -> (x, z, -y) for every
+# marker sample (C3D read back, TRC, CSV), and q' = q_R q for every body orientation, so each body
+# axis is the z-up axis turned.
+expect_exit 0 "export the walking data y up" -- "$bin/panoptes_export" --markers "$walk" --up-axis y \
+  --c3d "$work/walk_y.c3d" --csv "$work/walk_y.csv"
+expect_exit 0 "read the y-up C3D back as CSV" -- "$bin/panoptes_export" --markers "$work/walk_y.c3d" --csv "$work/walk_y_c3d.csv"
+expect_exit 0 "export the session's bodies y up" -- "$bin/panoptes_export" --tracks "$work/tracks.jsonl" \
+  --poses "$work/poses.jsonl" --rate 100 --up-axis Y --csv "$work/session_y.csv" --bodies-csv "$work/bodies_y.csv"
+/usr/bin/python3 - "$work" <<'PY' && pass "y up: markers (CSV, C3D read back) and bodies are the z-up ones turned" || fail "y-up export differs from z up turned"
+import csv, math, sys
+w = sys.argv[1]
+def table(name):
+    return list(csv.reader(open(f"{w}/{name}")))
+def check_markers(z_name, y_name, tolerance):
+    z, y = table(z_name), table(y_name)
+    assert z[0] == y[0] and len(z) == len(y) > 1, (z_name, y_name)
+    worst = 0.0
+    for rz, ry in zip(z[1:], y[1:]):
+        for i in range(2, len(rz), 3):
+            if rz[i] == "":
+                assert ry[i] == "", (rz[:2], i)
+                continue
+            x, yy, zz = (float(v) for v in rz[i:i + 3])
+            want = (x, zz, -yy)
+            worst = max(worst, max(abs(float(a) - b) for a, b in zip(ry[i:i + 3], want)))
+    assert worst <= tolerance, (z_name, y_name, worst)
+    print(y_name, "max difference from z up turned", worst, "m")
+check_markers("walk.csv", "walk_y.csv", 0.0)
+check_markers("walk.csv", "walk_y_c3d.csv", 1e-6)  # C3D stores float32
+check_markers("session.csv", "session_y.csv", 0.0)
+def rot(q):  # x, y, z, w -> rows
+    x, y, z, w = q
+    return [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+turn = [[1, 0, 0], [0, 0, 1], [0, -1, 0]]
+bz = list(csv.DictReader(open(f"{w}/bodies.csv")))
+by = list(csv.DictReader(open(f"{w}/bodies_y.csv")))
+assert len(bz) == len(by) > 0
+worst = 0.0
+for a, b in zip(bz, by):
+    assert (a["frame"], a["body"]) == (b["frame"], b["body"])
+    p = [float(a[k]) for k in "xyz"]
+    worst = max(worst, abs(float(b["x"]) - p[0]), abs(float(b["y"]) - p[2]), abs(float(b["z"]) + p[1]))
+    rz = rot([float(a[k]) for k in ("qx", "qy", "qz", "qw")])
+    ry = rot([float(b[k]) for k in ("qx", "qy", "qz", "qw")])
+    want = [[sum(turn[i][k] * rz[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    worst = max(worst, max(abs(ry[i][j] - want[i][j]) for i in range(3) for j in range(3)))
+assert worst <= 1e-5, worst  # the CSV's printed precision
+print(len(by), "body rows, max difference", worst)
+PY
+expect_exit 2 "--up-axis x" -- "$bin/panoptes_export" --markers "$walk" --csv "$work/x.csv" --up-axis x
+expect_stderr_contains "--up-axis=x: not an up axis (z or y)" "the error names --up-axis and the value"
+
 # --- bad input ----------------------------------------------------------------------------------
 expect_exit 2 "no input" -- "$bin/panoptes_export" --c3d "$work/x.c3d"
 expect_exit 2 "no output" -- "$bin/panoptes_export" --markers "$walk"

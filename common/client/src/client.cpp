@@ -83,6 +83,7 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
 
   ClientOptions options;
   int domain = 0;
+  UpAxis up_axis = UpAxis::kZ;
   std::string profile;
   Clock::time_point started = Clock::now();
 
@@ -155,6 +156,7 @@ void Client::Impl::on_frame(const msg::MocapFrame& message) {
   const TimeNs receive_ns = wall_now_ns();
   std::string error;
   auto converted = detail::to_frame(message, receive_ns, error);
+  if (converted) detail::turn_to_up_axis(*converted, up_axis);
   std::shared_ptr<const Frame> frame;
   if (converted) frame = std::make_shared<const Frame>(std::move(*converted));
   {
@@ -205,6 +207,7 @@ void Client::Impl::on_strokes(const msg::StrokeEvents& message) {
 void Client::Impl::on_chains(const msg::ChainFrame& message) {
   std::string error;
   auto converted = detail::to_chain_update(message, wall_now_ns(), error);
+  if (converted) detail::turn_to_up_axis(*converted, up_axis);
   std::shared_ptr<const ChainUpdate> update;
   if (converted) update = std::make_shared<const ChainUpdate>(std::move(*converted));
   {
@@ -262,6 +265,11 @@ Client::Client(const ClientOptions& options) {
     impl_->domain = dds::resolve_domain(options.domain_id);  // the check every program makes
   } catch (const dds::DomainError& e) {
     throw OptionError(e.what());  // "PANOPTES_DOMAIN=abc: not a DDS domain id (an integer 0..232)"
+  }
+  try {
+    impl_->up_axis = detail::choose_up_axis(options.up_axis);
+  } catch (const ConfigError& e) {
+    throw OptionError(e.what());  // "PANOPTES_UP_AXIS=x: not an up axis (z or y)"
   }
   Impl* impl = impl_.get();
   try {
@@ -454,6 +462,10 @@ std::string Client::profile_file() const {
 
 int Client::domain_id() const {
   return impl_->domain;
+}
+
+std::string Client::up_axis() const {
+  return up_axis_name(impl_->up_axis);
 }
 
 void Client::close() {

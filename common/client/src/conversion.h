@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "panoptes/client/client.h"
+#include "panoptes/up_axis.h"
 #include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
 #include "panoptes_msgs/surface.h"
@@ -37,5 +38,14 @@ std::optional<std::vector<Stroke>> to_strokes(const msg::StrokeEvents& message, 
 // valid flags and angles do not agree in number, a non-finite number).
 std::optional<ChainUpdate> to_chain_update(const msg::ChainFrame& message, std::int64_t receive_ns,
                                            std::string& error);
+
+// ClientOptions::up_axis, else $PANOPTES_UP_AXIS, else z; a ConfigError naming the option or the
+// variable for anything but z or y.
+UpAxis choose_up_axis(const std::string& option);
+
+// Every world quantity of a frame (marker positions, velocities, covariances; body positions,
+// orientations, velocities, sigmas) or of a chain update (markers, tips) turned into `axis`.
+void turn_to_up_axis(Frame& frame, UpAxis axis);
+void turn_to_up_axis(ChainUpdate& update, UpAxis axis);
 
 }  // namespace panoptes::client::detail

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/dds/domain.h"
 
+#include <stdlib.h>  // setenv (POSIX)
 #include <cstdlib>
 #include <string>
 
@@ -33,6 +34,13 @@ int choose_domain(int requested, std::optional<std::string_view> variable) {
 int resolve_domain(int requested) {
   const char* env = std::getenv(kDomainVariable);
   return choose_domain(requested, env == nullptr ? std::nullopt : std::optional<std::string_view>(env));
+}
+
+int use_domain(std::string_view text, const std::string& source) {
+  const int domain = parse_domain(text, source);
+  if (::setenv(kDomainVariable, std::to_string(domain).c_str(), 1) != 0)
+    throw DomainError(source, text);  // only when the environment is out of memory
+  return domain;
 }
 
 }  // namespace panoptes::dds

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/estimator_app/command_line.h"
+#include "panoptes/dds/domain_option.h"
 
 #include <CLI/CLI.hpp>
 
@@ -173,6 +174,7 @@ std::optional<int> parse_node_command_line(int argc, char** argv, NodeCommandLin
                "estimator_node"};
   app.option_defaults()->always_capture_default();
   add_modes_and_files(app, command_line);
+  panoptes::dds::add_domain_option(app);
   auto flags = std::make_shared<SettingsFlags>();
   flags->add(app);
   if (const auto exit_code = parse_command_line(app, argc, argv, [&] { validate(command_line); }))

@@ -13,6 +13,7 @@
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
+#include "panoptes/dds/domain_option.h"
 #include "panoptes/dds/time_sync.h"
 #include "panoptes/image_coverage.h"
 #include "panoptes/jsonl.h"
@@ -41,6 +42,7 @@ int run_calibrate_capture(int argc, char** argv) {
   CLI::App app{"calibrate capture: record FeatureFrames of all cameras over DDS while the wand is waved",
                "estimator_node calibrate capture"};
   app.option_defaults()->always_capture_default();  // --help shows every default
+  panoptes::dds::add_domain_option(app);
   app.add_option("--out", out, "FeatureFrame JSONL file to write (all cameras)")->required();
   app.add_option("--duration", duration_s, "seconds to record")->default_str("until Ctrl-C");
   app.add_option("--dds-profile", profile, "Fast DDS XML profile")

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -250,6 +251,95 @@ TEST(Client, BadOptionsNameWhatIsWrong) {
   options = client_options();
   options.domain_id = 300;
   EXPECT_THROW(Client{options}, OptionError);
+}
+
+// Issue 34 item 2: a y-up client returns the z-up client's frame rotated, -90 degrees about x: the
+// markers (positions, velocities, covariances) and the bodies (positions, orientations), so a body
+// marker placed by the y-up pose is the z-up marker rotated. The descriptions (body frame) are alike.
+TEST(Client, YUpClientReturnsTheZUpFrameRotated) {
+  FakeEstimator estimator;
+  estimator.descriptions->write(descriptions(1, "head"));
+  Client z_up(client_options());
+  ClientOptions y_options = client_options();
+  y_options.up_axis = "y";
+  Client y_up(y_options);
+  EXPECT_EQ(z_up.up_axis(), "z");
+  EXPECT_EQ(y_up.up_axis(), "y");
+  ASSERT_TRUE(estimator.frames->wait_for_readers(2, 5s));
+  msg::MocapFrame sent = frame(1);
+  const double h = std::sqrt(0.5);
+  sent.bodies()[0].pose().orientation({0, 0, h, h});  // 90 degrees about z
+  sent.bodies()[0].linear_velocity({0.1, 0.2, 0.3});
+  msg::FrameMarker marker;
+  marker.state().id(7);
+  marker.state().position({0.3, -0.4, 1.2});
+  marker.state().velocity({1, 2, 3});
+  marker.state().covariance({1, 2, 3, 4, 5, 6});
+  marker.state().status(1);
+  marker.body("");
+  marker.body_marker(-1);
+  sent.markers().push_back(marker);
+  estimator.frames->write(sent);
+  const FrameResult z = z_up.wait_for_frame(2s);
+  const FrameResult y = y_up.wait_for_frame(2s);
+  ASSERT_EQ(z.status, Status::kOk) << z_up.status_text();
+  ASSERT_EQ(y.status, Status::kOk) << y_up.status_text();
+  const Marker& mz = z.frame.markers.at(0);
+  const Marker& my = y.frame.markers.at(0);
+  EXPECT_EQ(mz.position, (Vec3{0.3, -0.4, 1.2}));
+  EXPECT_EQ(my.position, (Vec3{0.3, 1.2, 0.4}));
+  EXPECT_EQ(my.velocity, (Vec3{1, 3, -2}));
+  EXPECT_EQ(my.covariance, (std::array<double, 6>{1, 3, -2, 6, -5, 4}));
+  const RigidBody& bz = z.frame.bodies.at(0);
+  const RigidBody& by = y.frame.bodies.at(0);
+  EXPECT_EQ(by.position, (Vec3{bz.position[0], bz.position[2], -bz.position[1]}));
+  EXPECT_EQ(by.linear_velocity, (Vec3{0.1, 0.3, -0.2}));
+  // Each layout marker: R * (p + q m) == p' + q' m, with q' = (-h, 0, 0, h) * q.
+  const auto rotate = [](const Quat& q, const Vec3& v) {
+    const double x = q[0];
+    const double y = q[1];
+    const double z = q[2];
+    const double w = q[3];
+    const Vec3 t{2 * (y * v[2] - z * v[1]), 2 * (z * v[0] - x * v[2]), 2 * (x * v[1] - y * v[0])};
+    return Vec3{v[0] + w * t[0] + y * t[2] - z * t[1], v[1] + w * t[1] + z * t[0] - x * t[2],
+                v[2] + w * t[2] + x * t[1] - y * t[0]};
+  };
+  ASSERT_TRUE(wait_until([&] { return y_up.body_descriptions().size() == 1; }));
+  EXPECT_EQ(y_up.body_description("head").markers, z_up.body_description("head").markers);
+  for (const Vec3& layout : y_up.body_description("head").markers) {
+    const Vec3 rz = rotate(bz.orientation, layout);
+    const Vec3 world_z{bz.position[0] + rz[0], bz.position[1] + rz[1], bz.position[2] + rz[2]};
+    const Vec3 ry = rotate(by.orientation, layout);
+    const Vec3 world_y{by.position[0] + ry[0], by.position[1] + ry[1], by.position[2] + ry[2]};
+    EXPECT_NEAR(world_y[0], world_z[0], 1e-12);
+    EXPECT_NEAR(world_y[1], world_z[2], 1e-12);
+    EXPECT_NEAR(world_y[2], -world_z[1], 1e-12);
+  }
+}
+
+// The OptionError a client opened with `options` throws; "" when it opens.
+std::string option_error_of(const ClientOptions& options) {
+  try {
+    const Client client(options);
+  } catch (const OptionError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// ClientOptions::up_axis and $PANOPTES_UP_AXIS: anything but z or y is an OptionError naming it.
+TEST(Client, BadUpAxisIsAnOptionErrorNamingIt) {
+  ClientOptions options = client_options();
+  options.up_axis = "x";
+  EXPECT_EQ(option_error_of(options), "ClientOptions::up_axis=x: not an up axis (z or y)");
+  ::setenv("PANOPTES_UP_AXIS", "up", 1);
+  EXPECT_EQ(option_error_of(client_options()), "PANOPTES_UP_AXIS=up: not an up axis (z or y)");
+  ::setenv("PANOPTES_UP_AXIS", "y", 1);
+  {
+    const Client client(client_options());
+    EXPECT_EQ(client.up_axis(), "y");
+  }
+  ::unsetenv("PANOPTES_UP_AXIS");
 }
 
 // $PANOPTES_DOMAIN goes through the same check as every program's (dds::resolve_domain): a typo

@@ -10,6 +10,7 @@
 
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/domain.h"
+#include "panoptes/dds/domain_option.h"
 
 namespace panoptes::dds {
 namespace {
@@ -91,6 +92,27 @@ TEST(Domain, ResolveReadsTheVariable) {
   const DomainVariable variable("abc");
   EXPECT_EQ(domain_error_of([] { resolve_domain(); }),
             "PANOPTES_DOMAIN=abc: not a DDS domain id (an integer 0..232)");
+}
+
+// --domain (issue 34 item 10): a good id becomes $PANOPTES_DOMAIN, so every bus opened later joins
+// it; a typo is refused naming the flag and leaves the variable as it was, never domain 0.
+TEST(Domain, FlagSetsTheVariableOrRefuses) {
+  const DomainVariable variable("7");
+  CLI::App app{"test"};
+  add_domain_option(app);
+  const char* good[] = {"program", "--domain", "89"};
+  app.parse(3, good);
+  EXPECT_EQ(resolve_domain(), 89);
+  for (const char* bad : {"8x9", "-1", "233", ""}) {
+    ::setenv(kDomainVariable, "7", 1);
+    CLI::App again{"test"};
+    add_domain_option(again);
+    const char* argv[] = {"program", "--domain", bad};
+    EXPECT_EQ(domain_error_of([&] { again.parse(3, argv); }),
+              std::string("--domain=") + bad + ": not a DDS domain id (an integer 0..232)")
+        << bad;
+    EXPECT_EQ(resolve_domain(), 7) << bad;
+  }
 }
 
 // Before the fix the bus read the variable with atoi: "abc" joined domain 0 and 300 made Fast DDS

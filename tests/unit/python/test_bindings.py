@@ -50,6 +50,7 @@ class BadInput(unittest.TestCase):
             (dict(stale_after=0), "stale_after must be positive"),
             (dict(stale_after=math.nan), "stale_after must be a positive number"),
             (dict(stale_after=math.inf), "stale_after must be a positive number"),
+            (dict(up_axis="x"), "ClientOptions::up_axis=x: not an up axis (z or y)"),
         ]
         for kwargs, message in cases:
             with self.subTest(**{k: str(v) for k, v in kwargs.items()}):
@@ -83,6 +84,13 @@ class BadInput(unittest.TestCase):
                 cls.__new__(cls)
             with self.subTest(cls=cls.__name__), self.assertRaises(TypeError):
                 cls()
+
+    def test_up_axis_is_chosen_and_queried(self):
+        # docs/clients.md, "Axis conventions": y up on request, z up by default.
+        with panoptes.Client(domain=DOMAIN, up_axis="y") as client:
+            self.assertEqual(client.up_axis, "y")
+        with panoptes.Client(domain=DOMAIN) as client:
+            self.assertEqual(client.up_axis, "z")
 
     def test_bad_environment_domain(self):
         # The library's check (dds::resolve_domain), the same as every program's.

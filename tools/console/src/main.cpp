@@ -16,6 +16,7 @@
 #include "panoptes/console/server.h"
 #include "panoptes/console_app/bus_bridge.h"
 #include "panoptes/console_app/calibration_workflow.h"
+#include "panoptes/dds/domain_option.h"
 #include "panoptes/process.h"
 
 namespace {
@@ -65,6 +66,7 @@ int run(int argc, char** argv) {
   CLI::App app{"panoptes_console: the operator console in the browser (Panoptes, docs/console.md)",
                "panoptes_console"};
   app.option_defaults()->always_capture_default();
+  panoptes::dds::add_domain_option(app);
   app.add_option("--bind", bind, "address:port to serve on (0.0.0.0:8080 opens it on the LAN)");
   app.add_option("--token-file", token_file, "read the access token from this file")
       ->default_str("a new random token, printed at start");

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -339,6 +340,64 @@ nlohmann::json status_json(const msg::CameraStatus& status) {
           {"counters", counters}};
 }
 
+// Averages each confirmed track over `body_frames` MocapFrames; tracks not confirmed in every one
+// of them are left out (a blinking track is no base for a layout).
+std::optional<TrackPositions> averaged_tracks(const CtlOptions& options, int& frames_seen) {
+  auto bus = open_bus(options, "body");
+  std::mutex mutex;
+  std::map<std::int64_t, std::pair<Eigen::Vector3d, int>> sums;
+  int frames = 0;
+  auto reader = bus.make_reader<msg::MocapFrame>([&](msg::MocapFrame&& frame) {
+    std::lock_guard lock(mutex);
+    if (frames >= options.body_frames) return;
+    ++frames;
+    for (const auto& marker : frame.markers()) {
+      const auto& state = marker.state();
+      if (state.status() != 1) continue;  // confirmed only: not tentative, not coasting
+      auto& [sum, count] = sums.try_emplace(state.id(), Eigen::Vector3d::Zero(), 0).first->second;
+      sum += Eigen::Vector3d(state.position()[0], state.position()[1], state.position()[2]);
+      ++count;
+    }
+  });
+  const auto deadline = Clock::now() + std::chrono::milliseconds(static_cast<long>(options.timeout_s * 1000));
+  const auto done = [&] {
+    std::lock_guard lock(mutex);
+    return frames >= options.body_frames;
+  };
+  while (!done() && Clock::now() < deadline && !stop_requested())
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  reader.reset();
+  std::lock_guard lock(mutex);
+  frames_seen = frames;
+  if (frames == 0) return std::nullopt;
+  TrackPositions positions;
+  for (const auto& [id, entry] : sums)
+    if (entry.second == frames) positions[id] = entry.first / frames;
+  return positions;
+}
+
+int create_body(const CtlOptions& options) {
+  int frames = 0;
+  const auto seen = averaged_tracks(options, frames);
+  if (!seen) {
+    std::fprintf(stderr, "panoptes_ctl: no MocapFrame from an estimator within %.0f s (rt/panoptes/frames)\n",
+                 options.timeout_s);
+    return kExitFailure;
+  }
+  const auto ids = select_tracks(options.body, *seen);
+  const BodyDefinition body = make_body(options.body, ids, *seen);
+  append_body(options.body.bodies_file, body);
+  nlohmann::json markers = nlohmann::json::array();
+  for (const auto& marker : body.markers) markers.push_back({marker.x(), marker.y(), marker.z()});
+  const nlohmann::json line{{"body", body.name},
+                            {"tracks", ids},
+                            {"frames", frames},
+                            {"markers", markers},
+                            {"file", options.body.bodies_file.string()}};
+  std::printf("%s\n", line.dump().c_str());
+  return kExitOk;
+}
+
 int run_action(Action action, const CtlOptions& options) {
   try {
     switch (action) {
@@ -350,6 +409,8 @@ int run_action(Action action, const CtlOptions& options) {
         return show_status(options);
       case Action::kPreview:
         return get_preview(options);
+      case Action::kBodyCreate:
+        return create_body(options);
       case Action::kPredict:
         break;
     }

@@ -5,19 +5,56 @@
 //   panoptes_ctl status [--camera <id>] [--count <n>]            one JSON line per CameraStatus
 //   panoptes_ctl preview <camera id> --out <file.pgm> [--width <px>]
 //   panoptes_ctl predict <camera id> --window <x> <y> <half w> <half h> [--duration <s>] [--rate <Hz>]
+//   panoptes_ctl body create --name <n> --tracks <id,id,id...> | --near <x,y,z> [--radius <m>] --bodies
+//   <file>
 // The work is panoptes_ctl_actions's (panoptes/ctl_actions/ctl_actions.h); this is its command line.
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
+#include <Eigen/Core>
 
 #include "panoptes/cli.h"
 #include "panoptes/ctl_actions/ctl_actions.h"
+#include "panoptes/dds/domain_option.h"
 #include "panoptes/dds/security_options.h"
 #include "panoptes/process.h"
 
 namespace {
 
 using panoptes::ctl::CtlOptions;
+
+// `body create`: --name, --tracks or --near/--radius, --pivot, --bodies, --frames.
+void add_body_create_options(CLI::App& create, CtlOptions& options) {
+  auto& request = options.body;
+  create.add_option("--name", request.name, "the new body's name (unique in the bodies file)")->required();
+  auto* tracks = create.add_option("--tracks", request.tracks, "track ids, at least 3 (e.g. 3,5,7)")
+                     ->delimiter(',')
+                     ->expected(1, -1);
+  auto* near =
+      create
+          .add_option_function<std::vector<double>>(
+              "--near",
+              [&request](const std::vector<double>& p) { request.near = Eigen::Vector3d(p[0], p[1], p[2]); },
+              "x,y,z (m, world z up): every confirmed track within --radius of this point")
+          ->delimiter(',')
+          ->expected(3);
+  tracks->excludes(near);
+  near->excludes(tracks);
+  create.add_option("--radius", request.radius_m, "with --near: the radius, m")->check(CLI::PositiveNumber);
+  create.add_option_function<std::int64_t>(
+      "--pivot", [&request](std::int64_t id) { request.pivot = id; },
+      "the body origin at this track (one of the body's); default: the markers' centroid");
+  create.add_option("--bodies", request.bodies_file, "bodies file to append to (created when missing)")
+      ->required();
+  create.add_option("--frames", options.body_frames, "frames of positions to average")
+      ->check(CLI::Range(1, 10000));
+  create.final_callback([tracks, near] {
+    if (tracks->count() == 0 && near->count() == 0)
+      throw CLI::ValidationError("--tracks", "give --tracks or --near");
+  });
+}
 
 int run(int argc, char** argv) {
   CtlOptions options;
@@ -26,6 +63,7 @@ int run(int argc, char** argv) {
   app.require_subcommand(1);
   app.fallthrough();                                // --timeout and --dds-profile may follow the subcommand
   app.option_defaults()->always_capture_default();  // --help shows every default
+  panoptes::dds::add_domain_option(app);
   app.add_option("--dds-profile", options.dds_profile, "Fast DDS XML profile")
       ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
   panoptes::dds::add_security_options(app, options.security);
@@ -66,6 +104,14 @@ int run(int argc, char** argv) {
   predict->add_option("--duration", options.duration_s, "seconds to publish")->check(CLI::PositiveNumber);
   predict->add_option("--rate", options.rate_hz, "messages per second")->check(CLI::PositiveNumber);
 
+  auto* body = app.add_subcommand("body", "rigid bodies from markers in the volume (docs/bodies.md)");
+  body->require_subcommand(1);
+  auto* create = body->add_subcommand(
+      "create",
+      "make a body from live tracks (by id, or within a radius of a point) and append it to the "
+      "bodies file; an estimator running with --bodies FILE reloads it");
+  add_body_create_options(*create, options);
+
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
   using panoptes::ctl::Action;
@@ -73,6 +119,7 @@ int run(int argc, char** argv) {
                         : *script  ? Action::kScript
                         : *status  ? Action::kStatus
                         : *preview ? Action::kPreview
+                        : *body    ? Action::kBodyCreate
                                    : Action::kPredict;
   return panoptes::ctl::run_action(action, options);
 }

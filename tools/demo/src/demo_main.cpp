@@ -12,6 +12,7 @@
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/domain.h"
+#include "panoptes/dds/domain_option.h"
 #include "panoptes/demo_run/demo_run.h"
 #include "panoptes/process.h"
 
@@ -33,6 +34,7 @@ int run(int argc, char** argv) {
   CLI::App app{"panoptes_demo: simulated multi-camera tracking over DDS, with accuracy against ground truth",
                "panoptes_demo"};
   app.option_defaults()->always_capture_default();  // --help shows every default
+  panoptes::dds::add_domain_option(app);
   app.add_option("--scene", options.scene_file, "simulator scene");
   app.add_option("--duration", options.duration_s, "seconds of tracking")->check(CLI::Range(2.0, 3600.0));
   app.add_option("--summary-json", options.summary_json, "write the accuracy summary as JSON to this file");

@@ -194,6 +194,27 @@ bool set_poses_output(ExportOptions& options, const std::string& path) {
   return true;
 }
 
+namespace {
+
+// Markers and body poses turned from the recorded z-up world into `axis`.
+void turn_to_up_axis(Exported& data, UpAxis axis) {
+  if (axis == UpAxis::kZ) return;
+  for (auto& p : data.markers.positions) {
+    const auto turned = vector_to_up_axis(axis, {p.x(), p.y(), p.z()});
+    p = Eigen::Vector3d(turned[0], turned[1], turned[2]);
+  }
+  for (auto& p : data.bodies.positions) {
+    const auto turned = vector_to_up_axis(axis, {p.x(), p.y(), p.z()});
+    p = Eigen::Vector3d(turned[0], turned[1], turned[2]);
+  }
+  for (auto& q : data.bodies.quaternions) {
+    const auto turned = orientation_to_up_axis(axis, {q[0], q[1], q[2], q[3]});
+    q = Eigen::Vector4d(turned[0], turned[1], turned[2], turned[3]);
+  }
+}
+
+}  // namespace
+
 MarkerFileFormat marker_file_format(const std::string& path) {
   return lower_extension(path) == ".c3d" ? MarkerFileFormat::kC3d : MarkerFileFormat::kTrc;
 }
@@ -208,6 +229,7 @@ ExportSummary run_export(const ExportOptions& options) {
     data = from_records(options);
   }
   data.markers.units = options.units;
+  turn_to_up_axis(data, options.up_axis);
   const bool any_markers = data.markers.marker_count() > 0;
   if (!any_markers && (!options.c3d.empty() || !options.trc.empty() || !options.csv.empty())) {
     throw ConfigError(!options.in_recording.empty() ? options.in_recording

@@ -65,6 +65,10 @@ static int run_main(int argc, char** argv) {
   app.add_option("--units", options.units, "units of the C3D and TRC files")
       ->capture_default_str()
       ->check(CLI::IsMember({"mm", "cm", "m"}));
+  app.add_option_function<std::string>(
+         "--up-axis", [&](const std::string& text) { options.up_axis = parse_up_axis(text, "--up-axis"); },
+         "world up axis of the C3D, TRC and CSV files: z (as recorded) or y ((x, y, z) -> (x, z, -y))")
+      ->default_str("z");
   app.add_flag("--include-tentative", options.include_tentative, "export tentative tracks too");
   app.add_flag("--no-body-points", options.no_body_points,
                "leave the bodies' origins out of the marker files");

@@ -16,6 +16,7 @@
 
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/domain_option.h"
 #include "panoptes/process.h"
 #include "panoptes/recorder/recorder.h"
 #include "panoptes_msgs/panoptes.h"
@@ -221,7 +222,8 @@ int send_command(const Options& options, dds::Bus& bus) {
   });
   auto writer = bus.make_writer<msg::RecorderCommand>();
   if (!writer->wait_for_readers(1, std::chrono::seconds(5))) {
-    std::fprintf(stderr, "panoptes_record: no recorder on the bus (domain $PANOPTES_DOMAIN) after 5 s\n");
+    std::fprintf(stderr,
+                 "panoptes_record: no recorder on the bus (domain $PANOPTES_DOMAIN or --domain) after 5 s\n");
     return panoptes::kExitFailure;
   }
   // Sent again every second until a status confirms it (a reader may match a moment after the
@@ -289,6 +291,7 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--dds-profile", options.dds_profile, "DDS XML profile (default: deploy/dds/loopback.xml)");
   app.add_flag("--quiet", options.quiet, "no progress lines");
+  panoptes::dds::add_domain_option(app);
   app.add_option(
          "--command", options.send,
          "client mode: send this RecorderCommand to running recorders and exit (start uses --out if given)")

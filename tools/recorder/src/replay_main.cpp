@@ -9,6 +9,7 @@
 #include "panoptes/cli.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/domain.h"
+#include "panoptes/dds/domain_option.h"
 #include "panoptes/process.h"
 #include "panoptes/recorder/replayer.h"
 #include "panoptes/recording/mcap_types.h"
@@ -23,6 +24,7 @@ int run(int argc, char** argv) {
   std::string dds_profile;
   CLI::App app{"panoptes_replay: publishes an MCAP recording back onto the bus at the recorded pace"};
   app.add_option("recording", input, "MCAP file written by panoptes_record")->required();
+  panoptes::dds::add_domain_option(app);
   app.add_option("--rate", options.rate, "pace relative to the recording (0: as fast as possible)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

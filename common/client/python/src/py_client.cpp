@@ -40,8 +40,9 @@ constexpr double kSignalCheckS = 0.05;
 
 client::ClientOptions make_options(const std::optional<std::filesystem::path>& profile,
                                    std::optional<int> domain, double stale_after_s, long long queue_depth,
-                                   bool reliable) {
+                                   bool reliable, const std::string& up_axis) {
   client::ClientOptions options;
+  options.up_axis = up_axis;
   options.profile_file = profile ? profile->string() : std::string();
   if (domain && *domain < 0)
     throw client::ClientError("domain=" + std::to_string(*domain) +
@@ -124,9 +125,10 @@ void run_python_callback(const std::shared_ptr<CallbackState>& state, int key, c
 }  // namespace
 
 PyClient::PyClient(const std::optional<std::filesystem::path>& profile, std::optional<int> domain,
-                   double stale_after_s, long long queue_depth, bool reliable)
+                   double stale_after_s, long long queue_depth, bool reliable, const std::string& up_axis)
     : state_(std::make_shared<CallbackState>()) {
-  const client::ClientOptions options = make_options(profile, domain, stale_after_s, queue_depth, reliable);
+  const client::ClientOptions options =
+      make_options(profile, domain, stale_after_s, queue_depth, reliable, up_axis);
   // Opening the bus takes milliseconds: other threads may run meanwhile.
   client_ = without_gil([&] { return std::make_unique<client::Client>(options); });
   open_clients().insert(this);
@@ -278,6 +280,10 @@ int PyClient::domain_id() const {
   return client_->domain_id();
 }
 
+std::string PyClient::up_axis() const {
+  return client_->up_axis();
+}
+
 void PyClient::close() {
   state_->closed = true;
   without_gil([this] { client_->close(); });  // a callback waiting for the GIL can finish
@@ -327,7 +333,7 @@ auto bound(Result (PyClient::*method)(Args...) const) {
 
 // The Client class's docstring.
 constexpr const char* kClientDoc =
-    R"doc(Client(profile=None, domain=None, stale_after=1.0, queue_depth=1024, reliable=True)
+    R"doc(Client(profile=None, domain=None, stale_after=1.0, queue_depth=1024, reliable=True, up_axis='')
 
 Reads Panoptes frames (bodies, markers, latency) and body descriptions from the estimator.
 
@@ -336,6 +342,7 @@ Reads Panoptes frames (bodies, markers, latency) and body descriptions from the 
   stale_after  seconds without a frame after which connected() is False and status_text() says so
   queue_depth  frames kept for wait_for_frame(); when full the oldest is dropped (stats().frames_dropped)
   reliable     ask the estimator to repair lost frames
+  up_axis      'z' (as published) or 'y' (x, y, z) -> (x, z, -y); '': $PANOPTES_UP_AXIS, else 'z'
 
 Raises ClientError (with the library's message) when the bus cannot be opened or an option is bad.
 Use it as a context manager, or call close():
@@ -352,10 +359,10 @@ Every method may be called from any thread. Clients still open when the interpre
 void bind_client(py::module_& m) {
   using py::literals::operator""_a;
   py::class_<PyClient>(m, "Client", kClientDoc)
-      .def(py::init<const std::optional<std::filesystem::path>&, std::optional<int>, double, long long,
-                    bool>(),
+      .def(py::init<const std::optional<std::filesystem::path>&, std::optional<int>, double, long long, bool,
+                    const std::string&>(),
            "profile"_a = py::none(), "domain"_a = py::none(), "stale_after"_a = 1.0, "queue_depth"_a = 1024,
-           "reliable"_a = true)
+           "reliable"_a = true, "up_axis"_a = "")
       .def("wait_for_frame", bound(&PyClient::wait_for_frame), "timeout"_a,
            R"doc(wait_for_frame(timeout) -> Frame or None
 
@@ -411,6 +418,8 @@ yet; status_text() says why) or when the client is closed. Ctrl-C interrupts the
       .def_property_readonly("profile_file", bound(&PyClient::profile_file),
                              "the DDS profile file the client opened")
       .def_property_readonly("domain_id", bound(&PyClient::domain_id), "the DDS domain the client opened")
+      .def_property_readonly("up_axis", bound(&PyClient::up_axis),
+                             "the world's up axis of everything this client returns: 'z' or 'y'")
       .def_property_readonly("closed", bound(&PyClient::closed), "close() was called")
       .def("close", bound(&PyClient::close),
            "close(): stops delivery and wakes wait_for_frame and the other waits (None). Idempotent; "

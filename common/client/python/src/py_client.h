@@ -31,7 +31,7 @@ struct CallbackState {
 class PyClient {
  public:
   PyClient(const std::optional<std::filesystem::path>& profile, std::optional<int> domain,
-           double stale_after_s, long long queue_depth, bool reliable);
+           double stale_after_s, long long queue_depth, bool reliable, const std::string& up_axis);
   ~PyClient();
   PyClient(const PyClient&) = delete;
   PyClient& operator=(const PyClient&) = delete;
@@ -52,6 +52,7 @@ class PyClient {
   client::EstimatorHealth estimator_health() const;
   std::string profile_file() const;
   int domain_id() const;
+  std::string up_axis() const;
   bool closed() const { return state_->closed; }
   void close();
 

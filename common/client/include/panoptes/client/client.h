@@ -67,6 +67,10 @@ struct ClientOptions {
   // so an application that reads by callback or latest() alone sees no drops).
   std::size_t queue_depth = 1024;
   bool reliable = true;  // ask the estimator to repair lost frames (no drops on a busy host)
+  // The world's up axis in everything this client returns (docs/clients.md, "Axis conventions"):
+  // "z" (Panoptes' world, as published) or "y" (y up: (x, y, z) -> (x, z, -y), orientations turned
+  // with it, body layouts unchanged). Empty: $PANOPTES_UP_AXIS, else "z". Anything else: OptionError.
+  std::string up_axis;
 };
 
 // A point track (a 3D marker) with its label. Labelled markers are the markers of tracked rigid
@@ -342,6 +346,8 @@ class PANOPTES_CLIENT_API Client {
   // The DDS profile file and domain the client opened (for diagnostics: "which bus am I on?").
   std::string profile_file() const;
   int domain_id() const;
+  // The up axis of every position, velocity and orientation this client returns: "z" or "y".
+  std::string up_axis() const;
 
   // Stops delivery and wakes wait_for_frame and the other waits (kClosed). Idempotent; may be called from a
   // callback. After it returns (called from another thread) no callback is running or will run.

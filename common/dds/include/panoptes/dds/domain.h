@@ -39,4 +39,12 @@ int choose_domain(int requested, std::optional<std::string_view> variable);
 // line), so that a bad $PANOPTES_DOMAIN is a usage error (exit 2) wherever the bus is opened later.
 int resolve_domain(int requested = -1);
 
+// The help text of every program's --domain flag (docs/deployment.md, "Domains").
+inline constexpr const char* kDomainFlagHelp = "DDS domain, 0..232 (default: $PANOPTES_DOMAIN, else 0)";
+
+// A --domain value: checked like $PANOPTES_DOMAIN (parse_domain; a typo is a DomainError naming
+// `source`, exit 2, never domain 0), then put into $PANOPTES_DOMAIN for this process and the
+// programs it starts, so that every bus it opens later joins that domain. Returns the id.
+int use_domain(std::string_view text, const std::string& source = "--domain");
+
 }  // namespace panoptes::dds

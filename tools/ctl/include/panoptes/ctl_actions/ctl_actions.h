@@ -11,6 +11,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "panoptes/ctl_actions/body_create.h"
 #include "panoptes/dds/security.h"
 
 namespace panoptes::msg {
@@ -36,14 +37,18 @@ struct CtlOptions {
   std::vector<double> window;  // predict: x y half_width half_height (px)
   double duration_s = 5;
   double rate_hz = 100;
+  // body create: the body and how many frames of positions to average
+  BodyRequest body;
+  int body_frames = 30;
 };
 
-enum class Action { kCommand, kScript, kStatus, kPreview, kPredict };
+enum class Action { kCommand, kScript, kStatus, kPreview, kPredict, kBodyCreate };
 
 // Runs `action` and returns the exit code: 0, 1 for a failure on the bus (no node listening, no
-// reply in time), 2 for a bad script. Throws ConfigError for input refused before joining the bus
-// (DDS Security files, PANOPTES_DOMAIN); any other failure is rethrown as std::runtime_error (a
-// run-time failure). Stops early when a stop is requested (install_stop_handlers).
+// reply in time, no estimator frames), 2 for a bad script or a body that cannot be made (ConfigError). Throws
+// ConfigError for input refused before joining the bus (DDS Security files, PANOPTES_DOMAIN); any other
+// failure is rethrown as std::runtime_error (a run-time failure). Stops early when a stop is requested
+// (install_stop_handlers).
 int run_action(Action action, const CtlOptions& options);
 
 // The words of each line of a script, '#' starting a comment; empty lines stay (numbering).

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include "panoptes/up_axis.h"
 
 namespace panoptes::export_job {
 
@@ -27,6 +28,9 @@ struct ExportOptions {
   double max_gap_ms = 100.0;
   bool include_tentative = false;
   bool no_body_points = false;
+  // The world's up axis of every written position and orientation (--up-axis; docs/recording.md,
+  // "Axis conventions"): z as recorded, or y ((x, y, z) -> (x, z, -y)). Not the JSON Lines records.
+  UpAxis up_axis = UpAxis::kZ;
   // Resampling rate given (--rate): a recording of fixed-rate frames is otherwise exported at its
   // own rate.
   bool rate_given = false;
