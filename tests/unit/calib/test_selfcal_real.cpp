@@ -53,12 +53,7 @@ RealSet load() {
 }
 
 // As `calibrate import-points` then `calibrate solve --wand 0` do it.
-SolveResult solve(const RealSet& set, double focal_px, const SolveOptions& options, bool nominal = true) {
-  std::vector<CameraCalibration> cameras;
-  for (std::size_t c = 0; c < set.ids.size(); ++c) {
-    cameras.push_back(nominal_camera(set.ids[c], set.sizes[c].first, set.sizes[c].second, focal_px));
-    cameras.back().nominal_intrinsics = nominal;
-  }
+SolveResult solve(const RealSet& set, const std::vector<CameraCalibration>& cameras, const SolveOptions& options) {
   const auto frames = point_feature_frames(set.table, set.ids, 100.0, 0);
   std::vector<CameraWandTrack> tracks;
   for (const auto& camera : cameras) {
@@ -68,6 +63,34 @@ SolveResult solve(const RealSet& set, double focal_px, const SolveOptions& optio
     tracks.push_back(extract_wand_track(camera.id, own, camera.intrinsics, kPoint));
   }
   return solve_wand_calibration(cameras, tracks, kPoint, options);
+}
+
+SolveResult solve(const RealSet& set, double focal_px, const SolveOptions& options, bool nominal = true) {
+  std::vector<CameraCalibration> cameras;
+  for (std::size_t c = 0; c < set.ids.size(); ++c) {
+    cameras.push_back(nominal_camera(set.ids[c], set.sizes[c].first, set.sizes[c].second, focal_px));
+    cameras.back().nominal_intrinsics = nominal;
+  }
+  return solve(set, cameras, options);
+}
+
+// Cameras whose intrinsics come with the data (not nominal): the fitted ones (what the automatic
+// refinement converges to from a nominal start), scaled in focal length and shifted in the
+// principal point.
+std::vector<CameraCalibration> given_cameras(const RealSet& set, double focal_scale, double centre_shift_px) {
+  const SolveResult fitted = solve(set, kFittedFocalPx, SolveOptions{});
+  std::vector<CameraCalibration> cameras;
+  for (std::size_t c = 0; c < set.ids.size(); ++c) {
+    CameraCalibration camera = nominal_camera(set.ids[c], set.sizes[c].first, set.sizes[c].second, kFittedFocalPx);
+    camera.intrinsics = fitted.cameras[c].intrinsics;
+    camera.intrinsics.fx *= focal_scale;
+    camera.intrinsics.fy *= focal_scale;
+    camera.intrinsics.cx += centre_shift_px;
+    camera.intrinsics.cy += centre_shift_px;
+    camera.nominal_intrinsics = false;
+    cameras.push_back(camera);
+  }
+  return cameras;
 }
 
 // The acceptance figure, computed outside the solver: every frame seen by >= 3 calibrated cameras
@@ -175,6 +198,22 @@ TEST(SelfCalRealData, UnmarkedWrongFocalIsDetectedAfterTheFirstAdjustment) {
   EXPECT_TRUE(result.converged) << result.convergence;
   EXPECT_LE(r.mean_px, 0.62);
   EXPECT_GE(r.within_5px, 0.99);
+}
+
+// Issue 35: intrinsics given (not nominal) but 5% off in focal length and 10 px off in the principal
+// point, no flags. The first adjustment's residuals against the centroid noise decide the refinement.
+TEST(SelfCalRealData, GivenIntrinsicsFocalFivePercentCentreTenPixelsOff) {
+  if (!data_present()) GTEST_SKIP() << kData << " not present";
+  const RealSet set = load();
+  std::vector<CameraCalibration> cameras = given_cameras(set, 1.05, 10.0);
+  const SolveResult result = solve(set, cameras, SolveOptions{});
+  const Reprojected r = reproject(set, result);
+  print("selfcal_4cam, given f +5%, c +10 px, no flags", result, r);
+  EXPECT_EQ(result.calibrated_count(), 4);
+  EXPECT_FALSE(result.intrinsics_refined.empty()) << "the summary names what was refined";
+  EXPECT_LE(r.mean_px, 0.62);
+  EXPECT_GE(r.within_5px, 0.99);
+  EXPECT_GE(r.observations, 1000);
 }
 
 // The comparison: --refine-intrinsics (all nine intrinsics) from the same start.
