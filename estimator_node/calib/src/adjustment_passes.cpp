@@ -74,28 +74,27 @@ double robust_cost(const BundleState& state, const StageInput& in, const PassOpt
   return cost;
 }
 
-int tangent_size(unsigned free) {
-  return ((free & kFreeFocal) != 0U ? 1 : 0) + ((free & kFreeCentre) != 0U ? 2 : 0) +
-         ((free & kFreeK1) != 0U ? 1 : 0) + ((free & kFreeK2) != 0U ? 1 : 0);
+bool nothing_freed(const std::vector<unsigned>& free) {
+  return std::all_of(free.begin(), free.end(), [](unsigned groups) { return groups == 0U; });
 }
 
 std::string group_names(unsigned free) {
   std::vector<std::string> names;
   if ((free & kFreeFocal) != 0U) names.emplace_back("f");
+  if ((free & kFreeAspect) != 0U) names.emplace_back("fy/fx");
   if ((free & kFreeCentre) != 0U) names.emplace_back("cx, cy");
   if ((free & kFreeK1) != 0U) names.emplace_back("k1");
   if ((free & kFreeK2) != 0U) names.emplace_back("k2");
   return join(names);
 }
 
-// Which groups of which camera the data determine at the first adjustment's state (posterior
-// against prior, intrinsics_evidence.h); `what` lists them per camera.
+// Which groups of which camera the data determine at `state` (posterior against prior,
+// intrinsics_evidence.h), at least those in `free`.
 std::vector<unsigned> determined(const BundleState& state, const StageInput& in, PassOptions pass,
-                                 std::string& what) {
+                                 std::vector<unsigned> free) {
   pass.refinement = IntrinsicsRefinement::kEvidence;
   pass.free_intrinsics.assign(state.cameras.size(), kFreeEvidenceAll);
   const IntrinsicsPosterior posterior = intrinsics_posterior(state, in.wand, pass);
-  std::vector<unsigned> free(state.cameras.size(), 0U);
   if (!posterior.ok) return free;
   IntrinsicsPrior prior;
   prior.determined_ratio = in.options.intrinsics_determined_ratio;
@@ -103,21 +102,58 @@ std::vector<unsigned> determined(const BundleState& state, const StageInput& in,
     if (!state.cameras[c].registered) continue;
     const DeterminedGroups groups = determined_groups(posterior.sigma[c], in.given[c], prior);
     in.say("intrinsics posterior 1-sigma against prior, " + in.cameras[c].id + ": " + groups.why);
-    free[c] = groups.free;
-    if (groups.free != 0U)
-      what += (what.empty() ? "" : "; ") + in.cameras[c].id + " " + group_names(groups.free);
+    free[c] |= groups.free;
   }
   return free;
 }
 
+std::string determined_names(const std::vector<unsigned>& free, const StageInput& in) {
+  std::string what;
+  for (std::size_t c = 0; c < free.size(); ++c)
+    if (free[c] != 0U) what += (what.empty() ? "" : "; ") + in.cameras[c].id + " " + group_names(free[c]);
+  return what;
+}
+
+// One trial: `free` refined from `state` in a robust pass and judged against it. On kKeep `state`,
+// `pass` and `rms` are the refined ones; otherwise they are restored.
+template <typename Run>
+EvidenceJudgement trial(BundleState& state, PassOptions& pass, double& rms, const StageInput& in,
+                        const std::vector<unsigned>& free, Run& run) {
+  EvidenceFigures figures;
+  for (std::size_t c = 0; c < free.size(); ++c)
+    figures.added += evidence_tangent_size(free[c]) -
+                     evidence_tangent_size(c < pass.free_intrinsics.size() ? pass.free_intrinsics[c] : 0U);
+  figures.validation_given = raw_frame_median(state, in);
+  figures.cost_given = robust_cost(state, in, pass, figures.components);
+  BundleState before = state;
+  const PassOptions pass_before = pass;
+  const double rms_before = rms;
+  pass.refinement = IntrinsicsRefinement::kEvidence;
+  pass.free_intrinsics = free;
+  in.say("refining intrinsics on trial: " + determined_names(free, in));
+  rms = run(true);
+  int components = 0;
+  figures.cost_refined = robust_cost(state, in, pass, components);
+  figures.validation_refined = raw_frame_median(state, in);
+  EvidenceJudgement judgement = judge_refinement(figures);
+  in.say("intrinsics: " + judgement.why);
+  if (judgement.verdict != EvidenceVerdict::kKeep) {
+    state = std::move(before);
+    pass = pass_before;
+    rms = rms_before;
+  }
+  return judgement;
+}
+
 // After the first adjustment with the given intrinsics (none marked nominal, no flag): when the
 // residuals stand above the centroid noise, the groups the data determine are refined in a robust
-// pass, kept only if they earn their parameters, and reverted if anything got worse
-// (docs/calibration.md, "Intrinsics from evidence"). `state`, `pass` and `rms` are the refined ones
-// on kKeep, untouched otherwise.
+// pass, kept only if they earn their parameters, reverted if anything got worse; groups the refined
+// solution newly determines are tried the same way, up to kEvidenceRounds trials
+// (docs/calibration.md, "Intrinsics from evidence").
 template <typename Run>
 Decision evidence_step(BundleState& state, PassOptions& pass, double& rms, const StageInput& in,
                        std::string& declined, Run run) {
+  constexpr int kEvidenceRounds = 3;
   if (in.options.refine_intrinsics || !in.options.auto_intrinsics) return {};
   const double median = raw_frame_median(state, in);
   // The median 2D error of pure centroid noise (sigma per axis) is 1.1774 sigma (Rayleigh).
@@ -131,39 +167,27 @@ Decision evidence_step(BundleState& state, PassOptions& pass, double& rms, const
     declined = std::string("kept as given: ") + head + ": at the noise";
     return {};
   }
-  std::string what;
-  const std::vector<unsigned> free = determined(state, in, pass, what);
-  int added = 0;
-  for (unsigned groups : free) added += tangent_size(groups);
-  if (added == 0) {
-    declined = std::string("kept as given: ") + head + ", but no focal length, principal point, k1 or k2 is "
-               "determined by the data";
+  std::vector<unsigned> free(state.cameras.size(), 0U);
+  std::string kept;
+  for (int round = 0; round < kEvidenceRounds; ++round) {
+    const std::vector<unsigned> wider = determined(state, in, pass, free);
+    if (wider == free) break;
+    const EvidenceJudgement judgement = trial(state, pass, rms, in, wider, run);
+    if (judgement.verdict != EvidenceVerdict::kKeep) {
+      if (round == 0) declined = judgement.why + " (tried: " + determined_names(wider, in) + ")";
+      break;
+    }
+    free = wider;
+    kept += (kept.empty() ? "" : "; then ") + judgement.why;
+  }
+  if (nothing_freed(free)) {
+    if (declined.empty())
+      declined = std::string("kept as given: ") + head +
+                 ", but no focal length, principal point, k1 or k2 is determined by the data";
     return {};
   }
-  EvidenceFigures figures;
-  figures.added = added;
-  figures.validation_given = median;
-  figures.cost_given = robust_cost(state, in, pass, figures.components);
-  BundleState before = state;
-  const PassOptions pass_before = pass;
-  const double rms_before = rms;
-  pass.refinement = IntrinsicsRefinement::kEvidence;
-  pass.free_intrinsics = free;
-  in.say(std::string("refining intrinsics on trial: ") + head + "; determined: " + what);
-  rms = run(true);
-  int components = 0;
-  figures.cost_refined = robust_cost(state, in, pass, components);
-  figures.validation_refined = raw_frame_median(state, in);
-  const EvidenceJudgement judgement = judge_refinement(figures);
-  in.say("intrinsics: " + judgement.why);
-  if (judgement.verdict == EvidenceVerdict::kKeep)
-    return {IntrinsicsRefinement::kEvidence, std::string(head) + "; determined by the data: " + what + "; " +
-                                                 judgement.why};
-  state = std::move(before);
-  pass = pass_before;
-  rms = rms_before;
-  declined = judgement.why + " (tried: " + what + ")";
-  return {};
+  return {IntrinsicsRefinement::kEvidence,
+          std::string(head) + "; determined by the data: " + determined_names(free, in) + "; " + kept};
 }
 
 // Observations beyond `limit` of the adjusted wand go; with clock offsets the tracks are looked

@@ -192,6 +192,7 @@ Eigen::Matrix<double, 9, Eigen::Dynamic> evidence_basis(const double* intrinsics
   std::vector<Eigen::Matrix<double, 9, 1>> columns;
   const auto unit = [](int i) { return Eigen::Matrix<double, 9, 1>::Unit(i); };
   if ((free & kFreeFocal) != 0U) columns.push_back(unit(0) + (intrinsics[1] / intrinsics[0]) * unit(1));
+  if ((free & kFreeAspect) != 0U) columns.push_back(unit(1));
   if ((free & kFreeCentre) != 0U) {
     columns.push_back(unit(2));
     columns.push_back(unit(3));

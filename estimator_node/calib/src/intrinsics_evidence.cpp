@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/calib/intrinsics_evidence.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -22,7 +23,7 @@ void note(std::string& out, const char* group, double sigma, double prior, bool 
 DeterminedGroups determined_groups(const std::vector<double>& sigma, const CameraIntrinsics& given,
                                    const IntrinsicsPrior& prior) {
   DeterminedGroups out;
-  if (sigma.size() < 5) return out;
+  if (sigma.size() < 6) return out;
   const double focal = prior.focal_fraction * 0.5 * (given.fx + given.fy);
   const double centre = prior.centre_fraction * given.width;
   const auto test = [&](const char* group, double value, double bound, unsigned bit) {
@@ -31,9 +32,10 @@ DeterminedGroups determined_groups(const std::vector<double>& sigma, const Camer
     note(out.why, group, value, bound, determined);
   };
   test("f", sigma[0], focal, kFreeFocal);
-  test("c", std::max(sigma[1], sigma[2]), centre, kFreeCentre);
-  test("k1", sigma[3], prior.k1, kFreeK1);
-  test("k2", sigma[4], prior.k2, kFreeK2);
+  test("fy/fx", sigma[1], prior.aspect_fraction * given.fy, kFreeAspect);
+  test("c", std::max(sigma[2], sigma[3]), centre, kFreeCentre);
+  test("k1", sigma[4], prior.k1, kFreeK1);
+  test("k2", sigma[5], prior.k2, kFreeK2);
   return out;
 }
 

@@ -198,8 +198,7 @@ IntrinsicsPosterior intrinsics_posterior(const BundleState& state, const WandDef
     const int first = jacobian.cameras[c].intrinsics;
     if (first < 0) continue;
     const unsigned free = c < options.free_intrinsics.size() ? options.free_intrinsics[c] : 0U;
-    const int next = first + ((free & kFreeFocal) != 0U ? 1 : 0) + ((free & kFreeCentre) != 0U ? 2 : 0) +
-                     ((free & kFreeK1) != 0U ? 1 : 0) + ((free & kFreeK2) != 0U ? 1 : 0);
+    const int next = first + evidence_tangent_size(free);
     for (int k = first; k < next; ++k) {
       Eigen::VectorXd unit = Eigen::VectorXd::Zero(jacobian.columns);
       unit(k) = 1.0;

@@ -120,7 +120,8 @@ std::string report_summary(const SolveResult& result) {
       if (!camera.intrinsics_refined || !camera.T_world_cam) continue;
       const auto& given = camera.given_intrinsics;
       const auto& k = camera.intrinsics;
-      out << format(" %s f %.0f->%.1f px", camera.id.c_str(), 0.5 * (given.fx + given.fy), 0.5 * (k.fx + k.fy));
+      out << format(" %s f %.0f->%.1f px", camera.id.c_str(), 0.5 * (given.fx + given.fy),
+                    0.5 * (k.fx + k.fy));
       if (k.cx != given.cx || k.cy != given.cy)
         out << format(" c (%.1f, %.1f)->(%.1f, %.1f) px", given.cx, given.cy, k.cx, k.cy);
     }

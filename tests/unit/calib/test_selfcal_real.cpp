@@ -53,7 +53,8 @@ RealSet load() {
 }
 
 // As `calibrate import-points` then `calibrate solve --wand 0` do it.
-SolveResult solve(const RealSet& set, const std::vector<CameraCalibration>& cameras, const SolveOptions& options) {
+SolveResult solve(const RealSet& set, const std::vector<CameraCalibration>& cameras,
+                  const SolveOptions& options) {
   const auto frames = point_feature_frames(set.table, set.ids, 100.0, 0);
   std::vector<CameraWandTrack> tracks;
   for (const auto& camera : cameras) {
@@ -81,7 +82,8 @@ std::vector<CameraCalibration> given_cameras(const RealSet& set, double focal_sc
   const SolveResult fitted = solve(set, kFittedFocalPx, SolveOptions{});
   std::vector<CameraCalibration> cameras;
   for (std::size_t c = 0; c < set.ids.size(); ++c) {
-    CameraCalibration camera = nominal_camera(set.ids[c], set.sizes[c].first, set.sizes[c].second, kFittedFocalPx);
+    CameraCalibration camera =
+        nominal_camera(set.ids[c], set.sizes[c].first, set.sizes[c].second, kFittedFocalPx);
     camera.intrinsics = fitted.cameras[c].intrinsics;
     camera.intrinsics.fx *= focal_scale;
     camera.intrinsics.fy *= focal_scale;
@@ -190,7 +192,11 @@ TEST(SelfCalRealData, FocalThirtyPercentShortWithoutFlags) {
 TEST(SelfCalRealData, UnmarkedWrongFocalIsDetectedAfterTheFirstAdjustment) {
   if (!data_present()) GTEST_SKIP() << kData << " not present";
   const RealSet set = load();
-  const SolveResult result = solve(set, 1.3 * kFittedFocalPx, SolveOptions{}, false);
+  SolveOptions options;
+  options.progress = [](const std::string& line) {
+    if (line.find("intrinsics") != std::string::npos) std::printf("  progress: %s\n", line.c_str());
+  };
+  const SolveResult result = solve(set, 1.3 * kFittedFocalPx, options, false);
   const Reprojected r = reproject(set, result);
   print("selfcal_4cam, f +30% not marked nominal, no flags", result, r);
   EXPECT_EQ(result.calibrated_count(), 4);
@@ -210,10 +216,35 @@ TEST(SelfCalRealData, GivenIntrinsicsFocalFivePercentCentreTenPixelsOff) {
   const Reprojected r = reproject(set, result);
   print("selfcal_4cam, given f +5%, c +10 px, no flags", result, r);
   EXPECT_EQ(result.calibrated_count(), 4);
-  EXPECT_FALSE(result.intrinsics_refined.empty()) << "the summary names what was refined";
+  EXPECT_NE(result.intrinsics_refined.find("determined by the data: cam0 f"), std::string::npos)
+      << "the summary names what was refined and why: " << result.intrinsics_refined;
+  EXPECT_NE(report_summary(result).find("cam0 f 1057->"), std::string::npos);
+  EXPECT_TRUE(result.converged) << result.convergence;
   EXPECT_LE(r.mean_px, 0.62);
   EXPECT_GE(r.within_5px, 0.99);
   EXPECT_GE(r.observations, 1000);
+}
+
+// Correct intrinsics as given (the fitted ones): the evidence step must not make them worse than
+// keeping them fixed (--fixed-intrinsics).
+TEST(SelfCalRealData, GivenFittedIntrinsicsAreNotMadeWorse) {
+  if (!data_present()) GTEST_SKIP() << kData << " not present";
+  const RealSet set = load();
+  const std::vector<CameraCalibration> cameras = given_cameras(set, 1.0, 0.0);
+  SolveOptions fixed;
+  fixed.auto_intrinsics = false;
+  const Reprojected before = reproject(set, solve(set, cameras, fixed));
+  const SolveResult result = solve(set, cameras, SolveOptions{});
+  const Reprojected after = reproject(set, result);
+  print("selfcal_4cam, given fitted intrinsics, no flags", result, after);
+  std::printf("  fixed intrinsics: mean %.4f px, median %.4f px, %.2f%% within 5 px\n", before.mean_px,
+              before.median_px, 100 * before.within_5px);
+  std::printf("  intrinsics: refined '%s' declined '%s'\n", result.intrinsics_refined.c_str(),
+              result.intrinsics_declined.c_str());
+  EXPECT_EQ(result.calibrated_count(), 4);
+  EXPECT_FALSE(result.intrinsics_refined.empty() && result.intrinsics_declined.empty()) << "says what it did";
+  EXPECT_LE(after.mean_px, before.mean_px + 1e-3);
+  EXPECT_GE(after.within_5px, before.within_5px - 1e-3);
 }
 
 // The comparison: --refine-intrinsics (all nine intrinsics) from the same start.

@@ -54,10 +54,22 @@ BundleState triangulate_instants(BundleState state, const std::vector<CameraIntr
 // focal length as in kNominal). kAll: all nine (--refine-intrinsics).
 enum class IntrinsicsRefinement { kNone, kNominal, kSuspect, kEvidence, kAll };
 
-// kEvidence's per-camera groups (bits), in tangent order: focal length (fx, fy together), principal
-// point (cx, cy), k1, k2.
-enum IntrinsicsGroup : unsigned { kFreeFocal = 1U, kFreeCentre = 2U, kFreeK1 = 4U, kFreeK2 = 8U };
-constexpr unsigned kFreeEvidenceAll = kFreeFocal | kFreeCentre | kFreeK1 | kFreeK2;
+// kEvidence's per-camera groups (bits), in tangent order: focal length (fx, fy together), aspect
+// (fy alone), principal point (cx, cy), k1, k2.
+enum IntrinsicsGroup : unsigned {
+  kFreeFocal = 1U,
+  kFreeCentre = 2U,
+  kFreeK1 = 4U,
+  kFreeK2 = 8U,
+  kFreeAspect = 16U
+};
+constexpr unsigned kFreeEvidenceAll = kFreeFocal | kFreeAspect | kFreeCentre | kFreeK1 | kFreeK2;
+// The tangent size of a kEvidence block with groups `free`.
+constexpr int evidence_tangent_size(unsigned free) {
+  return ((free & kFreeFocal) != 0U ? 1 : 0) + ((free & kFreeAspect) != 0U ? 1 : 0) +
+         ((free & kFreeCentre) != 0U ? 2 : 0) + ((free & kFreeK1) != 0U ? 1 : 0) +
+         ((free & kFreeK2) != 0U ? 1 : 0);
+}
 
 struct PassOptions {
   int reference = 0;  // camera whose pose (and clock) is the gauge
@@ -132,10 +144,10 @@ struct BundleAdjustmentResult {
   std::vector<bool> intrinsics_refined;  // per camera
   IntrinsicsRefinement refinement = IntrinsicsRefinement::kNone;
   std::vector<unsigned> free_intrinsics;  // kEvidence: per camera
-  std::string intrinsics_refined_why;  // SolveResult::intrinsics_refined
-  std::string intrinsics_declined;     // SolveResult::intrinsics_declined
-  bool converged = false;              // every pass
-  std::string convergence;             // SolveResult::convergence
+  std::string intrinsics_refined_why;     // SolveResult::intrinsics_refined
+  std::string intrinsics_declined;        // SolveResult::intrinsics_declined
+  bool converged = false;                 // every pass
+  std::string convergence;                // SolveResult::convergence
   int iterations = 0;
 };
 

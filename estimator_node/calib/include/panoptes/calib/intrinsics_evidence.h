@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Intrinsics from evidence (issue 35): after the first adjustment with the given intrinsics, which
-// groups (focal length, principal point, k1, k2) the data determine, and whether refining them earns
-// its parameters. docs/calibration.md, "Intrinsics from evidence". Pure functions, no Ceres type.
+// groups (focal length, pixel aspect, principal point, k1, k2) the data determine, and whether refining them
+// earns its parameters. docs/calibration.md, "Intrinsics from evidence". Pure functions, no Ceres type.
 #pragma once
 
 #include <string>
@@ -15,15 +15,16 @@ namespace panoptes::calib {
 // the data pin it down to `determined_ratio` of this or better.
 struct IntrinsicsPrior {
   double focal_fraction = 0.05;   // of the focal length
+  double aspect_fraction = 0.01;  // fy alone (the pixels' aspect), of fy
   double centre_fraction = 0.02;  // of the image width
-  double k1 = 0.05;
-  double k2 = 0.05;
+  double k1 = 0.1;
+  double k2 = 0.1;
   double determined_ratio = 0.5;
 };
 
 // The groups (IntrinsicsGroup bits of bundle_adjustment.h) whose posterior 1-sigma is at most
 // determined_ratio x the prior. `sigma` is one camera's posterior over kFreeEvidenceAll's tangent
-// (focal, cx, cy, k1, k2); fewer than 5 values: nothing is determined. `why` lists each group's
+// (focal, fy alone, cx, cy, k1, k2); fewer than 6 values: nothing is determined. `why` lists each group's
 // posterior against its prior.
 struct DeterminedGroups {
   unsigned free = 0;
