@@ -5,12 +5,12 @@
 #include <cstdio>
 
 #include "panoptes/calib/bundle_adjustment.h"
+#include "panoptes/calib/intrinsics_evidence.h"
+#include "panoptes/calib/solve_diagnostics.h"
 
 namespace panoptes::calib {
 
 namespace {
-
-constexpr long kMinCamerasForCentre = 8;
 
 std::string join(const std::vector<std::string>& items) {
   std::string out;
@@ -48,29 +48,146 @@ Decision initial_intrinsics(const BundleState& state, const StageInput& in) {
   return {IntrinsicsRefinement::kNominal, "nominal intrinsics (" + join(nominal) + "): focal length, k1, k2"};
 }
 
-// After the first adjustment: raw-frame errors far above any centroid noise mean the given
-// intrinsics do not fit (fx, fy, cx, cy, k1, k2; the focal length, k1, k2 with few cameras).
-Decision suspected_intrinsics(const BundleState& state, const StageInput& in) {
-  if (in.options.refine_intrinsics || !in.options.auto_intrinsics) return {};
+// The raw-frame median 2D error of every registered camera at `state`: the validation figure (raw
+// frames, not the adjusted samples).
+double raw_frame_median(const BundleState& state, const StageInput& in) {
   std::vector<double> all;
   for (const auto& errors :
        raw_frame_errors(state, registered_models(state, in.given), in.tracks, in.wand.marker_count()))
     all.insert(all.end(), errors.begin(), errors.end());
-  const double median = error_stats(all).median_px;
-  if (all.empty() || median <= in.options.intrinsics_suspect_px) return {};
-  // The principal point and the aspect ratio need many views: with fewer than
-  // kMinCamerasForCentre cameras only the focal length and k1, k2 move (on the real 4-camera set,
-  // freeing cx, cy, fx/fy too left the adjustment crawling to the iteration cap).
-  const auto cameras = std::count_if(state.cameras.begin(), state.cameras.end(),
-                                     [](const CameraParameters& c) { return c.registered; });
-  const bool centre = cameras >= kMinCamerasForCentre;
-  char why[240];
-  std::snprintf(why, sizeof(why),
-                "raw-frame error median %.2f px (2D) after the first adjustment, above %.2f px: the given "
-                "intrinsics do not fit; %s",
-                median, in.options.intrinsics_suspect_px,
-                centre ? "fx, fy, cx, cy, k1, k2" : "focal length, k1, k2 (fewer than 8 cameras)");
-  return {centre ? IntrinsicsRefinement::kSuspect : IntrinsicsRefinement::kNominal, why};
+  return all.empty() ? 0.0 : error_stats(all).median_px;
+}
+
+// The robust pass's cost at `state`: Huber over every observation's 2D residual, px^2.
+double robust_cost(const BundleState& state, const StageInput& in, const PassOptions& pass, int& components) {
+  PassOptions fixed = pass;
+  fixed.refinement = IntrinsicsRefinement::kNone;
+  const AdjustmentJacobian jacobian = adjustment_jacobian(state, in.wand, fixed);
+  const Eigen::VectorXd& r = jacobian.reprojection_residuals;
+  components = static_cast<int>(r.size());
+  const double d = in.options.huber_px;
+  double cost = 0;
+  for (Eigen::Index i = 0; i + 1 < r.size(); i += 2) {
+    const double squared = r(i) * r(i) + r(i + 1) * r(i + 1);
+    cost += squared <= d * d ? squared : 2 * d * std::sqrt(squared) - d * d;
+  }
+  return cost;
+}
+
+bool nothing_freed(const std::vector<unsigned>& free) {
+  return std::all_of(free.begin(), free.end(), [](unsigned groups) { return groups == 0U; });
+}
+
+std::string group_names(unsigned free) {
+  std::vector<std::string> names;
+  if ((free & kFreeFocal) != 0U) names.emplace_back("f");
+  if ((free & kFreeAspect) != 0U) names.emplace_back("fy/fx");
+  if ((free & kFreeCentre) != 0U) names.emplace_back("cx, cy");
+  if ((free & kFreeK1) != 0U) names.emplace_back("k1");
+  if ((free & kFreeK2) != 0U) names.emplace_back("k2");
+  return join(names);
+}
+
+// Which groups of which camera the data determine at `state` (posterior against prior,
+// intrinsics_evidence.h), at least those in `free`.
+std::vector<unsigned> determined(const BundleState& state, const StageInput& in, PassOptions pass,
+                                 std::vector<unsigned> free) {
+  pass.refinement = IntrinsicsRefinement::kEvidence;
+  pass.free_intrinsics.assign(state.cameras.size(), kFreeEvidenceAll);
+  const IntrinsicsPosterior posterior = intrinsics_posterior(state, in.wand, pass);
+  if (!posterior.ok) return free;
+  IntrinsicsPrior prior;
+  prior.determined_ratio = in.options.intrinsics_determined_ratio;
+  for (std::size_t c = 0; c < state.cameras.size(); ++c) {
+    if (!state.cameras[c].registered) continue;
+    const DeterminedGroups groups = determined_groups(posterior.sigma[c], in.given[c], prior);
+    in.say("intrinsics posterior 1-sigma against prior, " + in.cameras[c].id + ": " + groups.why);
+    free[c] |= groups.free;
+  }
+  return free;
+}
+
+std::string determined_names(const std::vector<unsigned>& free, const StageInput& in) {
+  std::string what;
+  for (std::size_t c = 0; c < free.size(); ++c)
+    if (free[c] != 0U) what += (what.empty() ? "" : "; ") + in.cameras[c].id + " " + group_names(free[c]);
+  return what;
+}
+
+// One trial: `free` refined from `state` in a robust pass and judged against it. On kKeep `state`,
+// `pass` and `rms` are the refined ones; otherwise they are restored.
+template <typename Run>
+EvidenceJudgement trial(BundleState& state, PassOptions& pass, double& rms, const StageInput& in,
+                        const std::vector<unsigned>& free, Run& run) {
+  EvidenceFigures figures;
+  for (std::size_t c = 0; c < free.size(); ++c)
+    figures.added += evidence_tangent_size(free[c]) -
+                     evidence_tangent_size(c < pass.free_intrinsics.size() ? pass.free_intrinsics[c] : 0U);
+  figures.validation_given = raw_frame_median(state, in);
+  figures.cost_given = robust_cost(state, in, pass, figures.components);
+  BundleState before = state;
+  const PassOptions pass_before = pass;
+  const double rms_before = rms;
+  pass.refinement = IntrinsicsRefinement::kEvidence;
+  pass.free_intrinsics = free;
+  in.say("refining intrinsics on trial: " + determined_names(free, in));
+  rms = run(true);
+  int components = 0;
+  figures.cost_refined = robust_cost(state, in, pass, components);
+  figures.validation_refined = raw_frame_median(state, in);
+  EvidenceJudgement judgement = judge_refinement(figures);
+  in.say("intrinsics: " + judgement.why);
+  if (judgement.verdict != EvidenceVerdict::kKeep) {
+    state = std::move(before);
+    pass = pass_before;
+    rms = rms_before;
+  }
+  return judgement;
+}
+
+// After the first adjustment with the given intrinsics (none marked nominal, no flag): when the
+// residuals stand above the centroid noise, the groups the data determine are refined in a robust
+// pass, kept only if they earn their parameters, reverted if anything got worse; groups the refined
+// solution newly determines are tried the same way, up to kEvidenceRounds trials
+// (docs/calibration.md, "Intrinsics from evidence").
+template <typename Run>
+Decision evidence_step(BundleState& state, PassOptions& pass, double& rms, const StageInput& in,
+                       std::string& declined, Run run) {
+  constexpr int kEvidenceRounds = 3;
+  if (in.options.refine_intrinsics || !in.options.auto_intrinsics) return {};
+  const double median = raw_frame_median(state, in);
+  // The median 2D error of pure centroid noise (sigma per axis) is 1.1774 sigma (Rayleigh).
+  const double noise_median = 1.1774 * in.options.centroid_noise_px;
+  char head[300];
+  std::snprintf(head, sizeof(head),
+                "raw-frame error median %.3f px (2D) after the first adjustment with the given intrinsics, "
+                "against %.3f px from %.2f px/axis centroid noise",
+                median, noise_median, in.options.centroid_noise_px);
+  if (median <= in.options.intrinsics_noise_factor * noise_median) {
+    declined = std::string("kept as given: ") + head + ": at the noise";
+    return {};
+  }
+  std::vector<unsigned> free(state.cameras.size(), 0U);
+  std::string kept;
+  for (int round = 0; round < kEvidenceRounds; ++round) {
+    const std::vector<unsigned> wider = determined(state, in, pass, free);
+    if (wider == free) break;
+    const EvidenceJudgement judgement = trial(state, pass, rms, in, wider, run);
+    if (judgement.verdict != EvidenceVerdict::kKeep) {
+      if (round == 0) declined = judgement.why + " (tried: " + determined_names(wider, in) + ")";
+      break;
+    }
+    free = wider;
+    kept += (kept.empty() ? "" : "; then ") + judgement.why;
+  }
+  if (nothing_freed(free)) {
+    if (declined.empty())
+      declined = std::string("kept as given: ") + head +
+                 ", but no focal length, principal point, k1 or k2 is determined by the data";
+    return {};
+  }
+  return {IntrinsicsRefinement::kEvidence,
+          std::string(head) + "; determined by the data: " + determined_names(free, in) + "; " + kept};
 }
 
 // Observations beyond `limit` of the adjusted wand go; with clock offsets the tracks are looked
@@ -140,15 +257,11 @@ BundleState adjust_passes(BundleState state, PassOptions pass, const StageInput&
   result.intrinsics_refined_why = initial.why;
   double rms = run(true);
   if (pass.refinement == IntrinsicsRefinement::kNone) {
-    const Decision suspected = suspected_intrinsics(state, in);
-    if (suspected.refinement != IntrinsicsRefinement::kNone) {
-      pass.refinement = suspected.refinement;
-      result.intrinsics_refined_why = suspected.why;
-      in.say("refining intrinsics: " + suspected.why);
-      rms = run(true);
-    }
+    const Decision evidence = evidence_step(state, pass, rms, in, result.intrinsics_declined, run);
+    if (evidence.refinement != IntrinsicsRefinement::kNone) result.intrinsics_refined_why = evidence.why;
   }
   result.refinement = pass.refinement;
+  result.free_intrinsics = pass.free_intrinsics;
   const int count = in.options.time_offsets ? 3 : 2;
   for (int p = 1; p < count; ++p) {
     const int removed = drop_outliers(state, in, std::max(5.0 * rms, 3.0 * in.options.huber_px));
@@ -169,6 +282,9 @@ void check_focal_lengths(BundleState& state, const StageInput& in, BundleAdjustm
   for (std::size_t c = 0; c < state.cameras.size(); ++c) {
     CameraParameters& camera = state.cameras[c];
     if (!camera.registered) continue;
+    if (result.refinement == IntrinsicsRefinement::kEvidence &&
+        (c >= result.free_intrinsics.size() || result.free_intrinsics[c] == 0U))
+      continue;
     result.intrinsics_refined[c] = true;
     const auto& given = in.given[c];
     const double fx = camera.intrinsics[0], fy = camera.intrinsics[1];

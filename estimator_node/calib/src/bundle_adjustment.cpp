@@ -187,6 +187,23 @@ class LinearManifold : public ceres::Manifold {
   Eigen::Matrix<double, Eigen::Dynamic, 9> inverse_;
 };
 
+// kEvidence's basis: the groups `free` names, in IntrinsicsGroup order.
+Eigen::Matrix<double, 9, Eigen::Dynamic> evidence_basis(const double* intrinsics, unsigned free) {
+  std::vector<Eigen::Matrix<double, 9, 1>> columns;
+  const auto unit = [](int i) { return Eigen::Matrix<double, 9, 1>::Unit(i); };
+  if ((free & kFreeFocal) != 0U) columns.push_back(unit(0) + (intrinsics[1] / intrinsics[0]) * unit(1));
+  if ((free & kFreeAspect) != 0U) columns.push_back(unit(1));
+  if ((free & kFreeCentre) != 0U) {
+    columns.push_back(unit(2));
+    columns.push_back(unit(3));
+  }
+  if ((free & kFreeK1) != 0U) columns.push_back(unit(4));
+  if ((free & kFreeK2) != 0U) columns.push_back(unit(5));
+  Eigen::Matrix<double, 9, Eigen::Dynamic> basis(9, static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t i = 0; i < columns.size(); ++i) basis.col(static_cast<Eigen::Index>(i)) = columns[i];
+  return basis;
+}
+
 ceres::Manifold* refinement_manifold(const double* intrinsics, IntrinsicsRefinement refinement) {
   const bool nominal = refinement == IntrinsicsRefinement::kNominal;
   Eigen::Matrix<double, 9, Eigen::Dynamic> basis =
@@ -273,8 +290,16 @@ void set_camera_blocks(BundleState& state, const PassOptions& options, Problem& 
   for (int c : out.cameras) {
     CameraParameters& camera = state.cameras[c];
     if (c == options.reference) out.problem.SetParameterBlockConstant(camera.pose.data());
-    if (options.refinement == IntrinsicsRefinement::kNone)
+    const unsigned free = options.refinement == IntrinsicsRefinement::kEvidence &&
+                                  static_cast<std::size_t>(c) < options.free_intrinsics.size()
+                              ? options.free_intrinsics[static_cast<std::size_t>(c)]
+                              : 0U;
+    if (options.refinement == IntrinsicsRefinement::kNone ||
+        (options.refinement == IntrinsicsRefinement::kEvidence && free == 0U))
       out.problem.SetParameterBlockConstant(camera.intrinsics.data());
+    else if (options.refinement == IntrinsicsRefinement::kEvidence)
+      out.problem.SetManifold(camera.intrinsics.data(),
+                              new LinearManifold(evidence_basis(camera.intrinsics.data(), free)));
     // Automatic refinement: only along the directions the data determines (docs/calibration.md).
     if (options.refinement == IntrinsicsRefinement::kNominal ||
         options.refinement == IntrinsicsRefinement::kSuspect)
@@ -461,6 +486,7 @@ AdjustmentJacobian adjustment_jacobian(BundleState state, const WandDefinition& 
                                        const PassOptions& options) {
   AdjustmentJacobian out;
   out.refinement = options.refinement;
+  out.free_intrinsics = options.free_intrinsics;
   Problem problem;
   build_problem(state, wand, options, false, problem);
   ceres::Problem::EvaluateOptions evaluate;

@@ -77,7 +77,10 @@ Eigen::MatrixXd gradients(const BundleState& state, const AdjustmentJacobian& ja
   }
   if (columns.intrinsics < 0) return g;
   const auto& k = state.cameras[c].intrinsics;
-  if (jacobian.refinement == IntrinsicsRefinement::kNominal) {
+  const bool evidence = jacobian.refinement == IntrinsicsRefinement::kEvidence;
+  if (evidence && (c >= jacobian.free_intrinsics.size() || (jacobian.free_intrinsics[c] & kFreeFocal) == 0U))
+    return g;  // the focal length stayed as given
+  if (jacobian.refinement == IntrinsicsRefinement::kNominal || evidence) {
     g(columns.intrinsics, 3) = 0.5 * (1.0 + k[1] / k[0]);  // fx and fy move together
   } else {
     g(columns.intrinsics, 3) = 0.5;
@@ -177,6 +180,30 @@ SolveDiagnostics solve_diagnostics(const BundleState& state, const WandDefinitio
                           static_cast<int>(c) == options.reference;
     if (state.cameras[c].registered && adjusted)
       out.cameras[c] = camera_stats(state, jacobian, information, centre, c, markers);
+  }
+  return out;
+}
+
+IntrinsicsPosterior intrinsics_posterior(const BundleState& state, const WandDefinition& wand,
+                                         const PassOptions& options) {
+  IntrinsicsPosterior out;
+  out.sigma.resize(state.cameras.size());
+  const AdjustmentJacobian jacobian = adjustment_jacobian(state, wand, options);
+  Information information;
+  factorise(jacobian, information);
+  if (!information.ok) return out;
+  out.ok = true;
+  out.rms_axis_px = information.sigma_px;
+  for (std::size_t c = 0; c < state.cameras.size(); ++c) {
+    const int first = jacobian.cameras[c].intrinsics;
+    if (first < 0) continue;
+    const unsigned free = c < options.free_intrinsics.size() ? options.free_intrinsics[c] : 0U;
+    const int next = first + evidence_tangent_size(free);
+    for (int k = first; k < next; ++k) {
+      Eigen::VectorXd unit = Eigen::VectorXd::Zero(jacobian.columns);
+      unit(k) = 1.0;
+      out.sigma[c].push_back(std::sqrt(std::max(0.0, information.factor.solve(unit)(k))));
+    }
   }
   return out;
 }

@@ -156,6 +156,7 @@ BundleState adjust(const std::vector<CameraCalibration>& cameras, const AlignedT
   BundleAdjustmentResult adjusted =
       bundle_adjust(std::move(state), graph.reference, cameras, aligned.tracks, wand, options, progress);
   result.intrinsics_refined = adjusted.intrinsics_refined_why;
+  result.intrinsics_declined = adjusted.intrinsics_declined;
   result.converged = adjusted.converged;
   result.convergence = adjusted.convergence;
   result.iterations += adjusted.iterations;
@@ -168,6 +169,7 @@ BundleState adjust(const std::vector<CameraCalibration>& cameras, const AlignedT
     PassOptions last;  // the final pass's problem: plain least squares, the chosen refinement
     last.reference = graph.reference;
     last.refinement = adjusted.refinement;
+    last.free_intrinsics = adjusted.free_intrinsics;
     last.time_offsets = options.time_offsets;
     last.length_sigma_m = options.length_sigma_m;
     last.threads = options.threads;

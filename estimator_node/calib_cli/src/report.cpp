@@ -116,13 +116,18 @@ std::string report_summary(const SolveResult& result) {
     out << "intrinsics refined"
         << (result.intrinsics_refined == "--refine-intrinsics" ? " (" : " automatically (")
         << result.intrinsics_refined << "):";
-    for (const auto& camera : result.cameras)
-      if (camera.intrinsics_refined && camera.T_world_cam)
-        out << format(" %s f %.0f->%.1f px", camera.id.c_str(),
-                      0.5 * (camera.given_intrinsics.fx + camera.given_intrinsics.fy),
-                      0.5 * (camera.intrinsics.fx + camera.intrinsics.fy));
+    for (const auto& camera : result.cameras) {
+      if (!camera.intrinsics_refined || !camera.T_world_cam) continue;
+      const auto& given = camera.given_intrinsics;
+      const auto& k = camera.intrinsics;
+      out << format(" %s f %.0f->%.1f px", camera.id.c_str(), 0.5 * (given.fx + given.fy),
+                    0.5 * (k.fx + k.fy));
+      if (k.cx != given.cx || k.cy != given.cy)
+        out << format(" c (%.1f, %.1f)->(%.1f, %.1f) px", given.cx, given.cy, k.cx, k.cy);
+    }
     out << "\n";
   }
+  if (!result.intrinsics_declined.empty()) out << "intrinsics " << result.intrinsics_declined << "\n";
   out << "camera        state       raw obs  raw mean px  raw median px  within 5 px  raw rms px/axis  "
          "sample rms px  max px  offset ms  coverage\n";
   for (std::size_t c = 0; c < result.cameras.size(); ++c) {
@@ -241,6 +246,7 @@ nlohmann::json report_json(const SolveResult& result) {
   json["converged"] = result.converged;
   json["convergence"] = result.convergence;
   json["intrinsics_refined"] = result.intrinsics_refined;
+  json["intrinsics_declined"] = result.intrinsics_declined;
   json["synchronised"] = result.synchronised;
   json["seconds"] = result.seconds;
   json["iterations"] = result.iterations;

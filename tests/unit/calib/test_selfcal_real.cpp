@@ -53,12 +53,8 @@ RealSet load() {
 }
 
 // As `calibrate import-points` then `calibrate solve --wand 0` do it.
-SolveResult solve(const RealSet& set, double focal_px, const SolveOptions& options, bool nominal = true) {
-  std::vector<CameraCalibration> cameras;
-  for (std::size_t c = 0; c < set.ids.size(); ++c) {
-    cameras.push_back(nominal_camera(set.ids[c], set.sizes[c].first, set.sizes[c].second, focal_px));
-    cameras.back().nominal_intrinsics = nominal;
-  }
+SolveResult solve(const RealSet& set, const std::vector<CameraCalibration>& cameras,
+                  const SolveOptions& options) {
   const auto frames = point_feature_frames(set.table, set.ids, 100.0, 0);
   std::vector<CameraWandTrack> tracks;
   for (const auto& camera : cameras) {
@@ -68,6 +64,35 @@ SolveResult solve(const RealSet& set, double focal_px, const SolveOptions& optio
     tracks.push_back(extract_wand_track(camera.id, own, camera.intrinsics, kPoint));
   }
   return solve_wand_calibration(cameras, tracks, kPoint, options);
+}
+
+SolveResult solve(const RealSet& set, double focal_px, const SolveOptions& options, bool nominal = true) {
+  std::vector<CameraCalibration> cameras;
+  for (std::size_t c = 0; c < set.ids.size(); ++c) {
+    cameras.push_back(nominal_camera(set.ids[c], set.sizes[c].first, set.sizes[c].second, focal_px));
+    cameras.back().nominal_intrinsics = nominal;
+  }
+  return solve(set, cameras, options);
+}
+
+// Cameras whose intrinsics come with the data (not nominal): the fitted ones (what the automatic
+// refinement converges to from a nominal start), scaled in focal length and shifted in the
+// principal point.
+std::vector<CameraCalibration> given_cameras(const RealSet& set, double focal_scale, double centre_shift_px) {
+  const SolveResult fitted = solve(set, kFittedFocalPx, SolveOptions{});
+  std::vector<CameraCalibration> cameras;
+  for (std::size_t c = 0; c < set.ids.size(); ++c) {
+    CameraCalibration camera =
+        nominal_camera(set.ids[c], set.sizes[c].first, set.sizes[c].second, kFittedFocalPx);
+    camera.intrinsics = fitted.cameras[c].intrinsics;
+    camera.intrinsics.fx *= focal_scale;
+    camera.intrinsics.fy *= focal_scale;
+    camera.intrinsics.cx += centre_shift_px;
+    camera.intrinsics.cy += centre_shift_px;
+    camera.nominal_intrinsics = false;
+    cameras.push_back(camera);
+  }
+  return cameras;
 }
 
 // The acceptance figure, computed outside the solver: every frame seen by >= 3 calibrated cameras
@@ -167,7 +192,11 @@ TEST(SelfCalRealData, FocalThirtyPercentShortWithoutFlags) {
 TEST(SelfCalRealData, UnmarkedWrongFocalIsDetectedAfterTheFirstAdjustment) {
   if (!data_present()) GTEST_SKIP() << kData << " not present";
   const RealSet set = load();
-  const SolveResult result = solve(set, 1.3 * kFittedFocalPx, SolveOptions{}, false);
+  SolveOptions options;
+  options.progress = [](const std::string& line) {
+    if (line.find("intrinsics") != std::string::npos) std::printf("  progress: %s\n", line.c_str());
+  };
+  const SolveResult result = solve(set, 1.3 * kFittedFocalPx, options, false);
   const Reprojected r = reproject(set, result);
   print("selfcal_4cam, f +30% not marked nominal, no flags", result, r);
   EXPECT_EQ(result.calibrated_count(), 4);
@@ -175,6 +204,47 @@ TEST(SelfCalRealData, UnmarkedWrongFocalIsDetectedAfterTheFirstAdjustment) {
   EXPECT_TRUE(result.converged) << result.convergence;
   EXPECT_LE(r.mean_px, 0.62);
   EXPECT_GE(r.within_5px, 0.99);
+}
+
+// Issue 35: intrinsics given (not nominal) but 5% off in focal length and 10 px off in the principal
+// point, no flags. The first adjustment's residuals against the centroid noise decide the refinement.
+TEST(SelfCalRealData, GivenIntrinsicsFocalFivePercentCentreTenPixelsOff) {
+  if (!data_present()) GTEST_SKIP() << kData << " not present";
+  const RealSet set = load();
+  std::vector<CameraCalibration> cameras = given_cameras(set, 1.05, 10.0);
+  const SolveResult result = solve(set, cameras, SolveOptions{});
+  const Reprojected r = reproject(set, result);
+  print("selfcal_4cam, given f +5%, c +10 px, no flags", result, r);
+  EXPECT_EQ(result.calibrated_count(), 4);
+  EXPECT_NE(result.intrinsics_refined.find("determined by the data: cam0 f"), std::string::npos)
+      << "the summary names what was refined and why: " << result.intrinsics_refined;
+  EXPECT_NE(report_summary(result).find("cam0 f 1057->"), std::string::npos);
+  EXPECT_TRUE(result.converged) << result.convergence;
+  EXPECT_LE(r.mean_px, 0.62);
+  EXPECT_GE(r.within_5px, 0.99);
+  EXPECT_GE(r.observations, 1000);
+}
+
+// Correct intrinsics as given (the fitted ones): the evidence step must not make them worse than
+// keeping them fixed (--fixed-intrinsics).
+TEST(SelfCalRealData, GivenFittedIntrinsicsAreNotMadeWorse) {
+  if (!data_present()) GTEST_SKIP() << kData << " not present";
+  const RealSet set = load();
+  const std::vector<CameraCalibration> cameras = given_cameras(set, 1.0, 0.0);
+  SolveOptions fixed;
+  fixed.auto_intrinsics = false;
+  const Reprojected before = reproject(set, solve(set, cameras, fixed));
+  const SolveResult result = solve(set, cameras, SolveOptions{});
+  const Reprojected after = reproject(set, result);
+  print("selfcal_4cam, given fitted intrinsics, no flags", result, after);
+  std::printf("  fixed intrinsics: mean %.4f px, median %.4f px, %.2f%% within 5 px\n", before.mean_px,
+              before.median_px, 100 * before.within_5px);
+  std::printf("  intrinsics: refined '%s' declined '%s'\n", result.intrinsics_refined.c_str(),
+              result.intrinsics_declined.c_str());
+  EXPECT_EQ(result.calibrated_count(), 4);
+  EXPECT_FALSE(result.intrinsics_refined.empty() && result.intrinsics_declined.empty()) << "says what it did";
+  EXPECT_LE(after.mean_px, before.mean_px + 1e-3);
+  EXPECT_GE(after.within_5px, before.within_5px - 1e-3);
 }
 
 // The comparison: --refine-intrinsics (all nine intrinsics) from the same start.

@@ -50,12 +50,31 @@ BundleState triangulate_instants(BundleState state, const std::vector<CameraIntr
                                  std::size_t markers);
 
 // kNominal: the focal length (fx and fy together, keeping their ratio) and k1, k2. kSuspect: fx,
-// fy, cx, cy, k1, k2 each. kAll: all nine (--refine-intrinsics).
-enum class IntrinsicsRefinement { kNone, kNominal, kSuspect, kAll };
+// fy, cx, cy, k1, k2 each. kEvidence: per camera what PassOptions::free_intrinsics names (the
+// focal length as in kNominal). kAll: all nine (--refine-intrinsics).
+enum class IntrinsicsRefinement { kNone, kNominal, kSuspect, kEvidence, kAll };
+
+// kEvidence's per-camera groups (bits), in tangent order: focal length (fx, fy together), aspect
+// (fy alone), principal point (cx, cy), k1, k2.
+enum IntrinsicsGroup : unsigned {
+  kFreeFocal = 1U,
+  kFreeCentre = 2U,
+  kFreeK1 = 4U,
+  kFreeK2 = 8U,
+  kFreeAspect = 16U
+};
+constexpr unsigned kFreeEvidenceAll = kFreeFocal | kFreeAspect | kFreeCentre | kFreeK1 | kFreeK2;
+// The tangent size of a kEvidence block with groups `free`.
+constexpr int evidence_tangent_size(unsigned free) {
+  return ((free & kFreeFocal) != 0U ? 1 : 0) + ((free & kFreeAspect) != 0U ? 1 : 0) +
+         ((free & kFreeCentre) != 0U ? 2 : 0) + ((free & kFreeK1) != 0U ? 1 : 0) +
+         ((free & kFreeK2) != 0U ? 1 : 0);
+}
 
 struct PassOptions {
   int reference = 0;  // camera whose pose (and clock) is the gauge
   IntrinsicsRefinement refinement = IntrinsicsRefinement::kNone;
+  std::vector<unsigned> free_intrinsics;  // kEvidence: IntrinsicsGroup bits per camera (none: fixed)
   bool time_offsets = false;
   double huber_px = 1.0;           // robust loss (robust passes only)
   double length_sigma_m = 0.0005;  // weight of the wand-length residuals
@@ -112,6 +131,7 @@ struct AdjustmentJacobian {
   std::vector<CameraColumns> cameras;  // per camera of the state
   std::vector<int> instant_columns;    // per instant: first of its 3 x markers, -1: not adjusted
   IntrinsicsRefinement refinement = IntrinsicsRefinement::kNone;
+  std::vector<unsigned> free_intrinsics;  // as PassOptions
   int columns = 0;
 };
 
@@ -123,9 +143,11 @@ struct BundleAdjustmentResult {
   std::vector<std::string> failures;     // per camera: a refined focal length far from the given, or ""
   std::vector<bool> intrinsics_refined;  // per camera
   IntrinsicsRefinement refinement = IntrinsicsRefinement::kNone;
-  std::string intrinsics_refined_why;  // SolveResult::intrinsics_refined
-  bool converged = false;              // every pass
-  std::string convergence;             // SolveResult::convergence
+  std::vector<unsigned> free_intrinsics;  // kEvidence: per camera
+  std::string intrinsics_refined_why;     // SolveResult::intrinsics_refined
+  std::string intrinsics_declined;        // SolveResult::intrinsics_declined
+  bool converged = false;                 // every pass
+  std::string convergence;                // SolveResult::convergence
   int iterations = 0;
 };
 

@@ -31,6 +31,17 @@ SolveDiagnostics solve_diagnostics(const BundleState& state, const WandDefinitio
 // The plain-language warnings for `result`: one per camera whose |correlation| exceeds
 // options.focal_depth_correlation_warning, and one when the free wand length varies more than
 // options.length_consistency_warning times what the reprojection noise predicts.
+// Posterior 1-sigma of every camera's free intrinsics (kEvidence: the tangent columns of
+// options.free_intrinsics, marginalised over everything else the adjustment moves; the reprojection rows
+// weighted by their own RMS per axis): per camera, per tangent column; empty where the intrinsics are fixed.
+struct IntrinsicsPosterior {
+  std::vector<std::vector<double>> sigma;
+  double rms_axis_px = 0;
+  bool ok = false;
+};
+IntrinsicsPosterior intrinsics_posterior(const BundleState& state, const WandDefinition& wand,
+                                         const PassOptions& options);
+
 std::vector<std::string> solve_warnings(const SolveResult& result, const SolveOptions& options);
 
 }  // namespace panoptes::calib

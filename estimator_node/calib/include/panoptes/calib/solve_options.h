@@ -12,11 +12,17 @@ struct SolveOptions {
   bool refine_intrinsics = false;  // fx, fy, cx, cy and the five distortion terms per camera
   // Without refine_intrinsics, intrinsics are refined automatically: when a camera's intrinsics
   // are nominal (`nominal: true`) the focal length (fx, fy keeping their ratio), k1 and k2 of every
-  // camera; when, after the first adjustment, the raw-frame error is far above any centroid noise
-  // (median 2D error above intrinsics_suspect_px), fx, fy, cx, cy, k1 and k2. The tangential terms
-  // and k3 stay as given. docs/calibration.md, "Intrinsics: what is automatic".
+  // camera; otherwise from evidence after the first adjustment with the given intrinsics: when the
+  // raw-frame median 2D error is above intrinsics_noise_factor x what centroid_noise_px alone gives,
+  // the groups (focal length, principal point, k1, k2) whose posterior 1-sigma is at most
+  // intrinsics_determined_ratio of their prior (intrinsics_evidence.h) are refined, kept if the
+  // residual sum falls by more than the information criterion asks, reverted if the residuals or the
+  // raw-frame (validation) error get worse. The tangential terms and k3 stay as given.
+  // docs/calibration.md, "Intrinsics: what is automatic" and "Intrinsics from evidence".
   bool auto_intrinsics = true;
-  double intrinsics_suspect_px = 0.5;
+  double centroid_noise_px = 0.2;  // per axis
+  double intrinsics_noise_factor = 1.25;
+  double intrinsics_determined_ratio = 0.5;
   // A refined focal length more than this factor from the given one fails the camera: the given
   // intrinsics were wrong (wrong pixel pitch, lens or image size), not just imprecise.
   double max_focal_factor = 2.0;

@@ -70,6 +70,9 @@ struct SolveResult {
   // Whether intrinsics were refined and why ("" if not): "--refine-intrinsics", "nominal
   // intrinsics (cam0, cam1)" or "raw-frame error ... after the first adjustment".
   std::string intrinsics_refined;
+  // Why the intrinsics were kept as given although the evidence step looked at them ("" if it did
+  // not): at the noise, nothing determined, not worth its parameters, or reverted (worse).
+  std::string intrinsics_declined;
   // Whether every bundle-adjustment pass converged (Ceres CONVERGENCE), not stopped at the
   // iteration cap; `convergence` says which pass stopped and why.
   bool converged = false;
