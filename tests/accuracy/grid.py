@@ -15,7 +15,7 @@ Rigs: 4, 6 and 8 cameras as a ring (radius 4 m), a corridor (two walls 5 m apart
 centroid noise, merging spots. Motions: the 41-marker walk (real motion capture, 1.5 m/s), the
 same played twice as fast (run, 3 m/s), dance (12 markers on fast Lissajous paths, up to ~6 m/s),
 club (3 markers on a swung club, head at 25 m/s, 400 m/s^2) and ball (thrown to and fro at 25 m/s,
-caught over 0.15 s). Clutter: 0, 0.3 and 1 false blob per camera frame.
+caught and thrown back over 0.1 s, 785 m/s^2). Clutter: 0, 0.3 and 1 false blob per camera frame.
 
 Requirements (--require-*) make the exit status 1; a cell that cannot run (no marker trackable,
 a tool failing) fails loudly, naming the cell, with exit status 2.
@@ -97,18 +97,18 @@ def club_markers():
 
 
 def ball_markers():
-    # Thrown to and fro along x between +-2.2 m at 25 m/s (gravity in flight), each catch and
-    # throw a smooth reversal over 0.15 s (cosine velocity profile, peak 520 m/s^2).
-    v, tau, span = 25.0, 0.15, 4.4
+    # Thrown to and fro along x between +-1.2 m at 25 m/s (gravity in flight), each catch and
+    # throw a smooth reversal over 0.1 s reaching +-2.0 m (cosine velocity profile, peak 785 m/s^2).
+    v, tau, span = 25.0, 0.1, 2.4
     flight = span / v
     half = flight + tau
     period = 2 * half
-    arc = tau * v / math.pi  # distance travelled during half a reversal... each reversal overshoots
+    arc = tau * v / math.pi  # how far a reversal overshoots the end of a flight
 
     def pos(t):
         direction = 1 if t < half else -1
         u = t if t < half else t - half
-        x0 = -2.2 - arc if direction > 0 else 2.2 + arc
+        x0 = -span / 2 - arc if direction > 0 else span / 2 + arc
         if u < flight:
             x = x0 + direction * (arc + v * u)
             z = 1.3 + 0.5 * 9.81 * u * (flight - u)

@@ -554,8 +554,12 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     track.state.x.head<3>() = candidate.position;
     track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
     const double sp = options.init_position_sigma_m;
-    const double sv =
-        candidate.has_velocity ? options.init_measured_velocity_sigma_mps : options.init_velocity_sigma_mps;
+    // A measured velocity is as uncertain as it is large (finite differences of pixel positions
+    // over ~10 ms, through the marker's acceleration): a club head at 25 m/s is not known to 0.5 m/s.
+    const double sv = candidate.has_velocity
+                          ? std::max(options.init_measured_velocity_sigma_mps,
+                                     options.init_velocity_relative_sigma * candidate.velocity.norm())
+                          : options.init_velocity_sigma_mps;
     Vector6d variances;
     variances << sp * sp, sp * sp, sp * sp, sv * sv, sv * sv, sv * sv;
     track.state.P = FilterCovariance<6>::diagonal(variances);

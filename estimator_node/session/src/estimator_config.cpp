@@ -281,7 +281,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.number("init_position_sigma_m", o.init_position_sigma_m, kPositive, "initial 1-sigma of a new point, m");
   f.number("init_velocity_sigma_mps", o.init_velocity_sigma_mps, kPositive, "velocity unknown at initiation");
   f.number("init_measured_velocity_sigma_mps", o.init_measured_velocity_sigma_mps, kPositive,
-           "velocity from the tracklets' pixel velocities");
+           "velocity from the tracklets' pixel velocities ...");
+  f.number("init_velocity_relative_sigma", o.init_velocity_relative_sigma, kNonNegative,
+           "... at least this fraction of the measured speed (fast markers)");
   f.integer("confirm_cameras", o.confirm_cameras, 2, 64, "distinct cameras that confirm a track ...");
   f.integer("confirm_updates", o.confirm_updates, 1, 1 << 20, "... or this many updates from at least two");
   f.integer("tentative_max_misses", o.tentative_max_misses, 1, 1 << 20,

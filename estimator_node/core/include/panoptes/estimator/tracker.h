@@ -37,7 +37,8 @@ struct TrackerOptions {
   InitiatorOptions init;              // pairing of unmatched blobs into new points
   double init_position_sigma_m = 0.01;
   double init_velocity_sigma_mps = 2.0;           // velocity unknown at initiation
-  double init_measured_velocity_sigma_mps = 0.5;  // velocity from the tracklets' pixel velocities
+  double init_measured_velocity_sigma_mps = 0.5;  // velocity from the tracklets' pixel velocities ...
+  double init_velocity_relative_sigma = 0.3;      // ... at least this fraction of its magnitude
   int confirm_cameras = 3;                        // distinct cameras that confirm a track ...
   int confirm_updates = 12;                       // ... or this many updates from at least two cameras
   int tentative_max_misses = 4;                   // a tentative track absent where it should be seen: ghost
