@@ -50,7 +50,7 @@ def look_at_camera(index, eye, target):
     }
 
 
-def rig_cameras(layout, count):
+def rig_cameras(layout, count, blind=False):
     cams = []
     for i in range(count):
         if layout == "ring":
@@ -71,6 +71,8 @@ def rig_cameras(layout, count):
             target = [-0.4 * math.cos(a), -0.4 * math.sin(a), 0.8]
         else:
             raise CellError(f"unknown rig layout {layout}")
+        if blind:  # looking away from the volume: nothing to see (the loud-failure check)
+            target = [2 * e - t for e, t in zip(eye, target)]
         cams.append(look_at_camera(i, [round(v, 4) for v in eye], target))
     return cams
 
@@ -154,7 +156,7 @@ def run_trc(work):
     return out
 
 
-def scene(rig, count, motion, clutter, seed, duration, work):
+def scene(rig, count, motion, clutter, seed, duration, work, blind=False):
     s = {
         "seed": seed,
         "duration": duration,
@@ -163,7 +165,7 @@ def scene(rig, count, motion, clutter, seed, duration, work):
             "exposure": 0.0008, "pixel_noise": 1.0, "centroid_noise": 0.1, "false_blobs": clutter,
             "merge_distance": 3.0, "latency": 0.002,
         },
-        "cameras": rig_cameras(rig, count),
+        "cameras": rig_cameras(rig, count, blind),
     }
     if motion in ("walk", "run"):
         s["trc"] = {"file": TRC if motion == "walk" else run_trc(work), "up_axis": "y",
@@ -215,7 +217,7 @@ def run_cell(args, rig, n, motion, clutter, seed):
     duration = args.duration if args.duration else (12.0 if args.long else 2.5)
     path = os.path.join(work, "scene.yaml")
     with open(path, "w") as f:
-        json.dump(scene(rig, n, motion, clutter, seed, duration, args.work), f)
+        json.dump(scene(rig, n, motion, clutter, seed, duration, args.work, args.blind), f)
     b = args.bin
     if run([f"{b}/panoptes_sim", "features", "--scene", path, "--out-dir", work], name,
            os.path.join(work, "sim.log")) != 0:
@@ -284,6 +286,7 @@ def main():
     p.add_argument("--warmup", type=float, default=0.3)
     p.add_argument("--config", default=None, help="estimator configuration (default: none, the defaults)")
     p.add_argument("--json", default=None, help="write the rows here")
+    p.add_argument("--blind", action="store_true", help="every camera looks away (checks the loud failure)")
     p.add_argument("--require-fast-id-switches", type=int, default=None,
                    help="club and ball cells: at most this many ID switches each")
     p.add_argument("--require-fast-coverage", type=float, default=None, help="club and ball cells: coverage at least")
