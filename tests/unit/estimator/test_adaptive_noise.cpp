@@ -3,6 +3,7 @@
 // on a swung club (25 m/s through the bottom) keeps one identity with the default settings, and a
 // slow marker is tracked as well as with one fixed σ².
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <set>
 
@@ -82,6 +83,7 @@ Result track(Path path, const TrackerOptions& options, double duration_s) {
 
 TEST(AdaptiveNoise, SwungClubHeadKeepsOneIdentityWithDefaults) {
   const Result r = track(club_head, TrackerOptions{}, 3.0);
+  std::printf("adaptive: %zu ids, tracked %d of %d instants\n", r.ids.size(), r.tracked, r.instants);
   EXPECT_EQ(r.ids.size(), 1u) << "the club head changed identity";
   EXPECT_GE(r.tracked, 0.99 * r.instants) << r.tracked << " of " << r.instants;
 }
@@ -91,6 +93,7 @@ TEST(AdaptiveNoise, FixedDefaultNoiseLosesTheClubHead) {
   TrackerOptions fixed;
   fixed.process_noise_max_scale = 1.0;
   const Result r = track(club_head, fixed, 3.0);
+  std::printf("fixed: %zu ids, tracked %d of %d instants\n", r.ids.size(), r.tracked, r.instants);
   EXPECT_TRUE(r.ids.size() > 1u || r.tracked < 0.99 * r.instants)
       << r.ids.size() << " ids, " << r.tracked << " of " << r.instants;
 }
