@@ -47,11 +47,18 @@ struct Track {
   int misses = 0;          // tentative only: frames that should have shown it
   double nis_average = 0;  // moving average of the normalised innovation d²
   int nis_updates = 0;
+  // Adaptive process noise: σ² = process_noise × q_scale, q_scale raised by nis_adapt (a short
+  // average of d²) and decaying to 1 since q_stamp_ns (adapt_process_noise).
+  double q_scale = 1.0;
+  double nis_adapt = 0;
+  TimeNs q_stamp_ns = 0;
   int distinct_cameras = 0;                // cameras that ever updated it
   std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
   // Whether the last record made of it was published (determined): then it stays published up to
   // kKeepPublishedFactor × publish_max_sigma_m (hysteresis, issue 32 item 9). Set by tracks_at.
   mutable bool published = false;
+
+  double sigma2(double process_noise) const { return process_noise * q_scale; }
 
   Eigen::Vector3d position_at(TimeNs stamp_ns) const {
     return state.position() + ns_to_seconds(stamp_ns - state.stamp_ns) * state.velocity();
@@ -234,6 +241,27 @@ struct Tracker::Impl {
     }
   }
 
+  // Adaptive process noise (docs/estimator.md, "Adaptive process noise"): the prior d² of each
+  // update is χ²₂ (mean 2) while the motion model holds; a manoeuvre the white-acceleration model
+  // does not cover pushes it up for several updates before the marker leaves the gate. A short
+  // average above the target multiplies the track's σ² (by at most 4 per update, up to max_scale);
+  // without such evidence the factor decays back to 1, so a slow marker keeps the low noise.
+  void adapt_process_noise(Track& track, double d2, TimeNs stamp_ns) const {
+    const double max_scale = std::max(1.0, options.process_noise_max_scale);
+    if (max_scale <= 1.0) return;
+    if (track.q_stamp_ns != 0 && stamp_ns > track.q_stamp_ns) {
+      const double decay = std::exp(-ns_to_seconds(stamp_ns - track.q_stamp_ns) /
+                                    ns_to_seconds(options.process_noise_adapt_decay_ns));
+      track.q_scale = 1.0 + (track.q_scale - 1.0) * decay;
+    }
+    track.q_stamp_ns = std::max(track.q_stamp_ns, stamp_ns);
+    track.nis_adapt = track.nis_updates <= 1 ? d2 : 0.5 * track.nis_adapt + 0.5 * d2;
+    const double target = options.process_noise_nis_target;
+    if (track.nis_adapt > target) {
+      track.q_scale = std::min(max_scale, track.q_scale * std::min(track.nis_adapt / target, 4.0));
+    }
+  }
+
   void note_update(Track& track, int camera, TimeNs stamp_ns) {
     track.last_update_ns = std::max(track.last_update_ns, stamp_ns);
     ++track.updates;
@@ -339,7 +367,7 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
     const auto& P = track.state.P.matrix();
     const double trace = P.block<3, 3>(0, 0).trace() + 2.0 * dt * P.block<3, 3>(0, 3).trace() +
                          dt * dt * P.block<3, 3>(3, 3).trace() +
-                         options.process_noise * std::abs(dt * dt * dt);
+                         track.sigma2(options.process_noise) * std::abs(dt * dt * dt);
     const double lateral = (p_cam.x() * p_cam.x() + p_cam.y() * p_cam.y()) / (p_cam.z() * p_cam.z());
     const double gain = 1.3 * focal / p_cam.z() * std::sqrt(1.0 + lateral);  // 1.3: distortion slack
     const double radius =
@@ -352,7 +380,7 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
       gating.near[j] = 1;
       if (!projected[i]) {
         Projected full;
-        full.state = predicted(track.state, stamp, options.process_noise);
+        full.state = predicted(track.state, stamp, track.sigma2(options.process_noise));
         const auto projection = project_point(full.state, camera, options.measurement_noise_px);
         if (!projection) return;
         full.projection = *projection;
@@ -382,6 +410,7 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   const double d2 = mahalanobis2(projected.projection, pixel);
   track.nis_average = track.nis_updates == 0 ? d2 : 0.8 * track.nis_average + 0.2 * d2;
   ++track.nis_updates;
+  adapt_process_noise(track, d2, stamp);
   track.state = projected.state;
   update(track.state, projected.projection, pixel, options.measurement_noise_px);
   // A tentative track that a camera sees again cancels one miss: a marker that the body hides
@@ -428,7 +457,7 @@ bool Tracker::Impl::reassociate(const Entry& entry, const std::vector<Eigen::Vec
                                         [](const Track& track, std::int64_t key) { return track.id < key; });
     if (found == core.tracks.end() || found->id != id || blob >= pixels.size() || used[blob]) return false;
     Projected full;
-    full.state = predicted(found->state, stamp, options.process_noise);
+    full.state = predicted(found->state, stamp, found->sigma2(options.process_noise));
     if (camera.T_cam_world().apply(full.state.position()).z() < options.init.min_depth_m) return false;
     const auto projection = project_point(full.state, camera, options.measurement_noise_px);
     if (!projection) return false;
@@ -525,8 +554,12 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     track.state.x.head<3>() = candidate.position;
     track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
     const double sp = options.init_position_sigma_m;
-    const double sv =
-        candidate.has_velocity ? options.init_measured_velocity_sigma_mps : options.init_velocity_sigma_mps;
+    // A measured velocity is as uncertain as it is large (finite differences of pixel positions
+    // over ~10 ms, through the marker's acceleration): a club head at 25 m/s is not known to 0.5 m/s.
+    const double sv = candidate.has_velocity
+                          ? std::max(options.init_measured_velocity_sigma_mps,
+                                     options.init_velocity_relative_sigma * candidate.velocity.norm())
+                          : options.init_velocity_sigma_mps;
     Vector6d variances;
     variances << sp * sp, sp * sp, sp * sp, sv * sv, sv * sv, sv * sv;
     track.state.P = FilterCovariance<6>::diagonal(variances);
@@ -609,7 +642,7 @@ void Tracker::Impl::replay_with(std::vector<Entry> late) {
 }
 
 TrackRecord Tracker::Impl::to_record(const Track& track, TimeNs stamp_ns) const {
-  const PointState state = predicted(track.state, stamp_ns, options.process_noise);
+  const PointState state = predicted(track.state, stamp_ns, track.sigma2(options.process_noise));
   TrackRecord record;
   record.stamp_ns = stamp_ns;
   record.id = track.id;
@@ -865,7 +898,7 @@ std::vector<PredictedWindow2D> Tracker::predicted_windows(const std::string& cam
   if (found == impl_->camera_index.end()) return windows;
   const CameraModel& camera = *impl_->models[found->second];
   for (const auto& track : impl_->core.tracks) {
-    const PointState state = predicted(track.state, stamp_ns, impl_->options.process_noise);
+    const PointState state = predicted(track.state, stamp_ns, track.sigma2(impl_->options.process_noise));
     const auto projection = project_point(state, camera, impl_->options.measurement_noise_px);
     if (!projection) continue;
     const double hw = std::sqrt(impl_->options.gate_chi2 * projection->S(0, 0)) + margin_px;

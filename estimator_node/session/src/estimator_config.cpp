@@ -269,6 +269,13 @@ template <class Fields>
 void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.number("process_noise", o.process_noise, kPositive,
            "sigma^2 of white acceleration, m^2/s^3 (seed 003 A.48)");
+  f.number("process_noise_max_scale", o.process_noise_max_scale, kPositive,
+           "adaptive process noise: a track's sigma^2 grows from its innovations up to this times "
+           "process_noise (1: off)");
+  f.number("process_noise_nis_target", o.process_noise_nis_target, kPositive,
+           "adaptive process noise: averaged d^2 above this raises a track's sigma^2");
+  f.integer("process_noise_adapt_decay_ns", o.process_noise_adapt_decay_ns, 1, kHourNs,
+            "adaptive process noise: time constant of the return to process_noise");
   f.number("measurement_noise_px", o.measurement_noise_px, kPositive, "sigma of a centroid, px");
   f.number("gate_chi2", o.gate_chi2, kPositive, "verify region (seed 003 2.2.3.2)");
   f.section("init", "pairing of unmatched blobs into new points",
@@ -276,7 +283,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.number("init_position_sigma_m", o.init_position_sigma_m, kPositive, "initial 1-sigma of a new point, m");
   f.number("init_velocity_sigma_mps", o.init_velocity_sigma_mps, kPositive, "velocity unknown at initiation");
   f.number("init_measured_velocity_sigma_mps", o.init_measured_velocity_sigma_mps, kPositive,
-           "velocity from the tracklets' pixel velocities");
+           "velocity from the tracklets' pixel velocities ...");
+  f.number("init_velocity_relative_sigma", o.init_velocity_relative_sigma, kNonNegative,
+           "... at least this fraction of the measured speed (fast markers)");
   f.integer("confirm_cameras", o.confirm_cameras, 2, 64, "distinct cameras that confirm a track ...");
   f.integer("confirm_updates", o.confirm_updates, 1, 1 << 20, "... or this many updates from at least two");
   f.integer("tentative_max_misses", o.tentative_max_misses, 1, 1 << 20,
