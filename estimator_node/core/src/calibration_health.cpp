@@ -189,7 +189,16 @@ bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
     if (camera.calm_since_ns == 0 || stamp_ns - camera.calm_since_ns < options_.window_ns) return false;
     camera.calm_since_ns = 0;
     ++health.releases;
+  } else if (any_biased && last_quarantine_ns_ != 0 && stamp_ns - last_quarantine_ns_ < options_.window_ns &&
+             stamp_ns >= last_quarantine_ns_) {
+    // Held: one camera at a time, the most biased first.
+    health.state = CalibrationState::kSmallBias;
+    health.reason = "biased, held while " + last_quarantined_ + " was just quarantined: " + describe(*worst, where);
+    health.quarantined_since_ns = 0;
+    return health.state != before;
   } else if (any_biased) {
+    last_quarantine_ns_ = stamp_ns;
+    last_quarantined_ = health.camera_id;
     health.state = CalibrationState::kQuarantined;
     health.reason = "quarantined: " + describe(*worst, where);
     health.quarantined_since_ns = stamp_ns;

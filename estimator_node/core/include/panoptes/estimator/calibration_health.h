@@ -131,6 +131,10 @@ class CalibrationMonitor {
 
   CalibrationHealthOptions options_;
   double floor_px_;
+  // The newest quarantine: for a window after it no other camera is quarantined (their residuals
+  // were measured against tracks the quarantined camera had been pulling).
+  TimeNs last_quarantine_ns_ = 0;
+  std::string last_quarantined_;
   std::vector<PerCamera> cameras_;
 };
 
