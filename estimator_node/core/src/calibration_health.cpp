@@ -88,6 +88,15 @@ void CalibrationMonitor::set_cameras(const std::vector<std::string>& camera_ids,
   cameras_ = std::move(cameras);
 }
 
+bool CalibrationMonitor::due(int camera_index, TimeNs stamp_ns) {
+  PerCamera& camera = cameras_.at(camera_index);
+  if (camera.last_monitored_ns != 0 && stamp_ns >= camera.last_monitored_ns &&
+      stamp_ns - camera.last_monitored_ns < options_.sample_interval_ns)
+    return false;
+  camera.last_monitored_ns = stamp_ns;
+  return true;
+}
+
 bool CalibrationMonitor::wants(int camera, std::int64_t track_id, TimeNs stamp_ns) const {
   const auto& last = cameras_.at(camera).last_sample;
   const auto found = last.find(track_id);

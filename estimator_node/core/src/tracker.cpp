@@ -308,7 +308,7 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
   // identification, and the poses stay independent of the point tracks' lifecycle.
   const std::vector<char> excluded = used;
   if (calibration_mode != CalibrationMode::kOff) {
-    if (!replaying) {
+    if (!replaying && monitor.due(camera_index, frame.stamp_ns)) {
       monitor_frame(entry, pixels);
       monitor.judge(camera_index, frame.stamp_ns);
     }

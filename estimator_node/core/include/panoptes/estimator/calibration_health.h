@@ -90,6 +90,9 @@ class CalibrationMonitor {
   explicit CalibrationMonitor(CalibrationHealthOptions options = {}, double centroid_sigma_px = 0.5);
 
   void set_cameras(const std::vector<std::string>& camera_ids, const std::vector<Eigen::Vector2d>& image_sizes);
+  // Whether `camera`'s frame at `stamp_ns` is to be monitored and judged: one frame per sample
+  // interval (each track gives at most one residual per interval anyway). Marks it done.
+  bool due(int camera, TimeNs stamp_ns);
   // Whether a residual of `track_id` in `camera` at `stamp_ns` is wanted (one per sample interval).
   bool wants(int camera, std::int64_t track_id, TimeNs stamp_ns) const;
   // A residual: blob minus predicted pixel, at the predicted pixel `at`.
@@ -123,6 +126,7 @@ class CalibrationMonitor {
     std::array<Sums, kCalibrationRegions> regions{};
     std::unordered_map<std::int64_t, TimeNs> last_sample;  // by track id
     TimeNs calm_since_ns = 0;  // quarantined: residuals unbiased since (0: not calm)
+    TimeNs last_monitored_ns = 0;
     CameraCalibrationHealth health;
   };
   void expire(PerCamera& camera, TimeNs stamp_ns);
