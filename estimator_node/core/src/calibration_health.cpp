@@ -104,6 +104,13 @@ bool CalibrationMonitor::wants(int camera, std::int64_t track_id, TimeNs stamp_n
          stamp_ns < found->second;
 }
 
+void CalibrationMonitor::add_prediction(int camera_index, std::int64_t track_id, TimeNs stamp_ns, bool seen) {
+  PerCamera& camera = cameras_.at(camera_index);
+  camera.last_sample[track_id] = stamp_ns;
+  camera.predictions.emplace_back(stamp_ns, seen);
+  if (seen) ++camera.seen;
+}
+
 void CalibrationMonitor::add(int camera_index, std::int64_t track_id, TimeNs stamp_ns, const Eigen::Vector2d& at,
                              const Eigen::Vector2d& residual) {
   PerCamera& camera = cameras_.at(camera_index);
@@ -126,6 +133,10 @@ void CalibrationMonitor::expire(PerCamera& camera, TimeNs stamp_ns) {
     camera.regions[old.region].add(old.r, -1.0);
     camera.window.pop_front();
   }
+  while (!camera.predictions.empty() && stamp_ns - camera.predictions.front().first > options_.window_ns) {
+    if (camera.predictions.front().second) --camera.seen;
+    camera.predictions.pop_front();
+  }
   // Tracks not sampled for a window are forgotten (ids are never reused).
   std::erase_if(camera.last_sample,
                 [&](const auto& entry) { return stamp_ns - entry.second > 4 * options_.window_ns; });
@@ -133,6 +144,8 @@ void CalibrationMonitor::expire(PerCamera& camera, TimeNs stamp_ns) {
 
 void CalibrationMonitor::update_stats(PerCamera& camera) const {
   auto& health = camera.health;
+  health.predicted = camera.predictions.size();
+  health.seen = camera.seen;
   health.whole = residual_stats(camera.whole.n, camera.whole.sum, camera.whole.outer, floor_px_);
   for (int r = 0; r < kCalibrationRegions; ++r) {
     const Sums& sums = camera.regions[r];
@@ -186,9 +199,19 @@ bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
   };
   consider(health.whole, "whole image");
   for (int r = 0; r < kCalibrationRegions; ++r) consider(health.regions[r], kRegionNames[r]);
+  // Blobs that miss the tracks altogether (a bump beyond search_px) leave no residuals to test.
+  const bool judged_seen = health.predicted >= options_.min_samples;
+  const double seen_share = judged_seen ? static_cast<double>(health.seen) / static_cast<double>(health.predicted) : 1.0;
+  const bool blind = judged_seen && seen_share < options_.min_seen_fraction;
+  std::string blind_reason;
+  if (blind) {
+    blind_reason = "its blobs miss the tracks: " + std::to_string(health.seen) + " of " +
+                   std::to_string(health.predicted) + " predictions in its image had a blob in their gate";
+  }
 
   if (health.state == CalibrationState::kQuarantined) {
-    bool all_calm = judged(health.whole) && calm(health.whole);
+    bool all_calm = judged(health.whole) && calm(health.whole) &&
+                    (!judged_seen || seen_share >= options_.release_seen_fraction);
     for (const auto& region : health.regions) all_calm = all_calm && calm(region);
     if (!all_calm) {
       camera.calm_since_ns = 0;
@@ -198,18 +221,19 @@ bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
     if (camera.calm_since_ns == 0 || stamp_ns - camera.calm_since_ns < options_.window_ns) return false;
     camera.calm_since_ns = 0;
     ++health.releases;
-  } else if (any_biased && last_quarantine_ns_ != 0 && stamp_ns - last_quarantine_ns_ < options_.window_ns &&
+  } else if ((any_biased || blind) && last_quarantine_ns_ != 0 && stamp_ns - last_quarantine_ns_ < options_.window_ns &&
              stamp_ns >= last_quarantine_ns_) {
     // Held: one camera at a time, the most biased first.
     health.state = CalibrationState::kSmallBias;
-    health.reason = "biased, held while " + last_quarantined_ + " was just quarantined: " + describe(*worst, where);
+    health.reason = "held while " + last_quarantined_ + " was just quarantined: " +
+                    (any_biased ? describe(*worst, where) : blind_reason);
     health.quarantined_since_ns = 0;
     return health.state != before;
-  } else if (any_biased) {
+  } else if (any_biased || blind) {
     last_quarantine_ns_ = stamp_ns;
     last_quarantined_ = health.camera_id;
     health.state = CalibrationState::kQuarantined;
-    health.reason = "quarantined: " + describe(*worst, where);
+    health.reason = "quarantined: " + (any_biased ? describe(*worst, where) : blind_reason);
     health.quarantined_since_ns = stamp_ns;
     ++health.quarantines;
     return true;

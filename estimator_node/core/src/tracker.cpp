@@ -339,25 +339,27 @@ double largest_eigenvalue(const Eigen::Matrix2d& S) {
   return half_trace + std::sqrt(half_difference * half_difference + S(0, 1) * S(1, 0));
 }
 
-// The blob nearest `at` if it is within `radius` and the next nearest is `ratio` times farther.
-std::optional<std::size_t> unique_nearest(const std::vector<Eigen::Vector2d>& pixels, const Eigen::Vector2d& at,
-                                          double radius, double ratio) {
+// The blob nearest `at` and the distances of the nearest two (infinite when absent).
+struct Nearest {
+  std::size_t index = 0;
   double d1 = std::numeric_limits<double>::infinity();
-  double d2 = d1;
-  std::size_t nearest = 0;
+  double d2 = std::numeric_limits<double>::infinity();
+};
+
+Nearest nearest_two(const std::vector<Eigen::Vector2d>& pixels, const Eigen::Vector2d& at) {
+  Nearest n;
   for (std::size_t j = 0; j < pixels.size(); ++j) {
     const double d = (pixels[j] - at).norm();
-    if (!(d < d2)) continue;  // also skips NaN
-    if (d < d1) {
-      d2 = d1;
-      d1 = d;
-      nearest = j;
+    if (!(d < n.d2)) continue;  // also skips NaN
+    if (d < n.d1) {
+      n.d2 = n.d1;
+      n.d1 = d;
+      n.index = j;
     } else {
-      d2 = d;
+      n.d2 = d;
     }
   }
-  if (!(d1 <= radius) || d2 < ratio * d1) return std::nullopt;
-  return nearest;
+  return n;
 }
 
 }  // namespace
@@ -404,8 +406,14 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     const auto projection = project_point(state, camera, options.measurement_noise_px);
     if (!projection || largest_eigenvalue(projection->S) > o.max_predicted_sigma_px * o.max_predicted_sigma_px)
       continue;
-    const auto blob = unique_nearest(pixels, projection->pixel, o.search_px, o.unique_ratio);
-    if (blob) monitor.add(entry.camera, track.id, stamp, projection->pixel, pixels[*blob] - projection->pixel);
+    const Nearest nearest = nearest_two(pixels, projection->pixel);
+    const bool seen = std::isfinite(nearest.d1) &&
+                      inside_gate(mahalanobis2(*projection, pixels[nearest.index]), options.gate_chi2);
+    monitor.add_prediction(entry.camera, track.id, stamp, seen);
+    // The nearest blob, if near enough and unambiguous (the next is unique_ratio times farther).
+    if (nearest.d1 <= o.search_px && nearest.d2 >= o.unique_ratio * nearest.d1) {
+      monitor.add(entry.camera, track.id, stamp, projection->pixel, pixels[nearest.index] - projection->pixel);
+    }
   }
 }
 

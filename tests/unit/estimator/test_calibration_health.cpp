@@ -186,8 +186,8 @@ void print(const char* what, const BumpRun& run) {
               what, run.rmse_before_mm, run.rmse_after_mm, run.coverage_after,
               static_cast<unsigned long long>(run.quarantines), run.process_s);
   for (const auto& h : run.health) {
-    std::printf("  %s %-11s residuals %7llu window %4zu bias (%+.3f, %+.3f) spread %.3f p %.1e withheld %llu\n",
-                h.camera_id.c_str(), to_string(h.state), static_cast<unsigned long long>(h.residuals),
+    std::printf("  %s seen %4zu/%4zu %-11s residuals %7llu window %4zu bias (%+.3f, %+.3f) spread %.3f p %.1e withheld %llu\n",
+                h.camera_id.c_str(), h.seen, h.predicted, to_string(h.state), static_cast<unsigned long long>(h.residuals),
                 h.whole.samples, h.whole.bias.x(), h.whole.bias.y(), h.whole.spread_px, h.whole.p_value,
                 static_cast<unsigned long long>(h.blobs_withheld));
   }

@@ -40,6 +40,10 @@ struct CalibrationHealthOptions {
   double unique_ratio = 2.0;            // ... and the next nearest is this much farther
   double isolation_px = 25.0;           // no other track predicted within this of the track
   double max_predicted_sigma_px = 2.0;  // the track's prediction is this good (1σ, largest axis)
+  // A camera whose blobs miss the tracks: of at least min_samples predictions in its image, fewer
+  // than this share had a blob in their gate (a bump beyond search_px); released above the second.
+  double min_seen_fraction = 0.05;
+  double release_seen_fraction = 0.2;
   int min_other_cameras = 2;            // cameras other than this one updated the track recently
   TimeNs other_camera_window_ns = 100'000'000;
 };
@@ -70,6 +74,8 @@ struct CameraCalibrationHealth {
   CalibrationState state = CalibrationState::kUnknown;
   ResidualStats whole;
   std::array<ResidualStats, kCalibrationRegions> regions{};  // row-major 3 × 3 over the image
+  std::size_t predicted = 0;  // window: predictions of qualified tracks in its image ...
+  std::size_t seen = 0;       // ... and of those, with a blob in the gate
   std::string reason;  // why it is quarantined or biased (empty when ok)
   TimeNs quarantined_since_ns = 0;
   std::uint64_t residuals = 0;     // residuals collected since the start
@@ -95,6 +101,8 @@ class CalibrationMonitor {
   bool due(int camera, TimeNs stamp_ns);
   // Whether a residual of `track_id` in `camera` at `stamp_ns` is wanted (one per sample interval).
   bool wants(int camera, std::int64_t track_id, TimeNs stamp_ns) const;
+  // A qualified track predicted in the camera's image; `seen`: a blob fell in its gate.
+  void add_prediction(int camera, std::int64_t track_id, TimeNs stamp_ns, bool seen);
   // A residual: blob minus predicted pixel, at the predicted pixel `at`.
   void add(int camera, std::int64_t track_id, TimeNs stamp_ns, const Eigen::Vector2d& at,
            const Eigen::Vector2d& residual);
@@ -125,6 +133,8 @@ class CalibrationMonitor {
     Sums whole;
     std::array<Sums, kCalibrationRegions> regions{};
     std::unordered_map<std::int64_t, TimeNs> last_sample;  // by track id
+    std::deque<std::pair<TimeNs, bool>> predictions;       // (stamp, seen) over the window
+    std::size_t seen = 0;
     TimeNs calm_since_ns = 0;  // quarantined: residuals unbiased since (0: not calm)
     TimeNs last_monitored_ns = 0;
     CameraCalibrationHealth health;
