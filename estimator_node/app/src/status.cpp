@@ -51,7 +51,8 @@ msg::EstimatorStatus to_status_message(const estimator::EstimatorUsage& usage) {
     counter.value(value);
     message.counters().push_back(std::move(counter));
   }
-  for (const auto& health : usage.calibration) message.calibration().push_back(to_message(health, usage.stamp_ns));
+  for (const auto& health : usage.calibration)
+    message.calibration().push_back(to_message(health, usage.stamp_ns));
   return message;
 }
 
@@ -76,7 +77,8 @@ msg::CameraCalibrationHealth to_message(const estimator::CameraCalibrationHealth
   m.whole(to_message(health.whole));
   for (const auto& region : health.regions) m.regions().push_back(to_message(region));
   const bool quarantined = health.state == estimator::CalibrationState::kQuarantined;
-  m.quarantined_for_s(quarantined ? std::max(0.0, ns_to_seconds(stamp_ns - health.quarantined_since_ns)) : 0.0);
+  m.quarantined_for_s(quarantined ? std::max(0.0, ns_to_seconds(stamp_ns - health.quarantined_since_ns))
+                                  : 0.0);
   m.residuals(health.residuals);
   m.quarantines(static_cast<uint32_t>(health.quarantines));
   m.releases(static_cast<uint32_t>(health.releases));

@@ -111,8 +111,8 @@ void CalibrationMonitor::add_prediction(int camera_index, std::int64_t track_id,
   if (seen) ++camera.seen;
 }
 
-void CalibrationMonitor::add(int camera_index, std::int64_t track_id, TimeNs stamp_ns, const Eigen::Vector2d& at,
-                             const Eigen::Vector2d& residual) {
+void CalibrationMonitor::add(int camera_index, std::int64_t track_id, TimeNs stamp_ns,
+                             const Eigen::Vector2d& at, const Eigen::Vector2d& residual) {
   PerCamera& camera = cameras_.at(camera_index);
   camera.last_sample[track_id] = stamp_ns;
   const int column = std::clamp(static_cast<int>(kCalibrationRegionsX * at.x() / camera.image_size.x()), 0,
@@ -160,8 +160,9 @@ constexpr std::array<const char*, kCalibrationRegions> kRegionNames = {
 
 std::string describe(const ResidualStats& s, const char* where) {
   char buffer[200];
-  std::snprintf(buffer, sizeof buffer, "%s: bias (%+.2f, %+.2f) px = %.2f px over %zu residuals, spread %.2f px, p %.1e",
-                where, s.bias.x(), s.bias.y(), s.bias.norm(), s.samples, s.spread_px, s.p_value);
+  std::snprintf(buffer, sizeof buffer,
+                "%s: bias (%+.2f, %+.2f) px = %.2f px over %zu residuals, spread %.2f px, p %.1e", where,
+                s.bias.x(), s.bias.y(), s.bias.norm(), s.samples, s.spread_px, s.p_value);
   return buffer;
 }
 
@@ -201,7 +202,8 @@ bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
   for (int r = 0; r < kCalibrationRegions; ++r) consider(health.regions[r], kRegionNames[r]);
   // Blobs that miss the tracks altogether (a bump beyond search_px) leave no residuals to test.
   const bool judged_seen = health.predicted >= options_.min_samples;
-  const double seen_share = judged_seen ? static_cast<double>(health.seen) / static_cast<double>(health.predicted) : 1.0;
+  const double seen_share =
+      judged_seen ? static_cast<double>(health.seen) / static_cast<double>(health.predicted) : 1.0;
   const bool blind = judged_seen && seen_share < options_.min_seen_fraction;
   std::string blind_reason;
   if (blind) {
@@ -221,12 +223,12 @@ bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
     if (camera.calm_since_ns == 0 || stamp_ns - camera.calm_since_ns < options_.window_ns) return false;
     camera.calm_since_ns = 0;
     ++health.releases;
-  } else if ((any_biased || blind) && last_quarantine_ns_ != 0 && stamp_ns - last_quarantine_ns_ < options_.window_ns &&
-             stamp_ns >= last_quarantine_ns_) {
+  } else if ((any_biased || blind) && last_quarantine_ns_ != 0 &&
+             stamp_ns - last_quarantine_ns_ < options_.window_ns && stamp_ns >= last_quarantine_ns_) {
     // Held: one camera at a time, the most biased first.
     health.state = CalibrationState::kSmallBias;
-    health.reason = "held while " + last_quarantined_ + " was just quarantined: " +
-                    (any_biased ? describe(*worst, where) : blind_reason);
+    health.reason = "held while " + last_quarantined_ +
+                    " was just quarantined: " + (any_biased ? describe(*worst, where) : blind_reason);
     health.quarantined_since_ns = 0;
     return health.state != before;
   } else if (any_biased || blind) {

@@ -34,8 +34,8 @@ void TrackerOptions::print(std::ostream& out) const {
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
       << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n"
       << "  continuous calibration   " << calibration.mode << " (window "
-      << ns_to_seconds(calibration.window_ns) * 1e3 << " ms, alpha " << calibration.false_alarm << ", min bias "
-      << calibration.min_bias_px << " px)\n";
+      << ns_to_seconds(calibration.window_ns) * 1e3 << " ms, alpha " << calibration.false_alarm
+      << ", min bias " << calibration.min_bias_px << " px)\n";
 }
 
 namespace {
@@ -145,7 +145,8 @@ struct Tracker::Impl {
     core.initiator.set_cameras(pointers);
     core.associated_per_camera.resize(models.size(), 0);
     std::vector<Eigen::Vector2d> sizes;
-    for (const auto& model : models) sizes.emplace_back(model->intrinsics().width, model->intrinsics().height);
+    for (const auto& model : models)
+      sizes.emplace_back(model->intrinsics().width, model->intrinsics().height);
     monitor.set_cameras(camera_ids, sizes);
     history.clear();
     checkpoints.clear();
@@ -389,7 +390,8 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     int others = 0;
     for (std::size_t k = 0; k < track.camera_last_update.size(); ++k) {
       const TimeNs last = track.camera_last_update[k];
-      if (static_cast<int>(k) != entry.camera && last != 0 && stamp - last <= o.other_camera_window_ns) ++others;
+      if (static_cast<int>(k) != entry.camera && last != 0 && stamp - last <= o.other_camera_window_ns)
+        ++others;
     }
     if (others < o.min_other_cameras) continue;
     candidates.push_back(i);
@@ -404,7 +406,8 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     const Track& track = core.tracks[candidates[c]];
     const PointState state = predicted(track.state, stamp, options.process_noise);
     const auto projection = project_point(state, camera, options.measurement_noise_px);
-    if (!projection || largest_eigenvalue(projection->S) > o.max_predicted_sigma_px * o.max_predicted_sigma_px)
+    if (!projection ||
+        largest_eigenvalue(projection->S) > o.max_predicted_sigma_px * o.max_predicted_sigma_px)
       continue;
     const Nearest nearest = nearest_two(pixels, projection->pixel);
     const bool seen = std::isfinite(nearest.d1) &&
@@ -412,7 +415,8 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     monitor.add_prediction(entry.camera, track.id, stamp, seen);
     // The nearest blob, if near enough and unambiguous (the next is unique_ratio times farther).
     if (nearest.d1 <= o.search_px && nearest.d2 >= o.unique_ratio * nearest.d1) {
-      monitor.add(entry.camera, track.id, stamp, projection->pixel, pixels[nearest.index] - projection->pixel);
+      monitor.add(entry.camera, track.id, stamp, projection->pixel,
+                  pixels[nearest.index] - projection->pixel);
     }
   }
 }

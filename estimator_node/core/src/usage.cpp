@@ -182,8 +182,9 @@ std::vector<std::string> EstimatorUsage::lines() const {
     if (h.state == CalibrationState::kOk) continue;
     out.push_back("calibration " + h.camera_id + ": " + to_string(h.state) +
                   (h.reason.empty() || h.state == CalibrationState::kQuarantined ? "" : ", ") +
-                  (h.state == CalibrationState::kQuarantined ? h.reason.substr(std::string("quarantined").size())
-                                                             : h.reason));
+                  (h.state == CalibrationState::kQuarantined
+                       ? h.reason.substr(std::string("quarantined").size())
+                       : h.reason));
   }
   std::snprintf(buffer, sizeof buffer, "replays %llu (%llu frames replayed)",
                 static_cast<unsigned long long>(replays), static_cast<unsigned long long>(replayed_frames));

@@ -274,11 +274,13 @@ void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
   f.text("mode", o.mode, check_continuous_calibration,
          "off | detect: quarantine a camera whose residuals are biased (correct: not yet)");
   f.integer("window_ns", o.window_ns, 1'000'000, kHourNs, "residuals this recent are judged");
-  f.integer("sample_interval_ns", o.sample_interval_ns, 0, kHourNs, "one residual per track and camera this often");
+  f.integer("sample_interval_ns", o.sample_interval_ns, 0, kHourNs,
+            "one residual per track and camera this often");
   f.integer("min_samples", o.min_samples, 3, 1 << 24, "fewer residuals in a region: not judged");
   f.number("false_alarm", o.false_alarm, between(1e-300, 0.5), "alpha per judgement (regions share it)");
   f.number("min_bias_px", o.min_bias_px, kPositive, "a significant bias below this is only reported");
-  f.number("release_fraction", o.release_fraction, between(0, 1), "released when every bias < this x min_bias_px");
+  f.number("release_fraction", o.release_fraction, between(0, 1),
+           "released when every bias < this x min_bias_px");
   f.number("release_p", o.release_p, between(0, 1), "... or p above this, for a full window");
   f.number("search_px", o.search_px, kPositive, "a track's blob is the nearest within this");
   f.number("unique_ratio", o.unique_ratio, between(1, 1000), "... and the next is this much farther");

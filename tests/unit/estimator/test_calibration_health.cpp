@@ -73,7 +73,8 @@ TEST(CalibrationHealth, MonitorQuarantinesABiasAndReleasesWhenItGoes) {
     std::int64_t id = 0;
     for (TimeNs t = from; t < to; t += 10'000'000) {
       for (int k = 0; k < 4; ++k)
-        monitor.add(0, ++id, t, {where(random), where(random)}, bias + Eigen::Vector2d(normal(random), normal(random)));
+        monitor.add(0, ++id, t, {where(random), where(random)},
+                    bias + Eigen::Vector2d(normal(random), normal(random)));
       monitor.judge(0, t);
     }
   };
@@ -145,7 +146,9 @@ double rmse_mm(const Scene& scene, const std::vector<TrackRecord>& records, doub
   EvaluationOptions options;
   options.epoch_ns = kEpoch;
   const Evaluation evaluation = evaluate(scene, records, options);
-  coverage = evaluation.trackable == 0 ? 0.0 : static_cast<double>(evaluation.tracked_trackable) / evaluation.trackable;
+  coverage = evaluation.trackable == 0
+                 ? 0.0
+                 : static_cast<double>(evaluation.tracked_trackable) / evaluation.trackable;
   return evaluation.rmse_m * 1e3;
 }
 
@@ -182,14 +185,17 @@ BumpRun track(const Scene& scene, const std::string& mode, TimeNs split_ns = 10 
 }
 
 void print(const char* what, const BumpRun& run) {
-  std::printf("%s: RMSE before %.3f mm, after %.3f mm (coverage after %.3f), quarantines %llu, tracker %.3f s\n",
-              what, run.rmse_before_mm, run.rmse_after_mm, run.coverage_after,
-              static_cast<unsigned long long>(run.quarantines), run.process_s);
+  std::printf(
+      "%s: RMSE before %.3f mm, after %.3f mm (coverage after %.3f), quarantines %llu, tracker %.3f s\n",
+      what, run.rmse_before_mm, run.rmse_after_mm, run.coverage_after,
+      static_cast<unsigned long long>(run.quarantines), run.process_s);
   for (const auto& h : run.health) {
-    std::printf("  %s seen %4zu/%4zu %-11s residuals %7llu window %4zu bias (%+.3f, %+.3f) spread %.3f p %.1e withheld %llu\n",
-                h.camera_id.c_str(), h.seen, h.predicted, to_string(h.state), static_cast<unsigned long long>(h.residuals),
-                h.whole.samples, h.whole.bias.x(), h.whole.bias.y(), h.whole.spread_px, h.whole.p_value,
-                static_cast<unsigned long long>(h.blobs_withheld));
+    std::printf(
+        "  %s seen %4zu/%4zu %-11s residuals %7llu window %4zu bias (%+.3f, %+.3f) spread %.3f p %.1e "
+        "withheld %llu\n",
+        h.camera_id.c_str(), h.seen, h.predicted, to_string(h.state),
+        static_cast<unsigned long long>(h.residuals), h.whole.samples, h.whole.bias.x(), h.whole.bias.y(),
+        h.whole.spread_px, h.whole.p_value, static_cast<unsigned long long>(h.blobs_withheld));
   }
 }
 
@@ -264,21 +270,23 @@ TEST(CalibrationHealth, BumpTable) {
                                    {"0.5 deg cam3+cam6", 0.5, {3, 6}}};
   for (const auto& c : cases) {
     Scene scene = walk8(20.0, 8);
-    for (const std::size_t camera : c.cameras) scene.set_camera_bump(camera, 10 * kNsPerSecond, bump_of(c.degrees, 5.0));
+    for (const std::size_t camera : c.cameras)
+      scene.set_camera_bump(camera, 10 * kNsPerSecond, bump_of(c.degrees, 5.0));
     const BumpRun off = track(scene, "off");
     const BumpRun detect = track(scene, "detect");
     std::string quarantined;
     for (const auto& h : detect.health)
       if (h.quarantines > 0) quarantined += " " + h.camera_id;
-    std::printf("TABLE %-18s detection %s s, quarantined:%s | RMSE before %.3f mm, after: detect %.3f mm "
-                "(x%.3f, coverage %.3f), off %.3f mm (x%.3f, coverage %.3f)\n",
-                c.name,
-                detect.first_quarantine_ns == 0
-                    ? "never"
-                    : std::to_string(ns_to_seconds(detect.first_quarantine_ns - 10 * kNsPerSecond)).c_str(),
-                quarantined.empty() ? " none" : quarantined.c_str(), detect.rmse_before_mm, detect.rmse_after_mm,
-                detect.rmse_after_mm / detect.rmse_before_mm, detect.coverage_after, off.rmse_after_mm,
-                off.rmse_after_mm / off.rmse_before_mm, off.coverage_after);
+    std::printf(
+        "TABLE %-18s detection %s s, quarantined:%s | RMSE before %.3f mm, after: detect %.3f mm "
+        "(x%.3f, coverage %.3f), off %.3f mm (x%.3f, coverage %.3f)\n",
+        c.name,
+        detect.first_quarantine_ns == 0
+            ? "never"
+            : std::to_string(ns_to_seconds(detect.first_quarantine_ns - 10 * kNsPerSecond)).c_str(),
+        quarantined.empty() ? " none" : quarantined.c_str(), detect.rmse_before_mm, detect.rmse_after_mm,
+        detect.rmse_after_mm / detect.rmse_before_mm, detect.coverage_after, off.rmse_after_mm,
+        off.rmse_after_mm / off.rmse_before_mm, off.coverage_after);
   }
 }
 

@@ -147,7 +147,8 @@ TEST(CameraHealthStatus, CalibrationHealthIsInTheMessageAndTheLine) {
   EXPECT_EQ(m.blobs_withheld(), 900u);
   EXPECT_EQ(message.calibration()[0].quarantined_for_s(), 0.0);
   const std::string line = estimator_app::status_line(usage, {});
-  EXPECT_NE(line.find("| c3 quarantined 1.5 s: whole image: bias (-8.33, +4.71) px"), std::string::npos) << line;
+  EXPECT_NE(line.find("| c3 quarantined 1.5 s: whole image: bias (-8.33, +4.71) px"), std::string::npos)
+      << line;
   EXPECT_EQ(line.find("c0 quarantined"), std::string::npos) << line;
 }
 

@@ -25,15 +25,16 @@ namespace panoptes::estimator {
 enum class CalibrationMode : std::uint8_t { kOff = 0, kDetect = 1 };
 const char* to_string(CalibrationMode mode);
 // "off" or "detect"; throws ConfigError naming `key` otherwise (`correct`: not implemented yet).
-CalibrationMode parse_calibration_mode(const std::string& text, const std::string& key = "continuous_calibration");
+CalibrationMode parse_calibration_mode(const std::string& text,
+                                       const std::string& key = "continuous_calibration");
 
 struct CalibrationHealthOptions {
-  std::string mode = "detect";          // off | detect | correct (parse_calibration_mode)
-  TimeNs window_ns = 1'000'000'000;      // residuals this recent are judged
+  std::string mode = "detect";             // off | detect | correct (parse_calibration_mode)
+  TimeNs window_ns = 1'000'000'000;        // residuals this recent are judged
   TimeNs sample_interval_ns = 40'000'000;  // one residual per track and camera this often (decorrelation)
-  std::size_t min_samples = 30;         // a region (or the camera) with fewer is not judged
-  double false_alarm = 1e-9;            // α per judgement (whole camera; regions share it, Bonferroni)
-  double min_bias_px = 1.5;             // a significant mean below this is reported, not acted on
+  std::size_t min_samples = 30;            // a region (or the camera) with fewer is not judged
+  double false_alarm = 1e-9;               // α per judgement (whole camera; regions share it, Bonferroni)
+  double min_bias_px = 1.5;                // a significant mean below this is reported, not acted on
   double release_fraction = 0.3;        // quarantined: released when every |bias| < this × min_bias_px ...
   double release_p = 0.01;              // ... or p > this, over a full window
   double search_px = 25.0;              // a confirmed track's blob is the nearest within this ...
@@ -44,7 +45,7 @@ struct CalibrationHealthOptions {
   // than this share had a blob in their gate (a bump beyond search_px); released above the second.
   double min_seen_fraction = 0.05;
   double release_seen_fraction = 0.2;
-  int min_other_cameras = 2;            // cameras other than this one updated the track recently
+  int min_other_cameras = 2;  // cameras other than this one updated the track recently
   TimeNs other_camera_window_ns = 100'000'000;
 };
 
@@ -76,11 +77,11 @@ struct CameraCalibrationHealth {
   std::array<ResidualStats, kCalibrationRegions> regions{};  // row-major 3 × 3 over the image
   std::size_t predicted = 0;  // window: predictions of qualified tracks in its image ...
   std::size_t seen = 0;       // ... and of those, with a blob in the gate
-  std::string reason;  // why it is quarantined or biased (empty when ok)
+  std::string reason;         // why it is quarantined or biased (empty when ok)
   TimeNs quarantined_since_ns = 0;
-  std::uint64_t residuals = 0;     // residuals collected since the start
-  std::uint64_t quarantines = 0;   // times it was quarantined
-  std::uint64_t releases = 0;      // times it was brought back
+  std::uint64_t residuals = 0;       // residuals collected since the start
+  std::uint64_t quarantines = 0;     // times it was quarantined
+  std::uint64_t releases = 0;        // times it was brought back
   std::uint64_t blobs_withheld = 0;  // blobs not fused while quarantined
 };
 
@@ -95,7 +96,8 @@ class CalibrationMonitor {
  public:
   explicit CalibrationMonitor(CalibrationHealthOptions options = {}, double centroid_sigma_px = 0.5);
 
-  void set_cameras(const std::vector<std::string>& camera_ids, const std::vector<Eigen::Vector2d>& image_sizes);
+  void set_cameras(const std::vector<std::string>& camera_ids,
+                   const std::vector<Eigen::Vector2d>& image_sizes);
   // Whether `camera`'s frame at `stamp_ns` is to be monitored and judged: one frame per sample
   // interval (each track gives at most one residual per interval anyway). Marks it done.
   bool due(int camera, TimeNs stamp_ns);
