@@ -794,9 +794,9 @@ std::vector<BodyTruth> Scene::bodies_at(TimeNs scene_time_ns) const {
 
 RigidTransform Scene::camera_pose_at(std::size_t camera_index, TimeNs scene_time_ns) const {
   const SimCameraConfig& config = impl_->cameras.at(camera_index);
-  const RigidTransform mount = config.bumped && scene_time_ns >= config.bump_at_ns
-                                   ? *config.calibration.T_world_cam * config.bump
-                                   : *config.calibration.T_world_cam;
+  RigidTransform mount = config.bumped && scene_time_ns >= config.bump_at_ns
+                             ? *config.calibration.T_world_cam * config.bump
+                             : *config.calibration.T_world_cam;
   const auto& rig = impl_->camera_rigs.at(camera_index);
   if (!rig) return mount;
   const double t_s = ns_to_seconds(scene_time_ns);
