@@ -201,7 +201,7 @@ bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
   consider(health.whole, "whole image");
   for (int r = 0; r < kCalibrationRegions; ++r) consider(health.regions[r], kRegionNames[r]);
   // Blobs that miss the tracks altogether (a bump beyond search_px) leave no residuals to test.
-  const bool judged_seen = health.predicted >= options_.min_samples;
+  const bool judged_seen = health.predicted >= options_.min_blind_predictions;
   const double seen_share =
       judged_seen ? static_cast<double>(health.seen) / static_cast<double>(health.predicted) : 1.0;
   const bool blind = judged_seen && seen_share < options_.min_seen_fraction;

@@ -286,6 +286,11 @@ void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
   f.number("unique_ratio", o.unique_ratio, between(1, 1000), "... and the next is this much farther");
   f.number("isolation_px", o.isolation_px, kNonNegative, "no other track predicted this close");
   f.number("max_predicted_sigma_px", o.max_predicted_sigma_px, kPositive, "prediction at least this good");
+  f.number("min_seen_fraction", o.min_seen_fraction, between(0, 1),
+           "fewer predictions with a blob in the gate: quarantined");
+  f.number("release_seen_fraction", o.release_seen_fraction, between(0, 1), "... released above this share");
+  f.integer("min_blind_predictions", o.min_blind_predictions, 1, 1 << 24,
+            "predictions needed to judge the share");
   f.integer("min_other_cameras", o.min_other_cameras, 1, 64, "other cameras that updated the track recently");
   f.integer("other_camera_window_ns", o.other_camera_window_ns, 0, kHourNs, "... within this");
 }

@@ -44,6 +44,7 @@ struct CalibrationHealthOptions {
   // A camera whose blobs miss the tracks: of at least min_samples predictions in its image, fewer
   // than this share had a blob in their gate (a bump beyond search_px); released above the second.
   double min_seen_fraction = 0.05;
+  std::size_t min_blind_predictions = 100;  // ... judged from this many predictions in the window
   double release_seen_fraction = 0.2;
   int min_other_cameras = 2;  // cameras other than this one updated the track recently
   TimeNs other_camera_window_ns = 100'000'000;
