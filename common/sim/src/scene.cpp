@@ -164,8 +164,24 @@ RigidTransform read_pose(const YamlReader& camera, const std::optional<YamlReade
   return RigidTransform{sim::read_quaternion(pose, "q"), read_vector3(pose, "t")};
 }
 
+// `bump: {at: s, rotation: [rx, ry, rz] (rad, a rotation vector), translation: [x, y, z] (m)}`,
+// both in the camera's frame.
+void read_bump(const YamlReader& bump, SimCameraConfig& config) {
+  reject_unknown_keys(bump, {"at", "rotation", "translation"});
+  const double at_s = bump.get_double("at");
+  if (!(at_s >= 0.0) || !std::isfinite(at_s)) bump.fail("at", "must be a finite time >= 0 s");
+  const Eigen::Vector3d rotation = read_vector3(bump, "rotation", Eigen::Vector3d::Zero());
+  const Eigen::Vector3d translation = read_vector3(bump, "translation", Eigen::Vector3d::Zero());
+  config.bumped = true;
+  config.bump_at_ns = seconds_to_ns(at_s);
+  const double angle = rotation.norm();
+  config.bump.q = angle > 0.0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotation / angle))
+                              : Eigen::Quaterniond::Identity();
+  config.bump.t = translation;
+}
+
 SimCameraConfig read_camera(const YamlReader& camera, const std::optional<YamlReader>& defaults) {
-  reject_unknown_keys(camera, {"id", "rig", PANOPTES_SIM_CAMERA_KEYS});
+  reject_unknown_keys(camera, {"id", "rig", "bump", PANOPTES_SIM_CAMERA_KEYS});
   const CameraKeys keys(camera, defaults);
   SimCameraConfig config;
   CameraCalibration& calibration = config.calibration;
@@ -200,6 +216,7 @@ SimCameraConfig read_camera(const YamlReader& camera, const std::optional<YamlRe
                                 ? RigidTransform{}
                                 : read_pose(camera, on_rig ? std::nullopt : defaults);
   calibration.moving = on_rig;
+  if (camera.has("bump")) read_bump(camera.child("bump"), config);
 
   config.rate_hz = keys.number("rate", config.rate_hz);
   if (!(config.rate_hz > 0.0)) keys.source("rate").fail("rate", "must be > 0 Hz");
@@ -776,11 +793,21 @@ std::vector<BodyTruth> Scene::bodies_at(TimeNs scene_time_ns) const {
 }
 
 RigidTransform Scene::camera_pose_at(std::size_t camera_index, TimeNs scene_time_ns) const {
-  const RigidTransform& mount = *impl_->cameras.at(camera_index).calibration.T_world_cam;
+  const SimCameraConfig& config = impl_->cameras.at(camera_index);
+  RigidTransform mount = config.bumped && scene_time_ns >= config.bump_at_ns
+                             ? *config.calibration.T_world_cam * config.bump
+                             : *config.calibration.T_world_cam;
   const auto& rig = impl_->camera_rigs.at(camera_index);
   if (!rig) return mount;
   const double t_s = ns_to_seconds(scene_time_ns);
   return RigidTransform{sim::evaluate(rig->rotation, t_s), sim::evaluate(rig->path, t_s)} * mount;
+}
+
+void Scene::set_camera_bump(std::size_t camera_index, TimeNs at_ns, const RigidTransform& bump) {
+  SimCameraConfig& config = impl_->cameras.at(camera_index);
+  config.bumped = true;
+  config.bump_at_ns = at_ns;
+  config.bump = bump;
 }
 
 std::map<std::string, std::vector<Eigen::Vector3d>> Scene::rig_markers() const {

@@ -61,6 +61,13 @@ struct SettingsFlags {
     bind(app.add_option("--measurement-noise-px", tracker.measurement_noise_px, "σ of a centroid, px")
              ->check(CLI::PositiveNumber),
          [this](auto& c) { c.tracker.measurement_noise_px = values.tracker.measurement_noise_px; });
+    bind(app.add_option("--continuous-calibration", tracker.calibration.mode,
+                        "watch each camera's residuals against the tracks the others determine; detect: "
+                        "stop fusing a camera whose residuals are significantly biased (a bump) until they "
+                        "are not; off: do not watch; correct (re-estimate its pose): not yet "
+                        "(docs/continuous_calibration.md)")
+             ->check(CLI::Validator(session::check_continuous_calibration, "off|detect")),
+         [this](auto& c) { c.tracker.calibration.mode = values.tracker.calibration.mode; });
     bind(app.add_option("--confirm-cameras", tracker.confirm_cameras,
                         "distinct cameras that must see a new track before it is published")
              ->check(CLI::Range(2, 64)),

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/estimator_app/status.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -50,7 +51,39 @@ msg::EstimatorStatus to_status_message(const estimator::EstimatorUsage& usage) {
     counter.value(value);
     message.counters().push_back(std::move(counter));
   }
+  for (const auto& health : usage.calibration)
+    message.calibration().push_back(to_message(health, usage.stamp_ns));
   return message;
+}
+
+namespace {
+
+msg::ResidualRegion to_message(const estimator::ResidualStats& stats) {
+  msg::ResidualRegion region;
+  region.samples(static_cast<uint32_t>(stats.samples));
+  region.bias_px({stats.bias.x(), stats.bias.y()});
+  region.spread_px(stats.spread_px);
+  region.p_value(stats.p_value);
+  return region;
+}
+
+}  // namespace
+
+msg::CameraCalibrationHealth to_message(const estimator::CameraCalibrationHealth& health, TimeNs stamp_ns) {
+  msg::CameraCalibrationHealth m;
+  m.camera_id(health.camera_id);
+  m.state(static_cast<uint8_t>(health.state));
+  m.reason(health.reason);
+  m.whole(to_message(health.whole));
+  for (const auto& region : health.regions) m.regions().push_back(to_message(region));
+  const bool quarantined = health.state == estimator::CalibrationState::kQuarantined;
+  m.quarantined_for_s(quarantined ? std::max(0.0, ns_to_seconds(stamp_ns - health.quarantined_since_ns))
+                                  : 0.0);
+  m.residuals(health.residuals);
+  m.quarantines(static_cast<uint32_t>(health.quarantines));
+  m.releases(static_cast<uint32_t>(health.releases));
+  m.blobs_withheld(health.blobs_withheld);
+  return m;
 }
 
 namespace {
@@ -79,6 +112,18 @@ std::string status_line(const estimator::EstimatorUsage& usage, const StatusLine
             std::to_string(usage.cameras_live + usage.cameras_lost) + " live:";
   }
   for (const auto& c : usage.cameras) line += camera_field(c);
+  // A quarantined camera with the reason; one with a small significant bias by name only.
+  for (const auto& h : usage.calibration) {
+    if (h.state == estimator::CalibrationState::kQuarantined) {
+      char seconds[32];
+      std::snprintf(seconds, sizeof seconds, " %.1f s",
+                    std::max(0.0, ns_to_seconds(usage.stamp_ns - h.quarantined_since_ns)));
+      line += " | " + h.camera_id + " " + h.reason.substr(0, h.reason.find(':')) + seconds +
+              h.reason.substr(h.reason.find(':'));
+    } else if (h.state == estimator::CalibrationState::kSmallBias) {
+      line += " | " + h.camera_id + " small calibration bias";
+    }
+  }
   line += " | tracks " + std::to_string(usage.tracks_confirmed) + "+" +
           std::to_string(usage.tracks_coasting) + " coasting";
   if (usage.tracks_unobserved > 0)

@@ -32,7 +32,10 @@ void TrackerOptions::print(std::ostream& out) const {
       << "  delete_after             " << ns_to_seconds(delete_after_ns) * 1e3 << " ms\n"
       << "  publish_max_sigma        " << publish_max_sigma_m * 1e3 << " mm\n"
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
-      << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n";
+      << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n"
+      << "  continuous calibration   " << calibration.mode << " (window "
+      << ns_to_seconds(calibration.window_ns) * 1e3 << " ms, alpha " << calibration.false_alarm
+      << ", min bias " << calibration.min_bias_px << " px)\n";
 }
 
 namespace {
@@ -112,9 +115,17 @@ struct Gating {
 }  // namespace
 
 struct Tracker::Impl {
-  explicit Impl(const TrackerOptions& o) : options(o) { core.initiator = Initiator(o.init); }
+  explicit Impl(const TrackerOptions& o)
+      : options(o),
+        calibration_mode(parse_calibration_mode(o.calibration.mode, "tracker.calibration.mode")),
+        monitor(o.calibration, o.measurement_noise_px) {
+    core.initiator = Initiator(o.init);
+  }
 
   const TrackerOptions options;
+  const CalibrationMode calibration_mode;
+  // Not part of Core: a rewind does not undo what the residuals showed (replays add none).
+  CalibrationMonitor monitor;
   std::vector<std::unique_ptr<CameraModel>> models;  // by camera index; pointers stay valid
   std::vector<std::string> camera_ids;
   std::map<std::string, int> camera_index;
@@ -140,6 +151,10 @@ struct Tracker::Impl {
     for (const auto& model : models) pointers.push_back(model.get());
     core.initiator.set_cameras(pointers);
     core.associated_per_camera.resize(models.size(), 0);
+    std::vector<Eigen::Vector2d> sizes;
+    for (const auto& model : models)
+      sizes.emplace_back(model->intrinsics().width, model->intrinsics().height);
+    monitor.set_cameras(camera_ids, sizes);
     history.clear();
     checkpoints.clear();
     recent.clear();
@@ -278,6 +293,9 @@ struct Tracker::Impl {
 
   // Applies a history entry's frame; `replaying`: the entry was applied before (rewind).
   void apply(Entry& entry, bool replaying);
+  // The frame's residuals against the confirmed tracks the other cameras determine, to the
+  // calibration monitor (docs/continuous_calibration.md, "Residuals").
+  void monitor_frame(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels);
   void associate(Entry& entry, const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used,
                  bool replaying);
   // A replayed frame's previous association, checked against today's states: every pair must
@@ -318,6 +336,18 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
   // Bodies and point tracks use the same blobs: the point tracks of body markers feed
   // identification, and the poses stay independent of the point tracks' lifecycle.
   const std::vector<char> excluded = used;
+  if (calibration_mode != CalibrationMode::kOff) {
+    if (!replaying && monitor.due(camera_index, frame.stamp_ns)) {
+      monitor_frame(entry, pixels);
+      monitor.judge(camera_index, frame.stamp_ns);
+    }
+    // A quarantined camera's blobs are not fused: tracking continues on the other cameras.
+    if (monitor.quarantined(camera_index)) {
+      if (!replaying) monitor.note_withheld(camera_index, pixels.size());
+      prune(frame.stamp_ns);
+      return;
+    }
+  }
   associate(entry, pixels, used, replaying);
   initiate(frame, camera_index, pixels, used);
   prune(frame.stamp_ns);
@@ -326,6 +356,96 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
     core.bodies.process_frame(camera_index, *models[camera_index], frame.stamp_ns, pixels, excluded, taken);
     if (core.bodies.wants_points(frame.stamp_ns))
       core.bodies.identify(frame.stamp_ns, confirmed_points(frame.stamp_ns));
+  }
+}
+
+namespace {
+
+// Largest eigenvalue of a symmetric 2 × 2 matrix.
+double largest_eigenvalue(const Eigen::Matrix2d& S) {
+  const double half_trace = 0.5 * (S(0, 0) + S(1, 1));
+  const double half_difference = 0.5 * (S(0, 0) - S(1, 1));
+  return half_trace + std::sqrt(half_difference * half_difference + S(0, 1) * S(1, 0));
+}
+
+// The blob nearest `at` and the distances of the nearest two (infinite when absent).
+struct Nearest {
+  std::size_t index = 0;
+  double d1 = std::numeric_limits<double>::infinity();
+  double d2 = std::numeric_limits<double>::infinity();
+};
+
+Nearest nearest_two(const std::vector<Eigen::Vector2d>& pixels, const Eigen::Vector2d& at) {
+  Nearest n;
+  for (std::size_t j = 0; j < pixels.size(); ++j) {
+    const double d = (pixels[j] - at).norm();
+    if (!(d < n.d2)) continue;  // also skips NaN
+    if (d < n.d1) {
+      n.d2 = n.d1;
+      n.d1 = d;
+      n.index = j;
+    } else {
+      n.d2 = d;
+    }
+  }
+  return n;
+}
+
+}  // namespace
+
+// Residuals are taken with the fusion path's own prediction and projection (predicted(),
+// project_point()), but associated by a wider, unambiguous nearest-blob rule instead of the gate:
+// a bumped camera's blobs fall outside the gate (0.5° is ~9 px at f = 1000 px, the gate of a
+// well-tracked marker ~3 px), and gated innovations alone would hide the bias by censoring it.
+void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels) {
+  constexpr std::size_t kMaxBlobs = 1024;  // a frame of garbage is not worth monitoring
+  if (pixels.empty() || pixels.size() > kMaxBlobs) return;
+  const auto& o = options.calibration;
+  const CameraModel& camera = *models[entry.camera];
+  const TimeNs stamp = entry.frame.stamp_ns;
+  std::vector<Eigen::Vector2d> predicted_pixels;  // every live track in view, for isolation
+  std::vector<std::size_t> candidates;            // indices into core.tracks
+  std::vector<std::size_t> candidate_pixel;       // ... and into predicted_pixels
+  for (std::size_t i = 0; i < core.tracks.size(); ++i) {
+    const Track& track = core.tracks[i];
+    const Eigen::Vector3d p_cam = camera.T_cam_world().apply(track.position_at(stamp));
+    if (p_cam.z() < options.init.min_depth_m) continue;
+    const auto pixel = camera.project_camera_point(p_cam);
+    if (!pixel) continue;
+    predicted_pixels.push_back(*pixel);
+    if (!track.confirmed || stamp - track.last_update_ns > options.coast_after_ns) continue;
+    if (!camera.in_image(*pixel, 0.0) || !monitor.wants(entry.camera, track.id, stamp)) continue;
+    int others = 0;
+    for (std::size_t k = 0; k < track.camera_last_update.size(); ++k) {
+      const TimeNs last = track.camera_last_update[k];
+      if (static_cast<int>(k) != entry.camera && last != 0 && stamp - last <= o.other_camera_window_ns)
+        ++others;
+    }
+    if (others < o.min_other_cameras) continue;
+    candidates.push_back(i);
+    candidate_pixel.push_back(predicted_pixels.size() - 1);
+  }
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    const Eigen::Vector2d& rough = predicted_pixels[candidate_pixel[c]];
+    bool isolated = true;
+    for (std::size_t k = 0; k < predicted_pixels.size() && isolated; ++k)
+      isolated = k == candidate_pixel[c] || (predicted_pixels[k] - rough).norm() > o.isolation_px;
+    if (!isolated) continue;
+    const Track& track = core.tracks[candidates[c]];
+    const PointState state = predicted(track.state, stamp, options.process_noise);
+    const auto projection = project_point(state, camera, options.measurement_noise_px);
+    if (!projection ||
+        largest_eigenvalue(projection->S) > o.max_predicted_sigma_px * o.max_predicted_sigma_px)
+      continue;
+    const Nearest nearest = nearest_two(pixels, projection->pixel);
+    const bool seen = std::isfinite(nearest.d1) &&
+                      inside_gate(mahalanobis2(*projection, pixels[nearest.index]), options.gate_chi2);
+    monitor.add_prediction(entry.camera, track.id, stamp, seen);
+    // The nearest blob, if near enough and unambiguous (the next is unique_ratio times farther).
+    if (nearest.d1 <= o.search_px && nearest.d2 >= o.unique_ratio * nearest.d1) {
+      monitor.add(entry.camera, track.id, stamp, projection->pixel,
+                  pixels[nearest.index] - projection->pixel);
+    }
   }
 }
 
@@ -838,6 +958,17 @@ std::vector<FrameOutcome> Tracker::process_batch(std::span<const FeatureFrame> f
     impl.trim();
   }
   return outcomes;
+}
+
+std::vector<CameraCalibrationHealth> Tracker::calibration_health() const {
+  if (impl_->calibration_mode == CalibrationMode::kOff) return {};
+  return impl_->monitor.health();
+}
+
+bool Tracker::camera_quarantined(const std::string& camera_id) const {
+  const auto found = impl_->camera_index.find(camera_id);
+  return impl_->calibration_mode != CalibrationMode::kOff && found != impl_->camera_index.end() &&
+         impl_->monitor.quarantined(found->second);
 }
 
 const TrackerStats& Tracker::stats() const {

@@ -153,6 +153,11 @@ EstimatorUsage UsageMonitor::summarize(const Tracker& tracker, TimeNs stamp_ns, 
     usage.cameras.push_back(u);
   }
   judge_health(usage, now_ns);
+  usage.calibration = tracker.calibration_health();
+  for (const auto& health : usage.calibration) {
+    if (health.quarantines > 0) usage.counters["calibration_quarantines"] += health.quarantines;
+    if (health.blobs_withheld > 0) usage.counters["blobs_of_quarantined_camera"] += health.blobs_withheld;
+  }
   return usage;
 }
 
@@ -172,6 +177,14 @@ std::vector<std::string> EstimatorUsage::lines() const {
       out.back() += " refused " + std::to_string(c.refused_frames) + " from " +
                     std::to_string(c.refused_writers) + " second writer(s)";
     }
+  }
+  for (const auto& h : calibration) {
+    if (h.state == CalibrationState::kOk) continue;
+    out.push_back("calibration " + h.camera_id + ": " + to_string(h.state) +
+                  (h.reason.empty() || h.state == CalibrationState::kQuarantined ? "" : ", ") +
+                  (h.state == CalibrationState::kQuarantined
+                       ? h.reason.substr(std::string("quarantined").size())
+                       : h.reason));
   }
   std::snprintf(buffer, sizeof buffer, "replays %llu (%llu frames replayed)",
                 static_cast<unsigned long long>(replays), static_cast<unsigned long long>(replayed_frames));

@@ -161,6 +161,12 @@ std::string check_frames_mode(const std::string& mode) {
   return mode == "per-camera" || mode == "fixed" ? "" : "'" + mode + "': must be per-camera or fixed";
 }
 
+std::string check_continuous_calibration(const std::string& mode) {
+  if (mode == "off" || mode == "detect") return "";
+  if (mode == "correct") return "correct is not implemented yet (issue 36 item 3): use detect or off";
+  return "'" + mode + "': must be off or detect";
+}
+
 namespace {
 
 template <class Fields>
@@ -266,6 +272,32 @@ void visit_bodies(Fields& f, estimator::BodyTrackerOptions& o) {
 }
 
 template <class Fields>
+void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
+  f.text("mode", o.mode, check_continuous_calibration,
+         "off | detect: quarantine a camera whose residuals are biased (correct: not yet)");
+  f.integer("window_ns", o.window_ns, 1'000'000, kHourNs, "residuals this recent are judged");
+  f.integer("sample_interval_ns", o.sample_interval_ns, 0, kHourNs,
+            "one residual per track and camera this often");
+  f.integer("min_samples", o.min_samples, 3, 1 << 24, "fewer residuals in a region: not judged");
+  f.number("false_alarm", o.false_alarm, between(1e-300, 0.5), "alpha per judgement (regions share it)");
+  f.number("min_bias_px", o.min_bias_px, kPositive, "a significant bias below this is only reported");
+  f.number("release_fraction", o.release_fraction, between(0, 1),
+           "released when every bias < this x min_bias_px");
+  f.number("release_p", o.release_p, between(0, 1), "... or p above this, for a full window");
+  f.number("search_px", o.search_px, kPositive, "a track's blob is the nearest within this");
+  f.number("unique_ratio", o.unique_ratio, between(1, 1000), "... and the next is this much farther");
+  f.number("isolation_px", o.isolation_px, kNonNegative, "no other track predicted this close");
+  f.number("max_predicted_sigma_px", o.max_predicted_sigma_px, kPositive, "prediction at least this good");
+  f.number("min_seen_fraction", o.min_seen_fraction, between(0, 1),
+           "fewer predictions with a blob in the gate: quarantined");
+  f.number("release_seen_fraction", o.release_seen_fraction, between(0, 1), "... released above this share");
+  f.integer("min_blind_predictions", o.min_blind_predictions, 1, 1 << 24,
+            "predictions needed to judge the share");
+  f.integer("min_other_cameras", o.min_other_cameras, 1, 64, "other cameras that updated the track recently");
+  f.integer("other_camera_window_ns", o.other_camera_window_ns, 0, kHourNs, "... within this");
+}
+
+template <class Fields>
 void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.number("process_noise", o.process_noise, kPositive,
            "sigma^2 of white acceleration, m^2/s^3 (seed 003 A.48)");
@@ -312,6 +344,8 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.integer("max_unmatched_per_frame", o.max_unmatched_per_frame, 0, 1 << 20,
             "unmatched blobs of one frame offered to initiation");
   f.section("bodies", "rigid bodies (docs/bodies.md)", [&](auto& s) { visit_bodies(s, o.bodies); });
+  f.section("calibration", "continuous calibration (docs/continuous_calibration.md)",
+            [&](auto& s) { visit_calibration(s, o.calibration); });
 }
 
 // A tf2 frame id: not empty, no leading '/' (tf2 rejects it), no whitespace or control characters.

@@ -111,3 +111,46 @@ TEST(CameraHealthStatus, TheLineShowsLostCamerasTheirSilenceAndUnobservedTracks)
 
 }  // namespace
 }  // namespace panoptes::session
+
+namespace panoptes::session {
+namespace {
+
+// Continuous calibration (issue 36): a quarantined camera's health on the wire and in the line.
+TEST(CameraHealthStatus, CalibrationHealthIsInTheMessageAndTheLine) {
+  estimator::EstimatorUsage usage;
+  usage.stamp_ns = kWall + 3000 * kMs;
+  estimator::CameraCalibrationHealth ok;
+  ok.camera_id = "c0";
+  ok.state = estimator::CalibrationState::kOk;
+  ok.whole.samples = 50;
+  estimator::CameraCalibrationHealth bumped;
+  bumped.camera_id = "c3";
+  bumped.state = estimator::CalibrationState::kQuarantined;
+  bumped.reason = "quarantined: whole image: bias (-8.33, +4.71) px = 9.57 px over 45 residuals";
+  bumped.quarantined_since_ns = kWall + 1500 * kMs;
+  bumped.whole.samples = 45;
+  bumped.whole.bias = {-8.33, 4.71};
+  bumped.regions[4].samples = 12;
+  bumped.quarantines = 1;
+  bumped.blobs_withheld = 900;
+  usage.calibration = {ok, bumped};
+  const msg::EstimatorStatus message = estimator_app::to_status_message(usage);
+  ASSERT_EQ(message.calibration().size(), 2u);
+  const auto& m = message.calibration()[1];
+  EXPECT_EQ(m.camera_id(), "c3");
+  EXPECT_EQ(m.state(), 3);
+  EXPECT_EQ(m.reason(), bumped.reason);
+  EXPECT_DOUBLE_EQ(m.whole().bias_px()[0], -8.33);
+  ASSERT_EQ(m.regions().size(), 9u);
+  EXPECT_EQ(m.regions()[4].samples(), 12u);
+  EXPECT_NEAR(m.quarantined_for_s(), 1.5, 1e-9);
+  EXPECT_EQ(m.blobs_withheld(), 900u);
+  EXPECT_EQ(message.calibration()[0].quarantined_for_s(), 0.0);
+  const std::string line = estimator_app::status_line(usage, {});
+  EXPECT_NE(line.find("| c3 quarantined 1.5 s: whole image: bias (-8.33, +4.71) px"), std::string::npos)
+      << line;
+  EXPECT_EQ(line.find("c0 quarantined"), std::string::npos) << line;
+}
+
+}  // namespace
+}  // namespace panoptes::session

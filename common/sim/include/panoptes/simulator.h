@@ -47,6 +47,12 @@ struct SimCameraConfig {
   double late_fraction = 0.0;
   TimeNs late_delay_min_ns = 5'000'000;
   TimeNs late_delay_max_ns = 30'000'000;
+  // A bump (camera key `bump`, issue 36): from scene time bump_at_ns on, the camera's true pose is
+  // T_world_cam · bump (a turn and shift in the camera's own frame). The calibration keeps the
+  // pose from before: what a knocked tripod does to a calibrated system.
+  bool bumped = false;
+  TimeNs bump_at_ns = 0;
+  RigidTransform bump;
 };
 
 struct MarkerTruth {
@@ -100,7 +106,10 @@ class Scene {
   std::vector<BodyDefinition> body_definitions() const;
   // A camera's pose in the world: its T_world_cam, or for a camera on a rig (calibration.moving,
   // whose T_world_cam is then its mount T_rig_cam) the rig's pose times the mount.
+  // A bumped camera's pose is its bump applied from bump_at_ns on.
   RigidTransform camera_pose_at(std::size_t camera_index, TimeNs scene_time_ns) const;
+  // Bumps camera `camera_index` at `at_ns` (as the camera key `bump` does): for tests.
+  void set_camera_bump(std::size_t camera_index, TimeNs at_ns, const RigidTransform& bump);
   // The markers a rig carries (camera key rig.markers, rig frame), by rig name; simulated as
   // markers "<rig>/<index>" after the bodies'.
   std::map<std::string, std::vector<Eigen::Vector3d>> rig_markers() const;

@@ -17,6 +17,7 @@
 
 #include "panoptes/calibration.h"
 #include "panoptes/estimator/bodies.h"
+#include "panoptes/estimator/calibration_health.h"
 #include "panoptes/estimator/initiator.h"
 #include "panoptes/estimator/point_ekf.h"
 #include "panoptes/records.h"
@@ -61,6 +62,8 @@ struct TrackerOptions {
   double grid_cell_px = 32.0;                     // spatial index of a frame's blobs
   std::size_t max_unmatched_per_frame = 256;      // unmatched blobs of one frame offered to initiation
   BodyTrackerOptions bodies;                      // rigid bodies (set_bodies)
+  // Per-camera calibration health and quarantine of a bumped camera (docs/continuous_calibration.md).
+  CalibrationHealthOptions calibration;
 
   void print(std::ostream& out) const;
 };
@@ -161,6 +164,10 @@ class Tracker {
                                                    double margin_px = 3.0) const;
 
   const TrackerStats& stats() const;
+  // Each calibrated camera's calibration health, in calibration order (empty with mode off).
+  std::vector<CameraCalibrationHealth> calibration_health() const;
+  // Whether `camera_id`'s blobs are currently withheld from fusion (quarantined).
+  bool camera_quarantined(const std::string& camera_id) const;
   const std::map<std::string, CameraCounters>& camera_counters() const { return camera_counters_; }
   const TrackerOptions& options() const;
 

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "panoptes/estimator/calibration_health.h"
 #include "panoptes/time.h"
 
 namespace panoptes::estimator {
@@ -74,9 +75,12 @@ struct EstimatorUsage {
   double latency_window_ms = 0;
   std::vector<CameraUsage> cameras;
   std::map<std::string, std::uint64_t> counters;  // dropped frames and blobs by reason
+  // Each camera's calibration health (empty with continuous calibration off).
+  std::vector<CameraCalibrationHealth> calibration;
 
   // One line per camera: "camera <id>: frames N used N late N dropped N utilisation U latency
-  // p50 X ms p99 Y ms" (tests parse it), then one with the drop reasons.
+  // p50 X ms p99 Y ms" (tests parse it), then "calibration <id>: <state> <reason>" for each camera
+  // not ok, then one with the drop reasons.
   std::vector<std::string> lines() const;
 };
 

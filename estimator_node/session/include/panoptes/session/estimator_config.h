@@ -63,6 +63,8 @@ struct NodeSettings {
 
 // "" for "per-camera" or "fixed", else why not (the option or key is named by the caller).
 std::string check_frames_mode(const std::string& mode);
+// Empty if `mode` is a --continuous-calibration mode this build implements, else why not.
+std::string check_continuous_calibration(const std::string& mode);
 
 struct EstimatorConfig {
   NodeSettings node;

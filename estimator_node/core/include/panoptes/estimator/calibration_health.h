@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: Apache-2.0
+// Per-camera calibration health (issue 36, docs/continuous_calibration.md): the residuals of a
+// camera's blobs against the predictions of confirmed tracks that other cameras determine, kept
+// over a sliding window, whole image and by region; a Hotelling T² test of their mean against
+// zero with a stated false-alarm rate and a bias floor; quarantine of a camera whose residuals
+// are significantly biased (a bump), and its release once they are not. Maths only: no DDS, no I/O.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "panoptes/time.h"
+
+namespace panoptes::estimator {
+
+// What the tracker does about a camera found biased: nothing (no monitoring), or quarantine it
+// (stop fusing its blobs until its residuals are unbiased again). `correct` (re-estimate its pose
+// from the tracks, issue 36 item 3) is not implemented yet and is refused.
+enum class CalibrationMode : std::uint8_t { kOff = 0, kDetect = 1 };
+const char* to_string(CalibrationMode mode);
+// "off" or "detect"; throws ConfigError naming `key` otherwise (`correct`: not implemented yet).
+CalibrationMode parse_calibration_mode(const std::string& text,
+                                       const std::string& key = "continuous_calibration");
+
+struct CalibrationHealthOptions {
+  std::string mode = "detect";             // off | detect | correct (parse_calibration_mode)
+  TimeNs window_ns = 1'000'000'000;        // residuals this recent are judged
+  TimeNs sample_interval_ns = 40'000'000;  // one residual per track and camera this often (decorrelation)
+  std::size_t min_samples = 30;            // a region (or the camera) with fewer is not judged
+  double false_alarm = 1e-9;               // α per judgement (whole camera; regions share it, Bonferroni)
+  double min_bias_px = 1.5;                // a significant mean below this is reported, not acted on
+  double release_fraction = 0.3;        // quarantined: released when every |bias| < this × min_bias_px ...
+  double release_p = 0.01;              // ... or p > this, over a full window
+  double search_px = 25.0;              // a confirmed track's blob is the nearest within this ...
+  double unique_ratio = 2.0;            // ... and the next nearest is this much farther
+  double isolation_px = 25.0;           // no other track predicted within this of the track
+  double max_predicted_sigma_px = 2.0;  // the track's prediction is this good (1σ, largest axis)
+  // A camera whose blobs miss the tracks: of at least min_samples predictions in its image, fewer
+  // than this share had a blob in their gate (a bump beyond search_px); released above the second.
+  double min_seen_fraction = 0.05;
+  std::size_t min_blind_predictions = 100;  // ... judged from this many predictions in the window
+  double release_seen_fraction = 0.2;
+  int min_other_cameras = 2;  // cameras other than this one updated the track recently
+  TimeNs other_camera_window_ns = 100'000'000;
+};
+
+inline constexpr int kCalibrationRegionsX = 3;
+inline constexpr int kCalibrationRegionsY = 3;
+inline constexpr int kCalibrationRegions = kCalibrationRegionsX * kCalibrationRegionsY;
+
+enum class CalibrationState : std::uint8_t {
+  kUnknown = 0,      // too few residuals in the window to judge
+  kOk = 1,           // no significant bias
+  kSmallBias = 2,    // a significant bias below min_bias_px: reported, the camera is still used
+  kQuarantined = 3,  // a significant bias of at least min_bias_px: its blobs are not fused
+};
+const char* to_string(CalibrationState state);
+
+// Residual statistics of one image region (or the whole image) over the window.
+struct ResidualStats {
+  std::size_t samples = 0;
+  Eigen::Vector2d bias = Eigen::Vector2d::Zero();  // mean residual, px (observed − predicted)
+  double spread_px = 0;                            // RMS distance of the residuals from their mean
+  double t2 = 0;                                   // Hotelling T² of the mean against zero
+  double p_value = 1;                              // P(T² this large | no bias), F(2, n−2)
+};
+
+struct CameraCalibrationHealth {
+  std::string camera_id;
+  CalibrationState state = CalibrationState::kUnknown;
+  ResidualStats whole;
+  std::array<ResidualStats, kCalibrationRegions> regions{};  // row-major 3 × 3 over the image
+  std::size_t predicted = 0;  // window: predictions of qualified tracks in its image ...
+  std::size_t seen = 0;       // ... and of those, with a blob in the gate
+  std::string reason;         // why it is quarantined or biased (empty when ok)
+  TimeNs quarantined_since_ns = 0;
+  std::uint64_t residuals = 0;       // residuals collected since the start
+  std::uint64_t quarantines = 0;     // times it was quarantined
+  std::uint64_t releases = 0;        // times it was brought back
+  std::uint64_t blobs_withheld = 0;  // blobs not fused while quarantined
+};
+
+// Hotelling T² of the mean of `n` 2-vectors against zero, from their sum and sum of outer
+// products, and its p-value (exact for Gaussian residuals: (n−2)/(2(n−1)) T² ~ F(2, n−2), whose
+// tail is (1 + T²/(n−1))^−(n−2)/2). `floor_px`: the covariance is at least floor² I (a window of
+// identical residuals, a still marker, is not infinitely significant).
+ResidualStats residual_stats(std::size_t n, const Eigen::Vector2d& sum, const Eigen::Matrix2d& sum_outer,
+                             double floor_px);
+
+class CalibrationMonitor {
+ public:
+  explicit CalibrationMonitor(CalibrationHealthOptions options = {}, double centroid_sigma_px = 0.5);
+
+  void set_cameras(const std::vector<std::string>& camera_ids,
+                   const std::vector<Eigen::Vector2d>& image_sizes);
+  // Whether `camera`'s frame at `stamp_ns` is to be monitored and judged: one frame per sample
+  // interval (each track gives at most one residual per interval anyway). Marks it done.
+  bool due(int camera, TimeNs stamp_ns);
+  // Whether a residual of `track_id` in `camera` at `stamp_ns` is wanted (one per sample interval).
+  bool wants(int camera, std::int64_t track_id, TimeNs stamp_ns) const;
+  // A qualified track predicted in the camera's image; `seen`: a blob fell in its gate.
+  void add_prediction(int camera, std::int64_t track_id, TimeNs stamp_ns, bool seen);
+  // A residual: blob minus predicted pixel, at the predicted pixel `at`.
+  void add(int camera, std::int64_t track_id, TimeNs stamp_ns, const Eigen::Vector2d& at,
+           const Eigen::Vector2d& residual);
+  // Judges the camera's window at `stamp_ns` (after its frame's residuals): may quarantine or
+  // release it. Returns whether its state changed.
+  bool judge(int camera, TimeNs stamp_ns);
+  bool quarantined(int camera) const;
+  void note_withheld(int camera, std::size_t blobs);
+  const CameraCalibrationHealth& health(int camera) const { return cameras_.at(camera).health; }
+  std::vector<CameraCalibrationHealth> health() const;
+  const CalibrationHealthOptions& options() const { return options_; }
+
+ private:
+  struct Sample {
+    TimeNs stamp_ns;
+    int region;
+    Eigen::Vector2d r;
+  };
+  struct Sums {
+    std::size_t n = 0;
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d outer = Eigen::Matrix2d::Zero();
+    void add(const Eigen::Vector2d& r, double sign);
+  };
+  struct PerCamera {
+    Eigen::Vector2d image_size{1, 1};
+    std::deque<Sample> window;
+    Sums whole;
+    std::array<Sums, kCalibrationRegions> regions{};
+    std::unordered_map<std::int64_t, TimeNs> last_sample;  // by track id
+    std::deque<std::pair<TimeNs, bool>> predictions;       // (stamp, seen) over the window
+    std::size_t seen = 0;
+    TimeNs calm_since_ns = 0;  // quarantined: residuals unbiased since (0: not calm)
+    TimeNs last_monitored_ns = 0;
+    CameraCalibrationHealth health;
+  };
+  void expire(PerCamera& camera, TimeNs stamp_ns);
+  // The judgement of the window: biased (quarantine), calm (release) and the reason.
+  void update_stats(PerCamera& camera) const;
+
+  CalibrationHealthOptions options_;
+  double floor_px_;
+  // The newest quarantine: for a window after it no other camera is quarantined (their residuals
+  // were measured against tracks the quarantined camera had been pulling).
+  TimeNs last_quarantine_ns_ = 0;
+  std::string last_quarantined_;
+  std::vector<PerCamera> cameras_;
+};
+
+}  // namespace panoptes::estimator

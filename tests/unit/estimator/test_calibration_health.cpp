@@ -1,0 +1,294 @@
+// SPDX-License-Identifier: Apache-2.0
+// Continuous calibration (issue 36 items 1 and 2, docs/continuous_calibration.md): the residual
+// statistics and their test, and on the seeded walk8 scene (eight cameras, clutter, merging,
+// self-occlusion) a camera bumped by 0.5° and 5 mm at t = 10 s is quarantined within 2 s with the
+// marker RMSE at most 1.2 times its value before, while unbumped runs raise no alarm.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <Eigen/Geometry>
+
+#include "panoptes/errors.h"
+#include "panoptes/estimator/calibration_health.h"
+#include "panoptes/estimator/tracker.h"
+#include "panoptes/eval/evaluation.h"
+#include "panoptes/simulator.h"
+
+namespace panoptes::estimator {
+namespace {
+
+constexpr TimeNs kEpoch = 1'700'000'000'000'000'000;
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+TEST(CalibrationHealth, HotellingPValueMatchesTheFDistribution) {
+  // n residuals with mean m and sample covariance C: T² = n mᵀ C⁻¹ m.
+  const std::size_t n = 50;
+  const Eigen::Vector2d mean(0.2, -0.1);
+  const Eigen::Matrix2d covariance = Eigen::Vector2d(0.25, 0.16).asDiagonal();
+  const Eigen::Vector2d sum = static_cast<double>(n) * mean;
+  const Eigen::Matrix2d outer = (n - 1.0) * covariance + static_cast<double>(n) * mean * mean.transpose();
+  const ResidualStats s = residual_stats(n, sum, outer, 0.0);
+  EXPECT_NEAR(s.bias.x(), 0.2, 1e-12);
+  const double t2 = 50.0 * (0.04 / 0.25 + 0.01 / 0.16);
+  EXPECT_NEAR(s.t2, t2, 1e-9);
+  EXPECT_NEAR(s.p_value, std::pow(1.0 + t2 / 49.0, -24.0), 1e-12);
+  EXPECT_NEAR(s.spread_px, std::sqrt(0.41), 1e-9);
+}
+
+TEST(CalibrationHealth, FalseAlarmRateOfTheTestIsAsStated) {
+  // Unbiased Gaussian residuals: P(p < α) = α. 20000 windows of 40 at α = 0.01.
+  std::mt19937_64 random(36);
+  std::normal_distribution<double> normal(0.0, 0.7);
+  int rejected = 0;
+  const int windows = 20000;
+  for (int w = 0; w < windows; ++w) {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d outer = Eigen::Matrix2d::Zero();
+    for (int i = 0; i < 40; ++i) {
+      const Eigen::Vector2d r(normal(random), normal(random));
+      sum += r;
+      outer += r * r.transpose();
+    }
+    if (residual_stats(40, sum, outer, 0.0).p_value < 0.01) ++rejected;
+  }
+  EXPECT_NEAR(static_cast<double>(rejected) / windows, 0.01, 0.002);
+}
+
+TEST(CalibrationHealth, MonitorQuarantinesABiasAndReleasesWhenItGoes) {
+  CalibrationHealthOptions options;
+  CalibrationMonitor monitor(options, 0.5);
+  monitor.set_cameras({"c0"}, {Eigen::Vector2d(1280, 1024)});
+  std::mt19937_64 random(7);
+  std::normal_distribution<double> normal(0.0, 0.4);
+  std::uniform_real_distribution<double> where(0.0, 1000.0);
+  const auto feed = [&](TimeNs from, TimeNs to, Eigen::Vector2d bias) {
+    std::int64_t id = 0;
+    for (TimeNs t = from; t < to; t += 10'000'000) {
+      for (int k = 0; k < 4; ++k)
+        monitor.add(0, ++id, t, {where(random), where(random)},
+                    bias + Eigen::Vector2d(normal(random), normal(random)));
+      monitor.judge(0, t);
+    }
+  };
+  feed(kEpoch, kEpoch + 2'000'000'000, Eigen::Vector2d::Zero());
+  EXPECT_EQ(monitor.health(0).state, CalibrationState::kOk) << monitor.health(0).reason;
+  feed(kEpoch + 2'000'000'000, kEpoch + 3'000'000'000, Eigen::Vector2d(3.0, -1.0));
+  ASSERT_TRUE(monitor.quarantined(0));
+  EXPECT_LT(monitor.health(0).quarantined_since_ns, kEpoch + 2'500'000'000);
+  EXPECT_NE(monitor.health(0).reason.find("quarantined"), std::string::npos);
+  feed(kEpoch + 3'000'000'000, kEpoch + 6'000'000'000, Eigen::Vector2d::Zero());
+  EXPECT_FALSE(monitor.quarantined(0)) << monitor.health(0).reason;
+  EXPECT_EQ(monitor.health(0).quarantines, 1u);
+  EXPECT_EQ(monitor.health(0).releases, 1u);
+}
+
+TEST(CalibrationHealth, ModeIsParsedAndCorrectIsRefused) {
+  EXPECT_EQ(parse_calibration_mode("off"), CalibrationMode::kOff);
+  EXPECT_EQ(parse_calibration_mode("detect"), CalibrationMode::kDetect);
+  EXPECT_THROW(parse_calibration_mode("correct"), ConfigError);
+  EXPECT_THROW(parse_calibration_mode("on"), ConfigError);
+  TrackerOptions options;
+  options.calibration.mode = "sometimes";
+  EXPECT_THROW(Tracker{options}, ConfigError);
+}
+
+// The walk8 scene, `duration_s` long with `seed`.
+Scene walk8(double duration_s, int seed) {
+  const std::string dir = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes";
+  std::ifstream in(dir + "/walk8.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const auto replace = [&](const std::string& from, const std::string& to) {
+    const auto at = yaml.find(from);
+    if (at == std::string::npos) throw std::runtime_error("walk8.yaml: no '" + from + "'");
+    yaml.replace(at, from.size(), to);
+  };
+  replace("seed: 8\n", "seed: " + std::to_string(seed) + "\n");
+  replace("duration: 20.0\n", "duration: " + std::to_string(duration_s) + "\n");
+  return Scene::from_yaml_string(yaml, dir, "walk8.yaml");
+}
+
+std::vector<FeatureFrame> frames_of(const Scene& scene) {
+  std::vector<FeatureFrame> frames;
+  for (const auto& camera : scene.cameras()) {
+    const CameraSimulator simulator(scene, camera.calibration.id);
+    for (std::int64_t k = 0; simulator.frame_time_ns(k) < scene.duration_ns(); ++k) {
+      frames.push_back(simulator.features(k));
+      frames.back().stamp_ns += kEpoch;
+    }
+  }
+  std::stable_sort(frames.begin(), frames.end(),
+                   [](const FeatureFrame& a, const FeatureFrame& b) { return a.stamp_ns < b.stamp_ns; });
+  return frames;
+}
+
+struct BumpRun {
+  double rmse_before_mm = 0;  // scene time 1-10 s
+  double rmse_after_mm = 0;   // 10-end
+  double coverage_after = 0;
+  std::vector<CameraCalibrationHealth> health;
+  std::uint64_t quarantines = 0;
+  TimeNs first_quarantine_ns = 0;  // scene time; 0: none
+  std::string first_camera;
+  double process_s = 0;  // time in Tracker::process
+};
+
+double rmse_mm(const Scene& scene, const std::vector<TrackRecord>& records, double& coverage) {
+  EvaluationOptions options;
+  options.epoch_ns = kEpoch;
+  const Evaluation evaluation = evaluate(scene, records, options);
+  coverage = evaluation.trackable == 0
+                 ? 0.0
+                 : static_cast<double>(evaluation.tracked_trackable) / evaluation.trackable;
+  return evaluation.rmse_m * 1e3;
+}
+
+BumpRun track(const Scene& scene, const std::string& mode, TimeNs split_ns = 10 * kNsPerSecond) {
+  TrackerOptions options;
+  options.calibration.mode = mode;
+  Tracker tracker(options);
+  tracker.set_calibration(scene.calibration());
+  std::vector<TrackRecord> before;
+  std::vector<TrackRecord> after;
+  BumpRun run;
+  for (const auto& frame : frames_of(scene)) {
+    const auto start = std::chrono::steady_clock::now();
+    const FrameOutcome outcome = tracker.process(frame);
+    run.process_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (outcome != FrameOutcome::kProcessed) continue;
+    auto& records = frame.stamp_ns - kEpoch < split_ns ? before : after;
+    for (const auto& record : tracker.current_tracks()) records.push_back(record);
+    for (const auto& health : tracker.calibration_health()) {
+      if (run.first_quarantine_ns == 0 && health.quarantines > 0) {
+        run.first_quarantine_ns = health.quarantined_since_ns - kEpoch;
+        run.first_camera = health.camera_id;
+        std::printf("%s at %.3f s: %s\n", health.camera_id.c_str(), ns_to_seconds(run.first_quarantine_ns),
+                    health.reason.c_str());
+      }
+    }
+  }
+  double coverage = 0;
+  run.rmse_before_mm = rmse_mm(scene, before, coverage);
+  if (!after.empty()) run.rmse_after_mm = rmse_mm(scene, after, run.coverage_after);
+  run.health = tracker.calibration_health();
+  for (const auto& health : run.health) run.quarantines += health.quarantines;
+  return run;
+}
+
+void print(const char* what, const BumpRun& run) {
+  std::printf(
+      "%s: RMSE before %.3f mm, after %.3f mm (coverage after %.3f), quarantines %llu, tracker %.3f s\n",
+      what, run.rmse_before_mm, run.rmse_after_mm, run.coverage_after,
+      static_cast<unsigned long long>(run.quarantines), run.process_s);
+  for (const auto& h : run.health) {
+    std::printf(
+        "  %s seen %4zu/%4zu %-11s residuals %7llu window %4zu bias (%+.3f, %+.3f) spread %.3f p %.1e "
+        "withheld %llu\n",
+        h.camera_id.c_str(), h.seen, h.predicted, to_string(h.state),
+        static_cast<unsigned long long>(h.residuals), h.whole.samples, h.whole.bias.x(), h.whole.bias.y(),
+        h.whole.spread_px, h.whole.p_value, static_cast<unsigned long long>(h.blobs_withheld));
+  }
+}
+
+// A turn of 0.5° about an axis in the image plane and across it, and 5 mm, in the camera frame.
+RigidTransform bump_of(double degrees, double millimetres) {
+  const Eigen::Vector3d axis = Eigen::Vector3d(1.0, 2.0, 0.5).normalized();
+  return {Eigen::Quaterniond(Eigen::AngleAxisd(degrees * kDegree, axis)),
+          millimetres * 1e-3 * Eigen::Vector3d(0.6, -0.8, 0.0)};
+}
+
+TEST(CalibrationHealth, BumpedCameraIsQuarantinedWithinTwoSecondsAndTrackingHolds) {
+  Scene scene = walk8(20.0, 8);
+  const BumpRun clean_off = track(scene, "off");
+  print("walk8 unbumped, off", clean_off);
+  const BumpRun clean = track(scene, "detect");
+  print("walk8 unbumped, detect", clean);
+  EXPECT_EQ(clean.quarantines, 0u);
+  scene.set_camera_bump(3, 10 * kNsPerSecond, bump_of(0.5, 5.0));
+  const BumpRun off = track(scene, "off");
+  print("walk8 cam3 bumped 0.5 deg 5 mm at 10 s, off", off);
+  const BumpRun detect = track(scene, "detect");
+  print("walk8 cam3 bumped 0.5 deg 5 mm at 10 s, detect", detect);
+  ASSERT_GT(detect.quarantines, 0u);
+  EXPECT_EQ(detect.first_camera, "cam3");
+  EXPECT_GE(detect.first_quarantine_ns, 10 * kNsPerSecond);
+  EXPECT_LE(detect.first_quarantine_ns, 12 * kNsPerSecond);
+  EXPECT_EQ(detect.quarantines, 1u);
+  EXPECT_LE(detect.rmse_after_mm, 1.2 * detect.rmse_before_mm);
+  std::printf("detection %.3f s after the bump; RMSE ratio after/before %.3f (off: %.3f)\n",
+              ns_to_seconds(detect.first_quarantine_ns - 10 * kNsPerSecond),
+              detect.rmse_after_mm / detect.rmse_before_mm, off.rmse_after_mm / off.rmse_before_mm);
+}
+
+// The false-alarm measurement: PANOPTES_CALHEALTH_SECONDS of unbumped walk8 per seed (default 60)
+// over PANOPTES_CALHEALTH_SEEDS seeds (default 2).
+TEST(CalibrationHealth, NoFalseAlarmsOnNormalTrackingWithClutter) {
+  const char* seconds_text = std::getenv("PANOPTES_CALHEALTH_SECONDS");
+  const char* seeds_text = std::getenv("PANOPTES_CALHEALTH_SEEDS");
+  const double seconds = seconds_text != nullptr ? std::atof(seconds_text) : 60.0;
+  const int seeds = seeds_text != nullptr ? std::atoi(seeds_text) : 2;
+  std::uint64_t quarantines = 0;
+  std::uint64_t residuals = 0;
+  for (int seed = 100; seed < 100 + seeds; ++seed) {
+    const BumpRun run = track(walk8(seconds, seed), "detect", kNsPerSecond * 3600);
+    print(("walk8 seed " + std::to_string(seed)).c_str(), run);
+    quarantines += run.quarantines;
+    for (const auto& h : run.health) residuals += h.residuals;
+  }
+  std::printf("%d seeds x %.0f s x 8 cameras: %llu quarantines, %llu residuals\n", seeds, seconds,
+              static_cast<unsigned long long>(quarantines), static_cast<unsigned long long>(residuals));
+  EXPECT_EQ(quarantines, 0u);
+}
+
+}  // namespace
+}  // namespace panoptes::estimator
+
+namespace panoptes::estimator {
+namespace {
+
+// Issue 36's table, measured (printed; only the 0.5° case above is asserted): bumps of 0.1°, 0.5°,
+// 2° and 5° (with 5 mm) of cam3 at 10 s, and cam3 and cam6 bumped at once.
+TEST(CalibrationHealth, BumpTable) {
+  struct Case {
+    const char* name;
+    double degrees;
+    std::vector<std::size_t> cameras;
+  };
+  const std::vector<Case> cases = {{"0.1 deg cam3", 0.1, {3}},
+                                   {"0.5 deg cam3", 0.5, {3}},
+                                   {"2 deg cam3", 2.0, {3}},
+                                   {"5 deg cam3", 5.0, {3}},
+                                   {"0.5 deg cam3+cam6", 0.5, {3, 6}}};
+  for (const auto& c : cases) {
+    Scene scene = walk8(20.0, 8);
+    for (const std::size_t camera : c.cameras)
+      scene.set_camera_bump(camera, 10 * kNsPerSecond, bump_of(c.degrees, 5.0));
+    const BumpRun off = track(scene, "off");
+    const BumpRun detect = track(scene, "detect");
+    std::string quarantined;
+    for (const auto& h : detect.health)
+      if (h.quarantines > 0) quarantined += " " + h.camera_id;
+    std::printf(
+        "TABLE %-18s detection %s s, quarantined:%s | RMSE before %.3f mm, after: detect %.3f mm "
+        "(x%.3f, coverage %.3f), off %.3f mm (x%.3f, coverage %.3f)\n",
+        c.name,
+        detect.first_quarantine_ns == 0
+            ? "never"
+            : std::to_string(ns_to_seconds(detect.first_quarantine_ns - 10 * kNsPerSecond)).c_str(),
+        quarantined.empty() ? " none" : quarantined.c_str(), detect.rmse_before_mm, detect.rmse_after_mm,
+        detect.rmse_after_mm / detect.rmse_before_mm, detect.coverage_after, off.rmse_after_mm,
+        off.rmse_after_mm / off.rmse_before_mm, off.coverage_after);
+  }
+}
+
+}  // namespace
+}  // namespace panoptes::estimator
