@@ -25,9 +25,7 @@ std::vector<std::string> subject_names(const std::vector<labelling::SubjectModel
 
 LabelStage::LabelStage(std::vector<labelling::SubjectModel> models, const labelling::LabellerOptions& options,
                        const std::string& out_path, TimeNs period_ns)
-    : labeller_(std::vector<labelling::SubjectModel>(models), options),
-      subjects_(subject_names(models)),
-      period_ns_(period_ns) {
+    : subjects_(subject_names(models)), labeller_(std::move(models), options), period_ns_(period_ns) {
   if (!out_path.empty()) out_.emplace(out_path);
 }
 

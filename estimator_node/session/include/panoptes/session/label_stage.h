@@ -53,8 +53,8 @@ class LabelStage {
   std::string summary() const;
 
  private:
+  std::vector<std::string> subjects_;  // before labeller_: built from the models it takes
   labelling::Labeller labeller_;
-  std::vector<std::string> subjects_;
   std::optional<JsonlWriter> out_;
   std::vector<TrackLabel> labels_;
   std::vector<labelling::TrackPoint> points_;
