@@ -90,7 +90,7 @@ std::optional<session::ChainStage> chain_stage(const app::NodeCommandLine& comma
 // Live auto-labelling (--subjects, docs/marker_sets.md), if asked for.
 std::optional<session::LabelStage> label_stage(const app::NodeCommandLine& command_line) {
   if (command_line.subjects.empty()) {
-    if (!command_line.out_labels.empty()) throw panoptes::ConfigError("", "--out-labels", "needs --subjects");
+    if (!command_line.out_labels.empty()) throw panoptes::ConfigError("--out-labels", "", "needs --subjects");
     return std::nullopt;
   }
   panoptes::labelling::LabellerOptions options;
