@@ -24,6 +24,7 @@
 #include "panoptes/process.h"
 #include "panoptes/session/body_file.h"
 #include "panoptes/session/estimator_session.h"
+#include "panoptes/session/label_stage.h"
 #include "panoptes/session/log.h"
 #include "panoptes/session/offline_replay.h"
 #include "panoptes/surface_app/calibrate_surface.h"
@@ -86,11 +87,30 @@ std::optional<session::ChainStage> chain_stage(const app::NodeCommandLine& comma
   return stage;
 }
 
+// Live auto-labelling (--subjects, docs/marker_sets.md), if asked for.
+std::optional<session::LabelStage> label_stage(const app::NodeCommandLine& command_line) {
+  if (command_line.subjects.empty()) {
+    if (!command_line.out_labels.empty()) throw panoptes::ConfigError("--out-labels", "", "needs --subjects");
+    return std::nullopt;
+  }
+  panoptes::labelling::LabellerOptions options;
+  options.soft_segments = command_line.soft_segments;
+  options.min_track_age = command_line.label_min_track_age;
+  std::optional<session::LabelStage> stage(session::LabelStage::from_files(
+      command_line.subjects, options, command_line.out_labels,
+      command_line.label_rate_hz > 0.0 ? panoptes::seconds_to_ns(1.0 / command_line.label_rate_hz) : 0));
+  session::log("labelling with " + std::to_string(command_line.subjects.size()) + " subject model" +
+               (command_line.subjects.size() == 1 ? "" : "s"));
+  return stage;
+}
+
 int run(const app::NodeCommandLine& command_line, session::EstimatorSession& estimator,
         session::BodyFile& body_file) {
   session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
   std::optional<session::ChainStage> chains = chain_stage(command_line);
   if (chains) replay.chains = &*chains;
+  std::optional<session::LabelStage> labels = label_stage(command_line);
+  if (labels) replay.labels = &*labels;
   if (!command_line.in_recording.empty()) {
     session::FeatureFiles input =
         panoptes::as_input_error([&] { return app::read_recording_features(command_line.in_recording); });
@@ -111,7 +131,12 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
   live.latency_probe = command_line.latency_probe;
   live.quiet = command_line.quiet;
   if (chains) live.chains = &*chains;
+  if (labels) live.labels = &*labels;
   const int exit_code = app::run_live(live, estimator, body_file);
+  if (labels) {
+    labels->flush();
+    session::log(labels->summary());
+  }
   if (chains) {
     chains->flush();
     session::log(chains->summary());

@@ -131,6 +131,23 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
       "--out-chains", c.out_chains,
       "write the articulated chains of the bodies file (type: chain) and their grab/release events as "
       "Chain JSONL (docs/articulated.md; needs --bodies; live mode also publishes rt/panoptes/chains)");
+  app.add_option("--subjects", c.subjects,
+                 "label point tracks with marker names from these subject models (panoptes_label model; "
+                 "comma-separated; docs/marker_sets.md)")
+      ->delimiter(',');
+  app.add_option("--soft-segments", c.soft_segments,
+                 "with --subjects: segments that deform while moving (e.g. Torso; comma-separated)")
+      ->delimiter(',');
+  app.add_option("--label-rate-hz", c.label_rate_hz,
+                 "with --subjects: run the labeller at most this often (0: every processed frame)")
+      ->check(CLI::Range(0.0, 100000.0))
+      ->capture_default_str();
+  app.add_option("--label-min-track-age", c.label_min_track_age,
+                 "with --subjects: a track processed fewer frames is not used to acquire a subject")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  app.add_option("--out-labels", c.out_labels,
+                 "with --subjects: write the labelled tracks of every processed frame as JSONL");
   app.add_option("--dds-profile", c.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
   dds::add_security_options(app, c.security);
   app.add_flag("--replay-arrival", c.replay_arrival,

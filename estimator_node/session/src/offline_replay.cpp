@@ -119,6 +119,7 @@ int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineRepl
     // the state that the next frame's output shows.
     if (outcome != est::FrameOutcome::kProcessed) return;
     if (options.chains) options.chains->observe(frame, tracker);
+    if (options.labels) options.labels->observe(tracker);
     if (fixed) return;
     if (outputs.writes_tracks()) outputs.write_tracks(tracker.current_tracks());
     if (outputs.writes_poses()) outputs.write_poses(session.current_poses());
@@ -128,6 +129,10 @@ int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineRepl
   if (options.chains) {
     options.chains->flush();
     log(options.chains->summary());
+  }
+  if (options.labels) {
+    options.labels->flush();
+    log(options.labels->summary());
   }
   log(outputs.summary());
   return kExitOk;

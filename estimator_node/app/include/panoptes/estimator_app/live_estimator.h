@@ -11,6 +11,7 @@
 #include "panoptes/session/body_file.h"
 #include "panoptes/session/chain_stage.h"
 #include "panoptes/session/estimator_session.h"
+#include "panoptes/session/label_stage.h"
 
 namespace panoptes::estimator_app {
 
@@ -26,6 +27,8 @@ struct LiveOptions {
   // Articulated chains of the bodies file (docs/articulated.md): fed every processed frame and
   // published on rt/panoptes/chains. Null: none.
   session::ChainStage* chains = nullptr;
+  // Auto-labelling (--subjects, docs/marker_sets.md): fed every processed frame. Null: none.
+  session::LabelStage* labels = nullptr;
 };
 
 // Runs until a stop signal (panoptes::stop_requested) or the duration; returns the exit code.

@@ -13,6 +13,7 @@
 #include "panoptes/jsonl.h"
 #include "panoptes/session/chain_stage.h"
 #include "panoptes/session/estimator_session.h"
+#include "panoptes/session/label_stage.h"
 #include "panoptes/session/output_sinks.h"
 
 namespace panoptes::session {
@@ -37,6 +38,8 @@ struct OfflineReplayOptions {
   // Articulated chains of the bodies file (docs/articulated.md; --out-chains): fed every frame
   // the tracker processed. Null: none.
   ChainStage* chains = nullptr;
+  // Live auto-labelling (--subjects, docs/marker_sets.md): fed every frame the tracker processed.
+  LabelStage* labels = nullptr;
   // Called before each frame is offered with the replay's clock: the frame's arrival
   // (received_ns) with by_arrival, else its stamp (the offline timing model of docs/frames.md).
   std::function<void(TimeNs)> clock = nullptr;

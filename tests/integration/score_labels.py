@@ -1,0 +1,107 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
+"""Scores estimator_node --out-labels against the simulator's truth.jsonl (docs/marker_sets.md).
+
+A confirmed track within --match-m of a true marker (truth interpolated to the record's stamp) is a
+visible marker-frame of that marker; it is right when it carries that marker's name, wrong when it
+carries another. A left/right swap is a wrong name that differs from the true one only by its side
+prefix. Return latency: for each track that starts on a marker whose name was seen before, the
+time from the track's first record to its first right name. Prints one JSON object; exit 1 when
+--min-right / --max-wrong / --max-return-ms are not met."""
+import argparse
+import bisect
+import json
+import math
+import sys
+
+
+def load_truth(path):
+    stamps, markers = [], []
+    for line in open(path):
+        record = json.loads(line)
+        stamps.append(record["stamp_ns"])
+        markers.append({m["name"].split("/")[-1]: m["p"] for m in record["markers"]})
+    return stamps, markers
+
+
+def truth_at(stamps, markers, stamp):
+    i = bisect.bisect_right(stamps, stamp)
+    if i == 0 or i == len(stamps):
+        return markers[min(i, len(stamps) - 1)]
+    a, b = markers[i - 1], markers[i]
+    w = (stamp - stamps[i - 1]) / (stamps[i] - stamps[i - 1])
+    return {n: [pa + w * (pb - pa) for pa, pb in zip(a[n], b[n])] for n in a if n in b}
+
+
+def side_swapped(name, truth_name):
+    for a, b in (("R.", "L."), ("L.", "R.")):
+        if name.startswith(a) and truth_name.startswith(b) and name[2:] == truth_name[2:]:
+            return True
+    return False
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("labels")
+    parser.add_argument("truth")
+    parser.add_argument("--match-m", type=float, default=0.02)
+    parser.add_argument("--skip-s", type=float, default=0.0, help="ignore records before this (from the first)")
+    parser.add_argument("--min-right", type=float, default=None)
+    parser.add_argument("--max-wrong", type=float, default=None)
+    parser.add_argument("--max-return-ms", type=float, default=None)
+    args = parser.parse_args()
+    stamps, markers = load_truth(args.truth)
+    visible = right = wrong = swaps = ghost_named = 0
+    first_stamp = None
+    track_start, track_marker, track_named, seen_names = {}, {}, set(), set()
+    returns = []
+    for line in open(args.labels):
+        record = json.loads(line)
+        stamp = record["stamp_ns"]
+        first_stamp = stamp if first_stamp is None else first_stamp
+        truth = truth_at(stamps, markers, stamp)
+        for entry in record["tracks"]:
+            best, best_d = None, args.match_m
+            for name, p in truth.items():
+                d = math.dist(p, entry["p"])
+                if d < best_d:
+                    best, best_d = name, d
+            label = entry.get("marker")
+            track = entry["track"]
+            if track not in track_start:
+                track_start[track] = stamp
+                track_marker[track] = best
+            if best is None:
+                ghost_named += label is not None
+                continue
+            if (stamp - first_stamp) * 1e-9 < args.skip_s:
+                continue
+            visible += 1
+            if label == best:
+                right += 1
+                if track not in track_named:
+                    track_named.add(track)
+                    if best in seen_names and track_marker[track] == best:
+                        returns.append((stamp - track_start[track]) * 1e-6)
+                seen_names.add(best)
+            elif label is not None:
+                wrong += 1
+                swaps += side_swapped(label, best)
+    result = {
+        "visible_marker_frames": visible,
+        "right_percent": 100.0 * right / max(visible, 1),
+        "wrong_percent": 100.0 * wrong / max(visible, 1),
+        "left_right_swaps": swaps,
+        "ghost_tracks_named": ghost_named,
+        "returns": len(returns),
+        "worst_return_ms": max(returns, default=0.0),
+    }
+    print(json.dumps(result))
+    ok = (args.min_right is None or result["right_percent"] >= args.min_right) and (
+        args.max_wrong is None or result["wrong_percent"] <= args.max_wrong) and (
+        args.max_return_ms is None or result["worst_return_ms"] <= args.max_return_ms)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
