@@ -800,7 +800,7 @@ bool Tracker::Impl::determined(const TrackRecord& record, bool published) const 
   return largest <= limit * limit;
 }
 
-Tracker::Tracker(TrackerOptions options) : impl_(std::make_unique<Impl>(options)) {}
+Tracker::Tracker(const TrackerOptions& options) : impl_(std::make_unique<Impl>(options)) {}
 Tracker::~Tracker() = default;
 Tracker::Tracker(Tracker&&) noexcept = default;
 Tracker& Tracker::operator=(Tracker&&) noexcept = default;

@@ -109,7 +109,7 @@ enum class FrameOutcome { kProcessed, kLateReplayed, kTooLate, kUnknownCamera };
 
 class Tracker {
  public:
-  explicit Tracker(TrackerOptions options = {});
+  explicit Tracker(const TrackerOptions& options = {});
   ~Tracker();
   Tracker(Tracker&&) noexcept;
   Tracker& operator=(Tracker&&) noexcept;
