@@ -131,9 +131,16 @@ done
 
 # The application issued without --cyclone: the estimator requests the handshake, Cyclone fails it.
 plain_decoded=$(jq '.native.bodies.samples + .native.body_descriptions.samples' "$work/plain.json" 2>/dev/null)
-if [ -z "$plain_decoded" ]; then  # no summary: say how the probe ended (one such run in the 10-run check of 51abb9e)
-  fail "$plain (no --cyclone) wrote no summary: exit $plain_rc; stdout $(head -c 200 "$work/plain.json" | tr '\n' ' ')"
-  tail -20 "$work/plain.log"
+if [ -z "$plain_decoded" ]; then
+  # No summary: Cyclone DDS 0.10 sometimes crashes (SIGSEGV, exit 139) after failing the estimator's
+  # handshake requests over and over ("Begin handshake reply failed: Failed to convert octet
+  # sequence to ASN1 integer"); it read nothing either way (docs/security.md). Anything else fails.
+  if [ "$plain_rc" -eq 139 ] && grep -q "Begin handshake reply failed" "$work/plain.log"; then
+    pass "$plain (no --cyclone) read nothing: Cyclone failed the handshake and then crashed (exit 139, as it sometimes does)"
+  else
+    fail "$plain (no --cyclone) wrote no summary: exit $plain_rc; stdout $(head -c 200 "$work/plain.json" | tr '\n' ' ')"
+    tail -20 "$work/plain.log"
+  fi
 else
   [ "$plain_decoded" = 0 ] && pass "$plain (no --cyclone, sorts after the estimator) read nothing" ||
     fail "$plain read $plain_decoded samples: the documented limitation no longer holds (docs/security.md)"
