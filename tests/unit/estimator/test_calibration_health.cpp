@@ -230,11 +230,9 @@ TEST(CalibrationHealth, BumpedCameraIsQuarantinedWithinTwoSecondsAndTrackingHold
   EXPECT_GE(detect.first_quarantine_ns, 10 * kNsPerSecond);
   EXPECT_LE(detect.first_quarantine_ns, 12 * kNsPerSecond);
   EXPECT_EQ(detect.quarantines, 1u);
-  // While quarantined the issue asks <= 1.2x. Measured 1.11x from the bump on before issue 35's
-  // adaptive process noise; with it 1.23x while quarantined and 1.26x from the bump on (seven
-  // cameras left; docs/continuous_calibration.md, "Measurements"): not met, so this bound is the
-  // regression bound at the measured figure.
-  EXPECT_LE(detect.rmse_quarantined_mm, 1.25 * detect.rmse_before_mm);
+  // While quarantined the issue asks <= 1.2x: measured 1.07x (1.11x from the bump on) with the
+  // default tracker; with issue 35's fast-motion settings 1.23x (docs/continuous_calibration.md).
+  EXPECT_LE(detect.rmse_quarantined_mm, 1.2 * detect.rmse_before_mm);
   EXPECT_LE(detect.rmse_after_mm, 1.4 * detect.rmse_before_mm);
   std::printf("RMSE while quarantined %.3f mm (%.3fx the RMSE before the bump)\n", detect.rmse_quarantined_mm,
               detect.rmse_quarantined_mm / detect.rmse_before_mm);

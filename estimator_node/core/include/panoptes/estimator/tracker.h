@@ -29,8 +29,11 @@ struct TrackerOptions {
   // Adaptive process noise (issue 35 item 2, docs/estimator.md "Adaptive process noise"): each
   // track scales process_noise by its own factor in [1, max_scale], raised by its normalised
   // innovations (d² above nis_target, averaged) and decaying back to 1 with time constant
-  // adapt_decay_ns. max_scale 1: off (one fixed σ² for every track).
-  double process_noise_max_scale = 40.0;
+  // adapt_decay_ns. max_scale 1: off (one fixed σ² for every track). Off by default: with it (40),
+  // init.link_radius_px 120 and init_velocity_relative_sigma 0.3, fast markers keep identity on
+  // the accuracy grid, but the planner validation's ring of 4 lost half its coverage
+  // (docs/estimator.md, "Adaptive process noise").
+  double process_noise_max_scale = 1.0;
   double process_noise_nis_target = 5.0;
   TimeNs process_noise_adapt_decay_ns = 60'000'000;
   double measurement_noise_px = 0.5;  // σ of a centroid, px (seed 003 A.30)
@@ -39,7 +42,7 @@ struct TrackerOptions {
   double init_position_sigma_m = 0.01;
   double init_velocity_sigma_mps = 2.0;           // velocity unknown at initiation
   double init_measured_velocity_sigma_mps = 0.5;  // velocity from the tracklets' pixel velocities ...
-  double init_velocity_relative_sigma = 0.3;      // ... at least this fraction of its magnitude
+  double init_velocity_relative_sigma = 0.0;      // ... at least this fraction of its magnitude (0: off)
   int confirm_cameras = 3;                        // distinct cameras that confirm a track ...
   int confirm_updates = 12;                       // ... or this many updates from at least two cameras
   int tentative_max_misses = 4;                   // a tentative track absent where it should be seen: ghost
