@@ -178,6 +178,19 @@ netns_spawn "$app_host" "$bin/panoptes_ctl" status --count 1000 --timeout 14 $(s
 pids+=("$!")
 status_reader=$!
 sleep 4
+# A tampered program that writes as cam0 and as cam9 from cam1's own partition (cam1's certificate).
+# Two of them, one before the intruders' burst and one during it: with Fast DDS 2.9 a pair of
+# participants now and then never matches (docs/security.md), and one impostor once matched
+# neither the estimator nor the operator's reader (issue 37); two independent participants, started
+# apart, make that four unmatched pairs.
+impostor() {  # impostor TAG: 5 s of FeatureFrames as cam0 and cam9
+  netns_spawn "$intruder_host" env PANOPTES_SECURITY_DIR="$studio" PANOPTES_SECURITY_IDENTITY=cam1 \
+    "$bin/panoptes_feature_flood" --dds-profile "$secure" --partition cam1 --camera-ids cam0,cam9 --tracks 0 \
+    --rate 100 --duration 5 >"$work/$1.log" 2>&1 &
+  pids+=("$!")
+}
+impostor impostor_a
+sleep 1
 intruder_probe nocert --dds-profile "$lan"
 intruder_probe rogue $(secure_args "$work/rogue" rogue)
 intruder_probe leaver $(secure_args "$leaver" leaver)
@@ -197,11 +210,8 @@ netns_exec "$intruder_host" "$bin/camera_node" --source "sim:$scene#cam1" --came
   { grep -q "not granted" "$work/cam1_as_cam0.log" &&
     pass "cam1's certificate cannot publish as cam0 (camera_node refused: not granted)" ||
     { fail "camera_node as cam0 with cam1's certificate"; tail -n 3 "$work/cam1_as_cam0.log"; }; }
-# ... and a tampered program that writes as cam0 and as cam9 from cam1's own partition.
-netns_spawn "$intruder_host" env PANOPTES_SECURITY_DIR="$studio" PANOPTES_SECURITY_IDENTITY=cam1 \
-  "$bin/panoptes_feature_flood" --dds-profile "$secure" --partition cam1 --camera-ids cam0,cam9 --tracks 0 \
-  --rate 100 --duration 6 >"$work/impostor.log" 2>&1 &
-pids+=("$!")
+# ... and the second tampered program.
+impostor impostor_b
 netns_spawn "$intruder_host" env PANOPTES_SECURITY_DIR="$forged" PANOPTES_SECURITY_IDENTITY=mallory \
   "$bin/panoptes_feature_flood" --dds-profile "$secure" --cameras 8 --rate 50 --duration 5 \
   >"$work/flood.log" 2>&1 &
@@ -286,7 +296,7 @@ case " $cameras " in
   *" cam4 "* | *" cam5 "* | *" cam6 "* | *" cam7 "* | *" cam9 "* | "  ") fail "the estimator's per-camera counters name: '$cameras'" ;;
   *) pass "the estimator counted frames from the system's cameras only ($cameras)" ;;
 esac
-# The impostor (cam1's certificate writing as cam0 and cam9) ran, and the estimator dropped its
+# The impostors (cam1's certificate writing as cam0 and cam9) ran, and the estimator dropped its
 # samples as naming another camera than their writer's partition.
 outside="$(python3 -c "
 import json, sys
@@ -298,9 +308,10 @@ print(n)" "$work/console.jsonl")"
 # The operator's status reader got the impostor's CameraStatus too: dropped, never printed. (Either
 # reader may be a pair that never matched the impostor, docs/security.md; both rarely are.)
 status_dropped=$(sed -n 's/^panoptes_ctl: dropped \([0-9]*\) status messages (id_outside_partition)$/\1/p' "$work/status.log")
-grep -q "FeatureFrames in" "$work/impostor.log" && [ "$outside" -gt 100 ] || [ "${status_dropped:-0}" -gt 3 ] &&
+grep -q "FeatureFrames in" "$work/impostor_a.log" "$work/impostor_b.log" && [ "$outside" -gt 100 ] ||
+  [ "${status_dropped:-0}" -gt 3 ] &&
   pass "cam1's certificate writing as cam0 and cam9 was dropped (id_outside_partition): estimator $outside, operator ${status_dropped:-0}" ||
-  { fail "impostor: estimator $outside, operator ${status_dropped:-0} samples counted id_outside_partition"; tail -n 3 "$work/impostor.log"; }
+  { fail "impostor: estimator $outside, operator ${status_dropped:-0} samples counted id_outside_partition"; tail -n 3 "$work"/impostor_?.log; }
 grep -q '"camera_id":"cam9"' "$work/status.jsonl" && fail "the operator was shown the impostor's cam9" ||
   pass "the operator was never shown a status of the impostor's cam9"
 # The intruder's capture: traffic flowed past it, and none of it is readable.

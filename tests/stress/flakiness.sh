@@ -16,13 +16,15 @@
 #     -j N             ctest's parallelism (2)
 #     --json FILE      the report as JSON (BUILD_DIR/flakiness.json)
 #     --logs DIR       every run's ctest output and JUnit file (BUILD_DIR/flakiness-logs)
+#     --resume         add N runs to those already in --logs (the same build, e.g. a check that did
+#                      not fit one sitting); the report covers every run there
 # Exit status: 0 when every test that ran passed in every run, 1 otherwise.
 # Skipped tests (exit 77: no root, no browser, ...) are counted apart and do not lower the rate.
 set -uo pipefail
 build_dir="$(cd "${1:?usage: flakiness.sh BUILD_DIR [--runs N] [--load] [-R REGEX] ...}" && pwd)"
 shift
 source_dir="$(cd "$(dirname "$0")/../.." && pwd)"
-runs=10 load=0 load_cmd="" jobs=2
+runs=10 load=0 load_cmd="" jobs=2 resume=0
 select=(-R '^integration\.')
 json="$build_dir/flakiness.json"
 logs="$build_dir/flakiness-logs"
@@ -30,18 +32,27 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --runs) runs="$2"; shift 2 ;;
     --load) load=1; shift ;;
+    --resume) resume=1; shift ;;
     --load-cmd) load=1; load_cmd="$2"; shift 2 ;;
     -R) select=(-R "$2"); shift 2 ;;
     -L | -E) select+=("$1" "$2"); shift 2 ;;
     -j) jobs="$2"; shift 2 ;;
     --json) json="$2"; shift 2 ;;
     --logs) logs="$2"; shift 2 ;;
-    -h | --help) sed -n '3,20p' "$0"; exit 0 ;;
+    -h | --help) sed -n '3,22p' "$0"; exit 0 ;;
     *) echo "flakiness.sh: unknown option '$1' (--help)" >&2; exit 2 ;;
   esac
 done
 case "$runs" in '' | *[!0-9]* | 0) echo "flakiness.sh: --runs must be a positive whole number (got '$runs')" >&2; exit 2 ;; esac
 mkdir -p "$logs"
+first=1
+if [ "$resume" -eq 1 ]; then
+  while [ -e "$logs/run$first.log" ]; do first=$((first + 1)); done
+  echo "resuming after $((first - 1)) run(s) in $logs"
+else
+  rm -f "$logs"/run*.log "$logs"/run*.xml "$logs/run_seconds.txt"
+fi
+last=$((first + runs - 1))
 
 # The load: one busy loop per core, or the user's command restarted whenever it ends. Each runs in
 # a process group of its own so that it can be stopped with everything it started.
@@ -66,16 +77,17 @@ if [ "$load" -eq 1 ]; then
 fi
 
 started=$(date -u +%Y-%m-%dT%H:%M:%SZ)
-for run in $(seq "$runs"); do
+for run in $(seq "$first" "$last"); do
   t0=$(date +%s)
   (cd "$build_dir" && ctest -j "$jobs" "${select[@]}" --output-on-failure --output-junit "$logs/run$run.xml") \
     >"$logs/run$run.log" 2>&1
   bash "$source_dir/deploy/dds-shm-clean.sh" >/dev/null 2>&1
-  echo "run $run/$runs: $(grep -E '^[0-9]+% tests passed' "$logs/run$run.log" || echo 'no summary (see log)') ($(($(date +%s) - t0)) s)"
+  echo "$run $(($(date +%s) - t0))" >>"$logs/run_seconds.txt"
+  echo "run $run/$last: $(grep -E '^[0-9]+% tests passed' "$logs/run$run.log" || echo 'no summary (see log)') ($(($(date +%s) - t0)) s)"
 done
 stop_load
 
-python3 - "$logs" "$runs" "$json" "$load" "$load_cmd" "$jobs" "$started" "${select[*]}" <<'PY'
+python3 - "$logs" "$last" "$json" "$load" "$load_cmd" "$jobs" "$started" "${select[*]}" <<'PY'
 import json, sys, xml.etree.ElementTree as ET
 logs, runs, out, load, load_cmd, jobs, started, selection = sys.argv[1:]
 runs = int(runs)
@@ -103,7 +115,11 @@ for name, e in sorted(tests.items()):
     rows.append({"test": name, "runs": ran, "passed": e["passed"], "failed": e["failed"], "skipped": e["skipped"],
                  "pass_rate": round(e["passed"] / ran, 3) if ran else None, "failed_runs": e["failed_runs"],
                  "seconds_max": round(max(e["seconds"], default=0), 1)})
-report = {"started": started, "runs": runs, "ctest_jobs": int(jobs), "selection": selection,
+try:
+    run_seconds = [int(line.split()[1]) for line in open(f"{logs}/run_seconds.txt")]
+except (OSError, IndexError, ValueError):
+    run_seconds = []
+report = {"started": started, "runs": runs, "run_seconds": run_seconds, "ctest_jobs": int(jobs), "selection": selection,
           "load": (load_cmd or "busy loop per core") if load == "1" else None, "tests": rows,
           "flaky_or_failing": [r["test"] for r in rows if r["failed"]]}
 json.dump(report, open(out, "w"), indent=1)
