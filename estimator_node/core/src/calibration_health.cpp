@@ -111,6 +111,14 @@ void CalibrationMonitor::add_prediction(int camera_index, std::int64_t track_id,
   if (seen) ++camera.seen;
 }
 
+void CalibrationMonitor::add_blobs(int camera_index, TimeNs stamp_ns, std::size_t blobs,
+                                   std::size_t explained) {
+  PerCamera& camera = cameras_.at(camera_index);
+  camera.blob_counts.push_back({stamp_ns, blobs, explained});
+  camera.blobs += blobs;
+  camera.explained += explained;
+}
+
 void CalibrationMonitor::add(int camera_index, std::int64_t track_id, TimeNs stamp_ns,
                              const Eigen::Vector2d& at, const Eigen::Vector2d& residual) {
   PerCamera& camera = cameras_.at(camera_index);
@@ -137,6 +145,11 @@ void CalibrationMonitor::expire(PerCamera& camera, TimeNs stamp_ns) {
     if (camera.predictions.front().second) --camera.seen;
     camera.predictions.pop_front();
   }
+  while (!camera.blob_counts.empty() && stamp_ns - camera.blob_counts.front().stamp_ns > options_.window_ns) {
+    camera.blobs -= camera.blob_counts.front().blobs;
+    camera.explained -= camera.blob_counts.front().explained;
+    camera.blob_counts.pop_front();
+  }
   // Tracks not sampled for a window are forgotten (ids are never reused).
   std::erase_if(camera.last_sample,
                 [&](const auto& entry) { return stamp_ns - entry.second > 4 * options_.window_ns; });
@@ -146,6 +159,8 @@ void CalibrationMonitor::update_stats(PerCamera& camera) const {
   auto& health = camera.health;
   health.predicted = camera.predictions.size();
   health.seen = camera.seen;
+  health.blobs = camera.blobs;
+  health.explained = camera.explained;
   health.whole = residual_stats(camera.whole.n, camera.whole.sum, camera.whole.outer, floor_px_);
   for (int r = 0; r < kCalibrationRegions; ++r) {
     const Sums& sums = camera.regions[r];
@@ -204,11 +219,16 @@ bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
   const bool judged_seen = health.predicted >= options_.min_blind_predictions;
   const double seen_share =
       judged_seen ? static_cast<double>(health.seen) / static_cast<double>(health.predicted) : 1.0;
-  const bool blind = judged_seen && seen_share < options_.min_seen_fraction;
+  const bool unexplained =
+      health.blobs > 0 && static_cast<double>(health.explained) <
+                              options_.max_explained_blob_fraction * static_cast<double>(health.blobs);
+  const bool blind = judged_seen && seen_share < options_.min_seen_fraction && unexplained;
   std::string blind_reason;
   if (blind) {
     blind_reason = "its blobs miss the tracks: " + std::to_string(health.seen) + " of " +
-                   std::to_string(health.predicted) + " predictions in its image had a blob in their gate";
+                   std::to_string(health.predicted) + " predictions in its image had a blob in their gate, " +
+                   std::to_string(health.explained) + " of its " + std::to_string(health.blobs) +
+                   " blobs lay near a track";
   }
 
   if (health.state == CalibrationState::kQuarantined) {

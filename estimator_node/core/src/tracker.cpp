@@ -425,6 +425,14 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     candidates.push_back(i);
     candidate_pixel.push_back(predicted_pixels.size() - 1);
   }
+  // The frame's blobs near some live track's prediction (a bumped camera's are near none).
+  std::size_t explained = 0;
+  const double search2 = o.search_px * o.search_px;
+  for (const Eigen::Vector2d& blob : pixels) {
+    explained += std::any_of(predicted_pixels.begin(), predicted_pixels.end(),
+                             [&](const Eigen::Vector2d& p) { return (p - blob).squaredNorm() <= search2; });
+  }
+  monitor.add_blobs(entry.camera, stamp, pixels.size(), explained);
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     const Eigen::Vector2d& rough = predicted_pixels[candidate_pixel[c]];
     bool isolated = true;

@@ -293,6 +293,8 @@ void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
   f.number("release_seen_fraction", o.release_seen_fraction, between(0, 1), "... released above this share");
   f.integer("min_blind_predictions", o.min_blind_predictions, 1, 1 << 24,
             "predictions needed to judge the share");
+  f.number("max_explained_blob_fraction", o.max_explained_blob_fraction, between(0, 1),
+           "... and fewer of its blobs within search_px of a track");
   f.integer("min_other_cameras", o.min_other_cameras, 1, 64, "other cameras that updated the track recently");
   f.integer("other_camera_window_ns", o.other_camera_window_ns, 0, kHourNs, "... within this");
 }

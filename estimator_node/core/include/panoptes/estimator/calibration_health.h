@@ -46,6 +46,11 @@ struct CalibrationHealthOptions {
   double min_seen_fraction = 0.05;
   std::size_t min_blind_predictions = 100;  // ... judged from this many predictions in the window
   double release_seen_fraction = 0.2;
+  // ... and its own blobs are unexplained: fewer than this share of them lie within search_px of
+  // any live track's predicted pixel. A camera on a sparse rig whose qualified tracks (seen by
+  // min_other_cameras others) are mostly the markers the body hides from it predicts many and sees
+  // few, yet its blobs sit on the tracks it does see; a bumped camera's blobs sit on none.
+  double max_explained_blob_fraction = 0.6;
   int min_other_cameras = 2;  // cameras other than this one updated the track recently
   TimeNs other_camera_window_ns = 100'000'000;
 };
@@ -78,6 +83,8 @@ struct CameraCalibrationHealth {
   std::array<ResidualStats, kCalibrationRegions> regions{};  // row-major 3 × 3 over the image
   std::size_t predicted = 0;  // window: predictions of qualified tracks in its image ...
   std::size_t seen = 0;       // ... and of those, with a blob in the gate
+  std::size_t blobs = 0;      // window: blobs of the monitored frames ...
+  std::size_t explained = 0;  // ... and of those, within search_px of a live track's prediction
   std::string reason;         // why it is quarantined or biased (empty when ok)
   TimeNs quarantined_since_ns = 0;
   std::uint64_t residuals = 0;       // residuals collected since the start
@@ -106,6 +113,8 @@ class CalibrationMonitor {
   bool wants(int camera, std::int64_t track_id, TimeNs stamp_ns) const;
   // A qualified track predicted in the camera's image; `seen`: a blob fell in its gate.
   void add_prediction(int camera, std::int64_t track_id, TimeNs stamp_ns, bool seen);
+  // A monitored frame's blobs, and how many lie within search_px of a live track's prediction.
+  void add_blobs(int camera, TimeNs stamp_ns, std::size_t blobs, std::size_t explained);
   // A residual: blob minus predicted pixel, at the predicted pixel `at`.
   void add(int camera, std::int64_t track_id, TimeNs stamp_ns, const Eigen::Vector2d& at,
            const Eigen::Vector2d& residual);
@@ -138,6 +147,14 @@ class CalibrationMonitor {
     std::unordered_map<std::int64_t, TimeNs> last_sample;  // by track id
     std::deque<std::pair<TimeNs, bool>> predictions;       // (stamp, seen) over the window
     std::size_t seen = 0;
+    struct BlobCount {
+      TimeNs stamp_ns;
+      std::size_t blobs;
+      std::size_t explained;
+    };
+    std::deque<BlobCount> blob_counts;  // over the window
+    std::size_t blobs = 0;
+    std::size_t explained = 0;
     TimeNs calm_since_ns = 0;  // quarantined: residuals unbiased since (0: not calm)
     TimeNs last_monitored_ns = 0;
     CameraCalibrationHealth health;
