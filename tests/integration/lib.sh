@@ -99,7 +99,7 @@ replay_cameras() {
 # replay_clients_scene_with_restart: the client tests' live run (test_client.sh,
 # test_python_client.sh). The simulated clients scene in $work/sim replayed by six camera_nodes
 # (16 s) into estimator_node (run 1, --out-poses $work/poses1.jsonl), which is killed (-9) after
-# 8 s and started again 1 s later (run 2, 10 s, $work/poses2.jsonl). Sets $restart_ns (when run 2
+# 8 s and started again 1 s later (run 2, 9 s, $work/poses2.jsonl). Sets $restart_ns (when run 2
 # started) and $estimator (its pid). Start the client under test first.
 replay_clients_scene_with_restart() {
   local epoch=$(( ($(date +%s) + 3) * 1000000000 ))
@@ -110,7 +110,7 @@ replay_clients_scene_with_restart() {
   wait "$estimator" 2>/dev/null
   sleep 1
   restart_ns=$(date +%s%N)
-  start_clients_estimator 2 10
+  start_clients_estimator 2 9  # until 2 s after the cameras (3 s until issue 31)
 }
 start_clients_estimator() {  # RUN DURATION
   "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \

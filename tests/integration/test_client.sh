@@ -24,7 +24,7 @@ expect_stderr_contains "--frames many" "the error names the argument"
 
 # --- live: estimator, six cameras, the client; the estimator killed and restarted -----------------
 expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
-"$bin/panoptes_client_probe" --out "$work/client.jsonl" --duration 22 >"$work/probe.log" 2>&1 &
+"$bin/panoptes_client_probe" --out "$work/client.jsonl" --duration 20 >"$work/probe.log" 2>&1 &
 probe=$!
 pids+=("$probe")
 replay_clients_scene_with_restart

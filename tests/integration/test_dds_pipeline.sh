@@ -5,11 +5,13 @@
 # on or joined anything but loopback.
 source "$(dirname "$0")/lib.sh"
 
-"$bin/panoptes_demo" --duration 8 --check --summary-json "$work/summary.json" --log-dir "$work/logs" >"$work/demo.out" 2>&1 &
+# 6 s of tracking (8 s until issue 31): the demo's accuracy targets are still judged over about 6500
+# marker-instants (7800 with 8 s), and every camera's utilisation over 450 frames or more.
+"$bin/panoptes_demo" --duration 6 --check --summary-json "$work/summary.json" --log-dir "$work/logs" >"$work/demo.out" 2>&1 &
 demo=$!
 pids+=("$demo")
-# While it runs, record every socket of our processes and every multicast membership.
-sleep 6
+# While it runs (scene time 2-3 s), record every socket of our processes and every multicast membership.
+sleep 5
 for exe in camera_node estimator_node panoptes_demo; do
   for pid in $(pgrep -x "$exe"); do ss -H -uanp 2>/dev/null | grep "pid=$pid," ; done
 done >"$work/sockets.txt"

@@ -23,19 +23,20 @@ expect_stderr_contains "--frame-rate-hz" "the error names --frame-rate-hz"
 
 expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
 
-# live_run NAME FRAMES_MODE [ESTIMATOR ARGS]: 10 s of the scene into estimator_node, the probe
-# recording 12 s.
+# live_run NAME FRAMES_MODE SECONDS [ESTIMATOR ARGS]: the cameras replay the scene for SECONDS from
+# their start (camera_node --duration; the epoch is 2-3 s after it) into estimator_node, which runs
+# 4 s longer; the probe records SECONDS + 2.
 live_run() {
-  local name=$1 mode=$2 epoch=$(( ($(date +%s) + 3) * 1000000000 ))
-  shift 2
-  "$bin/panoptes_client_probe" --out "$work/$name.jsonl" --duration 12 >"$work/$name.probe.log" 2>&1 &
+  local name=$1 mode=$2 seconds=$3 epoch=$(( ($(date +%s) + 3) * 1000000000 ))
+  shift 3
+  "$bin/panoptes_client_probe" --out "$work/$name.jsonl" --duration $((seconds + 2)) >"$work/$name.probe.log" 2>&1 &
   local probe=$!
   pids+=("$probe")
   "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
-    --frames "$mode" --duration 14 --status-period 1 "$@" >"$work/$name.estimator.log" 2>&1 &
+    --frames "$mode" --duration $((seconds + 4)) --status-period 1 "$@" >"$work/$name.estimator.log" 2>&1 &
   local estimator=$!
   pids+=("$estimator")
-  replay_cameras "$epoch" 10 c0 c1 c2 c3 c4 c5
+  replay_cameras "$epoch" "$seconds" c0 c1 c2 c3 c4 c5
   timeout 40 tail --pid="$estimator" -f /dev/null
   wait "$estimator" && pass "$name: the estimator exited cleanly" ||
     { fail "$name: estimator exit"; tail -5 "$work/$name.estimator.log"; }
@@ -47,14 +48,16 @@ live_run() {
 # lab that needs steady delivery runs it (docs/frames.md, "Timing of the live loop").
 realtime=()
 if chrt -f 10 true 2>/dev/null; then realtime=(--realtime-priority 10); fi
-live_run fixed fixed ${realtime[@]+"${realtime[@]}"}
+live_run fixed fixed 10 ${realtime[@]+"${realtime[@]}"}
 if [ "${#realtime[@]}" -gt 0 ]; then
   grep -q "estimator thread at SCHED_FIFO priority 10" "$work/fixed.estimator.log" &&
     pass "--realtime-priority 10: the estimator thread runs under SCHED_FIFO" || fail "--realtime-priority was not applied"
 else
   echo "NOTE: no SCHED_FIFO for this user: the fixed-rate run uses the normal scheduler"
 fi
-live_run per_camera per-camera
+# The per-camera run is only printed beside the fixed one (no bound on it): 6 s (10 s until issue
+# 31), 3-4 s of scene, still gives 2500-3000 frames for its p50 and p99.
+live_run per_camera per-camera 6
 skipped=$(sed -n 's/.*fixed-rate frames: [0-9]* published, \([0-9]*\) periods skipped.*/\1/p' "$work/fixed.estimator.log")
 rate=$(sed -n 's/.*rt\/panoptes\/frames at a fixed \([0-9]*\) Hz.*/\1/p' "$work/fixed.estimator.log")
 [ -n "$rate" ] && pass "the estimator announced the rate ($rate Hz)" || { fail "no rate announced"; rate=0; }

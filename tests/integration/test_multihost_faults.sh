@@ -23,7 +23,10 @@ app_host=6
 profile="$source_dir/deploy/dds/lan.xml"
 netns_create_lan 6 || { fail "could not create the namespaces"; finish; }
 scene="$work/scene.yaml"
-sed 's/^duration: .*/duration: 27.0/' "$source_dir/deploy/scenes/demo.yaml" >"$scene"
+# 25 s of the scene (27 s until issue 31): the faults at 4-17 s as before, and 4 s judged for
+# accuracy after the restarted estimator's 4 s warm-up (about 900 instants, 1340 with 6 s; the
+# bounds are RMSE < 2 mm and >= 95 % tracked, measured 1.4 mm and 100 %).
+sed 's/^duration: .*/duration: 25.0/' "$source_dir/deploy/scenes/demo.yaml" >"$scene"
 "$bin/panoptes_sim" calibration --scene "$scene" --out "$work/calibration.yaml" >/dev/null
 
 now_ns() { date +%s%N; }
@@ -70,7 +73,7 @@ echo "lossy link: $lossy"
 
 start_estimator 1 24
 netns_spawn "$app_host" "$bin/panoptes_track_probe" --dds-profile "$profile" --out "$work/probe.jsonl" \
-  --duration 34 >"$work/probe.log" 2>&1 &
+  --duration 31 >"$work/probe.log" 2>&1 &
 probe=$!
 pids+=("$probe")
 start_camera 0 a
@@ -99,7 +102,7 @@ t_kill_estimator=$(now_ns)
 kill -KILL "$estimator"
 wait "$estimator" 2>/dev/null || true
 t_restart_estimator=$(now_ns)
-start_estimator 2 14
+start_estimator 2 11  # until 3 s after the scene ends
 
 for i in 0 1 2 3; do
   if timeout 25 tail --pid="${camera_pid[$i]}" -f /dev/null && wait "${camera_pid[$i]}"; then

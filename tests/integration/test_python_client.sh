@@ -61,7 +61,7 @@ rm -rf "$prefix"
 
 # --- live: estimator, six cameras, the Python client; the estimator killed and restarted ------------
 expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
-"$python" "$source_dir/tests/tools/python_client_probe.py" --out "$work/client.jsonl" --duration 22 >"$work/probe.log" 2>&1 &
+"$python" "$source_dir/tests/tools/python_client_probe.py" --out "$work/client.jsonl" --duration 20 >"$work/probe.log" 2>&1 &
 probe=$!
 pids+=("$probe")
 replay_clients_scene_with_restart
