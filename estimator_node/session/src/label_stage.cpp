@@ -50,7 +50,7 @@ void LabelStage::observe(const estimator::Tracker& tracker) {
   if (last_run_ns_ == 0 || stamp - last_run_ns_ >= period_ns_) {
     last_run_ns_ = stamp;
     const auto start = std::chrono::steady_clock::now();
-    labeller_.update(points_);
+    labeller_.update(points_, static_cast<double>(stamp) * 1e-9);
     const double us =
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
     const double per_subject = us / static_cast<double>(std::max<std::size_t>(subjects_.size(), 1));
