@@ -859,6 +859,16 @@ std::optional<MarkerLabel> Labeller::label_of(std::uint64_t track) const {
                      state_->subjects[subject].model.segments[where.first].markers[where.second].name};
 }
 
+std::vector<std::pair<std::uint64_t, MarkerLabel>> Labeller::labels() const {
+  std::vector<std::pair<std::uint64_t, MarkerLabel>> out;
+  out.reserve(state_->labels.size());
+  for (const auto& entry : state_->labels) {
+    if (auto label = label_of(entry.first)) out.emplace_back(entry.first, std::move(*label));
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
+}
+
 const SubjectModel& Labeller::model(std::size_t subject) const {
   return state_->subjects.at(subject).model;
 }

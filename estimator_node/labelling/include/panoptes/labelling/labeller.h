@@ -95,6 +95,8 @@ class Labeller {
   void name_track(std::uint64_t track, const MarkerLabel& label);
 
   std::optional<MarkerLabel> label_of(std::uint64_t track) const;
+  // Every named track (those briefly missing live too), by track id.
+  std::vector<std::pair<std::uint64_t, MarkerLabel>> labels() const;
   const SubjectModel& model(std::size_t subject) const;
 
  private:
