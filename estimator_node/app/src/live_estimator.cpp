@@ -174,7 +174,7 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
   std::unique_ptr<dds::Writer<msg::SystemCalibration>> calibration_writer_;
   SystemCalibration in_use_;
-  std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;  // with options_.chains
+  std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;     // with options_.chains
   std::unique_ptr<dds::Writer<msg::MarkerLabels>> labels_writer_;  // with options_.labels
   std::uint64_t labels_generation_ = 0;                            // the map last written
   session::FrameOutputBuilder frame_builder_;
