@@ -144,6 +144,8 @@ class LiveEstimator {
   void publish_descriptions_if_changed();
   // --subjects: the names on rt/panoptes/labels when the labelling stage's map changed.
   void publish_labels_if_changed();
+  // --subjects: each marker's subject and name in a frame's output (rt/markers carries them).
+  void name_markers(session::FrameOutput& output) const;
   void publish_chains(const FeatureFrame& frame);
 
   const LiveOptions& options_;
@@ -294,6 +296,7 @@ void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {
     newest_stages_ = stages;
   } else {
     output = frame_builder_.build(tracker_, frame, stages, poses, tracks);
+    name_markers(output);
     frame_writer_->write(to_frame_message(output, wall_now_ns()));
   }
   const LatencyProbeEchoer::Stamps stamps{dequeued_ns, updated_ns, poses_published_ns,
@@ -316,8 +319,9 @@ void LiveEstimator::publish_fixed_frame() {
   if (!tick) return;
   const auto tracks = tracker_.tracks_at(tick->instant_ns);
   const auto poses = session_.poses_at(tick->instant_ns);
-  const session::FrameOutput output =
+  session::FrameOutput output =
       frame_builder_.build_at(tracker_, tick->frame_number, tick->instant_ns, newest_stages_, poses, tracks);
+  name_markers(output);
   const TimeNs publish_ns = wall_now_ns();
   frame_writer_->write(to_frame_message(output, publish_ns));
   if (ros2_) ros2_->publish(output);
@@ -348,6 +352,16 @@ void LiveEstimator::publish_descriptions_if_changed() {
   descriptions_writer_->write(to_descriptions_message(tracker_.body_definitions(), ++descriptions_sent_,
                                                       body_file_.path(), wall_now_ns(),
                                                       session_.inside_out().rig_descriptions()));
+}
+
+void LiveEstimator::name_markers(session::FrameOutput& output) const {
+  if (!options_.labels) return;
+  for (auto& marker : output.markers) {
+    if (const auto label = options_.labels->label_of(marker.track.id)) {
+      marker.subject = label->subject;
+      marker.name = label->marker;
+    }
+  }
 }
 
 void LiveEstimator::publish_labels_if_changed() {
