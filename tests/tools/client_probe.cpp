@@ -49,6 +49,22 @@ json frame_line(const pc::Frame& frame) {
           {"labelled", labelled}};
 }
 
+// The frame's markers as estimator_node --out-labels writes them (tests/integration/score_labels.py):
+// every confirmed marker with its position, and the subject's name on the named ones.
+json labels_line(const pc::Frame& frame) {
+  json tracks = json::array();
+  for (const auto& m : frame.markers) {
+    if (m.occluded) continue;
+    json entry{{"track", m.id}, {"p", m.position}};
+    if (m.named()) {
+      entry["subject"] = m.subject;
+      entry["marker"] = m.name;
+    }
+    tracks.push_back(std::move(entry));
+  }
+  return {{"stamp_ns", frame.stamp_ns}, {"tracks", tracks}};
+}
+
 json descriptions_line(const std::vector<pc::BodyDescription>& descriptions, std::int64_t at_ns) {
   json bodies = json::array();
   for (const auto& d : descriptions)
@@ -65,6 +81,8 @@ json stats_line(const pc::Stats& s) {
           {"descriptions_received", s.descriptions_received},
           {"descriptions_malformed", s.descriptions_malformed},
           {"estimator_restarts", s.estimator_restarts},
+          {"labels_received", s.labels_received},
+          {"labels_malformed", s.labels_malformed},
           {"callback_errors", s.callback_errors},
           {"last_error", s.last_error}};
 }
@@ -77,12 +95,15 @@ std::int64_t wall_ns() {
 
 int run(int argc, char** argv) {
   std::string out_file;
+  std::string out_labels;
   double duration_s = 10;
   pc::ClientOptions options;
   CLI::App app{"panoptes_client_probe: records the frames a panoptes::client::Client receives as JSON lines",
                "panoptes_client_probe"};
   app.option_defaults()->always_capture_default();
   app.add_option("--out", out_file, "JSONL file to write")->required();
+  app.add_option("--out-labels", out_labels,
+                 "also the frames' named markers as JSONL (estimator_node --out-labels' format)");
   app.add_option("--duration", duration_s, "stop after this many seconds")->check(CLI::PositiveNumber);
   app.add_option("--domain", options.domain_id, "DDS domain")
       ->check(CLI::Range(0, 232))  // the client library's ids; a negative one is not "the environment"
@@ -95,13 +116,24 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "panoptes_client_probe: cannot write %s\n", out_file.c_str());
     return panoptes::kExitBadInput;
   }
+  std::ofstream labels_out;
+  if (!out_labels.empty()) {
+    labels_out.open(out_labels);
+    if (!labels_out) {
+      std::fprintf(stderr, "panoptes_client_probe: cannot write %s\n", out_labels.c_str());
+      return panoptes::kExitBadInput;
+    }
+  }
   try {
     pc::Client client(options);
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(duration_s);
     std::uint64_t descriptions_seen = 0;
     while (!panoptes::stop_requested() && std::chrono::steady_clock::now() < end) {
       const pc::FrameResult result = client.wait_for_frame(std::chrono::milliseconds(100));
-      if (result.status == pc::Status::kOk) out << frame_line(result.frame).dump() << '\n';
+      if (result.status == pc::Status::kOk) {
+        out << frame_line(result.frame).dump() << '\n';
+        if (labels_out.is_open()) labels_out << labels_line(result.frame).dump() << '\n';
+      }
       const std::uint64_t received = client.stats().descriptions_received;
       if (received != descriptions_seen) {
         descriptions_seen = received;

@@ -49,6 +49,25 @@ const RigidBody* Frame::body(const std::string& name) const {
   return it == bodies.end() ? nullptr : &*it;
 }
 
+SubjectMarkers Frame::subject(const std::string& name) const {
+  return SubjectMarkers{this, name};
+}
+
+const Marker* SubjectMarkers::marker(const std::string& name) const {
+  if (frame == nullptr) return nullptr;
+  const auto it = std::find_if(frame->markers.begin(), frame->markers.end(),
+                               [&](const Marker& m) { return m.subject == subject && m.name == name; });
+  return it == frame->markers.end() ? nullptr : &*it;
+}
+
+std::vector<const Marker*> SubjectMarkers::markers() const {
+  std::vector<const Marker*> out;
+  if (frame == nullptr) return out;
+  for (const Marker& m : frame->markers)
+    if (m.named() && m.subject == subject) out.push_back(&m);
+  return out;
+}
+
 const Chain* ChainUpdate::chain(const std::string& name) const {
   const auto it = std::find_if(chains.begin(), chains.end(), [&](const Chain& c) { return c.name == name; });
   return it == chains.end() ? nullptr : &*it;
@@ -116,7 +135,9 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
   std::unique_ptr<dds::Reader<msg::StrokeEvents>> stroke_reader;
   std::unique_ptr<dds::Reader<msg::ChainFrame>> chain_reader;
   std::unique_ptr<dds::Reader<msg::EstimatorStatus>> status_reader;
-  EstimatorHealth health;  // under `mutex`
+  std::unique_ptr<dds::Reader<msg::MarkerLabels>> labels_reader;
+  detail::LabelMap labels;  // under `mutex`: the newest map of names (rt/panoptes/labels)
+  EstimatorHealth health;   // under `mutex`
   Clock::time_point health_arrival;
 
   void on_frame(const msg::MocapFrame& message);
@@ -129,7 +150,23 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
   void on_callback_error(const std::string& what);
   void on_descriptions(const msg::BodyDescriptions& message);
   void on_status(const msg::EstimatorStatus& message);
+  void on_labels(const msg::MarkerLabels& message);
 };
+
+void Client::Impl::on_labels(const msg::MarkerLabels& message) {
+  std::string error;
+  auto map = detail::to_label_map(message, error);
+  std::lock_guard lock(mutex);
+  if (closed) return;
+  if (!map) {
+    ++stats.labels_malformed;
+    stats.last_error = "labels (generation " + std::to_string(message.generation()) + "): " + error;
+    return;
+  }
+  // The newest map wins, whichever run wrote it (as with the body descriptions).
+  labels = std::move(*map);
+  ++stats.labels_received;
+}
 
 void Client::Impl::on_status(const msg::EstimatorStatus& message) {
   EstimatorHealth next;
@@ -157,6 +194,10 @@ void Client::Impl::on_frame(const msg::MocapFrame& message) {
   std::string error;
   auto converted = detail::to_frame(message, receive_ns, error);
   if (converted) detail::turn_to_up_axis(*converted, up_axis);
+  if (converted) {
+    std::lock_guard lock(mutex);
+    detail::apply_names(*converted, labels);  // the names as of now (docs/marker_sets.md)
+  }
   std::shared_ptr<const Frame> frame;
   if (converted) frame = std::make_shared<const Frame>(std::move(*converted));
   {
@@ -283,6 +324,8 @@ Client::Client(const ClientOptions& options) {
         [impl](msg::BodyDescriptions&& message) { impl->on_descriptions(message); });
     impl->status_reader = impl->bus->make_reader<msg::EstimatorStatus>(
         [impl](msg::EstimatorStatus&& message) { impl->on_status(message); });
+    impl->labels_reader = impl->bus->make_reader<msg::MarkerLabels>(
+        [impl](msg::MarkerLabels&& message) { impl->on_labels(message); });
     impl->frame_reader = impl->bus->make_reader<msg::MocapFrame>(
         [impl](msg::MocapFrame&& message) { impl->on_frame(message); },
         options.reliable ? dds::Qos::kReliable : dds::Qos::kDefault);
@@ -292,6 +335,7 @@ Client::Client(const ClientOptions& options) {
   } catch (const std::exception& e) {
     impl->frame_reader.reset();
     impl->status_reader.reset();
+    impl->labels_reader.reset();
     impl->description_reader.reset();
     impl->bus.reset();
     throw ClientError(std::string("panoptes client: ") + e.what());
@@ -380,6 +424,11 @@ std::optional<Frame> Client::latest() const {
 std::vector<BodyDescription> Client::body_descriptions() const {
   std::lock_guard lock(impl_->mutex);
   return impl_->descriptions;
+}
+
+std::vector<SubjectDescription> Client::subject_descriptions() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->labels.subjects;
 }
 
 DescriptionsResult Client::wait_for_descriptions(std::chrono::milliseconds timeout) {
@@ -485,6 +534,7 @@ void Client::close() {
   impl_->chain_reader.reset();
   impl_->frame_reader.reset();
   impl_->status_reader.reset();
+  impl_->labels_reader.reset();
   impl_->description_reader.reset();
   impl_->bus.reset();
 }

@@ -318,4 +318,51 @@ std::optional<ChainUpdate> to_chain_update(const msg::ChainFrame& message, std::
   return update;
 }
 
+std::optional<LabelMap> to_label_map(const msg::MarkerLabels& message, std::string& error) {
+  LabelMap map;
+  std::set<std::string> subject_names;
+  for (const msg::SubjectLabels& subject : message.subjects()) {
+    if (subject.name().empty() || !subject_names.insert(subject.name()).second) {
+      error = "subject '" + subject.name() + "': empty or duplicate name";
+      return std::nullopt;
+    }
+    SubjectDescription description;
+    description.name = subject.name();
+    description.marker_set = subject.marker_set();
+    description.markers.assign(subject.markers().begin(), subject.markers().end());
+    const std::set<std::string> known(description.markers.begin(), description.markers.end());
+    for (const msg::LabelStick& stick : subject.sticks()) {
+      if (known.count(stick.from()) == 0 || known.count(stick.to()) == 0) {
+        error = "subject '" + subject.name() + "': stick " + stick.from() + "-" + stick.to() +
+                " names a marker the subject does not have";
+        return std::nullopt;
+      }
+      description.sticks.emplace_back(stick.from(), stick.to());
+    }
+    for (const msg::TrackLabel& label : subject.labels()) {
+      if (known.count(label.marker()) == 0) {
+        error = "subject '" + subject.name() + "': track " + std::to_string(label.track()) + " named '" +
+                label.marker() + "', not one of its markers";
+        return std::nullopt;
+      }
+      if (!map.names.emplace(label.track(), std::make_pair(subject.name(), label.marker())).second) {
+        error = "track " + std::to_string(label.track()) + " named twice";
+        return std::nullopt;
+      }
+    }
+    map.subjects.push_back(std::move(description));
+  }
+  return map;
+}
+
+void apply_names(Frame& frame, const LabelMap& map) {
+  if (map.names.empty()) return;
+  for (Marker& marker : frame.markers) {
+    const auto found = map.names.find(marker.id);
+    if (found == map.names.end()) continue;
+    marker.subject = found->second.first;
+    marker.name = found->second.second;
+  }
+}
+
 }  // namespace panoptes::client::detail

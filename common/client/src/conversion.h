@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "panoptes/client/client.h"
@@ -27,6 +29,17 @@ Latency latency_of(const msg::MocapFrame& message, std::int64_t receive_ns);
 // duplicate name, a body without markers, a non-finite marker position).
 std::optional<std::vector<BodyDescription>> to_descriptions(const msg::BodyDescriptions& message,
                                                             std::string& error);
+
+// A MarkerLabels sample (rt/panoptes/labels): the subjects, and the names by track id.
+struct LabelMap {
+  std::vector<SubjectDescription> subjects;
+  std::unordered_map<std::int64_t, std::pair<std::string, std::string>> names;  // track -> (subject, marker)
+};
+// nullopt with `error` for a malformed one (an empty or duplicate subject name, a track named twice,
+// a name that is not one of its subject's markers).
+std::optional<LabelMap> to_label_map(const msg::MarkerLabels& message, std::string& error);
+// Gives every marker of `frame` whose track `map` names its subject and name.
+void apply_names(Frame& frame, const LabelMap& map);
 
 // A StrokeEvents sample as its strokes; nullopt with `error` for a malformed one (an unknown phase,
 // stroke id 0, a non-finite number).

@@ -122,6 +122,7 @@ bool shift_sample_times(const std::string& topic, std::vector<std::uint8_t>& cdr
   }
   if (is_topic<msg::BodyPose>(topic)) return shift_stamp<msg::BodyPose>(cdr, at);
   if (is_topic<msg::BodyDescriptions>(topic)) return shift_stamp<msg::BodyDescriptions>(cdr, at);
+  if (is_topic<msg::MarkerLabels>(topic)) return shift_stamp<msg::MarkerLabels>(cdr, at);
   if (is_topic<msg::CameraInfo>(topic)) return shift_stamp<msg::CameraInfo>(cdr, at);
   if (is_topic<msg::CameraStatus>(topic)) return shift_stamp<msg::CameraStatus>(cdr, at);
   if (is_topic<msg::CameraPreview>(topic)) return shift_stamp<msg::CameraPreview>(cdr, at);

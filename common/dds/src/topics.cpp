@@ -72,6 +72,7 @@ const std::vector<RawTopicEntry>& raw_entries() {
       raw_entry<msg::SystemCalibration>("panoptes/msg/SystemCalibration"),
       raw_entry<msg::MocapFrame>("panoptes/msg/MocapFrame"),
       raw_entry<msg::BodyDescriptions>("panoptes/msg/BodyDescriptions"),
+      raw_entry<msg::MarkerLabels>("panoptes/msg/MarkerLabels"),
   };
   return entries;
 }

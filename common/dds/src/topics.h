@@ -98,6 +98,7 @@ PANOPTES_TOPIC(SystemCalibration, "rt/panoptes/calibration", true, Durability::k
 PANOPTES_TOPIC(MocapFrame, "rt/panoptes/frames", false, Durability::kVolatile, 8, true, false)
 PANOPTES_TOPIC(BodyDescriptions, "rt/panoptes/body_descriptions", true, Durability::kTransientLocal, 1, false,
                false)
+PANOPTES_TOPIC(MarkerLabels, "rt/panoptes/labels", true, Durability::kTransientLocal, 1, false, false)
 PANOPTES_TOPIC(RecorderCommand, "rt/panoptes/recorder_command", true, Durability::kVolatile, 32, false, false)
 PANOPTES_TOPIC(RecorderStatus, "rt/panoptes/recorder_status", false, Durability::kVolatile, 1, false, true)
 // Off by default: camera_node and estimator_node --latency-probe (docs/protocol.md, "Latency probes").

@@ -94,4 +94,34 @@ msg::BodyDescriptions to_descriptions_message(const std::vector<BodyDefinition>&
   return message;
 }
 
+msg::MarkerLabels to_labels_message(const session::LabelStage& stage) {
+  msg::MarkerLabels message;
+  message.stamp_ns(stage.map_stamp_ns());
+  message.generation(stage.generation());
+  for (std::size_t i = 0; i < stage.subject_count(); ++i) {
+    const labelling::SubjectModel& model = stage.model(i);
+    msg::SubjectLabels subject;
+    subject.name(model.subject);
+    subject.marker_set(model.marker_set);
+    for (const auto& segment : model.segments) {
+      for (const auto& name : segment.tracked_marker_names()) subject.markers().push_back(name);
+    }
+    for (const auto& [from, to] : model.sticks) {
+      msg::LabelStick stick;
+      stick.from(from);
+      stick.to(to);
+      subject.sticks().push_back(std::move(stick));
+    }
+    for (const auto& label : stage.map()) {
+      if (label.subject != model.subject) continue;
+      msg::TrackLabel named;
+      named.track(label.track);
+      named.marker(label.marker);
+      subject.labels().push_back(std::move(named));
+    }
+    message.subjects().push_back(std::move(subject));
+  }
+  return message;
+}
+
 }  // namespace panoptes::estimator_app

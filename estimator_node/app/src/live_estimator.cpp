@@ -80,6 +80,10 @@ class LiveEstimator {
         descriptions_writer_(bus_->make_writer<msg::BodyDescriptions>()),
         calibration_writer_(bus_->make_writer<msg::SystemCalibration>()) {
     if (options_.chains) chain_writer_ = bus_->make_writer<msg::ChainFrame>();
+    if (options_.labels) {
+      labels_writer_ = bus_->make_writer<msg::MarkerLabels>();
+      labels_writer_->write(to_labels_message(*options_.labels));  // the subjects, before any name
+    }
     if (options_.latency_probe) {
       latency_probe_.emplace(*bus_);
       log("benchmark aid: echoing latency probes (rt/panoptes/latency_probe/...)");
@@ -138,6 +142,10 @@ class LiveEstimator {
   // No frame for longer than a track lives without one (every camera stopped): the tracks go.
   void expire_idle_tracks(TimeNs now);
   void publish_descriptions_if_changed();
+  // --subjects: the names on rt/panoptes/labels when the labelling stage's map changed.
+  void publish_labels_if_changed();
+  // --subjects: each marker's subject and name in a frame's output (rt/markers carries them).
+  void name_markers(session::FrameOutput& output) const;
   void publish_chains(const FeatureFrame& frame);
 
   const LiveOptions& options_;
@@ -168,7 +176,9 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
   std::unique_ptr<dds::Writer<msg::SystemCalibration>> calibration_writer_;
   SystemCalibration in_use_;
-  std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;  // with options_.chains
+  std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;     // with options_.chains
+  std::unique_ptr<dds::Writer<msg::MarkerLabels>> labels_writer_;  // with options_.labels
+  std::uint64_t labels_generation_ = 0;                            // the map last written
   session::FrameOutputBuilder frame_builder_;
   std::optional<session::FrameClock> frame_clock_;  // --frames fixed
   session::FixedRateStats fixed_rate_stats_;
@@ -274,7 +284,10 @@ void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {
     if (latency_probe_) latency_probe_->note_pose(pose_message);
   }
   publish_chains(frame);
-  if (options_.labels) options_.labels->observe(tracker_);
+  if (options_.labels) {
+    options_.labels->observe(tracker_);
+    publish_labels_if_changed();
+  }
   auto tracks = tracker_.current_tracks();
   const session::FrameStages stages{frame.arrival_ns,  frame.processing_ns, frame.publish_ns,
                                     frame.received_ns, dequeued_ns,         updated_ns};
@@ -283,6 +296,7 @@ void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {
     newest_stages_ = stages;
   } else {
     output = frame_builder_.build(tracker_, frame, stages, poses, tracks);
+    name_markers(output);
     frame_writer_->write(to_frame_message(output, wall_now_ns()));
   }
   const LatencyProbeEchoer::Stamps stamps{dequeued_ns, updated_ns, poses_published_ns,
@@ -305,8 +319,9 @@ void LiveEstimator::publish_fixed_frame() {
   if (!tick) return;
   const auto tracks = tracker_.tracks_at(tick->instant_ns);
   const auto poses = session_.poses_at(tick->instant_ns);
-  const session::FrameOutput output =
+  session::FrameOutput output =
       frame_builder_.build_at(tracker_, tick->frame_number, tick->instant_ns, newest_stages_, poses, tracks);
+  name_markers(output);
   const TimeNs publish_ns = wall_now_ns();
   frame_writer_->write(to_frame_message(output, publish_ns));
   if (ros2_) ros2_->publish(output);
@@ -337,6 +352,22 @@ void LiveEstimator::publish_descriptions_if_changed() {
   descriptions_writer_->write(to_descriptions_message(tracker_.body_definitions(), ++descriptions_sent_,
                                                       body_file_.path(), wall_now_ns(),
                                                       session_.inside_out().rig_descriptions()));
+}
+
+void LiveEstimator::name_markers(session::FrameOutput& output) const {
+  if (!options_.labels) return;
+  for (auto& marker : output.markers) {
+    if (const auto label = options_.labels->label_of(marker.track.id)) {
+      marker.subject = label->subject;
+      marker.name = label->marker;
+    }
+  }
+}
+
+void LiveEstimator::publish_labels_if_changed() {
+  if (!labels_writer_ || options_.labels->generation() == labels_generation_) return;
+  labels_generation_ = options_.labels->generation();
+  labels_writer_->write(to_labels_message(*options_.labels));
 }
 
 void LiveEstimator::finish(Processed& done) {

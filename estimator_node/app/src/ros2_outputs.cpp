@@ -168,9 +168,14 @@ void Ros2Messages::markers(const session::FrameOutput& frame, mocap::Markers_& o
     const session::MarkerOutput& marker = frame.markers[i];
     mocap::Marker_& m = out.markers()[i];
     if (marker.body.empty()) {
-      m.id_type(kMarkerUseIndex);
+      // A subject's marker (--subjects) carries "subject/name" beside its track's index.
+      m.id_type(marker.name.empty() ? kMarkerUseIndex : kMarkerUseBoth);
       m.marker_index(index_of_track(marker.track.id));
-      m.marker_name().clear();
+      if (marker.name.empty()) {
+        m.marker_name().clear();
+      } else {
+        m.marker_name(marker.subject + "/" + marker.name);
+      }
       m.translation(xyz<ros2::Point_>(marker.track.p));
     } else {
       labelled_marker(marker, m);

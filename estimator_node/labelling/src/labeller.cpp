@@ -25,6 +25,7 @@ struct MarkerState {
   std::optional<std::size_t> point;      // this instant's point
   std::optional<Eigen::Vector3d> moved;  // since the previous instant, when seen in both
   double residual_m = 0.0;               // running mean of its distance from the segment's rigid fit
+  std::optional<double> absent_since_s;  // live: its track missing since (keep_absent_s)
 };
 
 struct SegmentState {
@@ -165,6 +166,7 @@ struct Labeller::State {
   std::vector<Subject> subjects;
   std::unordered_map<std::uint64_t, std::pair<std::size_t, std::pair<std::size_t, std::size_t>>> labels;
   const std::vector<TrackPoint>* points = nullptr;
+  std::optional<double> now_s;  // this instant's time, live (keep_absent_s); none offline
   std::vector<char> claimed;
   std::vector<char> young;                      // per point: too new to be acquired
   std::unordered_map<std::uint64_t, int> ages;  // instants each track has been seen
@@ -234,11 +236,18 @@ void Labeller::State::keep(const std::unordered_map<std::uint64_t, std::size_t>&
         marker.moved.reset();
         if (!marker.track) continue;
         const auto found = by_track.find(*marker.track);
-        if (found == by_track.end()) {  // the track ended: the name waits
-          labels.erase(*marker.track);
+        if (found == by_track.end()) {
+          // Live, briefly missing: the name stays on its track (predicted like a waiting one).
+          if (now_s) {
+            if (!marker.absent_since_s) marker.absent_since_s = *now_s;
+            if (*now_s - *marker.absent_since_s <= options.keep_absent_s) continue;
+          }
+          labels.erase(*marker.track);  // the track ended: the name waits
           marker.track.reset();
+          marker.absent_since_s.reset();
           continue;
         }
+        marker.absent_since_s.reset();
         marker.point = found->second;
         claimed[found->second] = 1;
         if (marker.last) marker.moved = at(found->second) - *marker.last;
@@ -438,6 +447,9 @@ void Labeller::State::commit(std::size_t subject_index, std::size_t s, const Fou
   SegmentState& segment = subjects[subject_index].segments[s];
   for (const auto& [m, p] : found.pairs) {
     MarkerState& marker = segment.markers[m];
+    // A name kept on a missing track (keep_absent_s) moves to the new one.
+    if (marker.track && *marker.track != (*points)[p].track) labels.erase(*marker.track);
+    marker.absent_since_s.reset();
     marker.track = (*points)[p].track;
     marker.point = p;
     marker.last = at(p);
@@ -782,9 +794,10 @@ Labeller::~Labeller() = default;
 Labeller::Labeller(Labeller&&) noexcept = default;
 Labeller& Labeller::operator=(Labeller&&) noexcept = default;
 
-void Labeller::update(const std::vector<TrackPoint>& points) {
+void Labeller::update(const std::vector<TrackPoint>& points, std::optional<double> time_s) {
   State& s = *state_;
   s.points = &points;
+  s.now_s = time_s;
   s.claimed.assign(points.size(), 0);
   std::unordered_map<std::uint64_t, std::size_t> by_track;
   std::unordered_map<std::uint64_t, int> ages;
@@ -844,6 +857,16 @@ std::optional<MarkerLabel> Labeller::label_of(std::uint64_t track) const {
   const auto& [subject, where] = found->second;
   return MarkerLabel{subject,
                      state_->subjects[subject].model.segments[where.first].markers[where.second].name};
+}
+
+std::vector<std::pair<std::uint64_t, MarkerLabel>> Labeller::labels() const {
+  std::vector<std::pair<std::uint64_t, MarkerLabel>> out;
+  out.reserve(state_->labels.size());
+  for (const auto& entry : state_->labels) {
+    if (auto label = label_of(entry.first)) out.emplace_back(entry.first, std::move(*label));
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
 }
 
 const SubjectModel& Labeller::model(std::size_t subject) const {

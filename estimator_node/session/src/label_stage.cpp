@@ -50,13 +50,14 @@ void LabelStage::observe(const estimator::Tracker& tracker) {
   if (last_run_ns_ == 0 || stamp - last_run_ns_ >= period_ns_) {
     last_run_ns_ = stamp;
     const auto start = std::chrono::steady_clock::now();
-    labeller_.update(points_);
+    labeller_.update(points_, static_cast<double>(stamp) * 1e-9);
     const double us =
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
     const double per_subject = us / static_cast<double>(std::max<std::size_t>(subjects_.size(), 1));
     total_us_ += per_subject;
     worst_us_ = std::max(worst_us_, per_subject);
     ++frames_;
+    update_map(stamp);
   }
   labels_.clear();
   for (const auto& point : points_) {
@@ -79,6 +80,19 @@ void LabelStage::observe(const estimator::Tracker& tracker) {
     record["tracks"].push_back(std::move(entry));
   }
   out_->write_line(record.dump());
+}
+
+void LabelStage::update_map(TimeNs stamp) {
+  std::vector<TrackLabel> map;
+  for (const auto& [track, label] : labeller_.labels())
+    map.push_back({static_cast<std::int64_t>(track), subjects_.at(label.subject), label.marker});
+  const auto same = [](const TrackLabel& a, const TrackLabel& b) {
+    return a.track == b.track && a.subject == b.subject && a.marker == b.marker;
+  };
+  if (generation_ != 0 && std::equal(map.begin(), map.end(), map_.begin(), map_.end(), same)) return;
+  map_ = std::move(map);
+  map_stamp_ns_ = stamp;
+  ++generation_;
 }
 
 std::optional<TrackLabel> LabelStage::label_of(std::int64_t track) const {

@@ -224,6 +224,77 @@ TEST(Conversion, RejectsMalformedDescriptions) {
   EXPECT_TRUE(with_rig->front().markers.empty());
 }
 
+msg::MarkerLabels good_labels() {
+  msg::MarkerLabels labels;
+  labels.stamp_ns(1'000'000'000);
+  labels.generation(3);
+  msg::SubjectLabels s1;
+  s1.name("s1");
+  s1.marker_set("gait2392");
+  s1.markers({"R.ASIS", "L.ASIS", "S2"});
+  msg::LabelStick stick;
+  stick.from("R.ASIS");
+  stick.to("L.ASIS");
+  s1.sticks().push_back(stick);
+  msg::TrackLabel named;
+  named.track(9);
+  named.marker("L.ASIS");
+  s1.labels().push_back(named);
+  named.track(11);
+  named.marker("S2");
+  s1.labels().push_back(named);
+  labels.subjects().push_back(s1);
+  msg::SubjectLabels s2 = s1;
+  s2.name("s2");
+  s2.labels().clear();
+  labels.subjects().push_back(s2);
+  return labels;
+}
+
+// rt/panoptes/labels (docs/marker_sets.md, "Labels on the wire"): the map names the frame's markers
+// by track id; frame.subject("s1").marker(...) finds them.
+TEST(Conversion, LabelsNameTheFramesMarkersByTrack) {
+  std::string error;
+  const auto map = to_label_map(good_labels(), error);
+  ASSERT_TRUE(map) << error;
+  ASSERT_EQ(map->subjects.size(), 2U);
+  EXPECT_EQ(map->subjects[0].marker_set, "gait2392");
+  ASSERT_EQ(map->subjects[0].sticks.size(), 1U);
+  EXPECT_EQ(map->subjects[0].sticks[0].second, "L.ASIS");
+  auto frame = to_frame(good_frame(), 1'005'000'000, error);
+  ASSERT_TRUE(frame) << error;
+  apply_names(*frame, *map);
+  const Marker* asis = frame->subject("s1").marker("L.ASIS");
+  ASSERT_NE(asis, nullptr);
+  EXPECT_EQ(asis->id, 9);
+  EXPECT_EQ(frame->subject("s1").marker("S2")->id, 11);
+  EXPECT_EQ(frame->subject("s1").marker("R.ASIS"), nullptr);  // not named in this frame
+  EXPECT_EQ(frame->subject("s2").marker("L.ASIS"), nullptr);
+  EXPECT_EQ(frame->subject("s1").markers().size(), 2U);
+  EXPECT_FALSE(frame->markers[0].named());  // track 5: a body's marker, no subject's
+  EXPECT_EQ(frame->markers[0].body, "head");
+}
+
+TEST(Conversion, RejectsMalformedLabels) {
+  std::string error;
+  msg::MarkerLabels labels = good_labels();
+  labels.subjects()[1].name("s1");
+  EXPECT_FALSE(to_label_map(labels, error));
+  EXPECT_NE(error.find("duplicate"), std::string::npos) << error;
+  labels = good_labels();
+  labels.subjects()[0].labels()[1].marker("R.Knee");
+  EXPECT_FALSE(to_label_map(labels, error));
+  EXPECT_NE(error.find("'R.Knee', not one of its markers"), std::string::npos) << error;
+  labels = good_labels();
+  labels.subjects()[1].labels().push_back(labels.subjects()[0].labels()[0]);
+  EXPECT_FALSE(to_label_map(labels, error));
+  EXPECT_NE(error.find("track 9 named twice"), std::string::npos) << error;
+  labels = good_labels();
+  labels.subjects()[0].sticks()[0].to("nowhere");
+  EXPECT_FALSE(to_label_map(labels, error));
+  EXPECT_NE(error.find("stick R.ASIS-nowhere"), std::string::npos) << error;
+}
+
 TEST(FrameSequence, CountsGapsAndRestarts) {
   FrameSequence sequence;
   EXPECT_EQ(sequence.observe(100).missed, 0U);  // joined late: not missed

@@ -470,6 +470,32 @@ const trailLines = new THREE.LineSegments(trailGeometry, new THREE.LineBasicMate
 trailLines.frustumCulled = false;
 scene.add(trailLines);
 
+// Names of subjects' markers (rt/panoptes/labels, docs/marker_sets.md): track id -> "R.ASIS"
+// ("s1:R.ASIS" with several subjects), and the marker set's sticks between named markers.
+let markerNames = new Map();
+function namesOf(subjects) {
+  const names = new Map();
+  for (const s of subjects) {
+    for (const [id, name] of Object.entries(s.names || {})) names.set(Number(id), subjects.length > 1 ? `${s.name}:${name}` : name);
+  }
+  return names;
+}
+const stickGeometry = new THREE.BufferGeometry();
+const stickLines = new THREE.LineSegments(stickGeometry, new THREE.LineBasicMaterial({ color: 0x9ad1ff }));
+stickLines.frustumCulled = false;
+scene.add(stickLines);
+function updateSticks(subjects, tracks) {
+  const at = new Map(tracks.map(([id, x, y, z]) => [id, [x, y, z]]));
+  const segments = [];
+  for (const s of subjects) {
+    const byName = new Map();
+    for (const [id, name] of Object.entries(s.names || {})) if (at.has(Number(id))) byName.set(name, at.get(Number(id)));
+    for (const [a, b] of s.sticks || []) if (byName.has(a) && byName.has(b)) segments.push(...byName.get(a), ...byName.get(b));
+  }
+  page.sticksDrawn = segments.length / 6;
+  stickGeometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(segments), 3));
+}
+
 function updateTracks(tracks) {
   labelsDirty = true;
   const seen = new Set();
@@ -486,6 +512,7 @@ function updateTracks(tracks) {
     trail.points.push(new THREE.Vector3(x, y, z));
     if (trail.points.length > trailLength) trail.points.shift();
     trail.label.position.set(x, y, z + 0.08);
+    trail.label.userData.label.text = markerNames.get(id) || String(id);
   });
   for (const [id, trail] of trails) {
     if (!seen.has(id)) { scene.remove(trail.label); dropLabel(trail.label); trails.delete(id); }
@@ -837,7 +864,9 @@ function onState(state) {
     updateCard(camera);
     updateFrustum(camera);
   }
+  markerNames = namesOf(state.subjects || []);
   if (!synthetic) updateTracks(withoutChainMarkers(state.tracks, state.chains || []));
+  if (!synthetic) updateSticks(state.subjects || [], state.tracks);
   updateBodies(state.bodies);
   updateChains(state.chains || []);
   if (state.estimator) {

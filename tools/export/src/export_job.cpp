@@ -40,13 +40,23 @@ struct Exported {
 // The tracks of the marker files: a track labelled as a body marker in a record becomes, for that
 // record, the point "<body>_<n>" (ids below every track id, in the bodies' order, then by marker);
 // unlabelled records stay their track. Returns the names of the labelled points by id.
+// A subject's marker (rt/panoptes/labels) becomes the point of its name ("R.ASIS"; "s1:R.ASIS" when
+// the recording names several subjects), after the bodies, in the marker set's order.
 std::map<std::int64_t, std::string> label_tracks(const ExportRecords& records,
                                                  std::vector<TrackRecord>& tracks) {
-  // Bodies in the descriptions' order, then any other labelled body as first met.
+  // Bodies in the descriptions' order, then any other labelled body as first met; then subjects.
   std::map<std::string, std::size_t> rank;
   for (const std::string& body : records.body_order) rank.emplace(body, rank.size());
   for (const MarkerLabel& label : records.labels)
     if (!label.body.empty()) rank.emplace(label.body, rank.size());
+  std::map<std::string, std::size_t> subject_rank;
+  std::map<std::pair<std::string, std::string>, std::int64_t> marker_index;
+  for (const SubjectOrder& subject : records.subject_order) {
+    subject_rank.emplace(subject.subject, rank.size() + subject_rank.size());
+    for (std::size_t i = 0; i < subject.markers.size(); ++i)
+      marker_index.emplace(std::make_pair(subject.subject, subject.markers[i]), static_cast<std::int64_t>(i));
+  }
+  const bool several_subjects = subject_rank.size() > 1;
   constexpr std::int64_t kFirstLabelId = std::numeric_limits<std::int64_t>::min() / 2;
   constexpr std::int64_t kMarkersPerBody = 1 << 20;
   const auto id_of = [&](const MarkerLabel& label) {
@@ -57,9 +67,17 @@ std::map<std::int64_t, std::string> label_tracks(const ExportRecords& records,
   tracks = records.tracks;
   for (std::size_t i = 0; i < records.labels.size() && i < tracks.size(); ++i) {
     const MarkerLabel& label = records.labels[i];
-    if (label.body.empty()) continue;
-    tracks[i].id = id_of(label);
-    names.emplace(tracks[i].id, body_marker_name(label.body, label.marker));
+    if (!label.body.empty()) {
+      tracks[i].id = id_of(label);
+      names.emplace(tracks[i].id, body_marker_name(label.body, label.marker));
+      continue;
+    }
+    const auto subject = subject_rank.find(label.subject);
+    const auto index = marker_index.find({label.subject, label.name});
+    if (label.name.empty() || subject == subject_rank.end() || index == marker_index.end()) continue;
+    tracks[i].id = kFirstLabelId + static_cast<std::int64_t>(subject->second) * kMarkersPerBody +
+                   std::clamp<std::int64_t>(index->second, 0, kMarkersPerBody - 1);
+    names.emplace(tracks[i].id, several_subjects ? label.subject + ":" + label.name : label.name);
   }
   return names;
 }

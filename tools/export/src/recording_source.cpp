@@ -80,17 +80,41 @@ void restore_quality(ExportRecords& records, const RecordingContents& contents) 
   }
 }
 
+// A MarkerLabels map: the names by track id and the subjects' marker order (a subject listed
+// before keeps its place).
+void use_labels(const msg::MarkerLabels& labels, TrackNames& names, std::vector<SubjectOrder>& order) {
+  names.clear();
+  for (const auto& subject : labels.subjects()) {
+    for (const auto& label : subject.labels()) names[label.track()] = {subject.name(), label.marker()};
+    const auto known = std::find_if(order.begin(), order.end(),
+                                    [&](const SubjectOrder& o) { return o.subject == subject.name(); });
+    SubjectOrder entry{subject.name(), {subject.markers().begin(), subject.markers().end()}};
+    if (known == order.end()) {
+      order.push_back(std::move(entry));
+    } else {
+      *known = std::move(entry);
+    }
+  }
+}
+
 }  // namespace
 
 std::string body_marker_name(const std::string& body, int marker) {
   return body + "_" + std::to_string(marker);
 }
 
-void append_frame_records(const msg::MocapFrame& frame, ExportRecords& out) {
+void append_frame_records(const msg::MocapFrame& frame, ExportRecords& out, const TrackNames& names) {
   for (const auto& marker : frame.markers()) {
     out.tracks.push_back(dds::from_message(marker.state(), frame.stamp_ns()));
-    out.labels.push_back(marker.body().empty() ? MarkerLabel{}
-                                               : MarkerLabel{marker.body(), marker.body_marker()});
+    MarkerLabel label;
+    if (!marker.body().empty()) {
+      label.body = marker.body();
+      label.marker = marker.body_marker();
+    } else if (const auto named = names.find(marker.state().id()); named != names.end()) {
+      label.subject = named->second.first;
+      label.name = named->second.second;
+    }
+    out.labels.push_back(std::move(label));
   }
   for (const auto& body : frame.bodies())
     if (body.tracking_valid()) out.poses.push_back(pose_of(body, frame.stamp_ns()));
@@ -108,6 +132,7 @@ ExportRecords RecordingRecordSource::read() {
   ExportRecords records;
   contents_ = RecordingContents{};
   std::uint64_t index = 0;
+  TrackNames names;  // the newest map of names (rt/panoptes/labels) as the file goes
   const auto report = reader->read([&](const recording::MessageView& m) {
     ++index;
     if (m.channel->topic == kFramesChannel) {
@@ -121,7 +146,15 @@ ExportRecords RecordingRecordSource::read() {
       contents_.last_frame_number = frame.frame_number();
       contents_.frame_stamps.push_back(frame.stamp_ns());
       if (frame.source_frame() == -1 && frame.source_camera().empty()) ++contents_.fixed_rate_frames;
-      append_frame_records(frame, records);
+      append_frame_records(frame, records, names);
+    } else if (m.channel->topic == kLabelsChannel) {
+      msg::MarkerLabels labels;
+      if (const auto error = decode(m, labels); !error.empty()) {  // the frames keep the last map's names
+        records.skipped.push_back(file + ": message " + std::to_string(index) + " on " + kLabelsChannel +
+                                  ": cannot decode its CDR (" + std::string(error) + "): skipped");
+        return;
+      }
+      use_labels(labels, names, records.subject_order);
     } else if (m.channel->topic == kDescriptionsChannel) {
       msg::BodyDescriptions descriptions;
       if (const auto error = decode(m, descriptions); !error.empty()) {  // the frames still name the bodies

@@ -124,6 +124,11 @@ void bind_marker(py::module_& m) {
                     "index in the body's marker layout, -1 if unlabelled")
       .def_property_readonly(
           "labelled", [](const client::Marker& k) { return k.labelled(); }, "it belongs to a body (bool)")
+      .def_readonly("subject", &client::Marker::subject,
+                    "the subject whose marker it is (rt/panoptes/labels), '' if unnamed")
+      .def_readonly("name", &client::Marker::name, "its marker-set name, e.g. 'R.ASIS'; '' if unnamed")
+      .def_property_readonly(
+          "named", [](const client::Marker& k) { return k.named(); }, "it carries a marker-set name (bool)")
       .def("__repr__", [](const client::Marker& k) {
         return "<panoptes.Marker " + std::to_string(k.id) + " " +
                (k.labelled() ? k.body + "[" + std::to_string(k.body_marker) + "]"
@@ -133,6 +138,22 @@ void bind_marker(py::module_& m) {
 }
 
 void bind_frame(py::module_& m) {
+  py::class_<client::SubjectMarkers>(m, "SubjectMarkers",
+                                     "The named markers of one subject in one frame (Frame.subject(name)).")
+      .def_readonly("subject", &client::SubjectMarkers::subject, "str")
+      .def(
+          "marker", [](const client::SubjectMarkers& s, const std::string& name) { return s.marker(name); },
+          "name"_a, py::return_value_policy::reference_internal,
+          "marker(name) -> Marker or None: the marker carrying that name in the frame (None: hidden or "
+          "not named yet)")
+      .def(
+          "markers",
+          [](const client::SubjectMarkers& s) {
+            py::list out;
+            for (const client::Marker* marker : s.markers()) out.append(*marker);
+            return out;
+          },
+          "markers() -> list of Marker: every marker of the subject named in the frame");
   py::class_<client::Frame>(
       m, "Frame",
       "One processed camera frame of the estimator: bodies and markers with their capture "
@@ -153,6 +174,10 @@ void bind_frame(py::module_& m) {
       .def(
           "unlabelled_markers", [](const client::Frame& f) { return to_points(f.unlabelled_markers()); },
           "unlabelled_markers() -> array of shape (N, 3): positions (m, world) of the markers of no body")
+      .def(
+          "subject", [](const client::Frame& f, const std::string& name) { return f.subject(name); },
+          "name"_a, py::keep_alive<0, 1>(),
+          "subject(name) -> SubjectMarkers: frame.subject('s1').marker('R.ASIS') (docs/marker_sets.md)")
       .def("__repr__", [](const client::Frame& f) {
         return "<panoptes.Frame " + std::to_string(f.frame_number) +
                " stamp_ns=" + std::to_string(f.stamp_ns) + " " + std::to_string(f.bodies.size()) +
@@ -174,6 +199,17 @@ void bind_descriptions_and_stats(py::module_& m) {
         return "<panoptes.BodyDescription " + std::to_string(d.id) + " '" + d.name + "' " + d.kind + ", " +
                std::to_string(d.markers.size()) + " markers>";
       });
+  py::class_<client::SubjectDescription>(
+      m, "SubjectDescription",
+      "A subject the estimator labels: its marker set's names and sticks (Client.subject_descriptions()).")
+      .def_readonly("name", &client::SubjectDescription::name, "str")
+      .def_readonly("marker_set", &client::SubjectDescription::marker_set, "str")
+      .def_readonly("markers", &client::SubjectDescription::markers, "list of str")
+      .def_readonly("sticks", &client::SubjectDescription::sticks, "list of (str, str): markers drawn joined")
+      .def("__repr__", [](const client::SubjectDescription& d) {
+        return "<panoptes.SubjectDescription '" + d.name + "' (" + d.marker_set + ", " +
+               std::to_string(d.markers.size()) + " markers)>";
+      });
   py::class_<client::Stats>(m, "Stats", "Counters of a Client since it was opened.")
       .def_readonly("frames_received", &client::Stats::frames_received)
       .def_readonly(
@@ -192,6 +228,9 @@ void bind_descriptions_and_stats(py::module_& m) {
       .def_readonly("strokes_malformed", &client::Stats::strokes_malformed, "counted and ignored")
       .def_readonly("strokes_dropped", &client::Stats::strokes_dropped,
                     "overflowed the wait_for_stroke queue")
+      .def_readonly("labels_received", &client::Stats::labels_received,
+                    "rt/panoptes/labels maps (names of subjects' markers)")
+      .def_readonly("labels_malformed", &client::Stats::labels_malformed, "counted and ignored")
       .def_readonly("last_error", &client::Stats::last_error,
                     "why the last malformed sample was ignored, or the last callback's exception")
       .def("__repr__", [](const client::Stats& s) {

@@ -245,6 +245,10 @@ std::vector<client::BodyDescription> PyClient::body_descriptions() const {
   return client_->body_descriptions();
 }
 
+std::vector<client::SubjectDescription> PyClient::subject_descriptions() const {
+  return client_->subject_descriptions();
+}
+
 py::object PyClient::wait_for_descriptions(double timeout_s) {
   return wait_sliced(timeout_s, [this](std::chrono::milliseconds slice) {
     client::DescriptionsResult result = client_->wait_for_descriptions(slice);
@@ -399,6 +403,9 @@ one's traceback is printed). No callback runs after close() or remove_callback()
       .def("body_descriptions", bound(&PyClient::body_descriptions),
            "body_descriptions() -> list of BodyDescription: the estimator's bodies (known to late joiners "
            "too); empty until the first set arrived, which may be after the first frame")
+      .def("subject_descriptions", bound(&PyClient::subject_descriptions),
+           "subject_descriptions() -> list of SubjectDescription: the subjects the estimator labels "
+           "(rt/panoptes/labels; known to late joiners too); empty before the first map")
       .def("wait_for_descriptions", bound(&PyClient::wait_for_descriptions), "timeout"_a,
            R"doc(wait_for_descriptions(timeout) -> list of BodyDescription or None
 

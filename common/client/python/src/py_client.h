@@ -44,6 +44,7 @@ class PyClient {
   int add_callback(const pybind11::function& callback);
   void remove_callback(int handle);
   std::vector<client::BodyDescription> body_descriptions() const;
+  std::vector<client::SubjectDescription> subject_descriptions() const;
   pybind11::object wait_for_descriptions(double timeout_s);  // a list of BodyDescription or None
   client::BodyDescription body_description(const std::string& name) const;
   bool connected() const;

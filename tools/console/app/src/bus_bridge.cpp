@@ -167,6 +167,7 @@ struct BusBridge::Impl {
   std::unique_ptr<dds::Reader<msg::TrackFrame>> tracks;
   std::unique_ptr<dds::Reader<msg::BodyPose>> bodies;
   std::unique_ptr<dds::Reader<msg::ChainFrame>> chains;
+  std::unique_ptr<dds::Reader<msg::MarkerLabels>> labels;
 };
 
 // Listener callbacks copy only what the page shows and return: the state's lock is the only wait.
@@ -224,6 +225,18 @@ BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_uniqu
       [&state](msg::BodyPose&& pose) { state.on_body(body_of(pose), wall_now_ns()); });
   impl_->chains = bus.make_reader<msg::ChainFrame>(
       [&state](msg::ChainFrame&& frame) { state.on_chains(chains_of(frame), wall_now_ns()); });
+  impl_->labels = bus.make_reader<msg::MarkerLabels>([&state](msg::MarkerLabels&& message) {
+    std::vector<SubjectLabelsRecord> subjects;
+    for (const msg::SubjectLabels& subject : message.subjects()) {
+      SubjectLabelsRecord record;
+      record.name = subject.name();
+      for (const msg::LabelStick& stick : subject.sticks())
+        record.sticks.push_back({stick.from(), stick.to()});
+      for (const msg::TrackLabel& label : subject.labels()) record.names[label.track()] = label.marker();
+      subjects.push_back(std::move(record));
+    }
+    state.on_labels(std::move(subjects));
+  });
   impl_->recorder_commands = bus.make_writer<msg::RecorderCommand>();
   impl_->recorders = bus.make_reader<msg::RecorderStatus>([&state](msg::RecorderStatus&& status) {
     state.on_recorder_status(status.recorder_id(), recorder_of(status), wall_now_ns());

@@ -61,6 +61,11 @@ void ConsoleState::on_body(BodyRecord body, TimeNs now) {
   scene_.model.on_body(std::move(body), now);
 }
 
+void ConsoleState::on_labels(std::vector<SubjectLabelsRecord> subjects) {
+  std::lock_guard lock(scene_.mutex);
+  scene_.model.on_labels(std::move(subjects));
+}
+
 bool ConsoleState::on_chains(ChainFrameRecord frame, TimeNs now) {
   std::lock_guard lock(scene_.mutex);
   return scene_.model.on_chains(std::move(frame), now);

@@ -98,6 +98,10 @@ json SceneModel::body_details(const std::string& key, TimeNs now) const {
           {"since_update_ms", round_to(static_cast<double>(now - found->second.second) * 1e-6, 1)}};
 }
 
+void SceneModel::on_labels(std::vector<SubjectLabelsRecord> subjects) {
+  subjects_ = std::move(subjects);
+}
+
 json SceneModel::to_json(TimeNs now, bool full) const {
   json tracks = json::array();
   if (now - tracks_ns_ <= options_.track_timeout_ns) {
@@ -112,7 +116,16 @@ json SceneModel::to_json(TimeNs now, bool full) const {
     bodies.push_back(
         {{"name", name}, {"pose", detail::pose_json(body.first.pose)}, {"quality", body.first.quality}});
   }
-  json out = {{"tracks", std::move(tracks)}, {"bodies", std::move(bodies)}, {"chains", chains_json(now)}};
+  json subjects = json::array();
+  for (const SubjectLabelsRecord& subject : subjects_) {
+    json names = json::object();
+    for (const auto& [track, name] : subject.names) names[std::to_string(track)] = name;
+    subjects.push_back({{"name", subject.name}, {"sticks", subject.sticks}, {"names", std::move(names)}});
+  }
+  json out = {{"tracks", std::move(tracks)},
+              {"bodies", std::move(bodies)},
+              {"chains", chains_json(now)},
+              {"subjects", std::move(subjects)}};
   if (full) {
     out["chain_samples"] = {{"received", chain_samples_.received},
                             {"dropped", chain_samples_.dropped},

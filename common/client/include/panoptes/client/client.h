@@ -21,6 +21,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 // Only what this header declares is exported from libpanoptes_client.so (built with hidden
@@ -85,6 +86,11 @@ struct Marker {
   std::string body;                    // "": unlabelled
   int body_marker = -1;                // index in the body's marker layout
   bool labelled() const { return !body.empty(); }
+  // Its marker-set name when the estimator labels subjects (--subjects; rt/panoptes/labels,
+  // docs/marker_sets.md): subject "s1", name "R.ASIS"; both "" when unnamed.
+  std::string subject;
+  std::string name;
+  bool named() const { return !name.empty(); }
 };
 
 struct RigidBody {
@@ -116,6 +122,18 @@ struct Latency {
   std::int64_t output_ns = 0;   // the update -> the frame was written
 };
 
+struct Frame;
+
+// The named markers of one subject in one frame: frame.subject("s1").marker("R.ASIS"). Refers to
+// the frame it came from (valid while that frame lives).
+struct PANOPTES_CLIENT_API SubjectMarkers {
+  const Frame* frame = nullptr;
+  std::string subject;
+  // nullptr if no marker of this subject carries that name in the frame (hidden, or not named yet).
+  const Marker* marker(const std::string& name) const;
+  std::vector<const Marker*> markers() const;  // every marker of the subject named in the frame
+};
+
 struct PANOPTES_CLIENT_API Frame {
   std::uint64_t frame_number = 0;  // from 1 in each estimator run (restarts begin again at 1)
   std::int64_t stamp_ns = 0;       // mid-exposure capture time, common clock
@@ -129,6 +147,16 @@ struct PANOPTES_CLIENT_API Frame {
   std::vector<Vec3> unlabelled_markers() const;
   // nullptr if no body of that name is in this frame.
   const RigidBody* body(const std::string& name) const;
+  SubjectMarkers subject(const std::string& name) const;
+};
+
+// A subject the estimator labels (rt/panoptes/labels): its marker set's names and sticks (pairs of
+// names drawn joined).
+struct SubjectDescription {
+  std::string name;
+  std::string marker_set;
+  std::vector<std::string> markers;
+  std::vector<std::pair<std::string, std::string>> sticks;
 };
 
 struct BodyDescription {
@@ -254,6 +282,8 @@ struct Stats {
   std::uint64_t chain_updates_malformed = 0;  // counted and ignored
   std::uint64_t grab_events_received = 0;
   std::uint64_t grab_events_dropped = 0;  // overflowed the grab event queue
+  std::uint64_t labels_received = 0;      // rt/panoptes/labels maps (names of subjects' markers)
+  std::uint64_t labels_malformed = 0;     // counted and ignored
   std::string last_error;  // why the last malformed sample was ignored, or the last callback's exception
 };
 
@@ -334,6 +364,9 @@ class PANOPTES_CLIENT_API Client {
   // if close() was called.
   DescriptionsResult wait_for_descriptions(std::chrono::milliseconds timeout);
   BodyDescription body_description(const std::string& name) const;  // throws UnknownBody
+  // The subjects the estimator labels (rt/panoptes/labels, known to late joiners too); empty before
+  // the first map arrived or when the estimator labels none.
+  std::vector<SubjectDescription> subject_descriptions() const;
 
   // A frame arrived within stale_after.
   bool connected() const;

@@ -13,10 +13,19 @@
 
 namespace panoptes {
 
-// The body marker a track was labelled as when it was published (MocapFrame's FrameMarker).
+// The body marker a track was labelled as when it was published (MocapFrame's FrameMarker), or the
+// subject's marker name it carried (rt/panoptes/labels, docs/marker_sets.md).
 struct MarkerLabel {
-  std::string body;  // "" : unlabelled
-  int marker = -1;   // index in the body's layout (BodyDescription.markers)
+  std::string body;     // "" : not a body's marker
+  int marker = -1;      // index in the body's layout (BodyDescription.markers)
+  std::string subject;  // "" : not a subject's marker
+  std::string name;     // its marker-set name, e.g. "R.ASIS"
+};
+
+// A labelled subject: its name and its marker set's names in order.
+struct SubjectOrder {
+  std::string subject;
+  std::vector<std::string> markers;
 };
 
 struct ExportRecords {
@@ -26,6 +35,8 @@ struct ExportRecords {
   std::vector<MarkerLabel> labels;
   // The bodies in the order of their descriptions (the bodies file), when the source knows it.
   std::vector<std::string> body_order;
+  // The labelled subjects (rt/panoptes/labels), when the source knows them.
+  std::vector<SubjectOrder> subject_order;
   // Records that could not be read, skipped and counted: "<file>:<line or offset>: <reason>".
   std::vector<std::string> skipped;
 };

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -65,6 +66,12 @@ struct LabellerOptions {
   // A track seen for fewer instants is not used to acquire a subject or a segment (false blobs
   // make short tracks); a waiting name may still go to it.
   int min_track_age = 3;
+  // Live (update with a time): a named track missing from an instant keeps its name this long
+  // before the name waits for another track; it keeps it for good if it comes back. The estimator
+  // leaves a track out of an instant now and then (coasting, or not determined while one camera's
+  // frames were processed alone): ending the name at once made every such blink a re-acquisition,
+  // and a labeller run on every camera frame lost and mirrored most names (docs/marker_sets.md).
+  double keep_absent_s = 0.25;
 };
 
 // The tolerance of a marker-pair distance of `segment` while the subject moves (see allowance_m).
@@ -78,8 +85,10 @@ class Labeller {
   Labeller(Labeller&&) noexcept;
   Labeller& operator=(Labeller&&) noexcept;
 
-  // One instant: every track seen now (unique ids). Tracks absent since the last call have ended.
-  void update(const std::vector<TrackPoint>& points);
+  // One instant: every track seen now (unique ids). Without a time (offline, every instant complete)
+  // tracks absent since the last call have ended; with `time_s` (live) a named track absent for
+  // longer than keep_absent_s has, and one absent for less keeps its name while it is away.
+  void update(const std::vector<TrackPoint>& points, std::optional<double> time_s = std::nullopt);
 
   // Before the next update: `track` carries `label` (a name known from elsewhere: offline, the other
   // pass's names at the instant this pass starts from). The name leaves the track it was on, the
@@ -87,6 +96,8 @@ class Labeller {
   void name_track(std::uint64_t track, const MarkerLabel& label);
 
   std::optional<MarkerLabel> label_of(std::uint64_t track) const;
+  // Every named track (those briefly missing live too), by track id.
+  std::vector<std::pair<std::uint64_t, MarkerLabel>> labels() const;
   const SubjectModel& model(std::size_t subject) const;
 
  private:

@@ -39,6 +39,8 @@ struct MarkerOutput {
   TrackRecord track;
   std::string body;      // "": unlabelled
   int body_marker = -1;  // index in the body's layout
+  std::string subject;   // --subjects: the subject and marker-set name its track carries ("": none)
+  std::string name;
 };
 
 struct FrameOutput {

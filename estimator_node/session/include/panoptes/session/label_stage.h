@@ -45,6 +45,16 @@ class LabelStage {
   std::optional<TrackLabel> label_of(std::int64_t track) const;
   const std::vector<TrackLabel>& labels() const { return labels_; }
 
+  // The whole current map of names (rt/panoptes/labels, docs/marker_sets.md "Labels on the wire"):
+  // every named track, sorted by track id, as of the newest labeller run, and a generation that
+  // counts its changes (0: no run yet). A publisher writes the map when the generation moves.
+  const std::vector<TrackLabel>& map() const { return map_; }
+  std::uint64_t generation() const { return generation_; }
+  TimeNs map_stamp_ns() const { return map_stamp_ns_; }
+  // The subject models, in --subjects order (names, marker sets, markers and sticks).
+  const labelling::SubjectModel& model(std::size_t subject) const { return labeller_.model(subject); }
+  std::size_t subject_count() const { return subjects_.size(); }
+
   void flush() {
     if (out_) out_->flush();
   }
@@ -53,10 +63,15 @@ class LabelStage {
   std::string summary() const;
 
  private:
+  void update_map(TimeNs stamp);
+
   std::vector<std::string> subjects_;  // before labeller_: built from the models it takes
   labelling::Labeller labeller_;
   std::optional<JsonlWriter> out_;
   std::vector<TrackLabel> labels_;
+  std::vector<TrackLabel> map_;
+  std::uint64_t generation_ = 0;
+  TimeNs map_stamp_ns_ = 0;
   std::vector<labelling::TrackPoint> points_;
   TimeNs period_ns_ = 0;
   TimeNs last_stamp_ns_ = 0;

@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "panoptes/formats/record_source.h"
@@ -20,11 +22,16 @@ namespace panoptes::export_job {
 
 inline constexpr const char* kFramesChannel = "/panoptes/frames";
 inline constexpr const char* kDescriptionsChannel = "/panoptes/body_descriptions";
+inline constexpr const char* kLabelsChannel = "/panoptes/labels";
+
+// The names of subjects' markers by track id, from the newest rt/panoptes/labels map.
+using TrackNames = std::unordered_map<std::int64_t, std::pair<std::string, std::string>>;
 
 // Appends the records of one MocapFrame: per marker a TrackRecord (stamp: the frame's) and its
 // label; per body with tracking_valid a PoseRecord (stamp: the frame's, horizon_ns: the frame
-// body's prediction_horizon_ns, so stamp + horizon is the instant the pose describes).
-void append_frame_records(const msg::MocapFrame& frame, ExportRecords& out);
+// body's prediction_horizon_ns, so stamp + horizon is the instant the pose describes). A marker
+// of no body takes its subject's name from `names` (the map in force when the frame was recorded).
+void append_frame_records(const msg::MocapFrame& frame, ExportRecords& out, const TrackNames& names = {});
 
 // What a recording held besides the records.
 struct RecordingContents {

@@ -134,6 +134,14 @@ struct EstimatorRecord {
   unsigned tracks_unobserved = 0;  // held while every camera is lost: predictions only
 };
 
+// One labelled subject of rt/panoptes/labels (docs/marker_sets.md): its sticks (pairs of marker
+// names drawn joined) and the names its tracks carry now.
+struct SubjectLabelsRecord {
+  std::string name;
+  std::vector<std::array<std::string, 2>> sticks;
+  std::map<std::int64_t, std::string> names;  // track id -> marker name
+};
+
 struct TrackPoint {
   std::int64_t id = 0;
   std::array<double, 3> position{};

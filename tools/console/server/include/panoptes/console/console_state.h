@@ -54,6 +54,7 @@ class ConsoleState {
   void on_estimator(EstimatorRecord status, TimeNs now);
   void on_tracks(std::vector<TrackPoint> tracks, TimeNs now);
   void on_body(BodyRecord body, TimeNs now);
+  void on_labels(std::vector<SubjectLabelsRecord> subjects);
   void on_recorder_status(const std::string& recorder, RecorderRecord status, TimeNs now);
   // A chain sample, kept or counted as dropped (SceneModel::on_chains; the full snapshot's
   // "chain_samples"). False when dropped.

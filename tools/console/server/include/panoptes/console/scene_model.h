@@ -27,6 +27,8 @@ class SceneModel {
 
   void on_tracks(std::vector<TrackPoint> tracks, TimeNs now);
   void on_body(BodyRecord body, TimeNs now);
+  // The newest map of names (rt/panoptes/labels): replaces the previous one.
+  void on_labels(std::vector<SubjectLabelsRecord> subjects);
   // A chain sample: kept (latest state per chain, events counted) or, when chain_frame_error
   // names a fault or it names more than max_chains chains, counted as dropped with that reason.
   // False when dropped.
@@ -44,7 +46,8 @@ class SceneModel {
   nlohmann::json details(const std::string& kind, const std::string& key, TimeNs now) const;
 
   // The snapshot's "tracks" ([id, x, y, z, status number]), "bodies" and "chains" (live ones
-  // only), and when `full` "chain_samples" (docs/console.md, "Protocol").
+  // only), "subjects" ({name, sticks, names: {track id: marker}}; docs/marker_sets.md), and when
+  // `full` "chain_samples" (docs/console.md, "Protocol").
   nlohmann::json to_json(TimeNs now, bool full) const;
 
  private:
@@ -70,6 +73,7 @@ class SceneModel {
   std::map<std::string, TimeNs> body_first_seen_ns_;
   std::map<std::string, Chain> chains_;
   ChainSampleCounts chain_samples_;
+  std::vector<SubjectLabelsRecord> subjects_;
 };
 
 }  // namespace panoptes::console

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Live labelling over DDS (issue 33 item 2; docs/marker_sets.md, "Labels on the wire"): the
+# Gait2392 subject01 model from its static trial; walk1 through the eight asynchronous cameras of
+# walk8.yaml (self-occlusion, merging, 0.3 false blobs per frame) replayed by camera_nodes into
+# estimator_node --subjects; a client (panoptes_client_probe) names the markers from
+# rt/panoptes/labels and its view is scored against the simulator's truth: >= 99.5 % of the
+# visible marker-frames named right and <= 0.1 % wrong after the first 0.5 s, no left/right swap; a
+# client started late has the names with its first frames (transient-local map).
+source "$(dirname "$0")/lib.sh"
+data="$source_dir/../shared/data/static"
+require_shared_data "$data/gait2392_subject01_static.trc"
+require_shared_data "$data/gait2392_subject01_walk1.trc"
+probe="$bin/panoptes_client_probe"
+score="$source_dir/tests/integration/score_labels.py"
+
+expect_exit 0 "model from the static trial" -- "$bin/panoptes_label" model \
+  --static "$data/gait2392_subject01_static.trc" --markerset "$source_dir/deploy/markersets/gait2392.yaml" \
+  --out "$work/s1.yaml" --subject s1
+
+# walk8's cameras and effects, walk1 instead of the 41-marker walk, 0.3 false blobs per frame.
+scene="$work/walk1.yaml"
+sed -e 's/^duration: .*/duration: 8.0/' -e 's/^  false_blobs: .*/  false_blobs: 0.3/' \
+  -e "s#^  file: .*#  file: $data/gait2392_subject01_walk1.trc#" -e 's/^  offset: .*/  offset: [-0.58, 0, 0]/' \
+  "$source_dir/deploy/scenes/walk8.yaml" >"$scene"
+expect_exit 0 "simulate walk1 through eight cameras" -- "$bin/panoptes_sim" features --scene "$scene" \
+  --out-dir "$work/sim"
+
+epoch=$((($(date +%s) + 4) * 1000000000))
+"$probe" --out "$work/client.jsonl" --out-labels "$work/client_labels.jsonl" --duration 14 \
+  >"$work/client.log" 2>&1 &
+client=$!
+pids+=("$client")
+"$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --subjects "$work/s1.yaml" \
+  --soft-segments Torso --out-labels "$work/estimator_labels.jsonl" --duration 13 >"$work/estimator.log" 2>&1 &
+estimator=$!
+pids+=("$estimator")
+replay_cameras "$epoch" 11 cam0 cam1 cam2 cam3 cam4 cam5 cam6 cam7
+# A late client: started while the subject is labelled, it gets the map (transient-local) at once.
+sleep 9
+late_start_ns=$(date +%s%N)
+"$probe" --out "$work/late.jsonl" --out-labels "$work/late_labels.jsonl" --duration 3 >"$work/late.log" 2>&1 &
+late=$!
+pids+=("$late")
+timeout 30 tail --pid="$estimator" -f /dev/null
+wait "$estimator" && pass "estimator_node exited cleanly" || { fail "estimator_node"; tail "$work/estimator.log"; }
+timeout 20 tail --pid="$client" -f /dev/null
+timeout 20 tail --pid="$late" -f /dev/null
+grep "^estimator_node: labels:" "$work/estimator.log" || true
+
+# The client's view, scored like the estimator's own --out-labels (the same format).
+for who in client estimator; do
+  if /usr/bin/python3 "$score" "$work/${who}_labels.jsonl" "$work/sim/truth.jsonl" --skip-s 0.5 \
+    --min-right 99.5 --max-wrong 0.1 >"$work/${who}_score.json" 2>&1; then
+    pass "$who: names right and wrong within the issue's bounds: $(cat "$work/${who}_score.json")"
+  else
+    fail "$who: names: $(cat "$work/${who}_score.json")"
+  fi
+done
+swaps=$(jq -r '.left_right_swaps' "$work/client_score.json" 2>/dev/null)
+[ "${swaps:-x}" = 0 ] && pass "no left/right swap in the client's names" ||
+  fail "left/right swaps in the client's names: ${swaps:-not reported}"
+stats=$(grep '"type":"stats"' "$work/client.jsonl" | tail -n 1)
+echo "$stats" | jq -e '.labels_received >= 1 and .labels_malformed == 0' >/dev/null &&
+  pass "the client received $(echo "$stats" | jq .labels_received) label maps, none malformed" ||
+  fail "client label maps: $stats"
+
+# The late client: its frames carry names from the first second on.
+/usr/bin/python3 - "$work/late_labels.jsonl" "$late_start_ns" <<'PY' && pass "a late client names markers within 1 s of starting" || fail "the late client's names"
+import json, sys
+records = [json.loads(line) for line in open(sys.argv[1]) if line.strip()]
+start = int(sys.argv[2])
+named = [r for r in records if any("marker" in t for t in r["tracks"])]
+print(f"late client: {len(records)} frames, {len(named)} with names")
+sys.exit(0 if records and named and named[0]["stamp_ns"] - start < 1_000_000_000 else 1)
+PY
+finish
