@@ -71,6 +71,9 @@ def main():
             print(f"log_poses_csv: {client.status_text()} on domain {client.domain_id} "
                   "(is estimator_node running?)", file=sys.stderr)
             return 1
+        rate = client.frame_rate()
+        print(f"log_poses_csv: frames at {rate.hz:.2f} Hz "
+              f"({'fixed rate' if rate.fixed else 'one per processed camera frame'})", file=sys.stderr)
         print(f"log_poses_csv: {counts[0]} frames logged to {args.out} (panoptes {panoptes.__version__}); "
               f"{client.stats()}", file=sys.stderr)
     return 0

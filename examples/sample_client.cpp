@@ -110,6 +110,9 @@ int main(int argc, char** argv) {
       print_frame(result.frame);
     }
     const auto stats = client.stats();
+    const auto rate = client.frame_rate();
+    std::fprintf(stderr, "sample_client: frames at %.2f Hz (%s)\n", rate.hz,
+                 rate.fixed ? "fixed rate" : "one per processed camera frame");
     std::fprintf(stderr, "sample_client: received %llu frames, %llu missed, %llu malformed\n",
                  static_cast<unsigned long long>(stats.frames_received),
                  static_cast<unsigned long long>(stats.frames_missed),

@@ -116,6 +116,8 @@ struct __attribute__((visibility("hidden"))) Client::Impl {
   std::vector<BodyDescription> descriptions;     // valid once stats.descriptions_received > 0
   std::condition_variable descriptions_arrived;  // or closed
   std::array<Clock::time_point, kRateWindow> arrivals{};
+  std::array<std::int64_t, kRateWindow> stamps{};  // of the same frames, for frame_rate()
+  bool newest_fixed = false;
   Clock::time_point last_arrival;
 
   // Frames (callbacks and pull), strokes (surface mode) and chains (callbacks get the update, the
@@ -213,6 +215,8 @@ void Client::Impl::on_frame(const msg::MocapFrame& message) {
     if (step.restart) ++stats.estimator_restarts;
     const Clock::time_point now = Clock::now();
     arrivals[stats.frames_received % kRateWindow] = now;
+    stamps[stats.frames_received % kRateWindow] = frame->stamp_ns;
+    newest_fixed = frame->source_frame == -1 && frame->source_camera.empty();
     last_arrival = now;
     ++stats.frames_received;
     newest = frame;
@@ -419,6 +423,14 @@ std::optional<Frame> Client::latest() const {
   }
   if (!frame) return std::nullopt;
   return *frame;
+}
+
+FrameRate Client::frame_rate() const {
+  std::lock_guard lock(impl_->mutex);
+  const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(impl_->stats.frames_received, kRateWindow));
+  std::vector<std::int64_t> stamps(impl_->stamps.begin(),
+                                   impl_->stamps.begin() + static_cast<std::ptrdiff_t>(n));
+  return {impl_->newest_fixed, detail::rate_from_stamps(std::move(stamps), impl_->newest_fixed)};
 }
 
 std::vector<BodyDescription> Client::body_descriptions() const {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "conversion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <string_view>
@@ -363,6 +364,21 @@ void apply_names(Frame& frame, const LabelMap& map) {
     marker.subject = found->second.first;
     marker.name = found->second.second;
   }
+}
+
+double rate_from_stamps(std::vector<std::int64_t> stamps, bool fixed) {
+  std::sort(stamps.begin(), stamps.end());
+  stamps.erase(std::unique(stamps.begin(), stamps.end()), stamps.end());
+  if (stamps.size() < 2) return 0.0;
+  if (!fixed) {
+    return static_cast<double>(stamps.size() - 1) * 1e9 / static_cast<double>(stamps.back() - stamps.front());
+  }
+  std::vector<std::int64_t> intervals;
+  intervals.reserve(stamps.size() - 1);
+  for (std::size_t i = 1; i < stamps.size(); ++i) intervals.push_back(stamps[i] - stamps[i - 1]);
+  const auto middle = intervals.begin() + static_cast<std::ptrdiff_t>(intervals.size() / 2);
+  std::nth_element(intervals.begin(), middle, intervals.end());
+  return 1e9 / static_cast<double>(*middle);
 }
 
 }  // namespace panoptes::client::detail

@@ -52,6 +52,11 @@ std::optional<std::vector<Stroke>> to_strokes(const msg::StrokeEvents& message, 
 std::optional<ChainUpdate> to_chain_update(const msg::ChainFrame& message, std::int64_t receive_ns,
                                            std::string& error);
 
+// The frame rate from frame stamps (any order; 0 with fewer than two distinct ones): `fixed`: 1 s
+// over the median interval between consecutive distinct stamps (a fixed-rate grid: exact); else the
+// number of intervals over the span.
+double rate_from_stamps(std::vector<std::int64_t> stamps, bool fixed);
+
 // ClientOptions::up_axis, else $PANOPTES_UP_AXIS, else z; a ConfigError naming the option or the
 // variable for anything but z or y.
 UpAxis choose_up_axis(const std::string& option);

@@ -295,6 +295,20 @@ TEST(Conversion, RejectsMalformedLabels) {
   EXPECT_NE(error.find("stick R.ASIS-nowhere"), std::string::npos) << error;
 }
 
+// Client::frame_rate(): a fixed-rate grid gives its rate exactly, even with a frame missing and the
+// stamps out of order; per camera frame, the mean rate (issue 34: the client can query the rate).
+TEST(Conversion, FrameRateFromStamps) {
+  std::vector<std::int64_t> grid;
+  for (std::int64_t k = 0; k < 64; ++k)
+    if (k != 20) grid.push_back(1'700'000'000'000'000'000 + k * 8'333'333 + (k % 3 == 0 ? 1 : 0));
+  std::swap(grid[3], grid[40]);
+  EXPECT_NEAR(rate_from_stamps(grid, true), 120.0, 0.00002);
+  EXPECT_EQ(rate_from_stamps({}, true), 0.0);
+  EXPECT_EQ(rate_from_stamps({5, 5}, true), 0.0);
+  const std::vector<std::int64_t> per_camera = {0, 1'000'000, 1'500'000, 4'000'000, 10'000'000};
+  EXPECT_DOUBLE_EQ(rate_from_stamps(per_camera, false), 400.0);
+}
+
 TEST(FrameSequence, CountsGapsAndRestarts) {
   FrameSequence sequence;
   EXPECT_EQ(sequence.observe(100).missed, 0U);  // joined late: not missed

@@ -257,6 +257,14 @@ void bind_health(py::module_& m) {
       .def("__repr__", [](const client::CameraHealth& c) {
         return "<panoptes.CameraHealth " + c.camera_id + (c.live ? " live" : " lost") + ">";
       });
+  py::class_<client::FrameRate>(m, "FrameRate", "The estimator's frame rate as its frames' stamps show it.")
+      .def_readonly("fixed", &client::FrameRate::fixed, "the newest frame was a fixed-rate frame (bool)")
+      .def_readonly("hz", &client::FrameRate::hz,
+                    "fixed: the grid's rate (median stamp interval); else the mean rate of the frames; "
+                    "0 before two frames")
+      .def("__repr__", [](const client::FrameRate& r) {
+        return "<panoptes.FrameRate " + std::to_string(r.hz) + " Hz" + (r.fixed ? " fixed>" : ">");
+      });
   py::class_<client::EstimatorHealth>(m, "EstimatorHealth", "The cameras in the estimator's latest status.")
       .def_readonly("received", &client::EstimatorHealth::received, "False until the first status arrived")
       .def_readonly("age_s", &client::EstimatorHealth::age_s, "seconds since that status arrived")

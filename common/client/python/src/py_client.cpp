@@ -272,6 +272,10 @@ client::Stats PyClient::stats() const {
   return client_->stats();
 }
 
+client::FrameRate PyClient::frame_rate() const {
+  return client_->frame_rate();
+}
+
 client::EstimatorHealth PyClient::estimator_health() const {
   return client_->estimator_health();
 }
@@ -420,6 +424,8 @@ yet; status_text() says why) or when the client is closed. Ctrl-C interrupts the
            "status_text() -> str: 'receiving (240 frames/s)', 'no data for 3.2 s (last frame 1234)', "
            "'closed', ...")
       .def("stats", bound(&PyClient::stats), "stats() -> Stats: counters since the client was opened")
+      .def("frame_rate", bound(&PyClient::frame_rate),
+           "frame_rate() -> FrameRate: the rate the estimator publishes frames at (fixed, hz)")
       .def("estimator_health", bound(&PyClient::estimator_health),
            "estimator_health() -> EstimatorHealth: the cameras as the estimator's latest status reports them")
       .def_property_readonly("profile_file", bound(&PyClient::profile_file),

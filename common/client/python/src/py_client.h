@@ -51,6 +51,7 @@ class PyClient {
   std::string status_text() const;
   client::Stats stats() const;
   client::EstimatorHealth estimator_health() const;
+  client::FrameRate frame_rate() const;
   std::string profile_file() const;
   int domain_id() const;
   std::string up_axis() const;

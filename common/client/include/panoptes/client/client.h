@@ -287,6 +287,15 @@ struct Stats {
   std::string last_error;  // why the last malformed sample was ignored, or the last callback's exception
 };
 
+// The estimator's frame rate as its frames' stamps show it (docs/frames.md). With
+// `estimator_node --frames fixed` the frames lie on a uniform grid of instants and `hz` is that
+// grid's rate (the median interval of the last 64 frames' stamps, exact to their nanoseconds);
+// with one frame per processed camera frame it is the mean rate of those frames.
+struct FrameRate {
+  bool fixed = false;  // the newest frame was a fixed-rate frame (no source camera)
+  double hz = 0.0;     // 0 before two frames arrived
+};
+
 // One camera as the estimator sees it (rt/panoptes/estimator_status; docs/clients.md, "Camera health").
 struct CameraHealth {
   std::string camera_id;
@@ -368,6 +377,8 @@ class PANOPTES_CLIENT_API Client {
   // the first map arrived or when the estimator labels none.
   std::vector<SubjectDescription> subject_descriptions() const;
 
+  // The rate the estimator publishes frames at (see FrameRate).
+  FrameRate frame_rate() const;
   // A frame arrived within stale_after.
   bool connected() const;
   // "receiving (240 frames/s)", "no data for 3.2 s (last frame 1234)" or, before the first frame,
