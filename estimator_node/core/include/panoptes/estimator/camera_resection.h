@@ -14,7 +14,7 @@
 #include "panoptes/camera_model.h"
 #include "panoptes/geometry.h"
 
-namespace panoptes::calib {
+namespace panoptes::estimator {
 
 // One monitored frame of the camera: where the tracks the other cameras determine were at its
 // stamp, and the blobs it saw. Which blob is which track is not known (a bump moves them all).
@@ -63,4 +63,4 @@ struct ResectionResult {
 ResectionResult resect_camera(const CameraModel& old_model, const std::vector<ResectionSample>& samples,
                               const ResectionOptions& options = {});
 
-}  // namespace panoptes::calib
+}  // namespace panoptes::estimator

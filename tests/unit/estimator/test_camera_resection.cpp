@@ -10,9 +10,9 @@
 
 #include <gtest/gtest.h>
 
-#include "panoptes/calib/camera_resection.h"
+#include "panoptes/estimator/camera_resection.h"
 
-namespace panoptes::calib {
+namespace panoptes::estimator {
 namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
@@ -115,4 +115,4 @@ TEST(CameraResection, TooLittleEvidenceIsRefusedWithTheReason) {
 }
 
 }  // namespace
-}  // namespace panoptes::calib
+}  // namespace panoptes::estimator

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "panoptes/calib/camera_resection.h"
+#include "panoptes/estimator/camera_resection.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,7 +14,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
-namespace panoptes::calib {
+namespace panoptes::estimator {
 
 namespace {
 
@@ -242,4 +242,4 @@ ResectionResult resect_camera(const CameraModel& old_model, const std::vector<Re
   return result;
 }
 
-}  // namespace panoptes::calib
+}  // namespace panoptes::estimator
