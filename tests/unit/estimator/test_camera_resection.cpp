@@ -5,6 +5,7 @@
 // noise), bumped by 0.5, 2 and 5 degrees about an axis across the image plane and by 5 mm; the pose
 // is recovered from the old pose and the samples alone.
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
