@@ -280,7 +280,7 @@ TEST(CalibrationHealth, BumpedCameraIsQuarantinedWithinTwoSecondsAndTrackingHold
 // back; the corrected pose is the bumped truth within 0.05 degrees and 5 mm.
 TEST(CalibrationHealth, CorrectModeBringsABumpedCameraBack) {
   Scene scene = walk8(20.0, 8);
-  const auto& cam3 = scene.calibration().cameras.at(3);
+  const CameraCalibration cam3 = scene.calibration().cameras.at(3);  // a copy: calibration() returns by value
   ASSERT_TRUE(cam3.T_world_cam.has_value());
   const RigidTransform bump = bump_of(2.0, 5.0);
   const RigidTransform truth = *cam3.T_world_cam * bump;  // the simulator's T_world_cam · bump
