@@ -290,8 +290,8 @@ void LiveEstimator::apply_corrections() {
           in_use_, change_because(c.camera_id + " corrected after a bump (continuous calibration)",
                                   {c.camera_id}, std::numeric_limits<double>::quiet_NaN(), c.result.rms_px));
       log("calibration " + c.camera_id + ": written to " + options_.calibration_file + " as version " +
-          std::to_string(version.version) + " (estimator_node calibrate revert " +
-          std::to_string(version.version - 1) + " undoes it)");
+          std::to_string(version.version) + " (estimator_node calibrate revert --calibration " +
+          options_.calibration_file + " --version " + std::to_string(version.version - 1) + " undoes it)");
     } catch (const std::exception& e) {
       log("calibration " + c.camera_id + ": the correction is in use but was not written to " +
           options_.calibration_file + ": " + e.what());
