@@ -501,15 +501,13 @@ void Tracker::Impl::apply_correction(int camera, TimeNs stamp, const ResectionRe
   correction.after = result.T_world_cam;
   correction.result = result;
   *models[camera] = CameraModel(models[camera]->intrinsics(), result.T_world_cam);
-  // The model object stays (pointers stay valid); what was derived from it is made again, and the
-  // rewind history, whose frames were applied with the old pose, is dropped.
+  // The model object stays (pointers stay valid); what the initiator derived from it is made
+  // again. The rewind history stays: this runs inside apply() on one of its entries, and the
+  // camera's frames in it were withheld (quarantined) anyway; it is released only a window later,
+  // past the rewind horizon.
   std::vector<const CameraModel*> pointers;
   for (const auto& model : models) pointers.push_back(model.get());
   core.initiator.set_cameras(pointers);
-  history.clear();
-  checkpoints.clear();
-  recent.clear();
-  history_base = 0;
   monitor.restart(camera);
   resection_samples[camera].clear();
   corrections.push_back(std::move(correction));
