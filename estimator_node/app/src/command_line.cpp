@@ -64,9 +64,10 @@ struct SettingsFlags {
     bind(app.add_option("--continuous-calibration", tracker.calibration.mode,
                         "watch each camera's residuals against the tracks the others determine; detect: "
                         "stop fusing a camera whose residuals are significantly biased (a bump) until they "
-                        "are not; off: do not watch; correct (re-estimate its pose): not yet "
+                        "are not; correct: as detect, and re-estimate the quarantined camera's pose from the "
+                        "tracks, apply it when well determined and bring the camera back; off: do not watch "
                         "(docs/continuous_calibration.md)")
-             ->check(CLI::Validator(session::check_continuous_calibration, "off|detect")),
+             ->check(CLI::Validator(session::check_continuous_calibration, "off|detect|correct")),
          [this](auto& c) { c.tracker.calibration.mode = values.tracker.calibration.mode; });
     bind(app.add_option("--confirm-cameras", tracker.confirm_cameras,
                         "distinct cameras that must see a new track before it is published")

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -19,6 +21,7 @@
 
 #include "panoptes/calibration.h"
 #include "panoptes/calibration_file.h"
+#include "panoptes/calibration_history.h"
 #include "panoptes/dds/bus.h"
 #include "panoptes/dds/convert.h"
 #include "panoptes/dds/time_sync.h"
@@ -146,6 +149,9 @@ class LiveEstimator {
   void publish_labels_if_changed();
   // --subjects: each marker's subject and name in a frame's output (rt/markers carries them).
   void name_markers(session::FrameOutput& output) const;
+  // --continuous-calibration correct: each camera pose the tracker corrected is logged, becomes the
+  // calibration in use (rt/panoptes/calibration) and, with a calibration file, a new version of it.
+  void apply_corrections();
   void publish_chains(const FeatureFrame& frame);
 
   const LiveOptions& options_;
@@ -271,6 +277,37 @@ void LiveEstimator::update(std::vector<FeatureFrame>& due) {
     publish_fixed_frame();        // an instant that fell due during this update goes out before the next
     dequeued_ns = wall_now_ns();  // the next frame's update starts now
   });
+  apply_corrections();
+}
+
+void LiveEstimator::apply_corrections() {
+  const auto corrections = tracker_.take_calibration_corrections();
+  if (corrections.empty()) return;
+  for (const auto& c : corrections) {
+    char text[240];
+    std::snprintf(text, sizeof text,
+                  "calibration %s: pose corrected from the tracks the other cameras see: turned %.3f deg, "
+                  "moved %.1f mm (%zu blobs on tracks, %.2f px RMS)",
+                  c.camera_id.c_str(), c.result.rotation_change_deg, c.result.translation_change_mm,
+                  c.result.inliers, c.result.rms_px);
+    log(text);
+    for (auto& camera : in_use_.cameras)
+      if (camera.id == c.camera_id) camera.T_world_cam = c.after;
+    if (options_.calibration_file.empty()) continue;
+    try {
+      CalibrationHistory history(options_.calibration_file);
+      const CalibrationVersion version = history.record(
+          in_use_, change_because(c.camera_id + " corrected after a bump (continuous calibration)",
+                                  {c.camera_id}, std::numeric_limits<double>::quiet_NaN(), c.result.rms_px));
+      log("calibration " + c.camera_id + ": written to " + options_.calibration_file + " as version " +
+          std::to_string(version.version) + " (estimator_node calibrate revert --calibration " +
+          options_.calibration_file + " --version " + std::to_string(version.version - 1) + " undoes it)");
+    } catch (const std::exception& e) {
+      log("calibration " + c.camera_id + ": the correction is in use but was not written to " +
+          options_.calibration_file + ": " + e.what());
+    }
+  }
+  publish_calibration();
 }
 
 void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {

@@ -12,17 +12,14 @@
 namespace panoptes::estimator {
 
 const char* to_string(CalibrationMode mode) {
-  return mode == CalibrationMode::kOff ? "off" : "detect";
+  return mode == CalibrationMode::kOff ? "off" : mode == CalibrationMode::kDetect ? "detect" : "correct";
 }
 
 CalibrationMode parse_calibration_mode(const std::string& text, const std::string& key) {
   if (text == "off") return CalibrationMode::kOff;
   if (text == "detect") return CalibrationMode::kDetect;
-  if (text == "correct") {
-    throw ConfigError("continuous calibration", key,
-                      "correct is not implemented yet (issue 36 item 3); use detect or off");
-  }
-  throw ConfigError("continuous calibration", key, "expected off or detect, got '" + text + "'");
+  if (text == "correct") return CalibrationMode::kCorrect;
+  throw ConfigError("continuous calibration", key, "expected off, detect or correct, got '" + text + "'");
 }
 
 const char* to_string(CalibrationState state) {
@@ -182,6 +179,20 @@ std::string describe(const ResidualStats& s, const char* where) {
 }
 
 }  // namespace
+
+void CalibrationMonitor::restart(int camera_index) {
+  PerCamera& camera = cameras_.at(camera_index);
+  camera.window.clear();
+  camera.whole = Sums{};
+  for (auto& region : camera.regions) region = Sums{};
+  camera.last_sample.clear();
+  camera.predictions.clear();
+  camera.seen = 0;
+  camera.blob_counts.clear();
+  camera.blobs = 0;
+  camera.explained = 0;
+  camera.calm_since_ns = 0;
+}
 
 bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
   PerCamera& camera = cameras_.at(camera_index);

@@ -127,6 +127,11 @@ struct Tracker::Impl {
   // Not part of Core: a rewind does not undo what the residuals showed (replays add none).
   CalibrationMonitor monitor;
   std::vector<std::unique_ptr<CameraModel>> models;  // by camera index; pointers stay valid
+  // Mode correct: per camera, the monitored frames collected while it is quarantined, when a
+  // resection was last tried, and the corrections not yet taken by the session.
+  std::vector<std::deque<ResectionSample>> resection_samples;
+  std::vector<TimeNs> resection_tried_ns;
+  std::vector<CalibrationCorrection> corrections;
   std::vector<std::string> camera_ids;
   std::map<std::string, int> camera_index;
   Core core;
@@ -296,6 +301,11 @@ struct Tracker::Impl {
   // The frame's residuals against the confirmed tracks the other cameras determine, to the
   // calibration monitor (docs/continuous_calibration.md, "Residuals").
   void monitor_frame(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels);
+  // Mode correct, a quarantined camera's monitored frame: collected; with enough, its pose is
+  // estimated again and, when well determined, applied (docs/continuous_calibration.md).
+  void collect_for_resection(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
+                             const std::vector<Eigen::Vector2d>& pixels);
+  void apply_correction(int camera, TimeNs stamp, const ResectionResult& result);
   void associate(Entry& entry, const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used,
                  bool replaying);
   // A replayed frame's previous association, checked against today's states: every pair must
@@ -406,6 +416,7 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
   std::vector<Eigen::Vector2d> predicted_pixels;  // every live track in view, for isolation
   std::vector<std::size_t> candidates;            // indices into core.tracks
   std::vector<std::size_t> candidate_pixel;       // ... and into predicted_pixels
+  std::vector<Eigen::Vector3d> determined;        // their positions, for a correction
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
     const Eigen::Vector3d p_cam = camera.T_cam_world().apply(track.position_at(stamp));
@@ -422,9 +433,12 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
         ++others;
     }
     if (others < o.min_other_cameras) continue;
+    determined.push_back(track.position_at(stamp));
     candidates.push_back(i);
     candidate_pixel.push_back(predicted_pixels.size() - 1);
   }
+  if (calibration_mode == CalibrationMode::kCorrect && monitor.quarantined(entry.camera))
+    collect_for_resection(entry.camera, stamp, determined, pixels);
   // The frame's blobs near some live track's prediction (a bumped camera's are near none).
   std::size_t explained = 0;
   const double search2 = o.search_px * o.search_px;
@@ -455,6 +469,48 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
                   pixels[nearest.index] - projection->pixel);
     }
   }
+}
+
+void Tracker::Impl::collect_for_resection(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
+                                          const std::vector<Eigen::Vector2d>& pixels) {
+  const auto& o = options.calibration;
+  if (resection_samples.size() < models.size()) {
+    resection_samples.resize(models.size());
+    resection_tried_ns.resize(models.size(), 0);
+  }
+  auto& samples = resection_samples[camera];
+  ResectionSample sample;
+  sample.points_world = std::move(points);
+  for (const Eigen::Vector2d& pixel : pixels)
+    if (pixel.allFinite()) sample.blobs.push_back(pixel);
+  samples.push_back(std::move(sample));
+  while (samples.size() > o.resection_frames) samples.pop_front();
+  if (samples.size() < o.resection_frames || stamp - resection_tried_ns[camera] < o.resection_retry_ns)
+    return;
+  resection_tried_ns[camera] = stamp;
+  const std::vector<ResectionSample> evidence(samples.begin(), samples.end());
+  const ResectionResult result = resect_camera(*models[camera], evidence, o.resection);
+  if (result.ok) apply_correction(camera, stamp, result);
+}
+
+void Tracker::Impl::apply_correction(int camera, TimeNs stamp, const ResectionResult& result) {
+  CalibrationCorrection correction;
+  correction.camera_id = camera_ids[camera];
+  correction.stamp_ns = stamp;
+  correction.before = models[camera]->T_world_cam();
+  correction.after = result.T_world_cam;
+  correction.result = result;
+  *models[camera] = CameraModel(models[camera]->intrinsics(), result.T_world_cam);
+  // The model object stays (pointers stay valid); what the initiator derived from it is made
+  // again. The rewind history stays: this runs inside apply() on one of its entries, and the
+  // camera's frames in it were withheld (quarantined) anyway; it is released only a window later,
+  // past the rewind horizon.
+  std::vector<const CameraModel*> pointers;
+  for (const auto& model : models) pointers.push_back(model.get());
+  core.initiator.set_cameras(pointers);
+  monitor.restart(camera);
+  resection_samples[camera].clear();
+  corrections.push_back(std::move(correction));
 }
 
 std::vector<TrackedPoint> Tracker::Impl::confirmed_points(TimeNs stamp_ns) const {
@@ -971,6 +1027,17 @@ std::vector<FrameOutcome> Tracker::process_batch(std::span<const FeatureFrame> f
 std::vector<CameraCalibrationHealth> Tracker::calibration_health() const {
   if (impl_->calibration_mode == CalibrationMode::kOff) return {};
   return impl_->monitor.health();
+}
+
+std::vector<CalibrationCorrection> Tracker::take_calibration_corrections() {
+  std::vector<CalibrationCorrection> out = std::move(impl_->corrections);
+  impl_->corrections.clear();
+  return out;
+}
+
+const CameraModel* Tracker::camera_model(const std::string& camera_id) const {
+  const auto found = impl_->camera_index.find(camera_id);
+  return found == impl_->camera_index.end() ? nullptr : impl_->models[found->second].get();
 }
 
 bool Tracker::camera_quarantined(const std::string& camera_id) const {

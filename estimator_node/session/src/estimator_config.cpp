@@ -162,9 +162,8 @@ std::string check_frames_mode(const std::string& mode) {
 }
 
 std::string check_continuous_calibration(const std::string& mode) {
-  if (mode == "off" || mode == "detect") return "";
-  if (mode == "correct") return "correct is not implemented yet (issue 36 item 3): use detect or off";
-  return "'" + mode + "': must be off or detect";
+  if (mode == "off" || mode == "detect" || mode == "correct") return "";
+  return "'" + mode + "': must be off, detect or correct";
 }
 
 namespace {
@@ -274,7 +273,11 @@ void visit_bodies(Fields& f, estimator::BodyTrackerOptions& o) {
 template <class Fields>
 void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
   f.text("mode", o.mode, check_continuous_calibration,
-         "off | detect: quarantine a camera whose residuals are biased (correct: not yet)");
+         "off | detect: quarantine a camera whose residuals are biased | correct: and re-estimate its pose");
+  f.integer("resection_frames", o.resection_frames, 6, 1 << 16,
+            "correct: monitored frames of a quarantined camera its new pose is estimated from");
+  f.integer("resection_retry_ns", o.resection_retry_ns, 0, kHourNs,
+            "correct: not determined: tried again after");
   f.integer("window_ns", o.window_ns, 1'000'000, kHourNs, "residuals this recent are judged");
   f.integer("sample_interval_ns", o.sample_interval_ns, 0, kHourNs,
             "one residual per track and camera this often");

@@ -15,21 +15,28 @@
 
 #include <Eigen/Core>
 
+#include "panoptes/estimator/camera_resection.h"
 #include "panoptes/time.h"
 
 namespace panoptes::estimator {
 
 // What the tracker does about a camera found biased: nothing (no monitoring), or quarantine it
-// (stop fusing its blobs until its residuals are unbiased again). `correct` (re-estimate its pose
-// from the tracks, issue 36 item 3) is not implemented yet and is refused.
-enum class CalibrationMode : std::uint8_t { kOff = 0, kDetect = 1 };
+// (stop fusing its blobs until its residuals are unbiased again).
+// kCorrect: as kDetect, and a quarantined camera's pose is estimated again from the tracks the
+// others determine and applied when well determined (camera_resection.h).
+enum class CalibrationMode : std::uint8_t { kOff = 0, kDetect = 1, kCorrect = 2 };
 const char* to_string(CalibrationMode mode);
-// "off" or "detect"; throws ConfigError naming `key` otherwise (`correct`: not implemented yet).
+// "off", "detect" or "correct"; throws ConfigError naming `key` otherwise.
 CalibrationMode parse_calibration_mode(const std::string& text,
                                        const std::string& key = "continuous_calibration");
 
 struct CalibrationHealthOptions {
-  std::string mode = "detect";             // off | detect | correct (parse_calibration_mode)
+  std::string mode = "detect";  // off | detect | correct (parse_calibration_mode)
+  // correct: the quarantined camera's pose from this many monitored frames (one per
+  // sample_interval_ns), tried again at most every resection_retry_ns while it is not determined.
+  std::size_t resection_frames = 25;
+  TimeNs resection_retry_ns = 500'000'000;
+  ResectionOptions resection;
   TimeNs window_ns = 1'000'000'000;        // residuals this recent are judged
   TimeNs sample_interval_ns = 40'000'000;  // one residual per track and camera this often (decorrelation)
   std::size_t min_samples = 30;            // a region (or the camera) with fewer is not judged
@@ -122,6 +129,9 @@ class CalibrationMonitor {
   // release it. Returns whether its state changed.
   bool judge(int camera, TimeNs stamp_ns);
   bool quarantined(int camera) const;
+  // The camera's pose changed (a correction): its window starts again, so that it is judged (and
+  // released) on residuals of the new pose only; its state and counters stay.
+  void restart(int camera);
   void note_withheld(int camera, std::size_t blobs);
   const CameraCalibrationHealth& health(int camera) const { return cameras_.at(camera).health; }
   std::vector<CameraCalibrationHealth> health() const;

@@ -110,6 +110,16 @@ struct PredictedWindow2D {
 
 enum class FrameOutcome { kProcessed, kLateReplayed, kTooLate, kUnknownCamera };
 
+// A quarantined camera's pose corrected from the tracks (--continuous-calibration correct,
+// docs/continuous_calibration.md): the tracker applied it; the session records and publishes it.
+struct CalibrationCorrection {
+  std::string camera_id;
+  TimeNs stamp_ns = 0;    // the monitored frame that completed the evidence
+  RigidTransform before;  // T_world_cam
+  RigidTransform after;
+  ResectionResult result;
+};
+
 class Tracker {
  public:
   explicit Tracker(const TrackerOptions& options = {});
@@ -171,6 +181,10 @@ class Tracker {
   std::vector<CameraCalibrationHealth> calibration_health() const;
   // Whether `camera_id`'s blobs are currently withheld from fusion (quarantined).
   bool camera_quarantined(const std::string& camera_id) const;
+  // The corrections applied since the last call (mode correct), oldest first.
+  std::vector<CalibrationCorrection> take_calibration_corrections();
+  // The camera's model as the tracker uses it now (a correction changes it); nullptr if unknown.
+  const CameraModel* camera_model(const std::string& camera_id) const;
   const std::map<std::string, CameraCounters>& camera_counters() const { return camera_counters_; }
   const TrackerOptions& options() const;
 
