@@ -231,6 +231,7 @@ const figureHelp = {
   clock: ['clock', "the camera clock's offset (ms) and drift (ppm) against the estimator's time base"],
   used: ['used (p99)', "share of this camera's frames the estimator used in its update (the rest came too late or were dropped), and the 99th percentile of their stamp-to-update latency"],
   lost: ['estimator: lost N s', 'no frame from this camera has reached the estimator for N seconds (more than its node.camera_lost_after_s): it is not tracking with it'],
+  calibration: ['calibration', "the estimator's check of this camera against the tracks the other cameras see (docs/continuous_calibration.md): ok, small bias (still used), quarantined (its blobs are not used: bumped or moved), unknown (too few tracks to judge); hover for the reason"],
   refused: ['2nd writer refused', "frames another camera node sent under this camera's id: the estimator refuses them (it keeps the first writer)"],
   threshold: ['threshold', 'the blob threshold the camera reports using (0-255)'],
   error: ['last error', "the camera node's last error"],
@@ -249,6 +250,13 @@ function estimatorCameras(e) {
   return text;
 }
 
+// A camera's calibration health as a light and a word; the reason is the figure's title (hover).
+const calibrationLights = { ok: '🟢 ok', small_bias: '🟡 small bias', quarantined: '🔴 quarantined', unknown: '⚪ unknown' };
+function calibrationLight(c) {
+  const text = calibrationLights[c.state] || c.state;
+  return c.reason ? `${text} (${c.reason})` : text;
+}
+
 function cardFigures(camera, status, usage) {
   const used = usage.utilisation === undefined ? '—' : (100 * usage.utilisation).toFixed(0) + '%';
   return [
@@ -260,6 +268,7 @@ function cardFigures(camera, status, usage) {
     usage.state === 'lost' ? [` · estimator: lost ${fixed(usage.since_last_frame_s, 1)} s`, 'lost']
       : [` · used ${used} (p99 ${fixed(usage.latency_p99_ms, 1)} ms)`, 'used'],
     ...(usage.refused_frames ? [[` · 2nd writer refused (${usage.refused_frames} frames)`, 'refused']] : []),
+    ...(usage.calibration ? [[` · calibration ${calibrationLight(usage.calibration)}`, 'calibration']] : []),
     [` · threshold ${status.threshold ?? '—'}`, 'threshold'],
     ...(status.last_error ? [[` · last error: ${status.last_error}`, 'error']] : []),
   ].map(([text, key]) => [text, figureHelp[key][1]]);

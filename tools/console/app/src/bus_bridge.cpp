@@ -77,9 +77,19 @@ EstimatorRecord estimator_of(const msg::EstimatorStatus& status) {
   out.tracks_unobserved = status.tracks_unobserved();
   static constexpr const char* kStates[] = {"live", "lost", "unknown"};
   for (const msg::CameraUsage& usage : status.cameras()) {
-    out.cameras[usage.camera_id()] = {usage.utilisation(), usage.latency_p99_ms(),
-                                      kStates[std::min<unsigned>(usage.state(), 2)],
-                                      usage.since_last_frame_s(), usage.refused_frames()};
+    CameraUsageRecord& record = out.cameras[usage.camera_id()];
+    record.utilisation = usage.utilisation();
+    record.latency_p99_ms = usage.latency_p99_ms();
+    record.state = kStates[std::min<unsigned>(usage.state(), 2)];
+    record.since_last_frame_s = usage.since_last_frame_s();
+    record.refused_frames = usage.refused_frames();
+  }
+  static constexpr const char* kCalibrationStates[] = {"unknown", "ok", "small_bias", "quarantined"};
+  for (const msg::CameraCalibrationHealth& health : status.calibration()) {
+    CameraUsageRecord& record = out.cameras[health.camera_id()];
+    record.calibration = kCalibrationStates[std::min<unsigned>(health.state(), 3)];
+    record.calibration_reason = health.reason();
+    record.quarantines = health.quarantines();
   }
   return out;
 }

@@ -224,6 +224,11 @@ json CameraModel::camera_json(const std::string& id, const Camera& camera, TimeN
                       {"state", found->second.state},
                       {"since_last_frame_s", round_to(found->second.since_last_frame_s, 1)},
                       {"refused_frames", found->second.refused_frames}};
+    if (!found->second.calibration.empty()) {
+      entry["usage"]["calibration"] = {{"state", found->second.calibration},
+                                       {"reason", found->second.calibration_reason},
+                                       {"quarantines", found->second.quarantines}};
+    }
   }
   return entry;
 }

@@ -120,6 +120,11 @@ struct CameraUsageRecord {
   std::string state = "unknown";     // the estimator's view: "live", "lost" or "unknown"
   double since_last_frame_s = -1;    // wall time since its last frame reached the estimator
   std::uint64_t refused_frames = 0;  // from a second writer claiming the camera's id
+  // Its calibration health (docs/continuous_calibration.md): "unknown", "ok", "small_bias" or
+  // "quarantined", why, and how often it was quarantined; empty with --continuous-calibration off.
+  std::string calibration;
+  std::string calibration_reason;
+  std::uint32_t quarantines = 0;
 };
 
 struct EstimatorRecord {
