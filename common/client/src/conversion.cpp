@@ -342,12 +342,12 @@ std::optional<LabelMap> to_label_map(const msg::MarkerLabels& message, std::stri
     }
     for (const msg::TrackLabel& label : subject.labels()) {
       if (known.count(label.marker()) == 0) {
-        error = "subject '" + subject.name() + "': track " + std::to_string(label.track()) + " named '" +
+        error = "subject '" + subject.name() + "': track " + std::to_string(label.track_id()) + " named '" +
                 label.marker() + "', not one of its markers";
         return std::nullopt;
       }
-      if (!map.names.emplace(label.track(), std::make_pair(subject.name(), label.marker())).second) {
-        error = "track " + std::to_string(label.track()) + " named twice";
+      if (!map.names.emplace(label.track_id(), std::make_pair(subject.name(), label.marker())).second) {
+        error = "track " + std::to_string(label.track_id()) + " named twice";
         return std::nullopt;
       }
     }

@@ -115,7 +115,7 @@ msg::MarkerLabels to_labels_message(const session::LabelStage& stage) {
     for (const auto& label : stage.map()) {
       if (label.subject != model.subject) continue;
       msg::TrackLabel named;
-      named.track(label.track);
+      named.track_id(label.track);
       named.marker(label.marker);
       subject.labels().push_back(std::move(named));
     }

@@ -237,10 +237,10 @@ msg::MarkerLabels good_labels() {
   stick.to("L.ASIS");
   s1.sticks().push_back(stick);
   msg::TrackLabel named;
-  named.track(9);
+  named.track_id(9);
   named.marker("L.ASIS");
   s1.labels().push_back(named);
-  named.track(11);
+  named.track_id(11);
   named.marker("S2");
   s1.labels().push_back(named);
   labels.subjects().push_back(s1);

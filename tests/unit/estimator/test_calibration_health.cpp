@@ -100,7 +100,10 @@ TEST(CalibrationHealth, BlindCameraNeedsUnexplainedBlobs) {
     monitor.set_cameras({"c0"}, {Eigen::Vector2d(1280, 1024)});
     std::int64_t id = 0;
     for (TimeNs t = kEpoch; t < kEpoch + 2'000'000'000; t += 10'000'000) {
-      for (int k = 0; k < 4; ++k) monitor.add_prediction(0, ++id, t, k == 0 && id % 40 == 1);
+      for (int k = 0; k < 4; ++k) {
+        ++id;
+        monitor.add_prediction(0, id, t, k == 0 && id % 40 == 1);
+      }
       monitor.add_blobs(0, t, 10, explained_of_ten);
       monitor.judge(0, t);
     }

@@ -85,7 +85,7 @@ void restore_quality(ExportRecords& records, const RecordingContents& contents) 
 void use_labels(const msg::MarkerLabels& labels, TrackNames& names, std::vector<SubjectOrder>& order) {
   names.clear();
   for (const auto& subject : labels.subjects()) {
-    for (const auto& label : subject.labels()) names[label.track()] = {subject.name(), label.marker()};
+    for (const auto& label : subject.labels()) names[label.track_id()] = {subject.name(), label.marker()};
     const auto known = std::find_if(order.begin(), order.end(),
                                     [&](const SubjectOrder& o) { return o.subject == subject.name(); });
     SubjectOrder entry{subject.name(), {subject.markers().begin(), subject.markers().end()}};

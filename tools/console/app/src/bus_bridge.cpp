@@ -242,7 +242,7 @@ BusBridge::BusBridge(dds::Bus& bus, ConsoleState& state) : impl_(std::make_uniqu
       record.name = subject.name();
       for (const msg::LabelStick& stick : subject.sticks())
         record.sticks.push_back({stick.from(), stick.to()});
-      for (const msg::TrackLabel& label : subject.labels()) record.names[label.track()] = label.marker();
+      for (const msg::TrackLabel& label : subject.labels()) record.names[label.track_id()] = label.marker();
       subjects.push_back(std::move(record));
     }
     state.on_labels(std::move(subjects));
