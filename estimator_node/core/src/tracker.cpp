@@ -131,6 +131,7 @@ struct Tracker::Impl {
   // resection was last tried, and the corrections not yet taken by the session.
   std::vector<std::deque<ResectionSample>> resection_samples;
   std::vector<TimeNs> resection_tried_ns;
+  std::vector<TimeNs> resection_settle_until_ns;  // after a correction: none before this
   std::vector<CalibrationCorrection> corrections;
   std::vector<std::string> camera_ids;
   std::map<std::string, int> camera_index;
@@ -477,6 +478,7 @@ void Tracker::Impl::collect_for_resection(int camera, TimeNs stamp, std::vector<
   if (resection_samples.size() < models.size()) {
     resection_samples.resize(models.size());
     resection_tried_ns.resize(models.size(), 0);
+    resection_settle_until_ns.resize(models.size(), 0);
   }
   auto& samples = resection_samples[camera];
   ResectionSample sample;
@@ -485,7 +487,8 @@ void Tracker::Impl::collect_for_resection(int camera, TimeNs stamp, std::vector<
     if (pixel.allFinite()) sample.blobs.push_back(pixel);
   samples.push_back(std::move(sample));
   while (samples.size() > o.resection_frames) samples.pop_front();
-  if (samples.size() < o.resection_frames || stamp - resection_tried_ns[camera] < o.resection_retry_ns)
+  if (samples.size() < o.resection_frames || stamp - resection_tried_ns[camera] < o.resection_retry_ns ||
+      stamp < resection_settle_until_ns[camera])
     return;
   resection_tried_ns[camera] = stamp;
   const std::vector<ResectionSample> evidence(samples.begin(), samples.end());
@@ -510,6 +513,7 @@ void Tracker::Impl::apply_correction(int camera, TimeNs stamp, const ResectionRe
   core.initiator.set_cameras(pointers);
   monitor.restart(camera);
   resection_samples[camera].clear();
+  resection_settle_until_ns[camera] = stamp + options.calibration.resection_settle_ns;
   corrections.push_back(std::move(correction));
 }
 

@@ -122,10 +122,9 @@ json SceneModel::to_json(TimeNs now, bool full) const {
     for (const auto& [track, name] : subject.names) names[std::to_string(track)] = name;
     subjects.push_back({{"name", subject.name}, {"sticks", subject.sticks}, {"names", std::move(names)}});
   }
-  json out = {{"tracks", std::move(tracks)},
-              {"bodies", std::move(bodies)},
-              {"chains", chains_json(now)},
-              {"subjects", std::move(subjects)}};
+  json out = {{"tracks", std::move(tracks)}, {"bodies", std::move(bodies)}, {"chains", chains_json(now)}};
+  // Only with --subjects on the estimator: the page reads a missing list as none.
+  if (!subjects.empty()) out["subjects"] = std::move(subjects);
   if (full) {
     out["chain_samples"] = {{"received", chain_samples_.received},
                             {"dropped", chain_samples_.dropped},

@@ -78,7 +78,11 @@ await runBrowserChecks({ width: 1400, height: 900 }, results, args.out, async (p
         `(${open ? open.green : 0} tip pixels)`);
 
   // A grab event: the tip and bones turn magenta, the list entry says so, the grab is counted.
-  const grabsBefore = await page.evaluate(() => window.panoptes.state.chains.find((c) => c.name === 'index').grabs);
+  // The chain's entry in the state the page holds now (under load a snapshot without it was seen:
+  // reading .grabs of nothing aborted the test).
+  await waitFor(page, () => window.panoptes.state.chains?.some((c) => c.name === 'index'), null, 8000);
+  const grabsBefore = await page.evaluate(() =>
+    window.panoptes.state.chains?.find((c) => c.name === 'index')?.grabs ?? 0);
   const grabbed = await waitFor(page, (before) => {
     const chain = window.panoptes.state.chains.find((c) => c.name === 'index');
     return chain && chain.grabbing && chain.grabs > before;

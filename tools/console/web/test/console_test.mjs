@@ -139,7 +139,9 @@ try {
   results.commands.threshold_max_ms = await sentAt('set_threshold', '255');
   const gone = await blobsOf('cam0', 'none');
   const goneMs = gone ? await page.evaluate(() => window.panoptes.seenAt) - results.commands.threshold_max_ms : Infinity;
-  check(goneMs < 1000, `threshold 255: cam0's blobs gone in the page ${goneMs} ms after the command was sent`);
+  // Quiet: 50-60 ms. Under a parallel build on both cores (issue 37's loaded run) 1034 ms was seen;
+  // the bound is what a loaded 2-core machine keeps, the figure goes into the results.
+  check(goneMs < 2500, `threshold 255: cam0's blobs gone in the page ${goneMs} ms after the command was sent`);
   const applied = await waitFor(page, () => document.querySelector('.card[data-camera="cam0"] .result').classList.contains('applied'), null, 12000);
   check(applied, `the card shows the camera's acknowledgement: "${await card0.locator('.result').textContent()}"`);
   await card0.screenshot({ path: join(args.shots, 'console_threshold.png') });
@@ -149,7 +151,7 @@ try {
   const tabShows = await waitFor(tab, () => {
     const input = document.querySelector('.card[data-camera="cam0"] input.threshold');
     return input && input.value === '255' && input.nextElementSibling.textContent === '255';
-  }, null, 5000);
+  }, null, 15000);  // a new tab loads three.js and connects: seconds under a parallel build
   check(tabShows, `a new tab's cam0 threshold slider shows the camera's 255: ${await tab.evaluate(() =>
     document.querySelector('.card[data-camera="cam0"] input.threshold')?.value)}`);
   await tab.close();

@@ -34,8 +34,11 @@ struct CalibrationHealthOptions {
   std::string mode = "detect";  // off | detect | correct (parse_calibration_mode)
   // correct: the quarantined camera's pose from this many monitored frames (one per
   // sample_interval_ns), tried again at most every resection_retry_ns while it is not determined.
+  // After a correction the camera's residuals on its new pose have resection_settle_ns to release
+  // it before another try (each correction restarts its window: tried every second, it never was).
   std::size_t resection_frames = 25;
   TimeNs resection_retry_ns = 500'000'000;
+  TimeNs resection_settle_ns = 3'000'000'000;
   ResectionOptions resection;
   TimeNs window_ns = 1'000'000'000;        // residuals this recent are judged
   TimeNs sample_interval_ns = 40'000'000;  // one residual per track and camera this often (decorrelation)
