@@ -45,12 +45,15 @@ def main():
     parser.add_argument("labels")
     parser.add_argument("truth")
     parser.add_argument("--match-m", type=float, default=0.02)
+    parser.add_argument("--truth-shift-ns", type=int, default=0,
+                        help="added to the truth's stamps (a replay's --sim-epoch-ns minus the scene's epoch)")
     parser.add_argument("--skip-s", type=float, default=0.0, help="ignore records before this (from the first)")
     parser.add_argument("--min-right", type=float, default=None)
     parser.add_argument("--max-wrong", type=float, default=None)
     parser.add_argument("--max-return-ms", type=float, default=None)
     args = parser.parse_args()
     stamps, markers = load_truth(args.truth)
+    stamps = [stamp + args.truth_shift_ns for stamp in stamps]
     visible = right = wrong = swaps = ghost_named = 0
     first_stamp = None
     track_start, track_marker, track_named, seen_names = {}, {}, set(), set()
