@@ -38,6 +38,9 @@ expect_exit 0 "sample_client prints live frames" -- "$bin/sample_client" --frame
 grep -q "body 1 head .*tracked" "$work/last.out" && grep -q "body 2 tool" "$work/last.out" &&
   grep -q "marker .* unlabelled" "$work/last.out" && grep -q "marker .* head\[" "$work/last.out" &&
   pass "it prints bodies and labelled and unlabelled markers" || { fail "sample_client output"; head -20 "$work/last.out"; }
+rate_line=$(grep -E "^sample_client: frames at [0-9]+\.[0-9]+ Hz \((fixed rate|one per processed camera frame)\)" "$work/last.err")
+[ -n "$rate_line" ] && pass "it prints the frame rate the client measured: $rate_line" ||
+  { fail "sample_client printed no frame rate"; cat "$work/last.err"; }
 timeout 10 tail --pid="$ptz_guide" -f /dev/null
 python3 - "$work/ptz.jsonl" <<'PY' && pass "ptz_guide steered at the live body 'head' ($(wc -l <"$work/ptz.jsonl") commands)" ||
 import json, math, sys

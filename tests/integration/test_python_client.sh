@@ -71,6 +71,9 @@ plot=$!
 pids+=("$plot")
 expect_exit 0 "log_poses_csv.py logs live poses" -- "$python" "$source_dir/examples/log_poses_csv.py" --duration 3 \
   --out "$work/poses.csv"
+rate_line=$(grep -E "^log_poses_csv: frames at [0-9]+\.[0-9]+ Hz \((fixed rate|one per processed camera frame)\)" "$work/last.err")
+[ -n "$rate_line" ] && pass "log_poses_csv.py prints the frame rate the client measured: $rate_line" ||
+  { fail "log_poses_csv.py printed no frame rate"; cat "$work/last.err"; }
 wait "$plot" && [ -s "$work/tool.png" ] && grep -q "positions of 'tool' plotted" "$work/plot.err" &&
   pass "plot_body.py --save wrote a PNG ($(stat -c %s "$work/tool.png") bytes): $(cat "$work/plot.err")" ||
   { fail "plot_body.py"; cat "$work/plot.err"; }
