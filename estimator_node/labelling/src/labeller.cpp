@@ -46,7 +46,9 @@ struct Subject {
   SubjectModel model;
   std::vector<SegmentState> segments;
   std::size_t root = 0;
-  std::vector<std::size_t> order;  // breadth first from the root
+  std::vector<std::size_t> order;   // breadth first from the root
+  std::optional<double> revised_s;  // live: the last revise() search
+  int instants_since_revision = 0;  // offline
 };
 
 // One segment's tentative assignment: (marker, point) pairs and the pose they give.
@@ -186,6 +188,9 @@ struct Labeller::State {
   std::optional<double> parent_shell(const Subject& subject, std::size_t s, std::size_t m,
                                      std::size_t p) const;
   void acquire(std::size_t subject_index);
+  std::optional<Hypothesis> best_hypothesis(const Subject& subject);
+  void commit_hypothesis(std::size_t subject_index, const Hypothesis& h);
+  void revise(std::size_t subject_index);
   std::optional<Found> search_segment(const Subject& subject, std::size_t s,
                                       const std::optional<RigidTransform>& parent_pose,
                                       const Points& parent_seen) const;
@@ -739,37 +744,53 @@ bool better(const Hypothesis& a, const Hypothesis& b) {
 
 }  // namespace
 
-// A subject with no name on any track: every root candidate grown over the tree, the hypothesis that
-// explains the most markers (then the lowest cost) taken. A mirrored root puts its children where
-// there are none, so left and right come from the tree. A subject with names: each segment that
-// lost them all is searched from its parent's pose.
+// Every root candidate grown over the tree, the hypothesis that explains the most markers (then the
+// lowest cost); none below min_markers. A mirrored root puts its children where there are none, so
+// left and right come from the tree. `claimed` is as it was on return.
+std::optional<Hypothesis> Labeller::State::best_hypothesis(const Subject& subject) {
+  std::vector<Found> roots;
+  search_rigid(subject, subject.root, std::nullopt, candidates_near(subject, subject.root, std::nullopt),
+               &roots);
+  std::sort(roots.begin(), roots.end(), [](const Found& a, const Found& b) {
+    return a.pairs.size() > b.pairs.size() || (a.pairs.size() == b.pairs.size() && a.cost < b.cost);
+  });
+  if (roots.size() > options.root_hypotheses) roots.resize(options.root_hypotheses);
+  std::optional<Hypothesis> best;
+  const std::vector<char> before = claimed;
+  for (const Found& root : roots) {
+    Hypothesis h;
+    h.segments.resize(subject.segments.size());
+    for (const auto& pair : root.pairs) claimed[pair.second] = 1;
+    h.markers = root.pairs.size();
+    h.cost = root.cost;
+    h.segments[subject.root] = root;
+    grow(subject, subject.root, root.pose, h);
+    claimed = before;
+    if (!best || better(h, *best)) best = std::move(h);
+  }
+  if (!best || best->markers < options.min_markers) return std::nullopt;
+  return best;
+}
+
+// Every segment of the hypothesis named (those it left out wait), its pose the hypothesis's.
+void Labeller::State::commit_hypothesis(std::size_t subject_index, const Hypothesis& h) {
+  Subject& subject = subjects[subject_index];
+  for (std::size_t s = 0; s < h.segments.size(); ++s) {
+    SegmentState& segment = subject.segments[s];
+    segment.pose.reset();
+    if (!h.segments[s]) continue;
+    commit(subject_index, s, *h.segments[s]);
+    segment.pose = h.segments[s]->pose;
+    segment.loose = h.segments[s]->loose;
+  }
+}
+
+// A subject with no name on any track: acquired from the best hypothesis. A subject with names:
+// each segment that lost them all is searched from its parent's pose, then revise().
 void Labeller::State::acquire(std::size_t subject_index) {
   Subject& subject = subjects[subject_index];
   if (std::none_of(subject.segments.begin(), subject.segments.end(), has_track)) {
-    std::vector<Found> roots;
-    search_rigid(subject, subject.root, std::nullopt, candidates_near(subject, subject.root, std::nullopt),
-                 &roots);
-    std::sort(roots.begin(), roots.end(), [](const Found& a, const Found& b) {
-      return a.pairs.size() > b.pairs.size() || (a.pairs.size() == b.pairs.size() && a.cost < b.cost);
-    });
-    if (roots.size() > options.root_hypotheses) roots.resize(options.root_hypotheses);
-    std::optional<Hypothesis> best;
-    const std::vector<char> before = claimed;
-    for (const Found& root : roots) {
-      Hypothesis h;
-      h.segments.resize(subject.segments.size());
-      for (const auto& pair : root.pairs) claimed[pair.second] = 1;
-      h.markers = root.pairs.size();
-      h.cost = root.cost;
-      h.segments[subject.root] = root;
-      grow(subject, subject.root, root.pose, h);
-      claimed = before;
-      if (!best || better(h, *best)) best = std::move(h);
-    }
-    if (!best || best->markers < options.min_markers) return;
-    for (std::size_t s = 0; s < best->segments.size(); ++s) {
-      if (best->segments[s]) commit(subject_index, s, *best->segments[s]);
-    }
+    if (const auto best = best_hypothesis(subject)) commit_hypothesis(subject_index, *best);
     return;
   }
   for (std::size_t s : subject.order) {
@@ -782,6 +803,47 @@ void Labeller::State::acquire(std::size_t subject_index) {
     segment.pose = found->pose;
     segment.loose = found->loose;
   }
+  revise(subject_index);
+}
+
+// An acquired subject is acquired again from scratch now and then (revise_period_s live,
+// revise_period_instants offline) while unnamed mature tracks are left over: when the fresh
+// hypothesis explains at least revise_margin more of the markers seen now than the names do, it
+// replaces them all. A subject acquired while one marker of a three-marker segment was hidden
+// (Gait2392's torso without L.Acromium: no rigid fit, so neither head nor arms) took the
+// hypothesis that fitted a wrong marker there (L.Temple as L.Acromium, the soft torso's distances
+// allow it) and unlocked the subtree; its names stayed on living tracks, the head and the left arm
+// never found their places, and nothing else ever took a name from a track.
+void Labeller::State::revise(std::size_t subject_index) {
+  Subject& subject = subjects[subject_index];
+  const bool due = now_s ? (!subject.revised_s || *now_s - *subject.revised_s >= options.revise_period_s)
+                         : ++subject.instants_since_revision >= options.revise_period_instants;
+  if (!due) return;
+  std::size_t spare = 0;
+  for (std::size_t p = 0; p < claimed.size(); ++p) spare += claimed[p] == 0 && young[p] == 0 ? 1 : 0;
+  if (spare < options.revise_margin) return;
+  subject.revised_s = now_s;
+  subject.instants_since_revision = 0;
+  const std::vector<char> before = claimed;
+  std::size_t seen = 0;
+  for (const auto& segment : subject.segments) {
+    for (const auto& marker : segment.markers) {
+      if (!marker.point) continue;
+      claimed[*marker.point] = 0;
+      ++seen;
+    }
+  }
+  const auto best = best_hypothesis(subject);
+  claimed = before;
+  if (!best || best->markers < seen + options.revise_margin) return;
+  for (auto& segment : subject.segments) {
+    for (auto& marker : segment.markers) {
+      if (marker.point) claimed[*marker.point] = 0;
+      if (marker.track) labels.erase(*marker.track);
+      marker = MarkerState{};
+    }
+  }
+  commit_hypothesis(subject_index, *best);
 }
 
 Labeller::Labeller(std::vector<SubjectModel> models, LabellerOptions options)
