@@ -22,7 +22,7 @@ namespace {
 struct Score {
   double visible = 0, right = 0, wrong = 0, swaps = 0, ghosts = 0, ghosts_named = 0;
   double visible_after = 0, right_after = 0;  // from the first frame a track may be acquired on
-  double wrong_after = 0;                     // (or from Blinks::scored_from)
+  double wrong_after = 0, swaps_after = 0;    // (or from Blinks::scored_from)
   std::vector<int> returns;                   // frames until a reappearing marker has its name back
   std::map<std::string, int> unlabelled;      // marker-frames without a name, by marker
   int never_returned = 0;
@@ -60,6 +60,7 @@ void score_frame(const Labeller& labeller, const std::vector<TrackPoint>& points
       score.visible_after += 1;
       score.right_after += right ? 1 : 0;
       score.wrong_after += label && !right ? 1 : 0;
+      score.swaps_after += label && !right && label->marker == mirrored(name->second) ? 1 : 0;
     }
     score.wrong += label && !right ? 1 : 0;
     if (!label) ++score.unlabelled[name->second];
@@ -167,6 +168,7 @@ Score replay_seeds(const std::string& title, const SubjectModel& model, const Ma
     total.visible_after += s.visible_after;
     total.right_after += s.right_after;
     total.wrong_after += s.wrong_after;
+    total.swaps_after += s.swaps_after;
     total.ghosts_named += s.ghosts_named;
     total.ghosts += s.ghosts;
     total.microseconds_per_frame += s.microseconds_per_frame / seeds;
@@ -256,8 +258,9 @@ TEST(Labeller, TracksMissingForAnInstantKeepTheirNamesLive) {
 // confirmed): acquired while L.Acromium was hidden, the three-marker soft torso had no rigid fit
 // with the right two, and the hypothesis that took L.Temple as L.Acromium explained more (the torso
 // unlocks the head and the arms); its names stayed on living tracks for the whole trial (the
-// estimator's walk: 80.5 % right, 2.4 % wrong, the head and left arm never named). revise() acquires
-// the subject again while mature tracks are left unnamed and takes a hypothesis that explains more.
+// estimator's walk: 80.5 % right, 2.4 % wrong, the head and left arm never named). revise() searches
+// the tree and each subtree afresh while mature tracks are left unnamed and takes a hypothesis that
+// explains more.
 TEST(Labeller, ASubjectAcquiredWhileAMarkerWasHiddenIsRevised) {
   PANOPTES_REQUIRE_SHARED(test::gait2392_static());
   PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
@@ -270,12 +273,12 @@ TEST(Labeller, ASubjectAcquiredWhileAMarkerWasHiddenIsRevised) {
   LabellerOptions never = gait2392_options();
   never.revise_margin = 1000;  // no revision: the behaviour before it
   const Score before = replay_seeds("gait2392 walk1, L.Acromium hidden at start, never revised", model, walk,
-                                    never, hidden, 2);
+                                    never, hidden, 10);
   const Score after =
-      replay_seeds("gait2392 walk1, L.Acromium hidden at start", model, walk, gait2392_options(), hidden, 2);
+      replay_seeds("gait2392 walk1, L.Acromium hidden at start", model, walk, gait2392_options(), hidden, 10);
   const auto right = [](const Score& s) { return 100.0 * s.right_after / s.visible_after; };
   const auto wrong = [](const Score& s) { return 100.0 * s.wrong_after / s.visible_after; };
-  EXPECT_EQ(after.swaps, 0.0);
+  EXPECT_EQ(after.swaps_after, 0.0);
   EXPECT_GT(right(after), 99.5);
   EXPECT_LT(wrong(after), 0.1);
   EXPECT_GT(wrong(before), 2.0) << "the early acquisition should stay wrong unrevised";
