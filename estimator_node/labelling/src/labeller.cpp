@@ -46,7 +46,9 @@ struct Subject {
   SubjectModel model;
   std::vector<SegmentState> segments;
   std::size_t root = 0;
-  std::vector<std::size_t> order;  // breadth first from the root
+  std::vector<std::size_t> order;   // breadth first from the root
+  std::optional<double> revised_s;  // live: the last revise() search
+  int instants_since_revision = 0;  // offline
 };
 
 // One segment's tentative assignment: (marker, point) pairs and the pose they give.
@@ -186,6 +188,11 @@ struct Labeller::State {
   std::optional<double> parent_shell(const Subject& subject, std::size_t s, std::size_t m,
                                      std::size_t p) const;
   void acquire(std::size_t subject_index);
+  std::optional<Hypothesis> best_hypothesis(const Subject& subject, std::size_t s,
+                                            const std::optional<RigidTransform>& parent_pose,
+                                            const Points& parent_seen);
+  void replace(std::size_t subject_index, const std::vector<char>& subtree, const Hypothesis& h);
+  void revise(std::size_t subject_index);
   std::optional<Found> search_segment(const Subject& subject, std::size_t s,
                                       const std::optional<RigidTransform>& parent_pose,
                                       const Points& parent_seen) const;
@@ -739,37 +746,72 @@ bool better(const Hypothesis& a, const Hypothesis& b) {
 
 }  // namespace
 
-// A subject with no name on any track: every root candidate grown over the tree, the hypothesis that
-// explains the most markers (then the lowest cost) taken. A mirrored root puts its children where
-// there are none, so left and right come from the tree. A subject with names: each segment that
-// lost them all is searched from its parent's pose.
+// Segment s searched afresh (the root in the lab, else from its parent's pose and seen markers):
+// each candidate (up to root_hypotheses of a rigid segment's, the best of a pair's) grown over its
+// subtree, the hypothesis that explains the most markers (then the lowest cost) taken. A mirrored
+// root puts its children where there are none, so left and right come from the tree. `claimed` is
+// as it was on return.
+std::optional<Hypothesis> Labeller::State::best_hypothesis(const Subject& subject, std::size_t s,
+                                                           const std::optional<RigidTransform>& parent_pose,
+                                                           const Points& parent_seen) {
+  std::vector<Found> starts;
+  const bool rigid = subject.segments[s].tracked.size() >= 3 && subject.model.segments[s].has_pose;
+  if (rigid) {
+    search_rigid(subject, s, parent_pose, candidates_near(subject, s, parent_pose), &starts);
+  } else if (auto found = search_segment(subject, s, parent_pose, parent_seen)) {
+    starts.push_back(std::move(*found));
+  }
+  std::sort(starts.begin(), starts.end(), [](const Found& a, const Found& b) {
+    return a.pairs.size() > b.pairs.size() || (a.pairs.size() == b.pairs.size() && a.cost < b.cost);
+  });
+  if (starts.size() > options.root_hypotheses) starts.resize(options.root_hypotheses);
+  std::optional<Hypothesis> best;
+  const std::vector<char> before = claimed;
+  for (const Found& start : starts) {
+    Hypothesis h;
+    h.segments.resize(subject.segments.size());
+    for (const auto& pair : start.pairs) claimed[pair.second] = 1;
+    h.markers = start.pairs.size();
+    h.cost = start.cost;
+    h.segments[s] = start;
+    grow(subject, s, start.pose, h);
+    claimed = before;
+    if (!best || better(h, *best)) best = std::move(h);
+  }
+  return best;
+}
+
+// The hypothesis's segments named (those of `subtree` it left out wait), their poses its own; the
+// names the subtree had cleared first.
+void Labeller::State::replace(std::size_t subject_index, const std::vector<char>& subtree,
+                              const Hypothesis& h) {
+  Subject& subject = subjects[subject_index];
+  for (std::size_t s = 0; s < subject.segments.size(); ++s) {
+    if (subtree[s] == 0) continue;
+    for (auto& marker : subject.segments[s].markers) {
+      if (marker.point) claimed[*marker.point] = 0;
+      if (marker.track) labels.erase(*marker.track);
+      marker = MarkerState{};
+    }
+    subject.segments[s].pose.reset();
+  }
+  // Named only once every old name is gone: a track may move to a segment cleared later.
+  for (std::size_t s = 0; s < subject.segments.size(); ++s) {
+    if (subtree[s] == 0 || !h.segments[s]) continue;
+    commit(subject_index, s, *h.segments[s]);
+    subject.segments[s].pose = h.segments[s]->pose;
+    subject.segments[s].loose = h.segments[s]->loose;
+  }
+}
+
+// A subject with no name on any track: acquired from the root's best hypothesis. A subject with
+// names: each segment that lost them all is searched from its parent's pose, then revise().
 void Labeller::State::acquire(std::size_t subject_index) {
   Subject& subject = subjects[subject_index];
   if (std::none_of(subject.segments.begin(), subject.segments.end(), has_track)) {
-    std::vector<Found> roots;
-    search_rigid(subject, subject.root, std::nullopt, candidates_near(subject, subject.root, std::nullopt),
-                 &roots);
-    std::sort(roots.begin(), roots.end(), [](const Found& a, const Found& b) {
-      return a.pairs.size() > b.pairs.size() || (a.pairs.size() == b.pairs.size() && a.cost < b.cost);
-    });
-    if (roots.size() > options.root_hypotheses) roots.resize(options.root_hypotheses);
-    std::optional<Hypothesis> best;
-    const std::vector<char> before = claimed;
-    for (const Found& root : roots) {
-      Hypothesis h;
-      h.segments.resize(subject.segments.size());
-      for (const auto& pair : root.pairs) claimed[pair.second] = 1;
-      h.markers = root.pairs.size();
-      h.cost = root.cost;
-      h.segments[subject.root] = root;
-      grow(subject, subject.root, root.pose, h);
-      claimed = before;
-      if (!best || better(h, *best)) best = std::move(h);
-    }
-    if (!best || best->markers < options.min_markers) return;
-    for (std::size_t s = 0; s < best->segments.size(); ++s) {
-      if (best->segments[s]) commit(subject_index, s, *best->segments[s]);
-    }
+    const auto best = best_hypothesis(subject, subject.root, std::nullopt, {});
+    if (best && best->markers >= options.min_markers)
+      replace(subject_index, std::vector<char>(subject.segments.size(), 1), *best);
     return;
   }
   for (std::size_t s : subject.order) {
@@ -781,6 +823,59 @@ void Labeller::State::acquire(std::size_t subject_index) {
     commit(subject_index, s, *found);
     segment.pose = found->pose;
     segment.loose = found->loose;
+  }
+  revise(subject_index);
+}
+
+// An acquired subject is searched afresh now and then (revise_period_s live, revise_period_instants
+// offline) while unnamed mature tracks are left over: the whole tree from the root, then each
+// segment's subtree from its parent's pose (a fresh whole tree often misses what tracking keeps
+// mid-walk). A hypothesis explaining at least revise_margin more of the markers seen now than the
+// names do replaces them. A subject acquired while one marker of a three-marker segment was hidden
+// (Gait2392's torso without L.Acromium: no rigid fit, so neither head nor arms) took the hypothesis
+// that fitted a wrong marker there (L.Temple as L.Acromium, the soft torso's distances allow it)
+// and unlocked the subtree; its names stayed on living tracks, the head and the left arm never
+// found their places, and nothing else ever took a name from a track.
+void Labeller::State::revise(std::size_t subject_index) {
+  Subject& subject = subjects[subject_index];
+  const bool due = now_s ? (!subject.revised_s || *now_s - *subject.revised_s >= options.revise_period_s)
+                         : ++subject.instants_since_revision >= options.revise_period_instants;
+  if (!due) return;
+  std::size_t spare = 0;
+  for (std::size_t p = 0; p < claimed.size(); ++p) spare += claimed[p] == 0 && young[p] == 0 ? 1 : 0;
+  if (spare < options.revise_margin) return;
+  subject.revised_s = now_s;
+  subject.instants_since_revision = 0;
+  for (std::size_t s : subject.order) {
+    const auto parent = subject.segments[s].parent;
+    std::optional<RigidTransform> parent_pose;
+    if (parent) {
+      const SegmentState& p = subject.segments[*parent];
+      if (!p.pose || p.loose) continue;
+      parent_pose = p.pose;
+    }
+    std::vector<char> subtree(subject.segments.size(), 0);
+    subtree[s] = 1;
+    for (std::size_t t : subject.order) {
+      if (subject.segments[t].parent && subtree[*subject.segments[t].parent] != 0) subtree[t] = 1;
+    }
+    const std::vector<char> before = claimed;
+    std::size_t seen = 0;
+    for (std::size_t t = 0; t < subject.segments.size(); ++t) {
+      for (const auto& marker : subject.segments[t].markers) {
+        if (subtree[t] == 0 || !marker.point) continue;
+        claimed[*marker.point] = 0;
+        ++seen;
+      }
+    }
+    const auto best =
+        best_hypothesis(subject, s, parent_pose, parent ? seen_now(subject.segments[*parent]) : Points{});
+    claimed = before;
+    if (!best || best->markers < seen + options.revise_margin ||
+        (!parent && best->markers < options.min_markers))
+      continue;
+    replace(subject_index, subtree, *best);
+    if (!parent) return;  // the whole tree
   }
 }
 

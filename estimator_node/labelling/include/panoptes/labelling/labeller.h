@@ -72,6 +72,14 @@ struct LabellerOptions {
   // frames were processed alone): ending the name at once made every such blink a re-acquisition,
   // and a labeller run on every camera frame lost and mirrored most names (docs/marker_sets.md).
   double keep_absent_s = 0.25;
+  // An acquired subject is searched afresh every revise_period_s (live; offline every
+  // revise_period_instants updates) while at least revise_margin mature tracks are unnamed: the
+  // whole tree, then each segment's subtree from its parent's pose; a hypothesis explaining
+  // revise_margin more of the markers seen now than the names do replaces them (a subject acquired
+  // wrongly while a marker was hidden, docs/marker_sets.md "Live labelling").
+  double revise_period_s = 0.1;
+  int revise_period_instants = 12;
+  std::size_t revise_margin = 2;
 };
 
 // The tolerance of a marker-pair distance of `segment` while the subject moves (see allowance_m).
