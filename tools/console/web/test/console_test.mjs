@@ -67,6 +67,14 @@ try {
         `predicted windows on every camera: ${held} of ${windowsShown} around a blob of the frame shown`);
   const health = await page.evaluate(() => window.panoptes.state.cameras.map((c) => `${c.id} ${c.health.light} (${c.health.reason})`));
   check(health.every((light) => !light.includes(' red ')), `health lights: ${health.join(', ')}`);
+  // The estimator's calibration health on each card (issue 36: a per-camera light with the reason);
+  // no camera of this unbumped scene is quarantined.
+  const calibrated = await waitFor(page, () => [...document.querySelectorAll('.card .figures')].length > 0 &&
+    [...document.querySelectorAll('.card .figures')].every((f) => /calibration \S+ (ok|small bias|unknown)/.test(f.textContent)),
+  null, 8000);
+  const calibrationTexts = await page.evaluate(() => [...document.querySelectorAll('.card')].map((card) =>
+    `${card.dataset.camera}: ${(card.querySelector('.figures').textContent.match(/calibration [^·]*/) || ['none'])[0].trim()}`));
+  check(calibrated, `calibration lights on every card: ${calibrationTexts.join(', ')}`);
 
   // --- 3D view ------------------------------------------------------------------------------
   const ready3d = await waitFor(page, () => window.panoptes.state && window.panoptes.state.bodies.length > 0 &&
