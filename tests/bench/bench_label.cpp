@@ -97,7 +97,7 @@ Cell run_cell(const lab::SubjectModel& model, const lab::MarkerSamples& walk, in
         Eigen::Vector3d p;
         if (!walk_at(walk, t + 0.7 * s, m, p)) continue;
         p[side] += 1.5 * s;
-        points.push_back({static_cast<std::uint64_t>(1000 * (s + 1) + m), p});
+        points.push_back({(1000 * static_cast<std::uint64_t>(s + 1)) + m, p});
       }
     }
     const auto start = std::chrono::steady_clock::now();
