@@ -297,8 +297,9 @@ TEST(CalibrationHealth, CorrectModeBringsABumpedCameraBack) {
   const double moved_mm = 1e3 * (c.after.t - truth.t).norm();
   // The position error in the true camera's frame (x, y across the image, z along the axis).
   const Eigen::Vector3d error_cam = truth.q.conjugate() * (c.after.t - truth.t);
-  std::printf("corrected pose against the bumped truth: %.4f deg, %.2f mm (camera frame: %+.2f %+.2f %+.2f mm)\n",
-              angle_deg, moved_mm, 1e3 * error_cam.x(), 1e3 * error_cam.y(), 1e3 * error_cam.z());
+  std::printf(
+      "corrected pose against the bumped truth: %.4f deg, %.2f mm (camera frame: %+.2f %+.2f %+.2f mm)\n",
+      angle_deg, moved_mm, 1e3 * error_cam.x(), 1e3 * error_cam.y(), 1e3 * error_cam.z());
   EXPECT_LT(angle_deg, 0.05);
   EXPECT_LT(moved_mm, 5.0);
   const auto& health = run.health.at(3);
