@@ -589,7 +589,7 @@ std::pair<double, double> join_late() {
 // Clients started while an estimator (another process) runs: the descriptions it wrote long before
 // come with their first frames (docs/clients.md, "Late joiners"), not tens of milliseconds after.
 TEST(Client, LateJoinerGetsDescriptionsWithItsFirstFrames) {
-  constexpr int kJoiners = 12;
+  constexpr int kJoiners = 24;
   ::setenv("PANOPTES_TEST_ESTIMATOR_DOMAIN", std::to_string(test_domain()).c_str(), 1);
   ::setenv("PANOPTES_TEST_ESTIMATOR_SECONDS", "30", 1);
   const std::filesystem::path log = std::filesystem::temp_directory_path() /
@@ -611,10 +611,12 @@ TEST(Client, LateJoinerGetsDescriptionsWithItsFirstFrames) {
   }
   estimator.stop();
   std::filesystem::remove(log);
-  // Before the late-joiner QoS (topics.cpp) 25 of 68 got them 30-77 ms late, at least two in every
-  // 8; after it none of 100 more than 26 ms, on a loaded machine too. One slow joiner is allowed.
+  // Before the late-joiner QoS (topics.cpp) 25 of 68 got them 30-77 ms late (37 %: 3 or fewer of 24
+  // has a chance of about 0.5 %); after it none of 100 more than 26 ms, on a loaded machine too. But
+  // endpoint discovery has no order: under ctest -j2 beside live tests a joiner can match the frames
+  // before the descriptions' writer (2 of 12 > 30 ms in one CI run), so 3 slow joiners are allowed.
   const auto late = std::count_if(lags.begin(), lags.end(), [](double lag) { return lag > 30.0; });
-  EXPECT_LE(late, 1) << "late joiners that got the descriptions > 30 ms after their first frame, of "
+  EXPECT_LE(late, 3) << "late joiners that got the descriptions > 30 ms after their first frame, of "
                      << kJoiners;
 }
 
