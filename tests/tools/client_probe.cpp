@@ -37,16 +37,23 @@ json frame_line(const pc::Frame& frame) {
                       {"mean_marker_error", b.mean_marker_error}});
   }
   int labelled = 0;
-  for (const auto& m : frame.markers) labelled += m.labelled() ? 1 : 0;
+  int named = 0;
+  for (const auto& m : frame.markers) {
+    labelled += m.labelled() ? 1 : 0;
+    named += m.named() ? 1 : 0;
+  }
   return {{"type", "frame"},
           {"frame", frame.frame_number},
           {"stamp_ns", frame.stamp_ns},
           {"publish_ns", frame.publish_ns},
           {"receive_ns", frame.receive_ns},
           {"capture_to_receive_ns", frame.latency.capture_to_receive_ns},
+          {"update_ns", frame.latency.update_ns},
+          {"output_ns", frame.latency.output_ns},
           {"bodies", bodies},
           {"markers", frame.markers.size()},
-          {"labelled", labelled}};
+          {"labelled", labelled},
+          {"named", named}};
 }
 
 // The frame's markers as estimator_node --out-labels writes them (tests/integration/score_labels.py):

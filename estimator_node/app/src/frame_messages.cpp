@@ -96,8 +96,9 @@ msg::BodyDescriptions to_descriptions_message(const std::vector<BodyDefinition>&
 
 msg::MarkerLabels to_labels_message(const session::LabelStage& stage) {
   msg::MarkerLabels message;
-  message.stamp_ns(stage.map_stamp_ns());
-  message.generation(stage.generation());
+  const std::shared_ptr<const session::LabelMap> map = stage.map();  // one consistent map
+  message.stamp_ns(map->stamp_ns);
+  message.generation(map->generation);
   for (std::size_t i = 0; i < stage.subject_count(); ++i) {
     const labelling::SubjectModel& model = stage.model(i);
     msg::SubjectLabels subject;
@@ -112,7 +113,7 @@ msg::MarkerLabels to_labels_message(const session::LabelStage& stage) {
       stick.to(to);
       subject.sticks().push_back(std::move(stick));
     }
-    for (const auto& label : stage.map()) {
+    for (const auto& label : map->labels) {
       if (label.subject != model.subject) continue;
       msg::TrackLabel named;
       named.track_id(label.track);

@@ -86,6 +86,7 @@ class LiveEstimator {
     if (options_.labels) {
       labels_writer_ = bus_->make_writer<msg::MarkerLabels>();
       labels_writer_->write(to_labels_message(*options_.labels));  // the subjects, before any name
+      options_.labels->run_in_background();  // a revision search delays no frame (marker_sets.md)
     }
     if (options_.latency_probe) {
       latency_probe_.emplace(*bus_);
@@ -402,9 +403,10 @@ void LiveEstimator::name_markers(session::FrameOutput& output) const {
 }
 
 void LiveEstimator::publish_labels_if_changed() {
-  if (!labels_writer_ || options_.labels->generation() == labels_generation_) return;
-  labels_generation_ = options_.labels->generation();
-  labels_writer_->write(to_labels_message(*options_.labels));
+  if (!labels_writer_ || options_.labels->map()->generation == labels_generation_) return;
+  const msg::MarkerLabels message = to_labels_message(*options_.labels);
+  labels_generation_ = message.generation();
+  labels_writer_->write(message);
 }
 
 void LiveEstimator::finish(Processed& done) {

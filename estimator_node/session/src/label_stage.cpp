@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
+#include <mutex>
+#include <thread>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -23,11 +26,88 @@ std::vector<std::string> subject_names(const std::vector<labelling::SubjectModel
 
 }  // namespace
 
+struct LabelStage::Core {
+  Core(std::vector<labelling::SubjectModel> models, const labelling::LabellerOptions& options)
+      : subjects(subject_names(models)), labeller(std::move(models), options) {}
+
+  // One labeller run on `points` at `stamp`; publishes a new map when the names changed.
+  void run(const std::vector<labelling::TrackPoint>& points, TimeNs stamp) {
+    const auto start = std::chrono::steady_clock::now();
+    labeller.update(points, static_cast<double>(stamp) * 1e-9);
+    const double us =
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
+    const double per_subject = us / static_cast<double>(std::max<std::size_t>(subjects.size(), 1));
+    std::vector<TrackLabel> names;
+    for (const auto& [track, label] : labeller.labels())
+      names.push_back({static_cast<std::int64_t>(track), subjects.at(label.subject), label.marker});
+    const auto same = [](const TrackLabel& a, const TrackLabel& b) {
+      return a.track == b.track && a.subject == b.subject && a.marker == b.marker;
+    };
+    std::lock_guard<std::mutex> lock(mutex);
+    total_us += per_subject;
+    worst_us = std::max(worst_us, per_subject);
+    ++runs;
+    if (map->generation != 0 &&
+        std::equal(names.begin(), names.end(), map->labels.begin(), map->labels.end(), same))
+      return;
+    map = std::make_shared<const LabelMap>(LabelMap{std::move(names), map->generation + 1, stamp});
+  }
+
+  void work() {
+    std::unique_lock<std::mutex> lock(mutex);
+    for (;;) {
+      wake.wait(lock, [this] { return stop || job_stamp != 0; });
+      if (stop) return;
+      std::vector<labelling::TrackPoint> points = std::move(job);
+      const TimeNs stamp = std::exchange(job_stamp, 0);
+      lock.unlock();
+      run(points, stamp);
+      lock.lock();
+    }
+  }
+
+  void post(const std::vector<labelling::TrackPoint>& points, TimeNs stamp) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      job = points;  // a job not started yet is replaced by the newer tracks
+      job_stamp = stamp;
+    }
+    wake.notify_one();
+  }
+
+  ~Core() {
+    if (!worker.joinable()) return;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      stop = true;
+    }
+    wake.notify_one();
+    worker.join();
+  }
+
+  const std::vector<std::string> subjects;  // before labeller: built from the models it takes
+  labelling::Labeller labeller;             // run() only: the worker's alone once it runs
+  mutable std::mutex mutex;                 // guards what follows
+  std::shared_ptr<const LabelMap> map = std::make_shared<const LabelMap>();
+  std::uint64_t runs = 0;
+  double total_us = 0.0;
+  double worst_us = 0.0;
+  std::condition_variable wake;
+  std::vector<labelling::TrackPoint> job;
+  TimeNs job_stamp = 0;  // 0: no job waiting
+  bool stop = false;
+  std::thread worker;  // last: started after everything above exists
+};
+
 LabelStage::LabelStage(std::vector<labelling::SubjectModel> models, const labelling::LabellerOptions& options,
                        const std::string& out_path, TimeNs period_ns)
-    : subjects_(subject_names(models)), labeller_(std::move(models), options), period_ns_(period_ns) {
+    : core_(std::make_unique<Core>(std::move(models), options)), period_ns_(period_ns) {
   if (!out_path.empty()) out_.emplace(out_path);
 }
+
+LabelStage::~LabelStage() = default;
+LabelStage::LabelStage(LabelStage&&) noexcept = default;
+LabelStage& LabelStage::operator=(LabelStage&&) noexcept = default;
 
 LabelStage LabelStage::from_files(const std::vector<std::string>& subject_files,
                                   const labelling::LabellerOptions& options, const std::string& out_path,
@@ -36,6 +116,23 @@ LabelStage LabelStage::from_files(const std::vector<std::string>& subject_files,
   models.reserve(subject_files.size());
   for (const auto& path : subject_files) models.push_back(labelling::load_subject_model(path));
   return LabelStage(std::move(models), options, out_path, period_ns);
+}
+
+void LabelStage::run_in_background() {
+  if (!core_->worker.joinable()) core_->worker = std::thread([core = core_.get()] { core->work(); });
+}
+
+std::shared_ptr<const LabelMap> LabelStage::map() const {
+  std::lock_guard<std::mutex> lock(core_->mutex);
+  return core_->map;
+}
+
+const labelling::SubjectModel& LabelStage::model(std::size_t subject) const {
+  return core_->labeller.model(subject);  // the models never change: safe beside a run
+}
+
+std::size_t LabelStage::subject_count() const {
+  return core_->subjects.size();
 }
 
 void LabelStage::observe(const estimator::Tracker& tracker) {
@@ -49,21 +146,20 @@ void LabelStage::observe(const estimator::Tracker& tracker) {
   }
   if (last_run_ns_ == 0 || stamp - last_run_ns_ >= period_ns_) {
     last_run_ns_ = stamp;
-    const auto start = std::chrono::steady_clock::now();
-    labeller_.update(points_, static_cast<double>(stamp) * 1e-9);
-    const double us =
-        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
-    const double per_subject = us / static_cast<double>(std::max<std::size_t>(subjects_.size(), 1));
-    total_us_ += per_subject;
-    worst_us_ = std::max(worst_us_, per_subject);
-    ++frames_;
-    update_map(stamp);
+    if (core_->worker.joinable()) {
+      core_->post(points_, stamp);
+    } else {
+      core_->run(points_, stamp);
+    }
   }
+  const std::shared_ptr<const LabelMap> names = map();
   labels_.clear();
   for (const auto& point : points_) {
-    const auto label = labeller_.label_of(point.track);
-    if (!label) continue;
-    labels_.push_back({static_cast<std::int64_t>(point.track), subjects_.at(label->subject), label->marker});
+    const auto track = static_cast<std::int64_t>(point.track);
+    const auto found =
+        std::lower_bound(names->labels.begin(), names->labels.end(), track,
+                         [](const TrackLabel& label, std::int64_t id) { return label.track < id; });
+    if (found != names->labels.end() && found->track == track) labels_.push_back(*found);
   }
   marker_frames_ += points_.size();
   labelled_marker_frames_ += labels_.size();
@@ -82,19 +178,6 @@ void LabelStage::observe(const estimator::Tracker& tracker) {
   out_->write_line(record.dump());
 }
 
-void LabelStage::update_map(TimeNs stamp) {
-  std::vector<TrackLabel> map;
-  for (const auto& [track, label] : labeller_.labels())
-    map.push_back({static_cast<std::int64_t>(track), subjects_.at(label.subject), label.marker});
-  const auto same = [](const TrackLabel& a, const TrackLabel& b) {
-    return a.track == b.track && a.subject == b.subject && a.marker == b.marker;
-  };
-  if (generation_ != 0 && std::equal(map.begin(), map.end(), map_.begin(), map_.end(), same)) return;
-  map_ = std::move(map);
-  map_stamp_ns_ = stamp;
-  ++generation_;
-}
-
 std::optional<TrackLabel> LabelStage::label_of(std::int64_t track) const {
   const auto found = std::find_if(labels_.begin(), labels_.end(),
                                   [track](const TrackLabel& label) { return label.track == track; });
@@ -106,14 +189,24 @@ std::string LabelStage::summary() const {
   const double named = marker_frames_ == 0 ? 0.0
                                            : 100.0 * static_cast<double>(labelled_marker_frames_) /
                                                  static_cast<double>(marker_frames_);
-  const double mean = frames_ == 0 ? 0.0 : total_us_ / static_cast<double>(frames_);
-  char text[256];
+  std::uint64_t runs = 0;
+  double total_us = 0.0;
+  double worst_us = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(core_->mutex);
+    runs = core_->runs;
+    total_us = core_->total_us;
+    worst_us = core_->worst_us;
+  }
+  const double mean = runs == 0 ? 0.0 : total_us / static_cast<double>(runs);
+  char text[320];
   std::snprintf(text, sizeof text,
                 "labels: %zu subject%s, %.2f %% of %llu confirmed marker-frames named, %.1f us per "
-                "subject-frame (mean; worst %.0f us) over %llu labeller runs",
-                subjects_.size(), subjects_.size() == 1 ? "" : "s", named,
-                static_cast<unsigned long long>(marker_frames_), mean, worst_us_,
-                static_cast<unsigned long long>(frames_));
+                "subject-frame (mean; worst %.0f us) over %llu labeller runs%s",
+                core_->subjects.size(), core_->subjects.size() == 1 ? "" : "s", named,
+                static_cast<unsigned long long>(marker_frames_), mean, worst_us,
+                static_cast<unsigned long long>(runs),
+                core_->worker.joinable() ? " (in the background)" : "");
   return text;
 }
 

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,6 +26,15 @@ struct TrackLabel {
   std::string marker;
 };
 
+// The whole current map of names (rt/panoptes/labels, docs/marker_sets.md "Labels on the wire"):
+// every named track, sorted by track id, as of the newest labeller run, and a generation that
+// counts its changes (0: no run yet). A publisher writes the map when the generation moves.
+struct LabelMap {
+  std::vector<TrackLabel> labels;
+  std::uint64_t generation = 0;
+  TimeNs stamp_ns = 0;
+};
+
 class LabelStage {
  public:
   // `out_path` empty: nothing is written. Throws if the file cannot be opened.
@@ -32,11 +42,23 @@ class LabelStage {
   // the names their tracks have; a new track waits for the next run).
   LabelStage(std::vector<labelling::SubjectModel> models, const labelling::LabellerOptions& options,
              const std::string& out_path, TimeNs period_ns = 0);
+  ~LabelStage();
+  LabelStage(LabelStage&&) noexcept;
+  LabelStage& operator=(LabelStage&&) noexcept;
+  LabelStage(const LabelStage&) = delete;
+  LabelStage& operator=(const LabelStage&) = delete;
 
   // Reads the subject model files (throws InputError/ConfigError naming the file).
   static LabelStage from_files(const std::vector<std::string>& subject_files,
                                const labelling::LabellerOptions& options, const std::string& out_path,
                                TimeNs period_ns = 0);
+
+  // Live (docs/marker_sets.md, "Off the frame path"): from now on the labeller runs on a thread of
+  // its own. observe() hands it the confirmed tracks when a run is due and returns at once (a run
+  // still busy is not waited for: the newest tracks replace a job not yet started), so a revision
+  // search of milliseconds delays no frame; the names come from the newest finished run. Offline
+  // replays do not call it: there every run finishes before observe() returns (reproducible).
+  void run_in_background();
 
   // The tracker has just processed a frame: its confirmed tracks at that instant are labelled.
   void observe(const estimator::Tracker& tracker);
@@ -45,15 +67,11 @@ class LabelStage {
   std::optional<TrackLabel> label_of(std::int64_t track) const;
   const std::vector<TrackLabel>& labels() const { return labels_; }
 
-  // The whole current map of names (rt/panoptes/labels, docs/marker_sets.md "Labels on the wire"):
-  // every named track, sorted by track id, as of the newest labeller run, and a generation that
-  // counts its changes (0: no run yet). A publisher writes the map when the generation moves.
-  const std::vector<TrackLabel>& map() const { return map_; }
-  std::uint64_t generation() const { return generation_; }
-  TimeNs map_stamp_ns() const { return map_stamp_ns_; }
+  // The newest map (never null; generation 0 before the first run). Safe from any thread.
+  std::shared_ptr<const LabelMap> map() const;
   // The subject models, in --subjects order (names, marker sets, markers and sticks).
-  const labelling::SubjectModel& model(std::size_t subject) const { return labeller_.model(subject); }
-  std::size_t subject_count() const { return subjects_.size(); }
+  const labelling::SubjectModel& model(std::size_t subject) const;
+  std::size_t subject_count() const;
 
   void flush() {
     if (out_) out_->flush();
@@ -63,24 +81,17 @@ class LabelStage {
   std::string summary() const;
 
  private:
-  void update_map(TimeNs stamp);
+  struct Core;  // the labeller, its map and its worker thread (fixed in memory: moves keep it)
 
-  std::vector<std::string> subjects_;  // before labeller_: built from the models it takes
-  labelling::Labeller labeller_;
+  std::unique_ptr<Core> core_;
   std::optional<JsonlWriter> out_;
   std::vector<TrackLabel> labels_;
-  std::vector<TrackLabel> map_;
-  std::uint64_t generation_ = 0;
-  TimeNs map_stamp_ns_ = 0;
   std::vector<labelling::TrackPoint> points_;
   TimeNs period_ns_ = 0;
   TimeNs last_stamp_ns_ = 0;
   TimeNs last_run_ns_ = 0;
-  std::uint64_t frames_ = 0;
   std::uint64_t marker_frames_ = 0;
   std::uint64_t labelled_marker_frames_ = 0;
-  double total_us_ = 0.0;
-  double worst_us_ = 0.0;
 };
 
 }  // namespace panoptes::session
