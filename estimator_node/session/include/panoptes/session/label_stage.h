@@ -59,13 +59,15 @@ class LabelStage {
   // search of milliseconds delays no frame; the names come from the newest finished run. Offline
   // replays do not call it: there every run finishes before observe() returns (reproducible).
   void run_in_background();
+  // Waits until the background run under way, and the job waiting, if any, are done (at once when
+  // not in the background).
+  void drain();
 
   // The tracker has just processed a frame: its confirmed tracks at that instant are labelled.
   void observe(const estimator::Tracker& tracker);
 
-  // After observe(): the label of `track`, if any (the names the last observe() gave).
+  // After observe(): the label of `track`, if any (in the map the last observe() saw).
   std::optional<TrackLabel> label_of(std::int64_t track) const;
-  const std::vector<TrackLabel>& labels() const { return labels_; }
 
   // The newest map (never null; generation 0 before the first run). Safe from any thread.
   std::shared_ptr<const LabelMap> map() const;
@@ -77,7 +79,8 @@ class LabelStage {
     if (out_) out_->flush();
   }
 
-  // "labels: N subjects, X % of confirmed marker-frames named, C us per subject-frame (mean), ..."
+  // "labels: N subjects, X % of confirmed marker-frames (at the labeller's runs) named, C us per
+  // subject-frame (mean), ..."
   std::string summary() const;
 
  private:
@@ -85,7 +88,9 @@ class LabelStage {
 
   std::unique_ptr<Core> core_;
   std::optional<JsonlWriter> out_;
-  std::vector<TrackLabel> labels_;
+  const TrackLabel* find(std::int64_t track) const;  // in names_, sorted by track
+
+  std::shared_ptr<const LabelMap> names_;  // the map the last observe() saw
   std::vector<labelling::TrackPoint> points_;
   TimeNs period_ns_ = 0;
   TimeNs last_stamp_ns_ = 0;
