@@ -5,7 +5,8 @@
 A confirmed track within --match-m of a true marker (truth interpolated to the record's stamp) is a
 visible marker-frame of that marker; it is right when it carries that marker's name, wrong when it
 carries another. A left/right swap is a wrong name that differs from the true one only by its side
-prefix. Return latency: for each track that starts on a marker whose name was seen before, the
+prefix. With --by-subject the truth's names are "<subject>/<marker>" (the scene's trc prefixes) and
+a name is right only with its subject; a name of the other subject is a subject crossing. Return latency: for each track that starts on a marker whose name was seen before, the
 time from the track's first record to its first right name. Prints one JSON object; exit 1 when
 --min-right / --max-wrong / --max-return-ms are not met."""
 import argparse
@@ -15,12 +16,12 @@ import math
 import sys
 
 
-def load_truth(path):
+def load_truth(path, by_subject):
     stamps, markers = [], []
     for line in open(path):
         record = json.loads(line)
         stamps.append(record["stamp_ns"])
-        markers.append({m["name"].split("/")[-1]: m["p"] for m in record["markers"]})
+        markers.append({(m["name"] if by_subject else m["name"].split("/")[-1]): m["p"] for m in record["markers"]})
     return stamps, markers
 
 
@@ -48,13 +49,15 @@ def main():
     parser.add_argument("--truth-shift-ns", type=int, default=0,
                         help="added to the truth's stamps (a replay's --sim-epoch-ns minus the scene's epoch)")
     parser.add_argument("--skip-s", type=float, default=0.0, help="ignore records before this (from the first)")
+    parser.add_argument("--by-subject", action="store_true",
+                        help="truth names are <subject>/<marker>; a name is right only with its subject")
     parser.add_argument("--min-right", type=float, default=None)
     parser.add_argument("--max-wrong", type=float, default=None)
     parser.add_argument("--max-return-ms", type=float, default=None)
     args = parser.parse_args()
-    stamps, markers = load_truth(args.truth)
+    stamps, markers = load_truth(args.truth, args.by_subject)
     stamps = [stamp + args.truth_shift_ns for stamp in stamps]
-    visible = right = wrong = swaps = ghost_named = 0
+    visible = right = wrong = swaps = ghost_named = crossings = 0
     first_stamp = None
     track_start, track_marker, track_named, seen_names = {}, {}, set(), set()
     returns = []
@@ -70,6 +73,8 @@ def main():
                 if d < best_d:
                     best, best_d = name, d
             label = entry.get("marker")
+            if args.by_subject and label is not None:
+                label = entry.get("subject", "") + "/" + label
             track = entry["track"]
             if track not in track_start:
                 track_start[track] = stamp
@@ -89,12 +94,15 @@ def main():
                 seen_names.add(best)
             elif label is not None:
                 wrong += 1
-                swaps += side_swapped(label, best)
+                name, true_name = label.split("/")[-1], best.split("/")[-1]
+                swaps += side_swapped(name, true_name)
+                crossings += args.by_subject and label.split("/")[0] != best.split("/")[0]
     result = {
         "visible_marker_frames": visible,
         "right_percent": 100.0 * right / max(visible, 1),
         "wrong_percent": 100.0 * wrong / max(visible, 1),
         "left_right_swaps": swaps,
+        "subject_crossings": crossings,
         "ghost_tracks_named": ghost_named,
         "returns": len(returns),
         "worst_return_ms": max(returns, default=0.0),

@@ -481,7 +481,7 @@ struct Scene::Impl {
   TimeNs duration_ns = 0;
   std::vector<SimCameraConfig> cameras;
   std::vector<MarkerSpec> markers;
-  std::optional<TrcSource> trc;
+  std::vector<TrcSource> trcs;  // `trc:`, one or a list
   std::vector<BodySpec> bodies;
   std::vector<sim::ChainSpec> chains;
   std::vector<std::string> marker_names;
@@ -603,10 +603,16 @@ void Scene::Impl::parse_landmarks(const YamlReader& root, std::set<std::string>&
 void Scene::Impl::parse_trc(const YamlReader& root, const std::filesystem::path& base_dir,
                             std::set<std::string>& names) {
   if (!root.has("trc")) return;
-  const YamlReader trc_reader = root.child("trc");
-  std::vector<std::string> trc_names;
-  trc = read_trc(trc_reader, base_dir, trc_names);
-  for (const std::string& name : trc_names) add_marker_name(names, trc_reader, "prefix", name, trc->radius);
+  // One recording, or a list of them (several people: each with its own prefix, offset and start).
+  const std::vector<YamlReader> readers = root.node()["trc"].IsSequence()
+                                              ? root.sequence_or_empty("trc")
+                                              : std::vector<YamlReader>{root.child("trc")};
+  for (const YamlReader& reader : readers) {
+    std::vector<std::string> trc_names;
+    trcs.push_back(read_trc(reader, base_dir, trc_names));
+    for (const std::string& name : trc_names)
+      add_marker_name(names, reader, "prefix", name, trcs.back().radius);
+  }
 }
 
 namespace {
@@ -734,9 +740,9 @@ std::vector<MarkerTruth> Scene::markers_at(TimeNs scene_time_ns) const {
     out[index].valid = marker.exists_at(t_s);
     out[index++].p = sim::evaluate(marker.path, t_s);
   }
-  if (impl_->trc) {
-    sample_trc(*impl_->trc, t_s, out, index);
-    index += impl_->trc->columns.size();
+  for (const TrcSource& trc : impl_->trcs) {
+    sample_trc(trc, t_s, out, index);
+    index += trc.columns.size();
   }
   for (const BodySpec& body : impl_->bodies) {
     const Eigen::Quaterniond q = sim::evaluate(body.rotation, t_s);

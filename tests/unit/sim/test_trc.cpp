@@ -129,6 +129,35 @@ TEST(Trc, UpAxisXTurnsTheFilesXIntoWorldZ) {
   }
 }
 
+// Issue 33 (two subjects): `trc:` as a list plays several recordings at once, each with its own
+// prefix, offset and start; a prefix shared by two entries names the duplicate marker.
+TEST(Trc, AListOfRecordingsIsSeveralPeople) {
+  const TempDir dir;
+  const std::string walk = fs::absolute(kWalk).string();
+  const Scene scene = Scene::load(
+      dir.write("two.yaml", kCamera + "trc:\n  - {file: " + walk +
+                                ", prefix: s1/, markers: [L.Toe, R.Shoulder]}\n" + "  - {file: " + walk +
+                                ", prefix: s2/, markers: [L.Toe, R.Shoulder], offset: [0, 1.5, 0], " +
+                                "start: 0.7}\n"));
+  EXPECT_EQ(scene.marker_names(),
+            (std::vector<std::string>{"s1/L.Toe", "s1/R.Shoulder", "s2/L.Toe", "s2/R.Shoulder"}));
+  // s2 is s1 0.7 s later (pingpong, no turnaround: file time t + start within the recording), 1.5 m
+  // along y.
+  const auto at_1s = scene.markers_at(1000 * kNsPerMillisecond);
+  const auto at_0_3s = scene.markers_at(300 * kNsPerMillisecond);
+  for (int m = 0; m < 2; ++m) {
+    ASSERT_TRUE(at_1s[m].valid && at_0_3s[2 + m].valid);
+    EXPECT_LT((at_0_3s[2 + m].p - (at_1s[m].p + Eigen::Vector3d(0, 1.5, 0))).norm(), 1e-9) << m;
+  }
+  try {
+    Scene::load(dir.write("same.yaml", kCamera + "trc:\n  - {file: " + walk + ", markers: [L.Toe]}\n" +
+                                           "  - {file: " + walk + ", markers: [L.Toe]}\n"));
+    ADD_FAILURE() << "two recordings with one prefix were accepted";
+  } catch (const std::exception& error) {
+    EXPECT_NE(std::string(error.what()).find("trc/L.Toe"), std::string::npos) << error.what();
+  }
+}
+
 TEST(Trc, GapsMakeMarkersInvalidWhereTheyHaveNoData) {
   const TempDir dir;
   const fs::path trc_path = dir.write("gappy.trc", kGappyTrc);
