@@ -322,11 +322,11 @@ void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {
     if (latency_probe_) latency_probe_->note_pose(pose_message);
   }
   publish_chains(frame);
+  auto tracks = tracker_.current_tracks();
   if (options_.labels) {
-    options_.labels->observe(tracker_);
+    options_.labels->observe(tracker_, tracks);
     publish_labels_if_changed();
   }
-  auto tracks = tracker_.current_tracks();
   const session::FrameStages stages{frame.arrival_ns,  frame.processing_ns, frame.publish_ns,
                                     frame.received_ns, dequeued_ns,         updated_ns};
   session::FrameOutput output;

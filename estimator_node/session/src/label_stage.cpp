@@ -162,14 +162,21 @@ std::size_t LabelStage::subject_count() const {
 
 void LabelStage::observe(const estimator::Tracker& tracker) {
   const TimeNs stamp = tracker.last_stamp_ns();
-  if (stamp <= last_stamp_ns_) return;  // nothing new (a late frame refined an older instant)
-  last_stamp_ns_ = stamp;
+  if (stamp <= last_stamp_ns_) return;
   const bool due = last_run_ns_ == 0 || stamp - last_run_ns_ >= period_ns_;
   // On the frame path only what is needed: the tracks when the labeller runs or --out-labels
   // writes them, and the newest map for label_of().
+  observe(tracker, due || out_ ? tracker.current_tracks() : std::vector<TrackRecord>{});
+}
+
+void LabelStage::observe(const estimator::Tracker& tracker, const std::vector<TrackRecord>& current_tracks) {
+  const TimeNs stamp = tracker.last_stamp_ns();
+  if (stamp <= last_stamp_ns_) return;  // nothing new (a late frame refined an older instant)
+  last_stamp_ns_ = stamp;
+  const bool due = last_run_ns_ == 0 || stamp - last_run_ns_ >= period_ns_;
   if (due || out_) {
     points_.clear();
-    for (const auto& track : tracker.current_tracks()) {
+    for (const auto& track : current_tracks) {
       if (track.status != TrackStatus::kConfirmed) continue;
       points_.push_back({static_cast<std::uint64_t>(track.id), track.p});
     }

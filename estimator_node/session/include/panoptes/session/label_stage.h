@@ -65,6 +65,9 @@ class LabelStage {
 
   // The tracker has just processed a frame: its confirmed tracks at that instant are labelled.
   void observe(const estimator::Tracker& tracker);
+  // The same with the tracker's current_tracks() the caller already has (the live path needs them
+  // for the frame anyway: no second copy).
+  void observe(const estimator::Tracker& tracker, const std::vector<TrackRecord>& current_tracks);
 
   // After observe(): the label of `track`, if any (in the map the last observe() saw).
   std::optional<TrackLabel> label_of(std::int64_t track) const;
