@@ -7,21 +7,31 @@
 # rt/panoptes/labels and its view is scored against the simulator's truth: >= 99.5 % of the
 # visible marker-frames named right and <= 0.1 % wrong after the first 0.5 s, no left/right swap; a
 # client started late has the names with its first frames (transient-local map).
+# By hand: PANOPTES_LABELS_WALK=rajagopal runs the same with the Rajagopal walk (walk8's own) and its
+# static trial and marker set; PANOPTES_LABELS_SEED=N sets the scene's seed (default walk8's, 8).
 source "$(dirname "$0")/lib.sh"
 data="$source_dir/../shared/data/static"
-require_shared_data "$data/gait2392_subject01_static.trc"
-require_shared_data "$data/gait2392_subject01_walk1.trc"
 probe="$bin/panoptes_client_probe"
 score="$source_dir/tests/integration/score_labels.py"
+walk_args=(-e "s#^  file: .*#  file: $data/gait2392_subject01_walk1.trc#" -e 's/^  offset: .*/  offset: [-0.58, 0, 0]/')
+static="$data/gait2392_subject01_static.trc"
+markerset="$source_dir/deploy/markersets/gait2392.yaml"
+if [ "${PANOPTES_LABELS_WALK:-gait2392}" = rajagopal ]; then
+  walk_args=(-e "s#^  file: .*#  file: $source_dir/tests/data/walk_41markers_100hz.trc#")
+  static="$data/rajagopal_static_walk_1.trc"
+  markerset="$source_dir/deploy/markersets/rajagopal.yaml"
+else
+  require_shared_data "$data/gait2392_subject01_walk1.trc"
+fi
+require_shared_data "$static"
+[ -z "${PANOPTES_LABELS_SEED:-}" ] || walk_args+=(-e "s/^seed: .*/seed: $PANOPTES_LABELS_SEED/")
 
 expect_exit 0 "model from the static trial" -- "$bin/panoptes_label" model \
-  --static "$data/gait2392_subject01_static.trc" --markerset "$source_dir/deploy/markersets/gait2392.yaml" \
-  --out "$work/s1.yaml" --subject s1
+  --static "$static" --markerset "$markerset" --out "$work/s1.yaml" --subject s1
 
 # walk8's cameras and effects, walk1 instead of the 41-marker walk, 0.3 false blobs per frame.
 scene="$work/walk1.yaml"
-sed -e 's/^duration: .*/duration: 8.0/' -e 's/^  false_blobs: .*/  false_blobs: 0.3/' \
-  -e "s#^  file: .*#  file: $data/gait2392_subject01_walk1.trc#" -e 's/^  offset: .*/  offset: [-0.58, 0, 0]/' \
+sed -e 's/^duration: .*/duration: 8.0/' -e 's/^  false_blobs: .*/  false_blobs: 0.3/' "${walk_args[@]}" \
   "$source_dir/deploy/scenes/walk8.yaml" >"$scene"
 expect_exit 0 "simulate walk1 through eight cameras" -- "$bin/panoptes_sim" features --scene "$scene" \
   --out-dir "$work/sim"
