@@ -6,7 +6,8 @@
 # estimator_node --subjects; a client (panoptes_client_probe) names the markers from
 # rt/panoptes/labels and its view is scored against the simulator's truth: >= 99.5 % of the
 # visible marker-frames named right and <= 0.1 % wrong after the first 0.5 s, no left/right swap; a
-# client started late has the names with its first frames (transient-local map).
+# client started late has the names with its first frames (transient-local map); the console's 3D
+# view draws the names and the marker set's sticks (console_labels.png for docs/marker_sets.md).
 # By hand: PANOPTES_LABELS_WALK=rajagopal runs the same with the Rajagopal walk (walk8's own) and its
 # static trial and marker set; PANOPTES_LABELS_SEED=N sets the scene's seed (default walk8's, 8).
 source "$(dirname "$0")/lib.sh"
@@ -46,6 +47,23 @@ pids+=("$client")
 estimator=$!
 pids+=("$estimator")
 replay_cameras "$epoch" 11 cam0 cam1 cam2 cam3 cam4 cam5 cam6 cam7
+# The console's 3D view with the names and sticks (tools/console/web/test/console_labels_test.mjs),
+# when a browser is installed (required under CI, like every browser test).
+browser=""
+web="$source_dir/tools/console/web"
+if [ -d "$web/node_modules/playwright-core" ] && [ -x /usr/bin/chromium ]; then
+  shots="${PANOPTES_CONSOLE_SHOTS:-$work/shots}"
+  mkdir -p "$shots"
+  start_console labels
+  timeout 40 node "$web/test/console_labels_test.mjs" --url "$url" --out "$work/browser.json" --shots "$shots" \
+    >"$work/browser.out" 2>&1 &
+  browser=$!
+  pids+=("$browser")
+elif [ -n "${CI:-}" ]; then
+  fail "playwright-core (npm ci in $web) or /usr/bin/chromium missing"
+else
+  echo "SKIP (console part): playwright-core or /usr/bin/chromium missing"
+fi
 # A late client: started while the subject is labelled, it gets the map (transient-local) at once.
 sleep 7
 late_start_ns=$(date +%s%N)
@@ -57,6 +75,23 @@ wait "$estimator" && pass "estimator_node exited cleanly" || { fail "estimator_n
 timeout 20 tail --pid="$client" -f /dev/null
 timeout 20 tail --pid="$late" -f /dev/null
 grep "^estimator_node: labels:" "$work/estimator.log" || true
+if [ -n "$browser" ]; then
+  wait "$browser" && pass "console: names and sticks drawn" || fail "console: names and sticks (exit $?)"
+  cat "$work/browser.out"
+  # Every (track, name) the page drew is one the estimator wrote (--out-labels).
+  /usr/bin/python3 - "$work/browser.json" "$work/estimator_labels.jsonl" <<'PY' &&
+import json, sys
+shown = {tuple(pair) for pair in json.load(open(sys.argv[1])).get("names", [])}
+written = set()
+for line in open(sys.argv[2]):
+    for t in json.loads(line)["tracks"]:
+        if t.get("marker"):
+            written.add((t["track"], t["marker"]))
+print(f"the page showed {len(shown)} (track, name) pairs; {len(shown & written)} of them in the estimator's labels")
+sys.exit(0 if shown and shown <= written else 1)
+PY
+    pass "the console's names are the estimator's" || fail "the console showed names the estimator did not write"
+fi
 
 # The client's view, scored like the estimator's own --out-labels (the same format).
 for who in client estimator; do

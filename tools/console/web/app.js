@@ -526,6 +526,7 @@ function updateTracks(tracks) {
   for (const [id, trail] of trails) {
     if (!seen.has(id)) { scene.remove(trail.label); dropLabel(trail.label); trails.delete(id); }
   }
+  page.trackLabels = trails;  // track id -> { label }: the text drawn beside each track (tests)
   trackGeometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
   let segments = 0;
   for (const trail of trails.values()) segments += Math.max(0, trail.points.length - 1);
@@ -653,16 +654,21 @@ function updateChainLegend(list) {
   for (const item of [...items.children]) if (!list.some((c) => c.name === item.dataset.chain)) item.remove();
 }
 
-// Orbit around the chain's tip from 0.4 m, keeping the direction the view looks from.
+// Orbit around `target` from `distance` m, keeping the direction the view looks from.
+function focusOn(target, distance) {
+  const direction = camera3d.position.clone().sub(controls.target).normalize();
+  controls.target.copy(target);
+  camera3d.position.copy(target).addScaledVector(direction, distance);
+  controls.update();
+  labelsDirty = true;
+}
+page.focusOn = (point, distance) => focusOn(new THREE.Vector3(...point), distance);
+
+// Orbit around the chain's tip from 0.4 m.
 function focusChain(name) {
   const c = page.state && page.state.chains.find((chain) => chain.name === name);
   if (!c || !c.tip) return;
-  const target = new THREE.Vector3(...c.tip);
-  const direction = camera3d.position.clone().sub(controls.target).normalize();
-  controls.target.copy(target);
-  camera3d.position.copy(target).addScaledVector(direction, 0.4);
-  controls.update();
-  labelsDirty = true;
+  focusOn(new THREE.Vector3(...c.tip), 0.4);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,0 +1,79 @@
+// SPDX-License-Identifier: Apache-2.0
+// Marker names and the marker set's sticks in the console's 3D view (docs/marker_sets.md, "Labels
+// on the wire"; docs/console.md), against the live labelling run of
+// tests/integration/test_live_labels.sh, in Debian's chromium driven by playwright-core. Checks
+// that the page receives the subject with its names and sticks, that each named track is drawn with
+// its name, and that the sticks are drawn (their light blue in the view). Writes the names the page
+// showed to --out for the shell to compare with the estimator's own --out-labels, and a
+// screenshot of the view (console_labels.png) to --shots.
+//   node console_labels_test.mjs --url <console URL with token> --out <results.json> --shots <dir>
+import { join } from 'node:path';
+import { parseArgs, runBrowserChecks, sleep, waitFor } from './browser.mjs';
+
+const args = parseArgs(process.argv.slice(2));
+const results = { names: [] };
+
+// Pixels of the sticks' colour (0x9ad1ff; the frusta's 0x6fa8dc is not counted) in the 3D view,
+// counted right after a render.
+function stickPixels() {
+  return new Promise((resolve) => requestAnimationFrame(() => {
+    const source = document.getElementById('view3d');
+    const copy = document.createElement('canvas');
+    copy.width = source.width; copy.height = source.height;
+    const context = copy.getContext('2d');
+    context.drawImage(source, 0, 0);
+    const pixels = context.getImageData(0, 0, copy.width, copy.height).data;
+    let n = 0;
+    for (let i = 0; i < pixels.length; i += 4) {
+      if (Math.abs(pixels[i] - 154) < 12 && Math.abs(pixels[i + 1] - 209) < 12 && pixels[i + 2] > 240) n += 1;
+    }
+    resolve(n);
+  }));
+}
+
+await runBrowserChecks({ width: 1400, height: 900 }, results, args.out, async (page, errors, check) => {
+  await page.goto(`${args.url}&view=3d`);
+  const t0 = Date.now();
+  const named = await waitFor(page, () => {
+    const s = window.panoptes.state && (window.panoptes.state.subjects || []).find((x) => x.name === 's1');
+    return s && Object.keys(s.names || {}).length >= 30 && window.panoptes.sticksDrawn >= 20;
+  }, null, 20000);
+  const subject = await page.evaluate(() => (window.panoptes.state.subjects || []).find((x) => x.name === 's1') || {});
+  check(named, `the page receives subject s1 with ${Object.keys(subject.names || {}).length} names and ` +
+    `${(subject.sticks || []).length} sticks, draws ${await page.evaluate(() => window.panoptes.sticksDrawn)} ` +
+    `(${Date.now() - t0} ms after loading)`);
+
+  // Several moments: every named track that is drawn carries its name as its label.
+  let drawn = 0, wrong = 0;
+  for (let k = 0; k < 5; ++k) {
+    const seen = await page.evaluate(() => new Promise((resolve) => requestAnimationFrame(() => {
+      const s = (window.panoptes.state.subjects || []).find((x) => x.name === 's1') || { names: {} };
+      const out = [];
+      for (const [id, trail] of window.panoptes.trackLabels || new Map()) {
+        const name = s.names[String(id)];
+        if (name) out.push([id, name, trail.label.userData.label.text]);
+      }
+      resolve({ stamp_ns: window.panoptes.state.stamp_ns, labels: out });
+    })));
+    for (const [id, name, text] of seen.labels) {
+      drawn += 1;
+      if (text !== name) wrong += 1;
+      results.names.push([id, name]);
+    }
+    await sleep(300);
+  }
+  check(drawn >= 100 && wrong === 0, `named tracks drawn with their names: ${drawn - wrong} of ${drawn} over 5 moments`);
+  // The subject from 3.2 m: its named markers' centroid (state.tracks: [id, x, y, z]).
+  await page.evaluate(() => {
+    const s = (window.panoptes.state.subjects || []).find((x) => x.name === 's1');
+    const named = window.panoptes.state.tracks.filter(([id]) => s && s.names[String(id)]);
+    if (!named.length) return;
+    const c = [1, 2, 3].map((k) => named.reduce((sum, t) => sum + t[k], 0) / named.length);
+    window.panoptes.focusOn(c, 3.2);
+  });
+  await sleep(400);
+  const blue = await page.evaluate(stickPixels);
+  check(blue > 300, `the sticks are drawn (${blue} pixels of their light blue in the view)`);
+  await page.locator('#view3d-panel').screenshot({ path: join(args.shots, 'console_labels.png') });
+  check(errors.length === 0, `no page errors (${errors.join('; ')})`);
+});
