@@ -7,7 +7,8 @@
 # rt/panoptes/labels and its view is scored against the simulator's truth: >= 99.5 % of the
 # visible marker-frames named right and <= 0.1 % wrong after the first 0.5 s, no left/right swap; a
 # client started late has the names with its first frames (transient-local map); the console's 3D
-# view draws the names and the marker set's sticks (console_labels.png for docs/marker_sets.md).
+# view draws the names and the marker set's sticks (console_labels.png for docs/marker_sets.md); the
+# run's recording exported to C3D names its points after the markers (read by tests/c3d/read_c3d.js).
 # By hand: PANOPTES_LABELS_WALK=rajagopal runs the same with the Rajagopal walk (walk8's own) and its
 # static trial and marker set; PANOPTES_LABELS_SEED=N sets the scene's seed (default walk8's, 8).
 source "$(dirname "$0")/lib.sh"
@@ -42,6 +43,11 @@ epoch=$((($(date +%s) + 4) * 1000000000))
   >"$work/client.log" 2>&1 &
 client=$!
 pids+=("$client")
+# The recording of the live run, exported with the names (rt/panoptes/labels, docs/recording.md).
+"$bin/panoptes_record" --out "$work/live.mcap" --topics rt/panoptes/frames rt/panoptes/labels --quiet \
+  2>"$work/record.log" &
+recorder=$!
+pids+=("$recorder")
 "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --subjects "$work/s1.yaml" \
   --soft-segments Torso --out-labels "$work/estimator_labels.jsonl" --duration 13 >"$work/estimator.log" 2>&1 &
 estimator=$!
@@ -75,6 +81,19 @@ wait "$estimator" && pass "estimator_node exited cleanly" || { fail "estimator_n
 timeout 20 tail --pid="$client" -f /dev/null
 timeout 20 tail --pid="$late" -f /dev/null
 grep "^estimator_node: labels:" "$work/estimator.log" || true
+kill -INT "$recorder" 2>/dev/null
+wait "$recorder" && pass "recorder stopped cleanly" || fail "recorder exit $?"
+expect_exit 0 "export the live recording to C3D" -- "$bin/panoptes_export" --in-recording "$work/live.mcap" \
+  --out "$work/live.c3d"
+# Read back by the independent reader: every name the estimator gave is a point of the C3D.
+node "$source_dir/tests/c3d/read_c3d.js" "$work/live.c3d" >"$work/c3d.json" 2>&1
+/usr/bin/python3 - "$work/c3d.json" "$work/estimator_labels.jsonl" <<'PY' && pass "the exported C3D names every marker the estimator named" || fail "the exported C3D's names: $(head -c 300 "$work/c3d.json")"
+import json, sys
+labels = set(json.load(open(sys.argv[1]))["labels"])
+named = {t["marker"] for line in open(sys.argv[2]) for t in json.loads(line)["tracks"] if t.get("marker")}
+print(f"C3D points named after markers: {len(named & labels)} of the {len(named)} names the estimator gave")
+sys.exit(0 if len(named) >= 41 and named <= labels else 1)
+PY
 if [ -n "$browser" ]; then
   wait "$browser" && pass "console: names and sticks drawn" || fail "console: names and sticks (exit $?)"
   cat "$work/browser.out"
