@@ -2,7 +2,6 @@
 #include "panoptes/session/label_stage.h"
 
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -10,8 +9,6 @@
 #include <thread>
 #include <utility>
 
-#include <sys/resource.h>
-#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include "panoptes/labelling_files/subject_model_file.h"
@@ -19,8 +16,6 @@
 namespace panoptes::session {
 
 namespace {
-
-constexpr int kWorkerNice = 5;  // the labeller thread's nice value above the frame path's
 
 std::vector<std::string> subject_names(const std::vector<labelling::SubjectModel>& models) {
   std::vector<std::string> names;
@@ -59,12 +54,6 @@ struct LabelStage::Core {
   }
 
   void work() {
-    // Below the frame path: on a busy machine the frames take the core first and the names wait
-    // (a name is up to a labelling period late anyway). Linux: nice applies per thread.
-    const auto self = static_cast<id_t>(::gettid());
-    errno = 0;
-    const int nice = ::getpriority(PRIO_PROCESS, self);
-    if (errno == 0) ::setpriority(PRIO_PROCESS, self, std::min(nice + kWorkerNice, 19));
     std::unique_lock<std::mutex> lock(mutex);
     for (;;) {
       wake.wait(lock, [this] { return stop || job_stamp != 0; });
