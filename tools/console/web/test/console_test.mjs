@@ -187,20 +187,32 @@ try {
         `preview on request drawn under cam0's blobs (${previewImage.width}x${previewImage.height} P5, ${previewImage.bright} bright pixels)`);
 
   // --- mask: drag a rectangle over the left half of cam1's image ------------------------------
+  // A second attempt when the first gesture sent nothing: in one full-suite run (a CPU-heavy unit
+  // test beside it) no add_mask followed the drag; alone and under a busy loop it always did. A
+  // page that never sends the mask still fails both.
   const card1 = page.locator('.card[data-camera="cam1"]');
-  await card1.locator('button.mask').click();
-  const box = await card1.locator('canvas').boundingBox();
-  await page.mouse.move(box.x + 1, box.y + 1);
-  await page.mouse.down();
-  await page.mouse.move(box.x + box.width * 0.4, box.y + box.height * 0.6, { steps: 5 });
-  await page.mouse.move(box.x + box.width / 2, box.y + box.height - 1, { steps: 5 });
-  await card1.screenshot({ path: join(args.shots, 'console_mask.png') });
-  await page.mouse.up();
-  const maskArgs = await waitFor(page, () => window.panoptes.results.some((r) => r.command === 'add_mask'), null, 5000)
-    ? await page.evaluate(() => window.panoptes.results.find((r) => r.command === 'add_mask').args) : null;
+  let maskArgs = null;
+  let attempts = 0;
+  while (!maskArgs && attempts < 2) {
+    attempts += 1;
+    // The button toggles the mask mode: press it only while it is off.
+    if (await card1.locator('button.mask.active').count() === 0) await card1.locator('button.mask').click();
+    await sleep(200);  // the mask mode's layout settled before the canvas is measured
+    const box = await card1.locator('canvas').boundingBox();
+    await page.mouse.move(box.x + 1, box.y + 1);
+    await page.mouse.down();
+    await page.mouse.move(box.x + box.width * 0.4, box.y + box.height * 0.6, { steps: 5 });
+    await page.mouse.move(box.x + box.width / 2, box.y + box.height - 1, { steps: 5 });
+    await card1.screenshot({ path: join(args.shots, 'console_mask.png') });
+    await page.mouse.up();
+    maskArgs = await waitFor(page, () => window.panoptes.results.some((r) => r.command === 'add_mask'), null, 5000)
+      ? await page.evaluate(() => window.panoptes.results.find((r) => r.command === 'add_mask').args) : null;
+  }
+  results.commands.mask_attempts = attempts;
   results.commands.mask_args = maskArgs;
   if (maskArgs) results.commands.mask_ms = await sentAt('add_mask', null);
-  check(maskArgs && maskArgs[0] === 'rect', `mask sent as add_mask ${maskArgs ? maskArgs.join(' ') : '(none)'}`);
+  check(maskArgs && maskArgs[0] === 'rect',
+        `mask sent as add_mask ${maskArgs ? maskArgs.join(' ') : '(none)'} (gesture ${attempts} of at most 2)`);
   await sleep(600);
   // The page has centroids only: a spot on the mask's edge keeps its outside pixels and its
   // centroid may lie a pixel or two inside; count those deeper than 3 px.
