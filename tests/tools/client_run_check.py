@@ -38,7 +38,8 @@ class ClientRun:
 
 def check_restart_delivery(checks, run, restart_ns, published2):
     """Two runs seen, >= 99% of the frames published while matched received, the restarted run's
-    last frame received, and delivery resumed within 2 s of the restart."""
+    last frame received, at most a second's frames of the new run missed before discovery, and
+    delivery resumed within 5 s of the restart (process start included)."""
     runs, frames = run.runs, run.frames
     checks.check(len(runs) == 2, f"{checks.who} saw two estimator runs ({len(runs)})")
     checks.check(run.stats["estimator_restarts"] == 1,
@@ -61,10 +62,20 @@ def check_restart_delivery(checks, run, restart_ns, published2):
                  f"received {received} of {matched} frames published while matched "
                  f"({100.0 * received / max(matched, 1):.2f}%) over {span_s:.1f} s; "
                  f"{first2['frame'] - 1} written by the new estimator before discovery")
+    # How soon the client had the new run: the frames the new estimator wrote before its writer
+    # matched this reader (discovery) are at most a second's worth (its rate measured on run 1).
+    # From the restart on, the time also holds the new process's start (participant, calibration,
+    # the first camera frames): 0.6 s on a quiet machine, 2.008 s once in a fresh clone's suite
+    # (its first frame, number 1, was received: nothing lost to discovery), so that total is
+    # bounded only loosely, as a liveness check (5 s).
     resume_s = (first2["receive_ns"] - restart_ns) * 1e-9
     gap_s = (first2["receive_ns"] - runs[0][-1]["receive_ns"]) * 1e-9
-    checks.check(resume_s <= 2.0, f"delivery resumed {resume_s:.3f} s after the estimator was restarted "
-                 f"(first frame of the new run: {first2['frame']}; {gap_s:.3f} s since the killed run's last frame)")
+    run1_s = max((runs[0][-1]["receive_ns"] - runs[0][0]["receive_ns"]) * 1e-9, 1e-3)
+    rate_hz = (len(runs[0]) - 1) / run1_s
+    checks.check(first2["frame"] - 1 <= rate_hz and resume_s <= 5.0,
+                 f"delivery resumed {resume_s:.3f} s after the estimator was restarted; {first2['frame'] - 1} "
+                 f"frames of the new run missed before discovery (at most a second's, {rate_hz:.0f}); "
+                 f"{gap_s:.3f} s since the killed run's last frame")
 
 
 def read_estimator_poses(work):
