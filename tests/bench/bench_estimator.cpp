@@ -82,11 +82,14 @@ double percentile(std::vector<double> values, double q) {
   return values[k];
 }
 
+// `calibration_mode`: the continuous calibration's mode (off | detect | correct; "": the default).
 Result run(const RingConfig& config, std::uint64_t seed, bool track_bodies = false,
-           std::size_t* bodies_tracked = nullptr) {
+           std::size_t* bodies_tracked = nullptr, const std::string& calibration_mode = "") {
   const Scene scene = Scene::from_yaml_string(scene_yaml(config, seed), ".", "bench_estimator scene");
   const auto frames = simulate(scene);
-  est::Tracker tracker;
+  est::TrackerOptions options;
+  if (!calibration_mode.empty()) options.calibration.mode = calibration_mode;
+  est::Tracker tracker(options);
   tracker.set_calibration(scene.calibration());
   if (track_bodies) tracker.set_bodies(scene.body_definitions());
   const TimeNs timed_from = kEpoch + panoptes::seconds_to_ns(config.warmup_s);
@@ -272,6 +275,35 @@ std::string print_inside_out_case(double seconds, std::uint64_t seed) {
   return buffer;
 }
 
+// The continuous calibration's cost (issue 36: with `correct` at most 1.1x `off`): the main case run
+// with each mode, alternately, `rounds` times; the sums of Tracker::process per mode.
+std::string print_calibration_case(const RingConfig& config, std::uint64_t seed, int rounds) {
+  const std::vector<std::string> modes = {"off", "detect", "correct"};
+  std::vector<double> seconds(modes.size(), 0.0);
+  std::vector<std::size_t> frames(modes.size(), 0);
+  for (int round = 0; round < rounds; ++round) {
+    for (std::size_t m = 0; m < modes.size(); ++m) {
+      const Result r = run(config, seed, false, nullptr, modes[m]);
+      seconds[m] += r.process_s;
+      frames[m] += r.frames;
+    }
+  }
+  const auto us = [&](std::size_t m) {
+    return seconds[m] * 1e6 / static_cast<double>(std::max<std::size_t>(frames[m], 1));
+  };
+  std::printf(
+      "continuous calibration: %d cameras x %.0f Hz, %d markers, %d rounds alternately: Tracker::process "
+      "%.2f us per frame with off, %.2f with detect (%.3fx), %.2f with correct (%.3fx)\n",
+      config.cameras, config.rate_hz, config.markers, rounds, us(0), us(1), us(1) / us(0), us(2),
+      us(2) / us(0));
+  char buffer[320];
+  std::snprintf(buffer, sizeof buffer,
+                "{\"rounds\": %d, \"off_us_per_frame\": %.3f, \"detect_us_per_frame\": %.3f, "
+                "\"correct_us_per_frame\": %.3f, \"detect_over_off\": %.4f, \"correct_over_off\": %.4f}",
+                rounds, us(0), us(1), us(2), us(1) / us(0), us(2) / us(0));
+  return buffer;
+}
+
 int run_command_line(int argc, char** argv) {
   RingConfig config;
   bool json = false;
@@ -305,6 +337,10 @@ int run_command_line(int argc, char** argv) {
          "--inside-out-seconds", inside_out_seconds,
          "simulated seconds of the inside-out case (deploy/scenes/inside_out.yaml); 0: no inside-out case")
       ->check(CLI::Range(0.0, 20.0));
+  int calibration_rounds = 3;
+  app.add_option("--calibration-rounds", calibration_rounds,
+                 "rounds of the continuous-calibration case (off, detect, correct alternately); 0: none")
+      ->check(CLI::Range(0, 100));
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   if (no_sweep) sweep.clear();
 
@@ -370,6 +406,8 @@ int run_command_line(int argc, char** argv) {
   }
   const std::string inside_out_json =
       inside_out_seconds > 0 ? print_inside_out_case(inside_out_seconds, seed) : "null";
+  const std::string calibration_json =
+      calibration_rounds > 0 ? print_calibration_case(config, seed, calibration_rounds) : "null";
   if (json) {
     std::string sweep_json;
     for (const Result& r : scaling) sweep_json += (sweep_json.empty() ? "" : ", ") + to_json(r);
@@ -378,9 +416,10 @@ int run_command_line(int argc, char** argv) {
     std::printf(
         "{\"cameras\": %d, \"rate_hz\": %.1f, \"warmup_s\": %.3f, \"seconds\": %.3f, \"main\": %s, "
         "\"scaling\": [%s], \"us_per_observation_ratio_last_to_first\": %.4f, \"bodies\": %s, \"chain\": "
-        "%s, \"inside_out\": %s}\n",
+        "%s, \"inside_out\": %s, \"calibration\": %s}\n",
         config.cameras, config.rate_hz, config.warmup_s, config.seconds, to_json(main_case).c_str(),
-        sweep_json.c_str(), flatness, bodies_json.c_str(), chain_json.c_str(), inside_out_json.c_str());
+        sweep_json.c_str(), flatness, bodies_json.c_str(), chain_json.c_str(), inside_out_json.c_str(),
+        calibration_json.c_str());
   }
   return 0;
 }

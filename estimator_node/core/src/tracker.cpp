@@ -386,11 +386,14 @@ struct Nearest {
   double d2 = std::numeric_limits<double>::infinity();
 };
 
-Nearest nearest_two(const std::vector<Eigen::Vector2d>& pixels, const Eigen::Vector2d& at) {
+// Looks only at the grid's cells within `radius` of `at`: exact for every distance up to `radius`;
+// a blob farther than that may come out infinite (callers judge only nearer ones).
+Nearest nearest_two(const std::vector<Eigen::Vector2d>& pixels, const BlobGrid& grid,
+                    const Eigen::Vector2d& at, double radius) {
   Nearest n;
-  for (std::size_t j = 0; j < pixels.size(); ++j) {
+  grid.for_each_near(at, radius, [&](std::size_t j) {
     const double d = (pixels[j] - at).norm();
-    if (!(d < n.d2)) continue;  // also skips NaN
+    if (!(d < n.d2)) return;  // also skips NaN
     if (d < n.d1) {
       n.d2 = n.d1;
       n.d1 = d;
@@ -398,7 +401,7 @@ Nearest nearest_two(const std::vector<Eigen::Vector2d>& pixels, const Eigen::Vec
     } else {
       n.d2 = d;
     }
-  }
+  });
   return n;
 }
 
@@ -440,19 +443,31 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
   }
   if (calibration_mode == CalibrationMode::kCorrect && monitor.quarantined(entry.camera))
     collect_for_resection(entry.camera, stamp, determined, pixels);
+  // The predictions in a grid: each blob and each candidate looks only at the cells around it
+  // (issue 36's cost at 32 cameras: all pairs took most of the monitor's time).
+  const auto& intrinsics = camera.intrinsics();
+  const BlobGrid near_predictions(predicted_pixels, intrinsics.width, intrinsics.height,
+                                  std::max(o.search_px, o.isolation_px));
   // The frame's blobs near some live track's prediction (a bumped camera's are near none).
   std::size_t explained = 0;
   const double search2 = o.search_px * o.search_px;
   for (const Eigen::Vector2d& blob : pixels) {
-    explained += std::any_of(predicted_pixels.begin(), predicted_pixels.end(),
-                             [&](const Eigen::Vector2d& p) { return (p - blob).squaredNorm() <= search2; });
+    bool near = false;
+    near_predictions.for_each_near(blob, o.search_px, [&](std::size_t k) {
+      near = near || (predicted_pixels[k] - blob).squaredNorm() <= search2;
+    });
+    explained += near ? 1 : 0;
   }
   monitor.add_blobs(entry.camera, stamp, pixels.size(), explained);
+  const double isolation2 = o.isolation_px * o.isolation_px;
+  const BlobGrid blob_grid(pixels, intrinsics.width, intrinsics.height, o.search_px);
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     const Eigen::Vector2d& rough = predicted_pixels[candidate_pixel[c]];
     bool isolated = true;
-    for (std::size_t k = 0; k < predicted_pixels.size() && isolated; ++k)
-      isolated = k == candidate_pixel[c] || (predicted_pixels[k] - rough).norm() > o.isolation_px;
+    near_predictions.for_each_near(rough, o.isolation_px, [&](std::size_t k) {
+      isolated =
+          isolated && (k == candidate_pixel[c] || (predicted_pixels[k] - rough).squaredNorm() > isolation2);
+    });
     if (!isolated) continue;
     const Track& track = core.tracks[candidates[c]];
     const PointState state = predicted(track.state, stamp, options.process_noise);
@@ -460,7 +475,9 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     if (!projection ||
         largest_eigenvalue(projection->S) > o.max_predicted_sigma_px * o.max_predicted_sigma_px)
       continue;
-    const Nearest nearest = nearest_two(pixels, projection->pixel);
+    // Within unique_ratio x search_px: the blob taken (<= search_px) and the next one it is
+    // compared with; the gate of `seen` (<= max_predicted_sigma_px wide) is far inside.
+    const Nearest nearest = nearest_two(pixels, blob_grid, projection->pixel, o.unique_ratio * o.search_px);
     const bool seen = std::isfinite(nearest.d1) &&
                       inside_gate(mahalanobis2(*projection, pixels[nearest.index]), options.gate_chi2);
     monitor.add_prediction(entry.camera, track.id, stamp, seen);
