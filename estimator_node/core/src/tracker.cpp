@@ -106,10 +106,11 @@ struct Projected {
 
 // The tracks and blobs of one frame that may belong together.
 struct Gating {
-  std::vector<GatedPair> gated;                     // (track, blob, d²)
-  std::vector<std::optional<Projected>> projected;  // by track; set when a blob came near it
-  std::vector<char> in_view;                        // by track: predicted inside the image
-  std::vector<char> near;                           // by blob: within some track's search radius
+  std::vector<GatedPair> gated;                       // (track, blob, d²)
+  std::vector<std::optional<Projected>> projected;    // by track; set when a blob came near it
+  std::vector<char> in_view;                          // by track: predicted inside the image
+  std::vector<char> near;                             // by blob: within some track's search radius
+  std::vector<std::optional<Eigen::Vector2d>> pixel;  // by track: its predicted position's pixel
 };
 
 }  // namespace
@@ -301,14 +302,16 @@ struct Tracker::Impl {
   void apply(Entry& entry, bool replaying);
   // The frame's residuals against the confirmed tracks the other cameras determine, to the
   // calibration monitor (docs/continuous_calibration.md, "Residuals").
-  void monitor_frame(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels);
+  // `gating`: the frame's gating, which association then uses (its projections are shared).
+  void monitor_frame(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels, const Gating& gating);
   // Mode correct, a quarantined camera's monitored frame: collected; with enough, its pose is
   // estimated again and, when well determined, applied (docs/continuous_calibration.md).
   void collect_for_resection(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
                              const std::vector<Eigen::Vector2d>& pixels);
   void apply_correction(int camera, TimeNs stamp, const ResectionResult& result);
+  // `early`: the gating already made for this frame (a monitored frame), if any.
   void associate(Entry& entry, const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used,
-                 bool replaying);
+                 bool replaying, std::optional<Gating> early = std::nullopt);
   // A replayed frame's previous association, checked against today's states: every pair must
   // still pass its gate. Then applied (true); otherwise nothing changes (false).
   bool reassociate(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used);
@@ -347,9 +350,11 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
   // Bodies and point tracks use the same blobs: the point tracks of body markers feed
   // identification, and the poses stay independent of the point tracks' lifecycle.
   const std::vector<char> excluded = used;
+  std::optional<Gating> early;  // a monitored frame's gating, made once for monitor and association
   if (calibration_mode != CalibrationMode::kOff) {
     if (!replaying && monitor.due(camera_index, frame.stamp_ns)) {
-      monitor_frame(entry, pixels);
+      early = gate(*models[camera_index], frame.stamp_ns, pixels, used);
+      monitor_frame(entry, pixels, *early);
       monitor.judge(camera_index, frame.stamp_ns);
     }
     // A quarantined camera's blobs are not fused: tracking continues on the other cameras.
@@ -359,7 +364,7 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
       return;
     }
   }
-  associate(entry, pixels, used, replaying);
+  associate(entry, pixels, used, replaying, std::move(early));
   initiate(frame, camera_index, pixels, used);
   prune(frame.stamp_ns);
   if (!core.bodies.empty()) {
@@ -411,7 +416,8 @@ Nearest nearest_two(const std::vector<Eigen::Vector2d>& pixels, const BlobGrid& 
 // project_point()), but associated by a wider, unambiguous nearest-blob rule instead of the gate:
 // a bumped camera's blobs fall outside the gate (0.5° is ~9 px at f = 1000 px, the gate of a
 // well-tracked marker ~3 px), and gated innovations alone would hide the bias by censoring it.
-void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels) {
+void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels,
+                                  const Gating& gating) {
   constexpr std::size_t kMaxBlobs = 1024;  // a frame of garbage is not worth monitoring
   if (pixels.empty() || pixels.size() > kMaxBlobs) return;
   const auto& o = options.calibration;
@@ -423,9 +429,7 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
   std::vector<Eigen::Vector3d> determined;        // their positions, for a correction
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
-    const Eigen::Vector3d p_cam = camera.T_cam_world().apply(track.position_at(stamp));
-    if (p_cam.z() < options.init.min_depth_m) continue;
-    const auto pixel = camera.project_camera_point(p_cam);
+    const auto& pixel = gating.pixel[i];  // gate(): the same position_at(stamp), depth and projection
     if (!pixel) continue;
     predicted_pixels.push_back(*pixel);
     if (!track.confirmed || stamp - track.last_update_ns > options.coast_after_ns) continue;
@@ -470,8 +474,15 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     });
     if (!isolated) continue;
     const Track& track = core.tracks[candidates[c]];
-    const PointState state = predicted(track.state, stamp, options.process_noise);
-    const auto projection = project_point(state, camera, options.measurement_noise_px);
+    // The gating's projection when it made one with the same process noise (not adapted).
+    std::optional<PointProjection> projection;
+    const auto& shared = gating.projected[candidates[c]];
+    if (shared && track.sigma2(options.process_noise) == options.process_noise) {
+      projection = shared->projection;
+    } else {
+      projection = project_point(predicted(track.state, stamp, options.process_noise), camera,
+                                 options.measurement_noise_px);
+    }
     if (!projection ||
         largest_eigenvalue(projection->S) > o.max_predicted_sigma_px * o.max_predicted_sigma_px)
       continue;
@@ -561,6 +572,7 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
   projected.resize(core.tracks.size());
   gating.near.assign(pixels.size(), 0);
   gating.in_view.assign(core.tracks.size(), 0);
+  gating.pixel.assign(core.tracks.size(), std::nullopt);
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
     const double dt = ns_to_seconds(stamp - track.state.stamp_ns);
@@ -569,6 +581,7 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
     if (p_cam.z() < options.init.min_depth_m) continue;
     const auto pixel = camera.project_camera_point(p_cam);
     if (!pixel) continue;
+    gating.pixel[i] = pixel;
     const auto& P = track.state.P.matrix();
     const double trace = P.block<3, 3>(0, 0).trace() + 2.0 * dt * P.block<3, 3>(0, 3).trace() +
                          dt * dt * P.block<3, 3>(3, 3).trace() +
@@ -690,7 +703,7 @@ bool Tracker::Impl::reassociate(const Entry& entry, const std::vector<Eigen::Vec
 }
 
 void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& pixels,
-                              std::vector<char>& used, bool replaying) {
+                              std::vector<char>& used, bool replaying, std::optional<Gating> early) {
   const std::uint64_t digest = tracks_digest();
   if (replaying && options.reuse_replay_associations && entry.associated && entry.tracks_digest == digest &&
       reassociate(entry, pixels, used)) {
@@ -701,7 +714,7 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
   const TimeNs stamp = entry.frame.stamp_ns;
   entry.associations.clear();
   entry.tracks_digest = digest;
-  const Gating gating = gate(*models[camera_index], stamp, pixels, used);
+  const Gating gating = early ? std::move(*early) : gate(*models[camera_index], stamp, pixels, used);
   const auto& gated = gating.gated;
   const auto& projected = gating.projected;
   const auto& in_view = gating.in_view;
