@@ -64,11 +64,15 @@ expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --sce
 "$python" "$source_dir/tests/tools/python_client_probe.py" --out "$work/client.jsonl" --duration 20 >"$work/probe.log" 2>&1 &
 probe=$!
 pids+=("$probe")
-replay_clients_scene_with_restart
-sleep 3
-"$python" "$source_dir/examples/plot_body.py" --body tool --duration 3 --save "$work/tool.png" >"$work/plot.out" 2>"$work/plot.err" &
+# plot_body.py starts with the run and waits for it (--timeout 20: also across the restart's gap).
+# Started 3 s into the run, its interpreter and matplotlib took so long on a loaded machine (a
+# fresh clone's suite) that its window began after the restarted run had ended.
+"$python" "$source_dir/examples/plot_body.py" --body tool --duration 3 --timeout 20 --save "$work/tool.png" \
+  >"$work/plot.out" 2>"$work/plot.err" &
 plot=$!
 pids+=("$plot")
+replay_clients_scene_with_restart
+sleep 3
 expect_exit 0 "log_poses_csv.py logs live poses" -- "$python" "$source_dir/examples/log_poses_csv.py" --duration 3 \
   --out "$work/poses.csv"
 rate_line=$(grep -E "^log_poses_csv: frames at [0-9]+\.[0-9]+ Hz \((fixed rate|one per processed camera frame)\)" "$work/last.err")
