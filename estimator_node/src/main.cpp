@@ -88,19 +88,36 @@ std::optional<session::ChainStage> chain_stage(const app::NodeCommandLine& comma
 }
 
 // Live auto-labelling (--subjects, docs/marker_sets.md), if asked for.
-std::optional<session::LabelStage> label_stage(const app::NodeCommandLine& command_line) {
-  if (command_line.subjects.empty()) {
-    if (!command_line.out_labels.empty()) throw panoptes::ConfigError("--out-labels", "", "needs --subjects");
+std::optional<session::LabelStage> label_stage(const app::NodeCommandLine& command_line,
+                                               const session::LabellingSettings& settings) {
+  if (settings.models.empty()) {
+    if (!command_line.out_labels.empty())
+      throw panoptes::ConfigError("--out-labels", "", "needs --subjects (or subjects: models: in --config)");
     return std::nullopt;
   }
   panoptes::labelling::LabellerOptions options;
-  options.soft_segments = command_line.soft_segments;
-  options.min_track_age = command_line.label_min_track_age;
+  options.soft_segments = settings.soft_segments;
+  options.min_track_age = settings.min_track_age;
   std::optional<session::LabelStage> stage(session::LabelStage::from_files(
-      command_line.subjects, options, command_line.out_labels,
-      command_line.label_rate_hz > 0.0 ? panoptes::seconds_to_ns(1.0 / command_line.label_rate_hz) : 0));
-  session::log("labelling with " + std::to_string(command_line.subjects.size()) + " subject model" +
-               (command_line.subjects.size() == 1 ? "" : "s"));
+      settings.models, options, command_line.out_labels,
+      settings.rate_hz > 0.0 ? panoptes::seconds_to_ns(1.0 / settings.rate_hz) : 0));
+  session::log("labelling with " + std::to_string(settings.models.size()) + " subject model" +
+               (settings.models.size() == 1 ? "" : "s"));
+  return stage;
+}
+
+// Live segment poses after the labels (subjects: segment_poses, docs/marker_sets.md), if asked for.
+std::optional<session::SegmentStage> segment_stage(const std::optional<session::LabelStage>& labels,
+                                                   const session::LabellingSettings& settings) {
+  if (!labels || !settings.segment_poses) return std::nullopt;
+  panoptes::labelling::KinematicsOptions options;
+  options.up = *panoptes::labelling::axis_from_name(settings.static_up);  // checked with the settings
+  options.forward = *panoptes::labelling::axis_from_name(settings.static_forward);
+  std::vector<panoptes::labelling::SubjectModel> models;
+  for (std::size_t i = 0; i < labels->subject_count(); ++i) models.push_back(labels->model(i));
+  std::optional<session::SegmentStage> stage(std::in_place, std::move(models), options);
+  session::log("segment poses: " + std::to_string(stage->segment_count()) +
+               " segments published like bodies");
   return stage;
 }
 
@@ -109,7 +126,7 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
   session::OfflineReplayOptions replay{command_line.replay_arrival, !command_line.quiet};
   std::optional<session::ChainStage> chains = chain_stage(command_line);
   if (chains) replay.chains = &*chains;
-  std::optional<session::LabelStage> labels = label_stage(command_line);
+  std::optional<session::LabelStage> labels = label_stage(command_line, estimator.config().subjects);
   if (labels) replay.labels = &*labels;
   if (!command_line.in_recording.empty()) {
     session::FeatureFiles input =
@@ -132,6 +149,8 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
   live.quiet = command_line.quiet;
   if (chains) live.chains = &*chains;
   if (labels) live.labels = &*labels;
+  const std::optional<session::SegmentStage> segments = segment_stage(labels, estimator.config().subjects);
+  if (segments) live.segments = &*segments;
   const int exit_code = app::run_live(live, estimator, body_file);
   if (labels) {
     labels->flush();

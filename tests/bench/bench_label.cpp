@@ -5,8 +5,10 @@
 // and 0.7 s later in the walk),
 // every marker a track with a stable id, hidden markers left out. Labeller::update runs on every
 // instant with the instant's time, as the estimator's labelling stage does; its time is divided by
-// the subjects. Also reported: the share of marker-instants named right, and names that crossed to
-// another subject (must be 0). Goal: <= 50 us per subject-frame on one core.
+// the subjects. Also reported: the share of marker-instants named right, names that crossed to
+// another subject (must be 0), and the cost of the segment poses the estimator publishes after the
+// names (session::SegmentStage::append on the instant's named markers, docs/marker_sets.md "Segment
+// poses live"), per subject-frame. Goal: <= 50 us per subject-frame on one core.
 //   bench_label [--json] [--subjects 1,2,4] [--rate-hz 240] [--seconds 4]
 // With --json the last line of output is one JSON object (docs/benchmarks.md).
 #include <algorithm>
@@ -14,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -25,6 +28,7 @@
 #include "panoptes/labelling_files/marker_set_file.h"
 #include "panoptes/labelling_files/static_trial.h"
 #include "panoptes/process.h"
+#include "panoptes/session/segment_stage.h"
 
 namespace {
 
@@ -34,6 +38,7 @@ namespace fs = std::filesystem;
 struct Cell {
   int subjects = 0;
   double mean_us = 0, p99_us = 0;  // per subject-frame
+  double segments_mean_us = 0, segments_p99_us = 0;  // segment poses, per subject-frame
   double right_percent = 0;
   long crossed = 0;  // a person's marker named by another subject than the one naming that person
   long instants = 0;
@@ -77,7 +82,13 @@ Cell run_cell(const lab::SubjectModel& model, const lab::MarkerSamples& walk, in
   lab::LabellerOptions options;
   options.soft_segments = {"Torso"};
   lab::Labeller labeller(models, options);
+  const panoptes::session::SegmentStage segments(models, lab::KinematicsOptions{});
+  std::map<std::string, int> segment_ids;
+  for (const auto& description : segments.descriptions())
+    segment_ids.emplace(description.name, static_cast<int>(segment_ids.size()) + 1);
+  panoptes::session::FrameOutput frame;
   std::vector<double> per_subject_us;
+  std::vector<double> segments_us;
   double visible = 0, right = 0;
   Cell cell;
   cell.subjects = subjects;
@@ -105,13 +116,24 @@ Cell run_cell(const lab::SubjectModel& model, const lab::MarkerSamples& walk, in
     const double us =
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
     per_subject_us.push_back(us / subjects);
-    for (const auto& point : points) {
+    frame.bodies.clear();
+    frame.markers.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const auto& point = points[i];
       const std::size_t person = point.track / 1000 - 1, m = point.track % 1000;
       const auto label = labeller.label_of(point.track);
       visible += 1;
+      frame.markers[i].track.p = point.position_m;
+      frame.markers[i].subject = label ? models[label->subject].subject : "";
+      frame.markers[i].name = label ? label->marker : "";
       if (!label) continue;
       named.push_back({person, label->subject, label->marker == walk.names[m]});
     }
+    const auto segments_start = std::chrono::steady_clock::now();
+    segments.append(frame, segment_ids);
+    segments_us.push_back(
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - segments_start).count() /
+        subjects);
   }
   // The subjects share one model, so which subject takes which person is the labeller's choice:
   // each person is the subject that names most of its markers, a different subject per person; a
@@ -141,6 +163,11 @@ Cell run_cell(const lab::SubjectModel& model, const lab::MarkerSamples& walk, in
   cell.mean_us = per_subject_us.empty() ? 0 : sum / static_cast<double>(per_subject_us.size());
   cell.p99_us = per_subject_us.empty() ? 0 : per_subject_us[per_subject_us.size() * 99 / 100];
   cell.right_percent = visible > 0 ? 100.0 * right / visible : 0.0;
+  std::sort(segments_us.begin(), segments_us.end());
+  double segments_sum = 0;
+  for (double us : segments_us) segments_sum += us;
+  cell.segments_mean_us = segments_us.empty() ? 0 : segments_sum / static_cast<double>(segments_us.size());
+  cell.segments_p99_us = segments_us.empty() ? 0 : segments_us[segments_us.size() * 99 / 100];
   return cell;
 }
 
@@ -176,20 +203,22 @@ int run(int argc, char** argv) {
     const Cell& c = cells.back();
     std::printf(
         "%d subject%s at %.0f Hz: %.1f us per subject-frame (mean), p99 %.1f us; %.2f %% of marker-instants "
-        "named right, %ld named by another subject than their person's, %ld instants\n",
+        "named right, %ld named by another subject than their person's, %ld instants; segment poses %.1f us per "
+        "subject-frame (mean), p99 %.1f us\n",
         c.subjects, c.subjects == 1 ? "" : "s", rate_hz, c.mean_us, c.p99_us, c.right_percent, c.crossed,
-        c.instants);
+        c.instants, c.segments_mean_us, c.segments_p99_us);
   }
   std::printf("goal: <= 50 us per subject-frame on one core (issue 33)\n");
   if (json) {
     std::string text = "{\"rate_hz\": " + std::to_string(rate_hz) + ", \"cells\": [";
     for (std::size_t i = 0; i < cells.size(); ++i) {
       const Cell& c = cells[i];
-      char entry[256];
+      char entry[320];
       std::snprintf(entry, sizeof entry,
                     "%s{\"subjects\": %d, \"mean_us\": %.2f, \"p99_us\": %.2f, \"right_percent\": %.3f, "
-                    "\"crossed\": %ld}",
-                    i == 0 ? "" : ", ", c.subjects, c.mean_us, c.p99_us, c.right_percent, c.crossed);
+                    "\"crossed\": %ld, \"segments_mean_us\": %.2f, \"segments_p99_us\": %.2f}",
+                    i == 0 ? "" : ", ", c.subjects, c.mean_us, c.p99_us, c.right_percent, c.crossed,
+                    c.segments_mean_us, c.segments_p99_us);
       text += entry;
     }
     std::printf("%s]}\n", text.c_str());

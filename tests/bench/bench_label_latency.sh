@@ -7,7 +7,9 @@
 # by panoptes_client_probe. Runs alternate labelling off and on (--subjects), RUNS of each, and
 # print per mode the p50/p99/max of the frame's output stage (the filter update -> the frame was
 # written, where the labelling stage runs) and of capture -> received, over every frame after the
-# first second, with the runs pooled. Last line: one JSON object.
+# first second, with the runs pooled. A third mode, "names", labels without the segment poses
+# (`subjects: segment_poses: false`), so the poses' own share shows (docs/marker_sets.md, "Segment
+# poses live"). Last line: one JSON object.
 #   tests/bench/bench_label_latency.sh <build dir> [runs (2)] [seconds per run (8)]
 set -euo pipefail
 build="$(cd "${1:?build directory}" && pwd)"
@@ -34,7 +36,8 @@ sed -e "s/^duration: .*/duration: $((seconds + 1)).0/" -e 's/^  false_blobs: .*/
 
 run() {  # MODE INDEX: one live run; the probe's frames in $work/MODE.INDEX.jsonl
   local mode="$1" index="$2" args=() epoch
-  [ "$mode" = on ] && args=(--subjects "$work/s1.yaml" --soft-segments Torso)
+  [ "$mode" = off ] || args=(--subjects "$work/s1.yaml" --soft-segments Torso)
+  [ "$mode" = names ] && args+=(--config "$work/no_segments.yaml")
   epoch=$((($(date +%s) + 3) * 1000000000))
   "$bin/panoptes_client_probe" --out "$work/$mode.$index.jsonl" --duration $((seconds + 5)) >/dev/null 2>&1 &
   local probe=$!
@@ -51,8 +54,10 @@ run() {  # MODE INDEX: one live run; the probe's frames in $work/MODE.INDEX.json
   echo "bench_label_latency: run $index labelling $mode done" >&2
 }
 
+printf 'subjects:\n  segment_poses: false\n' >"$work/no_segments.yaml"
 for ((i = 1; i <= runs; i++)); do
   run off "$i"
+  run names "$i"
   run on "$i"
 done
 
@@ -63,7 +68,7 @@ def q(values, p):
     values = sorted(values)
     return values[min(len(values) - 1, int(len(values) * p))] if values else float("nan")
 result = {"runs": runs}
-for mode in ("off", "on"):
+for mode in ("off", "names", "on"):
     output, total, labelled = [], [], 0
     for path in sorted(glob.glob(f"{work}/{mode}.*.jsonl")):
         frames = [json.loads(l) for l in open(path) if '"type":"frame"' in l]
@@ -86,7 +91,9 @@ for mode in ("off", "on"):
           f"{row['capture_to_receive_ms']['max']:.3f} ms")
 for stage in ("output_ms", "capture_to_receive_ms"):
     result["added_p99_" + stage] = round(result["on"][stage]["p99"] - result["off"][stage]["p99"], 4)
-print(f"added by labelling at p99: output stage {result['added_p99_output_ms']:+.3f} ms, "
-      f"capture->received {result['added_p99_capture_to_receive_ms']:+.3f} ms")
+    result["names_added_p99_" + stage] = round(result["names"][stage]["p99"] - result["off"][stage]["p99"], 4)
+print(f"added by labelling with segment poses at p99: output stage {result['added_p99_output_ms']:+.3f} ms, "
+      f"capture->received {result['added_p99_capture_to_receive_ms']:+.3f} ms; names only: "
+      f"{result['names_added_p99_output_ms']:+.3f} ms, {result['names_added_p99_capture_to_receive_ms']:+.3f} ms")
 print(json.dumps(result))
 PY

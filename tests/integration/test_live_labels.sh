@@ -10,7 +10,9 @@
 # view draws the names and the marker set's sticks (console_labels.png for docs/marker_sets.md); the
 # run's recording exported to C3D names its points after the markers (read by tests/c3d/read_c3d.js).
 # By hand: PANOPTES_LABELS_WALK=rajagopal runs the same with the Rajagopal walk (walk8's own) and its
-# static trial and marker set; PANOPTES_LABELS_SEED=N sets the scene's seed (default walk8's, 8).
+# static trial and marker set; PANOPTES_LABELS_SEED=N sets the scene's seed (default walk8's, 8);
+# PANOPTES_LABELS_SUBJECTS=2 plays walk1 twice (1.5 m apart, the second 0.7 s later, as
+# test_label_two_subjects offline) with two models s1, s2, scored per subject (no name crosses).
 source "$(dirname "$0")/lib.sh"
 data="$source_dir/../shared/data/static"
 probe="$bin/panoptes_client_probe"
@@ -28,13 +30,32 @@ fi
 require_shared_data "$static"
 [ -z "${PANOPTES_LABELS_SEED:-}" ] || walk_args+=(-e "s/^seed: .*/seed: $PANOPTES_LABELS_SEED/")
 
-expect_exit 0 "model from the static trial" -- "$bin/panoptes_label" model \
-  --static "$static" --markerset "$markerset" --out "$work/s1.yaml" --subject s1
+subjects=(s1)
+[ "${PANOPTES_LABELS_SUBJECTS:-1}" = 2 ] && subjects=(s1 s2)
+mkdir -p "$work/models"
+for s in "${subjects[@]}"; do
+  expect_exit 0 "model $s from the static trial" -- "$bin/panoptes_label" model \
+    --static "$static" --markerset "$markerset" --out "$work/models/$s.yaml" --subject "$s"
+done
+# The subjects as settings (`subjects:` in --config; a model's path is relative to the file).
+models=$(printf 'models/%s.yaml, ' "${subjects[@]}")
+printf 'subjects:\n  models: [%s]\n  soft_segments: [Torso]\n' "${models%, }" >"$work/settings.yaml"
 
 # walk8's cameras and effects, walk1 instead of the 41-marker walk, 0.3 false blobs per frame.
 scene="$work/walk1.yaml"
 sed -e 's/^duration: .*/duration: 8.0/' -e 's/^  false_blobs: .*/  false_blobs: 0.3/' "${walk_args[@]}" \
   "$source_dir/deploy/scenes/walk8.yaml" >"$scene"
+score_args=()
+if [ "${#subjects[@]}" = 2 ]; then
+  sed -i '/^trc:/,$d' "$scene"
+  walk1="$data/gait2392_subject01_walk1.trc"
+  cat >>"$scene" <<YAML
+trc:
+  - {file: $walk1, prefix: s1/, offset: [-0.58, -0.75, 0], turnaround: 0.5, start: 0.125, occlusion: {facing_angle: 100}}
+  - {file: $walk1, prefix: s2/, offset: [-0.58, 0.75, 0], turnaround: 0.5, start: 0.825, occlusion: {facing_angle: 100}}
+YAML
+  score_args=(--by-subject)
+fi
 expect_exit 0 "simulate walk1 through eight cameras" -- "$bin/panoptes_sim" features --scene "$scene" \
   --out-dir "$work/sim"
 
@@ -48,8 +69,8 @@ pids+=("$client")
   2>"$work/record.log" &
 recorder=$!
 pids+=("$recorder")
-"$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --subjects "$work/s1.yaml" \
-  --soft-segments Torso --out-labels "$work/estimator_labels.jsonl" --duration 13 >"$work/estimator.log" 2>&1 &
+"$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --config "$work/settings.yaml" \
+  --out-labels "$work/estimator_labels.jsonl" --duration 13 >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
 replay_cameras "$epoch" 11 cam0 cam1 cam2 cam3 cam4 cam5 cam6 cam7
@@ -90,7 +111,10 @@ node "$source_dir/tests/c3d/read_c3d.js" "$work/live.c3d" >"$work/c3d.json" 2>&1
 /usr/bin/python3 - "$work/c3d.json" "$work/estimator_labels.jsonl" <<'PY' && pass "the exported C3D names every marker the estimator named" || fail "the exported C3D's names: $(head -c 300 "$work/c3d.json")"
 import json, sys
 labels = set(json.load(open(sys.argv[1]))["labels"])
-named = {t["marker"] for line in open(sys.argv[2]) for t in json.loads(line)["tracks"] if t.get("marker")}
+records = [json.loads(line) for line in open(sys.argv[2])]
+several = len({t["subject"] for r in records for t in r["tracks"] if t.get("subject")}) > 1
+# Several subjects: C3D points are "<subject>:<marker>" (export, docs/marker_sets.md).
+named = {(t["subject"] + ":" if several else "") + t["marker"] for r in records for t in r["tracks"] if t.get("marker")}
 print(f"C3D points named after markers: {len(named & labels)} of the {len(named)} names the estimator gave")
 sys.exit(0 if len(named) >= 41 and named <= labels else 1)
 PY
@@ -115,12 +139,28 @@ fi
 # The client's view, scored like the estimator's own --out-labels (the same format).
 for who in client estimator; do
   if /usr/bin/python3 "$score" "$work/${who}_labels.jsonl" "$work/sim/truth.jsonl" --skip-s 0.5 \
-    --truth-shift-ns $((epoch - 1700000000000000000)) --min-right 99.5 --max-wrong 0.1 >"$work/${who}_score.json" 2>&1; then
+    --truth-shift-ns $((epoch - 1700000000000000000)) --min-right 99.5 --max-wrong 0.1 "${score_args[@]}" \
+    >"$work/${who}_score.json" 2>&1; then
     pass "$who: names right and wrong within the issue's bounds: $(cat "$work/${who}_score.json")"
   else
     fail "$who: names: $(cat "$work/${who}_score.json")"
   fi
 done
+if [ "${#subjects[@]}" = 2 ]; then
+  crossings=$(jq -r '.subject_crossings' "$work/client_score.json" 2>/dev/null)
+  [ "${crossings:-x}" = 0 ] && pass "no name crosses subjects in the client's names" ||
+    fail "names crossing subjects in the client's names: ${crossings:-not reported}"
+fi
+# Segment poses (docs/marker_sets.md, "Segment poses live"): the client receives each segment as a
+# body "<subject>/<segment>" with its description; posed, the described markers lie where the true
+# markers were (the soft Torso left out).
+if /usr/bin/python3 "$source_dir/tests/integration/score_segments.py" "$work/client.jsonl" "$work/sim/truth.jsonl" \
+  --truth-shift-ns $((epoch - 1700000000000000000)) --skip-s 0.5 --every 10 --exclude Torso \
+  --max-rms-mm 10 --min-posed 95 >"$work/segments.json" 2>&1; then
+  pass "segment poses at the client: $(jq -c '{segments_described, worst_rms_mm, least_posed_percent}' "$work/segments.json")"
+else
+  fail "segment poses at the client: $(cat "$work/segments.json")"
+fi
 swaps=$(jq -r '.left_right_swaps' "$work/client_score.json" 2>/dev/null)
 [ "${swaps:-x}" = 0 ] && pass "no left/right swap in the client's names" ||
   fail "left/right swaps in the client's names: ${swaps:-not reported}"

@@ -2,6 +2,8 @@
 #include "panoptes/estimator_app/command_line.h"
 #include "panoptes/dds/domain_option.h"
 
+#include <filesystem>
+
 #include <CLI/CLI.hpp>
 
 #include "panoptes/cli.h"
@@ -102,6 +104,29 @@ struct SettingsFlags {
                 "(docs/ros2.md)")
              ->check(CLI::Validator(session::check_ros2_namespace, "NAMESPACE")),
          [this](auto& c) { c.ros2.topic_namespace = values.ros2.topic_namespace; });
+    auto& subjects = values.subjects;
+    bind(app.add_option("--subjects", subjects.models,
+                        "label point tracks with marker names from these subject models (panoptes_label "
+                        "model; comma-separated; `subjects: models:` in --config; docs/marker_sets.md)")
+             ->delimiter(','),
+         [this](auto& c) {
+           // From the working folder, written absolute: --print-config's output loads from anywhere.
+           c.subjects.models.clear();
+           for (const auto& model : values.subjects.models)
+             c.subjects.models.push_back(std::filesystem::absolute(model).lexically_normal().string());
+         });
+    bind(app.add_option("--soft-segments", subjects.soft_segments,
+                        "with --subjects: segments that deform while moving (e.g. Torso; comma-separated)")
+             ->delimiter(','),
+         [this](auto& c) { c.subjects.soft_segments = values.subjects.soft_segments; });
+    bind(app.add_option("--label-rate-hz", subjects.rate_hz,
+                        "with --subjects: run the labeller at most this often (0: every processed frame)")
+             ->check(CLI::Range(0.0, 100000.0)),
+         [this](auto& c) { c.subjects.rate_hz = values.subjects.rate_hz; });
+    bind(app.add_option("--label-min-track-age", subjects.min_track_age,
+                        "with --subjects: a track processed fewer frames is not used to acquire a subject")
+             ->check(CLI::Range(1, 1000000)),
+         [this](auto& c) { c.subjects.min_track_age = values.subjects.min_track_age; });
   }
 };
 
@@ -132,21 +157,6 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
       "--out-chains", c.out_chains,
       "write the articulated chains of the bodies file (type: chain) and their grab/release events as "
       "Chain JSONL (docs/articulated.md; needs --bodies; live mode also publishes rt/panoptes/chains)");
-  app.add_option("--subjects", c.subjects,
-                 "label point tracks with marker names from these subject models (panoptes_label model; "
-                 "comma-separated; docs/marker_sets.md)")
-      ->delimiter(',');
-  app.add_option("--soft-segments", c.soft_segments,
-                 "with --subjects: segments that deform while moving (e.g. Torso; comma-separated)")
-      ->delimiter(',');
-  app.add_option("--label-rate-hz", c.label_rate_hz,
-                 "with --subjects: run the labeller at most this often (0: every processed frame)")
-      ->check(CLI::Range(0.0, 100000.0))
-      ->capture_default_str();
-  app.add_option("--label-min-track-age", c.label_min_track_age,
-                 "with --subjects: a track processed fewer frames is not used to acquire a subject")
-      ->check(CLI::Range(1, 1000000))
-      ->capture_default_str();
   app.add_option("--out-labels", c.out_labels,
                  "with --subjects: write the labelled tracks of every processed frame as JSONL");
   app.add_option("--dds-profile", c.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");

@@ -64,7 +64,8 @@ msg::MocapFrame to_frame_message(const session::FrameOutput& frame, TimeNs publi
 
 msg::BodyDescriptions to_descriptions_message(const std::vector<BodyDefinition>& bodies,
                                               std::uint64_t generation, const std::string& source,
-                                              TimeNs stamp_ns, const std::vector<BodyDefinition>& rigs) {
+                                              TimeNs stamp_ns, const std::vector<BodyDefinition>& rigs,
+                                              const std::vector<BodyDefinition>& segments) {
   msg::BodyDescriptions message;
   message.stamp_ns(stamp_ns);
   message.generation(generation);
@@ -78,12 +79,18 @@ msg::BodyDescriptions to_descriptions_message(const std::vector<BodyDefinition>&
   // A rig named like a body would make the set malformed for clients (a name twice): left out.
   for (const auto& rig : rigs)
     if (names.insert(rig.name).second) listed.push_back(&rig);
+  const std::size_t rig_end = listed.size();
+  for (const auto& segment : segments)
+    if (names.insert(segment.name).second) listed.push_back(&segment);
   for (std::size_t i = 0; i < listed.size(); ++i) {
     const BodyDefinition& body = *listed[i];
     msg::BodyDescription description;
     description.name(body.name);
     description.id(++id);
-    description.kind(i >= body_count ? "rig" : body.kind == BodyKind::kLed7 ? "led7" : "passive");
+    description.kind(i >= rig_end                   ? "segment"
+                     : i >= body_count              ? "rig"
+                     : body.kind == BodyKind::kLed7 ? "led7"
+                                                    : "passive");
     for (const auto& marker : body.markers) {
       msg::MarkerPosition position;
       position.position({marker.x(), marker.y(), marker.z()});

@@ -148,7 +148,8 @@ class LiveEstimator {
   void publish_descriptions_if_changed();
   // --subjects: the names on rt/panoptes/labels when the labelling stage's map changed.
   void publish_labels_if_changed();
-  // --subjects: each marker's subject and name in a frame's output (rt/markers carries them).
+  // --subjects: each marker's subject and name in a frame's output (rt/markers carries them), and
+  // the segments' poses among its bodies.
   void name_markers(session::FrameOutput& output) const;
   // --continuous-calibration correct: each camera pose the tracker corrected is logged, becomes the
   // calibration in use (rt/panoptes/calibration) and, with a calibration file, a new version of it.
@@ -193,6 +194,7 @@ class LiveEstimator {
   std::size_t cameras_lost_ = 0;        // at the last health check: a change publishes the status at once
   std::uint64_t descriptions_generation_ = 0;  // the bodies file's generation last published
   std::uint64_t descriptions_sent_ = 0;        // BodyDescriptions.generation: 1, 2, ... per run
+  std::map<std::string, int> segment_ids_;     // the segments' ids in the descriptions last written
   std::optional<LatencyProbeEchoer> latency_probe_;
   std::optional<Ros2Outputs> ros2_;  // docs/ros2.md
   std::optional<session::JsonlOutputs> outputs_;
@@ -387,9 +389,15 @@ void LiveEstimator::publish_chains(const FeatureFrame& frame) {
 void LiveEstimator::publish_descriptions_if_changed() {
   if (descriptions_sent_ > 0 && body_file_.generation() == descriptions_generation_) return;
   descriptions_generation_ = body_file_.generation();
-  descriptions_writer_->write(to_descriptions_message(tracker_.body_definitions(), ++descriptions_sent_,
-                                                      body_file_.path(), wall_now_ns(),
-                                                      session_.inside_out().rig_descriptions()));
+  const msg::BodyDescriptions message = to_descriptions_message(
+      tracker_.body_definitions(), ++descriptions_sent_, body_file_.path(), wall_now_ns(),
+      session_.inside_out().rig_descriptions(),
+      options_.segments ? options_.segments->descriptions() : std::vector<BodyDefinition>{});
+  segment_ids_.clear();
+  for (const auto& description : message.bodies()) {
+    if (description.kind() == "segment") segment_ids_.emplace(description.name(), description.id());
+  }
+  descriptions_writer_->write(message);
 }
 
 void LiveEstimator::name_markers(session::FrameOutput& output) const {
@@ -400,6 +408,7 @@ void LiveEstimator::name_markers(session::FrameOutput& output) const {
       marker.name = label->marker;
     }
   }
+  if (options_.segments) options_.segments->append(output, segment_ids_);
 }
 
 void LiveEstimator::publish_labels_if_changed() {

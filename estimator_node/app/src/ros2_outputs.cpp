@@ -8,6 +8,8 @@
 #include <string>
 #include <utility>
 
+#include <Eigen/Geometry>
+
 #include "panoptes/session/log.h"
 
 namespace panoptes::estimator_app {
@@ -120,12 +122,36 @@ void Ros2Messages::transforms(const session::FrameOutput& frame, const std::vect
   for (std::size_t b = 0; b < frame.bodies.size(); ++b) {
     const session::BodyOutput& body = frame.bodies[b];
     if (!body.tracking_valid) continue;
+    // A subject's segment hangs from its parent segment (one tree per subject, docs/ros2.md); one
+    // whose parent has no pose in this frame is left out of it rather than moved to the world.
+    const session::BodyOutput* parent = nullptr;
+    std::size_t parent_index = 0;
+    if (!body.parent.empty()) {
+      for (std::size_t p = 0; p < frame.bodies.size() && !parent; ++p) {
+        if (frame.bodies[p].name == body.parent) {
+          parent = &frame.bodies[p];
+          parent_index = p;
+        }
+      }
+      if (!parent || !parent->tracking_valid) continue;
+    }
     if (out.transforms().size() <= n) out.transforms().emplace_back();
     ros2::TransformStamped_& transform = out.transforms()[n++];
     header(pose_time(body), transform.header());
     transform.child_frame_id(settings_.child_frame_prefix + tokens[b]);
-    transform.transform().translation(xyz<ros2::Vector3_>(body.pose.p));
-    transform.transform().rotation(quaternion(body.pose.q));
+    Eigen::Vector3d p = body.pose.p;
+    Eigen::Vector4d q = body.pose.q;
+    if (parent) {
+      transform.header().frame_id(settings_.child_frame_prefix + tokens[parent_index]);
+      const Eigen::Quaterniond q_parent(parent->pose.q[3], parent->pose.q[0], parent->pose.q[1],
+                                        parent->pose.q[2]);
+      const Eigen::Quaterniond q_child(q[3], q[0], q[1], q[2]);
+      const Eigen::Quaterniond q_relative = q_parent.conjugate() * q_child;
+      p = q_parent.conjugate() * (p - parent->pose.p);
+      q = Eigen::Vector4d(q_relative.x(), q_relative.y(), q_relative.z(), q_relative.w());
+    }
+    transform.transform().translation(xyz<ros2::Vector3_>(p));
+    transform.transform().rotation(quaternion(q));
   }
   out.transforms().resize(n);
 }
@@ -267,6 +293,7 @@ void Ros2Outputs::publish(const session::FrameOutput& frame) {
   for (std::size_t b = 0; b < frame.bodies.size(); ++b) {
     const session::BodyOutput& body = frame.bodies[b];
     frame_tokens_[b] = token_of(body);
+    if (body.segment) continue;               // segments: /tf and /rigid_bodies only
     BodyWriters& writers = writers_of(body);  // every defined body's topics exist, tracked or not
     if (!body.tracking_valid || !writers.twist) continue;
     if (writers.pose->matched_readers() > 0) {

@@ -112,6 +112,19 @@ bool is_knee(const JointAngleDefinition& joint, const std::string& child, const 
 
 }  // namespace
 
+std::optional<Eigen::Vector3d> axis_from_name(const std::string& name) {
+  std::string axis = name;
+  double sign = 1.0;
+  if (!axis.empty() && (axis[0] == '+' || axis[0] == '-')) {
+    sign = axis[0] == '-' ? -1.0 : 1.0;
+    axis = axis.substr(1);
+  }
+  if (axis == "x" || axis == "X") return sign * Eigen::Vector3d::UnitX();
+  if (axis == "y" || axis == "Y") return sign * Eigen::Vector3d::UnitY();
+  if (axis == "z" || axis == "Z") return sign * Eigen::Vector3d::UnitZ();
+  return std::nullopt;
+}
+
 SegmentKinematics build_segment_kinematics(const SubjectModel& model, const KinematicsOptions& options) {
   const Eigen::Vector3d up = options.up;
   const Eigen::Vector3d forward = options.forward;

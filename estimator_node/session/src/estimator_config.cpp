@@ -16,6 +16,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "panoptes/config.h"
+#include "panoptes/labelling/segment_kinematics.h"
 
 namespace panoptes::session {
 
@@ -94,6 +95,24 @@ class FieldReader {
     value = std::move(read);
   }
 
+  // A list of non-empty strings (a single string is a list of one).
+  void names(const char* key, std::vector<std::string>& value, const char* /*doc*/) {
+    keys_.emplace_back(key);
+    if (!reader_.has(key)) return;
+    if (reader_.node()[key].IsScalar()) {
+      value = {reader_.get_string(key)};
+      if (value.front().empty()) reader_.fail(key, "must not be empty");
+      return;
+    }
+    std::vector<std::string> read;
+    for (const YamlReader& item : reader_.sequence(key)) {
+      if (!item.node().IsScalar() || item.node().Scalar().empty())
+        item.fail("", "must be a non-empty string");
+      read.push_back(item.node().Scalar());
+    }
+    value = std::move(read);
+  }
+
   template <class Visit>
   void section(const char* key, const char* /*doc*/, Visit&& visit) {
     keys_.emplace_back(key);
@@ -129,9 +148,13 @@ class FieldWriter {
   void flag(const char* key, bool& value, const char* doc) { line(key, value ? "true" : "false", doc); }
 
   void text(const char* key, std::string& value, std::string (*)(const std::string&), const char* doc) {
-    YAML::Emitter quoted;  // always quoted: "" and values such as "true" or "1" stay strings
-    quoted << YAML::DoubleQuoted << value;
-    line(key, quoted.c_str(), doc);
+    line(key, quote(value), doc);
+  }
+
+  void names(const char* key, std::vector<std::string>& value, const char* doc) {
+    std::string list = "[";
+    for (const auto& name : value) list += (list.size() > 1 ? ", " : "") + quote(name);
+    line(key, list + "]", doc);
   }
 
   template <class Visit>
@@ -145,6 +168,12 @@ class FieldWriter {
   const std::string& text() const { return text_; }
 
  private:
+  static std::string quote(const std::string& value) {
+    YAML::Emitter quoted;  // always quoted: "" and values such as "true" or "1" stay strings
+    quoted << YAML::DoubleQuoted << value;
+    return quoted.c_str();
+  }
+
   void line(const char* key, const std::string& value, const char* doc) {
     text_ += indent_ + key + ":" + (value.empty() ? "" : " " + value);
     if (doc && *doc) text_ += std::string("  # ") + doc;
@@ -159,6 +188,10 @@ class FieldWriter {
 
 std::string check_frames_mode(const std::string& mode) {
   return mode == "per-camera" || mode == "fixed" ? "" : "'" + mode + "': must be per-camera or fixed";
+}
+
+std::string check_axis_name(const std::string& axis) {
+  return labelling::axis_from_name(axis) ? "" : "'" + axis + "': must be an axis (+x, -x, +y, -y, +z or -z)";
 }
 
 std::string check_continuous_calibration(const std::string& mode) {
@@ -407,12 +440,27 @@ void visit_ros2(Fields& f, Ros2Settings& o) {
 }
 
 template <class Fields>
+void visit_subjects(Fields& f, LabellingSettings& o) {
+  f.names("models", o.models,
+          "subject model files (panoptes_label model), relative to this file; none: no labelling");
+  f.names("soft_segments", o.soft_segments, "segments that deform while moving (e.g. Torso)");
+  f.number("rate_hz", o.rate_hz, between(0, 100000), "the labeller runs at most this often (0: every frame)");
+  f.integer("min_track_age", o.min_track_age, 1, 1000000,
+            "a track processed fewer frames does not acquire a subject");
+  f.flag("segment_poses", o.segment_poses, "publish each segment's pose like a body, <subject>/<segment>");
+  f.text("static_up", o.static_up, check_axis_name, "the static trials' vertical axis (anatomical frames)");
+  f.text("static_forward", o.static_forward, check_axis_name, "the direction the subject faced in them");
+}
+
+template <class Fields>
 void visit_config(Fields& f, EstimatorConfig& config) {
   f.section("node", "the session and the live node", [&](auto& s) { visit_node(s, config.node); });
   f.section("screen", "the gate for bad input", [&](auto& s) { visit_screen(s, config.screen); });
   f.section("tracker", "the multi-point tracker (docs/estimator.md)",
             [&](auto& s) { visit_tracker(s, config.tracker); });
   f.section("ros2", "ROS 2 topics on the wire (docs/ros2.md)", [&](auto& s) { visit_ros2(s, config.ros2); });
+  f.section("subjects", "live auto-labelling of marker sets (docs/marker_sets.md)",
+            [&](auto& s) { visit_subjects(s, config.subjects); });
 }
 
 }  // namespace
@@ -428,7 +476,12 @@ EstimatorConfig estimator_config_from_yaml(const YamlReader& reader) {
 
 EstimatorConfig load_estimator_config(const std::filesystem::path& path) {
   const YAML::Node root = load_yaml_file(path);
-  return estimator_config_from_yaml(YamlReader(path.string(), root));
+  EstimatorConfig config = estimator_config_from_yaml(YamlReader(path.string(), root));
+  for (auto& model : config.subjects.models) {
+    if (std::filesystem::path(model).is_relative())
+      model = (path.parent_path() / model).lexically_normal().string();
+  }
+  return config;
 }
 
 std::string estimator_config_to_yaml(const EstimatorConfig& config) {

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -54,6 +55,10 @@ EstimatorConfig unusual_config() {
   config.ros2.child_frame_prefix = "true";  // a string, not a boolean
   config.ros2.tf_rate_hz = 0;
   config.ros2.topic_namespace = "/site_a/lab1";
+  config.subjects.models = {"/data/s1.yaml", "/data/subject two, \"B\".yaml"};
+  config.subjects.soft_segments = {"Torso", "true"};
+  config.subjects.rate_hz = 0.0;
+  config.subjects.min_track_age = 7;
   return config;
 }
 
@@ -79,6 +84,11 @@ TEST(EstimatorConfig, PrintedConfigurationLoadsBackEqual) {
   EXPECT_EQ(loaded.ros2.child_frame_prefix, "true");
   EXPECT_EQ(loaded.ros2.tf_rate_hz, 0);
   EXPECT_EQ(loaded.ros2.topic_namespace, "/site_a/lab1");
+  EXPECT_EQ(loaded.subjects.models,
+            (std::vector<std::string>{"/data/s1.yaml", "/data/subject two, \"B\".yaml"}));
+  EXPECT_EQ(loaded.subjects.soft_segments, (std::vector<std::string>{"Torso", "true"}));
+  EXPECT_EQ(loaded.subjects.rate_hz, 0.0);
+  EXPECT_EQ(loaded.subjects.min_track_age, 7);
   EXPECT_FALSE(loaded == EstimatorConfig{});
 }
 
@@ -158,6 +168,39 @@ TEST(EstimatorConfig, WrongTypesAreNamedWithTheirPath) {
   EXPECT_NE(error.find("expected a map"), std::string::npos) << error;
   error = load_error("flag.yaml", "node:\n  predictions: perhaps\n");
   EXPECT_NE(error.find("flag.yaml: node.predictions: expected true or false"), std::string::npos) << error;
+}
+
+// `subjects:` (docs/marker_sets.md, "Live labelling"): models relative to the settings file's folder,
+// a single name as a list of one; bad entries named with their index.
+TEST(EstimatorConfig, SubjectModelsAreReadRelativeToTheSettingsFile) {
+  const auto path = write_file("subjects.yaml",
+                               "subjects:\n  models: [s1.yaml, /abs/s2.yaml, ../up/s3.yaml]\n"
+                               "  soft_segments: Torso\n  rate_hz: 60\n");
+  const EstimatorConfig loaded = load_estimator_config(path);
+  std::filesystem::remove(path);
+  const std::filesystem::path folder = path.parent_path();
+  EXPECT_EQ(loaded.subjects.models,
+            (std::vector<std::string>{(folder / "s1.yaml").string(), "/abs/s2.yaml",
+                                      (folder / "../up/s3.yaml").lexically_normal().string()}));
+  EXPECT_EQ(loaded.subjects.soft_segments, std::vector<std::string>{"Torso"});
+  EXPECT_EQ(loaded.subjects.rate_hz, 60.0);
+  EXPECT_EQ(loaded.subjects.min_track_age, EstimatorConfig{}.subjects.min_track_age);
+  EXPECT_TRUE(EstimatorConfig{}.subjects.models.empty());  // no labelling unless asked
+
+  std::string error = load_error("subjects_empty.yaml", "subjects:\n  models: [s1.yaml, \"\"]\n");
+  EXPECT_NE(error.find("subjects_empty.yaml: subjects.models[1]: must be a non-empty string"),
+            std::string::npos)
+      << error;
+  error = load_error("subjects_map.yaml", "subjects:\n  models: [{a: 1}]\n");
+  EXPECT_NE(error.find("subjects_map.yaml: subjects.models[0]: must be a non-empty string"),
+            std::string::npos)
+      << error;
+  error = load_error("subjects_rate.yaml", "subjects:\n  rate_hz: -1\n");
+  EXPECT_NE(error.find("subjects_rate.yaml: subjects.rate_hz: must be a number in [0, 1e+05]"),
+            std::string::npos)
+      << error;
+  error = load_error("subjects_key.yaml", "subjects:\n  model: s1.yaml\n");
+  EXPECT_NE(error.find("subjects_key.yaml: subjects.model: unknown key"), std::string::npos) << error;
 }
 
 TEST(EstimatorConfig, AMissingFileIsNamed) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "../dds_test_support.h"
 #include "panoptes/dds/bus.h"
@@ -143,6 +144,51 @@ struct Received {
     names.push_back(name);
   }
 };
+
+// A subject's segments (docs/marker_sets.md, "Segment poses live") form one tf tree: the root
+// from the world frame, each child relative to its parent; a child whose parent has no pose in the
+// frame is left out, not hung from the world.
+TEST(Ros2Messages, SegmentsFormOneTfTreePerSubject) {
+  session::Ros2Settings settings;
+  settings.child_frame_prefix = "mocap/";
+  const Ros2Messages messages(settings);
+  session::FrameOutput frame = test_frame(7, 1'000'000'000);
+  const Eigen::Quaterniond q_pelvis(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, 0.3, 1.0).normalized()));
+  const Eigen::Quaterniond q_thigh(Eigen::AngleAxisd(-0.4, Eigen::Vector3d(1.0, -0.5, 0.1).normalized()));
+  const auto segment = [&](const std::string& name, const std::string& parent, const Eigen::Vector3d& p,
+                           const Eigen::Quaterniond& q, bool valid) {
+    session::BodyOutput body;
+    body.name = name;
+    body.segment = true;
+    body.parent = parent;
+    body.tracking_valid = valid;
+    body.pose.stamp_ns = frame.stamp_ns;
+    body.pose.p = p;
+    body.pose.q = Eigen::Vector4d(q.x(), q.y(), q.z(), q.w());
+    frame.bodies.push_back(body);
+  };
+  segment("s1/Pelvis", "", {1.0, 2.0, 0.9}, q_pelvis, true);
+  segment("s1/R.Thigh", "s1/Pelvis", {1.1, 1.9, 0.5}, q_thigh, true);
+  segment("s1/R.Shank", "s1/R.Thigh", {1.1, 1.9, 0.1}, q_thigh, false);
+  segment("s1/R.Foot", "s1/R.Shank", {1.2, 1.9, 0.0}, q_thigh, true);  // its parent untracked
+  tf2_msgs::msg::dds_::TFMessage_ tf;
+  messages.transforms(frame, {"head", "tool", "s1_Pelvis", "s1_R_Thigh", "s1_R_Shank", "s1_R_Foot"}, tf);
+  ASSERT_EQ(tf.transforms().size(), 3U);  // head, pelvis, thigh
+  const auto& pelvis = tf.transforms()[1];
+  EXPECT_EQ(pelvis.header().frame_id(), "world");
+  EXPECT_EQ(pelvis.child_frame_id(), "mocap/s1_Pelvis");
+  EXPECT_EQ(pelvis.transform().translation().z(), 0.9);
+  const auto& thigh = tf.transforms()[2];
+  EXPECT_EQ(thigh.header().frame_id(), "mocap/s1_Pelvis");
+  EXPECT_EQ(thigh.child_frame_id(), "mocap/s1_R_Thigh");
+  // Composing the parent's world pose with the relative one gives the child's world pose back.
+  const auto& t = thigh.transform();
+  const Eigen::Quaterniond q_relative(t.rotation().w(), t.rotation().x(), t.rotation().y(), t.rotation().z());
+  const Eigen::Vector3d p_relative(t.translation().x(), t.translation().y(), t.translation().z());
+  const Eigen::Vector3d p_world = q_pelvis * p_relative + Eigen::Vector3d(1.0, 2.0, 0.9);
+  EXPECT_LT((p_world - Eigen::Vector3d(1.1, 1.9, 0.5)).norm(), 1e-12);
+  EXPECT_LT((q_pelvis * q_relative).angularDistance(q_thigh), 1e-12);
+}
 
 TEST(Ros2Outputs, BestEffortAndReliableReadersReceiveEveryTopic) {
   dds::Bus estimator(bus_options("estimator")), application(bus_options("ros2_application"));

@@ -106,15 +106,7 @@ std::vector<std::string> side_warnings(const labelling::SegmentKinematics& kinem
 }
 
 Eigen::Vector3d parse_axis(const std::string& text, const std::string& option) {
-  std::string axis = text;
-  double sign = 1.0;
-  if (!axis.empty() && (axis[0] == '+' || axis[0] == '-')) {
-    sign = axis[0] == '-' ? -1.0 : 1.0;
-    axis = axis.substr(1);
-  }
-  if (axis == "x" || axis == "X") return sign * Eigen::Vector3d::UnitX();
-  if (axis == "y" || axis == "Y") return sign * Eigen::Vector3d::UnitY();
-  if (axis == "z" || axis == "Z") return sign * Eigen::Vector3d::UnitZ();
+  if (const auto axis = labelling::axis_from_name(text)) return *axis;
   throw InputError((option.empty() ? "" : option + ": ") + "'" + text +
                    "' is not an axis (+x, -x, +y, -y, +z or -z)");
 }

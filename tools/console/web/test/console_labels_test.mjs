@@ -47,11 +47,14 @@ await runBrowserChecks({ width: 1400, height: 900 }, results, args.out, async (p
   let drawn = 0, wrong = 0;
   for (let k = 0; k < 5; ++k) {
     const seen = await page.evaluate(() => new Promise((resolve) => requestAnimationFrame(() => {
-      const s = (window.panoptes.state.subjects || []).find((x) => x.name === 's1') || { names: {} };
+      const subjects = window.panoptes.state.subjects || [];
+      const s = subjects.find((x) => x.name === 's1') || { names: {} };
       const out = [];
       for (const [id, trail] of window.panoptes.trackLabels || new Map()) {
         const name = s.names[String(id)];
-        if (name) out.push([id, name, trail.label.userData.label.text]);
+        // With several subjects a label is "<subject>:<name>" (as C3D exports name them).
+        const shown = subjects.length > 1 ? trail.label.userData.label.text.replace(/^s1:/, '') : trail.label.userData.label.text;
+        if (name) out.push([id, name, shown]);
       }
       resolve({ stamp_ns: window.panoptes.state.stamp_ns, labels: out });
     })));

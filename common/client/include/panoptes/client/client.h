@@ -162,7 +162,7 @@ struct SubjectDescription {
 struct BodyDescription {
   std::string name;
   int id = 0;
-  std::string kind;           // passive | led7 | rig (an inside-out rig: its markers may be empty)
+  std::string kind;           // passive | led7 | rig (an inside-out rig: its markers may be empty) | segment
   std::vector<Vec3> markers;  // m, body frame
 };
 

@@ -25,13 +25,8 @@ struct NodeCommandLine {
   std::string out_tracks;
   std::string out_poses;
   std::string out_chains;  // Chain JSONL (docs/articulated.md)
-  // Live auto-labelling (docs/marker_sets.md "Live labelling"): subject model files, the segments
-  // that deform while moving, and a labels JSONL.
-  std::vector<std::string> subjects;
-  std::vector<std::string> soft_segments;
+  // Live auto-labelling's labels JSONL (the subject models are settings: EstimatorConfig::subjects).
   std::string out_labels;
-  double label_rate_hz = 120.0;  // 0: the labeller runs on every processed frame
-  int label_min_track_age = 3;   // LabellerOptions::min_track_age, in processed frames
   std::string dds_profile;
   dds::SecurityOptions security;
   bool replay_arrival = false;

@@ -17,10 +17,12 @@ namespace panoptes::estimator_app {
 
 msg::MocapFrame to_frame_message(const session::FrameOutput& frame, TimeNs publish_ns);
 
-// The bodies, then the inside-out rigs (kind "rig", docs/inside_out.md) whose names no body has.
+// The bodies, then the inside-out rigs (kind "rig", docs/inside_out.md), then the subjects'
+// segments (kind "segment", session::SegmentStage), each whose name nothing before it has.
 msg::BodyDescriptions to_descriptions_message(const std::vector<BodyDefinition>& bodies,
                                               std::uint64_t generation, const std::string& source,
-                                              TimeNs stamp_ns, const std::vector<BodyDefinition>& rigs = {});
+                                              TimeNs stamp_ns, const std::vector<BodyDefinition>& rigs = {},
+                                              const std::vector<BodyDefinition>& segments = {});
 
 // Every subject of `stage` in --subjects order: its marker set's tracked marker names, its sticks
 // and the tracks named now (stage.map()); stamp and generation of the map.

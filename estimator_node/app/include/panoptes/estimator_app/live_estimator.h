@@ -12,6 +12,7 @@
 #include "panoptes/session/chain_stage.h"
 #include "panoptes/session/estimator_session.h"
 #include "panoptes/session/label_stage.h"
+#include "panoptes/session/segment_stage.h"
 
 namespace panoptes::estimator_app {
 
@@ -29,6 +30,9 @@ struct LiveOptions {
   session::ChainStage* chains = nullptr;
   // Auto-labelling (--subjects, docs/marker_sets.md): fed every processed frame. Null: none.
   session::LabelStage* labels = nullptr;
+  // With labels: each frame's segment poses, published like bodies (docs/marker_sets.md,
+  // "Segment poses live"). Null: none.
+  const session::SegmentStage* segments = nullptr;
 };
 
 // Runs until a stop signal (panoptes::stop_requested) or the duration; returns the exit code.

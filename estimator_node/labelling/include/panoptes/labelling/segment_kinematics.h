@@ -37,6 +37,9 @@ struct KinematicsOptions {
   bool joint_centres_in_fit = false;
 };
 
+// "+x", "-y", "z", … (a sign, then x, y or z in either case) as a unit axis; nullopt otherwise.
+std::optional<Eigen::Vector3d> axis_from_name(const std::string& name);
+
 // A segment's anatomical frame, fixed in its technical (layout) frame from the static pose.
 struct AnatomicalSegment {
   std::string name;

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "panoptes/estimator/frame_screen.h"
 #include "panoptes/estimator/tracker.h"
@@ -66,16 +67,37 @@ std::string check_frames_mode(const std::string& mode);
 // Empty if `mode` is a --continuous-calibration mode this build implements, else why not.
 std::string check_continuous_calibration(const std::string& mode);
 
+// Live auto-labelling (docs/marker_sets.md, "Live labelling"): `subjects:` in the settings YAML,
+// or --subjects, --soft-segments, --label-rate-hz and --label-min-track-age. No models: off.
+struct LabellingSettings {
+  // Subject model files (panoptes_label model). A relative path in a settings file is taken from
+  // the settings file's folder (load_estimator_config), on the command line from the working one.
+  std::vector<std::string> models;
+  std::vector<std::string> soft_segments;  // segments that deform while moving (e.g. Torso)
+  double rate_hz = 120.0;                  // the labeller runs at most this often; 0: every frame
+  int min_track_age = 3;                   // a track processed fewer frames does not acquire a subject
+  // Live segment poses (docs/marker_sets.md, "Segment poses live"): each segment with enough named
+  // markers is published like a body, "<subject>/<segment>". The models' static trials' vertical and
+  // the direction the subject faced in them define the anatomical axes (OpenSim's TRC: +y, +x).
+  bool segment_poses = true;
+  std::string static_up = "+y";
+  std::string static_forward = "+x";
+};
+
+// "" if `axis` names an axis (+x, -x, +y, -y, +z, -z; the sign may be left out), else why not.
+std::string check_axis_name(const std::string& axis);
+
 struct EstimatorConfig {
   NodeSettings node;
   estimator::FrameScreenOptions screen;
   estimator::TrackerOptions tracker;
   Ros2Settings ros2;
+  LabellingSettings subjects;
 };
 
 // Reads a configuration: keys left out keep their defaults. Throws ConfigError
 // ("<file>: <key path>: <reason>") on a missing file, bad syntax, an unknown key or a value out of
-// range.
+// range. Relative subject model paths are made relative to the file's folder.
 EstimatorConfig load_estimator_config(const std::filesystem::path& path);
 EstimatorConfig estimator_config_from_yaml(const YamlReader& reader);
 

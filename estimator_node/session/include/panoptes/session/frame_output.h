@@ -33,6 +33,11 @@ struct BodyOutput {
   PoseRecord pose;              // as published on rt/panoptes/bodies (predicted by the horizon)
   double mean_marker_error_m = 0.0;
   int labelled_markers = 0;
+  // A subject's segment (SegmentStage, docs/marker_sets.md "Segment poses live"), named
+  // "<subject>/<segment>": its parent segment's body name ("" for the subject's root), for ROS 2's
+  // tf tree. Not a body of the bodies file: no pose and twist topics of its own.
+  bool segment = false;
+  std::string parent;
 };
 
 struct MarkerOutput {
