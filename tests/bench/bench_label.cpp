@@ -37,7 +37,7 @@ namespace fs = std::filesystem;
 
 struct Cell {
   int subjects = 0;
-  double mean_us = 0, p99_us = 0;  // per subject-frame
+  double mean_us = 0, p99_us = 0;                    // per subject-frame
   double segments_mean_us = 0, segments_p99_us = 0;  // segment poses, per subject-frame
   double right_percent = 0;
   long crossed = 0;  // a person's marker named by another subject than the one naming that person
@@ -203,7 +203,8 @@ int run(int argc, char** argv) {
     const Cell& c = cells.back();
     std::printf(
         "%d subject%s at %.0f Hz: %.1f us per subject-frame (mean), p99 %.1f us; %.2f %% of marker-instants "
-        "named right, %ld named by another subject than their person's, %ld instants; segment poses %.1f us per "
+        "named right, %ld named by another subject than their person's, %ld instants; segment poses %.1f us "
+        "per "
         "subject-frame (mean), p99 %.1f us\n",
         c.subjects, c.subjects == 1 ? "" : "s", rate_hz, c.mean_us, c.p99_us, c.right_percent, c.crossed,
         c.instants, c.segments_mean_us, c.segments_p99_us);

@@ -43,7 +43,7 @@ printf 'subjects:\n  models: [%s]\n  soft_segments: [Torso]\n' "${models%, }" >"
 
 # walk8's cameras and effects, walk1 instead of the 41-marker walk, 0.3 false blobs per frame.
 scene="$work/walk1.yaml"
-sed -e 's/^duration: .*/duration: 8.0/' -e 's/^  false_blobs: .*/  false_blobs: 0.3/' "${walk_args[@]}" \
+sed -e 's/^duration: .*/duration: 10.0/' -e 's/^  false_blobs: .*/  false_blobs: 0.3/' "${walk_args[@]}" \
   "$source_dir/deploy/scenes/walk8.yaml" >"$scene"
 score_args=()
 if [ "${#subjects[@]}" = 2 ]; then
@@ -59,23 +59,10 @@ fi
 expect_exit 0 "simulate walk1 through eight cameras" -- "$bin/panoptes_sim" features --scene "$scene" \
   --out-dir "$work/sim"
 
-epoch=$((($(date +%s) + 4) * 1000000000))
-"$probe" --out "$work/client.jsonl" --out-labels "$work/client_labels.jsonl" --duration 14 \
-  >"$work/client.log" 2>&1 &
-client=$!
-pids+=("$client")
-# The recording of the live run, exported with the names (rt/panoptes/labels, docs/recording.md).
-"$bin/panoptes_record" --out "$work/live.mcap" --topics rt/panoptes/frames rt/panoptes/labels --quiet \
-  2>"$work/record.log" &
-recorder=$!
-pids+=("$recorder")
-"$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --config "$work/settings.yaml" \
-  --out-labels "$work/estimator_labels.jsonl" --duration 13 >"$work/estimator.log" 2>&1 &
-estimator=$!
-pids+=("$estimator")
-replay_cameras "$epoch" 11 cam0 cam1 cam2 cam3 cam4 cam5 cam6 cam7
 # The console's 3D view with the names and sticks (tools/console/web/test/console_labels_test.mjs),
-# when a browser is installed (required under CI, like every browser test).
+# when a browser is installed (required under CI, like every browser test). Started before the
+# cameras, and the walk lasts 10 s: beside a CPU-heavy test under -j2 the page saw the names only
+# 4-7 s into an 8 s walk and reached its last check after the walk had ended (no tracks to draw).
 browser=""
 web="$source_dir/tools/console/web"
 if [ -d "$web/node_modules/playwright-core" ] && [ -x /usr/bin/chromium ]; then
@@ -91,6 +78,21 @@ elif [ -n "${CI:-}" ]; then
 else
   echo "SKIP (console part): playwright-core or /usr/bin/chromium missing"
 fi
+epoch=$((($(date +%s) + 4) * 1000000000))
+"$probe" --out "$work/client.jsonl" --out-labels "$work/client_labels.jsonl" --duration 16 \
+  >"$work/client.log" 2>&1 &
+client=$!
+pids+=("$client")
+# The recording of the live run, exported with the names (rt/panoptes/labels, docs/recording.md).
+"$bin/panoptes_record" --out "$work/live.mcap" --topics rt/panoptes/frames rt/panoptes/labels --quiet \
+  2>"$work/record.log" &
+recorder=$!
+pids+=("$recorder")
+"$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --config "$work/settings.yaml" \
+  --out-labels "$work/estimator_labels.jsonl" --duration 15 >"$work/estimator.log" 2>&1 &
+estimator=$!
+pids+=("$estimator")
+replay_cameras "$epoch" 14 cam0 cam1 cam2 cam3 cam4 cam5 cam6 cam7
 # A late client: started while the subject is labelled, it gets the map (transient-local) at once.
 sleep 7
 late_start_ns=$(date +%s%N)

@@ -215,6 +215,7 @@ struct Labeller::State {
   void add_extras(const Subject& subject, std::size_t s, Found& found) const;
   void grow(const Subject& subject, std::size_t s, const RigidTransform& pose, Hypothesis& h);
   void commit(std::size_t subject_index, std::size_t s, const Found& found);
+  void untangle(std::size_t subject_index);
   std::vector<std::size_t> candidates_near(const Subject& subject, std::size_t s,
                                            const std::optional<RigidTransform>& parent_pose) const;
   bool tree_accepts(const Subject& subject, std::size_t s, const RigidTransform& pose,
@@ -447,6 +448,53 @@ void Labeller::State::recover() {
     Found found;
     found.pairs.emplace_back(rows[row].marker, p);
     commit(rows[row].subject, rows[row].segment, found);
+  }
+}
+
+// LabellerOptions::untangle_rms_m: a rigid segment's named points refitted with each pair exchanged;
+// an exchange that fits far better moves the two names (and what their markers learned stays with
+// the markers). Costs a fit per pair only when a segment fits poorly.
+void Labeller::State::untangle(std::size_t subject_index) {
+  Subject& subject = subjects[subject_index];
+  for (std::size_t s : subject.order) {
+    SegmentState& segment = subject.segments[s];
+    const SegmentLayout& layout = subject.model.segments[s];
+    if (!segment.pose || segment.loose || segment.soft || !layout.has_pose) continue;
+    Points seen = seen_now(segment);
+    std::vector<std::size_t> named;
+    for (std::size_t m : segment.tracked) {
+      if (seen[m]) named.push_back(m);
+    }
+    if (named.size() < 3) continue;
+    const auto now = fit_layout(layout, seen);
+    if (!now || now->rms_m <= options.untangle_rms_m) continue;
+    std::optional<std::pair<std::size_t, std::size_t>> best;
+    double best_rms = options.untangle_ratio * now->rms_m;
+    for (std::size_t i = 0; i < named.size(); ++i) {
+      for (std::size_t j = i + 1; j < named.size(); ++j) {
+        std::swap(seen[named[i]], seen[named[j]]);
+        const auto fit = fit_layout(layout, seen);
+        std::swap(seen[named[i]], seen[named[j]]);
+        if (fit && fit->rms_m < best_rms) {
+          best_rms = fit->rms_m;
+          best = {named[i], named[j]};
+        }
+      }
+    }
+    if (!best) continue;
+    MarkerState& a = segment.markers[best->first];
+    MarkerState& b = segment.markers[best->second];
+    std::swap(a.track, b.track);
+    std::swap(a.point, b.point);
+    std::swap(a.last, b.last);
+    std::swap(a.moved, b.moved);
+    labels[*a.track] = {subject_index, {s, best->first}};
+    labels[*b.track] = {subject_index, {s, best->second}};
+    const auto pose = segment_pose(layout, seen_now(segment), segment.pose->q);
+    if (pose) {
+      segment.pose = pose->first;
+      segment.loose = pose->second;
+    }
   }
 }
 
@@ -912,9 +960,10 @@ void Labeller::update(const std::vector<TrackPoint>& points, std::optional<doubl
     }
   }
   s.keep(by_track);
-  for (auto& subject : s.subjects) {
-    s.fit_poses(subject);
-    s.predict(subject);
+  for (std::size_t i = 0; i < s.subjects.size(); ++i) {
+    s.fit_poses(s.subjects[i]);
+    s.untangle(i);
+    s.predict(s.subjects[i]);
   }
   s.recover();
   for (std::size_t i = 0; i < s.subjects.size(); ++i) {

@@ -63,7 +63,7 @@ await runBrowserChecks({ width: 1400, height: 900 }, results, args.out, async (p
       if (text !== name) wrong += 1;
       results.names.push([id, name]);
     }
-    await sleep(300);
+    await sleep(100);
   }
   check(drawn >= 100 && wrong === 0, `named tracks drawn with their names: ${drawn - wrong} of ${drawn} over 5 moments`);
   // The subject from 3.2 m: its named markers' centroid (state.tracks: [id, x, y, z]).

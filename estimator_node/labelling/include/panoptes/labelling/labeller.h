@@ -80,6 +80,14 @@ struct LabellerOptions {
   double revise_period_s = 0.1;
   int revise_period_instants = 12;
   std::size_t revise_margin = 2;
+  // Two named tracks of a rigid segment that exchanged their markers (the tracker swapped two close
+  // markers: seen live under CPU contention, a foot's midfoot and toe) keep their names while the
+  // segment's rigid fit worsens by their distance; no revision sees it (as many markers explained).
+  // A rigid segment (not soft) whose fit RMS exceeds untangle_rms_m is refitted with each pair of
+  // its named points exchanged, and an exchange whose RMS is below untangle_ratio of it moves the
+  // two names.
+  double untangle_rms_m = 0.010;
+  double untangle_ratio = 0.5;
 };
 
 // The tolerance of a marker-pair distance of `segment` while the subject moves (see allowance_m).
