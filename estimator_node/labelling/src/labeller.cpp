@@ -164,6 +164,7 @@ std::optional<std::pair<RigidTransform, bool>> segment_pose(const SegmentLayout&
 }  // namespace
 
 struct Labeller::State {
+  std::uint64_t untangled = 0;  // pairs of names untangle() moved
   LabellerOptions options;
   std::vector<Subject> subjects;
   std::unordered_map<std::uint64_t, std::pair<std::size_t, std::pair<std::size_t, std::size_t>>> labels;
@@ -466,10 +467,14 @@ void Labeller::State::untangle(std::size_t subject_index) {
       if (seen[m]) named.push_back(m);
     }
     if (named.size() < 3) continue;
-    const auto now = fit_layout(layout, seen);
-    if (!now || now->rms_m <= options.untangle_rms_m) continue;
+    // The pose is fit_poses()'s rigid fit of these points: its RMS without a second fit.
+    double sum = 0.0;
+    for (std::size_t m : named)
+      sum += (segment.pose->apply(layout.markers[m].position_m) - *seen[m]).squaredNorm();
+    const double rms_now = std::sqrt(sum / static_cast<double>(named.size()));
+    if (rms_now <= options.untangle_rms_m) continue;
     std::optional<std::pair<std::size_t, std::size_t>> best;
-    double best_rms = options.untangle_ratio * now->rms_m;
+    double best_rms = options.untangle_ratio * rms_now;
     for (std::size_t i = 0; i < named.size(); ++i) {
       for (std::size_t j = i + 1; j < named.size(); ++j) {
         std::swap(seen[named[i]], seen[named[j]]);
@@ -482,6 +487,7 @@ void Labeller::State::untangle(std::size_t subject_index) {
       }
     }
     if (!best) continue;
+    ++untangled;
     MarkerState& a = segment.markers[best->first];
     MarkerState& b = segment.markers[best->second];
     std::swap(a.track, b.track);
@@ -1011,6 +1017,10 @@ std::vector<std::pair<std::uint64_t, MarkerLabel>> Labeller::labels() const {
   }
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   return out;
+}
+
+std::uint64_t Labeller::untangled() const {
+  return state_->untangled;
 }
 
 const SubjectModel& Labeller::model(std::size_t subject) const {

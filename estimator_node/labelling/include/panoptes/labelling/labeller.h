@@ -115,6 +115,8 @@ class Labeller {
   // Every named track (those briefly missing live too), by track id.
   std::vector<std::pair<std::uint64_t, MarkerLabel>> labels() const;
   const SubjectModel& model(std::size_t subject) const;
+  // How many pairs of names untangle() has moved (LabellerOptions::untangle_rms_m) so far.
+  std::uint64_t untangled() const;
 
  private:
   struct State;
