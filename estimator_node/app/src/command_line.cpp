@@ -104,6 +104,12 @@ struct SettingsFlags {
                 "(docs/ros2.md)")
              ->check(CLI::Validator(session::check_ros2_namespace, "NAMESPACE")),
          [this](auto& c) { c.ros2.topic_namespace = values.ros2.topic_namespace; });
+    add_subjects(app, bind);
+  }
+
+  // Live labelling (docs/marker_sets.md): the `subjects:` section's flags.
+  template <class Bind>
+  void add_subjects(CLI::App& app, const Bind& bind) {
     auto& subjects = values.subjects;
     bind(app.add_option("--subjects", subjects.models,
                         "label point tracks with marker names from these subject models (panoptes_label "

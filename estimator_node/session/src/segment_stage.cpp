@@ -22,7 +22,8 @@ SegmentStage::SegmentStage(std::vector<labelling::SubjectModel> models,
     }
     for (std::size_t s = 0; s < segments.size(); ++s) {
       const labelling::SegmentLayout& layout = subject.model.segments[segments[s].model_segment];
-      for (std::size_t m = 0; m < layout.markers.size(); ++m) subject.slots[layout.markers[m].name].push_back({s, m});
+      for (std::size_t m = 0; m < layout.markers.size(); ++m)
+        subject.slots[layout.markers[m].name].push_back({s, m});
     }
     for (std::size_t s = 0; s < segments.size(); ++s) {
       // The nearest ancestor that is published (a segment without tracked markers has no body).
