@@ -54,6 +54,9 @@ def main():
     parser.add_argument("--min-right", type=float, default=None)
     parser.add_argument("--max-wrong", type=float, default=None)
     parser.add_argument("--max-return-ms", type=float, default=None)
+    parser.add_argument("--explain", type=int, default=0, metavar="N",
+                        help="also print to stderr the N most frequent wrong names (true, given, "
+                        "marker-frames, first and last second from the first record)")
     args = parser.parse_args()
     stamps, markers = load_truth(args.truth, args.by_subject)
     stamps = [stamp + args.truth_shift_ns for stamp in stamps]
@@ -61,6 +64,7 @@ def main():
     first_stamp = None
     track_start, track_marker, track_named, seen_names = {}, {}, set(), set()
     returns = []
+    wrong_by_pair = {}  # (true, given) -> [count, first s, last s]
     for line in open(args.labels):
         record = json.loads(line)
         stamp = record["stamp_ns"]
@@ -94,6 +98,10 @@ def main():
                 seen_names.add(best)
             elif label is not None:
                 wrong += 1
+                at_s = (stamp - first_stamp) * 1e-9
+                pair = wrong_by_pair.setdefault((best, label), [0, at_s, at_s])
+                pair[0] += 1
+                pair[2] = at_s
                 name, true_name = label.split("/")[-1], best.split("/")[-1]
                 swaps += side_swapped(name, true_name)
                 crossings += args.by_subject and label.split("/")[0] != best.split("/")[0]
@@ -108,6 +116,10 @@ def main():
         "worst_return_ms": max(returns, default=0.0),
     }
     print(json.dumps(result))
+    ranked = sorted(wrong_by_pair.items(), key=lambda item: -item[1][0])
+    for (true_name, given), (count, first_s, last_s) in ranked[:args.explain]:
+        print(f"wrong: {true_name} named {given}: {count} marker-frames, {first_s:.3f}-{last_s:.3f} s",
+              file=sys.stderr)
     ok = (args.min_right is None or result["right_percent"] >= args.min_right) and (
         args.max_wrong is None or result["wrong_percent"] <= args.max_wrong) and (
         args.max_return_ms is None or result["worst_return_ms"] <= args.max_return_ms)

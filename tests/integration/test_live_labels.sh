@@ -79,6 +79,7 @@ else
   echo "SKIP (console part): playwright-core or /usr/bin/chromium missing"
 fi
 epoch=$((($(date +%s) + 4) * 1000000000))
+echo "$epoch" >"$work/epoch"  # for the scoring of a kept run by hand
 "$probe" --out "$work/client.jsonl" --out-labels "$work/client_labels.jsonl" --duration 16 \
   >"$work/client.log" 2>&1 &
 client=$!
@@ -142,10 +143,19 @@ fi
 for who in client estimator; do
   if /usr/bin/python3 "$score" "$work/${who}_labels.jsonl" "$work/sim/truth.jsonl" --skip-s 0.5 \
     --truth-shift-ns $((epoch - 1700000000000000000)) --min-right 99.5 --max-wrong 0.1 "${score_args[@]}" \
-    >"$work/${who}_score.json" 2>&1; then
+    --explain 8 >"$work/${who}_score.json" 2>"$work/${who}_score.err"; then
     pass "$who: names right and wrong within the issue's bounds: $(cat "$work/${who}_score.json")"
   else
-    fail "$who: names: $(cat "$work/${who}_score.json")"
+    fail "$who: names: $(cat "$work/${who}_score.json" "$work/${who}_score.err")"
+    if [ "$who" = estimator ]; then
+      # The labeller's share: the estimator's own tracks labelled again at every record, offline
+      # (docs/marker_sets.md, "When a live run names wrongly").
+      "$bin/panoptes_label_replay" --labels "$work/estimator_labels.jsonl" --subjects "$work"/models/*.yaml \
+        --out "$work/replayed_labels.jsonl" >/dev/null 2>&1 &&
+        echo "  the same tracks labelled at every record offline: $(/usr/bin/python3 "$score" \
+          "$work/replayed_labels.jsonl" "$work/sim/truth.jsonl" --skip-s 0.5 "${score_args[@]}" \
+          --truth-shift-ns $((epoch - 1700000000000000000)) 2>&1)"
+    fi
   fi
 done
 if [ "${#subjects[@]}" = 2 ]; then

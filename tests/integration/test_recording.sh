@@ -143,9 +143,24 @@ check_mcap "$work/D.mcap" >"$work/D.json" && [ "$(json "$work/D.json" "d['summar
   2>"$work/est_live.log" &
 live=$!
 pids+=("$live")
+# At 1x the replay keeps the original pace: panoptes_replay says "kept up" when no message left more
+# than 20 ms late. Beside another test on two cores a few messages did (3 of 1338, 24.7 ms, at
+# 1.00x overall): up to 1 % of them late, at 0.99x or better overall, passes too (issue 37).
 "$bin/panoptes_replay" "$work/A.mcap" --topics /panoptes/features /panoptes/camera_info --end 5 \
-  2>"$work/replay1.log" && grep -q "kept up" "$work/replay1.log" && pass "replay at 1x kept up: $(grep -o 'max lag [0-9.]* ms' "$work/replay1.log")" ||
-  { fail "replay at 1x"; cat "$work/replay1.log"; }
+  2>"$work/replay1.log"
+replay_rc=$?
+published=$(grep -oE "published [0-9]+ messages" "$work/replay1.log" | grep -oE "[0-9]+")
+late=$(grep -oE "[0-9]+ messages more than 20 ms late" "$work/replay1.log" | grep -oE "^[0-9]+")
+achieved=$(grep -oE "achieved [0-9.]+x" "$work/replay1.log" | grep -oE "[0-9.]+")
+if grep -q "kept up" "$work/replay1.log" && [ "$replay_rc" -eq 0 ]; then
+  pass "replay at 1x kept up: $(grep -o 'max lag [0-9.]* ms' "$work/replay1.log")"
+elif [ -n "$published" ] && [ -n "$late" ] && [ -n "$achieved" ] && [ $((late * 100)) -le "$published" ] &&
+  awk -v a="$achieved" 'BEGIN { exit !(a >= 0.99) }'; then
+  pass "replay at 1x kept the pace: $late of $published messages more than 20 ms late, ${achieved}x"
+else
+  fail "replay at 1x (exit $replay_rc)"
+  cat "$work/replay1.log"
+fi
 kill -INT "$live"
 wait "$live"
 shift=$(sed -n 's/.*shifted by \(-\?[0-9]*\) ns.*/\1/p' "$work/replay1.log")

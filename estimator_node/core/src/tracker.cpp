@@ -72,7 +72,6 @@ struct Track {
 struct Core {
   std::vector<Track> tracks;
   Initiator initiator;
-  std::int64_t next_id = 1;
   TimeNs last_stamp_ns = std::numeric_limits<TimeNs>::min();
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
@@ -137,6 +136,14 @@ struct Tracker::Impl {
   std::vector<std::string> camera_ids;
   std::map<std::string, int> camera_index;
   Core core;
+  // Track ids are never restored by a rewind: an id once published names one marker. The next new
+  // id, and during a replay the tracks the rewind undid (created after the restored state): a track
+  // the replay creates again where one of them was takes its id (docs/estimator.md, "Track ids
+  // across a rewind"). Restoring the id counter instead gave the re-created tracks each other's
+  // ids whenever the replay created them in another order (a late frame first): under CPU
+  // contention tens of tracks moved to other markers at once, and the names on them with them.
+  std::int64_t next_track_id = 1;
+  std::vector<Track> undone;
   std::deque<Entry> history;     // applied frames in stamp order, within the rewind horizon
   std::size_t history_base = 0;  // absolute index of history.front()
   // Rewind points in stamp order: `checkpoints` every checkpoint_interval_ns over the rewind
@@ -325,6 +332,9 @@ struct Tracker::Impl {
               const std::vector<char>& used) const;
   void initiate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
                 const std::vector<char>& used);
+  // A new track's id: an undone track's within kReuseIdGate of `position` at `stamp` (the nearest),
+  // else a new one.
+  std::int64_t id_for(const Eigen::Vector3d& position, TimeNs stamp);
   void prune(TimeNs now_ns);
   std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
   // Inserts `late` (in stamp order, each older than the newest applied frame, none older than the
@@ -768,7 +778,7 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
   };
   for (auto& candidate : core.initiator.add_frame(camera_index, stamp, unmatched, occupied)) {
     Track track;
-    track.id = core.next_id++;
+    track.id = id_for(candidate.position, stamp);
     track.state.x.head<3>() = candidate.position;
     track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
     const double sp = options.init_position_sigma_m;
@@ -787,7 +797,10 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     ++core.tracks_created;
     for (std::size_t k = 0; k < candidate.cameras.size(); ++k)
       note_update(track, candidate.cameras[k], candidate.camera_stamps[k]);
-    core.tracks.push_back(std::move(track));
+    // In id order (reassociate() searches by id): a reused id goes before the newer ones.
+    const auto at = std::lower_bound(core.tracks.begin(), core.tracks.end(), track.id,
+                                     [](const Track& t, std::int64_t id) { return t.id < id; });
+    core.tracks.insert(at, std::move(track));
   }
 }
 
@@ -840,8 +853,34 @@ void Tracker::Impl::prune(TimeNs now_ns) {
   std::erase_if(core.tracks, [&](const Track&) { return remove[k++] != 0; });
 }
 
+std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp) {
+  // Where an undone track was when the replay creates a track again: its newest state moved back
+  // by its velocity over at most the rewind horizon (0.5 s), a few millimetres for a walk.
+  constexpr double kReuseIdGate = 0.015;
+  auto nearest = undone.end();
+  double best = kReuseIdGate;
+  for (auto it = undone.begin(); it != undone.end(); ++it) {
+    const double d = (it->position_at(stamp) - position).norm();
+    if (d < best) {
+      best = d;
+      nearest = it;
+    }
+  }
+  if (nearest == undone.end()) return next_track_id++;
+  const std::int64_t id = nearest->id;
+  undone.erase(nearest);
+  return id;
+}
+
 void Tracker::Impl::replay_with(std::vector<Entry> late) {
+  std::vector<Track> before = core.tracks;
   const std::size_t start = rewind_to(late.front().frame.stamp_ns) - history_base;
+  undone.clear();
+  for (auto& track : before) {
+    const bool restored = std::any_of(core.tracks.begin(), core.tracks.end(),
+                                      [&](const Track& kept) { return kept.id == track.id; });
+    if (!restored) undone.push_back(std::move(track));
+  }
   // Merge: a late frame goes after the history's frames of the same stamp.
   const auto by_stamp = [](const Entry& a, const Entry& b) { return a.frame.stamp_ns < b.frame.stamp_ns; };
   std::vector<Entry> tail;
@@ -855,6 +894,7 @@ void Tracker::Impl::replay_with(std::vector<Entry> late) {
     maybe_checkpoint(history[i].frame.stamp_ns, history_base + i);
     apply(history[i], true);
   }
+  undone.clear();  // what the replay did not create again has ended
   ++stats.replays;
   stats.replayed_frames += history.size() - start;
 }

@@ -165,6 +165,7 @@ std::optional<std::pair<RigidTransform, bool>> segment_pose(const SegmentLayout&
 
 struct Labeller::State {
   std::uint64_t untangled = 0;  // pairs of names untangle() moved
+  std::uint64_t released = 0;   // names release() took from their tracks
   LabellerOptions options;
   std::vector<Subject> subjects;
   std::unordered_map<std::uint64_t, std::pair<std::size_t, std::pair<std::size_t, std::size_t>>> labels;
@@ -217,6 +218,8 @@ struct Labeller::State {
   void grow(const Subject& subject, std::size_t s, const RigidTransform& pose, Hypothesis& h);
   void commit(std::size_t subject_index, std::size_t s, const Found& found);
   void untangle(std::size_t subject_index);
+  void release_misfits(std::size_t subject_index, std::size_t s, const std::vector<std::size_t>& named);
+  void release(std::size_t subject_index, std::size_t s, std::size_t m);
   std::vector<std::size_t> candidates_near(const Subject& subject, std::size_t s,
                                            const std::optional<RigidTransform>& parent_pose) const;
   bool tree_accepts(const Subject& subject, std::size_t s, const RigidTransform& pose,
@@ -486,7 +489,10 @@ void Labeller::State::untangle(std::size_t subject_index) {
         }
       }
     }
-    if (!best) continue;
+    if (!best) {
+      if (rms_now > options.release_rms_m) release_misfits(subject_index, s, named);
+      continue;
+    }
     ++untangled;
     MarkerState& a = segment.markers[best->first];
     MarkerState& b = segment.markers[best->second];
@@ -502,6 +508,56 @@ void Labeller::State::untangle(std::size_t subject_index) {
       segment.loose = pose->second;
     }
   }
+}
+
+// A named marker's track leaves it: the name waits (recover(), acquire() and revise() may give it
+// to another track, this one included).
+void Labeller::State::release(std::size_t subject_index, std::size_t s, std::size_t m) {
+  MarkerState& marker = subjects[subject_index].segments[s].markers[m];
+  if (marker.point) claimed[*marker.point] = 0;
+  if (marker.track) labels.erase(*marker.track);
+  marker.track.reset();
+  marker.point.reset();
+  marker.moved.reset();
+  marker.absent_since_s.reset();
+  ++released;
+}
+
+// LabellerOptions::release_rms_m: a rigid segment that no exchange of two names fits (the tracker
+// moved three tracks round, or one to another segment's marker). The one name whose track leaving
+// makes the rest fit within untangle_rms_m is released (the worst such); when none does, every name
+// of the segment and its pose, so that it is searched afresh from its parent's pose.
+void Labeller::State::release_misfits(std::size_t subject_index, std::size_t s,
+                                      const std::vector<std::size_t>& named) {
+  SegmentState& segment = subjects[subject_index].segments[s];
+  const SegmentLayout& layout = subjects[subject_index].model.segments[s];
+  Points seen = seen_now(segment);
+  std::optional<std::size_t> outlier;
+  std::optional<LayoutFit> outlier_fit;
+  if (named.size() > 3) {
+    for (std::size_t m : named) {
+      auto point = std::exchange(seen[m], std::nullopt);
+      auto fit = fit_layout(layout, seen);
+      seen[m] = point;
+      if (fit && fit->rms_m <= options.untangle_rms_m && (!outlier_fit || fit->rms_m < outlier_fit->rms_m)) {
+        outlier = m;
+        outlier_fit = std::move(fit);
+      }
+    }
+  }
+  if (outlier) {
+    release(subject_index, s, *outlier);
+    segment.pose = outlier_fit->T_world_segment;
+    segment.loose = false;
+    return;
+  }
+  for (std::size_t m : named) {
+    release(subject_index, s, m);
+    // Waiting where the previous instant's pose put it, not where the wrong track is now.
+    if (segment.previous) segment.markers[m].last = segment.previous->apply(layout.markers[m].position_m);
+  }
+  segment.pose.reset();
+  segment.loose = false;
 }
 
 void Labeller::State::commit(std::size_t subject_index, std::size_t s, const Found& found) {
@@ -1021,6 +1077,10 @@ std::vector<std::pair<std::uint64_t, MarkerLabel>> Labeller::labels() const {
 
 std::uint64_t Labeller::untangled() const {
   return state_->untangled;
+}
+
+std::uint64_t Labeller::released() const {
+  return state_->released;
 }
 
 const SubjectModel& Labeller::model(std::size_t subject) const {

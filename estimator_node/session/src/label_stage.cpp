@@ -48,6 +48,7 @@ struct LabelStage::Core {
     worst_us = std::max(worst_us, per_subject);
     ++runs;
     untangled = labeller.untangled();
+    released = labeller.released();
     if (map->generation != 0 &&
         std::equal(names.begin(), names.end(), map->labels.begin(), map->labels.end(), same))
       return;
@@ -100,6 +101,7 @@ struct LabelStage::Core {
   std::shared_ptr<const LabelMap> map = std::make_shared<const LabelMap>();
   std::uint64_t runs = 0;
   std::uint64_t untangled = 0;  // labeller.untangled() after the newest run
+  std::uint64_t released = 0;   // labeller.released() after the newest run
   double total_us = 0.0;
   double worst_us = 0.0;
   std::condition_variable wake;
@@ -221,25 +223,27 @@ std::string LabelStage::summary() const {
                                                  static_cast<double>(marker_frames_);
   std::uint64_t runs = 0;
   std::uint64_t untangled = 0;
+  std::uint64_t released = 0;
   double total_us = 0.0;
   double worst_us = 0.0;
   {
     std::lock_guard<std::mutex> lock(core_->mutex);
     runs = core_->runs;
     untangled = core_->untangled;
+    released = core_->released;
     total_us = core_->total_us;
     worst_us = core_->worst_us;
   }
   const double mean = runs == 0 ? 0.0 : total_us / static_cast<double>(runs);
-  char text[384];
+  char text[448];
   std::snprintf(text, sizeof text,
                 "labels: %zu subject%s, %.2f %% of %llu confirmed marker-frames at the labeller's runs "
                 "named, %.1f us per subject-frame (mean; worst %.0f us) over %llu runs%s; %llu pairs of "
-                "names untangled",
+                "names untangled, %llu names released from tracks that stopped fitting",
                 core_->subjects.size(), core_->subjects.size() == 1 ? "" : "s", named,
                 static_cast<unsigned long long>(marker_frames_), mean, worst_us,
                 static_cast<unsigned long long>(runs), core_->worker.joinable() ? " (in the background)" : "",
-                static_cast<unsigned long long>(untangled));
+                static_cast<unsigned long long>(untangled), static_cast<unsigned long long>(released));
   return text;
 }
 

@@ -88,6 +88,11 @@ struct LabellerOptions {
   // two names.
   double untangle_rms_m = 0.010;
   double untangle_ratio = 0.5;
+  // A rigid segment whose fit RMS exceeds release_rms_m and that no exchange of two names fits (the
+  // tracker moved three of its tracks round, or one onto another segment's marker: seen live under
+  // CPU contention, test_live_labels) releases the one name whose track leaving makes the rest fit
+  // within untangle_rms_m, else all its names and its pose; they wait for the right tracks.
+  double release_rms_m = 0.020;
 };
 
 // The tolerance of a marker-pair distance of `segment` while the subject moves (see allowance_m).
@@ -117,6 +122,8 @@ class Labeller {
   const SubjectModel& model(std::size_t subject) const;
   // How many pairs of names untangle() has moved (LabellerOptions::untangle_rms_m) so far.
   std::uint64_t untangled() const;
+  // How many names release_rms_m has taken from tracks so far.
+  std::uint64_t released() const;
 
  private:
   struct State;
