@@ -10,6 +10,7 @@
 
 #include <Eigen/Geometry>
 
+#include "panoptes/geometry.h"
 #include "panoptes/session/log.h"
 
 namespace panoptes::estimator_app {
@@ -97,6 +98,11 @@ void labelled_marker(const session::MarkerOutput& marker, mocap::Marker_& out) {
   out.translation(xyz<ros2::Point_>(marker.track.p));
 }
 
+// A pose record as the transform world <- body.
+RigidTransform world_from(const PoseRecord& pose) {
+  return {Eigen::Quaterniond(pose.q[3], pose.q[0], pose.q[1], pose.q[2]), pose.p};
+}
+
 }  // namespace
 
 void Ros2Messages::header(TimeNs stamp_ns, std_msgs::msg::dds_::Header_& out) const {
@@ -139,19 +145,14 @@ void Ros2Messages::transforms(const session::FrameOutput& frame, const std::vect
     ros2::TransformStamped_& transform = out.transforms()[n++];
     header(pose_time(body), transform.header());
     transform.child_frame_id(settings_.child_frame_prefix + tokens[b]);
-    Eigen::Vector3d p = body.pose.p;
-    Eigen::Vector4d q = body.pose.q;
+    RigidTransform T_frame_body = world_from(body.pose);
     if (parent) {
       transform.header().frame_id(settings_.child_frame_prefix + tokens[parent_index]);
-      const Eigen::Quaterniond q_parent(parent->pose.q[3], parent->pose.q[0], parent->pose.q[1],
-                                        parent->pose.q[2]);
-      const Eigen::Quaterniond q_child(q[3], q[0], q[1], q[2]);
-      const Eigen::Quaterniond q_relative = q_parent.conjugate() * q_child;
-      p = q_parent.conjugate() * (p - parent->pose.p);
-      q = Eigen::Vector4d(q_relative.x(), q_relative.y(), q_relative.z(), q_relative.w());
+      T_frame_body = world_from(parent->pose).inverse() * T_frame_body;  // T_parent_body
     }
-    transform.transform().translation(xyz<ros2::Vector3_>(p));
-    transform.transform().rotation(quaternion(q));
+    const Eigen::Quaterniond& q = T_frame_body.q;
+    transform.transform().translation(xyz<ros2::Vector3_>(T_frame_body.t));
+    transform.transform().rotation(quaternion(Eigen::Vector4d(q.x(), q.y(), q.z(), q.w())));
   }
   out.transforms().resize(n);
 }

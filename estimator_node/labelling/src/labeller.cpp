@@ -218,6 +218,8 @@ struct Labeller::State {
   void grow(const Subject& subject, std::size_t s, const RigidTransform& pose, Hypothesis& h);
   void commit(std::size_t subject_index, std::size_t s, const Found& found);
   void untangle(std::size_t subject_index);
+  void untangle_pair(std::size_t subject_index, std::size_t s);
+  void exchange(std::size_t subject_index, std::size_t s, std::size_t m1, std::size_t m2);
   void release_misfits(std::size_t subject_index, std::size_t s, const std::vector<std::size_t>& named);
   void release(std::size_t subject_index, std::size_t s, std::size_t m);
   std::vector<std::size_t> candidates_near(const Subject& subject, std::size_t s,
@@ -463,6 +465,10 @@ void Labeller::State::untangle(std::size_t subject_index) {
   for (std::size_t s : subject.order) {
     SegmentState& segment = subject.segments[s];
     const SegmentLayout& layout = subject.model.segments[s];
+    if (!layout.has_pose && segment.tracked.size() == 2) {
+      untangle_pair(subject_index, s);
+      continue;
+    }
     if (!segment.pose || segment.loose || segment.soft || !layout.has_pose) continue;
     Points seen = seen_now(segment);
     std::vector<std::size_t> named;
@@ -470,6 +476,17 @@ void Labeller::State::untangle(std::size_t subject_index) {
       if (seen[m]) named.push_back(m);
     }
     if (named.size() < 3) continue;
+    // Turned further from its parent than acquisition allows (tree_accepts): the names fit the
+    // layout mirrored (a foot's medial and lateral markers exchanged fit it turned upside down).
+    if (const auto parent = segment.parent) {
+      const SegmentState& p = subject.segments[*parent];
+      if (p.pose && !p.loose &&
+          p.pose->q.angularDistance(segment.pose->q) > options.max_relative_rotation_rad) {
+        for (std::size_t m : named) release(subject_index, s, m);
+        segment.pose.reset();
+        continue;
+      }
+    }
     // The pose is fit_poses()'s rigid fit of these points: its RMS without a second fit.
     double sum = 0.0;
     for (std::size_t m : named)
@@ -493,21 +510,45 @@ void Labeller::State::untangle(std::size_t subject_index) {
       if (rms_now > options.release_rms_m) release_misfits(subject_index, s, named);
       continue;
     }
-    ++untangled;
-    MarkerState& a = segment.markers[best->first];
-    MarkerState& b = segment.markers[best->second];
-    std::swap(a.track, b.track);
-    std::swap(a.point, b.point);
-    std::swap(a.last, b.last);
-    std::swap(a.moved, b.moved);
-    labels[*a.track] = {subject_index, {s, best->first}};
-    labels[*b.track] = {subject_index, {s, best->second}};
+    exchange(subject_index, s, best->first, best->second);
     const auto pose = segment_pose(layout, seen_now(segment), segment.pose->q);
     if (pose) {
       segment.pose = pose->first;
       segment.loose = pose->second;
     }
   }
+}
+
+// Two named markers of segment s exchange their tracks (and what they learned stays with the
+// markers).
+void Labeller::State::exchange(std::size_t subject_index, std::size_t s, std::size_t m1, std::size_t m2) {
+  ++untangled;
+  MarkerState& a = subjects[subject_index].segments[s].markers[m1];
+  MarkerState& b = subjects[subject_index].segments[s].markers[m2];
+  std::swap(a.track, b.track);
+  std::swap(a.point, b.point);
+  std::swap(a.last, b.last);
+  std::swap(a.moved, b.moved);
+  labels[*a.track] = {subject_index, {s, m1}};
+  labels[*b.track] = {subject_index, {s, m2}};
+}
+
+// A two-marker segment (no rigid fit; Gait2392's upper arm, Bicep and Elbow) whose two named
+// tracks lost the static pose's handedness with the parent's two nearest markers, and would keep it
+// exchanged: the tracker exchanged them, the names follow the markers.
+void Labeller::State::untangle_pair(std::size_t subject_index, std::size_t s) {
+  const Subject& subject = subjects[subject_index];
+  const SegmentState& segment = subject.segments[s];
+  if (!segment.parent) return;
+  const std::size_t a = segment.tracked[0];
+  const std::size_t b = segment.tracked[1];
+  const auto& pa = segment.markers[a].point;
+  const auto& pb = segment.markers[b].point;
+  if (!pa || !pb) return;
+  const Points parent_seen = seen_now(subject.segments[*segment.parent]);
+  if (!keeps_handedness(subject, s, a, b, parent_seen, *pa, *pb) &&
+      keeps_handedness(subject, s, a, b, parent_seen, *pb, *pa))
+    exchange(subject_index, s, a, b);
 }
 
 // A named marker's track leaves it: the name waits (recover(), acquire() and revise() may give it

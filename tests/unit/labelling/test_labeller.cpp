@@ -375,10 +375,38 @@ TEST(Labeller, TracksMovedRoundOrToAnotherSegmentAreReleased) {
   const auto [right_before, wrong_before] = names_after_moved_tracks(model, walk, never, moved, 60, every);
   const auto [right_after, wrong_after] =
       names_after_moved_tracks(model, walk, gait2392_options(), moved, 60, every);
-  EXPECT_GT(wrong_before, 200) << "the moved tracks should keep the wrong names without releasing them";
+  EXPECT_GT(wrong_before, 100) << "the moved tracks should keep the wrong names without releasing them";
   EXPECT_LE(wrong_after, 5 * static_cast<int>(every))
       << "the names should follow their markers within a few runs";
   EXPECT_GE(right_after, wrong_before * 9 / 10) << "the moved markers should be named again";
+}
+
+// Seen in a live run's tracks labelled again at every instant (panoptes_label_replay): the tracker
+// exchanged the upper arm's two markers (Bicep, Elbow: a two-marker segment, no rigid fit) and the
+// left foot's lateral and medial markers in pairs (Toe.Lat/Toe.Med, Midfoot.Lat/Midfoot.Sup),
+// which the foot's layout fits turned upside down with a small residual. The names stayed wrong for
+// the rest of the walk (14.6 % of all marker-frames). The pair's handedness with its parent's
+// markers and the foot's turn from its parent give them back.
+TEST(Labeller, ExchangedPairsAndAMirroredSegmentAreUntangled) {
+  PANOPTES_REQUIRE_SHARED(test::gait2392_static());
+  PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
+  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
+  const SubjectModel model = build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1");
+  const MarkerSamples walk = load_marker_samples(test::gait2392_walk());
+  std::map<std::size_t, std::size_t> moved;
+  for (const auto& [a, b] : {std::pair<std::string, std::string>{"L.Bicep", "L.Elbow"},
+                             {"L.Toe.Lat", "L.Toe.Med"},
+                             {"L.Midfoot.Lat", "L.Midfoot.Sup"}}) {
+    const std::size_t i = column(walk, a);
+    const std::size_t j = column(walk, b);
+    ASSERT_LT(i, walk.point_count()) << a;
+    ASSERT_LT(j, walk.point_count()) << b;
+    moved[i] = j;
+    moved[j] = i;
+  }
+  const auto [right, wrong] = names_after_moved_tracks(model, walk, gait2392_options(), moved, 60);
+  EXPECT_LE(wrong, 6 * 2) << "the names should follow their markers within two instants";
+  EXPECT_GT(right, 6 * 80);
 }
 
 TEST(Labeller, PointsThatFitNothingStayUnlabelled) {
