@@ -65,6 +65,20 @@ require_shared_data() {
   exit 77
 }
 
+# Waits for background process PID (a child of this shell) at most SECONDS, then kills it: a
+# process that hangs on its way out (seen once: a recorder after closing its file, in Fast DDS's
+# teardown) fails the test instead of holding it until ctest's timeout. Returns PID's exit status,
+# or 124 when it had to be killed (and says so).
+wait_bounded() {  # PID SECONDS NAME
+  if ! timeout "$2" tail --pid="$1" -f /dev/null; then
+    echo "$3 (pid $1) still running after $2 s: killed"
+    kill -KILL "$1" 2>/dev/null
+    wait "$1" 2>/dev/null
+    return 124
+  fi
+  wait "$1"
+}
+
 finish() {
   if [ "$failures" -eq 0 ]; then echo "all checks passed"; exit 0; fi
   echo "$failures check(s) failed"

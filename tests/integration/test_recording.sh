@@ -49,14 +49,14 @@ timeout 60 tail --pid="$demo" -f /dev/null
 wait "$demo" || { fail "demo exit $?"; tail -5 "$work/demo.out"; }
 sleep 1
 kill -INT "$a"
-"$rec" --command quit --target rec_c 2>/dev/null
-wait "$a" && pass "recorder A stopped cleanly on SIGINT" || fail "recorder A exit $?"
-wait "$c" && pass "recorder C quit on its DDS command" || fail "recorder C exit $?"
+timeout 20 "$rec" --command quit --target rec_c 2>/dev/null
+wait_bounded "$a" 30 "recorder A" && pass "recorder A stopped cleanly on SIGINT" || fail "recorder A exit $?"
+wait_bounded "$c" 30 "recorder C" && pass "recorder C quit on its DDS command" || fail "recorder C exit $?"
 # D stops by itself when its file reaches the size limit; under heavy load the demo may not have
 # produced 300 kB by now: bounded wait, then a clear failure rather than a hang.
 timeout 30 tail --pid="$d" -f /dev/null ||
   { echo "recorder D still running 30 s after the demo (the demo produced too little data?)"; kill -INT "$d"; }
-wait "$d"
+wait_bounded "$d" 10 "recorder D"
 rc_d=$?
 
 # A: every message published is in the file; @mcap/core reads it.

@@ -63,7 +63,14 @@ int run(int argc, char** argv) {
   std::size_t records = 0;
   std::size_t runs = 0;
   while (std::getline(in, line)) {
-    auto record = nlohmann::json::parse(line);
+    nlohmann::json record;
+    try {
+      record = nlohmann::json::parse(line);
+    } catch (const nlohmann::json::exception& e) {
+      std::fprintf(stderr, "panoptes_label_replay: %s line %zu: %s\n", in_file.c_str(), records + 1,
+                   e.what());
+      return 1;
+    }
     const std::int64_t stamp = record.at("stamp_ns").get<std::int64_t>();
     std::vector<TrackPoint> points;
     for (const auto& entry : record.at("tracks")) {

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "../scratch_dir.h"
 #include "../shared_data.h"
 #include "panoptes/errors.h"
 
@@ -35,9 +36,7 @@ inline std::filesystem::path rajagopal_walk() {
 // A file in a per-test scratch directory (ctest runs tests in parallel).
 inline std::filesystem::path scratch_file(const std::string& name, const std::string& text = "") {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("panoptes_labelling_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const auto dir = panoptes::testing::process_scratch_dir("panoptes_labelling_" + std::string(info->name()));
   auto path = dir / name;
   if (!text.empty()) std::ofstream(path) << text;
   return path;

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "../scratch_dir.h"
 #include "../shared_data.h"
 #include "panoptes/errors.h"
 #include "panoptes/label_job/angles_job.h"
@@ -21,9 +22,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path scratch(const std::string& name) {
-  const auto dir = fs::temp_directory_path() / ("panoptes_label_angles_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
+  return panoptes::testing::process_scratch_dir("panoptes_label_angles") / name;
 }
 
 std::string read(const fs::path& path) {

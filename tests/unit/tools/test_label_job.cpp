@@ -15,6 +15,7 @@
 #include <unistd.h>
 #include <nlohmann/json.hpp>
 
+#include "../scratch_dir.h"
 #include "../shared_data.h"
 #include "panoptes/dds/decode.h"
 #include "panoptes/errors.h"
@@ -31,9 +32,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path scratch(const std::string& name) {
-  const auto dir = fs::temp_directory_path() / ("panoptes_label_job_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
+  return panoptes::testing::process_scratch_dir("panoptes_label_job") / name;
 }
 
 ModelCommandOptions gait2392() {
