@@ -15,12 +15,21 @@ namespace panoptes::dds {
 // the body descriptions 5-39 ms after its first frame, which has no such wait (docs/clients.md,
 // "Late joiners"). Not 0 ms for the reader: the doubling would then resend without pause.
 constexpr std::uint32_t kLateJoinerAcknackNs = 1'000'000;
+// And a lost sample of theirs is repaired within this: they are written seldom (a label map when
+// names change, descriptions when bodies do), so the next write may be seconds away, and a reader
+// asks again only after the writer's heartbeat (3 s by default). Under CPU contention a client held
+// an old label map for 2.6 s (test_live_labels); a heartbeat per 100 ms to each reader costs nothing
+// at these topics' rates.
+constexpr std::uint32_t kTransientLocalHeartbeatNs = 100'000'000;
 
 fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos) {
   fdds::DataWriterQos writer_qos = fdds::DATAWRITER_QOS_DEFAULT;
   apply_spec(writer_qos, spec, qos);
-  if (spec.durability == Durability::kTransientLocal)
+  if (spec.durability == Durability::kTransientLocal) {
     writer_qos.reliable_writer_qos().times.nackResponseDelay = eprosima::fastrtps::Duration_t(0, 0);
+    writer_qos.reliable_writer_qos().times.heartbeatPeriod =
+        eprosima::fastrtps::Duration_t(0, kTransientLocalHeartbeatNs);
+  }
   if (spec.offer_reliable && !spec.reliable && qos == Qos::kDefault) {
     writer_qos.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
     writer_qos.history().depth = kOfferedReliableDepth;
