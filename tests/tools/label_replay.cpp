@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // panoptes_label_replay: estimator_node --out-labels JSON Lines (every confirmed track per instant)
 // played through the live labeller again, offline and deterministic: what a live run's labeller
-// did, reproduced from its own input (docs/marker_sets.md, "When a live run names wrongly"). The
-// labeller runs at the records whose stamp is --period-s after its last run (0: every record), or,
-// with --runs-from, at the instants a run's labeller ran. Writes the same format with its names, for
+// did, reproduced from its own input (docs/marker_sets.md, "When a live run names wrongly"), with the
+// labeller's default options but --soft-segments. The labeller runs at the records whose stamp is
+// --period-s after its last run (0: every record). Writes the same format with its names, for
 // tests/integration/score_labels.py.
 #include <cstdint>
 #include <cstdio>

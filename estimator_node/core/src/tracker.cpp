@@ -873,13 +873,15 @@ std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp
 }
 
 void Tracker::Impl::replay_with(std::vector<Entry> late) {
-  std::vector<Track> before = core.tracks;
+  // The tracks now, moved out (the rewind overwrites them); those the restored state lacks are
+  // undone. Both lists are in id order.
+  std::vector<Track> before = std::move(core.tracks);
   const std::size_t start = rewind_to(late.front().frame.stamp_ns) - history_base;
   undone.clear();
+  auto kept = core.tracks.begin();
   for (auto& track : before) {
-    const bool restored = std::any_of(core.tracks.begin(), core.tracks.end(),
-                                      [&](const Track& kept) { return kept.id == track.id; });
-    if (!restored) undone.push_back(std::move(track));
+    while (kept != core.tracks.end() && kept->id < track.id) ++kept;
+    if (kept == core.tracks.end() || kept->id != track.id) undone.push_back(std::move(track));
   }
   // Merge: a late frame goes after the history's frames of the same stamp.
   const auto by_stamp = [](const Entry& a, const Entry& b) { return a.frame.stamp_ns < b.frame.stamp_ns; };

@@ -10,9 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <random>
-#include <sstream>
 
 #include <Eigen/Geometry>
 
@@ -21,6 +19,7 @@
 #include "panoptes/estimator/tracker.h"
 #include "panoptes/eval/evaluation.h"
 #include "panoptes/simulator.h"
+#include "walk8_scene.h"
 
 namespace panoptes::estimator {
 namespace {
@@ -129,23 +128,6 @@ TEST(CalibrationHealth, ModeIsParsed) {
   EXPECT_THROW(Tracker{options}, ConfigError);
 }
 
-// The walk8 scene, `duration_s` long with `seed`.
-Scene walk8(double duration_s, int seed) {
-  const std::string dir = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes";
-  std::ifstream in(dir + "/walk8.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  const auto replace = [&](const std::string& from, const std::string& to) {
-    const auto at = yaml.find(from);
-    if (at == std::string::npos) throw std::runtime_error("walk8.yaml: no '" + from + "'");
-    yaml.replace(at, from.size(), to);
-  };
-  replace("seed: 8\n", "seed: " + std::to_string(seed) + "\n");
-  replace("duration: 20.0\n", "duration: " + std::to_string(duration_s) + "\n");
-  return Scene::from_yaml_string(yaml, dir, "walk8.yaml");
-}
-
 std::vector<FeatureFrame> frames_of(const Scene& scene) {
   std::vector<FeatureFrame> frames;
   for (const auto& camera : scene.cameras()) {
@@ -251,7 +233,7 @@ RigidTransform bump_of(double degrees, double millimetres) {
 }
 
 TEST(CalibrationHealth, BumpedCameraIsQuarantinedWithinTwoSecondsAndTrackingHolds) {
-  Scene scene = walk8(20.0, 8);
+  Scene scene = walk8_scene(20.0, 8);
   const BumpRun clean_off = track(scene, "off");
   print("walk8 unbumped, off", clean_off);
   const BumpRun clean = track(scene, "detect");
@@ -282,7 +264,7 @@ TEST(CalibrationHealth, BumpedCameraIsQuarantinedWithinTwoSecondsAndTrackingHold
 // pose estimated again from the tracks the other seven determine, applied, and the camera brought
 // back; the corrected pose is the bumped truth within 0.05 degrees and 5 mm.
 TEST(CalibrationHealth, CorrectModeBringsABumpedCameraBack) {
-  Scene scene = walk8(20.0, 8);
+  Scene scene = walk8_scene(20.0, 8);
   const CameraCalibration cam3 = scene.calibration().cameras.at(3);  // a copy: calibration() returns by value
   ASSERT_TRUE(cam3.T_world_cam.has_value());
   const RigidTransform bump = bump_of(2.0, 5.0);
@@ -318,7 +300,7 @@ TEST(CalibrationHealth, NoFalseAlarmsOnNormalTrackingWithClutter) {
   std::uint64_t quarantines = 0;
   std::uint64_t residuals = 0;
   for (int seed = 100; seed < 100 + seeds; ++seed) {
-    const BumpRun run = track(walk8(seconds, seed), "detect", kNsPerSecond * 3600);
+    const BumpRun run = track(walk8_scene(seconds, seed), "detect", kNsPerSecond * 3600);
     print(("walk8 seed " + std::to_string(seed)).c_str(), run);
     quarantines += run.quarantines;
     for (const auto& h : run.health) residuals += h.residuals;
@@ -348,7 +330,7 @@ TEST(CalibrationHealth, BumpTable) {
                                    {"5 deg cam3", 5.0, {3}},
                                    {"0.5 deg cam3+cam6", 0.5, {3, 6}}};
   for (const auto& c : cases) {
-    Scene scene = walk8(20.0, 8);
+    Scene scene = walk8_scene(20.0, 8);
     for (const std::size_t camera : c.cameras)
       scene.set_camera_bump(camera, 10 * kNsPerSecond, bump_of(c.degrees, 5.0));
     const BumpRun off = track(scene, "off");

@@ -5,16 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <fstream>
 #include <map>
 #include <numeric>
 #include <random>
-#include <sstream>
 
 #include "panoptes/estimator/inbox.h"
 #include "panoptes/estimator/tracker.h"
 #include "panoptes/eval/evaluation.h"
 #include "panoptes/simulator.h"
+#include "walk8_scene.h"
 
 namespace panoptes::estimator {
 namespace {
@@ -252,15 +251,7 @@ TEST(LateData, FramesBeyondTheRewindHorizonAreCountedPerCamera) {
 // Each record's marker is the nearest true one; no id may ever be on two markers.
 TEST(LateData, TrackIdsStayOnTheirMarkersWhenReplaysCreateTracksAgain) {
   // The walk8 scene's first second: 41 markers on a person, eight cameras, clutter.
-  const std::string dir = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes";
-  std::ifstream in(dir + "/walk8.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  const auto at = yaml.find("duration: 20.0\n");
-  ASSERT_NE(at, std::string::npos) << "walk8.yaml: no 'duration: 20.0'";
-  yaml.replace(at, 15, "duration: 1.0\n");
-  const Scene scene = Scene::from_yaml_string(yaml, dir, "walk8.yaml");
+  const Scene scene = walk8_scene(1.0, 8);
   struct Moves {
     std::size_t moved = 0, records = 0, replays = 0;
   };

@@ -139,6 +139,12 @@ Score replay_walk(const SubjectModel& model, const MarkerSamples& walk, std::uin
   return score;
 }
 
+// Subject s1 from Gait2392 subject01's static trial (the caller checks the shared data is there).
+SubjectModel gait2392_model() {
+  return build_subject_model(load_marker_set(test::marker_set_path("gait2392")),
+                             load_marker_samples(test::gait2392_static()), "s1");
+}
+
 LabellerOptions gait2392_options() {
   LabellerOptions options;
   options.soft_segments = {"Torso"};
@@ -200,8 +206,7 @@ Score replay_seeds(const std::string& title, const SubjectModel& model, const Ma
 TEST(Labeller, Gait2392WalkFromTheStaticModel) {
   PANOPTES_REQUIRE_SHARED(test::gait2392_static());
   PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
-  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
-  const SubjectModel model = build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1");
+  const SubjectModel model = gait2392_model();
   const Score total =
       replay_seeds("gait2392 walk1", model, load_marker_samples(test::gait2392_walk()), gait2392_options());
   // Measured (10 seeds): 98.44 % right, 99.83 % from frame 2, 0.068 % wrong, 0 swaps, worst return 2
@@ -241,8 +246,7 @@ TEST(Labeller, RajagopalWalkFromItsStaticModel) {
 TEST(Labeller, TracksMissingForAnInstantKeepTheirNamesLive) {
   PANOPTES_REQUIRE_SHARED(test::gait2392_static());
   PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
-  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
-  const SubjectModel model = build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1");
+  const SubjectModel model = gait2392_model();
   const MarkerSamples walk = load_marker_samples(test::gait2392_walk());
   const Blinks ended{0.02, 0.10, false, {}, 0, 0};
   const Blinks live{0.02, 0.10, true, {}, 0, 0};
@@ -266,8 +270,7 @@ TEST(Labeller, TracksMissingForAnInstantKeepTheirNamesLive) {
 TEST(Labeller, ASubjectAcquiredWhileAMarkerWasHiddenIsRevised) {
   PANOPTES_REQUIRE_SHARED(test::gait2392_static());
   PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
-  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
-  const SubjectModel model = build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1");
+  const SubjectModel model = gait2392_model();
   const MarkerSamples walk = load_marker_samples(test::gait2392_walk());
   // Scored from two revision periods (12 instants each) after L.Acromium's track has begun: before
   // it nothing tells the wrong torso from the right one.
@@ -331,8 +334,7 @@ std::size_t column(const MarkerSamples& walk, const std::string& name) {
 TEST(Labeller, TracksThatExchangeTheirMarkersAreUntangled) {
   PANOPTES_REQUIRE_SHARED(test::gait2392_static());
   PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
-  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
-  const SubjectModel model = build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1");
+  const SubjectModel model = gait2392_model();
   const MarkerSamples walk = load_marker_samples(test::gait2392_walk());
   const std::size_t a = column(walk, "L.Midfoot.Sup");
   const std::size_t b = column(walk, "L.Toe.Med");
@@ -357,8 +359,7 @@ TEST(Labeller, TracksThatExchangeTheirMarkersAreUntangled) {
 TEST(Labeller, TracksMovedRoundOrToAnotherSegmentAreReleased) {
   PANOPTES_REQUIRE_SHARED(test::gait2392_static());
   PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
-  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
-  const SubjectModel model = build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1");
+  const SubjectModel model = gait2392_model();
   const MarkerSamples walk = load_marker_samples(test::gait2392_walk());
   const std::size_t sup = column(walk, "L.Midfoot.Sup");
   const std::size_t med = column(walk, "L.Toe.Med");
@@ -390,8 +391,7 @@ TEST(Labeller, TracksMovedRoundOrToAnotherSegmentAreReleased) {
 TEST(Labeller, ExchangedPairsAndAMirroredSegmentAreUntangled) {
   PANOPTES_REQUIRE_SHARED(test::gait2392_static());
   PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
-  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
-  const SubjectModel model = build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1");
+  const SubjectModel model = gait2392_model();
   const MarkerSamples walk = load_marker_samples(test::gait2392_walk());
   std::map<std::size_t, std::size_t> moved;
   for (const auto& [a, b] : {std::pair<std::string, std::string>{"L.Bicep", "L.Elbow"},
@@ -411,9 +411,7 @@ TEST(Labeller, ExchangedPairsAndAMirroredSegmentAreUntangled) {
 
 TEST(Labeller, PointsThatFitNothingStayUnlabelled) {
   PANOPTES_REQUIRE_SHARED(test::gait2392_static());
-  const MarkerSet set = load_marker_set(test::marker_set_path("gait2392"));
-  Labeller labeller({build_subject_model(set, load_marker_samples(test::gait2392_static()), "s1")},
-                    gait2392_options());
+  Labeller labeller({gait2392_model()}, gait2392_options());
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> room(-1.5, 1.5);
   std::size_t named = 0;
