@@ -5,11 +5,13 @@ import { chromium } from 'playwright-core';
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
+import { fileURLToPath } from 'node:url';
 
 export async function openBrowser(viewport) {
   const profile = mkdtempSync(join(tmpdir(), 'panoptes-chromium-'));
   const context = await chromium.launchPersistentContext(profile, {
-    executablePath: '/usr/bin/chromium',
+    // /usr/bin/chromium, unable to raise its own priority above the processes it watches.
+    executablePath: fileURLToPath(new URL('./chromium.sh', import.meta.url)),
     headless: true,
     viewport,
     args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
