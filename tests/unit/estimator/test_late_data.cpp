@@ -249,6 +249,31 @@ TEST(LateData, FramesBeyondTheRewindHorizonAreCountedPerCamera) {
 // tracks are being born every camera's frames arrive 0-40 ms late in a random order (a starved
 // estimator's start), so replays create tracks again, often in another order than the first pass.
 // Each record's marker is the nearest true one; no id may ever be on two markers.
+// Which marker each confirmed track id is on (the nearest within 20 mm), and how often an id
+// moved to another marker.
+struct IdFollower {
+  std::map<std::int64_t, std::string> marker_of;
+  std::size_t records = 0, moved = 0;
+
+  void observe(const Tracker& tracker, const Scene& scene) {
+    const auto truth = scene.markers_at(tracker.last_stamp_ns() - kEpoch);
+    for (const auto& track : tracker.current_tracks()) {
+      if (track.status != TrackStatus::kConfirmed) continue;
+      const MarkerTruth* nearest = nullptr;
+      for (const auto& marker : truth) {
+        if ((marker.p - track.p).norm() < 0.02) nearest = &marker;
+      }
+      if (nearest == nullptr) continue;
+      ++records;
+      const auto [it, inserted] = marker_of.emplace(track.id, nearest->name);
+      if (!inserted && it->second != nearest->name) {
+        ++moved;
+        it->second = nearest->name;
+      }
+    }
+  }
+};
+
 TEST(LateData, TrackIdsStayOnTheirMarkersWhenReplaysCreateTracksAgain) {
   // The walk8 scene's first second: 41 markers on a person, eight cameras, clutter.
   const Scene scene = walk8_scene(1.0, 8);
@@ -270,25 +295,13 @@ TEST(LateData, TrackIdsStayOnTheirMarkersWhenReplaysCreateTracksAgain) {
                        [](const Delivered& a, const Delivered& b) { return a.received_ns < b.received_ns; });
       Tracker tracker;
       tracker.set_calibration(scene.calibration());
-      std::map<std::int64_t, std::string> marker_of;
+      IdFollower follower;
       for (auto& delivered : frames) {
         if (tracker.process(delivered.frame) != FrameOutcome::kProcessed) continue;
-        const auto truth = scene.markers_at(tracker.last_stamp_ns() - kEpoch);
-        for (const auto& track : tracker.current_tracks()) {
-          if (track.status != TrackStatus::kConfirmed) continue;
-          const MarkerTruth* nearest = nullptr;
-          for (const auto& marker : truth) {
-            if ((marker.p - track.p).norm() < 0.02) nearest = &marker;
-          }
-          if (nearest == nullptr) continue;
-          ++m.records;
-          const auto [it, inserted] = marker_of.emplace(track.id, nearest->name);
-          if (!inserted && it->second != nearest->name) {
-            ++m.moved;
-            it->second = nearest->name;
-          }
-        }
+        follower.observe(tracker, scene);
       }
+      m.records += follower.records;
+      m.moved += follower.moved;
       m.replays += tracker.stats().replays;
     }
     std::printf(
@@ -304,6 +317,38 @@ TEST(LateData, TrackIdsStayOnTheirMarkersWhenReplaysCreateTracksAgain) {
   // Restoring the id counter with the state (before): 55 moves here, against 0 in order; with ids
   // reused within 15 mm: 1 (30 mm: 5, 50 mm: 7, close foot markers took each other's ids).
   EXPECT_LE(late.moved, in_order.moved + 2);
+}
+
+TEST(LateData, IdsStayOnTheirMarkersAfterEveryCameraStalled) {
+  // A loaded machine stalls every camera at once (test_live_labels: the camera_nodes dropped their
+  // frames in the queue for ~150 ms): the walk's 41 tracks coast, then take blobs again.
+  const Scene scene = walk8_scene(2.0, 8);
+  std::size_t moved = 0, records = 0, moved_without_stall = 0;
+  for (const double gap_ms : {0.0, 100.0, 150.0, 250.0}) {
+    for (const double at_s : {0.8, 1.2, 1.6}) {
+      auto frames = simulate(scene, 0.0, 1);
+      std::stable_sort(frames.begin(), frames.end(),
+                       [](const Delivered& a, const Delivered& b) { return a.received_ns < b.received_ns; });
+      Tracker tracker;
+      tracker.set_calibration(scene.calibration());
+      IdFollower follower;
+      for (const auto& delivered : frames) {
+        const double t = 1e-9 * static_cast<double>(delivered.frame.stamp_ns - kEpoch);
+        if (t >= at_s && t < at_s + 1e-3 * gap_ms) continue;
+        if (tracker.process(delivered.frame) != FrameOutcome::kProcessed) continue;
+        follower.observe(tracker, scene);
+      }
+      std::printf("every camera stalled %.0f ms at %.1f s: an id moved to another marker %zu times\n", gap_ms,
+                  at_s, follower.moved);
+      records += follower.records;
+      (gap_ms > 0 ? moved : moved_without_stall) += follower.moved;
+    }
+  }
+  EXPECT_GT(records, 50000u);
+  // Measured (2026-11-29): 131 moves over the nine stalls (100 ms: 4-9 each, 250 ms: 18-28), 0
+  // without a stall. The goal is as few as without a stall (docs/estimator.md, "After every camera
+  // stalled"); until then this bound keeps it from getting worse.
+  EXPECT_LE(moved, moved_without_stall + 140);
 }
 
 }  // namespace
