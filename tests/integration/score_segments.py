@@ -8,13 +8,15 @@ frame in which a segment is posed, its markers are placed by the pose and each i
 nearest true marker (the truth interpolated to the frame's stamp): the distance is how far the pose
 puts the segment's markers from where they really were (soft tissue and fit included). Per segment:
 the share of frames posed and the RMS distance. Prints one JSON object; exit 1 when --max-rms-mm or
---min-posed are not met by a segment not in --exclude."""
+--min-posed are not met by a segment not in --exclude. With --gaps-from, frames within --after-gap-ms
+of the end of a gap in the estimator's input are left out (score_labels.py, docs/testing.md "Live
+tests under load")."""
 import argparse
 import json
 import math
 import sys
 
-from score_labels import load_truth, truth_at
+from score_labels import after_gap, input_gap_ends, load_truth, truth_at
 
 
 def rotate(q, v):
@@ -35,7 +37,11 @@ def main():
     parser.add_argument("--exclude", default="", help="comma-separated segment names (after the subject)")
     parser.add_argument("--max-rms-mm", type=float, default=None)
     parser.add_argument("--min-posed", type=float, default=None, help="percent of frames")
+    parser.add_argument("--gaps-from", default=None, help="an --out-labels file whose gaps are input gaps")
+    parser.add_argument("--gap-ms", type=float, default=50.0)
+    parser.add_argument("--after-gap-ms", type=float, default=500.0)
     args = parser.parse_args()
+    gap_ends = input_gap_ends(args.gaps_from, args.gap_ms) if args.gaps_from else []
     stamps, markers = load_truth(args.truth, True)  # every subject's markers
     stamps = [s + args.truth_shift_ns for s in stamps]
     layouts, frames = {}, []
@@ -50,6 +56,8 @@ def main():
     stats = {name: {"frames": 0, "posed": 0, "sum2": 0.0, "n": 0} for name in layouts}
     for frame in frames[::max(args.every, 1)]:
         if (frame["stamp_ns"] - first) * 1e-9 < args.skip_s or not stamps[0] <= frame["stamp_ns"] <= stamps[-1]:
+            continue
+        if after_gap(gap_ends, frame["stamp_ns"], args.after_gap_ms):
             continue
         truth = list(truth_at(stamps, markers, frame["stamp_ns"]).values())
         for body in frame["bodies"]:

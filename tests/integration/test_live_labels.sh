@@ -5,7 +5,8 @@
 # walk8.yaml (self-occlusion, merging, 0.3 false blobs per frame) replayed by camera_nodes into
 # estimator_node --subjects; a client (panoptes_client_probe) names the markers from
 # rt/panoptes/labels and its view is scored against the simulator's truth: >= 99.5 % of the
-# visible marker-frames named right and <= 0.1 % wrong after the first 0.5 s, no left/right swap; a
+# visible marker-frames named right and <= 0.1 % wrong after the first 0.5 s (outside the 500 ms
+# after a gap in the estimator's input: a loaded machine, bounded apart), no left/right swap; a
 # client started late has the names with its first frames (transient-local map); the console's 3D
 # view draws the names and the marker set's sticks (console_labels.png for docs/marker_sets.md); the
 # run's recording exported to C3D names its points after the markers (read by tests/c3d/read_c3d.js).
@@ -139,10 +140,16 @@ PY
     pass "the console's names are the estimator's" || fail "the console showed names the estimator did not write"
 fi
 
-# The client's view, scored like the estimator's own --out-labels (the same format).
+# The client's view, scored like the estimator's own --out-labels (the same format). The issue's
+# bounds hold while the estimator's input flows. A machine too loaded to run eight cameras beside
+# another test (the README's ctest -j2 on 2 cores) can stall every camera_node at once: after such a
+# gap (no frame for > 50 ms) the tracker starts the markers again and the labeller names them again
+# (docs/estimator.md, "After every camera stalled"). The 500 ms after a gap are scored apart, with
+# a bound of their own, and may cover at most 2 s of the walk (docs/testing.md, "Live tests under load").
 for who in client estimator; do
   if /usr/bin/python3 "$score" "$work/${who}_labels.jsonl" "$work/sim/truth.jsonl" --skip-s 0.5 \
     --truth-shift-ns $((epoch - 1700000000000000000)) --min-right 99.5 --max-wrong 0.1 "${score_args[@]}" \
+    --gaps-from "$work/estimator_labels.jsonl" --max-wrong-after-gap 10 --max-after-gap-s 2 \
     --explain 8 >"$work/${who}_score.json" 2>"$work/${who}_score.err"; then
     pass "$who: names right and wrong within the issue's bounds: $(cat "$work/${who}_score.json")"
   else
@@ -168,7 +175,7 @@ fi
 # markers were (the soft Torso left out).
 if /usr/bin/python3 "$source_dir/tests/integration/score_segments.py" "$work/client.jsonl" "$work/sim/truth.jsonl" \
   --truth-shift-ns $((epoch - 1700000000000000000)) --skip-s 0.5 --every 10 --exclude Torso \
-  --max-rms-mm 10 --min-posed 95 >"$work/segments.json" 2>&1; then
+  --max-rms-mm 10 --min-posed 95 --gaps-from "$work/estimator_labels.jsonl" >"$work/segments.json" 2>&1; then
   pass "segment poses at the client: $(jq -c '{segments_described, worst_rms_mm, least_posed_percent}' "$work/segments.json")"
 else
   fail "segment poses at the client: $(cat "$work/segments.json")"
