@@ -114,12 +114,15 @@ cmd = result["commands"]
 def window(camera, t0_ms, t1_ms):
     return [r for r in frames[camera].values() if t0_ms * 1e6 <= r["arrival_ns"] < t1_ms * 1e6]
 if "threshold_max_ms" in cmd:
-    after = sorted(window("cam0", cmd["threshold_max_ms"], cmd["threshold_restore_ms"]), key=lambda r: r["frame"])
+    # Up to 100 ms before the page noted the restore: it notes a command once sent, and the camera
+    # can apply it first (a frame with blobs arrived 5 ms before the noted restore under ctest -j2).
+    after = sorted(window("cam0", cmd["threshold_max_ms"], cmd["threshold_restore_ms"] - 100), key=lambda r: r["frame"])
     first_empty = next((r for r in after if not r["blobs"]), None)
     delay = (first_empty["arrival_ns"] / 1e6 - cmd["threshold_max_ms"]) if first_empty else float("inf")
     late = [r for r in after if r["arrival_ns"] / 1e6 > cmd["threshold_max_ms"] + 1000 and r["blobs"]]
     ok &= report(delay < 1000 and not late and len(after) > 30,
-                 f"cam0 published no blob {delay:.0f} ms after threshold 255 (and none after, {len(after)} frames)")
+                 f"cam0 published no blob {delay:.0f} ms after threshold 255 (and {len(late)} frames with blobs "
+                 f"after that second, of {len(after)})")
     back = window("cam0", cmd["threshold_restore_ms"] + 1000, cmd["threshold_restore_ms"] + 3000)
     ok &= report(back and all(r["blobs"] for r in back), f"cam0 publishes blobs again after the restore ({len(back)} frames)")
 if cmd.get("mask_args"):
