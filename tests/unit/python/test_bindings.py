@@ -270,8 +270,13 @@ class Live(unittest.TestCase):
 
     def setUp(self):
         self.client = panoptes.Client(domain=DOMAIN)
-        self.publisher = subprocess.Popen(
-            [str(PUBLISHER), "--publish", "--rate", "500", "--duration", "3", "--readers", "1",
+        self.publisher = self.start_publisher(readers=1)
+
+    @staticmethod
+    def start_publisher(readers):
+        """Publishes for 3 s once `readers` readers have matched."""
+        return subprocess.Popen(
+            [str(PUBLISHER), "--publish", "--rate", "500", "--duration", "3", "--readers", str(readers),
              "--domain", str(DOMAIN)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
     def tearDown(self):
@@ -370,6 +375,11 @@ class Live(unittest.TestCase):
 
     def test_client_dropped_inside_its_own_callback(self):
         holder = {"client": panoptes.Client(domain=DOMAIN)}
+        # setUp's publisher starts its 3 s once one client matched: under the suite's load this
+        # second client once matched after they were over (no frame, issue 37). Wait for both.
+        self.publisher.kill()
+        self.publisher.wait()
+        self.publisher = self.start_publisher(readers=2)
         dropped = threading.Event()
 
         def drop(frame):
