@@ -138,9 +138,12 @@ function attachMaskDrawing(card, canvas, button) {
     return [Math.round((event.clientX - box.left) * canvas.width / box.width),
             Math.round((event.clientY - box.top) * canvas.height / box.height)];
   };
+  // The drag is followed on the whole window: a release beyond the image's edge masks up to the
+  // edge, and a card whose text re-wraps under the pointer (a health reason appearing) still ends
+  // the drag it started.
   canvas.addEventListener('mousedown', (event) => { if (button.classList.contains('active')) start = toImage(event); });
-  canvas.addEventListener('mousemove', (event) => { if (start) card.drag = [start, toImage(event)]; });
-  canvas.addEventListener('mouseup', (event) => {
+  window.addEventListener('mousemove', (event) => { if (start) card.drag = [start, toImage(event)]; });
+  window.addEventListener('mouseup', (event) => {
     if (!start) return;
     const end = toImage(event);
     const x = Math.max(0, Math.min(start[0], end[0])), y = Math.max(0, Math.min(start[1], end[1]));
@@ -199,6 +202,7 @@ function updateCard(camera) {
   light.className = `light ${camera.health.light}`;
   light.title = camera.health.reason;
   card.querySelector('.reason').textContent = camera.health.reason;
+  card.querySelector('.reason').title = camera.health.reason;  // the heading ends in an ellipsis
   if (camera.status) card.status = camera.status;
   if (camera.usage) card.usage = camera.usage;
   if (camera.status_age_s !== undefined) card.statusAge = camera.status_age_s;
