@@ -65,6 +65,25 @@ require_shared_data() {
   exit 77
 }
 
+# walk1_in_walk8 OUT [SED_EXPRESSION...]: walk8.yaml's eight cameras and effects playing the Gait2392
+# subject01 walk1 (../shared/data/static) instead of its 41-marker walk, 0.3 false blobs per frame,
+# with further sed expressions (duration, seed, start) applied after; written to OUT.
+walk1_in_walk8() {
+  local out="$1" static_data="$source_dir/../shared/data/static"
+  shift
+  local extra=()
+  for expression in "$@"; do extra+=(-e "$expression"); done
+  sed -e 's/^  false_blobs: .*/  false_blobs: 0.3/' -e "s#^  file: .*#  file: $static_data/gait2392_subject01_walk1.trc#"     -e 's/^  offset: .*/  offset: [-0.58, 0, 0]/' "${extra[@]}" "$source_dir/deploy/scenes/walk8.yaml" >"$out"
+}
+
+# label_offline SIM_DIR MODELS LABELS [WHAT]: estimator_node --subjects MODELS offline over the
+# simulator's features in SIM_DIR (Torso soft), names written to LABELS; its labels line echoed.
+label_offline() {
+  expect_exit 0 "${4:-estimator_node --subjects offline}" -- "$bin/estimator_node" --calibration "$1/calibration.yaml" \
+    --in-features "$1"/cam*.jsonl --no-dds --subjects "$2" --soft-segments Torso --out-labels "$3"
+  grep "labels:" "$work/last.err" || true
+}
+
 # Waits for background process PID (a child of this shell) at most SECONDS, then kills it: a
 # process that hangs on its way out (seen once: a recorder after closing its file, in Fast DDS's
 # teardown) fails the test instead of holding it until ctest's timeout. Returns PID's exit status,

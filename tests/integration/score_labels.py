@@ -11,7 +11,10 @@ time from the track's first record to its first right name. With --gaps-from, th
 within --after-gap-ms of the end of a gap in the estimator's input (no record for longer than
 --gap-ms in that --out-labels file: a machine too loaded to run every camera, issue 37) are scored
 apart ("after_gap_*") and bounded by --max-wrong-after-gap; --max-after-gap-s bounds the time they
-cover. Prints one JSON object; exit 1 when a bound is not met."""
+cover. With --hidden NAME:END_S (a marker the scene hid from every camera until END_S of scene time,
+the truth's first record being scene time 0; repeatable), the time from the first track on NAME
+after END_S to its first right name ("reappearances"; never named counts as failing
+--max-reappear-ms). Prints one JSON object; exit 1 when a bound is not met."""
 import argparse
 import bisect
 import json
@@ -81,6 +84,9 @@ def main():
     parser.add_argument("--explain", type=int, default=0, metavar="N",
                         help="also print to stderr the N most frequent wrong names (true, given, "
                         "marker-frames, first and last second from the first record)")
+    parser.add_argument("--hidden", action="append", default=[], metavar="NAME:END_S",
+                        help="a marker hidden until END_S (scene s): time to its name after it reappears")
+    parser.add_argument("--max-reappear-ms", type=float, default=None)
     parser.add_argument("--gaps-from", default=None, help="an --out-labels file whose gaps are input gaps")
     parser.add_argument("--gap-ms", type=float, default=50.0)
     parser.add_argument("--after-gap-ms", type=float, default=500.0)
@@ -90,6 +96,13 @@ def main():
     gap_ends = input_gap_ends(args.gaps_from, args.gap_ms) if args.gaps_from else []
     stamps, markers = load_truth(args.truth, args.by_subject)
     stamps = [stamp + args.truth_shift_ns for stamp in stamps]
+    hidden = {}  # name -> [end stamp, first track stamp, named stamp]
+    for entry in args.hidden:
+        name, _, end_s = entry.rpartition(":")
+        try:
+            hidden[name] = [stamps[0] + int(float(end_s) * 1e9), None, None]
+        except ValueError:
+            parser.error(f"--hidden {entry}: expected NAME:END_S, END_S in seconds")
     visible = right = wrong = swaps = ghost_named = crossings = 0
     after_gap_visible = after_gap_wrong = 0
     first_stamp = None
@@ -124,6 +137,11 @@ def main():
                 after_gap_wrong += label is not None and label != best
                 continue
             visible += 1
+            reappear = hidden.get(best)
+            if reappear and stamp >= reappear[0]:
+                reappear[1] = stamp if reappear[1] is None else reappear[1]
+                if label == best and reappear[2] is None:
+                    reappear[2] = stamp
             if label == best:
                 right += 1
                 if track not in track_named:
@@ -150,6 +168,11 @@ def main():
         "returns": len(returns),
         "worst_return_ms": max(returns, default=0.0),
     }
+    if hidden:
+        result["reappearances"] = {name: None if v[1] is None or v[2] is None else (v[2] - v[1]) * 1e-6
+                                   for name, v in hidden.items()}
+        times = result["reappearances"].values()
+        result["worst_reappear_ms"] = None if None in times else max(times)  # None: one never named
     if args.gaps_from:
         result["input_gaps"] = len(gap_ends)
         result["after_gap_s"] = covered_s(gap_ends, args.after_gap_ms)
@@ -163,6 +186,8 @@ def main():
     ok = (args.min_right is None or result["right_percent"] >= args.min_right) and (
         args.max_wrong is None or result["wrong_percent"] <= args.max_wrong) and (
         args.max_return_ms is None or result["worst_return_ms"] <= args.max_return_ms) and (
+        args.max_reappear_ms is None or result.get("worst_reappear_ms", 0) is not None and
+        result.get("worst_reappear_ms", 0) <= args.max_reappear_ms) and (
         args.max_wrong_after_gap is None or result.get("after_gap_wrong_percent", 0) <= args.max_wrong_after_gap) and (
         args.max_after_gap_s is None or result.get("after_gap_s", 0) <= args.max_after_gap_s)
     return 0 if ok else 1

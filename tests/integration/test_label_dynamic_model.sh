@@ -19,15 +19,10 @@ grep -q "kind: labelled" "$work/s1.yaml" && pass "the model records its labelled
 
 # The second half only: 1.25 s in, to the end (2.5 s) and back over the 2.5 s scene.
 scene="$work/half.yaml"
-sed -e 's/^duration: .*/duration: 2.5/' -e 's/^  false_blobs: .*/  false_blobs: 0.3/' \
-  -e "s#^  file: .*#  file: $data/gait2392_subject01_walk1.trc#" -e 's/^  offset: .*/  offset: [-0.58, 0, 0]/' \
-  -e 's/^  start: .*/  start: 1.25/' "$source_dir/deploy/scenes/walk8.yaml" >"$scene"
+walk1_in_walk8 "$scene" 's/^duration: .*/duration: 2.5/' 's/^  start: .*/  start: 1.25/'
 expect_exit 0 "simulate the walk's second half through eight cameras" -- "$bin/panoptes_sim" features \
   --scene "$scene" --out-dir "$work/sim"
-expect_exit 0 "estimator_node --subjects (the dynamic model) offline" -- "$bin/estimator_node" \
-  --calibration "$work/sim/calibration.yaml" --in-features "$work"/sim/cam*.jsonl --no-dds \
-  --subjects "$work/s1.yaml" --soft-segments Torso --out-labels "$work/labels.jsonl"
-grep "labels:" "$work/last.err" || true
+label_offline "$work/sim" "$work/s1.yaml" "$work/labels.jsonl" "estimator_node --subjects (the dynamic model) offline"
 if /usr/bin/python3 "$source_dir/tests/integration/score_labels.py" "$work/labels.jsonl" "$work/sim/truth.jsonl" \
   --skip-s 0.5 --min-right 99 --max-wrong 0.2 >"$work/score.json" 2>&1; then
   pass "second half named by the first half's model within the issue's bounds: $(cat "$work/score.json")"

@@ -46,6 +46,14 @@ struct TrcSource {
   double radius = kDefaultMarkerRadius;
   // Self-occlusion by the body (trc.occlusion); 0: off.
   double facing_angle_rad = 0.0;
+  // trc.hide: a marker hidden from every camera over [from_s, to_s) of scene time (a hand over
+  // it, a subject turned away for a while); `marker` indexes `columns`.
+  struct Hidden {
+    std::size_t marker = 0;
+    double from_s = 0.0;
+    double to_s = 0.0;
+  };
+  std::vector<Hidden> hidden;
 };
 
 struct MarkerSpec {
@@ -298,10 +306,29 @@ TrcLoop read_trc_loop(const YamlReader& reader) {
   reader.fail("loop", "expected pingpong (or true), wrap, or none (or false); got '" + text + "'");
 }
 
+// `hide: [{marker: NAME, from: S, to: S}, ...]`: NAME one of the markers the source plays.
+void read_trc_hide(const YamlReader& reader, const std::filesystem::path& file, TrcSource& source) {
+  for (const YamlReader& entry : reader.sequence_or_empty("hide")) {
+    reject_unknown_keys(entry, {"marker", "from", "to"});
+    const std::string name = entry.get_string("marker");
+    const auto played = std::find_if(source.columns.begin(), source.columns.end(), [&](std::size_t column) {
+      return source.data.marker_names[column] == name;
+    });
+    if (played == source.columns.end()) {
+      entry.fail("marker", "no marker '" + name + "' played from " + file.string());
+    }
+    TrcSource::Hidden hidden{static_cast<std::size_t>(played - source.columns.begin()),
+                             entry.get_double("from"), entry.get_double("to")};
+    if (!(hidden.from_s >= 0.0)) entry.fail("from", "must be a scene time >= 0 s");
+    if (!(hidden.to_s > hidden.from_s)) entry.fail("to", "must be after 'from'");
+    source.hidden.push_back(hidden);
+  }
+}
+
 TrcSource read_trc(const YamlReader& reader, const std::filesystem::path& base_dir,
                    std::vector<std::string>& names) {
   reject_unknown_keys(reader, {"file", "offset", "up_axis", "loop", "turnaround", "markers", "radius",
-                               "start", "prefix", "occlusion"});
+                               "start", "prefix", "occlusion", "hide"});
   TrcSource source;
   std::filesystem::path file = expand_environment(reader, "file", reader.get_string("file"));
   if (file.is_relative()) file = base_dir / file;
@@ -364,6 +391,7 @@ TrcSource read_trc(const YamlReader& reader, const std::filesystem::path& base_d
     for (std::size_t i = 0; i < source.data.marker_count(); ++i) source.columns.push_back(i);
   }
   for (std::size_t column : source.columns) names.push_back(prefix + source.data.marker_names[column]);
+  read_trc_hide(reader, file, source);
   return source;
 }
 
@@ -471,6 +499,13 @@ void sample_trc(const TrcSource& source, double t_s, std::vector<MarkerTruth>& o
     truth.p = valid ? Eigen::Vector3d(source.R_world_file * p + source.offset) : Eigen::Vector3d::Zero();
   }
   if (source.facing_angle_rad > 0.0) add_body_normals(source, out, first);
+  // After the normals: a hidden marker still belongs to the body whose axis places the others'.
+  for (const TrcSource::Hidden& hidden : source.hidden) {
+    if (t_s < hidden.from_s || t_s >= hidden.to_s) continue;
+    MarkerTruth& truth = out[first + hidden.marker];
+    truth.valid = false;
+    truth.p = Eigen::Vector3d::Zero();
+  }
 }
 
 }  // namespace

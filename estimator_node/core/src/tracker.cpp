@@ -45,6 +45,7 @@ struct Track {
   PointState state;
   TimeNs created_ns = 0;
   TimeNs last_update_ns = 0;
+  TimeNs resumed_ns = 0;  // when an update last ended a coast (none for > coast_after_ns); 0: never
   std::uint64_t updates = 0;
   bool confirmed = false;
   int misses = 0;          // tentative only: frames that should have shown it
@@ -292,6 +293,7 @@ struct Tracker::Impl {
   }
 
   void note_update(Track& track, int camera, TimeNs stamp_ns) {
+    if (stamp_ns - track.last_update_ns > options.coast_after_ns) track.resumed_ns = stamp_ns;
     track.last_update_ns = std::max(track.last_update_ns, stamp_ns);
     ++track.updates;
     if (track.camera_last_update.size() < models.size()) track.camera_last_update.resize(models.size(), 0);
@@ -843,8 +845,15 @@ void Tracker::Impl::prune(TimeNs now_ns) {
       if (remove[i] || remove[j] || (positions[a].first - positions[b].first).norm() >= d) continue;
       const auto& ti = core.tracks[i];
       const auto& tj = core.tracks[j];
-      const bool keep_i = std::make_tuple(ti.confirmed, ti.updates, -ti.id) >=
-                          std::make_tuple(tj.confirmed, tj.updates, -tj.id);
+      // A track that came out of a coast within the deletion time onto a marker another track
+      // followed all along is the one astray (its widened gate took a neighbour's blobs: a shank
+      // marker hidden for 0.8 s, docs/estimator.md "Coasting tracks and their neighbours"), not the
+      // duplicate to keep because it is older.
+      const auto resumed = [&](const Track& t) {
+        return t.resumed_ns != 0 && now_ns - t.resumed_ns <= options.delete_after_ns;
+      };
+      const bool keep_i = std::make_tuple(ti.confirmed, !resumed(ti), ti.updates, -ti.id) >=
+                          std::make_tuple(tj.confirmed, !resumed(tj), tj.updates, -tj.id);
       remove[keep_i ? j : i] = 1;
       ++core.tracks_merged;
     }

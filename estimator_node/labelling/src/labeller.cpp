@@ -26,7 +26,12 @@ struct MarkerState {
   std::optional<Eigen::Vector3d> moved;  // since the previous instant, when seen in both
   double residual_m = 0.0;               // running mean of its distance from the segment's rigid fit
   std::optional<double> absent_since_s;  // live: its track missing since (keep_absent_s)
+  std::optional<double> back_at_s;       // live: when its track came back after a long absence
 };
+
+// Live: a named track back after more than this long out of the estimator's output (coasting
+// through an occlusion) may have been fed by something else meanwhile: a false blob, a neighbour.
+constexpr double kLongAbsenceS = 0.1;
 
 struct SegmentState {
   std::vector<MarkerState> markers;
@@ -261,6 +266,8 @@ void Labeller::State::keep(const std::unordered_map<std::uint64_t, std::size_t>&
           marker.absent_since_s.reset();
           continue;
         }
+        if (now_s && marker.absent_since_s && *now_s - *marker.absent_since_s > kLongAbsenceS)
+          marker.back_at_s = *now_s;
         marker.absent_since_s.reset();
         marker.point = found->second;
         claimed[found->second] = 1;
@@ -546,9 +553,21 @@ void Labeller::State::untangle_pair(std::size_t subject_index, std::size_t s) {
   const auto& pb = segment.markers[b].point;
   if (!pa || !pb) return;
   const Points parent_seen = seen_now(subject.segments[*segment.parent]);
-  if (!keeps_handedness(subject, s, a, b, parent_seen, *pa, *pb) &&
-      keeps_handedness(subject, s, a, b, parent_seen, *pb, *pa))
-    exchange(subject_index, s, a, b);
+  if (keeps_handedness(subject, s, a, b, parent_seen, *pa, *pb) ||
+      !keeps_handedness(subject, s, a, b, parent_seen, *pb, *pa))
+    return;
+  // One of the two just came back from a long absence and the other stayed: the one that came back
+  // is astray (seen: a wrist marker hidden for 0.6 s, its coasting track back on the far side of the
+  // other wrist marker, which the exchange then named after the hidden one), not an exchange.
+  const auto back = [&](std::size_t m) {
+    const auto& at_s = segment.markers[m].back_at_s;
+    return now_s && at_s && *now_s - *at_s <= options.keep_absent_s;
+  };
+  if (back(a) != back(b)) {
+    release(subject_index, s, back(a) ? a : b);
+    return;
+  }
+  exchange(subject_index, s, a, b);
 }
 
 // A named marker's track leaves it: the name waits (recover(), acquire() and revise() may give it
@@ -561,6 +580,7 @@ void Labeller::State::release(std::size_t subject_index, std::size_t s, std::siz
   marker.point.reset();
   marker.moved.reset();
   marker.absent_since_s.reset();
+  marker.back_at_s.reset();
   ++released;
 }
 
@@ -608,6 +628,7 @@ void Labeller::State::commit(std::size_t subject_index, std::size_t s, const Fou
     // A name kept on a missing track (keep_absent_s) moves to the new one.
     if (marker.track && *marker.track != (*points)[p].track) labels.erase(*marker.track);
     marker.absent_since_s.reset();
+    marker.back_at_s.reset();
     marker.track = (*points)[p].track;
     marker.point = p;
     marker.last = at(p);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -407,6 +408,50 @@ TEST(Labeller, ExchangedPairsAndAMirroredSegmentAreUntangled) {
   const auto [right, wrong] = names_after_moved_tracks(model, walk, gait2392_options(), moved, 60);
   EXPECT_LE(wrong, 6 * 2) << "the names should follow their markers within two instants";
   EXPECT_GT(right, 6 * 80);
+}
+
+// Live, a hidden marker's coasting track kept its name through 0.2 s out of the estimator's output
+// (under keep_absent_s) and came back on the far side of its segment's other marker, at the right
+// distance but mirrored (L.Wrist.Lat through L.Wrist.Med, test_label_occlusion seed 8). The pair's
+// handedness exchange then named the Med marker's track L.Wrist.Lat. The track that came back is
+// released instead; the marker's own new track gets the name when it reappears.
+TEST(Labeller, ATrackBackFromALongAbsenceOnTheWrongSideIsReleasedNotExchanged) {
+  PANOPTES_REQUIRE_SHARED(test::gait2392_static());
+  PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
+  const MarkerSamples walk = load_marker_samples(test::gait2392_walk());
+  const std::size_t lat = column(walk, "L.Wrist.Lat");
+  const std::size_t med = column(walk, "L.Wrist.Med");
+  ASSERT_LT(lat, walk.point_count());
+  ASSERT_LT(med, walk.point_count());
+  const std::size_t gone = 60, back = gone + 12, reappears = back + 18;  // 0.2 s out, 0.3 s astray
+  constexpr std::uint64_t kNewTrack = 1000;
+  Labeller labeller({gait2392_model()}, gait2392_options());
+  int med_wrong = 0;
+  std::optional<std::size_t> lat_named;
+  for (std::size_t f = 0; f < walk.frame_count(); ++f) {
+    std::vector<TrackPoint> points;
+    for (std::size_t m = 0; m < walk.point_count(); ++m) {
+      if (!walk.is_valid(f, m) || !walk.position(f, m).allFinite()) continue;
+      Eigen::Vector3d p = walk.position(f, m);
+      std::uint64_t id = m + 1;
+      if (m == lat && f >= gone && f < back) continue;
+      if (m == lat && f >= back && f < reappears)
+        p = 2.0 * walk.position(f, med) - p;  // mirrored through Med
+      if (m == lat && f >= reappears) id = kNewTrack;
+      points.push_back({id, p});
+    }
+    labeller.update(points, static_cast<double>(f) / walk.rate_hz);
+    if (f < gone) continue;
+    const auto label = labeller.label_of(med + 1);
+    med_wrong += label && label->marker != "L.Wrist.Med" ? 1 : 0;
+    const auto new_label = labeller.label_of(kNewTrack);
+    if (f >= reappears && !lat_named && new_label && new_label->marker == "L.Wrist.Lat") lat_named = f;
+  }
+  std::printf("L.Wrist.Med misnamed in %d frames; L.Wrist.Lat's new track named after %s frames\n", med_wrong,
+              lat_named ? std::to_string(*lat_named - reappears).c_str() : "never");
+  EXPECT_EQ(med_wrong, 0) << "the Med marker's track took the hidden marker's name";
+  ASSERT_TRUE(lat_named) << "L.Wrist.Lat's new track was never named";
+  EXPECT_LE(static_cast<double>(*lat_named - reappears) / walk.rate_hz, 0.1);
 }
 
 TEST(Labeller, PointsThatFitNothingStayUnlabelled) {

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <numbers>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -377,6 +379,44 @@ TEST(SimEffects, SelfOcclusionFollowsTheCentroidOfValidMarkers) {
   EXPECT_EQ(camera.visible_markers(0), (std::vector<int>{1}));  // left faces -x, away from the camera
   EXPECT_EQ(camera.visible_markers(2), (std::vector<int>{0}));  // right missing: left is the axis
   EXPECT_EQ(camera.features(2).blobs.size(), 1u);
+}
+
+// trc.hide: a marker hidden from every camera over an interval of scene time (to exercise a track
+// replaced after a long occlusion, issue 33); the other markers' normals are those without it.
+TEST(SimEffects, AHiddenMarkerIsGoneFromEveryCameraAndTheTruthForItsInterval) {
+  const TempDir dir;
+  dir.write("ring.trc", kRingTrc);
+  const Scene scene = Scene::from_yaml_string(
+      ring_scene("  occlusion: {facing_angle: 100}\n  hide: [{marker: px, from: 0.005, to: 0.015}]\n"),
+      dir.path());
+  const Scene open = Scene::from_yaml_string(ring_scene("  occlusion: {facing_angle: 100}\n"), dir.path());
+  const CameraSimulator camera(scene, "east");
+  const CameraSimulator all(open, "east");
+  // Frames at 0, 10 and 20 ms: px (seen face-on from +x) is missing only at 10 ms.
+  EXPECT_EQ(camera.visible_markers(0), (std::vector<int>{0, 2, 3, 4}));
+  EXPECT_EQ(camera.visible_markers(1), (std::vector<int>{2, 3}));  // "gap" is missing there too
+  EXPECT_EQ(all.visible_markers(1), (std::vector<int>{0, 2, 3}));
+  EXPECT_EQ(camera.visible_markers(2), (std::vector<int>{0, 2, 3, 4}));
+  EXPECT_EQ(camera.features(1).blobs.size(), 2u);
+  const std::vector<MarkerTruth> hidden = scene.markers_at(10'000'000);
+  EXPECT_FALSE(hidden[0].valid);
+  EXPECT_TRUE(hidden[1].normal.isApprox(open.markers_at(10'000'000)[1].normal));
+  EXPECT_TRUE(scene.markers_at(15'000'000)[0].valid);  // [from, to)
+  EXPECT_FALSE(scene.markers_at(5'000'000)[0].valid);
+
+  for (const auto& [hide, key] : std::vector<std::pair<std::string, std::string>>{
+           {"  hide: [{marker: elbow, from: 0, to: 1}]\n", "hide[0].marker"},
+           {"  hide: [{marker: px, from: 1, to: 0.5}]\n", "hide[0].to"},
+           {"  hide: [{marker: px, from: -1, to: 0.5}]\n", "hide[0].from"},
+           {"  hide: [{marker: px, from: 0, until: 0.5}]\n", "until"}}) {
+    try {
+      Scene::from_yaml_string(ring_scene(hide), dir.path(), "bad.yaml");
+      ADD_FAILURE() << "accepted: " << hide;
+    } catch (const ConfigError& error) {
+      EXPECT_NE(std::string(error.what()).find(key), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find("bad.yaml"), std::string::npos) << error.what();
+    }
+  }
 }
 
 TEST(SimEffects, DeliveryTimingIsEndOfExposurePlusLatencyPlusOccasionalLateDelay) {
