@@ -10,7 +10,9 @@ puts the segment's markers from where they really were (soft tissue and fit incl
 the share of frames posed and the RMS distance. Prints one JSON object; exit 1 when --max-rms-mm or
 --min-posed are not met by a segment not in --exclude. With --gaps-from, frames within --after-gap-ms
 of the end of a gap in the estimator's input are left out (score_labels.py, docs/testing.md "Live
-tests under load")."""
+tests under load"). With --skip-between FROM_S:TO_S (scene time from the truth's first record;
+repeatable), frames in that interval are left out: a marker the scene hid (trc.hide) is missing from
+the truth there, so the pose's placement of it would be matched to another marker."""
 import argparse
 import json
 import math
@@ -37,6 +39,8 @@ def main():
     parser.add_argument("--exclude", default="", help="comma-separated segment names (after the subject)")
     parser.add_argument("--max-rms-mm", type=float, default=None)
     parser.add_argument("--min-posed", type=float, default=None, help="percent of frames")
+    parser.add_argument("--skip-between", action="append", default=[], metavar="FROM_S:TO_S",
+                        help="leave out frames in this interval of scene time (a hidden marker)")
     parser.add_argument("--gaps-from", default=None, help="an --out-labels file whose gaps are input gaps")
     parser.add_argument("--gap-ms", type=float, default=50.0)
     parser.add_argument("--after-gap-ms", type=float, default=500.0)
@@ -44,6 +48,13 @@ def main():
     gap_ends = input_gap_ends(args.gaps_from, args.gap_ms) if args.gaps_from else []
     stamps, markers = load_truth(args.truth, True)  # every subject's markers
     stamps = [s + args.truth_shift_ns for s in stamps]
+    skipped = []
+    for interval in args.skip_between:
+        try:
+            begin, end = (stamps[0] + int(float(x) * 1e9) for x in interval.split(":"))
+        except ValueError:
+            parser.error(f"--skip-between {interval}: expected FROM_S:TO_S in seconds")
+        skipped.append((begin, end))
     layouts, frames = {}, []
     for line in open(args.client):
         record = json.loads(line)
@@ -58,6 +69,8 @@ def main():
         if (frame["stamp_ns"] - first) * 1e-9 < args.skip_s or not stamps[0] <= frame["stamp_ns"] <= stamps[-1]:
             continue
         if after_gap(gap_ends, frame["stamp_ns"], args.after_gap_ms):
+            continue
+        if any(begin <= frame["stamp_ns"] < end for begin, end in skipped):
             continue
         truth = list(truth_at(stamps, markers, frame["stamp_ns"]).values())
         for body in frame["bodies"]:

@@ -6,7 +6,8 @@
 # estimator_node --subjects; a client (panoptes_client_probe) names the markers from
 # rt/panoptes/labels and its view is scored against the simulator's truth: >= 99.5 % of the
 # visible marker-frames named right and <= 0.1 % wrong after the first 0.5 s (outside the 500 ms
-# after a gap in the estimator's input: a loaded machine, bounded apart), no left/right swap; a
+# after a gap in the estimator's input: a loaded machine, bounded apart), no left/right swap, two
+# markers hidden for 0.6-0.8 s named again within 100 ms of their new tracks; a
 # client started late has the names with its first frames (transient-local map); the console's 3D
 # view draws the names and the marker set's sticks (console_labels.png for docs/marker_sets.md); the
 # run's recording exported to C3D names its points after the markers (read by tests/c3d/read_c3d.js).
@@ -47,6 +48,7 @@ scene="$work/walk1.yaml"
 sed -e 's/^duration: .*/duration: 10.0/' -e 's/^  false_blobs: .*/  false_blobs: 0.3/' "${walk_args[@]}" \
   "$source_dir/deploy/scenes/walk8.yaml" >"$scene"
 score_args=()
+segment_args=()
 if [ "${#subjects[@]}" = 2 ]; then
   sed -i '/^trc:/,$d' "$scene"
   walk1="$data/gait2392_subject01_walk1.trc"
@@ -56,6 +58,15 @@ trc:
   - {file: $walk1, prefix: s2/, offset: [-0.58, 0.75, 0], turnaround: 0.5, start: 0.825, occlusion: {facing_angle: 100}}
 YAML
   score_args=(--by-subject)
+elif [ "${PANOPTES_LABELS_WALK:-gait2392}" = gait2392 ]; then
+  # Two markers hidden from every camera for longer than the tracker keeps a coasting track: each
+  # comes back under a new track, and its name must be back within 100 ms (issue 33; offline with
+  # more seeds: test_label_occlusion.sh).
+  printf '  hide:\n    - {marker: L.Shank.Front, from: 3.0, to: 3.8}\n    - {marker: L.Wrist.Lat, from: 6.0, to: 6.6}\n' >>"$scene"
+  score_args=(--hidden L.Shank.Front:3.8 --hidden L.Wrist.Lat:6.6 --max-reappear-ms 100)
+  # Hidden, a marker is missing from the truth: the segment scoring leaves those intervals out (and
+  # 0.2 s after, for the name and the pose to come back).
+  segment_args=(--skip-between 3.0:4.0 --skip-between 6.0:6.8)
 fi
 expect_exit 0 "simulate walk1 through eight cameras" -- "$bin/panoptes_sim" features --scene "$scene" \
   --out-dir "$work/sim"
@@ -175,7 +186,7 @@ fi
 # markers were (the soft Torso left out).
 if /usr/bin/python3 "$source_dir/tests/integration/score_segments.py" "$work/client.jsonl" "$work/sim/truth.jsonl" \
   --truth-shift-ns $((epoch - 1700000000000000000)) --skip-s 0.5 --every 10 --exclude Torso \
-  --max-rms-mm 10 --min-posed 95 --gaps-from "$work/estimator_labels.jsonl" >"$work/segments.json" 2>&1; then
+  --max-rms-mm 10 --min-posed 95 --gaps-from "$work/estimator_labels.jsonl" "${segment_args[@]}" >"$work/segments.json" 2>&1; then
   pass "segment poses at the client: $(jq -c '{segments_described, worst_rms_mm, least_posed_percent}' "$work/segments.json")"
 else
   fail "segment poses at the client: $(cat "$work/segments.json")"
