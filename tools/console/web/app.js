@@ -133,11 +133,7 @@ function cardFor(camera) {
 // A rectangle dragged on the image (in image pixels) becomes add_mask rect x y w h.
 function attachMaskDrawing(card, canvas, button) {
   let start = null;
-  const toImage = (event) => {
-    const box = canvas.getBoundingClientRect();
-    return [Math.round((event.clientX - box.left) * canvas.width / box.width),
-            Math.round((event.clientY - box.top) * canvas.height / box.height)];
-  };
+  const toImage = (event) => toImagePoint(canvas, event);
   // The drag is followed on the whole window: a release beyond the image's edge masks up to the
   // edge, and a card whose text re-wraps under the pointer (a health reason appearing) still ends
   // the drag it started.
