@@ -147,6 +147,30 @@ bool distance_fits(const SegmentState& s, std::size_t a, std::size_t b, const Ei
          tolerance;
 }
 
+// The exchange of two of `named`'s points that fits the layout best below `below` (RMS, metres) and
+// that `accept` takes (the fit's pose), with its fit.
+struct Exchange {
+  std::size_t a, b;
+  LayoutFit fit;
+};
+template <typename Accept>
+std::optional<Exchange> best_exchange(const SegmentLayout& layout, Points seen,
+                                      const std::vector<std::size_t>& named, double below, Accept accept) {
+  std::optional<Exchange> best;
+  for (std::size_t i = 0; i < named.size(); ++i) {
+    for (std::size_t j = i + 1; j < named.size(); ++j) {
+      std::swap(seen[named[i]], seen[named[j]]);
+      auto fit = fit_layout(layout, seen);
+      std::swap(seen[named[i]], seen[named[j]]);
+      if (!fit || fit->rms_m >= below || (best && fit->rms_m >= best->fit.rms_m) ||
+          !accept(fit->T_world_segment))
+        continue;
+      best = Exchange{named[i], named[j], std::move(*fit)};
+    }
+  }
+  return best;
+}
+
 // The pose of a segment from its markers seen now: a rigid fit from three, else the translation
 // that puts the seen markers' layout on them with `rotation` (the parent's, or the lab's).
 std::optional<std::pair<RigidTransform, bool>> segment_pose(const SegmentLayout& layout, const Points& seen,
@@ -224,6 +248,8 @@ struct Labeller::State {
   void commit(std::size_t subject_index, std::size_t s, const Found& found);
   void untangle(std::size_t subject_index);
   void untangle_pair(std::size_t subject_index, std::size_t s);
+  void untangle_mirrored(std::size_t subject_index, std::size_t s, const std::vector<std::size_t>& named,
+                         const RigidTransform& parent_pose);
   void exchange(std::size_t subject_index, std::size_t s, std::size_t m1, std::size_t m2);
   void release_misfits(std::size_t subject_index, std::size_t s, const std::vector<std::size_t>& named);
   void release(std::size_t subject_index, std::size_t s, std::size_t m);
@@ -489,8 +515,7 @@ void Labeller::State::untangle(std::size_t subject_index) {
       const SegmentState& p = subject.segments[*parent];
       if (p.pose && !p.loose &&
           p.pose->q.angularDistance(segment.pose->q) > options.max_relative_rotation_rad) {
-        for (std::size_t m : named) release(subject_index, s, m);
-        segment.pose.reset();
+        untangle_mirrored(subject_index, s, named, *p.pose);
         continue;
       }
     }
@@ -500,30 +525,50 @@ void Labeller::State::untangle(std::size_t subject_index) {
       sum += (segment.pose->apply(layout.markers[m].position_m) - *seen[m]).squaredNorm();
     const double rms_now = std::sqrt(sum / static_cast<double>(named.size()));
     if (rms_now <= options.untangle_rms_m) continue;
-    std::optional<std::pair<std::size_t, std::size_t>> best;
-    double best_rms = options.untangle_ratio * rms_now;
-    for (std::size_t i = 0; i < named.size(); ++i) {
-      for (std::size_t j = i + 1; j < named.size(); ++j) {
-        std::swap(seen[named[i]], seen[named[j]]);
-        const auto fit = fit_layout(layout, seen);
-        std::swap(seen[named[i]], seen[named[j]]);
-        if (fit && fit->rms_m < best_rms) {
-          best_rms = fit->rms_m;
-          best = {named[i], named[j]};
-        }
-      }
-    }
+    const auto best = best_exchange(layout, seen, named, options.untangle_ratio * rms_now,
+                                    [](const RigidTransform&) { return true; });
     if (!best) {
       if (rms_now > options.release_rms_m) release_misfits(subject_index, s, named);
       continue;
     }
-    exchange(subject_index, s, best->first, best->second);
+    exchange(subject_index, s, best->a, best->b);
     const auto pose = segment_pose(layout, seen_now(segment), segment.pose->q);
     if (pose) {
       segment.pose = pose->first;
       segment.loose = pose->second;
     }
   }
+}
+
+// A rigid segment whose named tracks fit its layout only mirrored (turned from its parent further
+// than max_relative_rotation_rad). When the tracker exchanged two of its tracks (seen under load: a
+// shank's Upper and Rear tracks exchanged after a 108 ms stall of every camera; its near-isosceles
+// triangle fits mirrored within 3 mm), exchanging the two names back fits the layout turned as the
+// parent allows: the names follow the markers. Otherwise every name is released and waits where the
+// parent's pose puts it in the static posture, not on the tracks that fit mirrored (recover() would
+// otherwise give them straight back).
+void Labeller::State::untangle_mirrored(std::size_t subject_index, std::size_t s,
+                                        const std::vector<std::size_t>& named,
+                                        const RigidTransform& parent_pose) {
+  Subject& subject = subjects[subject_index];
+  SegmentState& segment = subject.segments[s];
+  const SegmentLayout& layout = subject.model.segments[s];
+  // Below untangle_rms_m, not a ratio: the mirrored fit is already good.
+  const auto best = best_exchange(
+      layout, seen_now(segment), named, options.untangle_rms_m, [&](const RigidTransform& pose) {
+        return parent_pose.q.angularDistance(pose.q) <= options.max_relative_rotation_rad;
+      });
+  if (best) {
+    exchange(subject_index, s, best->a, best->b);
+    segment.pose = best->fit.T_world_segment;
+    segment.loose = false;
+    return;
+  }
+  for (std::size_t m : named) {
+    release(subject_index, s, m);
+    segment.markers[m].last = with_parent(subject, s, m, std::nullopt);
+  }
+  segment.pose.reset();
 }
 
 // Two named markers of segment s exchange their tracks (and what they learned stays with the

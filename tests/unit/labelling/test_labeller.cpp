@@ -410,6 +410,27 @@ TEST(Labeller, ExchangedPairsAndAMirroredSegmentAreUntangled) {
   EXPECT_GT(right, 6 * 80);
 }
 
+// A fresh clone's suite under a parallel build (test_live_labels, replayed offline): after a 108 ms
+// stall of every camera the tracker exchanged the left shank's Upper and Rear tracks. The shank's
+// three markers make a near-isosceles triangle (Upper-Front 86.6 mm, Rear-Front 90.5 mm), so the
+// exchanged names fit it within 3 mm, turned over against the thigh. Releasing the names let them
+// straight back onto the same tracks at every run (95.8 % named right over the walk); exchanging
+// them back follows the markers.
+TEST(Labeller, AThreeMarkerSegmentThatFitsOnlyTurnedOverHasItsNamesExchangedBack) {
+  PANOPTES_REQUIRE_SHARED(test::gait2392_static());
+  PANOPTES_REQUIRE_SHARED(test::gait2392_walk());
+  const MarkerSamples walk = load_marker_samples(test::gait2392_walk());
+  const std::size_t upper = column(walk, "L.Shank.Upper");
+  const std::size_t rear = column(walk, "L.Shank.Rear");
+  ASSERT_LT(upper, walk.point_count());
+  ASSERT_LT(rear, walk.point_count());
+  const std::map<std::size_t, std::size_t> exchanged{{upper, rear}, {rear, upper}};
+  const auto [right, wrong] =
+      names_after_moved_tracks(gait2392_model(), walk, gait2392_options(), exchanged, 60);
+  EXPECT_LE(wrong, 2 * 2) << "the names should follow their markers within an instant";
+  EXPECT_GT(right, 2 * 80);
+}
+
 // Live, a hidden marker's coasting track kept its name through 0.2 s out of the estimator's output
 // (under keep_absent_s) and came back on the far side of its segment's other marker, at the right
 // distance but mirrored (L.Wrist.Lat through L.Wrist.Med, test_label_occlusion seed 8). The pair's
