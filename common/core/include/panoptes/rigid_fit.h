@@ -19,7 +19,8 @@ Eigen::Matrix3d nearest_rotation(const Eigen::Matrix3d& M);
 
 // Least-squares rigid transform T (no scale) with T·from[i] ≈ to[i]: the nearest rotation to the
 // cross-covariance of the centred points (Umeyama 1991, "Least-squares estimation of
-// transformation parameters between two point patterns", with c = 1). Needs ≥ 3 points not all
+// transformation parameters between two point patterns", with c = 1), found in closed form
+// (Horn's quaternion; the SVD for nearly collinear points). Needs ≥ 3 points not all
 // collinear; `rms` receives the RMS residual. nullopt for fewer points, mismatched sizes or
 // collinear points (the rotation about their line is undetermined).
 std::optional<RigidTransform> fit_rigid_transform(const std::vector<Eigen::Vector3d>& from,
