@@ -35,7 +35,10 @@ replay_cameras "$epoch" 16 c0 c1 c2 c3 c4 c5
 sleep 7
 expect_exit 2 "a track that is not on the bus is refused" -- "$bin/panoptes_ctl" body create --name x --tracks 1,2,999999 \
   --bodies "$work/live_bodies.yaml"
-expect_stderr_contains "no confirmed track 999999 on the bus (tracks seen: " "the refusal names the track and lists those seen"
+# Tracks 1 and 2 are usually confirmed by now, but not always under load (once track 1 was not: the
+# refusal then named "1,999999", rightly); the check is that 999999 is named with the tracks seen.
+expect_stderr_contains "999999 on the bus (tracks seen: " "the refusal names the track and lists those seen"
+expect_stderr_contains "no confirmed track " "the refusal says the tracks are not confirmed on the bus"
 expect_exit 2 "a radius holding fewer than 3 tracks is refused" -- "$bin/panoptes_ctl" body create --name x \
   --near 0.8,-0.6,0.9 --radius 0.01 --bodies "$work/live_bodies.yaml"
 expect_stderr_contains "at least 3 markers, got 1" "the refusal says how many"
