@@ -618,10 +618,10 @@ TEST(Client, LateJoinerGetsDescriptionsWithItsFirstFrames) {
   estimator.stop();
   std::filesystem::remove(log);
   // Before the late-joiner QoS (topics.cpp) 25 of 68 got them 30-77 ms late (37 %: 2 or fewer of 12
-  // has a chance of about 12 %, 3 or fewer of 24 had 0.5 %); after it none of 100 more than 26 ms, on a loaded
-  // machine too. But endpoint discovery has no order: under ctest -j2 beside live tests a joiner can match
-  // the frames before the descriptions' writer (2 of 12 > 30 ms in one CI run), so 2 slow joiners of 12 are
-  // allowed.
+  // has a chance of about 12 %, 3 or fewer of 24 had 0.5 %); after it none of 100 more than 26 ms, on a
+  // loaded machine too. But endpoint discovery has no order: under ctest -j2 beside live tests a joiner can
+  // match the frames before the descriptions' writer (2 of 12 > 30 ms in one CI run), so 2 slow joiners of 12
+  // are allowed.
   const auto late = std::count_if(lags.begin(), lags.end(), [](double lag) { return lag > 30.0; });
   EXPECT_LE(late, 2) << "late joiners that got the descriptions > 30 ms after their first frame, of "
                      << kJoiners;
