@@ -73,6 +73,11 @@ angles = sorted(2 * math.degrees(math.acos(min(1.0, abs(p["q"][3])))) for p in p
 print(f"fixture2: {len(poses)} poses, first {delay * 1000:.0f} ms after body create returned; mean position "
       f"{offset * 1000:.4f} mm from the true centroid, RMS {rms * 1000:.3f} mm, largest {max(errors) * 1000:.3f} mm; "
       f"rotation from the identity median {angles[len(angles) // 2]:.3f} deg")
+# Where it strays, for the log of a failed run: the poses more than 1 mm off, with their times.
+far = [(p["stamp_ns"], e) for p, e in zip(poses, errors) if e > 1e-3]
+if far:
+    print(f"{len(far)} poses more than 1 mm off, from {(far[0][0] - first) / 1e9:.3f} s to {(far[-1][0] - first) / 1e9:.3f} s "
+          f"after the first: " + ", ".join(f"{(t - first) / 1e9:.3f} s {e * 1000:.1f} mm" for t, e in far[:12]))
 assert delay <= 1.0, delay
 assert offset <= 1e-4, offset
 assert rms <= 3e-4, rms
