@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <map>
+#include <mutex>
 #include <vector>
 
 #include <fastdds/rtps/attributes/PropertyPolicy.h>
@@ -64,7 +66,7 @@ std::filesystem::path resolve_profile_file(const std::filesystem::path& requeste
     if (std::filesystem::is_regular_file(candidate)) return std::filesystem::weakly_canonical(candidate);
   }
   std::string tried;
-  for (const auto& candidate : candidates) tried += " " + candidate.lexically_normal().string();
+  for (const auto& candidate : candidates) (tried += ' ') += candidate.lexically_normal().string();
   throw DdsInputError("no DDS profile given (--dds-profile or PANOPTES_DDS_PROFILE) and none found at:" +
                       tried);
 }
@@ -132,8 +134,21 @@ int participant_id_limit(const fdds::DomainParticipantQos& qos) {
   return limit;
 }
 
-// Keeps a participant off the shared-memory ports of participants killed on this host, and off
-// those a process still maps after they were removed (shm_ports.h):
+// The participant ids this process chose before, with the order of their last use (shm_ports.h:
+// an id used again gives the new participant the old one's GUID). Guarded by
+// participant_creation_mutex().
+std::map<int, std::uint64_t>& ids_used_before() {
+  static std::map<int, std::uint64_t> ids;
+  return ids;
+}
+std::uint64_t& participants_created() {
+  static std::uint64_t count = 0;
+  return count;
+}
+
+// Keeps a participant off ids this process used before (their GUIDs, shm_ports.h), off the
+// shared-memory ports of participants killed on this host, and off those a process still maps
+// after they were removed (shm_ports.h):
 // taking one would cut it off from every writer that still maps the killed one's segment (a console
 // restarted after SIGKILL received no FeatureFrame from some or all cameras). An id the profile sets
 // is kept; when every id is taken, Fast DDS chooses as before.
@@ -143,8 +158,11 @@ void keep_off_killed_participants_ports(fdds::DomainParticipantQos& qos, std::ui
   const ParticipantPortRule rule{wire.port.portBase, wire.port.domainIDGain, wire.port.participantIDGain,
                                  wire.port.offsetd1, wire.port.offsetd3};
   if (const auto id = participant_id_clear_of_owned_shm_ports(
-          rule, domain, participant_id_limit(qos), kShmDir, shm_ports_mapped_after_removal(kProcDir)))
+          rule, domain, participant_id_limit(qos), kShmDir, shm_ports_mapped_after_removal(kProcDir),
+          ids_used_before())) {
     wire.participant_id = *id;
+    ids_used_before()[*id] = ++participants_created();
+  }
 }
 
 // Held from choosing a participant id until its ports exist: two buses of one process never take

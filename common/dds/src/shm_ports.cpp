@@ -54,23 +54,33 @@ std::set<std::uint32_t> shm_ports_mapped_after_removal(const std::filesystem::pa
   return ports;
 }
 
-std::optional<int> participant_id_clear_of_owned_shm_ports(
-    const ParticipantPortRule& rule, std::uint32_t domain, int id_limit, const std::filesystem::path& shm_dir,
-    const std::set<std::uint32_t>& removed_but_mapped) {
+std::optional<int> participant_id_clear_of_owned_shm_ports(const ParticipantPortRule& rule,
+                                                           std::uint32_t domain, int id_limit,
+                                                           const std::filesystem::path& shm_dir,
+                                                           const std::set<std::uint32_t>& removed_but_mapped,
+                                                           const std::map<int, std::uint64_t>& used_before) {
   const auto taken = [&](std::uint64_t port) {
     const auto port32 = static_cast<std::uint32_t>(port);
     return shm_port_owned(shm_dir, port32) || removed_but_mapped.count(port32) != 0;
   };
   const std::uint64_t domain_base =
       static_cast<std::uint64_t>(rule.base) + static_cast<std::uint64_t>(rule.domain_gain) * domain;
+  std::optional<int> oldest;  // the clear id this process used longest ago
+  std::uint64_t oldest_order = 0;
   for (int id = 0; id < id_limit; ++id) {
     const std::uint64_t participant_offset = static_cast<std::uint64_t>(rule.participant_gain) * id;
     const std::uint64_t metatraffic = domain_base + rule.metatraffic_unicast_offset + participant_offset;
     const std::uint64_t user = domain_base + rule.user_unicast_offset + participant_offset;
-    if (metatraffic > kMaxPort || user > kMaxPort) return std::nullopt;
-    if (!taken(metatraffic) && !taken(user)) return id;
+    if (metatraffic > kMaxPort || user > kMaxPort) break;
+    if (taken(metatraffic) || taken(user)) continue;
+    const auto used = used_before.find(id);
+    if (used == used_before.end()) return id;
+    if (!oldest || used->second < oldest_order) {
+      oldest = id;
+      oldest_order = used->second;
+    }
   }
-  return std::nullopt;
+  return oldest;
 }
 
 }  // namespace panoptes::dds

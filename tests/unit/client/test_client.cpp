@@ -590,10 +590,10 @@ std::pair<double, double> join_late() {
 // Clients started while an estimator (another process) runs: the descriptions it wrote long before
 // come with their first frames (docs/clients.md, "Late joiners"), not tens of milliseconds after.
 TEST(Client, LateJoinerGetsDescriptionsWithItsFirstFrames) {
-  // 12, not 24: in two of seven fresh-clone suites (one quiet) every joiner from the 15th or 16th on
-  // found no data for 10 s while the estimator still wrote (a limit on participants opened one after
-  // another in a domain, not understood yet; not the 30 s the estimator once wrote for).
-  constexpr int kJoiners = 12;
+  // 20 clients opened one after another in this process (12 until the participant ids: from the 15th
+  // or 16th on, clients that took id 0 again with the GUID of every one before found no estimator for
+  // 10 s, in two of seven fresh-clone suites; shm_ports.h).
+  constexpr int kJoiners = 20;
   ::setenv("PANOPTES_TEST_ESTIMATOR_DOMAIN", std::to_string(test_domain()).c_str(), 1);
   // Until the test stops it: the joiners' time is not bounded (under a parallel build 24 took longer
   // than the 30 s it once ran for, and the last 8 found no estimator).
@@ -609,11 +609,13 @@ TEST(Client, LateJoinerGetsDescriptionsWithItsFirstFrames) {
     ASSERT_EQ(probe.wait_for_frame(20s).status, Status::kOk) << probe.status_text();
   }
   std::vector<double> lags;
+  std::vector<double> first_frames;
   for (int i = 0; i < kJoiners; ++i) {
     const auto [frame_ms, descriptions_ms] = join_late();
     std::printf("late joiner %d: first frame %.1f ms, descriptions %.1f ms after opening (%+.1f ms)\n", i,
                 frame_ms, descriptions_ms, descriptions_ms - frame_ms);
     lags.push_back(descriptions_ms - frame_ms);
+    first_frames.push_back(frame_ms);
   }
   estimator.stop();
   std::filesystem::remove(log);
@@ -625,6 +627,13 @@ TEST(Client, LateJoinerGetsDescriptionsWithItsFirstFrames) {
   const auto late = std::count_if(lags.begin(), lags.end(), [](double lag) { return lag > 30.0; });
   EXPECT_LE(late, 2) << "late joiners that got the descriptions > 30 ms after their first frame, of "
                      << kJoiners;
+  // A joiner whose first announcement the estimator answered before it listened finds the estimator
+  // at its next announcement: within 250 ms with the profile's period (docs/protocol.md, "Participants
+  // that join late"). With the former 1 s, 12 of 30 joiners took 0.5-1 s; here 2 of 20 may take
+  // over 600 ms (a loaded machine), not more.
+  const auto slow =
+      std::count_if(first_frames.begin(), first_frames.end(), [](double ms) { return ms > 600.0; });
+  EXPECT_LE(slow, 2) << "late joiners whose first frame came > 600 ms after opening, of " << kJoiners;
 }
 
 TEST(Client, VersionIsTheProjectsAndThePackagesVersion) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -95,6 +96,21 @@ TEST_F(ShmPortsTest, SkipsAPortRemovedWhileAProcessMapsIt) {
   EXPECT_EQ(removed, std::set<std::uint32_t>{user_port(0)});
   EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 3, 80, dir_, removed), std::optional<int>(1));
   EXPECT_TRUE(shm_ports_mapped_after_removal(dir_ / "no-such-proc").empty());
+}
+
+TEST_F(ShmPortsTest, AnIdThisProcessUsedBeforeIsTakenLastTheOldestFirst) {
+  // Ids 0 and 1 were used by this process (0 first): a new participant takes 2, not the GUID of a
+  // closed one (shm_ports.h).
+  const std::map<int, std::uint64_t> used{{0, 1}, {1, 2}};
+  EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 3, 80, dir_, {}, used), std::optional<int>(2));
+  // Only ids used before are clear: the one used longest ago.
+  EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 3, 2, dir_, {}, used), std::optional<int>(0));
+  EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 3, 2, dir_, {}, {{0, 5}, {1, 2}}),
+            std::optional<int>(1));
+  // An id owned by a live participant stays out, used before or not.
+  leave_port(user_port(2), true);
+  EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 3, 3, dir_, {}, used), std::optional<int>(0));
+  EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 3, 80, dir_, {}, used), std::optional<int>(3));
 }
 
 }  // namespace
