@@ -15,6 +15,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <memory>
 #include <string>
 #include <thread>
 #include <utility>
@@ -567,24 +568,60 @@ TEST(ClientEstimatorProcess, WritesDescriptionsThenFrames) {
   }
 }
 
+// The last lines of a child's log, for a failure message.
+std::string log_tail(const std::filesystem::path& path, std::size_t max_chars = 4000) {
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return text.size() > max_chars ? text.substr(text.size() - max_chars) : text;
+}
+
 double milliseconds(std::chrono::steady_clock::duration d) {
   return std::chrono::duration<double, std::milli>(d).count();
 }
 
-// One late joiner: how long after opening its first frame and the descriptions arrived, ms.
-std::pair<double, double> join_late() {
+// One late joiner: how long after opening its first frame and the descriptions arrived, ms; or
+// what it saw when either did not come within 5 s.
+struct Join {
+  bool ok = false;
+  double frame_ms = 0;
+  double descriptions_ms = 0;
+  std::string status;
+};
+
+Join join_late() {
   const auto opened = std::chrono::steady_clock::now();
   Client client(client_options());
   std::chrono::steady_clock::time_point first_frame;
   std::thread frame_waiter([&] {
-    if (client.wait_for_frame(10s).status == Status::kOk) first_frame = std::chrono::steady_clock::now();
+    if (client.wait_for_frame(5s).status == Status::kOk) first_frame = std::chrono::steady_clock::now();
   });
-  const DescriptionsResult got = client.wait_for_descriptions(10s);
+  const DescriptionsResult got = client.wait_for_descriptions(5s);
   const auto described = std::chrono::steady_clock::now();
   frame_waiter.join();
-  EXPECT_EQ(got.status, Status::kOk) << client.status_text();
-  EXPECT_NE(first_frame, std::chrono::steady_clock::time_point{}) << client.status_text();
-  return {milliseconds(first_frame - opened), milliseconds(described - opened)};
+  Join join;
+  join.ok = got.status == Status::kOk && first_frame != std::chrono::steady_clock::time_point{};
+  join.frame_ms = milliseconds(first_frame - opened);
+  join.descriptions_ms = milliseconds(described - opened);
+  join.status = client.status_text();
+  return join;
+}
+
+// The estimator of the late-joiner test: this binary's ClientEstimatorProcess in a process of its
+// own on the test's domain, writing until stopped; its output in `log`.
+std::unique_ptr<ChildProcess> start_fake_estimator(const std::filesystem::path& log) {
+  ::setenv("PANOPTES_TEST_ESTIMATOR_DOMAIN", std::to_string(test_domain()).c_str(), 1);
+  // Until the test stops it: the joiners' time is not bounded (under a parallel build 24 took longer
+  // than the 30 s it once ran for, and the last 8 found no estimator).
+  ::setenv("PANOPTES_TEST_ESTIMATOR_SECONDS", "240", 1);
+  auto estimator = std::make_unique<ChildProcess>(
+      "fake estimator",
+      std::vector<std::string>{"/proc/self/exe",
+                               "--gtest_filter=ClientEstimatorProcess.WritesDescriptionsThenFrames"},
+      log);
+  ::unsetenv("PANOPTES_TEST_ESTIMATOR_DOMAIN");
+  Client probe(client_options());  // until the estimator runs
+  EXPECT_EQ(probe.wait_for_frame(20s).status, Status::kOk) << probe.status_text();
+  return estimator;
 }
 
 // Clients started while an estimator (another process) runs: the descriptions it wrote long before
@@ -592,33 +629,51 @@ std::pair<double, double> join_late() {
 TEST(Client, LateJoinerGetsDescriptionsWithItsFirstFrames) {
   // 20 clients opened one after another in this process (12 until the participant ids: from the 15th
   // or 16th on, clients that took id 0 again with the GUID of every one before found no estimator for
-  // 10 s, in two of seven fresh-clone suites; shm_ports.h).
+  // 10 s, in two of seven fresh-clone suites; shm_ports.h). In a later suite every joiner from the 6th
+  // on found no data, with new ids: the estimator's log and whether it still ran are printed now.
   constexpr int kJoiners = 20;
-  ::setenv("PANOPTES_TEST_ESTIMATOR_DOMAIN", std::to_string(test_domain()).c_str(), 1);
-  // Until the test stops it: the joiners' time is not bounded (under a parallel build 24 took longer
-  // than the 30 s it once ran for, and the last 8 found no estimator).
-  ::setenv("PANOPTES_TEST_ESTIMATOR_SECONDS", "240", 1);
   const std::filesystem::path log = std::filesystem::temp_directory_path() /
                                     ("client_tests_estimator_" + std::to_string(::getpid()) + ".log");
-  ChildProcess estimator(
-      "fake estimator",
-      {"/proc/self/exe", "--gtest_filter=ClientEstimatorProcess.WritesDescriptionsThenFrames"}, log);
-  ::unsetenv("PANOPTES_TEST_ESTIMATOR_DOMAIN");
-  {
-    Client probe(client_options());  // until the estimator runs
-    ASSERT_EQ(probe.wait_for_frame(20s).status, Status::kOk) << probe.status_text();
-  }
+  std::unique_ptr<ChildProcess> estimator = start_fake_estimator(log);
+  ASSERT_FALSE(::testing::Test::HasFailure());
   std::vector<double> lags;
   std::vector<double> first_frames;
-  for (int i = 0; i < kJoiners; ++i) {
-    const auto [frame_ms, descriptions_ms] = join_late();
-    std::printf("late joiner %d: first frame %.1f ms, descriptions %.1f ms after opening (%+.1f ms)\n", i,
-                frame_ms, descriptions_ms, descriptions_ms - frame_ms);
-    lags.push_back(descriptions_ms - frame_ms);
-    first_frames.push_back(frame_ms);
+  int estimator_restarts = 0;
+  int missed_in_a_row = 0;
+  for (int i = 0; i < kJoiners;) {
+    const Join join = join_late();
+    if (!estimator->running()) {
+      // Not the client's doing: the estimator ended under this joiner (Fast DDS 2.9.1 can abort on its
+      // lease check, docs/benchmarks.md). Said, and the joiner runs again against a new estimator.
+      std::printf("the fake estimator ended (exit %d) during late joiner %d; its log:\n%s\n",
+                  estimator->exit_code(), i, log_tail(log).c_str());
+      ASSERT_LT(++estimator_restarts, 3) << "the fake estimator ended 3 times";
+      estimator = start_fake_estimator(log);
+      ASSERT_FALSE(::testing::Test::HasFailure());
+      continue;
+    }
+    std::printf("late joiner %d: first frame %.1f ms, descriptions %.1f ms after opening (%+.1f ms)%s\n", i,
+                join.frame_ms, join.descriptions_ms, join.descriptions_ms - join.frame_ms,
+                join.ok ? "" : (", not within 5 s: " + join.status).c_str());
+    if (!join.ok) {
+      ADD_FAILURE() << "late joiner " << i
+                    << " got no frame or no descriptions within 5 s while the estimator ran: " << join.status;
+      if (++missed_in_a_row == 2) break;  // the rest would wait too: the log below says more
+    } else {
+      missed_in_a_row = 0;
+      lags.push_back(join.descriptions_ms - join.frame_ms);
+      first_frames.push_back(join.frame_ms);
+    }
+    ++i;
   }
-  estimator.stop();
-  std::filesystem::remove(log);
+  estimator->stop();
+  if (::testing::Test::HasFailure()) {
+    std::printf("the fake estimator's log (kept: %s):\n%s\n", log.c_str(), log_tail(log).c_str());
+  } else {
+    std::filesystem::remove(log);
+  }
+  if (estimator_restarts > 0)
+    std::printf("the fake estimator was started again %d time(s)\n", estimator_restarts);
   // Before the late-joiner QoS (topics.cpp) 25 of 68 got them 30-77 ms late (37 %: 2 or fewer of 12
   // has a chance of about 12 %, 3 or fewer of 24 had 0.5 %); after it none of 100 more than 26 ms, on a
   // loaded machine too. But endpoint discovery has no order: under ctest -j2 beside live tests a joiner can

@@ -51,9 +51,7 @@ std::set<std::uint32_t> shm_ports_mapped_after_removal(const std::filesystem::pa
 // participant keeps the sequence number it last saw from each announcing GUID, and forgets it when
 // the GUID's participant is removed, but not when it is removed because its lease expired (its
 // goodbye lost: StatelessReader, RTPSReader::may_remove_history_record). Every later participant
-// with that GUID starts again at announcement 1, which it ignores as seen: it is never found. In
-// two fresh-clone suites every client from the 15th or 16th opened one after another in a process
-// (all with id 0) found no estimator for 10 s; that fits one goodbye lost under load.
+// with that GUID starts again at announcement 1, which it ignores as seen: it is never found.
 std::optional<int> participant_id_clear_of_owned_shm_ports(
     const ParticipantPortRule& rule, std::uint32_t domain, int id_limit, const std::filesystem::path& shm_dir,
     const std::set<std::uint32_t>& removed_but_mapped = {},
