@@ -392,7 +392,11 @@ try {
     socket.send(JSON.stringify({ type: 'command', id: 4, camera: 'nocam', command: 'set_threshold', args: [10] }));
     socket.send(JSON.stringify({ type: 'command', id: 5, camera: 'cam3', command: 'add_mask', args: ['rect', 600, 400, 100, 100] }));
     for (let i = 0; i < 40; ++i) socket.send(JSON.stringify({ type: 'command', id: 100 + i, camera: 'cam3', command: 'set_threshold', args: [0] }));
-    await new Promise((resolve) => setTimeout(resolve, 800));
+    // Every one of the 46 messages is answered (sent, or rejected with its reason): wait for the 46
+    // answers, not a fixed time. 800 ms once passed with none (issue 37: the console's process beside
+    // the heaviest unit tests), and closing the socket then dropped the messages not yet read.
+    for (const end = Date.now() + 15000; replies.length < 46 && Date.now() < end;)
+      await new Promise((resolve) => setTimeout(resolve, 50));
     socket.close();
     return replies;
   }, `${base.replace('http', 'ws')}/ws?token=${token}`);
