@@ -597,6 +597,11 @@ void Labeller::State::untangle_pair(std::size_t subject_index, std::size_t s) {
   const auto& pa = segment.markers[a].point;
   const auto& pb = segment.markers[b].point;
   if (!pa || !pb) return;
+  // Two tracks that are not the pair's distance apart are not the pair exchanged (seen under load:
+  // a wrist marker's track coasting through its occlusion came back 3 mm from the other wrist
+  // marker after 93 ms, too soon to count as a long absence, and an exchange named the seen marker
+  // after the hidden one for the rest of the walk). The tracker ends the duplicate; nothing moves.
+  if (!distance_fits(segment, a, b, at(*pa), at(*pb))) return;
   const Points parent_seen = seen_now(subject.segments[*segment.parent]);
   if (keeps_handedness(subject, s, a, b, parent_seen, *pa, *pb) ||
       !keeps_handedness(subject, s, a, b, parent_seen, *pb, *pa))
