@@ -104,11 +104,12 @@ finish() {
   exit 1
 }
 
-# start_console NAME: panoptes_console on a free loopback port with a new token in $work/token (log
-# $work/console.log, pid added); sets $url (with the token) and $port, or fails and finishes.
+# start_console NAME [ARG...]: panoptes_console (with ARGs) on a free loopback port with a new token in
+# $work/token (log $work/console.log, pid added); sets $url (with the token) and $port, or fails and finishes.
 start_console() {
   printf '%s-test-%s\n' "$1" "$(head -c 12 /dev/urandom | od -An -tx1 | tr -d ' \n')" >"$work/token"
-  "$bin/panoptes_console" --bind 127.0.0.1:0 --token-file "$work/token" --url-file "$work/url" >"$work/console.log" 2>&1 &
+  shift
+  "$bin/panoptes_console" --bind 127.0.0.1:0 --token-file "$work/token" --url-file "$work/url" "$@" >"$work/console.log" 2>&1 &
   pids+=("$!")
   for _ in $(seq 50); do [ -s "$work/url" ] && break; sleep 0.1; done
   url="$(cat "$work/url" 2>/dev/null)"
@@ -160,6 +161,20 @@ require_browser() {
     if [ -n "${CI:-}" ]; then fail "playwright-core (npm ci in $web) or /usr/bin/chromium missing"; finish; fi
     echo "SKIP: playwright-core (npm ci in $web) or /usr/bin/chromium missing"; exit 77
   fi
+}
+
+# have_browser WHAT: for a test whose browser part is optional (WHAT names it): true with
+# playwright-core and chromium; without them false, after a failure in CI or a SKIP line outside
+# it. Sets $web.
+have_browser() {
+  web="$source_dir/tools/console/web"
+  [ -d "$web/node_modules/playwright-core" ] && [ -x /usr/bin/chromium ] && return 0
+  if [ -n "${CI:-}" ]; then
+    fail "playwright-core (npm ci in $web) or /usr/bin/chromium missing"
+  else
+    echo "SKIP ($1): playwright-core or /usr/bin/chromium missing"
+  fi
+  return 1
 }
 
 # floor_recording NAME POINTS QUATERNIONS: the room ($work/room.yaml, a copy of

@@ -104,6 +104,42 @@ TEST(RecorderGate, ForwardsStartAndStopWithABareFileName) {
   EXPECT_EQ(counter_of({{"recorder", "studio"}, {"command", "start"}, {"name", 3}}), "bad_message");
 }
 
+TEST(BodyGate, ForwardsANameTracksAndAPivot) {
+  const BodyGateResult result =
+      check_body_request({{"id", 4}, {"name", "wand_2"}, {"tracks", {12, 15, 19, 23}}, {"pivot", 15}});
+  ASSERT_TRUE(std::holds_alternative<BodyCreateRequest>(result));
+  const auto& body = std::get<BodyCreateRequest>(result);
+  EXPECT_EQ(body.request, 4);
+  EXPECT_EQ(body.name, "wand_2");
+  EXPECT_EQ(body.tracks, std::vector<std::int64_t>({12, 15, 19, 23}));
+  EXPECT_EQ(body.pivot, std::optional<std::int64_t>(15));
+  const BodyGateResult centroid =
+      check_body_request({{"name", "a.b-c"}, {"tracks", {1, 2, 3}}, {"pivot", nullptr}});
+  ASSERT_TRUE(std::holds_alternative<BodyCreateRequest>(centroid));
+  EXPECT_FALSE(std::get<BodyCreateRequest>(centroid).pivot);
+}
+
+TEST(BodyGate, RejectsBadNamesTooFewTracksAndBadIds) {
+  const auto reason = [](const json& message) {
+    const BodyGateResult result = check_body_request(message);
+    EXPECT_TRUE(std::holds_alternative<Rejection>(result)) << message.dump();
+    return std::holds_alternative<Rejection>(result) ? std::get<Rejection>(result) : Rejection{};
+  };
+  EXPECT_EQ(reason({{"tracks", {1, 2, 3}}}).counter, "bad_message");
+  EXPECT_EQ(reason({{"name", ""}, {"tracks", {1, 2, 3}}}).counter, "bad_arguments");
+  EXPECT_EQ(reason({{"name", "a/../b"}, {"tracks", {1, 2, 3}}}).counter, "bad_arguments");
+  EXPECT_EQ(reason({{"name", std::string(65, 'a')}, {"tracks", {1, 2, 3}}}).counter, "bad_arguments");
+  EXPECT_EQ(reason({{"name", "x"}, {"tracks", 3}}).counter, "bad_message");
+  const Rejection two = reason({{"id", 9}, {"name", "x"}, {"tracks", {1, 2}}});
+  EXPECT_EQ(two.request, 9);
+  EXPECT_EQ(two.counter, "bad_arguments");
+  EXPECT_NE(two.reason.find("3 to 64 markers, got 2"), std::string::npos) << two.reason;
+  EXPECT_EQ(reason({{"name", "x"}, {"tracks", json::array({1, 2, "3"})}}).counter, "bad_arguments");
+  EXPECT_EQ(reason({{"name", "x"}, {"tracks", {1, 2, -3}}}).counter, "bad_arguments");
+  EXPECT_EQ(reason({{"name", "x"}, {"tracks", {1, 2, 3}}, {"pivot", "2"}}).counter, "bad_arguments");
+  EXPECT_EQ(reason({{"name", "x"}, {"tracks", std::vector<int>(65, 1)}}).counter, "bad_arguments");
+}
+
 TEST(RateLimiter, AllowsTheBurstThenTheRate) {
   RateLimiter limiter(10, 20);
   const TimeNs start = 1'000'000'000;

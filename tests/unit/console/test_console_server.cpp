@@ -44,7 +44,7 @@ std::filesystem::path make_web_root() {
 
 class ConsoleServerTest : public ::testing::Test {
  protected:
-  void start(double update_hz = 30) {
+  void start(double update_hz = 30, bool with_body_sink = false) {
     ServerOptions options;
     options.port = 0;
     options.token = kToken;
@@ -60,7 +60,13 @@ class ConsoleServerTest : public ::testing::Test {
         [this](const RecorderCommandRequest& command) {
           recorder_commands_.push_back(command);
           return true;
-        });
+        },
+        CalibrationSink{},
+        with_body_sink ? BodySink([this](const BodyCreateRequest& body, std::uint64_t client) {
+          bodies_.emplace_back(body, client);
+          return body.name == "busy" ? std::string("body 'other' is being made: wait for it") : std::string();
+        })
+                       : BodySink{});
     thread_ = std::thread([this] { server_->run(); });
   }
   void TearDown() override {
@@ -110,6 +116,7 @@ class ConsoleServerTest : public ::testing::Test {
   ConsoleState state_;
   std::vector<CameraCommandRequest> forwarded_;
   std::vector<RecorderCommandRequest> recorder_commands_;
+  std::vector<std::pair<BodyCreateRequest, std::uint64_t>> bodies_;
   std::unique_ptr<ConsoleServer> server_;
   std::thread thread_;
 };
@@ -239,6 +246,43 @@ TEST_F(ConsoleServerTest, RecorderCommandsAndDetailsOfTheSelection) {
   EXPECT_EQ(details["figures"]["cameras"], 2);
   ws->write(net::buffer(json{{"type", "select"}, {"kind", "planet"}, {"key", "7"}}.dump()));
   EXPECT_EQ(read_until(*ws, "command_result")["counter"], "bad_message");
+}
+
+// A body request passes the gate to the body sink ("sent"); its outcome, posted to the state later
+// for the same browser, reaches that browser. A refusal of the sink and a console without one are
+// rejected with their reasons.
+TEST_F(ConsoleServerTest, BodyRequestsReachTheBodyMakerAndItsOutcomeTheBrowser) {
+  start(30, true);
+  net::io_context io;
+  auto ws = open_socket(io, "/ws?token=" + kToken);
+  ws->write(net::buffer(json{{"type", "body"}, {"id", 3}, {"name", "wand"}, {"tracks", {4, 5, 6}}}.dump()));
+  const json sent = read_until(*ws, "command_result");
+  EXPECT_EQ(sent["result"], "sent");
+  EXPECT_EQ(sent["body"], "wand");
+  ASSERT_EQ(bodies_.size(), 1u);
+  EXPECT_EQ(bodies_[0].first.tracks, std::vector<std::int64_t>({4, 5, 6}));
+  state_.on_outcome({bodies_[0].second, 3, CommandResult::kApplied, R"({"body":"wand"})"});
+  const json applied = read_until(*ws, "command_result");
+  EXPECT_EQ(applied["id"], 3);
+  EXPECT_EQ(applied["result"], "applied");
+  EXPECT_EQ(applied["reason"], R"({"body":"wand"})");
+  ws->write(net::buffer(json{{"type", "body"}, {"id", 4}, {"name", "busy"}, {"tracks", {4, 5, 6}}}.dump()));
+  const json busy = read_until(*ws, "command_result");
+  EXPECT_EQ(busy["counter"], "refused");
+  EXPECT_NE(busy["reason"].get<std::string>().find("being made"), std::string::npos) << busy.dump();
+  ws->write(net::buffer(json{{"type", "body"}, {"id", 5}, {"name", "x"}, {"tracks", {4, 5}}}.dump()));
+  EXPECT_EQ(read_until(*ws, "command_result")["counter"], "bad_arguments");
+  EXPECT_EQ(bodies_.size(), 2u);
+}
+
+TEST_F(ConsoleServerTest, WithoutABodiesFileBodyRequestsAreNotSent) {
+  start();
+  net::io_context io;
+  auto ws = open_socket(io, "/ws?token=" + kToken);
+  ws->write(net::buffer(json{{"type", "body"}, {"id", 1}, {"name", "wand"}, {"tracks", {4, 5, 6}}}.dump()));
+  const json answer = read_until(*ws, "command_result");
+  EXPECT_EQ(answer["counter"], "not_sent");
+  EXPECT_NE(answer["reason"].get<std::string>().find("--bodies"), std::string::npos) << answer.dump();
 }
 
 // Large snapshots at 60 Hz and a client that never reads: its socket fills, the server keeps only

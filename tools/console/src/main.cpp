@@ -14,6 +14,7 @@
 
 #include "panoptes/cli.h"
 #include "panoptes/console/server.h"
+#include "panoptes/console_app/body_maker.h"
 #include "panoptes/console_app/bus_bridge.h"
 #include "panoptes/console_app/calibration_workflow.h"
 #include "panoptes/dds/domain_option.h"
@@ -63,6 +64,8 @@ int run(int argc, char** argv) {
   panoptes::console::CalibrationWorkflowOptions calibration;
   calibration.directory = "panoptes_calibration";
   calibration.estimator_node = std::filesystem::canonical("/proc/self/exe").parent_path() / "estimator_node";
+  panoptes::console::BodyMakerOptions bodies;
+  bodies.ctl = std::filesystem::canonical("/proc/self/exe").parent_path() / "panoptes_ctl";
   CLI::App app{"panoptes_console: the operator console in the browser (Panoptes, docs/console.md)",
                "panoptes_console"};
   app.option_defaults()->always_capture_default();
@@ -85,6 +88,11 @@ int run(int argc, char** argv) {
       ->default_str("none: the page cannot solve");
   app.add_option("--estimator-node", calibration.estimator_node,
                  "the estimator_node program the calibration page runs");
+  app.add_option("--bodies", bodies.bodies_file,
+                 "the estimator's bodies file: bodies made from markers in the 3D view are appended to it "
+                 "(the estimator reloads it; docs/bodies.md)")
+      ->default_str("none: the page cannot make bodies");
+  app.add_option("--ctl", bodies.ctl, "the panoptes_ctl program that makes those bodies");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
 
   const auto colon = bind.rfind(':');
@@ -101,6 +109,9 @@ int run(int argc, char** argv) {
   calibration.directory = std::filesystem::absolute(calibration.directory);
   calibration.dds_profile = dds_profile;
   options.calibration_dir = calibration.directory;
+  bodies.dds_profile = dds_profile;
+  bodies.work_dir = calibration.directory;
+  if (!bodies.bodies_file.empty()) bodies.bodies_file = std::filesystem::absolute(bodies.bodies_file);
   options.port = static_cast<unsigned short>(port);
   try {
     options.token = token_file.empty() ? generate_token() : read_token(token_file);
@@ -118,6 +129,7 @@ int run(int argc, char** argv) {
   panoptes::console::BusBridge bridge(bus, state);
   options.bus_rejections = [&bus] { return bus.receive_rejections(); };
   panoptes::console::CalibrationWorkflow workflow(calibration, state);
+  panoptes::console::BodyMaker body_maker(bodies, state);
   std::unique_ptr<panoptes::console::ConsoleServer> server;
   try {
     server = std::make_unique<panoptes::console::ConsoleServer>(
@@ -126,6 +138,9 @@ int run(int argc, char** argv) {
         [&bridge](const panoptes::console::RecorderCommandRequest& command) { return bridge.send(command); },
         [&workflow](const panoptes::console::CalibrationRequest& request) {
           return workflow.handle(request);
+        },
+        [&body_maker](const panoptes::console::BodyCreateRequest& request, std::uint64_t client) {
+          return body_maker.handle(request, client);
         });
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_console: cannot serve on %s: %s\n", bind.c_str(), error.what());
@@ -138,10 +153,11 @@ int run(int argc, char** argv) {
   std::fflush(stdout);
   if (!url_file.empty()) std::ofstream(url_file) << url << "\n";
 
-  std::thread watcher([&server, &workflow, &bridge] {
+  std::thread watcher([&server, &workflow, &bridge, &body_maker] {
     for (int tick = 0; !panoptes::stop_requested(); ++tick) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
       if (tick % 4 == 0) workflow.poll();
+      if (tick % 4 == 1) body_maker.poll();
       if (tick % 4 == 2) bridge.poll();
     }
     server->stop();

@@ -69,13 +69,14 @@ function sendRecorder(row, command, name = '') {
 function onResult(message) {
   page.results.push(message);
   const card = pending.get(message.id);
-  const waiting = message.recorder ? 'recorder' : 'camera';
-  const text = message.result === 'sent' ? `${message.command} ${message.args.join(' ')}: sent, waiting for the ${waiting}`
+  const waiting = message.recorder ? 'recorder' : message.body ? 'body maker (panoptes_ctl body create)' : 'camera';
+  let text = message.result === 'sent' ? `${message.command} ${message.args.join(' ')}: sent, waiting for the ${waiting}`
     : `${message.result}${message.reason ? ': ' + message.reason : ''}`;
+  if (card === newBodyResult && message.result === 'applied') text = bodyCreated(message.reason);
   if (card) showResult(card, message.result, text);
   if (message.result !== 'sent') pending.delete(message.id);
   const item = document.createElement('li');
-  const target = card ? (card.dataset.camera || card.dataset.recorder) + ' ' : '';
+  const target = card ? (card.dataset.camera || card.dataset.recorder || card.dataset.body) + ' ' : '';
   item.textContent = `#${message.id} ${target}${text}`;
   const list = document.getElementById('results');
   list.prepend(item);
@@ -474,6 +475,12 @@ const trackGeometry = new THREE.BufferGeometry();
 const trackPoints = new THREE.Points(trackGeometry, new THREE.PointsMaterial({ color: 0xffd166, size: 7, sizeAttenuation: false }));
 trackPoints.frustumCulled = false;  // changes every update: no bounding sphere to keep
 scene.add(trackPoints);
+// The tracks picked for a new body (shift+click), drawn larger over them.
+const pickedGeometry = new THREE.BufferGeometry();
+const pickedPoints = new THREE.Points(pickedGeometry, new THREE.PointsMaterial({ color: 0x00e5ff, size: 13, sizeAttenuation: false, depthTest: false }));
+pickedPoints.frustumCulled = false;
+pickedPoints.renderOrder = 2;
+scene.add(pickedPoints);
 const trailGeometry = new THREE.BufferGeometry();
 const trailLines = new THREE.LineSegments(trailGeometry, new THREE.LineBasicMaterial({ color: 0x8a6d1f }));
 trailLines.frustumCulled = false;
@@ -704,7 +711,59 @@ canvas3d.addEventListener('pointerup', (event) => {
     const distance = Math.hypot(u - x, v - y) + penalty;
     if (distance < 15 && (!best || distance < best[2])) best = [kind, key, distance];
   }
-  if (best) select(best[0], best[1]);
+  if (best && best[0] === 'track' && event.shiftKey) toggleBodyTrack(best[1]);
+  else if (best) select(best[0], best[1]);
+});
+
+// ---------------------------------------------------------------------------------------------
+// Bodies from markers (docs/console.md, "Bodies from markers"): shift+click tracks, name the body,
+// choose its pivot and create it. The console runs panoptes_ctl body create, which averages the
+// tracks over 30 frames and appends the body to the estimator's bodies file (panoptes_console
+// --bodies); the estimator reloads it and the body appears in the view.
+const bodyTracks = [];  // track ids, in the order picked
+const newBody = document.getElementById('newbody');
+const newBodyResult = { dataset: { body: 'body' }, querySelector: () => newBody.querySelector('.result') };
+page.bodyTracks = bodyTracks;
+function toggleBodyTrack(id) {
+  const at = bodyTracks.indexOf(id);
+  if (at >= 0) bodyTracks.splice(at, 1); else bodyTracks.push(id);
+  showBodyTracks();
+}
+function showBodyTracks() {
+  newBody.hidden = bodyTracks.length === 0;
+  newBody.querySelector('.tracks').textContent = bodyTracks.join(', ') + (bodyTracks.length < 3 ? ` (${3 - bodyTracks.length} more)` : '');
+  const pivot = document.getElementById('newbody-pivot');
+  const chosen = pivot.value;
+  pivot.textContent = '';
+  pivot.add(new Option('centroid', ''));
+  for (const id of bodyTracks) pivot.add(new Option(`track ${id}`, String(id)));
+  pivot.value = bodyTracks.includes(Number(chosen)) ? chosen : '';
+  document.getElementById('newbody-create').disabled = bodyTracks.length < 3;
+  updatePicked();
+}
+// The body maker's line ({body, tracks, frames, markers, file}) as a sentence (Clear drops the picks).
+function bodyCreated(line) {
+  let made;
+  try { made = JSON.parse(line); } catch { return `applied: ${line}`; }
+  page.createdBody = made;
+  return `applied: body ${made.body} from tracks ${made.tracks.join(', ')} (${made.frames} frames averaged) appended to ${made.file}; the estimator reloads it`;
+}
+function updatePicked() {
+  const at = new Map((page.state ? page.state.tracks : []).map(([id, x, y, z]) => [id, [x, y, z]]));
+  const points = bodyTracks.filter((id) => at.has(id)).map((id) => at.get(id));
+  pickedGeometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(points.flat()), 3));
+}
+document.getElementById('newbody-clear').addEventListener('click', () => { bodyTracks.length = 0; showBodyTracks(); });
+document.getElementById('newbody-create').addEventListener('click', () => {
+  if (!socket || socket.readyState !== WebSocket.OPEN) { showResult(newBodyResult, 'rejected', 'not connected'); return; }
+  const name = document.getElementById('newbody-name').value.trim();
+  const pivot = document.getElementById('newbody-pivot').value;
+  const id = nextRequest++;
+  pending.set(id, newBodyResult);
+  const message = { type: 'body', id, name, tracks: [...bodyTracks], pivot: pivot === '' ? null : Number(pivot) };
+  socket.send(JSON.stringify(message));
+  page.sent.push({ id, body: name, args: message.tracks, at: Date.now() });
+  showResult(newBodyResult, 'sending', `body ${name}`);
 });
 
 const formatValue = (value) => (Array.isArray(value) ? value.map((v) => (typeof v === 'number' ? v.toFixed(3).replace(/\.?0+$/, '') : v)).join(', ') : String(value));
@@ -882,6 +941,7 @@ function onState(state) {
   markerNames = namesOf(state.subjects || []);
   if (!synthetic) updateTracks(withoutChainMarkers(state.tracks, state.chains || []));
   if (!synthetic) updateSticks(state.subjects || [], state.tracks);
+  if (bodyTracks.length) updatePicked();
   updateBodies(state.bodies);
   updateChains(state.chains || []);
   if (state.estimator) {

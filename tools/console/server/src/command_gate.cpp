@@ -284,6 +284,43 @@ CalibrationGateResult check_calibration_request(const json& message) {
   return out;
 }
 
+BodyGateResult check_body_request(const json& message) {
+  constexpr std::size_t kMaxName = 64;
+  constexpr std::size_t kMinTracks = 3;
+  constexpr std::size_t kMaxTracks = 64;
+  const std::int64_t request = request_of(message);
+  const auto reject = [&](std::string counter, std::string reason) -> BodyGateResult {
+    return Rejection{request, std::move(counter), std::move(reason)};
+  };
+  const auto name = message.find("name");
+  if (name == message.end() || !name->is_string())
+    return reject("bad_message", "a body message needs a string field 'name'");
+  const std::string& text = name->get_ref<const std::string&>();
+  const bool name_ok =
+      !text.empty() && text.size() <= kMaxName && std::all_of(text.begin(), text.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-' || c == '.';
+      });
+  if (!name_ok) return reject("bad_arguments", "name: 1 to 64 letters, digits, '_', '-' or '.'");
+  BodyCreateRequest out{request, text, {}, std::nullopt};
+  const auto tracks = message.find("tracks");
+  if (tracks == message.end() || !tracks->is_array())
+    return reject("bad_message", "a body message needs 'tracks', an array of track ids");
+  if (tracks->size() < kMinTracks || tracks->size() > kMaxTracks)
+    return reject("bad_arguments",
+                  "tracks: a body needs 3 to 64 markers, got " + std::to_string(tracks->size()));
+  for (const auto& id : *tracks) {
+    if (!id.is_number_integer() || id.get<std::int64_t>() < 0)
+      return reject("bad_arguments", "tracks: track ids are non-negative integers");
+    out.tracks.push_back(id.get<std::int64_t>());
+  }
+  if (const auto pivot = message.find("pivot"); pivot != message.end() && !pivot->is_null()) {
+    if (!pivot->is_number_integer() || pivot->get<std::int64_t>() < 0)
+      return reject("bad_arguments", "pivot: a track id, or null for the centroid");
+    out.pivot = pivot->get<std::int64_t>();
+  }
+  return out;
+}
+
 bool RateLimiter::allow(TimeNs now) {
   if (last_ns_ != 0) tokens_ = std::min(burst_, tokens_ + rate_ * static_cast<double>(now - last_ns_) * 1e-9);
   last_ns_ = now;

@@ -105,6 +105,11 @@ bool ConsoleState::knows_recorder(const std::string& recorder) const {
   return recorders_.model.knows(recorder);
 }
 
+void ConsoleState::on_outcome(CommandOutcome outcome) {
+  std::lock_guard lock(commands_.mutex);
+  commands_.model.on_outcome(std::move(outcome));
+}
+
 std::vector<CommandOutcome> ConsoleState::take_outcomes(TimeNs now) {
   std::lock_guard lock(commands_.mutex);
   return commands_.model.take_outcomes(now);

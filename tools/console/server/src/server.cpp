@@ -182,12 +182,13 @@ class WebSocketSession;
 
 struct ConsoleServer::Impl {
   Impl(ServerOptions options_in, ConsoleState& state_in, CommandSink sink_in, RecorderSink recorder_sink_in,
-       CalibrationSink calibration_sink_in)
+       CalibrationSink calibration_sink_in, BodySink body_sink_in)
       : options(std::move(options_in)),
         state(state_in),
         sink(std::move(sink_in)),
         recorder_sink(std::move(recorder_sink_in)),
         calibration_sink(std::move(calibration_sink_in)),
+        body_sink(std::move(body_sink_in)),
         files(load_web_files(options.web_root)),
         gzipped(gzip_web_files(files)),
         acceptor(io),
@@ -204,6 +205,7 @@ struct ConsoleServer::Impl {
   void handle_camera_command(WebSocketSession& session, const json& message, TimeNs now);
   void handle_recorder_command(WebSocketSession& session, const json& message, TimeNs now);
   void handle_calibration(WebSocketSession& session, const json& message, TimeNs now);
+  void handle_body(WebSocketSession& session, const json& message, TimeNs now);
   void reject(WebSocketSession& session, std::int64_t request, const std::string& counter,
               const std::string& reason);
   // The per-browser rate limit; a refused command is rejected (rate_limited).
@@ -216,6 +218,7 @@ struct ConsoleServer::Impl {
   CommandSink sink;
   RecorderSink recorder_sink;
   CalibrationSink calibration_sink;
+  BodySink body_sink;
   std::map<std::string, std::pair<std::string, std::string>> files;
   std::map<std::string, std::string> gzipped;  // of `files`, by path: those worth compressing
   net::io_context io;
@@ -403,9 +406,10 @@ void ConsoleServer::Impl::handle_client_message(WebSocketSession& session, std::
     session.select(what->get<std::string>(), key->get<std::string>());
     return;
   }
-  if (kind != "command" && kind != "recorder" && kind != "calibration") {
-    reject(session, 0, "bad_message",
-           "unknown message type (expected \"command\", \"recorder\", \"calibration\" or \"select\")");
+  if (kind != "command" && kind != "recorder" && kind != "calibration" && kind != "body") {
+    reject(
+        session, 0, "bad_message",
+        "unknown message type (expected \"command\", \"recorder\", \"calibration\", \"body\" or \"select\")");
     return;
   }
   ++counters.commands_received;
@@ -414,6 +418,8 @@ void ConsoleServer::Impl::handle_client_message(WebSocketSession& session, std::
     handle_recorder_command(session, message, now);
   } else if (kind == "calibration") {
     handle_calibration(session, message, now);
+  } else if (kind == "body") {
+    handle_body(session, message, now);
   } else {
     handle_camera_command(session, message, now);
   }
@@ -495,6 +501,34 @@ void ConsoleServer::Impl::handle_calibration(WebSocketSession& session, const js
                      {"calibration", request.action},
                      {"command", request.action},
                      {"args", json::array()}});
+}
+
+void ConsoleServer::Impl::handle_body(WebSocketSession& session, const json& message, TimeNs now) {
+  BodyGateResult result = check_body_request(message);
+  if (const auto* rejection = std::get_if<Rejection>(&result)) {
+    reject(session, rejection->request, rejection->counter, rejection->reason);
+    return;
+  }
+  const auto& request = std::get<BodyCreateRequest>(result);
+  if (!admitted(session, request.request, now)) return;
+  if (!body_sink) {
+    reject(session, request.request, "not_sent",
+           "this console has no bodies file (panoptes_console --bodies)");
+    return;
+  }
+  if (const std::string refusal = body_sink(request, session.id()); !refusal.empty()) {
+    reject(session, request.request, "refused", refusal);
+    return;
+  }
+  ++counters.commands_forwarded;
+  json args = json::array();
+  for (const std::int64_t id : request.tracks) args.push_back(std::to_string(id));
+  session.reply(json{{"type", "command_result"},
+                     {"id", request.request},
+                     {"result", "sent"},
+                     {"body", request.name},
+                     {"command", "create_body"},
+                     {"args", args}});
 }
 
 // The figures of each page's selected track or body, ~5 times a second (only pages that ask).
@@ -710,9 +744,9 @@ json ConsoleServer::Impl::stats_of(const Impl& impl) {
 }
 
 ConsoleServer::ConsoleServer(ServerOptions options, ConsoleState& state, CommandSink sink,
-                             RecorderSink recorder_sink, CalibrationSink calibration_sink)
+                             RecorderSink recorder_sink, CalibrationSink calibration_sink, BodySink body_sink)
     : impl_(std::make_unique<Impl>(std::move(options), state, std::move(sink), std::move(recorder_sink),
-                                   std::move(calibration_sink))) {
+                                   std::move(calibration_sink), std::move(body_sink))) {
   if (impl_->options.token.empty()) throw std::invalid_argument("the console needs an access token");
   if (!(impl_->options.update_hz > 0 && impl_->options.update_hz <= 240))
     throw std::invalid_argument("update rate must be in (0, 240] Hz");

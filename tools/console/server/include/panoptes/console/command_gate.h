@@ -69,6 +69,19 @@ struct CalibrationRequest {
 using CalibrationGateResult = std::variant<CalibrationRequest, Rejection>;
 CalibrationGateResult check_calibration_request(const nlohmann::json& message);
 
+// A rigid body made from live tracks selected in the 3D view (docs/bodies.md, "Bodies from
+// markers"): {"type":"body", "id", "name", "tracks": [3 to 64 track ids], "pivot": a track id or
+// null (the centroid)}. The name: 1 to 64 letters, digits, '_', '-' or '.'. Whether the tracks are
+// live and make a body is for the console's body maker (panoptes::ctl::select_tracks, make_body).
+struct BodyCreateRequest {
+  std::int64_t request = 0;
+  std::string name;
+  std::vector<std::int64_t> tracks;
+  std::optional<std::int64_t> pivot;
+};
+using BodyGateResult = std::variant<BodyCreateRequest, Rejection>;
+BodyGateResult check_body_request(const nlohmann::json& message);
+
 // Token bucket: `rate` commands per second on average, at most `burst` at once.
 class RateLimiter {
  public:

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "panoptes/console/console_records.h"
@@ -26,6 +27,9 @@ class CommandModel {
   // A recorder's status resolves the commands that asked for its recording state: applied, or
   // rejected with the status's error.
   void on_recorder_status(const std::string& recorder, const RecorderRecord& status);
+  // An outcome that needs no status (a body made by the console's body maker): handed out by the
+  // next take_outcomes.
+  void on_outcome(CommandOutcome outcome) { outcomes_.push_back(std::move(outcome)); }
   // The outcomes since the last call; commands not resolved within ack_timeout_ns end as no_ack.
   std::vector<CommandOutcome> take_outcomes(TimeNs now);
 

@@ -68,6 +68,8 @@ class ConsoleState {
   void on_recorder_command_sent(PendingRecorderCommand command);
   bool knows_recorder(const std::string& recorder) const;
   std::vector<CommandOutcome> take_outcomes(TimeNs now);
+  // CommandModel::on_outcome.
+  void on_outcome(CommandOutcome outcome);
 
   // Wand capture coverage (the calibration page, CalibrationModel), fed with the frames the
   // capture writes (the same frames the CLI counts).

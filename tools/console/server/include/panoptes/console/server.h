@@ -48,15 +48,19 @@ using RecorderSink = std::function<bool(const RecorderCommandRequest&)>;
 // Runs a checked calibration step; returns "" when it started, else why it cannot.
 using CalibrationSink = std::function<std::string(const CalibrationRequest&)>;
 
+// Starts making a checked body from live tracks for browser `client` (its outcome comes later
+// through ConsoleState::on_outcome); returns "" when it started, else why not.
+using BodySink = std::function<std::string(const BodyCreateRequest&, std::uint64_t client)>;
+
 // Loads the page's files; throws std::runtime_error naming the missing file.
 std::map<std::string, std::pair<std::string, std::string>> load_web_files(
     const std::filesystem::path& web_root);
 
 class ConsoleServer {
  public:
-  // Without a recorder or calibration sink, those commands are rejected (not_sent).
+  // Without a recorder, calibration or body sink, those commands are rejected (not_sent).
   ConsoleServer(ServerOptions options, ConsoleState& state, CommandSink sink, RecorderSink recorder_sink = {},
-                CalibrationSink calibration_sink = {});
+                CalibrationSink calibration_sink = {}, BodySink body_sink = {});
   ~ConsoleServer();
   ConsoleServer(const ConsoleServer&) = delete;
   ConsoleServer& operator=(const ConsoleServer&) = delete;
