@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -54,82 +55,102 @@ std::string read_token(const std::string& path) {
   return token;
 }
 
-int run(int argc, char** argv) {
+// The command line's settings, resolved (addresses parsed, paths absolute, the token read).
+struct ConsoleArgs {
   panoptes::console::ServerOptions options;
-  options.web_root = PANOPTES_CONSOLE_WEB_DIR;
   std::string bind = "127.0.0.1:8080";
   std::string token_file;
   std::string dds_profile;
   std::string url_file;
   panoptes::console::CalibrationWorkflowOptions calibration;
-  calibration.directory = "panoptes_calibration";
-  calibration.estimator_node = std::filesystem::canonical("/proc/self/exe").parent_path() / "estimator_node";
   panoptes::console::BodyMakerOptions bodies;
-  bodies.ctl = std::filesystem::canonical("/proc/self/exe").parent_path() / "panoptes_ctl";
-  CLI::App app{"panoptes_console: the operator console in the browser (Panoptes, docs/console.md)",
-               "panoptes_console"};
+};
+
+void add_options(CLI::App& app, ConsoleArgs& args) {
   app.option_defaults()->always_capture_default();
   panoptes::dds::add_domain_option(app);
-  app.add_option("--bind", bind, "address:port to serve on (0.0.0.0:8080 opens it on the LAN)");
-  app.add_option("--token-file", token_file, "read the access token from this file")
+  app.add_option("--bind", args.bind, "address:port to serve on (0.0.0.0:8080 opens it on the LAN)");
+  app.add_option("--token-file", args.token_file, "read the access token from this file")
       ->default_str("a new random token, printed at start");
-  app.add_option("--web-root", options.web_root, "the page's files (index.html, app.js, node_modules/three)");
-  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile")
+  app.add_option("--web-root", args.options.web_root,
+                 "the page's files (index.html, app.js, node_modules/three)");
+  app.add_option("--dds-profile", args.dds_profile, "Fast DDS XML profile")
       ->default_str("$PANOPTES_DDS_PROFILE or deploy/dds/loopback.xml");
-  app.add_option("--update-rate", options.update_hz, "snapshots per second sent to each browser")
+  app.add_option("--update-rate", args.options.update_hz, "snapshots per second sent to each browser")
       ->check(CLI::Range(1.0, 120.0));
-  app.add_option("--command-rate", options.commands_per_s, "commands per second allowed per browser")
+  app.add_option("--command-rate", args.options.commands_per_s, "commands per second allowed per browser")
       ->check(CLI::Range(0.1, 1000.0));
-  app.add_option("--url-file", url_file, "also write the URL (with the token) to this file");
-  app.add_option("--calibration-dir", calibration.directory,
+  app.add_option("--url-file", args.url_file, "also write the URL (with the token) to this file");
+  app.add_option("--calibration-dir", args.calibration.directory,
                  "where the calibration page's captures, calibration.yaml and its report go");
-  app.add_option("--calibration-cameras", calibration.cameras_file,
+  app.add_option("--calibration-cameras", args.calibration.cameras_file,
                  "intrinsics file for the calibration page's solve (docs/calibration.md, step 1)")
       ->default_str("none: the page cannot solve");
-  app.add_option("--estimator-node", calibration.estimator_node,
+  app.add_option("--estimator-node", args.calibration.estimator_node,
                  "the estimator_node program the calibration page runs");
-  app.add_option("--bodies", bodies.bodies_file,
+  app.add_option("--bodies", args.bodies.bodies_file,
                  "the estimator's bodies file: bodies made from markers in the 3D view are appended to it "
                  "(the estimator reloads it; docs/bodies.md)")
       ->default_str("none: the page cannot make bodies");
-  app.add_option("--ctl", bodies.ctl, "the panoptes_ctl program that makes those bodies");
-  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+  app.add_option("--ctl", args.bodies.ctl, "the panoptes_ctl program that makes those bodies");
+}
 
-  const auto colon = bind.rfind(':');
+// --bind parsed, paths made absolute, the token generated or read; an exit code on bad input.
+std::optional<int> resolve(ConsoleArgs& args) {
+  const auto colon = args.bind.rfind(':');
   int port = -1;
   try {
-    if (colon != std::string::npos) port = std::stoi(bind.substr(colon + 1));
+    if (colon != std::string::npos) port = std::stoi(args.bind.substr(colon + 1));
   } catch (const std::exception&) {
   }
   if (colon == std::string::npos || port < 0 || port > 65535) {
-    std::fprintf(stderr, "panoptes_console: --bind: expected <address>:<port>, got '%s'\n", bind.c_str());
+    std::fprintf(stderr, "panoptes_console: --bind: expected <address>:<port>, got '%s'\n",
+                 args.bind.c_str());
     return panoptes::kExitBadInput;
   }
-  options.bind_address = bind.substr(0, colon);
-  calibration.directory = std::filesystem::absolute(calibration.directory);
-  calibration.dds_profile = dds_profile;
-  options.calibration_dir = calibration.directory;
-  bodies.dds_profile = dds_profile;
-  bodies.work_dir = calibration.directory;
-  if (!bodies.bodies_file.empty()) bodies.bodies_file = std::filesystem::absolute(bodies.bodies_file);
-  options.port = static_cast<unsigned short>(port);
+  args.options.bind_address = args.bind.substr(0, colon);
+  args.options.port = static_cast<unsigned short>(port);
+  args.calibration.directory = std::filesystem::absolute(args.calibration.directory);
+  args.calibration.dds_profile = args.dds_profile;
+  args.options.calibration_dir = args.calibration.directory;
+  args.bodies.dds_profile = args.dds_profile;
+  args.bodies.work_dir = args.calibration.directory;
+  if (!args.bodies.bodies_file.empty())
+    args.bodies.bodies_file = std::filesystem::absolute(args.bodies.bodies_file);
   try {
-    options.token = token_file.empty() ? generate_token() : read_token(token_file);
+    args.options.token = args.token_file.empty() ? generate_token() : read_token(args.token_file);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_console: --token-file %s\n", error.what());
     return panoptes::kExitBadInput;
   }
+  return std::nullopt;
+}
+
+int run(int argc, char** argv) {
+  ConsoleArgs args;
+  args.options.web_root = PANOPTES_CONSOLE_WEB_DIR;
+  const auto programs = std::filesystem::canonical("/proc/self/exe").parent_path();
+  args.calibration.directory = "panoptes_calibration";
+  args.calibration.estimator_node = programs / "estimator_node";
+  args.bodies.ctl = programs / "panoptes_ctl";
+  CLI::App app{"panoptes_console: the operator console in the browser (Panoptes, docs/console.md)",
+               "panoptes_console"};
+  add_options(app, args);
+  if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
+  if (const auto exit_code = resolve(args)) return *exit_code;
+  auto& options = args.options;
+  const std::string& bind = args.bind;
 
   panoptes::install_stop_handlers();
   panoptes::console::ConsoleState state;
   panoptes::dds::BusOptions bus_options;
-  bus_options.profile_file = dds_profile;
+  bus_options.profile_file = args.dds_profile;
   bus_options.participant_name = "panoptes_console";
   panoptes::dds::Bus bus(bus_options);
   panoptes::console::BusBridge bridge(bus, state);
   options.bus_rejections = [&bus] { return bus.receive_rejections(); };
-  panoptes::console::CalibrationWorkflow workflow(calibration, state);
-  panoptes::console::BodyMaker body_maker(bodies, state);
+  panoptes::console::CalibrationWorkflow workflow(args.calibration, state);
+  panoptes::console::BodyMaker body_maker(args.bodies, state);
   std::unique_ptr<panoptes::console::ConsoleServer> server;
   try {
     server = std::make_unique<panoptes::console::ConsoleServer>(
@@ -151,7 +172,7 @@ int run(int argc, char** argv) {
       "http://" + host + ":" + std::to_string(server->port()) + "/?token=" + options.token;
   std::printf("panoptes_console: open %s\n", url.c_str());
   std::fflush(stdout);
-  if (!url_file.empty()) std::ofstream(url_file) << url << "\n";
+  if (!args.url_file.empty()) std::ofstream(args.url_file) << url << "\n";
 
   std::thread watcher([&server, &workflow, &bridge, &body_maker] {
     for (int tick = 0; !panoptes::stop_requested(); ++tick) {
