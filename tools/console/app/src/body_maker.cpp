@@ -3,13 +3,12 @@
 
 #include <fstream>
 #include <mutex>
-#include <optional>
 #include <sstream>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "panoptes/process.h"
-#include "panoptes/time.h"
 
 namespace panoptes::console {
 
