@@ -47,6 +47,7 @@ struct LabelStage::Core {
     total_us += per_subject;
     worst_us = std::max(worst_us, per_subject);
     ++runs;
+    ran_stamp = stamp;
     untangled = labeller.untangled();
     released = labeller.released();
     if (map->generation != 0 &&
@@ -100,6 +101,7 @@ struct LabelStage::Core {
   mutable std::mutex mutex;                 // guards what follows
   std::shared_ptr<const LabelMap> map = std::make_shared<const LabelMap>();
   std::uint64_t runs = 0;
+  TimeNs ran_stamp = 0;         // the newest finished run's stamp
   std::uint64_t untangled = 0;  // labeller.untangled() after the newest run
   std::uint64_t released = 0;   // labeller.released() after the newest run
   double total_us = 0.0;
@@ -115,7 +117,9 @@ struct LabelStage::Core {
 
 LabelStage::LabelStage(std::vector<labelling::SubjectModel> models, const labelling::LabellerOptions& options,
                        const std::string& out_path, TimeNs period_ns)
-    : core_(std::make_unique<Core>(std::move(models), options)), period_ns_(period_ns) {
+    : core_(std::make_unique<Core>(std::move(models), options)),
+      period_ns_(period_ns),
+      max_lag_ns_(std::max<TimeNs>(4 * period_ns, 20'000'000)) {
   if (!out_path.empty()) out_.emplace(out_path);
 }
 
@@ -182,15 +186,32 @@ void LabelStage::observe(const estimator::Tracker& tracker, const std::vector<Tr
       core_->run(points_, stamp);
     }
   }
-  names_ = map();
+  TimeNs labelled_ns = 0;  // the run whose names this frame carries (--out-labels: a live run's lag)
+  {
+    std::lock_guard<std::mutex> lock(core_->mutex);
+    names_ = core_->map;
+    labelled_ns = core_->ran_stamp;
+  }
+  // Names at most max_lag_ns behind the frame (header): else this frame waits for the run just
+  // posted, which the wait itself lets the worker have the CPU for (the first run too).
+  if (due && core_->worker.joinable() && stamp - labelled_ns > max_lag_ns_) {
+    core_->drain();
+    ++waits_;
+    std::lock_guard<std::mutex> lock(core_->mutex);
+    names_ = core_->map;
+    labelled_ns = core_->ran_stamp;
+  }
   if (due) {  // the share named, counted at the labeller's runs (every frame offline by default)
     marker_frames_ += points_.size();
     for (const auto& point : points_)
       labelled_marker_frames_ += label_of(static_cast<std::int64_t>(point.track)) ? 1 : 0;
   }
   if (!out_) return;
-  // Every confirmed track with its position; "subject"/"marker" only on the labelled ones.
-  nlohmann::json record{{"stamp_ns", stamp}, {"tracks", nlohmann::json::array()}};
+  // Every confirmed track with its position; "subject"/"marker" only on the labelled ones;
+  // "labelled_ns": the stamp of the labeller run whose names these are (live: behind "stamp_ns" by
+  // the run period and the worker's lag; panoptes_label_replay --as-recorded replays that schedule).
+  nlohmann::json record{
+      {"stamp_ns", stamp}, {"labelled_ns", labelled_ns}, {"tracks", nlohmann::json::array()}};
   for (const auto& point : points_) {
     nlohmann::json entry{{"track", static_cast<std::int64_t>(point.track)},
                          {"p", {point.position_m.x(), point.position_m.y(), point.position_m.z()}}};
@@ -235,15 +256,17 @@ std::string LabelStage::summary() const {
     worst_us = core_->worst_us;
   }
   const double mean = runs == 0 ? 0.0 : total_us / static_cast<double>(runs);
-  char text[448];
+  char text[560];
   std::snprintf(text, sizeof text,
                 "labels: %zu subject%s, %.2f %% of %llu confirmed marker-frames at the labeller's runs "
                 "named, %.1f us per subject-frame (mean; worst %.0f us) over %llu runs%s; %llu pairs of "
-                "names untangled, %llu names released from tracks that stopped fitting",
+                "names untangled, %llu names released from tracks that stopped fitting; %llu frames waited "
+                "for a run (names over %.0f ms behind)",
                 core_->subjects.size(), core_->subjects.size() == 1 ? "" : "s", named,
                 static_cast<unsigned long long>(marker_frames_), mean, worst_us,
                 static_cast<unsigned long long>(runs), core_->worker.joinable() ? " (in the background)" : "",
-                static_cast<unsigned long long>(untangled), static_cast<unsigned long long>(released));
+                static_cast<unsigned long long>(untangled), static_cast<unsigned long long>(released),
+                static_cast<unsigned long long>(waits_), static_cast<double>(max_lag_ns()) * 1e-6);
   return text;
 }
 

@@ -56,8 +56,11 @@ class LabelStage {
   // Live (docs/marker_sets.md, "Off the frame path"): from now on the labeller runs on a thread of
   // its own. observe() hands it the confirmed tracks when a run is due and returns at once (a run
   // still busy is not waited for: the newest tracks replace a job not yet started), so a revision
-  // search of milliseconds delays no frame; the names come from the newest finished run. Offline
-  // replays do not call it: there every run finishes before observe() returns (reproducible).
+  // search of milliseconds delays no frame; the names come from the newest finished run. Unless
+  // that run is more than max_lag_ns() older than the frame (the worker got no CPU while the frame
+  // path caught up a backlog: seen 110 frames, 299 ms of stamps, on a loaded 2-core machine): then
+  // the frame waits for the run just posted (counted in summary()). Offline replays do not call it:
+  // there every run finishes before observe() returns (reproducible).
   void run_in_background();
   // Waits until the background run under way, and the job waiting, if any, are done (at once when
   // not in the background).
@@ -68,6 +71,12 @@ class LabelStage {
   // The same with the tracker's current_tracks() the caller already has (the live path needs them
   // for the frame anyway: no second copy).
   void observe(const estimator::Tracker& tracker, const std::vector<TrackRecord>& current_tracks);
+
+  // How far behind a frame's stamp its names' run may be live: 4 labeller periods, at least 20 ms
+  // (33 ms at the default 120 Hz), unless set (0: every due frame waits for its own run, so the
+  // names are the inline stage's).
+  TimeNs max_lag_ns() const { return max_lag_ns_; }
+  void set_max_lag_ns(TimeNs lag) { max_lag_ns_ = lag; }
 
   // After observe(): the label of `track`, if any (in the map the last observe() saw).
   std::optional<TrackLabel> label_of(std::int64_t track) const;
@@ -96,10 +105,12 @@ class LabelStage {
   std::shared_ptr<const LabelMap> names_;  // the map the last observe() saw
   std::vector<labelling::TrackPoint> points_;
   TimeNs period_ns_ = 0;
+  TimeNs max_lag_ns_ = 0;
   TimeNs last_stamp_ns_ = 0;
   TimeNs last_run_ns_ = 0;
   std::uint64_t marker_frames_ = 0;
   std::uint64_t labelled_marker_frames_ = 0;
+  std::uint64_t waits_ = 0;  // frames that waited for a run (max_lag_ns)
 };
 
 }  // namespace panoptes::session
