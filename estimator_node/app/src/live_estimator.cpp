@@ -133,6 +133,8 @@ class LiveEstimator {
   void publish_update(FeatureFrame&& frame, TimeNs dequeued_ns);
   // --frames fixed: the frame of the newest grid instant, once it is due (docs/frames.md).
   void publish_fixed_frame();
+  // --frames fixed, before each update: the next instant's frame first if the update would overrun it.
+  void hold_for_instant();
   // The calibration in use (the file's cameras and those calibrated from their CameraInfo) on
   // rt/panoptes/calibration, transient-local: late joiners (the console, clients) get it at once.
   void publish_calibration() { calibration_writer_->write(dds::to_message(in_use_, wall_now_ns())); }
@@ -190,6 +192,13 @@ class LiveEstimator {
   session::FrameOutputBuilder frame_builder_;
   std::optional<session::FrameClock> frame_clock_;  // --frames fixed
   session::FixedRateStats fixed_rate_stats_;
+  // How long one frame's update and outputs take: a high-water mark that decays by 1/64 per update,
+  // within 50 us..1 ms (hold_for_instant).
+  struct WorkEstimate {
+    TimeNs ns = 150'000;
+    void add(TimeNs took) { ns = std::clamp<TimeNs>(std::max(took, ns - ns / 64), 50'000, 1'000'000); }
+  } update_work_;
+  std::uint64_t holds_ = 0;             // updates that waited for an instant
   session::FrameStages newest_stages_;  // of the newest processed frame (fixed-rate frames)
   std::size_t cameras_lost_ = 0;        // at the last health check: a change publishes the status at once
   std::uint64_t descriptions_generation_ = 0;  // the bodies file's generation last published
@@ -275,12 +284,33 @@ void LiveEstimator::publish_predictions(const FeatureFrame& frame) {
 
 void LiveEstimator::update(std::vector<FeatureFrame>& due) {
   TimeNs dequeued_ns = wall_now_ns();
-  session_.process_due(due, [&](FeatureFrame& frame, est::FrameOutcome outcome) {
-    if (outcome == est::FrameOutcome::kProcessed) publish_update(std::move(frame), dequeued_ns);
-    publish_fixed_frame();        // an instant that fell due during this update goes out before the next
-    dequeued_ns = wall_now_ns();  // the next frame's update starts now
-  });
+  TimeNs started_ns = dequeued_ns;
+  session_.process_due(
+      due,
+      [&](FeatureFrame& frame, est::FrameOutcome outcome) {
+        if (outcome == est::FrameOutcome::kProcessed) publish_update(std::move(frame), dequeued_ns);
+        update_work_.add(wall_now_ns() - started_ns);
+        publish_fixed_frame();        // an instant that fell due during this update goes out before the next
+        dequeued_ns = wall_now_ns();  // the next frame's update starts now
+      },
+      [&] {
+        hold_for_instant();
+        started_ns = wall_now_ns();
+      });
   apply_corrections();
+}
+
+// An update that would still run at the next fixed-rate instant waits for it: the frame goes out at
+// its instant from the state before the update, rather than up to an update late (docs/frames.md,
+// "Timing of the live loop"). Spun, not slept: at most update_work_.ns, 1 ms.
+void LiveEstimator::hold_for_instant() {
+  if (!frame_clock_ || frame_clock_->next_instant() == 0) return;
+  const TimeNs instant = frame_clock_->next_instant();
+  if (instant - wall_now_ns() > update_work_.ns) return;
+  if (wall_now_ns() < instant) ++holds_;
+  while (wall_now_ns() < instant) {
+  }
+  publish_fixed_frame();
 }
 
 void LiveEstimator::apply_corrections() {
@@ -589,7 +619,8 @@ int LiveEstimator::run() {
   if (frame_clock_) {
     log("fixed-rate frames: " + std::to_string(frame_clock_->published()) + " published, " +
         std::to_string(frame_clock_->skipped()) + " periods skipped (the estimator was behind), " +
-        std::to_string(frame_clock_->idle()) + " idle (no camera sending)");
+        std::to_string(frame_clock_->idle()) + " idle (no camera sending); " + std::to_string(holds_) +
+        " updates held for an instant");
     log(fixed_rate_stats_.summary());
   }
   return kExitOk;

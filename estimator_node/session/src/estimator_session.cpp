@@ -17,28 +17,40 @@ EstimatorSession::EstimatorSession(const EstimatorConfig& config)
 }
 
 void EstimatorSession::process_due(std::vector<FeatureFrame>& due,
-                                   const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each) {
+                                   const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each,
+                                   const std::function<void()>& before) {
+  const auto ahead = [&] {
+    if (before) before();
+  };
   if (!inside_out_.empty()) {
     // Moving cameras' frames go to their rigs' trackers, in the order taken; the rest as below.
     const auto moving = std::stable_partition(due.begin(), due.end(), [&](const FeatureFrame& frame) {
       return inside_out_.handles(frame.camera_id);
     });
-    for (auto it = due.begin(); it != moving; ++it) each(*it, inside_out_.process(*it));
+    for (auto it = due.begin(); it != moving; ++it) {
+      ahead();
+      each(*it, inside_out_.process(*it));
+    }
     due.erase(due.begin(), moving);
   }
   const TimeNs newest = tracker_.last_stamp_ns();
   std::size_t late = 0;
   while (late < due.size() && due[late].stamp_ns < newest) ++late;
   if (late == 1) {
+    ahead();
     each(due[0], process(due[0]));
   } else if (late > 1) {
+    ahead();
     const auto outcomes = intake_.process_batch({due.data(), late});
     for (std::size_t i = 0; i < late; ++i) {
       if (!inside_out_.empty()) inside_out_.observe_fixed(due[i]);
       each(due[i], outcomes[i]);
     }
   }
-  for (std::size_t i = late; i < due.size(); ++i) each(due[i], process(due[i]));
+  for (std::size_t i = late; i < due.size(); ++i) {
+    ahead();
+    each(due[i], process(due[i]));
+  }
 }
 
 void EstimatorSession::print_summary(std::size_t bad_lines) const {

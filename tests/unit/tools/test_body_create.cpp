@@ -3,7 +3,9 @@
 // tracks chosen by id or by radius, the layout about the centroid or a pivot track, refusals that
 // name what is wrong, and the bodies file appended so that the estimator's reader accepts it.
 #include <filesystem>
+#include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -108,6 +110,36 @@ TEST(BodyCreate, AppendKeepsTheOtherBodiesAndRefusesADuplicateName) {
   append_body(created, body);
   EXPECT_EQ(load_bodies(created).size(), 1U);
   EXPECT_FALSE(std::filesystem::exists(dir.file("new.yaml.new")));
+}
+
+// Creations at the same moment (the CLI and a console, two consoles) each keep their body: without
+// the lock, two writers read the same file and the later rename drops the other's body.
+TEST(BodyCreate, AppendsAtTheSameMomentEachKeepTheirBody) {
+  const testing::TempDir dir;
+  const auto file = dir.write(
+      "bodies.yaml", "bodies:\n  - name: head\n    markers: [[0, 0, 0], [0.16, 0, 0.02], [0.05, 0.19, 0]]\n");
+  BodyRequest request;
+  request.name = "template";
+  request.tracks = {3, 5, 7, 9};
+  const BodyDefinition body = make_body(request, select_tracks(request, volume()), volume());
+  constexpr int kWriters = 8;
+  constexpr int kEach = 5;
+  std::vector<std::thread> writers;
+  for (int w = 0; w < kWriters; ++w) {
+    writers.emplace_back([&, w] {
+      for (int k = 0; k < kEach; ++k) {
+        BodyDefinition named = body;
+        named.name = "body_" + std::to_string(w) + "_" + std::to_string(k);
+        append_body(file, named);
+      }
+    });
+  }
+  for (auto& writer : writers) writer.join();
+  const auto bodies = load_bodies(file);
+  EXPECT_EQ(bodies.size(), 1U + kWriters * kEach);
+  std::set<std::string> names;
+  for (const auto& entry : bodies) names.insert(entry.name);
+  EXPECT_EQ(names.size(), bodies.size());
 }
 
 }  // namespace

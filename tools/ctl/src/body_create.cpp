@@ -1,11 +1,19 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/ctl_actions/body_create.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <system_error>
+#include <thread>
 #include <utility>
 
 #include <yaml-cpp/yaml.h>
@@ -41,6 +49,37 @@ std::vector<std::int64_t> tracks_near(const BodyRequest& request, const TrackPos
   for (const auto& [distance, id] : within) ids.push_back(id);
   return ids;
 }
+
+// An exclusive lock on `<file>.lock` (flock: released when its holder ends, even killed), held
+// while the bodies file is read, appended and replaced: two creations at once (the CLI and a
+// console, or two consoles) each keep their body. Waits up to 10 s for another writer.
+class BodiesFileLock {
+ public:
+  explicit BodiesFileLock(const std::filesystem::path& bodies_file) {
+    const std::string path = bodies_file.string() + ".lock";
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0)
+      throw ConfigError(path, "", std::string("cannot open the lock file: ") + std::strerror(errno));
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      const int error = errno;
+      if ((error != EWOULDBLOCK && error != EINTR) || std::chrono::steady_clock::now() > give_up) {
+        ::close(fd_);
+        throw ConfigError(path, "",
+                          "cannot lock the bodies file: " +
+                              (error == EWOULDBLOCK ? std::string("another writer held it for 10 s")
+                                                    : std::string(std::strerror(error))));
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+  ~BodiesFileLock() { ::close(fd_); }  // closing releases the lock
+  BodiesFileLock(const BodiesFileLock&) = delete;
+  BodiesFileLock& operator=(const BodiesFileLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
 
 }  // namespace
 
@@ -85,6 +124,7 @@ BodyDefinition make_body(const BodyRequest& request, const std::vector<std::int6
 
 void append_body(const std::filesystem::path& bodies_file, const BodyDefinition& body) {
   const std::string file = bodies_file.string();
+  const BodiesFileLock lock(bodies_file);
   YAML::Node root;
   std::error_code error;
   if (std::filesystem::exists(bodies_file, error)) {

@@ -57,9 +57,11 @@ class EstimatorSession {
   // The owning thread: frames taken from the inbox together (oldest first). Those older than the
   // newest processed frame go to the tracker as one batch (one rewind and replay for the burst);
   // then the others one at a time. `each` sees every frame right after its update, so the outputs
-  // of in-order frames follow their own update.
+  // of in-order frames follow their own update; `before`, if given, runs before each update (the
+  // batch's one included): the live loop's fixed-rate frame goes out there rather than wait for it.
   void process_due(std::vector<FeatureFrame>& due,
-                   const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each);
+                   const std::function<void(FeatureFrame&, estimator::FrameOutcome)>& each,
+                   const std::function<void()>& before = {});
 
   // `wall_now_ns`: the wall time for the cameras' health (0: unknown, offline).
   estimator::EstimatorUsage usage(TimeNs stamp_ns, TimeNs wall_now_ns = 0) const {

@@ -44,7 +44,9 @@ BodyDefinition make_body(const BodyRequest& request, const std::vector<std::int6
 // Appends `body` to the bodies file (a new file when missing), keeping every other entry (bodies
 // and chains; comments are not kept). Refuses a name already in the file. Written to a temporary
 // file, read back as the estimator reads it, then renamed over the file, so a running estimator
-// reloads either the old or the complete new file. Throws ConfigError naming the file.
+// reloads either the old or the complete new file. Writers take `<file>.lock` (flock) for the
+// whole read-append-replace, so creations at the same moment each keep their body (a writer waits
+// up to 10 s). Throws ConfigError naming the file.
 void append_body(const std::filesystem::path& bodies_file, const BodyDefinition& body);
 
 }  // namespace panoptes::ctl
