@@ -74,6 +74,11 @@ def main():
         rate = client.frame_rate()
         print(f"log_poses_csv: frames at {rate.hz:.2f} Hz "
               f"({'fixed rate' if rate.fixed else 'one per processed camera frame'})", file=sys.stderr)
+        newest = client.latest()
+        timecode = client.timecode(newest) if newest is not None else None  # fixed-rate frames only
+        if timecode is not None:
+            print(f"log_poses_csv: the newest frame's timecode {timecode.text} ({timecode.rate_hz} frames a second)",
+                  file=sys.stderr)
         print(f"log_poses_csv: {counts[0]} frames logged to {args.out} (panoptes {panoptes.__version__}); "
               f"{client.stats()}", file=sys.stderr)
     return 0

@@ -113,6 +113,11 @@ int main(int argc, char** argv) {
     const auto rate = client.frame_rate();
     std::fprintf(stderr, "sample_client: frames at %.2f Hz (%s)\n", rate.hz,
                  rate.fixed ? "fixed rate" : "one per processed camera frame");
+    if (const auto newest = client.latest()) {
+      if (const auto timecode = client.timecode(*newest))  // fixed-rate frames only
+        std::fprintf(stderr, "sample_client: the newest frame's timecode %s (%d frames a second)\n",
+                     timecode->text.c_str(), timecode->rate_hz);
+    }
     std::fprintf(stderr, "sample_client: received %llu frames, %llu missed, %llu malformed\n",
                  static_cast<unsigned long long>(stats.frames_received),
                  static_cast<unsigned long long>(stats.frames_missed),

@@ -67,7 +67,7 @@ rate=$(sed -n 's/.*rt\/panoptes\/frames at a fixed \([0-9]*\) Hz.*/\1/p' "$work/
 grep "fixed-rate: " "$work/fixed.estimator.log" || fail "the estimator printed no fixed-rate summary"
 
 python3 - "$work" "$rate" "${skipped:-0}" "$work/sim/bodies.yaml" "${#realtime[@]}" <<'PYTHON'
-import json, sys
+import json, sys, time
 work, rate, skipped = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 realtime = sys.argv[5] != "0"
 failures = 0
@@ -118,6 +118,18 @@ else:
     print(f"publish intervals: {intervals}")
 print(f"receive intervals: deviation p50 {100 * pct(receive, 0.5):.2f} %, p99 {100 * pct(receive, 0.99):.2f} %")
 check(max(stamps) <= 1, f"stamps one period apart on the grid (worst {max(stamps):.0f} ns off)")
+# The client's timecode (Client::timecode, panoptes/frame_grid.h) against Python's own reading of
+# the stamp: UTC time of day, and the frame's period within its second. The first frames come before
+# the client knows the rate (two frames); every later one has it.
+def expected_timecode(stamp):
+    second, within = divmod(stamp, 1_000_000_000)
+    day = time.gmtime(second)
+    return [day.tm_hour, day.tm_min, day.tm_sec, ((within + 1) * rate - 1) // 1_000_000_000]
+coded = [f for f in fixed[2:] if "timecode" in f]
+wrong = [f for f in coded if f["timecode"] != expected_timecode(f["stamp_ns"])]
+check(len(coded) == len(fixed) - 2 and not wrong,
+      f"timecodes on {len(coded)} of {len(fixed) - 2} frames after the first two, {len(wrong)} wrong "
+      f"(first {coded[0]['timecode_text'] if coded else '-'}, e.g. {wrong[0]['timecode'] if wrong else ''})")
 check(all(b["frame"] > a["frame"] for a, b in zip(fixed, fixed[1:])), "frame numbers increase")
 gaps = sum(b["frame"] - a["frame"] - 1 for a, b in zip(fixed, fixed[1:]))
 print(f"frame-number gaps: {gaps} periods; the estimator skipped {skipped}")

@@ -138,7 +138,12 @@ int run(int argc, char** argv) {
     while (!panoptes::stop_requested() && std::chrono::steady_clock::now() < end) {
       const pc::FrameResult result = client.wait_for_frame(std::chrono::milliseconds(100));
       if (result.status == pc::Status::kOk) {
-        out << frame_line(result.frame).dump() << '\n';
+        json line = frame_line(result.frame);
+        if (const auto timecode = client.timecode(result.frame)) {  // fixed-rate frames (docs/frames.md)
+          line["timecode"] = {timecode->hours, timecode->minutes, timecode->seconds, timecode->frames};
+          line["timecode_text"] = timecode->text;
+        }
+        out << line.dump() << '\n';
         if (labels_out.is_open()) labels_out << labels_line(result.frame).dump() << '\n';
       }
       const std::uint64_t received = client.stats().descriptions_received;

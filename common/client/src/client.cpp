@@ -433,6 +433,10 @@ FrameRate Client::frame_rate() const {
   return {impl_->newest_fixed, detail::rate_from_stamps(std::move(stamps), impl_->newest_fixed)};
 }
 
+std::optional<Timecode> Client::timecode(const Frame& frame) const {
+  return detail::timecode_of(frame.stamp_ns, frame_rate());
+}
+
 std::vector<BodyDescription> Client::body_descriptions() const {
   std::lock_guard lock(impl_->mutex);
   return impl_->descriptions;

@@ -7,6 +7,8 @@
 #include <string_view>
 #include <utility>
 
+#include "panoptes/frame_grid.h"
+
 namespace panoptes::client::detail {
 namespace {
 
@@ -379,6 +381,16 @@ double rate_from_stamps(std::vector<std::int64_t> stamps, bool fixed) {
   const auto middle = intervals.begin() + static_cast<std::ptrdiff_t>(intervals.size() / 2);
   std::nth_element(intervals.begin(), middle, intervals.end());
   return 1e9 / static_cast<double>(*middle);
+}
+
+std::optional<Timecode> timecode_of(std::int64_t stamp_ns, const FrameRate& rate) {
+  if (!rate.fixed) return std::nullopt;
+  const double whole = std::round(rate.hz);
+  if (whole < 1 || whole > FrameGrid::kMaxRateHz || std::abs(rate.hz - whole) > 0.01) return std::nullopt;
+  const FrameGrid grid(static_cast<int>(whole));
+  if (grid.instant(grid.index_at(stamp_ns)) != stamp_ns) return std::nullopt;
+  const ::panoptes::Timecode tc = grid.timecode(stamp_ns);
+  return Timecode{tc.hours, tc.minutes, tc.seconds, tc.frames, grid.rate_hz(), to_string(tc, grid.rate_hz())};
 }
 
 }  // namespace panoptes::client::detail

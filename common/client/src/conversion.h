@@ -57,6 +57,10 @@ std::optional<ChainUpdate> to_chain_update(const msg::ChainFrame& message, std::
 // number of intervals over the span.
 double rate_from_stamps(std::vector<std::int64_t> stamps, bool fixed);
 
+// The timecode of a frame stamped `stamp_ns` in a stream of `rate` (panoptes/frame_grid.h): nullopt
+// unless the rate is fixed and whole (within 0.01 Hz) and the stamp lies on its grid.
+std::optional<Timecode> timecode_of(std::int64_t stamp_ns, const FrameRate& rate);
+
 // ClientOptions::up_axis, else $PANOPTES_UP_AXIS, else z; a ConfigError naming the option or the
 // variable for anything but z or y.
 UpAxis choose_up_axis(const std::string& option);

@@ -9,6 +9,7 @@
 
 #include "conversion.h"
 #include "frame_sequence.h"
+#include "panoptes/frame_grid.h"
 
 namespace panoptes::client::detail {
 namespace {
@@ -307,6 +308,27 @@ TEST(Conversion, FrameRateFromStamps) {
   EXPECT_EQ(rate_from_stamps({5, 5}, true), 0.0);
   const std::vector<std::int64_t> per_camera = {0, 1'000'000, 1'500'000, 4'000'000, 10'000'000};
   EXPECT_DOUBLE_EQ(rate_from_stamps(per_camera, false), 400.0);
+}
+
+// Client::timecode(): a frame on a whole-rate fixed grid gets the grid's timecode (one place for
+// the maths, panoptes/frame_grid.h); per-camera frames, stamps off the grid and rates that are not
+// whole get none.
+TEST(Conversion, TimecodeOfAFixedRateFrame) {
+  const FrameGrid grid(120);
+  const std::int64_t stamp = grid.instant(1'796'000'000LL * 120 + 37);  // 37th frame of its second
+  const auto timecode = timecode_of(stamp, FrameRate{true, 1e9 / 8'333'333.0});
+  ASSERT_TRUE(timecode);
+  const auto expected = grid.timecode(stamp);
+  EXPECT_EQ(timecode->hours, expected.hours);
+  EXPECT_EQ(timecode->minutes, expected.minutes);
+  EXPECT_EQ(timecode->seconds, expected.seconds);
+  EXPECT_EQ(timecode->frames, 37);
+  EXPECT_EQ(timecode->rate_hz, 120);
+  EXPECT_EQ(timecode->text, to_string(expected, 120));
+  EXPECT_FALSE(timecode_of(stamp + 1, FrameRate{true, 120.0})) << "off the grid";
+  EXPECT_FALSE(timecode_of(stamp, FrameRate{false, 120.0})) << "per-camera frames";
+  EXPECT_FALSE(timecode_of(stamp, FrameRate{true, 119.5})) << "not a whole rate";
+  EXPECT_FALSE(timecode_of(stamp, FrameRate{true, 0.0})) << "rate not known yet";
 }
 
 TEST(FrameSequence, CountsGapsAndRestarts) {

@@ -297,6 +297,14 @@ class Live(unittest.TestCase):
         self.first_frame()
         self.assertEqual(len(self.client.wait_for_descriptions(0)), 2)  # known: at once
 
+    def test_timecode_only_for_fixed_rate_frames(self):
+        frame = self.first_frame()  # bench_client's frames name a source camera frame: per camera
+        self.assertIsNone(self.client.timecode(frame))
+        self.assertFalse(self.client.frame_rate().fixed)
+        with self.assertRaises(TypeError):
+            self.client.timecode(None)
+        self.assertIn("timecode", panoptes.Client.timecode.__doc__)
+
     def test_frame_contents_are_numpy(self):
         frame = self.first_frame()
         head = frame.body("head")

@@ -113,16 +113,12 @@ TEST(FrameClock, IdlePeriodsAreNeitherPublishedNorSkippedAndFrameNumbersStayOnTh
   EXPECT_EQ(clock.published(), 2u);
 }
 
-TEST(FrameClock, TimecodeCountsFramesWithinTheSecondOfTheDay) {
+// The timecode's maths is the grid's (panoptes/frame_grid.h, tests/unit/common/test_frame_grid.cpp).
+TEST(FrameClock, TimecodeIsTheGrids) {
   const FrameClock clock(120);
-  const TimeNs day = 86'400 * kSecond;
-  const TimeNs instant = 20'000 * day + (13 * 3600 + 7 * 60 + 42) * kSecond + clock.instant(119);
-  const Timecode tc = clock.timecode(instant);
-  EXPECT_EQ(tc.hours, 13);
-  EXPECT_EQ(tc.minutes, 7);
-  EXPECT_EQ(tc.seconds, 42);
-  EXPECT_EQ(tc.frames, 119);
-  EXPECT_EQ(clock.timecode(instant + 10'000'000).frames, 0) << "next second";
+  const TimeNs instant = 20'000 * 86'400 * kSecond + (13 * 3600 + 7 * 60 + 42) * kSecond + clock.instant(119);
+  EXPECT_EQ(to_string(clock.timecode(instant), 120), "13:07:42:119");
+  EXPECT_EQ(to_string(clock.timecode(instant + 10'000'000), 120), "13:07:43:000") << "next second";
 }
 
 TEST(FixedRateStats, SummarisesDataAgeAndPublishDelay) {

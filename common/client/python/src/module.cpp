@@ -265,6 +265,14 @@ void bind_health(py::module_& m) {
       .def("__repr__", [](const client::FrameRate& r) {
         return "<panoptes.FrameRate " + std::to_string(r.hz) + " Hz" + (r.fixed ? " fixed>" : ">");
       });
+  py::class_<client::Timecode>(m, "Timecode", "A fixed-rate frame's SMPTE-style timecode (docs/frames.md).")
+      .def_readonly("hours", &client::Timecode::hours)
+      .def_readonly("minutes", &client::Timecode::minutes)
+      .def_readonly("seconds", &client::Timecode::seconds)
+      .def_readonly("frames", &client::Timecode::frames, "0 .. rate_hz - 1 within the second")
+      .def_readonly("rate_hz", &client::Timecode::rate_hz)
+      .def_readonly("text", &client::Timecode::text, "'HH:MM:SS:FF'")
+      .def("__repr__", [](const client::Timecode& t) { return "<panoptes.Timecode " + t.text + ">"; });
   py::class_<client::EstimatorHealth>(m, "EstimatorHealth", "The cameras in the estimator's latest status.")
       .def_readonly("received", &client::EstimatorHealth::received, "False until the first status arrived")
       .def_readonly("age_s", &client::EstimatorHealth::age_s, "seconds since that status arrived")
@@ -394,7 +402,7 @@ void forbid_new(py::module_& m) {
     throw py::type_error("panoptes frames, bodies, markers, descriptions and stats come from a Client");
   });
   for (const char* name : {"Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats", "Stroke",
-                           "Chain", "GrabEvent", "ChainUpdate"})
+                           "Chain", "GrabEvent", "ChainUpdate", "Timecode"})
     m.attr(name).attr("__new__") = py::staticmethod(refuse);
 }
 
@@ -452,7 +460,7 @@ PYBIND11_MODULE(_panoptes, m) {
                      panoptes::client::version_patch());
   // Users meet these classes as panoptes.X (help(), repr of the types, pickling errors).
   for (const char* name : {"Client", "Latency", "RigidBody", "Marker", "Frame", "BodyDescription", "Stats",
-                           "Stroke", "Chain", "GrabEvent", "ChainUpdate"})
+                           "Stroke", "Chain", "GrabEvent", "ChainUpdate", "Timecode"})
     m.attr(name).attr("__module__") = "panoptes";
   py::module_::import("atexit").attr("register")(py::cpp_function(&PyClient::close_all_at_exit));
 }

@@ -276,6 +276,10 @@ client::FrameRate PyClient::frame_rate() const {
   return client_->frame_rate();
 }
 
+std::optional<client::Timecode> PyClient::timecode(const client::Frame& frame) const {
+  return client_->timecode(frame);
+}
+
 client::EstimatorHealth PyClient::estimator_health() const {
   return client_->estimator_health();
 }
@@ -426,6 +430,10 @@ yet; status_text() says why) or when the client is closed. Ctrl-C interrupts the
       .def("stats", bound(&PyClient::stats), "stats() -> Stats: counters since the client was opened")
       .def("frame_rate", bound(&PyClient::frame_rate),
            "frame_rate() -> FrameRate: the rate the estimator publishes frames at (fixed, hz)")
+      .def(
+          "timecode", bound(&PyClient::timecode), py::arg("frame"),
+          "timecode(frame) -> Timecode or None: the frame's SMPTE-style timecode in a fixed-rate stream at a "
+          "whole rate (docs/frames.md)")
       .def("estimator_health", bound(&PyClient::estimator_health),
            "estimator_health() -> EstimatorHealth: the cameras as the estimator's latest status reports them")
       .def_property_readonly("profile_file", bound(&PyClient::profile_file),

@@ -52,6 +52,7 @@ class PyClient {
   client::Stats stats() const;
   client::EstimatorHealth estimator_health() const;
   client::FrameRate frame_rate() const;
+  std::optional<client::Timecode> timecode(const client::Frame& frame) const;
   std::string profile_file() const;
   int domain_id() const;
   std::string up_axis() const;

@@ -296,6 +296,14 @@ struct FrameRate {
   double hz = 0.0;     // 0 before two frames arrived
 };
 
+// A fixed-rate frame's SMPTE-style timecode (docs/frames.md, "Timecode"): hours:minutes:seconds:
+// frames of the capture clock's day (UTC), frames counting 0 .. rate_hz - 1 within each second.
+struct Timecode {
+  int hours = 0, minutes = 0, seconds = 0, frames = 0;
+  int rate_hz = 0;
+  std::string text;  // "14:03:27:118"
+};
+
 // One camera as the estimator sees it (rt/panoptes/estimator_status; docs/clients.md, "Camera health").
 struct CameraHealth {
   std::string camera_id;
@@ -379,6 +387,10 @@ class PANOPTES_CLIENT_API Client {
 
   // The rate the estimator publishes frames at (see FrameRate).
   FrameRate frame_rate() const;
+  // The timecode of `frame` (its stamp on the grid of frame_rate()) when the stream is fixed-rate
+  // at a whole number of frames a second; nullopt otherwise (per-camera frames, before the rate is
+  // known).
+  std::optional<Timecode> timecode(const Frame& frame) const;
   // A frame arrived within stale_after.
   bool connected() const;
   // "receiving (240 frames/s)", "no data for 3.2 s (last frame 1234)" or, before the first frame,

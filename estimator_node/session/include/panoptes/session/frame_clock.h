@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "panoptes/frame_grid.h"
 #include "panoptes/records.h"
 
 namespace panoptes::session {
@@ -21,25 +22,20 @@ struct FrameTick {
   TimeNs instant_ns = 0;           // on the grid
 };
 
-// SMPTE-style timecode of a grid instant: hours:minutes:seconds:frames of the capture clock's
-// day (UTC when the capture clock is the system clock), frames counting 0 .. rate - 1.
-struct Timecode {
-  int hours = 0, minutes = 0, seconds = 0, frames = 0;
-};
-
 class FrameClock {
  public:
-  static constexpr int kMaxRateHz = 10000;
+  static constexpr int kMaxRateHz = FrameGrid::kMaxRateHz;
   // Throws std::invalid_argument (naming the rate) unless 1 <= rate_hz <= kMaxRateHz.
   explicit FrameClock(int rate_hz);
 
-  int rate_hz() const { return rate_hz_; }
+  int rate_hz() const { return grid_.rate_hz(); }
   // The nominal period (exact periods alternate between floor and ceil of it).
-  double period_ns() const { return 1e9 / rate_hz_; }
+  double period_ns() const { return 1e9 / grid_.rate_hz(); }
 
-  // Grid instants: the index of the newest instant at or before `t_ns`, and the instant of an index.
-  std::int64_t index_at(TimeNs t_ns) const;
-  TimeNs instant(std::int64_t index) const;
+  // Grid instants (panoptes/frame_grid.h): the index of the newest instant at or before `t_ns`,
+  // and the instant of an index.
+  std::int64_t index_at(TimeNs t_ns) const { return grid_.index_at(t_ns); }
+  TimeNs instant(std::int64_t index) const { return grid_.instant(index); }
 
   // Live: the newest instant at or before `now_ns` if not yet published. Periods passed over since
   // the last one are counted in skipped(), never published late (no bursts).
@@ -57,12 +53,12 @@ class FrameClock {
   std::uint64_t skipped() const { return skipped_; }
   std::uint64_t idle() const { return idle_; }
 
-  Timecode timecode(TimeNs instant_ns) const;
+  Timecode timecode(TimeNs instant_ns) const { return grid_.timecode(instant_ns); }
 
  private:
   FrameTick emit(std::int64_t index);
 
-  int rate_hz_;
+  FrameGrid grid_;
   std::optional<std::int64_t> first_index_;
   std::int64_t last_index_ = 0;
   std::uint64_t published_ = 0;
