@@ -116,7 +116,8 @@ TEST(FrameClock, IdlePeriodsAreNeitherPublishedNorSkippedAndFrameNumbersStayOnTh
 // The timecode's maths is the grid's (panoptes/frame_grid.h, tests/unit/common/test_frame_grid.cpp).
 TEST(FrameClock, TimecodeIsTheGrids) {
   const FrameClock clock(120);
-  const TimeNs instant = 20'000 * 86'400 * kSecond + (13 * 3600 + 7 * 60 + 42) * kSecond + clock.instant(119);
+  const TimeNs instant =
+      TimeNs{20'000} * 86'400 * kSecond + (13 * 3600 + 7 * 60 + 42) * kSecond + clock.instant(119);
   EXPECT_EQ(to_string(clock.timecode(instant), 120), "13:07:42:119");
   EXPECT_EQ(to_string(clock.timecode(instant + 10'000'000), 120), "13:07:43:000") << "next second";
 }
