@@ -133,7 +133,9 @@ if cmd.get("mask_args"):
     def overlaps(b):
         x0, y0, x1, y1 = b["bbox"]
         return x0 < x + w and x1 > x and y0 < y + h and y1 > y
-    masked = window("cam1", cmd["mask_ms"] + 1000, cmd["clear_masks_ms"])
+    # Up to 100 ms before the page noted the clear, as for the threshold above (the camera applied a
+    # clear to a frame that arrived 8 ms before the page noted it, in a quiet suite run).
+    masked = window("cam1", cmd["mask_ms"] + 1000, cmd["clear_masks_ms"] - 100)
     inside = sum(1 for r in masked for b in r["blobs"] if overlaps(b))
     before = window("cam1", cmd["mask_ms"] - 3000, cmd["mask_ms"])
     had = sum(1 for r in before for b in r["blobs"] if overlaps(b))
@@ -151,7 +153,7 @@ if cmd.get("polygon_args"):
             out.append(side * (1 if other > 0 else -1) / ((bx - ax) ** 2 + (by - ay) ** 2) ** 0.5)
         return min(out)
     # Centroids deeper than 3 px: a spot on the edge keeps its outside pixels.
-    masked = window("cam2", cmd["polygon_ms"] + 1000, cmd["clear_polygon_ms"])
+    masked = window("cam2", cmd["polygon_ms"] + 1000, cmd["clear_polygon_ms"] - 100)
     inside = sum(1 for r in masked for b in r["blobs"] if depth(b["x"], b["y"]) > 3)
     before = window("cam2", cmd["polygon_ms"] - 3000, cmd["polygon_ms"])
     had = sum(1 for r in before for b in r["blobs"] if depth(b["x"], b["y"]) > 3)
