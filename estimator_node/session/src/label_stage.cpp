@@ -72,6 +72,13 @@ struct LabelStage::Core {
     }
   }
 
+  // The newest map into `names`; returns the stamp of the run that made it (0: none yet).
+  TimeNs newest(std::shared_ptr<const LabelMap>& names) const {
+    std::lock_guard<std::mutex> lock(mutex);
+    names = map;
+    return ran_stamp;
+  }
+
   void drain() {
     std::unique_lock<std::mutex> lock(mutex);
     idle.wait(lock, [this] { return stop || (job_stamp == 0 && !busy); });
@@ -186,20 +193,14 @@ void LabelStage::observe(const estimator::Tracker& tracker, const std::vector<Tr
       core_->run(points_, stamp);
     }
   }
-  TimeNs labelled_ns = 0;  // the run whose names this frame carries (--out-labels: a live run's lag)
-  {
-    std::lock_guard<std::mutex> lock(core_->mutex);
-    names_ = core_->map;
-    labelled_ns = core_->ran_stamp;
-  }
+  // The run whose names this frame carries (--out-labels: a live run's lag).
+  TimeNs labelled_ns = core_->newest(names_);
   // Names at most max_lag_ns behind the frame (header): else this frame waits for the run just
   // posted, which the wait itself lets the worker have the CPU for (the first run too).
   if (due && core_->worker.joinable() && stamp - labelled_ns > max_lag_ns_) {
     core_->drain();
     ++waits_;
-    std::lock_guard<std::mutex> lock(core_->mutex);
-    names_ = core_->map;
-    labelled_ns = core_->ran_stamp;
+    labelled_ns = core_->newest(names_);
   }
   if (due) {  // the share named, counted at the labeller's runs (every frame offline by default)
     marker_frames_ += points_.size();
