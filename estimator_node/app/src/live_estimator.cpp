@@ -2,6 +2,7 @@
 #include "panoptes/estimator_app/live_estimator.h"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -135,6 +136,8 @@ class LiveEstimator {
   void publish_fixed_frame();
   // --frames fixed, before each update: the next instant's frame first if the update would overrun it.
   void hold_for_instant();
+  // --frames fixed: the next instant falls due within `work_ns` (work that long waits until after it).
+  bool near_instant(TimeNs work_ns) const;
   // The calibration in use (the file's cameras and those calibrated from their CameraInfo) on
   // rt/panoptes/calibration, transient-local: late joiners (the console, clients) get it at once.
   void publish_calibration() { calibration_writer_->write(dds::to_message(in_use_, wall_now_ns())); }
@@ -145,6 +148,13 @@ class LiveEstimator {
   bool finish_processed(bool force);
   void publish_predictions(const FeatureFrame& frame);
   void publish_status(TimeNs now, TimeNs start);
+  // When the loop's periodic chores are next due.
+  struct Chores {
+    TimeNs next_status = 0;
+    TimeNs next_body_poll = 0;
+    TimeNs next_health_check = 0;
+  };
+  void do_chores(Chores& chores, TimeNs now, TimeNs start);
   // No frame for longer than a track lives without one (every camera stopped): the tracks go.
   void expire_idle_tracks(TimeNs now);
   void publish_descriptions_if_changed();
@@ -198,7 +208,13 @@ class LiveEstimator {
     TimeNs ns = 150'000;
     void add(TimeNs took) { ns = std::clamp<TimeNs>(std::max(took, ns - ns / 64), 50'000, 1'000'000); }
   } update_work_;
-  std::uint64_t holds_ = 0;             // updates that waited for an instant
+  WorkEstimate finish_work_;  // one processed frame's finish (tracks, predictions, files)
+  std::uint64_t holds_ = 0;   // updates that waited for an instant
+  // What the loop was doing when a fixed-rate frame fell due, for frames written more than 2 % of
+  // a period after their instant (the end-of-run line; docs/frames.md, "Timing of the live loop").
+  enum Phase : std::size_t { kWaiting, kUpdating, kFinishing, kHousekeeping, kPhases };
+  Phase phase_ = kWaiting;
+  std::array<std::uint64_t, kPhases> late_by_phase_{};
   session::FrameStages newest_stages_;  // of the newest processed frame (fixed-rate frames)
   std::size_t cameras_lost_ = 0;        // at the last health check: a change publishes the status at once
   std::uint64_t descriptions_generation_ = 0;  // the bodies file's generation last published
@@ -283,6 +299,7 @@ void LiveEstimator::publish_predictions(const FeatureFrame& frame) {
 }
 
 void LiveEstimator::update(std::vector<FeatureFrame>& due) {
+  phase_ = kUpdating;
   TimeNs dequeued_ns = wall_now_ns();
   TimeNs started_ns = dequeued_ns;
   session_.process_due(
@@ -304,13 +321,17 @@ void LiveEstimator::update(std::vector<FeatureFrame>& due) {
 // its instant from the state before the update, rather than up to an update late (docs/frames.md,
 // "Timing of the live loop"). Spun, not slept: at most update_work_.ns, 1 ms.
 void LiveEstimator::hold_for_instant() {
-  if (!frame_clock_ || frame_clock_->next_instant() == 0) return;
+  if (!near_instant(update_work_.ns)) return;
   const TimeNs instant = frame_clock_->next_instant();
-  if (instant - wall_now_ns() > update_work_.ns) return;
   if (wall_now_ns() < instant) ++holds_;
   while (wall_now_ns() < instant) {
   }
   publish_fixed_frame();
+}
+
+bool LiveEstimator::near_instant(TimeNs work_ns) const {
+  return frame_clock_ && frame_clock_->next_instant() != 0 &&
+         frame_clock_->next_instant() - wall_now_ns() <= work_ns;
 }
 
 void LiveEstimator::apply_corrections() {
@@ -395,7 +416,13 @@ void LiveEstimator::publish_fixed_frame() {
   const TimeNs publish_ns = wall_now_ns();
   frame_writer_->write(to_frame_message(output, publish_ns));
   if (ros2_) ros2_->publish(output);
-  fixed_rate_stats_.add(tick->instant_ns - tracker_.last_stamp_ns(), publish_ns - tick->instant_ns);
+  // The data age only while the cameras send (not over the camera_lost_after_s before the stream stops).
+  constexpr TimeNs kSendingNs = 50'000'000;
+  const bool sending = now - last_frame_wall_ns_ <= kSendingNs;
+  fixed_rate_stats_.add(sending ? tick->instant_ns - tracker_.last_stamp_ns() : -1,
+                        publish_ns - tick->instant_ns);
+  if (static_cast<double>(publish_ns - tick->instant_ns) > 0.02 * frame_clock_->period_ns())
+    ++late_by_phase_[phase_];
 }
 
 std::chrono::nanoseconds LiveEstimator::max_wait() const {
@@ -463,11 +490,16 @@ void LiveEstimator::finish(Processed& done) {
   if (latency_probe_) latency_probe_->trace(done.frame, done.stamps, message.publish_ns());
 }
 
-// Finishes processed frames while no other frame is due (all of them with `force`). True when all
-// are finished.
+// Finishes processed frames while no other frame is due and no fixed-rate instant falls due
+// before one more would be finished (all of them with `force`). True when all are finished.
 bool LiveEstimator::finish_processed(bool force) {
-  while (finished_ < processed_.size() && (force || !session_.inbox().has_due(wall_now_ns())))
+  phase_ = kFinishing;
+  while (finished_ < processed_.size() &&
+         (force || (!session_.inbox().has_due(wall_now_ns()) && !near_instant(finish_work_.ns)))) {
+    const TimeNs started = wall_now_ns();
     finish(processed_[finished_++]);
+    finish_work_.add(wall_now_ns() - started);
+  }
   if (finished_ < processed_.size()) return false;
   processed_.clear();
   finished_ = 0;
@@ -570,6 +602,28 @@ void LiveEstimator::use_realtime_priority() {
       "; the normal scheduler is used");
 }
 
+// The loop's periodic work between frames: the latency probe, the bodies file, descriptions, idle
+// tracks and the status.
+void LiveEstimator::do_chores(Chores& chores, TimeNs now, TimeNs start) {
+  phase_ = kHousekeeping;
+  if (latency_probe_) latency_probe_->flush(now, false);
+  if (now >= chores.next_body_poll) {
+    chores.next_body_poll = now + seconds_to_ns(node_.bodies_poll_s);
+    body_file_.reload_if_changed(tracker_);
+  }
+  publish_descriptions_if_changed();
+  expire_idle_tracks(now);
+  constexpr TimeNs kHealthCheckNs = 50'000'000;
+  if (now >= chores.next_status) {
+    chores.next_status += seconds_to_ns(node_.status_period_s);
+    publish_status(now, start);
+  } else if (now >= chores.next_health_check) {
+    // A camera lost (or back) is reported at once, not at the next period (issue 34: within 1 s).
+    chores.next_health_check = now + kHealthCheckNs;
+    if (session_.cameras_lost(now) != cameras_lost_) publish_status(now, start);
+  }
+}
+
 int LiveEstimator::run() {
   auto& inbox = session_.inbox();
   // Fixed-rate frames wait for their instant in inbox.wait: the default 50 us timer slack of a
@@ -578,10 +632,8 @@ int LiveEstimator::run() {
   use_realtime_priority();
   const TimeNs start = wall_now_ns();
   last_status_ = {start, 0, 0, process_cpu_seconds()};
-  TimeNs next_status = start + seconds_to_ns(node_.status_period_s);
-  TimeNs next_body_poll = start + seconds_to_ns(node_.bodies_poll_s);
-  constexpr TimeNs kHealthCheckNs = 50'000'000;
-  TimeNs next_health_check = start;
+  Chores chores{start + seconds_to_ns(node_.status_period_s), start + seconds_to_ns(node_.bodies_poll_s),
+                start};
   while (!stop_requested()) {
     apply_announced_cameras();
     publish_fixed_frame();
@@ -593,23 +645,13 @@ int LiveEstimator::run() {
     }
     const bool finished = finish_processed(false);
     publish_fixed_frame();
-    if (!finished) continue;  // a frame is due: its update first
-    if (latency_probe_) latency_probe_->flush(now, false);
-    if (now >= next_body_poll) {
-      next_body_poll = now + seconds_to_ns(node_.bodies_poll_s);
-      body_file_.reload_if_changed(tracker_);
-    }
-    publish_descriptions_if_changed();
-    expire_idle_tracks(now);
-    if (now >= next_status) {
-      next_status += seconds_to_ns(node_.status_period_s);
-      publish_status(now, start);
-    } else if (now >= next_health_check) {
-      // A camera lost (or back) is reported at once, not at the next period (issue 34: within 1 s).
-      next_health_check = now + kHealthCheckNs;
-      if (session_.cameras_lost(now) != cameras_lost_) publish_status(now, start);
-    }
+    if (!finished) continue;  // a frame is due (its update first) or a fixed-rate instant is near
+    // The chores wait until after a fixed-rate instant that falls due within 1 ms (a quarter period).
+    if (!near_instant(std::min<TimeNs>(
+            1'000'000, static_cast<TimeNs>(frame_clock_ ? frame_clock_->period_ns() / 4 : 0))))
+      do_chores(chores, now, start);
     if (options_.duration_s > 0 && now - start >= seconds_to_ns(options_.duration_s)) break;
+    phase_ = kWaiting;
     inbox.wait(wall_now_ns(), max_wait());  // wakes as frames arrive (issue 7)
   }
   if (auto rest = inbox.drain(); !rest.empty()) update(rest);
@@ -620,7 +662,12 @@ int LiveEstimator::run() {
     log("fixed-rate frames: " + std::to_string(frame_clock_->published()) + " published, " +
         std::to_string(frame_clock_->skipped()) + " periods skipped (the estimator was behind), " +
         std::to_string(frame_clock_->idle()) + " idle (no camera sending); " + std::to_string(holds_) +
-        " updates held for an instant");
+        " updates held for an instant; frames written > 2 % of a period after their instant, by what "
+        "the loop was doing then: " +
+        std::to_string(late_by_phase_[kWaiting]) + " waiting for frames, " +
+        std::to_string(late_by_phase_[kUpdating]) + " updating, " +
+        std::to_string(late_by_phase_[kFinishing]) + " finishing frames, " +
+        std::to_string(late_by_phase_[kHousekeeping]) + " chores");
     log(fixed_rate_stats_.summary());
   }
   return kExitOk;

@@ -44,7 +44,7 @@ TimeNs FrameClock::next_instant() const {
 
 void FixedRateStats::add(TimeNs data_age, TimeNs publish_delay) {
   ++frames;
-  if (data_age_ns.size() < kMaxSamples) data_age_ns.push_back(data_age);
+  if (data_age >= 0 && data_age_ns.size() < kMaxSamples) data_age_ns.push_back(data_age);
   if (publish_delay >= 0 && publish_delay_ns.size() < kMaxSamples) publish_delay_ns.push_back(publish_delay);
 }
 

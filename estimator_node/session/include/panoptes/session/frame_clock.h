@@ -68,7 +68,8 @@ class FrameClock {
 
 // What fixed-rate frames cost, for the end-of-run summary: per frame, its instant minus the
 // newest processed camera stamp (the age of the newest data, what a fixed rate adds to latency)
-// and, live, its write time minus its instant. The first kMaxSamples frames are kept.
+// and, live, its write time minus its instant (a negative value is not a sample: live, the data
+// age is left out once the cameras have stopped sending). The first kMaxSamples frames are kept.
 struct FixedRateStats {
   static constexpr std::size_t kMaxSamples = 1 << 20;
   std::uint64_t frames = 0;
