@@ -146,8 +146,10 @@ replay_clients_scene_with_restart() {
   restart_ns=$(date +%s%N)
   start_clients_estimator 2 9  # until 2 s after the cameras (3 s until issue 31)
 }
+# The per-camera stream (--frames per-camera, not the live default): the client tests compare the
+# client's poses with the estimator's --out-poses, which are one record set per camera frame.
 start_clients_estimator() {  # RUN DURATION
-  "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
+  "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" --frames per-camera \
     --out-poses "$work/poses$1.jsonl" --duration "$2" --status-period 1 >"$work/estimator$1.log" 2>&1 &
   estimator=$!
   pids+=("$estimator")

@@ -36,8 +36,9 @@ epoch=$(($(date +%s) * 1000000000 + 4000000000))
   >"$work/cyclone_summary.json" 2>"$work/cyclone.log" &
 probe_pid=$!
 pids+=("$probe_pid")
+# The per-camera stream (not the live default): the Cyclone reader's poses are compared with --out-poses.
 "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" "${ros2_flag[@]}" \
-  --out-poses "$work/own_poses.jsonl" --out-tracks "$work/own_tracks.jsonl" --duration 15 --status-period 5 \
+  --frames per-camera --out-poses "$work/own_poses.jsonl" --out-tracks "$work/own_tracks.jsonl" --duration 15 --status-period 5 \
   >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")

@@ -17,7 +17,8 @@ topics="rt/panoptes/frames rt/panoptes/body_descriptions rt/panoptes/tracks rt/p
 a=$!
 pids+=("$a")
 sleep 1
-"$bin/panoptes_demo" --scene "$work/scene.yaml" --duration 8 --log-dir "$work/logs" >"$work/demo.out" 2>&1 &
+# The per-camera stream (not the live default): the recorded frames are compared with the estimator's records.
+"$bin/panoptes_demo" --scene "$work/scene.yaml" --duration 8 --log-dir "$work/logs" --frames per-camera >"$work/demo.out" 2>&1 &
 demo=$!
 pids+=("$demo")
 timeout 90 tail --pid="$demo" -f /dev/null

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # Fixed-rate frames over DDS (issue 34 item 1, docs/frames.md): the clients scene (two bodies, two
-# loose markers, six free-running cameras at 90-120 Hz) through estimator_node --frames fixed at
-# the default rate, read by panoptes_client_probe. Checks: frames are published within 0.25 ms of
+# loose markers, six free-running cameras at 90-120 Hz) through estimator_node's default live
+# output (--frames auto: fixed-rate) at the default rate, read by panoptes_client_probe. Checks: frames are published within 0.25 ms of
 # their instant at p50 (the delays' and intervals' distributions are printed, docs/frames.md
 # "Timing"); stamps lie
 # exactly on the grid (one period apart, +-1 ns, for consecutive frame numbers); frame numbers
@@ -23,7 +23,7 @@ expect_stderr_contains "--frame-rate-hz" "the error names --frame-rate-hz"
 
 expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
 
-# live_run NAME FRAMES_MODE SECONDS [ESTIMATOR ARGS]: the cameras replay the scene for SECONDS from
+# live_run NAME FRAMES_MODE SECONDS [ESTIMATOR ARGS] (FRAMES_MODE "": no --frames, the default): the cameras replay the scene for SECONDS from
 # their start (camera_node --duration; the epoch is 2-3 s after it) into estimator_node, which runs
 # 4 s longer; the probe records SECONDS + 2.
 live_run() {
@@ -33,7 +33,7 @@ live_run() {
   local probe=$!
   pids+=("$probe")
   "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --bodies "$work/sim/bodies.yaml" \
-    --frames "$mode" --duration $((seconds + 4)) --status-period 1 "$@" >"$work/$name.estimator.log" 2>&1 &
+    ${mode:+--frames "$mode"} --duration $((seconds + 4)) --status-period 1 "$@" >"$work/$name.estimator.log" 2>&1 &
   local estimator=$!
   pids+=("$estimator")
   replay_cameras "$epoch" "$seconds" c0 c1 c2 c3 c4 c5
@@ -48,7 +48,8 @@ live_run() {
 # lab that needs steady delivery runs it (docs/frames.md, "Timing of the live loop").
 realtime=()
 if chrt -f 10 true 2>/dev/null; then realtime=(--realtime-priority 10); fi
-live_run fixed fixed 10 ${realtime[@]+"${realtime[@]}"}
+# The live default (--frames auto) is fixed-rate: no --frames given.
+live_run fixed "" 10 ${realtime[@]+"${realtime[@]}"}
 if [ "${#realtime[@]}" -gt 0 ]; then
   grep -q "estimator thread at SCHED_FIFO priority 10" "$work/fixed.estimator.log" &&
     pass "--realtime-priority 10: the estimator thread runs under SCHED_FIFO" || fail "--realtime-priority was not applied"

@@ -96,7 +96,8 @@ pids+=("$client")
   2>"$work/record.log" &
 recorder=$!
 pids+=("$recorder")
-"$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --config "$work/settings.yaml" \
+# The per-camera stream (not the live default): the recorded frames' names are compared with --out-labels.
+"$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --config "$work/settings.yaml" --frames per-camera \
   --out-labels "$work/estimator_labels.jsonl" --duration 15 >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")

@@ -35,7 +35,8 @@ c=$!
 d=$!
 pids+=("$a" "$b" "$c" "$d")
 sleep 1
-"$bin/panoptes_demo" --scene "$work/scene.yaml" --duration 8 --log-dir "$work/logs" >"$work/demo.out" 2>&1 &
+# The per-camera stream (not the live default): the recorded frames are compared with the estimator's records.
+"$bin/panoptes_demo" --scene "$work/scene.yaml" --duration 8 --log-dir "$work/logs" --frames per-camera >"$work/demo.out" 2>&1 &
 demo=$!
 pids+=("$demo")
 sleep 3

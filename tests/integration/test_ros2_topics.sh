@@ -87,9 +87,9 @@ sys.exit(0 if abs(rate - limit) <= 0.05 * limit else 1)
 EOF
 }
 
-# --- default settings ---------------------------------------------------------------------------
+# --- default settings, per-camera frames ---------------------------------------------------------------------------
 record_topics=(all)
-run_live default 8
+run_live default 8 --frames per-camera  # the per-camera stream: ROS 2 poses compared with --out-poses
 record_topics=()
 recorded_ros2 "$work/default.mcap" "$work/default.ros2.jsonl" /tf /rigid_bodies /markers
 tf_rate "$work/default.ros2.jsonl" 120 "per-camera frames, default ros2.tf_rate_hz"

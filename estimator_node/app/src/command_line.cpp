@@ -76,9 +76,10 @@ struct SettingsFlags {
              ->check(CLI::Range(2, 64)),
          [this](auto& c) { c.tracker.confirm_cameras = values.tracker.confirm_cameras; });
     bind(app.add_option("--frames", node.frames,
-                        "rt/panoptes/frames, ROS 2 and --out-tracks/--out-poses: per-camera (one per camera "
-                        "frame) or fixed (--frame-rate-hz, on a grid; docs/frames.md)")
-             ->check(CLI::IsMember({"per-camera", "fixed"})),
+                        "rt/panoptes/frames, ROS 2 and offline --out-tracks/--out-poses: per-camera (one per "
+                        "camera frame), fixed (--frame-rate-hz, on a grid) or auto (fixed live, per-camera "
+                        "records offline; docs/frames.md)")
+             ->check(CLI::IsMember({"auto", "per-camera", "fixed"})),
          [this](auto& c) { c.node.frames = values.node.frames; });
     bind(app.add_option("--frame-rate-hz", node.frame_rate_hz, "rate of --frames fixed")
              ->check(CLI::Range(1, 10000)),

@@ -95,7 +95,7 @@ class LiveEstimator {
     }
     outputs_.emplace(options_.out_tracks, options_.out_poses);
     if (session.config().ros2.enabled) ros2_.emplace(*bus_, session.config().ros2);
-    if (node_.frames == "fixed") {
+    if (node_.fixed_rate_live()) {
       frame_clock_.emplace(node_.frame_rate_hz);
       if (!options_.quiet)
         log("rt/panoptes/frames at a fixed " + std::to_string(node_.frame_rate_hz) + " Hz (docs/frames.md)");

@@ -187,7 +187,9 @@ class FieldWriter {
 }  // namespace
 
 std::string check_frames_mode(const std::string& mode) {
-  return mode == "per-camera" || mode == "fixed" ? "" : "'" + mode + "': must be per-camera or fixed";
+  return mode == "auto" || mode == "per-camera" || mode == "fixed"
+             ? ""
+             : "'" + mode + "': must be auto, per-camera or fixed";
 }
 
 std::string check_axis_name(const std::string& axis) {
@@ -214,7 +216,8 @@ void visit_node(Fields& f, NodeSettings& o) {
   f.number("status_period_s", o.status_period_s, kPositive, "live: seconds between status messages");
   f.number("bodies_poll_s", o.bodies_poll_s, kPositive, "live: how often the bodies file is checked");
   f.text("frames", o.frames, check_frames_mode,
-         "per-camera: a frame per camera frame; fixed: frame_rate_hz (docs/frames.md)");
+         "per-camera: a frame per camera frame; fixed: frame_rate_hz; auto: fixed live, per-camera records "
+         "offline (docs/frames.md)");
   f.integer("frame_rate_hz", o.frame_rate_hz, 1, 10000, "rate of fixed-rate frames");
   f.number("camera_lost_after_s", o.camera_lost_after_s, between(0.01, 3600),
            "live: a camera without a frame for this long (wall time) is lost");

@@ -99,7 +99,7 @@ int run_offline(EstimatorSession& session, FeatureFiles input, const OfflineRepl
   sort_by_stamp(input.frames);
   JsonlOutputs outputs(out_tracks, out_poses);
   const est::Tracker& tracker = session.tracker();
-  const bool fixed = session.config().node.frames == "fixed";
+  const bool fixed = session.config().node.fixed_rate_offline();
   FrameClock clock(session.config().node.frame_rate_hz);
   FixedRateStats stats;
   OfflineReplayOptions replay = options;

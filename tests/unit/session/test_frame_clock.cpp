@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "panoptes/jsonl.h"
+#include "panoptes/session/estimator_config.h"
 #include "panoptes/session/estimator_session.h"
 #include "panoptes/session/frame_clock.h"
 #include "panoptes/session/frame_output.h"
@@ -120,6 +121,21 @@ TEST(FrameClock, TimecodeIsTheGrids) {
       TimeNs{20'000} * 86'400 * kSecond + (13 * 3600 + 7 * 60 + 42) * kSecond + clock.instant(119);
   EXPECT_EQ(to_string(clock.timecode(instant), 120), "13:07:42:119");
   EXPECT_EQ(to_string(clock.timecode(instant + 10'000'000), 120), "13:07:43:000") << "next second";
+}
+
+TEST(FrameClock, TheDefaultIsFixedRateLiveAndPerCameraRecordsOffline) {
+  NodeSettings node;
+  EXPECT_EQ(node.frames, "auto");
+  EXPECT_TRUE(node.fixed_rate_live());
+  EXPECT_FALSE(node.fixed_rate_offline());
+  node.frames = "per-camera";
+  EXPECT_FALSE(node.fixed_rate_live());
+  EXPECT_FALSE(node.fixed_rate_offline());
+  node.frames = "fixed";
+  EXPECT_TRUE(node.fixed_rate_live());
+  EXPECT_TRUE(node.fixed_rate_offline());
+  EXPECT_EQ(check_frames_mode("auto"), "");
+  EXPECT_NE(check_frames_mode("sometimes").find("must be auto, per-camera or fixed"), std::string::npos);
 }
 
 TEST(FixedRateStats, SummarisesDataAgeAndPublishDelay) {

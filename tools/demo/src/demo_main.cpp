@@ -42,6 +42,10 @@ int run(int argc, char** argv) {
       ->default_str("deploy/dds/loopback.xml");
   app.add_option("--log-dir", options.log_dir, "keep process logs and recorded tracks here")
       ->default_str("a temporary folder");
+  app.add_option(
+         "--frames", options.frames,
+         "the estimator's rt/panoptes/frames: auto (fixed-rate live), per-camera or fixed (docs/frames.md)")
+      ->check(CLI::IsMember({"auto", "per-camera", "fixed"}));
   app.add_flag(
       "--check", options.check,
       "exit 1 unless every marker meets the demo's targets (RMSE < 2 mm, >= 95% tracked, 0 ID switches)");

@@ -34,18 +34,21 @@ namespace fs = std::filesystem;
 using Child = ChildProcess;
 
 // One estimator_node and one camera_node per simulated camera, logging into `run_dir`.
-std::vector<std::unique_ptr<Child>> start_processes(const fs::path& bin_dir, const Scene& scene,
-                                                    const std::string& scene_file,
+std::vector<std::unique_ptr<Child>> start_processes(const DemoOptions& options, const Scene& scene,
                                                     const fs::path& calibration_file,
-                                                    const fs::path& bodies_file,
-                                                    const std::string& dds_profile, const fs::path& run_dir,
-                                                    TimeNs epoch, double duration_s) {
+                                                    const fs::path& bodies_file, const fs::path& run_dir,
+                                                    TimeNs epoch) {
+  const fs::path& bin_dir = options.bin_dir;
   std::vector<std::string> common_dds;
-  if (!dds_profile.empty()) common_dds = {"--dds-profile", dds_profile};
+  if (!options.dds_profile.empty()) common_dds = {"--dds-profile", options.dds_profile};
   std::vector<std::unique_ptr<Child>> children;
-  std::vector<std::string> estimator_args = {(bin_dir / "estimator_node").string(), "--calibration",
-                                             calibration_file.string(), "--out-tracks",
-                                             (run_dir / "tracks.jsonl").string()};
+  std::vector<std::string> estimator_args = {(bin_dir / "estimator_node").string(),
+                                             "--calibration",
+                                             calibration_file.string(),
+                                             "--out-tracks",
+                                             (run_dir / "tracks.jsonl").string(),
+                                             "--frames",
+                                             options.frames};
   if (!bodies_file.empty()) {
     // The scene's rigid bodies: the estimator tracks them and writes their poses beside the tracks.
     for (const std::string& arg : {std::string("--bodies"), bodies_file.string(), std::string("--out-poses"),
@@ -55,7 +58,7 @@ std::vector<std::unique_ptr<Child>> start_processes(const fs::path& bin_dir, con
   estimator_args.insert(estimator_args.end(), common_dds.begin(), common_dds.end());
   children.push_back(
       std::make_unique<Child>("estimator_node", estimator_args, run_dir / "estimator_node.log"));
-  const std::string source_prefix = "sim:" + scene_file + "#";
+  const std::string source_prefix = "sim:" + options.scene_file + "#";
   for (const auto& camera : scene.cameras()) {
     const std::string& id = camera.calibration.id;
     std::vector<std::string> camera_args = {(bin_dir / "camera_node").string(),
@@ -64,7 +67,7 @@ std::vector<std::unique_ptr<Child>> start_processes(const fs::path& bin_dir, con
                                             "--sim-epoch-ns",
                                             std::to_string(epoch),
                                             "--duration",
-                                            std::to_string(duration_s + 4.0)};
+                                            std::to_string(options.duration_s + 4.0)};
     camera_args.insert(camera_args.end(), common_dds.begin(), common_dds.end());
     children.push_back(
         std::make_unique<Child>("camera_node[" + id + "]", camera_args, run_dir / (id + ".log")));
@@ -213,8 +216,7 @@ int run_demo(DemoOptions options) {
 
   std::vector<std::unique_ptr<Child>> children;
   try {
-    children = start_processes(options.bin_dir, scene, options.scene_file, calibration_file, bodies_file,
-                               options.dds_profile, run_dir, epoch, options.duration_s);
+    children = start_processes(options, scene, calibration_file, bodies_file, run_dir, epoch);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "panoptes_demo: %s\n", error.what());
     return kExitFailure;

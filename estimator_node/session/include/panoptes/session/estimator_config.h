@@ -52,9 +52,12 @@ struct NodeSettings {
   double prediction_horizon_ms = 0.0;  // body poses are published this far ahead (seed 000 Ch. 5)
   double status_period_s = 1.0;        // live: seconds between status messages and progress lines
   double bodies_poll_s = 1.0;          // live: how often the bodies file is checked for changes
-  // rt/panoptes/frames, the ROS 2 outputs and --out-tracks/--out-poses (docs/frames.md):
-  // "per-camera" (one per processed camera frame) or "fixed" (frame_rate_hz, on a grid).
-  std::string frames = "per-camera";
+  // rt/panoptes/frames, the ROS 2 outputs and offline --out-tracks/--out-poses (docs/frames.md):
+  // "per-camera" (one per processed camera frame), "fixed" (frame_rate_hz, on a grid) or "auto"
+  // (the default: fixed live, per-camera records offline).
+  std::string frames = "auto";
+  bool fixed_rate_live() const { return frames != "per-camera"; }
+  bool fixed_rate_offline() const { return frames == "fixed"; }
   int frame_rate_hz = 120;           // with frames: fixed
   double camera_lost_after_s = 0.5;  // live: a camera without a frame this long is lost (wall time)
   // live: SCHED_FIFO priority (1-99) of the estimator thread, which publishes fixed-rate frames;
@@ -62,7 +65,7 @@ struct NodeSettings {
   int realtime_priority = 0;
 };
 
-// "" for "per-camera" or "fixed", else why not (the option or key is named by the caller).
+// "" for "auto", "per-camera" or "fixed", else why not (the option or key is named by the caller).
 std::string check_frames_mode(const std::string& mode);
 // Empty if `mode` is a --continuous-calibration mode this build implements, else why not.
 std::string check_continuous_calibration(const std::string& mode);

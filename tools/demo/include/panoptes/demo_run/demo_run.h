@@ -14,11 +14,12 @@ namespace panoptes::demo_run {
 struct DemoOptions {
   std::filesystem::path bin_dir;  // where camera_node and estimator_node are
   std::string scene_file;
-  double duration_s = 20.0;  // seconds of tracking; cut to the scene's duration
-  std::string summary_json;  // empty: none
-  std::string dds_profile;   // empty: the bus's default ($PANOPTES_DDS_PROFILE or loopback)
-  std::string log_dir;       // empty: a temporary folder
-  bool check = false;        // exit 1 unless the targets are met
+  double duration_s = 20.0;     // seconds of tracking; cut to the scene's duration
+  std::string summary_json;     // empty: none
+  std::string dds_profile;      // empty: the bus's default ($PANOPTES_DDS_PROFILE or loopback)
+  std::string log_dir;          // empty: a temporary folder
+  bool check = false;           // exit 1 unless the targets are met
+  std::string frames = "auto";  // the estimator's --frames (docs/frames.md)
 };
 
 // The demo's targets: every marker's RMSE < 2 mm, tracked >= 95% of the time, no ID switch, and
