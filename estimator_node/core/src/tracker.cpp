@@ -75,6 +75,7 @@ struct Core {
   Initiator initiator;
   TimeNs last_stamp_ns = std::numeric_limits<TimeNs>::min();
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
+  std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
                 ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
@@ -103,6 +104,26 @@ struct Projected {
   PointState state;
   PointProjection projection;
 };
+
+// A track, a blob of the frame and the track's prediction projected for it: a pair to commit.
+struct ProjectedPair {
+  std::size_t track;
+  std::size_t blob;
+  Projected projected;
+};
+
+// `state` predicted to `stamp` with white-acceleration σ² `sigma2` and projected into `camera`;
+// nullopt when it lies closer than `min_depth` in front of the camera or does not project.
+std::optional<Projected> project_prediction(const PointState& state, TimeNs stamp, double sigma2,
+                                            const CameraModel& camera, double min_depth, double noise_px) {
+  Projected full;
+  full.state = predicted(state, stamp, sigma2);
+  if (camera.T_cam_world().apply(full.state.position()).z() < min_depth) return std::nullopt;
+  const auto projection = project_point(full.state, camera, noise_px);
+  if (!projection) return std::nullopt;
+  full.projection = *projection;
+  return full;
+}
 
 // The tracks and blobs of one frame that may belong together.
 struct Gating {
@@ -329,6 +350,11 @@ struct Tracker::Impl {
                    int camera_index, TimeNs stamp, std::vector<char>& used);
   // Tentative tracks inside the image that took no blob were not seen.
   void count_misses(const std::vector<char>& track_done, const std::vector<char>& in_view);
+  // Adaptive process noise on: a fast confirmed track in view that took no blob although it was
+  // updated a moment ago takes the one blob left in its manoeuvre gate (σ² ×
+  // process_noise_max_scale), if no other such track claims it (docs/estimator.md, "Manoeuvres").
+  void recover_manoeuvres(Entry& entry, const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used,
+                          std::vector<char>& track_done, const std::vector<char>& in_view);
   std::uint64_t tracks_digest() const;
   Gating gate(const CameraModel& camera, TimeNs stamp, const std::vector<Eigen::Vector2d>& pixels,
               const std::vector<char>& used) const;
@@ -674,29 +700,20 @@ bool Tracker::Impl::reassociate(const Entry& entry, const std::vector<Eigen::Vec
                                 std::vector<char>& used) {
   const CameraModel& camera = *models[entry.camera];
   const TimeNs stamp = entry.frame.stamp_ns;
-  struct Chosen {
-    std::size_t track;
-    std::size_t blob;
-    Projected projected;
-  };
-  std::vector<Chosen> chosen;
+  std::vector<ProjectedPair> chosen;
   chosen.reserve(entry.associations.size());
   for (const auto& [id, blob] : entry.associations) {
     // Tracks stay in id order: created with increasing ids, removed in place.
     const auto found = std::lower_bound(core.tracks.begin(), core.tracks.end(), id,
                                         [](const Track& track, std::int64_t key) { return track.id < key; });
     if (found == core.tracks.end() || found->id != id || blob >= pixels.size() || used[blob]) return false;
-    Projected full;
-    full.state = predicted(found->state, stamp, found->sigma2(options.process_noise));
-    if (camera.T_cam_world().apply(full.state.position()).z() < options.init.min_depth_m) return false;
-    const auto projection = project_point(full.state, camera, options.measurement_noise_px);
-    if (!projection) return false;
-    full.projection = *projection;
-    if (!inside_gate(mahalanobis2(full.projection, pixels[blob]), options.gate_chi2)) return false;
-    chosen.push_back({static_cast<std::size_t>(found - core.tracks.begin()), blob, std::move(full)});
+    auto full = project_prediction(found->state, stamp, found->sigma2(options.process_noise), camera,
+                                   options.init.min_depth_m, options.measurement_noise_px);
+    if (!full || !inside_gate(mahalanobis2(full->projection, pixels[blob]), options.gate_chi2)) return false;
+    chosen.push_back({static_cast<std::size_t>(found - core.tracks.begin()), blob, std::move(*full)});
   }
   std::vector<char> track_done(core.tracks.size(), 0);
-  for (const Chosen& pair : chosen) {
+  for (const ProjectedPair& pair : chosen) {
     commit_pair(pair.track, pair.projected, pixels[pair.blob], pair.blob, entry.camera, stamp, used);
     track_done[pair.track] = 1;
   }
@@ -750,6 +767,7 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
       entry.associations.emplace_back(core.tracks[t].id, b);
     }
   }
+  recover_manoeuvres(entry, pixels, used, track_done, in_view);
   count_misses(track_done, in_view);
   // Kept for replays only when nothing competed: every gated pair was taken and no blob left over
   // came within a track's search radius (a circle well beyond the gate). A replay's small change
@@ -757,6 +775,51 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
   bool contested = entry.associations.size() != gated.size();
   for (std::size_t j = 0; j < pixels.size() && !contested; ++j) contested = gating.near[j] && !used[j];
   entry.associated = !contested;
+}
+
+void Tracker::Impl::recover_manoeuvres(Entry& entry, const std::vector<Eigen::Vector2d>& pixels,
+                                       std::vector<char>& used, std::vector<char>& track_done,
+                                       const std::vector<char>& in_view) {
+  const double max_scale = options.process_noise_max_scale;
+  if (max_scale <= 1.0 || !options.recover_manoeuvres) return;
+  // Within 10 ms of an update (the longest gap between frames of a rig's cameras at >= 100 Hz): a
+  // track lost for longer is coasting, and its wide gate would take any blob. Above 10 m/s: a swung
+  // or thrown object; the markers of a walking, running or dancing body stay below (the accuracy
+  // grid's walk lost 23 more identities when slower or merely manoeuvring tracks took part).
+  constexpr TimeNs kManoeuvreGapNs = 10'000'000;
+  constexpr double kManoeuvreSpeed = 10.0;
+  const CameraModel& camera = *models[entry.camera];
+  const TimeNs stamp = entry.frame.stamp_ns;
+  std::vector<ProjectedPair> claims;
+  std::vector<int> claimed(pixels.size(), 0);
+  for (std::size_t i = 0; i < core.tracks.size(); ++i) {
+    const Track& track = core.tracks[i];
+    if (!track.confirmed || track_done[i] || !in_view[i] || stamp - track.last_update_ns > kManoeuvreGapNs)
+      continue;
+    if (track.state.velocity().squaredNorm() < kManoeuvreSpeed * kManoeuvreSpeed) continue;
+    auto wide = project_prediction(track.state, stamp, options.process_noise * max_scale, camera,
+                                   options.init.min_depth_m, options.measurement_noise_px);
+    if (!wide) continue;
+    std::optional<std::size_t> only;
+    bool ambiguous = false;
+    for (std::size_t j = 0; j < pixels.size() && !ambiguous; ++j) {
+      if (used[j] || !inside_gate(mahalanobis2(wide->projection, pixels[j]), options.gate_chi2)) continue;
+      ambiguous = only.has_value();
+      only = j;
+    }
+    if (!only || ambiguous) continue;
+    ++claimed[*only];
+    claims.push_back({i, *only, std::move(*wide)});
+  }
+  for (const ProjectedPair& claim : claims) {
+    if (claimed[claim.blob] != 1) continue;
+    commit_pair(claim.track, claim.projected, pixels[claim.blob], claim.blob, entry.camera, stamp, used);
+    Track& track = core.tracks[claim.track];
+    track.q_scale = max_scale;  // a manoeuvre: the blob was beyond the track's own gate
+    track_done[claim.track] = 1;
+    entry.associations.emplace_back(track.id, claim.blob);
+    ++core.manoeuvres_recovered;
+  }
 }
 
 void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
@@ -1140,6 +1203,7 @@ const TrackerStats& Tracker::stats() const {
   s.tracks_confirmed = core.tracks_confirmed;
   s.tracks_deleted = core.tracks_deleted;
   s.tracks_merged = core.tracks_merged;
+  s.manoeuvres_recovered = core.manoeuvres_recovered;
   s.ghosts_deleted = core.ghosts_deleted;
   s.blobs_not_initiated = core.blobs_not_initiated;
   return s;

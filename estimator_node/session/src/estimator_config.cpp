@@ -349,6 +349,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
            "adaptive process noise: averaged d^2 above this raises a track's sigma^2");
   f.integer("process_noise_adapt_decay_ns", o.process_noise_adapt_decay_ns, 1, kHourNs,
             "adaptive process noise: time constant of the return to process_noise");
+  f.flag(
+      "recover_manoeuvres", o.recover_manoeuvres,
+      "adaptive process noise: a confirmed track that missed takes the one blob left in its manoeuvre gate");
   f.number("measurement_noise_px", o.measurement_noise_px, kPositive, "sigma of a centroid, px");
   f.number("gate_chi2", o.gate_chi2, kPositive, "verify region (seed 003 2.2.3.2)");
   f.section("init", "pairing of unmatched blobs into new points",
