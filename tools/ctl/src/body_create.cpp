@@ -122,9 +122,11 @@ BodyDefinition make_body(const BodyRequest& request, const std::vector<std::int6
   return body;
 }
 
-void append_body(const std::filesystem::path& bodies_file, const BodyDefinition& body) {
+namespace {
+// The bodies file's root (an empty map when the file does not exist yet); ConfigError when it is
+// not a bodies file or already defines `name`.
+YAML::Node bodies_root(const std::filesystem::path& bodies_file, const std::string& name) {
   const std::string file = bodies_file.string();
-  const BodiesFileLock lock(bodies_file);
   YAML::Node root;
   std::error_code error;
   if (std::filesystem::exists(bodies_file, error)) {
@@ -140,8 +142,21 @@ void append_body(const std::filesystem::path& bodies_file, const BodyDefinition&
   if (list.IsDefined() && !list.IsNull() && !list.IsSequence())
     throw ConfigError(file, "bodies", "not a list");
   for (const auto& entry : list)
-    if (entry["name"] && entry["name"].as<std::string>() == body.name)
-      throw ConfigError(file, "bodies", "a body named '" + body.name + "' is already defined");
+    if (entry["name"] && entry["name"].as<std::string>() == name)
+      throw ConfigError(file, "bodies", "a body named '" + name + "' is already defined");
+  return root;
+}
+}  // namespace
+
+void check_body_name(const std::filesystem::path& bodies_file, const std::string& name) {
+  (void)bodies_root(bodies_file, name);
+}
+
+void append_body(const std::filesystem::path& bodies_file, const BodyDefinition& body) {
+  const std::string file = bodies_file.string();
+  const BodiesFileLock lock(bodies_file);
+  YAML::Node root = bodies_root(bodies_file, body.name);
+  std::error_code error;
   YAML::Node entry(YAML::NodeType::Map);
   entry["name"] = body.name;
   for (const Eigen::Vector3d& marker : body.markers) {

@@ -377,6 +377,8 @@ std::optional<TrackPositions> averaged_tracks(const CtlOptions& options, int& fr
 }
 
 int create_body(const CtlOptions& options) {
+  // The name first: once the estimator tracks a body of these markers they are no loose tracks.
+  check_body_name(options.body.bodies_file, options.body.name);
   int frames = 0;
   const auto seen = averaged_tracks(options, frames);
   if (!seen) {

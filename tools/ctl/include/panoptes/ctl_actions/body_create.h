@@ -48,5 +48,8 @@ BodyDefinition make_body(const BodyRequest& request, const std::vector<std::int6
 // whole read-append-replace, so creations at the same moment each keep their body (a writer waits
 // up to 10 s). Throws ConfigError naming the file.
 void append_body(const std::filesystem::path& bodies_file, const BodyDefinition& body);
+// Before the tracks are collected: ConfigError (naming the file) when the bodies file is not one
+// or already defines `name` (append_body checks again under the file's lock).
+void check_body_name(const std::filesystem::path& bodies_file, const std::string& name);
 
 }  // namespace panoptes::ctl
