@@ -91,8 +91,10 @@ await runBrowserChecks({ width: 1400, height: 900 }, results, args.out, async (p
   results.applied_ms = Date.now();  // wall clock, as the shell's date +%s%N after the CLI returned
   const made = await page.evaluate(() => window.panoptes.createdBody || null);
   results.created = made;
+  // The same tracks, in any order: a track clicked again in a later round is picked last.
+  const sorted = (ids) => JSON.stringify([...ids].sort((a, b) => a - b));
   check(answer && answer.result === 'applied' && made && made.body === args.name &&
-    JSON.stringify(made.tracks) === JSON.stringify(picked),
+    sorted(made.tracks) === sorted(picked),
   `the console made body ${args.name}: ${answer ? answer.result : 'no answer'} (${answer ? answer.reason : ''})`);
   const seen = await waitFor(page, (name) => (window.panoptes.state ? window.panoptes.state.bodies : [])
     .some((b) => b.name === name), args.name, 8000);
