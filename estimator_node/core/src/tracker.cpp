@@ -40,6 +40,13 @@ void TrackerOptions::print(std::ostream& out) const {
 
 namespace {
 
+// A swung or thrown object: the markers of a walking, running or dancing body stay below (the
+// accuracy grid's walk lost 23 more identities when slower tracks took manoeuvre gates).
+constexpr double kFastSpeed = 10.0;
+// Longer than any gap between the frames of a rig's cameras at >= 100 Hz: a track not updated for
+// longer has lost its marker.
+constexpr TimeNs kFrameGapNs = 10'000'000;
+
 struct Track {
   std::int64_t id = 0;
   PointState state;
@@ -56,7 +63,10 @@ struct Track {
   double q_scale = 1.0;
   double nis_adapt = 0;
   TimeNs q_stamp_ns = 0;
-  int distinct_cameras = 0;                // cameras that ever updated it
+  int distinct_cameras = 0;  // cameras that ever updated it
+  // Confirmed and once faster than kFastSpeed, or rejoined to such a track's identity: a swung or
+  // thrown object, which may rejoin its identity after a gap (rejoin_fast_tracks).
+  bool fast = false;
   std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
   // Whether the last record made of it was published (determined): then it stays published up to
   // kKeepPublishedFactor × publish_max_sigma_m (hysteresis, issue 32 item 9). Set by tracks_at.
@@ -72,10 +82,14 @@ struct Track {
 // Everything a rewind restores.
 struct Core {
   std::vector<Track> tracks;
+  // Confirmed tracks deleted as implausible (a club's shaft marker that lost its way at the top
+  // of the swing), kept until delete_after_ns after their last update for rejoin_fast_track.
+  std::vector<Track> lost;
   Initiator initiator;
   TimeNs last_stamp_ns = std::numeric_limits<TimeNs>::min();
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
+  std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
                 ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
@@ -361,8 +375,11 @@ struct Tracker::Impl {
   void initiate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
                 const std::vector<char>& used);
   // A new track's id: an undone track's within kReuseIdGate of `position` at `stamp` (the nearest),
-  // else a new one.
-  std::int64_t id_for(const Eigen::Vector3d& position, TimeNs stamp);
+  // else a lost fast track's (rejoin_fast_track; sets `fast`), else a new one.
+  std::int64_t id_for(const Eigen::Vector3d& position, TimeNs stamp, bool& fast);
+  // rejoin_fast_tracks: the id of the one confirmed fast track that lost its marker within reach
+  // of `position`, clearly the nearest such; that track is removed. None when ambiguous.
+  std::optional<std::int64_t> rejoin_fast_track(const Eigen::Vector3d& position, TimeNs stamp);
   void prune(TimeNs now_ns);
   std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
   // Inserts `late` (in stamp order, each older than the newest applied frame, none older than the
@@ -674,6 +691,7 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   // confirmed; a ghost, starved of blobs in its own views, still reaches tentative_max_misses.
   if (!track.confirmed && track.misses > 0) --track.misses;
   note_update(track, camera_index, stamp);
+  if (track.confirmed && track.state.velocity().squaredNorm() >= kFastSpeed * kFastSpeed) track.fast = true;
   used[blob] = 1;
   ++core.blobs_associated;
   ++core.associated_per_camera[camera_index];
@@ -782,21 +800,17 @@ void Tracker::Impl::recover_manoeuvres(Entry& entry, const std::vector<Eigen::Ve
                                        const std::vector<char>& in_view) {
   const double max_scale = options.process_noise_max_scale;
   if (max_scale <= 1.0 || !options.recover_manoeuvres) return;
-  // Within 10 ms of an update (the longest gap between frames of a rig's cameras at >= 100 Hz): a
-  // track lost for longer is coasting, and its wide gate would take any blob. Above 10 m/s: a swung
-  // or thrown object; the markers of a walking, running or dancing body stay below (the accuracy
-  // grid's walk lost 23 more identities when slower or merely manoeuvring tracks took part).
-  constexpr TimeNs kManoeuvreGapNs = 10'000'000;
-  constexpr double kManoeuvreSpeed = 10.0;
+  // Within kFrameGapNs of an update: a track lost for longer is coasting, and its wide gate would
+  // take any blob. Above kFastSpeed: a swung or thrown object.
   const CameraModel& camera = *models[entry.camera];
   const TimeNs stamp = entry.frame.stamp_ns;
   std::vector<ProjectedPair> claims;
   std::vector<int> claimed(pixels.size(), 0);
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
-    if (!track.confirmed || track_done[i] || !in_view[i] || stamp - track.last_update_ns > kManoeuvreGapNs)
+    if (!track.confirmed || track_done[i] || !in_view[i] || stamp - track.last_update_ns > kFrameGapNs)
       continue;
-    if (track.state.velocity().squaredNorm() < kManoeuvreSpeed * kManoeuvreSpeed) continue;
+    if (track.state.velocity().squaredNorm() < kFastSpeed * kFastSpeed) continue;
     auto wide = project_prediction(track.state, stamp, options.process_noise * max_scale, camera,
                                    options.init.min_depth_m, options.measurement_noise_px);
     if (!wide) continue;
@@ -843,7 +857,7 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
   };
   for (auto& candidate : core.initiator.add_frame(camera_index, stamp, unmatched, occupied)) {
     Track track;
-    track.id = id_for(candidate.position, stamp);
+    track.id = id_for(candidate.position, stamp, track.fast);
     track.state.x.head<3>() = candidate.position;
     track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
     const double sp = options.init_position_sigma_m;
@@ -870,11 +884,14 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
 }
 
 void Tracker::Impl::prune(TimeNs now_ns) {
+  std::erase_if(core.lost,
+                [&](const Track& track) { return now_ns - track.last_update_ns > options.delete_after_ns; });
   std::erase_if(core.tracks, [&](const Track& track) {
     const bool implausible =
         track.nis_updates >= 4 &&
         track.nis_average > (track.confirmed ? options.confirmed_max_nis : options.tentative_max_nis);
     if (implausible || (!track.confirmed && track.misses >= options.tentative_max_misses)) {
+      if (track.confirmed) core.lost.push_back(track);
       ++core.ghosts_deleted;
       ++core.tracks_deleted;
       return true;
@@ -925,7 +942,7 @@ void Tracker::Impl::prune(TimeNs now_ns) {
   std::erase_if(core.tracks, [&](const Track&) { return remove[k++] != 0; });
 }
 
-std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp) {
+std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp, bool& fast) {
   // Where an undone track was when the replay creates a track again: its newest state moved back
   // by its velocity over at most the rewind horizon (0.5 s), a few millimetres for a walk.
   constexpr double kReuseIdGate = 0.015;
@@ -938,9 +955,53 @@ std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp
       nearest = it;
     }
   }
-  if (nearest == undone.end()) return next_track_id++;
+  if (nearest == undone.end()) {
+    const auto rejoined = rejoin_fast_track(position, stamp);
+    fast = rejoined.has_value();
+    return rejoined ? *rejoined : next_track_id++;
+  }
   const std::int64_t id = nearest->id;
   undone.erase(nearest);
+  return id;
+}
+
+std::optional<std::int64_t> Tracker::Impl::rejoin_fast_track(const Eigen::Vector3d& position, TimeNs stamp) {
+  if (!options.rejoin_fast_tracks || options.process_noise_max_scale <= 1.0) return std::nullopt;
+  // A swung object that leaves every view (a club head above the cameras at the top of the swing)
+  // comes back where its path turned, not where constant velocity puts it. Candidates: every
+  // confirmed track that lost its marker, fast or not (a slower shaft marker lost beside the head
+  // must not hand the head's id to the shaft), and the fast ones deleted as implausible. The nearest
+  // must be fast and within its reach (the distance it could have covered at its last speed, plus a
+  // margin), every other at least twice as far and kClearMargin beyond.
+  constexpr double kReachMargin = 0.05, kClearMargin = 0.05;
+  const Track* best = nullptr;
+  double best_d = std::numeric_limits<double>::infinity(), second_d = best_d;
+  const auto consider = [&](const Track& track) {
+    const TimeNs gap = stamp - track.last_update_ns;
+    if (!track.confirmed || gap <= kFrameGapNs || gap > options.delete_after_ns) return;
+    const double d = (position - track.state.position()).norm();
+    if (d < best_d) {
+      second_d = best_d;
+      best_d = d;
+      best = &track;
+    } else {
+      second_d = std::min(second_d, d);
+    }
+  };
+  for (const Track& track : core.tracks) consider(track);
+  for (const Track& track : core.lost) consider(track);
+  if (best == nullptr || !best->fast || second_d < 2.0 * best_d + kClearMargin) return std::nullopt;
+  const double reach =
+      std::max(best->state.velocity().norm(), kFastSpeed) * ns_to_seconds(stamp - best->last_update_ns) +
+      kReachMargin;
+  if (best_d > reach) return std::nullopt;
+  const std::int64_t id = best->id;
+  const auto same = [id](const Track& track) { return track.id == id; };
+  if (std::erase_if(core.lost, same) == 0) {
+    std::erase_if(core.tracks, same);
+    ++core.tracks_deleted;
+  }
+  ++core.fast_tracks_rejoined;
   return id;
 }
 
@@ -1204,6 +1265,7 @@ const TrackerStats& Tracker::stats() const {
   s.tracks_deleted = core.tracks_deleted;
   s.tracks_merged = core.tracks_merged;
   s.manoeuvres_recovered = core.manoeuvres_recovered;
+  s.fast_tracks_rejoined = core.fast_tracks_rejoined;
   s.ghosts_deleted = core.ghosts_deleted;
   s.blobs_not_initiated = core.blobs_not_initiated;
   return s;

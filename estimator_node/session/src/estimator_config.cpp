@@ -352,6 +352,8 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.flag(
       "recover_manoeuvres", o.recover_manoeuvres,
       "adaptive process noise: a confirmed track that missed takes the one blob left in its manoeuvre gate");
+  f.flag("rejoin_fast_tracks", o.rejoin_fast_tracks,
+         "adaptive process noise: a new track takes the id of the one fast track lost nearby moments ago");
   f.number("measurement_noise_px", o.measurement_noise_px, kPositive, "sigma of a centroid, px");
   f.number("gate_chi2", o.gate_chi2, kPositive, "verify region (seed 003 2.2.3.2)");
   f.section("init", "pairing of unmatched blobs into new points",

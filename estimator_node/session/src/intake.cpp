@@ -90,7 +90,11 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
       std::to_string(s.frames_unknown_camera) + " from uncalibrated cameras, " + std::to_string(rejected) +
       " rejected, " + std::to_string(bad_lines) + " malformed lines); tracks created " +
       std::to_string(s.tracks_created) + ", confirmed " + std::to_string(s.tracks_confirmed) +
-      ", ghosts removed " + std::to_string(s.ghosts_deleted));
+      ", ghosts removed " + std::to_string(s.ghosts_deleted) +
+      (s.manoeuvres_recovered + s.fast_tracks_rejoined > 0
+           ? "; fast tracks: manoeuvres recovered " + std::to_string(s.manoeuvres_recovered) + ", rejoined " +
+                 std::to_string(s.fast_tracks_rejoined)
+           : std::string()));
   for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops, other_cameras).lines()) log(line);
   if (tracker_.body_count() > 0) {
     const auto& b = tracker_.body_stats();

@@ -25,12 +25,12 @@
 namespace panoptes::estimator {
 
 struct InitiatorOptions {
-  TimeNs window_ns = 30'000'000;  // other cameras' tracklets this recent may pair
-  double link_radius_px = 30.0;   // a blob continues its camera's tracklet within this (fast markers: 120; 25
-                                  // m/s at 3 m, 110 Hz: 80 px)
-  double epipolar_px = 2.0;       // distance to the epipolar line, beyond time alignment
-  double reprojection_px = 3.0;   // every supporting view must reproject this well
-  double max_image_speed_px_s = 800;       // allowance for a partner without a pixel velocity yet ...
+  TimeNs window_ns = 30'000'000;      // other cameras' tracklets this recent may pair
+  double link_radius_px = 120.0;      // a blob continues its camera's tracklet within this (25 m/s at 3 m,
+                                      // 110 Hz: 80 px; docs/estimator.md "Adaptive process noise")
+  double epipolar_px = 2.0;           // distance to the epipolar line, beyond time alignment
+  double reprojection_px = 3.0;       // every supporting view must reproject this well
+  double max_image_speed_px_s = 800;  // allowance for a partner without a pixel velocity yet ...
   TimeNs unaligned_max_dt_ns = 3'000'000;  // ... which pairs only this close in time
   double min_depth_m = 0.05;               // points closer to a camera are rejected
 };

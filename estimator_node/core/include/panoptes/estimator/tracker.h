@@ -29,30 +29,34 @@ struct TrackerOptions {
   // Adaptive process noise (issue 35 item 2, docs/estimator.md "Adaptive process noise"): each
   // track scales process_noise by its own factor in [1, max_scale], raised by its normalised
   // innovations (d² above nis_target, averaged) and decaying back to 1 with time constant
-  // adapt_decay_ns. max_scale 1: off (one fixed σ² for every track), the default. With 40,
-  // init.link_radius_px 120, init_velocity_relative_sigma 0.3, confirmed_max_nis 16 and
-  // recover_manoeuvres ("the fast-motion settings", docs/estimator.md "Manoeuvres") a swung club or a
-  // thrown ball keeps its identity on most of the accuracy grid; not yet the default (a wrist pair
-  // of test_label_occlusion's seed 3 swapped with them).
-  double process_noise_max_scale = 1.0;
-  double process_noise_nis_target = 5.0;
+  // adapt_decay_ns. max_scale 1: off (one fixed σ² for every track). With init.link_radius_px 120,
+  // init_velocity_relative_sigma 0.3, confirmed_max_nis 16, recover_manoeuvres and
+  // rejoin_fast_tracks a swung club or a thrown ball keeps its identity (docs/estimator.md
+  // "Manoeuvres"); the default since stop 55.
+  double process_noise_max_scale = 40.0;
+  double process_noise_nis_target = 6.0;
   TimeNs process_noise_adapt_decay_ns = 30'000'000;
   // With adaptive process noise: a confirmed track faster than 10 m/s that took no blob in a frame
   // that sees it, updated within 10 ms, takes the one blob left in its gate widened to the largest
   // σ², unless another such track claims it too (docs/estimator.md, "Manoeuvres").
   bool recover_manoeuvres = true;
+  // With adaptive process noise: a new track takes the id of a confirmed fast track (once faster
+  // than 10 m/s) that lost its marker 10 ms to delete_after_ns ago, when that track is within reach
+  // (its speed x the gap) and clearly the nearest of every confirmed track that lost its marker: a
+  // club head that left every view at the top of the swing (docs/estimator.md, "Manoeuvres").
+  bool rejoin_fast_tracks = true;
   double measurement_noise_px = 0.5;  // σ of a centroid, px (seed 003 A.30)
   double gate_chi2 = 18.42;           // χ²₂ at p = 0.9999: the verify region (seed 003 §2.2.3.2)
   InitiatorOptions init;              // pairing of unmatched blobs into new points
   double init_position_sigma_m = 0.01;
   double init_velocity_sigma_mps = 2.0;           // velocity unknown at initiation
   double init_measured_velocity_sigma_mps = 0.5;  // velocity from the tracklets' pixel velocities ...
-  double init_velocity_relative_sigma = 0.0;      // ... at least this fraction of its magnitude (0: off)
+  double init_velocity_relative_sigma = 0.3;      // ... at least this fraction of its magnitude (0: off)
   int confirm_cameras = 3;                        // distinct cameras that confirm a track ...
   int confirm_updates = 12;                       // ... or this many updates from at least two cameras
   int tentative_max_misses = 4;                   // a tentative track absent where it should be seen: ghost
   double tentative_max_nis = 4.0;                 // moving average of d² above this: fed by clutter, deleted
-  double confirmed_max_nis = 8.0;                 // 16 with the fast-motion settings ("Manoeuvres")
+  double confirmed_max_nis = 16.0;                // through a manoeuvre the average passes 8 ("Manoeuvres")
   TimeNs coast_after_ns = 50'000'000;             // no update for this long: coasting
   TimeNs delete_after_ns = 300'000'000;
   TimeNs tentative_delete_after_ns = 100'000'000;
@@ -92,6 +96,7 @@ struct TrackerStats {
   std::uint64_t tracks_deleted = 0;
   std::uint64_t tracks_merged = 0;
   std::uint64_t manoeuvres_recovered = 0;  // blobs a fast track took in its manoeuvre gate
+  std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id
   std::uint64_t ghosts_deleted = 0;        // tentative tracks that cameras did not see
   std::uint64_t blobs_not_initiated = 0;   // unmatched blobs beyond max_unmatched_per_frame
 };
