@@ -377,8 +377,8 @@ struct Tracker::Impl {
   // A new track's id: an undone track's within kReuseIdGate of `position` at `stamp` (the nearest),
   // else a lost fast track's (rejoin_fast_track; sets `fast`), else a new one.
   std::int64_t id_for(const Eigen::Vector3d& position, TimeNs stamp, bool& fast);
-  // rejoin_fast_tracks: the id of the one confirmed fast track that lost its marker within reach
-  // of `position`, clearly the nearest such; that track is removed. None when ambiguous.
+  // rejoin_fast_tracks: the id of the confirmed fast track that lost its marker within reach of
+  // `position`, clearly the nearest of all that lost theirs; that track is removed. None when ambiguous.
   std::optional<std::int64_t> rejoin_fast_track(const Eigen::Vector3d& position, TimeNs stamp);
   void prune(TimeNs now_ns);
   std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
@@ -970,7 +970,7 @@ std::optional<std::int64_t> Tracker::Impl::rejoin_fast_track(const Eigen::Vector
   // A swung object that leaves every view (a club head above the cameras at the top of the swing)
   // comes back where its path turned, not where constant velocity puts it. Candidates: every
   // confirmed track that lost its marker, fast or not (a slower shaft marker lost beside the head
-  // must not hand the head's id to the shaft), and the fast ones deleted as implausible. The nearest
+  // must not hand the head's id to the shaft), also those deleted as implausible. The nearest
   // must be fast and within its reach (the distance it could have covered at its last speed, plus a
   // margin), every other at least twice as far and kClearMargin beyond.
   constexpr double kReachMargin = 0.05, kClearMargin = 0.05;
