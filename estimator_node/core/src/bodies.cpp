@@ -20,6 +20,10 @@ double initial_angular_accel_sigma(const BodyTrackerOptions& o) {
   return o.noise.angular_jerk > 0 ? o.init_angular_accel_sigma : 0.0;
 }
 
+BodyMotionNoise scaled(const BodyMotionNoise& noise, double scale) {
+  return {noise.jerk * scale, noise.angular_accel * scale, noise.angular_jerk * scale};
+}
+
 }  // namespace
 
 struct BodySet::Shared {
@@ -37,6 +41,12 @@ struct BodySet::Body {
   TimeNs last_update_ns = 0;
   double nis_average = 0;
   int nis_updates = 0;
+  // Adaptive process noise (docs/bodies.md, "Speed"): `noise` × noise_scale, the scale driven by
+  // the correlation of successive innovations of the same marker in the same camera.
+  double noise_scale = 1.0;
+  double correlation_sum = 0, energy_sum = 0;    // moving averages of ν·ν_previous and |ν|²
+  std::vector<Eigen::Vector2d> last_innovation;  // by camera × marker, pixels
+  std::vector<TimeNs> last_innovation_ns;        // 0: none
   std::uint64_t updates = 0;
   std::vector<TimeNs> marker_last_seen;    // by marker
   std::vector<TimeNs> camera_last_update;  // by camera index
@@ -51,6 +61,10 @@ struct BodySet::Body {
     last_update_ns = stamp_ns;
     nis_average = 0;
     nis_updates = 0;
+    noise_scale = 1.0;
+    correlation_sum = energy_sum = 0;
+    last_innovation.clear();
+    last_innovation_ns.clear();
     history.clear();
   }
 
@@ -61,6 +75,37 @@ struct BodySet::Body {
     std::size_t index = 0;
     while (index + 1 < history.size() && history[index + 1].filtered.stamp_ns <= at) ++index;
     return smoothed_state(history, index);
+  }
+
+  // A filter whose gain suits the body has white innovations; one that lags behind an acceleration
+  // sees the same marker displaced the same way frame after frame. The scale of the process noise
+  // rises while successive innovations of a marker in a camera are correlated above
+  // process_noise_adapt_correlation and falls (to 1 at least) while they are below, so a slow body
+  // keeps the memory of the low noise and a fast one the responsiveness of a high one. The
+  // correlation is a ratio of moving averages, independent of how well measurement_noise_px
+  // matches the centroids' noise (an NIS target is not: docs/bodies.md, "Speed").
+  void adapt_process_noise(std::size_t slot, const Eigen::Vector2d& innovation, TimeNs stamp_ns,
+                           const BodyTrackerOptions& o) {
+    if (o.process_noise_max_scale <= 1.0) return;
+    if (last_innovation.size() <= slot) {
+      last_innovation.resize(slot + 1, Eigen::Vector2d::Zero());
+      last_innovation_ns.resize(slot + 1, 0);
+    }
+    // Successive: the same camera's previous frame (any camera faster than 20 Hz).
+    constexpr TimeNs kSuccessiveNs = 50'000'000;
+    const TimeNs previous_ns = last_innovation_ns[slot];
+    if (previous_ns != 0 && stamp_ns > previous_ns && stamp_ns - previous_ns < kSuccessiveNs) {
+      const Eigen::Vector2d& previous = last_innovation[slot];
+      const double w = o.process_noise_adapt_weight;
+      correlation_sum = (1 - w) * correlation_sum + w * innovation.dot(previous);
+      energy_sum = (1 - w) * energy_sum + w * 0.5 * (innovation.squaredNorm() + previous.squaredNorm());
+      const double correlation = energy_sum > 0 ? correlation_sum / energy_sum : 0.0;
+      noise_scale = std::clamp(noise_scale * std::exp(o.process_noise_adapt_gain *
+                                                      (correlation - o.process_noise_adapt_correlation)),
+                               1.0, o.process_noise_max_scale);
+    }
+    last_innovation[slot] = innovation;
+    last_innovation_ns[slot] = std::max(previous_ns, stamp_ns);
   }
 
   // Keeps the step of a camera frame for smoothing, and the steps back to the first one at least
@@ -149,7 +194,7 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
   std::vector<BodyFilterStep> steps(o.smoothing_ns > 0 ? bodies_.size() : 0);
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     if (!bodies_[b].tracked) continue;
-    predicted_states[b] = predicted(bodies_[b].state, stamp_ns, o.noise);
+    predicted_states[b] = predicted(bodies_[b].state, stamp_ns, scaled(o.noise, bodies_[b].noise_scale));
     if (!steps.empty()) {
       steps[b].predicted = predicted_states[b];
       steps[b].A = body_transition(bodies_[b].state, ns_to_seconds(stamp_ns - bodies_[b].state.stamp_ns));
@@ -188,6 +233,9 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
       Body& body = bodies_[b];
       body.nis_average = body.nis_updates == 0 ? d2 : 0.9 * body.nis_average + 0.1 * d2;
       ++body.nis_updates;
+      body.adapt_process_noise(
+          static_cast<std::size_t>(camera_index) * shared_->definitions[b].markers.size() + m,
+          pixels[blob] - projection->pixel, stamp_ns, o);
       update(state, *projection, pixels[blob], o.measurement_noise_px);
       body.marker_last_seen[m] = stamp_ns;
       taken[blob] = 1;
@@ -370,6 +418,22 @@ void BodySet::start_from_match(std::size_t b, const BodyMatch& match, const std:
     body.marker_last_seen[static_cast<std::size_t>(pair.second)] = stamp_ns;
 }
 
+// Whether the points near body b (`local`), which identify it with `own` markers, identify an
+// untracked body with more (at least 4): b was acquired on the other body's markers, which a
+// match of three markers of a small constellation can do while several bodies are being found.
+bool BodySet::sits_on_another_body(std::size_t b, std::size_t own,
+                                   const std::vector<MeasuredPoint>& local) const {
+  const auto& markers = shared_->definitions[b].markers;
+  if (own >= markers.size()) return false;
+  for (std::size_t other = 0; other < bodies_.size(); ++other) {
+    if (other == b || bodies_[other].tracked) continue;
+    const auto match =
+        identify_body(shared_->definitions[other].markers, local, shared_->options.identification);
+    if (match && match->pairs.size() >= 4 && match->pairs.size() > own) return true;
+  }
+  return false;
+}
+
 // Verification: a tracked body whose identification among nearby points disagrees with its filter
 // pose (a wrong acquisition, or markers swapped) is restarted from the identification.
 void BodySet::verify_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
@@ -382,6 +446,11 @@ void BodySet::verify_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& p
     for (int i : near_body[b]) local.push_back(measured[static_cast<std::size_t>(i)]);
     const auto& markers = shared_->definitions[b].markers;
     const auto match = identify_body(markers, local, o.identification);
+    if (sits_on_another_body(b, match ? match->pairs.size() : 0, local)) {
+      bodies_[b].tracked = false;  // a wrong acquisition: acquisition finds both again
+      ++stats_.lost;
+      continue;
+    }
     if (!match || match->pairs.size() < std::min<std::size_t>(4, markers.size())) continue;
     const RigidTransform pose = predicted(bodies_[b].state, stamp_ns, o.noise).pose();
     if ((match->T_world_body.t - pose.t).norm() > o.verify_position_m ||
@@ -413,6 +482,12 @@ void BodySet::acquire_untracked(TimeNs stamp_ns, const std::vector<TrackedPoint>
       if (!pending[b]) continue;
       auto match = identify_body(shared_->definitions[b].markers, free_points, o.identification);
       if (!match) continue;
+      // Fewer than four markers of a larger constellation: three points of other bodies can form
+      // the triangle within tolerance while several bodies are being found (docs/bodies.md,
+      // "The grid"), so such a match must fit twice as well.
+      if (match->pairs.size() < std::min<std::size_t>(4, shared_->definitions[b].markers.size()) &&
+          match->rms_m > 0.5 * o.identification.max_rms_m)
+        continue;
       if (!best || match->pairs.size() > best->pairs.size() ||
           (match->pairs.size() == best->pairs.size() && match->rms_m < best->rms_m)) {
         best = std::move(match);

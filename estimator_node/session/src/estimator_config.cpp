@@ -292,6 +292,14 @@ void visit_bodies(Fields& f, estimator::BodyTrackerOptions& o) {
   f.number("verify_angle_rad", o.verify_angle_rad, kPositive, "... or in angle, rad");
   f.integer("lost_after_ns", o.lost_after_ns, 0, kHourNs, "no marker update for this long: lost");
   f.number("max_nis", o.max_nis, kPositive, "moving average of a marker's d^2 above this: lost");
+  f.number("process_noise_max_scale", o.process_noise_max_scale, between(1.0, 1e6),
+           "adaptive process noise: a body's noise is scaled by at most this (1: off)");
+  f.number("process_noise_adapt_gain", o.process_noise_adapt_gain, kPositive,
+           "adaptive process noise: the scale changes by exp(gain x innovation correlation) per update");
+  f.number("process_noise_adapt_weight", o.process_noise_adapt_weight, between(1e-6, 1.0),
+           "adaptive process noise: weight of an update in the innovation correlation's averages");
+  f.number("process_noise_adapt_correlation", o.process_noise_adapt_correlation, between(-1.0, 1.0),
+           "adaptive process noise: innovation correlation above this raises the scale, below lowers it");
   f.number("init_position_sigma_m", o.init_position_sigma_m, kPositive,
            "initial 1-sigma of an acquired body, m");
   f.number("init_velocity_sigma_mps", o.init_velocity_sigma_mps, kPositive, "m/s");

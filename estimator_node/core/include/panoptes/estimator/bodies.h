@@ -36,6 +36,16 @@ struct BodyTrackerOptions {
   double verify_angle_rad = 0.0873;          // (5°)
   TimeNs lost_after_ns = 250'000'000;        // no marker update for this long: lost
   double max_nis = 6.0;                      // moving average of a marker's d²: above it, lost
+  // Adaptive process noise (docs/bodies.md, "Speed"): each body scales `noise` by its own factor
+  // in [1, process_noise_max_scale], multiplied by exp(process_noise_adapt_gain × (c − c₀)) at
+  // every marker update, c the correlation of successive innovations of a marker in a camera
+  // (moving averages with weight process_noise_adapt_weight per update) and c₀
+  // process_noise_adapt_correlation: up while the filter lags, down while its innovations are
+  // (nearly) white. max_scale 1: off (the fixed `noise`).
+  double process_noise_max_scale = 100.0;
+  double process_noise_adapt_gain = 0.1;
+  double process_noise_adapt_weight = 0.05;
+  double process_noise_adapt_correlation = 0.05;
   double init_position_sigma_m = 0.002;
   double init_velocity_sigma_mps = 0.2;
   double init_accel_sigma_mps2 = 5.0;
@@ -108,6 +118,7 @@ class BodySet {
   // one of its markers are marked in `claimed`.
   void claim_points_of_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
                                std::vector<char>& claimed, std::vector<std::vector<int>>& near_body) const;
+  bool sits_on_another_body(std::size_t b, std::size_t own, const std::vector<MeasuredPoint>& local) const;
   void verify_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
                       const std::vector<MeasuredPoint>& measured,
                       const std::vector<std::vector<int>>& near_body);
