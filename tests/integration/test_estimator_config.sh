@@ -20,6 +20,12 @@ expect_exit 0 "--print-config" -- "$bin/estimator_node" --print-config
 cp "$work/last.out" "$work/c.yaml"
 grep -q '^tracker:' "$work/c.yaml" && grep -q '^  process_noise: 50' "$work/c.yaml" && grep -q 'led_marker:' "$work/c.yaml" &&
   pass "the printed configuration has the tracker, bodies and LED-marker settings" || fail "printed configuration incomplete"
+# docs/estimator.md lists every key "as --print-config prints it": the block is the printed file.
+awk '/^Every key with its default and meaning/ { on = 1; next } on && /^```yaml$/ { inside = 1; next }
+  inside && /^```$/ { exit } inside { print }' "$source_dir/docs/estimator.md" >"$work/doc_config.yaml"
+diff -u "$work/doc_config.yaml" "$work/c.yaml" >"$work/doc_config.diff" &&
+  pass "docs/estimator.md's configuration block is what --print-config prints" ||
+  fail "docs/estimator.md's configuration block differs from --print-config (regenerate it): $(head -c 600 "$work/doc_config.diff")"
 offline default && pass "default offline run" || fail "default offline run: exit $?"
 offline config --config "$work/c.yaml" && pass "offline run with the printed configuration" || fail "run with --config: exit $?"
 [ -s "$work/default.tracks.jsonl" ] && [ -s "$work/default.poses.jsonl" ] && pass "the runs wrote tracks and poses" ||
