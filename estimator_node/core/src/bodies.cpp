@@ -418,22 +418,6 @@ void BodySet::start_from_match(std::size_t b, const BodyMatch& match, const std:
     body.marker_last_seen[static_cast<std::size_t>(pair.second)] = stamp_ns;
 }
 
-// Whether the points near body b (`local`), which identify it with `own` markers, identify an
-// untracked body with more (at least 4): b was acquired on the other body's markers, which a
-// match of three markers of a small constellation can do while several bodies are being found.
-bool BodySet::sits_on_another_body(std::size_t b, std::size_t own,
-                                   const std::vector<MeasuredPoint>& local) const {
-  const auto& markers = shared_->definitions[b].markers;
-  if (own >= markers.size()) return false;
-  for (std::size_t other = 0; other < bodies_.size(); ++other) {
-    if (other == b || bodies_[other].tracked) continue;
-    const auto match =
-        identify_body(shared_->definitions[other].markers, local, shared_->options.identification);
-    if (match && match->pairs.size() >= 4 && match->pairs.size() > own) return true;
-  }
-  return false;
-}
-
 // Verification: a tracked body whose identification among nearby points disagrees with its filter
 // pose (a wrong acquisition, or markers swapped) is restarted from the identification.
 void BodySet::verify_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
@@ -446,11 +430,6 @@ void BodySet::verify_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& p
     for (int i : near_body[b]) local.push_back(measured[static_cast<std::size_t>(i)]);
     const auto& markers = shared_->definitions[b].markers;
     const auto match = identify_body(markers, local, o.identification);
-    if (sits_on_another_body(b, match ? match->pairs.size() : 0, local)) {
-      bodies_[b].tracked = false;  // a wrong acquisition: acquisition finds both again
-      ++stats_.lost;
-      continue;
-    }
     if (!match || match->pairs.size() < std::min<std::size_t>(4, markers.size())) continue;
     const RigidTransform pose = predicted(bodies_[b].state, stamp_ns, o.noise).pose();
     if ((match->T_world_body.t - pose.t).norm() > o.verify_position_m ||

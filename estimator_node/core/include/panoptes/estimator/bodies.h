@@ -118,7 +118,6 @@ class BodySet {
   // one of its markers are marked in `claimed`.
   void claim_points_of_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
                                std::vector<char>& claimed, std::vector<std::vector<int>>& near_body) const;
-  bool sits_on_another_body(std::size_t b, std::size_t own, const std::vector<MeasuredPoint>& local) const;
   void verify_tracked(TimeNs stamp_ns, const std::vector<TrackedPoint>& points,
                       const std::vector<MeasuredPoint>& measured,
                       const std::vector<std::vector<int>>& near_body);
