@@ -28,6 +28,83 @@ inline double angle_deg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b
   return quaternion_to_rotation_vector(a.conjugate() * b).norm() * 180.0 / M_PI;
 }
 
+// A body of a generated scene: its markers (body frame, YAML) and its motion, a Lissajous path and
+// an oscillation about three axes whose frequencies are those at a peak rate of 2 rad/s.
+struct SceneBody {
+  const char* name;
+  const char* markers;
+  const char* center;
+  double amplitude[3];      // path, m
+  double frequency[3];      // path, Hz at 2 rad/s
+  const char* phase;        // path
+  double rot_amplitude[3];  // rad
+  double rot_frequency[3];  // Hz at 2 rad/s
+  const char* rot_phase;
+  const char* initial;  // quaternion [x, y, z, w]
+};
+
+// Issue 16's three small bodies (4-5 markers, 8-12 cm across; ~20 m/s² and ~2 rad/s).
+inline const std::vector<SceneBody>& small_fast_bodies() {
+  static const std::vector<SceneBody> bodies = {
+      {"small",
+       "[[0.035, 0.033, 0.001], [-0.015, 0.03, 0.002], [0.0, -0.035, 0.01], [-0.021, -0.029, -0.011]]",
+       "[0.35, 0.1, 1.0]",
+       {0.21, 0.19, 0.1},
+       {1.3, 1.1, 1.5},
+       "[0, 1, 2]",
+       {0.3, 0.25, 0.35},
+       {0.6, 0.8, 0.5},
+       "[0, 0.5, 1]",
+       "[0, 0, 0, 1]"},
+      {"five",
+       "[[0.06, -0.004, -0.002], [-0.005, 0.031, 0.005], [-0.022, 0.033, -0.023], [0.012, -0.006, -0.007], "
+       "[-0.044, -0.056, 0.028]]",
+       "[-0.35, 0.25, 1.1]",
+       {0.18, 0.21, 0.1},
+       {1.2, 1.35, 1.45},
+       "[2, 0.3, 1]",
+       {0.33, 0.28, 0.23},
+       {0.7, 0.5, 0.8},
+       "[1, 2, 0]",
+       "[0.0, 0.0, 0.7071068, 0.7071068]"},
+      {"ten",
+       "[[-0.023, -0.032, -0.032], [-0.002, 0.037, 0.019], [-0.027, -0.029, 0.008], [0.053, 0.023, 0.007]]",
+       "[0.0, -0.4, 0.95]",
+       {0.23, 0.17, 0.09},
+       {1.15, 1.4, 1.6},
+       "[0.7, 2.2, 0.1]",
+       {0.24, 0.33, 0.28},
+       {0.8, 0.6, 0.55},
+       "[0.4, 1.1, 2.5]",
+       "[0, 0, 0, 1]"},
+  };
+  return bodies;
+}
+
+inline std::string yaml_triple(const double v[3], double scale) {
+  char text[96];
+  std::snprintf(text, sizeof text, "[%.6g, %.6g, %.6g]", v[0] * scale, v[1] * scale, v[2] * scale);
+  return text;
+}
+
+// A scene's `bodies:` section (4 mm markers, hidden beyond 110° from their normal). `speed_radps`
+// is the peak angular rate: rotation frequencies scale with it and path frequencies with its square
+// root (the peak linear acceleration with it), from the bodies' figures at 2 rad/s.
+inline std::string bodies_yaml(const std::vector<SceneBody>& bodies, double speed_radps) {
+  std::string yaml = "bodies:\n";
+  const double rot_scale = speed_radps / 2.0, path_scale = std::sqrt(speed_radps / 2.0);
+  for (const SceneBody& body : bodies) {
+    yaml += std::string("  - name: ") + body.name + "\n    markers: " + body.markers +
+            "\n    marker_radius: 0.004\n    path: {type: lissajous, center: " + body.center +
+            ", amplitude: " + yaml_triple(body.amplitude, 1.0) +
+            ", frequency: " + yaml_triple(body.frequency, path_scale) + ", phase: " + body.phase +
+            "}\n    rotation: {type: oscillate, amplitude: " + yaml_triple(body.rot_amplitude, 1.0) +
+            ", frequency: " + yaml_triple(body.rot_frequency, rot_scale) + ", phase: " + body.rot_phase +
+            ", initial: " + body.initial + "}\n    occlusion: {facing_angle: 110}\n";
+  }
+  return yaml;
+}
+
 struct BodyErrors {
   double sum_p2 = 0, sum_a2 = 0, max_p = 0;
   std::size_t samples = 0, published = 0, correct = 0, wrong = 0;

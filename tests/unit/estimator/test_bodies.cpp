@@ -462,28 +462,7 @@ cameras:
             ", target: [0, 0, 1.0]}, rate: " + (synchronous ? std::string("100") : std::to_string(rates[c])) +
             ", phase: " + (synchronous ? "0.0" : phases[c]) + "}\n";
   }
-  yaml += R"(
-bodies:
-  - name: small
-    markers: [[0.035, 0.033, 0.001], [-0.015, 0.03, 0.002], [0.0, -0.035, 0.01], [-0.021, -0.029, -0.011]]
-    marker_radius: 0.004
-    path: {type: lissajous, center: [0.35, 0.1, 1.0], amplitude: [0.21, 0.19, 0.1], frequency: [1.3, 1.1, 1.5], phase: [0, 1, 2]}
-    rotation: {type: oscillate, amplitude: [0.3, 0.25, 0.35], frequency: [0.6, 0.8, 0.5], phase: [0, 0.5, 1]}
-    occlusion: {facing_angle: 110}
-  - name: five
-    markers: [[0.06, -0.004, -0.002], [-0.005, 0.031, 0.005], [-0.022, 0.033, -0.023], [0.012, -0.006, -0.007], [-0.044, -0.056, 0.028]]
-    marker_radius: 0.004
-    path: {type: lissajous, center: [-0.35, 0.25, 1.1], amplitude: [0.18, 0.21, 0.1], frequency: [1.2, 1.35, 1.45], phase: [2, 0.3, 1]}
-    rotation: {type: oscillate, amplitude: [0.33, 0.28, 0.23], frequency: [0.7, 0.5, 0.8], phase: [1, 2, 0], initial: [0.0, 0.0, 0.7071068, 0.7071068]}
-    occlusion: {facing_angle: 110}
-  - name: ten
-    markers: [[-0.023, -0.032, -0.032], [-0.002, 0.037, 0.019], [-0.027, -0.029, 0.008], [0.053, 0.023, 0.007]]
-    marker_radius: 0.004
-    path: {type: lissajous, center: [0.0, -0.4, 0.95], amplitude: [0.23, 0.17, 0.09], frequency: [1.15, 1.4, 1.6], phase: [0.7, 2.2, 0.1]}
-    rotation: {type: oscillate, amplitude: [0.24, 0.33, 0.28], frequency: [0.8, 0.6, 0.55], phase: [0.4, 1.1, 2.5]}
-    occlusion: {facing_angle: 110}
-)";
-  return yaml;
+  return yaml + bodies_yaml(small_fast_bodies(), 2.0);
 }
 
 TEST(BodyScenes, SmallFastBodiesFilterBeatsTheSynchronousSnapshotSolve) {

@@ -63,57 +63,24 @@ const std::vector<GridRig>& grid_rigs() {
   return rigs;
 }
 
-struct GridBody {
-  const char* name;
-  const char* markers;
-  const char* center;
-  double amplitude[3];      // path, m
-  double frequency[3];      // path, Hz at 2 rad/s
-  const char* phase;        // path
-  double rot_amplitude[3];  // rad
-  double rot_frequency[3];  // Hz at 2 rad/s
-  const char* initial;      // quaternion [x, y, z, w]
-};
-
 struct GridConstellations {
   const char* name;
-  std::vector<GridBody> bodies;
+  std::vector<SceneBody> bodies;
 };
+
+// Issue 16's three bodies with their oscillations in phase (as the grid was measured).
+std::vector<SceneBody> small_bodies_in_phase() {
+  std::vector<SceneBody> bodies = small_fast_bodies();
+  for (SceneBody& body : bodies) body.rot_phase = "[0, 0, 0]";
+  return bodies;
+}
 
 // "small": issue 16's three bodies, 8-12 cm; "large": a head (4 markers, 19 cm), a tool (5, 22 cm)
 // and a six-marker frame (25 cm). Each body moves on a Lissajous path and oscillates about three
 // axes; the frequencies are those at 2 rad/s and scale with the cell's speed.
 const std::vector<GridConstellations>& grid_constellations() {
   static const std::vector<GridConstellations> sets = {
-      {"small",
-       {{"small",
-         "[[0.035, 0.033, 0.001], [-0.015, 0.03, 0.002], [0.0, -0.035, 0.01], [-0.021, -0.029, -0.011]]",
-         "[0.35, 0.1, 1.0]",
-         {0.21, 0.19, 0.1},
-         {1.3, 1.1, 1.5},
-         "[0, 1, 2]",
-         {0.3, 0.25, 0.35},
-         {0.6, 0.8, 0.5},
-         "[0, 0, 0, 1]"},
-        {"five",
-         "[[0.06, -0.004, -0.002], [-0.005, 0.031, 0.005], [-0.022, 0.033, -0.023], [0.012, -0.006, -0.007], "
-         "[-0.044, -0.056, 0.028]]",
-         "[-0.35, 0.25, 1.1]",
-         {0.18, 0.21, 0.1},
-         {1.2, 1.35, 1.45},
-         "[2, 0.3, 1]",
-         {0.33, 0.28, 0.23},
-         {0.7, 0.5, 0.8},
-         "[0.0, 0.0, 0.7071068, 0.7071068]"},
-        {"ten",
-         "[[-0.023, -0.032, -0.032], [-0.002, 0.037, 0.019], [-0.027, -0.029, 0.008], [0.053, 0.023, 0.007]]",
-         "[0.0, -0.4, 0.95]",
-         {0.23, 0.17, 0.09},
-         {1.15, 1.4, 1.6},
-         "[0.7, 2.2, 0.1]",
-         {0.24, 0.33, 0.28},
-         {0.8, 0.6, 0.55},
-         "[0, 0, 0, 1]"}}},
+      {"small", small_bodies_in_phase()},
       {"large",
        {{"head",
          "[[0.0, 0.0, 0.0], [0.16, 0.0, 0.02], [0.05, 0.19, 0.0], [-0.07, 0.08, 0.10]]",
@@ -123,6 +90,7 @@ const std::vector<GridConstellations>& grid_constellations() {
          "[0, 1, 2]",
          {0.3, 0.3, 0.3},
          {0.65, 0.7, 0.55},
+         "[0, 0, 0]",
          "[0, 0, 0, 1]"},
         {"tool",
          "[[0.0, 0.0, 0.0], [0.22, 0.0, 0.0], [0.09, 0.12, 0.0], [-0.07, 0.15, 0.04], [0.15, -0.08, 0.09]]",
@@ -132,6 +100,7 @@ const std::vector<GridConstellations>& grid_constellations() {
          "[2, 0.3, 1]",
          {0.35, 0.25, 0.3},
          {0.6, 0.75, 0.6},
+         "[0, 0, 0]",
          "[0.0, 0.0, 0.7071068, 0.7071068]"},
         {"frame",
          "[[0.0, 0.0, 0.0], [0.25, 0.0, 0.0], [0.0, 0.18, 0.0], [0.21, 0.16, 0.03], [0.11, -0.05, 0.08], "
@@ -142,21 +111,15 @@ const std::vector<GridConstellations>& grid_constellations() {
          "[0.7, 2.2, 0.1]",
          {0.28, 0.32, 0.25},
          {0.75, 0.55, 0.7},
+         "[0, 0, 0]",
          "[0, 0, 0, 1]"}}},
   };
   return sets;
 }
 
-std::string triple(const double v[3], double scale) {
-  char text[96];
-  std::snprintf(text, sizeof text, "[%.6g, %.6g, %.6g]", v[0] * scale, v[1] * scale, v[2] * scale);
-  return text;
-}
-
-// A cell's scene: `speed_radps` is the bodies' peak angular rate; rotation frequencies scale
-// with it and path frequencies with its square root, so that the peak linear acceleration is
-// about 10 m/s² per rad/s (5, 20 and 40 m/s² at 0.5, 2 and 4 rad/s). `synchronous`: every
-// camera at 100 Hz with phase 0 (the snapshot's rig).
+// A cell's scene: `speed_radps` is the bodies' peak angular rate (bodies_yaml), the peak linear
+// acceleration about 10 m/s² per rad/s (5, 20 and 40 m/s² at 0.5, 2 and 4 rad/s). `synchronous`:
+// every camera at 100 Hz with phase 0 (the snapshot's rig).
 std::string grid_scene(const GridRig& rig, const GridConstellations& set, double speed_radps,
                        bool synchronous, double duration_s, int seed) {
   std::string yaml =
@@ -178,18 +141,7 @@ cameras:
             "}, rate: " + (synchronous ? std::string("100") : std::to_string(camera.rate)) +
             ", phase: " + (synchronous ? "0.0" : camera.phase) + "}\n";
   }
-  yaml += "bodies:\n";
-  const double rot_scale = speed_radps / 2.0, path_scale = std::sqrt(speed_radps / 2.0);
-  for (const GridBody& body : set.bodies) {
-    yaml += std::string("  - name: ") + body.name + "\n    markers: " + body.markers +
-            "\n    marker_radius: 0.004\n    path: {type: lissajous, center: " + body.center +
-            ", amplitude: " + triple(body.amplitude, 1.0) +
-            ", frequency: " + triple(body.frequency, path_scale) + ", phase: " + body.phase +
-            "}\n    rotation: {type: oscillate, amplitude: " + triple(body.rot_amplitude, 1.0) +
-            ", frequency: " + triple(body.rot_frequency, rot_scale) + ", initial: " + body.initial +
-            "}\n    occlusion: {facing_angle: 110}\n";
-  }
-  return yaml;
+  return yaml + bodies_yaml(set.bodies, speed_radps);
 }
 
 struct CellResult {
