@@ -22,6 +22,7 @@
 #include "panoptes/geometry.h"
 #include "panoptes/landmarks_file.h"
 #include "panoptes/simulator.h"
+#include "random.h"
 
 namespace panoptes {
 
@@ -188,8 +189,34 @@ void read_bump(const YamlReader& bump, SimCameraConfig& config) {
   config.bump.t = translation;
 }
 
+// A unit vector drawn from (scene seed, camera index): the direction of a drift whose axis is not
+// given (`drift` in `defaults` gives every camera its own).
+Eigen::Vector3d random_axis(std::uint64_t seed, std::size_t camera_index) {
+  sim::Rng random(sim::hash_key(seed, 0xD71F7ULL, camera_index));
+  const Eigen::Vector3d v(random.normal(), random.normal(), random.normal());
+  return v.norm() > 1e-9 ? Eigen::Vector3d(v.normalized()) : Eigen::Vector3d::UnitX();
+}
+
+// `drift: {rate: deg/min, axis: [x, y, z] (camera frame; absent: drawn per camera), translation:
+// [x, y, z] (mm/min, camera frame), from: s}`. The axis is left zero when absent (drawn later,
+// when the seed and the camera's index are known).
+void read_drift(const YamlReader& drift, SimCameraConfig& config) {
+  reject_unknown_keys(drift, {"rate", "axis", "translation", "from"});
+  const double rate = drift.get_double("rate");
+  if (!(rate >= 0.0) || !std::isfinite(rate)) drift.fail("rate", "must be a finite rate >= 0 deg/min");
+  const double from_s = drift.get_double("from", 0.0);
+  if (!(from_s >= 0.0) || !std::isfinite(from_s)) drift.fail("from", "must be a finite time >= 0 s");
+  const Eigen::Vector3d axis = read_vector3(drift, "axis", Eigen::Vector3d::Zero());
+  if (drift.has("axis") && !(axis.norm() > 0.0)) drift.fail("axis", "must not be zero");
+  config.drifting = true;
+  config.drift_from_ns = seconds_to_ns(from_s);
+  config.drift_axis = drift.has("axis") ? Eigen::Vector3d(axis.normalized()) : Eigen::Vector3d::Zero();
+  config.drift_rate_rad_s = rate * std::numbers::pi / 180.0 / 60.0;
+  config.drift_velocity_m_s = read_vector3(drift, "translation", Eigen::Vector3d::Zero()) * 1e-3 / 60.0;
+}
+
 SimCameraConfig read_camera(const YamlReader& camera, const std::optional<YamlReader>& defaults) {
-  reject_unknown_keys(camera, {"id", "rig", "bump", PANOPTES_SIM_CAMERA_KEYS});
+  reject_unknown_keys(camera, {"id", "rig", "bump", "drift", PANOPTES_SIM_CAMERA_KEYS});
   const CameraKeys keys(camera, defaults);
   SimCameraConfig config;
   CameraCalibration& calibration = config.calibration;
@@ -225,6 +252,11 @@ SimCameraConfig read_camera(const YamlReader& camera, const std::optional<YamlRe
                                 : read_pose(camera, on_rig ? std::nullopt : defaults);
   calibration.moving = on_rig;
   if (camera.has("bump")) read_bump(camera.child("bump"), config);
+  if (camera.has("drift")) {
+    read_drift(camera.child("drift"), config);
+  } else if (defaults && defaults->has("drift")) {
+    read_drift(defaults->child("drift"), config);
+  }
 
   config.rate_hz = keys.number("rate", config.rate_hz);
   if (!(config.rate_hz > 0.0)) keys.source("rate").fail("rate", "must be > 0 Hz");
@@ -572,13 +604,14 @@ void Scene::Impl::parse_cameras(const YamlReader& root) {
   std::optional<YamlReader> defaults;
   if (root.has("defaults")) {
     defaults.emplace(root.child("defaults"));
-    reject_unknown_keys(*defaults, {PANOPTES_SIM_CAMERA_KEYS});
+    reject_unknown_keys(*defaults, {"drift", PANOPTES_SIM_CAMERA_KEYS});
   }
   const std::vector<YamlReader> camera_readers = root.sequence("cameras");
   if (camera_readers.empty()) root.fail("cameras", "expected at least one camera");
   std::set<std::string> camera_ids;
   for (const YamlReader& camera : camera_readers) {
     SimCameraConfig config = read_camera(camera, defaults);
+    if (config.drifting && config.drift_axis.isZero()) config.drift_axis = random_axis(seed, cameras.size());
     if (!camera_ids.insert(config.calibration.id).second) {
       camera.fail("id", "duplicate camera id '" + config.calibration.id + "'");
     }
@@ -835,9 +868,15 @@ std::vector<BodyTruth> Scene::bodies_at(TimeNs scene_time_ns) const {
 
 RigidTransform Scene::camera_pose_at(std::size_t camera_index, TimeNs scene_time_ns) const {
   const SimCameraConfig& config = impl_->cameras.at(camera_index);
-  RigidTransform mount = config.bumped && scene_time_ns >= config.bump_at_ns
-                             ? *config.calibration.T_world_cam * config.bump
-                             : *config.calibration.T_world_cam;
+  RigidTransform mount = *config.calibration.T_world_cam;
+  if (config.drifting && scene_time_ns > config.drift_from_ns) {
+    const double t_s = ns_to_seconds(scene_time_ns - config.drift_from_ns);
+    mount =
+        mount * RigidTransform{
+                    Eigen::Quaterniond(Eigen::AngleAxisd(config.drift_rate_rad_s * t_s, config.drift_axis)),
+                    config.drift_velocity_m_s * t_s};
+  }
+  if (config.bumped && scene_time_ns >= config.bump_at_ns) mount = mount * config.bump;
   const auto& rig = impl_->camera_rigs.at(camera_index);
   if (!rig) return mount;
   const double t_s = ns_to_seconds(scene_time_ns);
@@ -849,6 +888,17 @@ void Scene::set_camera_bump(std::size_t camera_index, TimeNs at_ns, const RigidT
   config.bumped = true;
   config.bump_at_ns = at_ns;
   config.bump = bump;
+}
+
+void Scene::set_camera_drift(std::size_t camera_index, TimeNs from_ns, double degrees_per_minute,
+                             const Eigen::Vector3d& axis, const Eigen::Vector3d& millimetres_per_minute) {
+  SimCameraConfig& config = impl_->cameras.at(camera_index);
+  config.drifting = true;
+  config.drift_from_ns = from_ns;
+  config.drift_axis =
+      axis.norm() > 0.0 ? Eigen::Vector3d(axis.normalized()) : random_axis(impl_->seed, camera_index);
+  config.drift_rate_rad_s = degrees_per_minute * std::numbers::pi / 180.0 / 60.0;
+  config.drift_velocity_m_s = millimetres_per_minute * 1e-3 / 60.0;
 }
 
 std::map<std::string, std::vector<Eigen::Vector3d>> Scene::rig_markers() const {

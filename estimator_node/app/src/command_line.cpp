@@ -8,6 +8,7 @@
 
 #include "panoptes/cli.h"
 #include "panoptes/dds/security_options.h"
+#include "panoptes/landmarks_file.h"
 #include "panoptes/time.h"
 
 namespace panoptes::estimator_app {
@@ -17,6 +18,7 @@ namespace {
 // The settings flags, bound to a default configuration so --help shows the defaults.
 struct SettingsFlags {
   session::EstimatorConfig values;
+  std::string anchors_file;
   double rewind_horizon_ms = ns_to_seconds(values.tracker.rewind_horizon_ns) * 1e3;
   double smoothing_ms = ns_to_seconds(values.tracker.bodies.smoothing_ns) * 1e3;
   std::vector<std::pair<CLI::Option*, std::function<void(session::EstimatorConfig&)>>> options;
@@ -71,6 +73,17 @@ struct SettingsFlags {
                         "(docs/continuous_calibration.md)")
              ->check(CLI::Validator(session::check_continuous_calibration, "off|detect|correct")),
          [this](auto& c) { c.tracker.calibration.mode = values.tracker.calibration.mode; });
+    bind(app.add_option("--anchors", anchors_file,
+                        "correct: anchor markers, a landmarks YAML (docs/inside_out.md) of fixed markers at "
+                        "known positions that hold the world frame while the cameras' drift is followed "
+                        "(docs/continuous_calibration.md)")
+             ->check(CLI::ExistingFile),
+         [this](auto& c) {
+           c.tracker.calibration.anchors.clear();
+           for (const auto& group : load_landmarks(anchors_file))
+             c.tracker.calibration.anchors.insert(c.tracker.calibration.anchors.end(), group.points.begin(),
+                                                  group.points.end());
+         });
     bind(app.add_option("--confirm-cameras", tracker.confirm_cameras,
                         "distinct cameras that must see a new track before it is published")
              ->check(CLI::Range(2, 64)),

@@ -196,6 +196,13 @@ class LiveEstimator {
   std::unique_ptr<dds::Writer<msg::BodyDescriptions>> descriptions_writer_;
   std::unique_ptr<dds::Writer<msg::SystemCalibration>> calibration_writer_;
   SystemCalibration in_use_;
+  // Drift refinements (continuous calibration) are written and published together, at most once
+  // per kDriftVersionInterval: the cameras refined since the last version, and the worst residual.
+  static constexpr TimeNs kDriftVersionIntervalNs = 60 * kNsPerSecond;
+  std::set<std::string> drift_pending_;
+  double drift_pending_rms_px_ = 0.0;
+  TimeNs drift_written_ns_ = 0;
+  void write_version(const std::string& reason, const std::vector<std::string>& cameras, double rms_px);
   std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;     // with options_.chains
   std::unique_ptr<dds::Writer<msg::MarkerLabels>> labels_writer_;  // with options_.labels
   std::uint64_t labels_generation_ = 0;                            // the map last written
@@ -336,32 +343,57 @@ bool LiveEstimator::near_instant(TimeNs work_ns) const {
 
 void LiveEstimator::apply_corrections() {
   const auto corrections = tracker_.take_calibration_corrections();
-  if (corrections.empty()) return;
+  const TimeNs now = wall_now_ns();
+  bool bumped = false;
   for (const auto& c : corrections) {
+    const bool drift = c.kind == estimator::CalibrationCorrection::Kind::kDrift;
     char text[240];
-    std::snprintf(text, sizeof text,
-                  "calibration %s: pose corrected from the tracks the other cameras see: turned %.3f deg, "
-                  "moved %.1f mm (%zu blobs on tracks, %.2f px RMS)",
-                  c.camera_id.c_str(), c.result.rotation_change_deg, c.result.translation_change_mm,
-                  c.result.inliers, c.result.rms_px);
+    std::snprintf(
+        text, sizeof text,
+        "calibration %s: %s: turned %.3f deg, moved %.1f mm (%zu blobs on tracks, %.2f px RMS)",
+        c.camera_id.c_str(),
+        drift ? "drift followed from the tracks" : "pose corrected from the tracks the other cameras see",
+        c.result.rotation_change_deg, c.result.translation_change_mm, c.result.inliers, c.result.rms_px);
     log(text);
     for (auto& camera : in_use_.cameras)
       if (camera.id == c.camera_id) camera.T_world_cam = c.after;
-    if (options_.calibration_file.empty()) continue;
-    try {
-      CalibrationHistory history(options_.calibration_file);
-      const CalibrationVersion version = history.record(
-          in_use_, change_because(c.camera_id + " corrected after a bump (continuous calibration)",
-                                  {c.camera_id}, std::numeric_limits<double>::quiet_NaN(), c.result.rms_px));
-      log("calibration " + c.camera_id + ": written to " + options_.calibration_file + " as version " +
-          std::to_string(version.version) + " (estimator_node calibrate revert --calibration " +
-          options_.calibration_file + " --version " + std::to_string(version.version - 1) + " undoes it)");
-    } catch (const std::exception& e) {
-      log("calibration " + c.camera_id + ": the correction is in use but was not written to " +
-          options_.calibration_file + ": " + e.what());
+    if (drift) {
+      drift_pending_.insert(c.camera_id);
+      drift_pending_rms_px_ = std::max(drift_pending_rms_px_, c.result.rms_px);
+      continue;
     }
+    bumped = true;
+    write_version(c.camera_id + " corrected after a bump (continuous calibration)", {c.camera_id},
+                  c.result.rms_px);
   }
-  publish_calibration();
+  const bool drift_due = !drift_pending_.empty() && now - drift_written_ns_ >= kDriftVersionIntervalNs;
+  if (drift_due) {
+    std::string names;
+    for (const auto& id : drift_pending_) names += (names.empty() ? "" : ", ") + id;
+    write_version("drift followed on " + names + " (continuous calibration)",
+                  {drift_pending_.begin(), drift_pending_.end()}, drift_pending_rms_px_);
+    drift_pending_.clear();
+    drift_pending_rms_px_ = 0.0;
+    drift_written_ns_ = now;
+  }
+  if (bumped || drift_due) publish_calibration();
+}
+
+void LiveEstimator::write_version(const std::string& reason, const std::vector<std::string>& cameras,
+                                  double rms_px) {
+  if (options_.calibration_file.empty()) return;
+  const std::string who = cameras.size() == 1 ? cameras.front() : "cameras";
+  try {
+    CalibrationHistory history(options_.calibration_file);
+    const CalibrationVersion version = history.record(
+        in_use_, change_because(reason, cameras, std::numeric_limits<double>::quiet_NaN(), rms_px));
+    log("calibration " + who + ": written to " + options_.calibration_file + " as version " +
+        std::to_string(version.version) + " (estimator_node calibrate revert --calibration " +
+        options_.calibration_file + " --version " + std::to_string(version.version - 1) + " undoes it)");
+  } catch (const std::exception& e) {
+    log("calibration " + who + ": the correction is in use but was not written to " +
+        options_.calibration_file + ": " + e.what());
+  }
 }
 
 void LiveEstimator::publish_update(FeatureFrame&& frame, TimeNs dequeued_ns) {

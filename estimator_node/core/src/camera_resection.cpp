@@ -23,6 +23,7 @@ constexpr double kDegree = 3.14159265358979323846 / 180.0;
 struct Pair {
   Eigen::Vector3d point;
   Eigen::Vector2d pixel;
+  double weight = 1.0;
 };
 
 // The image shift most (blob - prediction) pairs agree on: votes in cells, the best 3 x 3
@@ -107,7 +108,9 @@ std::vector<Pair> associate(const CameraModel& model, const std::vector<Resectio
       ++takers[nearest];
     }
     for (const auto& [i, j] : found)
-      if (takers[j] == 1) pairs.push_back({sample.points_world[i], sample.blobs[j]});
+      if (takers[j] == 1)
+        pairs.push_back(
+            {sample.points_world[i], sample.blobs[j], i < sample.weights.size() ? sample.weights[i] : 1.0});
   }
   return pairs;
 }
@@ -140,7 +143,7 @@ Normal normal_equations(const CameraIntrinsics& intrinsics, const RigidTransform
     const Eigen::Vector2d r = *pixel - pair.pixel;
     const double e = r.norm();
     if (e > within) continue;
-    const double w = huber > 0.0 && e > huber ? huber / e : 1.0;
+    const double w = pair.weight * (huber > 0.0 && e > huber ? huber / e : 1.0);
     Eigen::Matrix<double, 3, 6> d_cam;
     d_cam.leftCols<3>() = -skew(p_cam);
     d_cam.rightCols<3>() = Eigen::Matrix3d::Identity();
@@ -153,11 +156,27 @@ Normal normal_equations(const CameraIntrinsics& intrinsics, const RigidTransform
   return n;
 }
 
+// The centre prior (ResectionOptions::centre_prior_mm) added to `n`: the residual (C - C_old)/σ
+// with C = -Rᵀt; under the perturbation dC = -Rᵀ dt, so it adds I/σ² to the translation block
+// (scaled to pixel units) and R (C - C_old)/σ² to its gradient with the sign of dC's Jacobian.
+void add_centre_prior(Normal& n, const RigidTransform& T_cam_world, const Eigen::Vector3d& old_centre,
+                      const ResectionOptions& o) {
+  if (!(o.centre_prior_mm > 0.0)) return;
+  const double sigma_m = 1e-3 * o.centre_prior_mm;
+  const double w = o.prior_pixel_sigma_px * o.prior_pixel_sigma_px / (sigma_m * sigma_m);
+  const Eigen::Matrix3d R = T_cam_world.q.toRotationMatrix();
+  const Eigen::Vector3d centre = -(R.transpose() * T_cam_world.t);
+  n.H.bottomRightCorner<3, 3>() += w * Eigen::Matrix3d::Identity();
+  n.g.tail<3>() += -w * (R * (centre - old_centre));
+}
+
 RigidTransform adjust(const CameraIntrinsics& intrinsics, RigidTransform T_cam_world,
-                      const std::vector<Pair>& pairs, const ResectionOptions& o, double within) {
+                      const std::vector<Pair>& pairs, const ResectionOptions& o, double within,
+                      const Eigen::Vector3d& old_centre) {
   for (int iteration = 0; iteration < o.iterations; ++iteration) {
-    const Normal n = normal_equations(intrinsics, T_cam_world, pairs, o.huber_px, within);
+    Normal n = normal_equations(intrinsics, T_cam_world, pairs, o.huber_px, within);
     if (n.inliers < 6) break;
+    add_centre_prior(n, T_cam_world, old_centre, o);
     const Eigen::Matrix<double, 6, 1> delta = -n.H.ldlt().solve(n.g);
     if (!delta.allFinite()) break;
     const Eigen::Quaterniond dq = exp_rotation(delta.head<3>());
@@ -170,9 +189,13 @@ RigidTransform adjust(const CameraIntrinsics& intrinsics, RigidTransform T_cam_w
 
 // Uncertainty of the pose from the inliers' normal equations scaled by their residual.
 void judge(const CameraIntrinsics& intrinsics, const RigidTransform& T_cam_world,
-           const std::vector<Pair>& pairs, const ResectionOptions& o, ResectionResult& result) {
-  const Normal n = normal_equations(intrinsics, T_cam_world, pairs, 0.0, o.inlier_px);
+           const std::vector<Pair>& pairs, const ResectionOptions& o, const Eigen::Vector3d& old_centre,
+           ResectionResult& result) {
+  Normal n = normal_equations(intrinsics, T_cam_world, pairs, 0.0, o.inlier_px);
   result.inliers = n.inliers;
+  const double squared = n.squared;
+  add_centre_prior(n, T_cam_world, old_centre, o);
+  n.squared = squared;
   result.rms_px = n.inliers == 0 ? 0.0 : std::sqrt(n.squared / static_cast<double>(n.inliers));
   if (n.inliers < 6) return;
   // σ² per pixel coordinate from the residuals (2 per pair, 6 parameters), floored at 0.1 px.
@@ -212,12 +235,12 @@ ResectionResult resect_camera(const CameraModel& old_model, const std::vector<Re
     }
     // The first round's pairs sit a whole bump from the old pose's projections.
     const double within = round == 0 ? result.shift_px.norm() + 2.0 * radius : 2.0 * radius;
-    T_cam_world = adjust(intrinsics, T_cam_world, pairs, o, within);
+    T_cam_world = adjust(intrinsics, T_cam_world, pairs, o, within, old_model.T_world_cam().t);
   }
   const CameraModel model(intrinsics, T_cam_world.inverse());
   const std::vector<Pair> pairs =
       associate(model, samples, Eigen::Vector2d::Zero(), o.inlier_px, o.unique_ratio);
-  judge(intrinsics, T_cam_world, pairs, o, result);
+  judge(intrinsics, T_cam_world, pairs, o, old_model.T_world_cam().t, result);
   const RigidTransform T_world_cam = T_cam_world.inverse();
   result.rotation_change_deg =
       Eigen::AngleAxisd(T_world_cam.q * old_model.T_world_cam().q.conjugate()).angle() / kDegree;

@@ -166,6 +166,7 @@ struct Tracker::Impl {
   // Mode correct: per camera, the monitored frames collected while it is quarantined, when a
   // resection was last tried, and the corrections not yet taken by the session.
   std::vector<std::deque<ResectionSample>> resection_samples;
+  std::vector<std::vector<ResectionSample>> refine_samples;  // not quarantined: drift followed
   std::vector<TimeNs> resection_tried_ns;
   std::vector<TimeNs> resection_settle_until_ns;  // after a correction: none before this
   std::vector<CalibrationCorrection> corrections;
@@ -352,7 +353,12 @@ struct Tracker::Impl {
   // estimated again and, when well determined, applied (docs/continuous_calibration.md).
   void collect_for_resection(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
                              const std::vector<Eigen::Vector2d>& pixels);
-  void apply_correction(int camera, TimeNs stamp, const ResectionResult& result);
+  // Mode correct, a camera in use: collected; every refine_frames its pose is refined and, when
+  // determined and significantly different, applied (docs/continuous_calibration.md).
+  void collect_for_refinement(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
+                              const std::vector<Eigen::Vector2d>& pixels);
+  void apply_correction(int camera, TimeNs stamp, const ResectionResult& result,
+                        CalibrationCorrection::Kind kind = CalibrationCorrection::Kind::kBump);
   // `early`: the gating already made for this frame (a monitored frame), if any.
   void associate(Entry& entry, const std::vector<Eigen::Vector2d>& pixels, std::vector<char>& used,
                  bool replaying, std::optional<Gating> early = std::nullopt);
@@ -500,8 +506,13 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     candidates.push_back(i);
     candidate_pixel.push_back(predicted_pixels.size() - 1);
   }
-  if (calibration_mode == CalibrationMode::kCorrect && monitor.quarantined(entry.camera))
-    collect_for_resection(entry.camera, stamp, determined, pixels);
+  if (calibration_mode == CalibrationMode::kCorrect) {
+    if (monitor.quarantined(entry.camera)) {
+      collect_for_resection(entry.camera, stamp, std::move(determined), pixels);
+    } else if (o.follow_drift) {
+      collect_for_refinement(entry.camera, stamp, std::move(determined), pixels);
+    }
+  }
   // The predictions in a grid: each blob and each candidate looks only at the cells around it
   // (issue 36's cost at 32 cameras: all pairs took most of the monitor's time).
   const auto& intrinsics = camera.intrinsics();
@@ -555,6 +566,18 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
   }
 }
 
+namespace {
+
+ResectionSample make_sample(std::vector<Eigen::Vector3d> points, const std::vector<Eigen::Vector2d>& pixels) {
+  ResectionSample sample;
+  sample.points_world = std::move(points);
+  for (const Eigen::Vector2d& pixel : pixels)
+    if (pixel.allFinite()) sample.blobs.push_back(pixel);
+  return sample;
+}
+
+}  // namespace
+
 void Tracker::Impl::collect_for_resection(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
                                           const std::vector<Eigen::Vector2d>& pixels) {
   const auto& o = options.calibration;
@@ -563,12 +586,9 @@ void Tracker::Impl::collect_for_resection(int camera, TimeNs stamp, std::vector<
     resection_tried_ns.resize(models.size(), 0);
     resection_settle_until_ns.resize(models.size(), 0);
   }
+  if (camera < static_cast<int>(refine_samples.size())) refine_samples[camera].clear();
   auto& samples = resection_samples[camera];
-  ResectionSample sample;
-  sample.points_world = std::move(points);
-  for (const Eigen::Vector2d& pixel : pixels)
-    if (pixel.allFinite()) sample.blobs.push_back(pixel);
-  samples.push_back(std::move(sample));
+  samples.push_back(make_sample(std::move(points), pixels));
   while (samples.size() > o.resection_frames) samples.pop_front();
   if (samples.size() < o.resection_frames || stamp - resection_tried_ns[camera] < o.resection_retry_ns ||
       stamp < resection_settle_until_ns[camera])
@@ -579,8 +599,54 @@ void Tracker::Impl::collect_for_resection(int camera, TimeNs stamp, std::vector<
   if (result.ok) apply_correction(camera, stamp, result);
 }
 
-void Tracker::Impl::apply_correction(int camera, TimeNs stamp, const ResectionResult& result) {
+void Tracker::Impl::collect_for_refinement(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
+                                           const std::vector<Eigen::Vector2d>& pixels) {
+  const auto& o = options.calibration;
+  if (refine_samples.size() < models.size()) refine_samples.resize(models.size());
+  auto& samples = refine_samples[camera];
+  if (!o.anchors.empty()) {
+    const double r2 = o.anchor_radius_m * o.anchor_radius_m;
+    std::erase_if(points, [&](const Eigen::Vector3d& p) {
+      return std::any_of(o.anchors.begin(), o.anchors.end(),
+                         [&](const Eigen::Vector3d& a) { return (a - p).squaredNorm() <= r2; });
+    });
+  }
+  const std::size_t tracked = points.size();
+  points.insert(points.end(), o.anchors.begin(), o.anchors.end());
+  samples.push_back(make_sample(std::move(points), pixels));
+  if (!o.anchors.empty()) {
+    samples.back().weights.assign(samples.back().points_world.size(), 1.0);
+    std::fill(samples.back().weights.begin() + static_cast<std::ptrdiff_t>(tracked),
+              samples.back().weights.end(), o.anchor_weight);
+  }
+  if (samples.size() < o.refine_frames) return;
+  // The camera is near right: no vote for a shift, a narrow association, two rounds.
+  ResectionOptions refine = o.resection;
+  refine.vote_radius_px = 0.0;
+  refine.associate_px = std::min(refine.associate_px, 2.0 * refine.inlier_px);
+  refine.rounds = 2;
+  refine.centre_prior_mm = o.refine_centre_prior_mm;
+  refine.max_rotation_sigma_deg = o.refine_max_rotation_sigma_deg;
+  refine.max_translation_sigma_mm = o.refine_max_translation_sigma_mm;
+  const ResectionResult result = resect_camera(*models[camera], samples, refine);
+  samples.clear();
+  if (!result.ok) return;
+  // Significant: the change in rotation, or in the camera's centre, beyond k sigma (the
+  // translation's sigma bounds the centre's, camera_resection.cpp) and beyond the floor.
+  // With anchors (known positions, not the tracks' correlated errors) the rotation's floor is lower.
+  const double k = o.refine_significance;
+  const double floor_deg = o.anchors.empty() ? o.refine_min_rotation_deg : o.refine_anchored_min_rotation_deg;
+  const double floor_mm = o.refine_min_translation_mm;
+  const bool turned = result.rotation_change_deg > std::max(k * result.rotation_sigma_deg, floor_deg);
+  const bool moved = result.translation_change_mm > std::max(k * result.translation_sigma_mm, floor_mm);
+  if (!turned && !moved) return;
+  apply_correction(camera, stamp, result, CalibrationCorrection::Kind::kDrift);
+}
+
+void Tracker::Impl::apply_correction(int camera, TimeNs stamp, const ResectionResult& result,
+                                     CalibrationCorrection::Kind kind) {
   CalibrationCorrection correction;
+  correction.kind = kind;
   correction.camera_id = camera_ids[camera];
   correction.stamp_ns = stamp;
   correction.before = models[camera]->T_world_cam();
@@ -594,10 +660,11 @@ void Tracker::Impl::apply_correction(int camera, TimeNs stamp, const ResectionRe
   std::vector<const CameraModel*> pointers;
   for (const auto& model : models) pointers.push_back(model.get());
   core.initiator.set_cameras(pointers);
+  corrections.push_back(std::move(correction));
+  if (kind == CalibrationCorrection::Kind::kDrift) return;  // small: its residual window stays
   monitor.restart(camera);
   resection_samples[camera].clear();
   resection_settle_until_ns[camera] = stamp + options.calibration.resection_settle_ns;
-  corrections.push_back(std::move(correction));
 }
 
 std::vector<TrackedPoint> Tracker::Impl::confirmed_points(TimeNs stamp_ns) const {

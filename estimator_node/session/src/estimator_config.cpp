@@ -322,6 +322,23 @@ void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
             "correct: monitored frames of a quarantined camera its new pose is estimated from");
   f.integer("resection_retry_ns", o.resection_retry_ns, 0, kHourNs,
             "correct: not determined: tried again after");
+  f.flag("follow_drift", o.follow_drift, "correct: refine the cameras in use too (slow drift)");
+  f.integer("refine_frames", o.refine_frames, 6, 1 << 16,
+            "correct, follow_drift: monitored frames each refinement of a camera in use is made from");
+  f.number("refine_max_rotation_sigma_deg", o.refine_max_rotation_sigma_deg, kPositive,
+           "a refinement is applied only when determined this well ...");
+  f.number("refine_max_translation_sigma_mm", o.refine_max_translation_sigma_mm, kPositive, "... and this");
+  f.number("refine_significance", o.refine_significance, kNonNegative,
+           "... and it moves the camera by more than this many sigma");
+  f.number("refine_min_rotation_deg", o.refine_min_rotation_deg, kNonNegative,
+           "... and by more than this rotation ...");
+  f.number("refine_min_translation_mm", o.refine_min_translation_mm, kNonNegative, "... or this translation");
+  f.number("refine_anchored_min_rotation_deg", o.refine_anchored_min_rotation_deg, kNonNegative,
+           "the rotation's floor when anchors are given");
+  f.number("anchor_weight", o.anchor_weight, kPositive, "an anchor's residual weighs this many tracks'");
+  f.number("anchor_radius_m", o.anchor_radius_m, kPositive, "tracks this near an anchor are left out");
+  f.number("refine_centre_prior_mm", o.refine_centre_prior_mm, kNonNegative,
+           "1-sigma prior that a refined camera's centre stays (0: none)");
   f.integer("window_ns", o.window_ns, 1'000'000, kHourNs, "residuals this recent are judged");
   f.integer("sample_interval_ns", o.sample_interval_ns, 0, kHourNs,
             "one residual per track and camera this often");

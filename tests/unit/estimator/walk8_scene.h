@@ -12,7 +12,8 @@
 
 namespace panoptes::estimator {
 
-inline Scene walk8_scene(double duration_s, int seed) {
+// `extra`: YAML appended to the scene (e.g. a `landmarks:` list).
+inline Scene walk8_scene(double duration_s, int seed, const std::string& extra = {}) {
   const std::string dir = std::string(PANOPTES_SOURCE_DIR) + "/deploy/scenes";
   std::ifstream in(dir + "/walk8.yaml");
   std::stringstream text;
@@ -25,7 +26,7 @@ inline Scene walk8_scene(double duration_s, int seed) {
   };
   replace("seed: 8\n", "seed: " + std::to_string(seed) + "\n");
   replace("duration: 20.0\n", "duration: " + std::to_string(duration_s) + "\n");
-  return Scene::from_yaml_string(yaml, dir, "walk8.yaml");
+  return Scene::from_yaml_string(yaml + extra, dir, "walk8.yaml");
 }
 
 }  // namespace panoptes::estimator

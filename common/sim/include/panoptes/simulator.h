@@ -53,6 +53,14 @@ struct SimCameraConfig {
   bool bumped = false;
   TimeNs bump_at_ns = 0;
   RigidTransform bump;
+  // A slow drift (camera key `drift`, issue 36 item 6): from scene time drift_from_ns on the
+  // camera turns about drift_axis (its own frame, unit) at drift_rate_rad_s and moves at
+  // drift_velocity_m_s (its own frame): T_world_cam · drift(t) (· bump). A truss warming up.
+  bool drifting = false;
+  TimeNs drift_from_ns = 0;
+  Eigen::Vector3d drift_axis = Eigen::Vector3d::UnitX();
+  double drift_rate_rad_s = 0.0;
+  Eigen::Vector3d drift_velocity_m_s = Eigen::Vector3d::Zero();
 };
 
 struct MarkerTruth {
@@ -110,6 +118,10 @@ class Scene {
   RigidTransform camera_pose_at(std::size_t camera_index, TimeNs scene_time_ns) const;
   // Bumps camera `camera_index` at `at_ns` (as the camera key `bump` does): for tests.
   void set_camera_bump(std::size_t camera_index, TimeNs at_ns, const RigidTransform& bump);
+  // Gives camera `camera_index` a slow drift (as the camera key `drift` does; `axis` in the
+  // camera's frame, normalised here; a zero axis draws one from the scene seed and the camera).
+  void set_camera_drift(std::size_t camera_index, TimeNs from_ns, double degrees_per_minute,
+                        const Eigen::Vector3d& axis, const Eigen::Vector3d& millimetres_per_minute);
   // The markers a rig carries (camera key rig.markers, rig frame), by rig name; simulated as
   // markers "<rig>/<index>" after the bodies'.
   std::map<std::string, std::vector<Eigen::Vector3d>> rig_markers() const;

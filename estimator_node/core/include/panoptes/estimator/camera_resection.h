@@ -21,6 +21,9 @@ namespace panoptes::estimator {
 struct ResectionSample {
   std::vector<Eigen::Vector3d> points_world;
   std::vector<Eigen::Vector2d> blobs;  // px, as the camera reported them (distorted)
+  // Per point, the weight of its residual (empty: all 1). Anchor markers, whose positions are
+  // known and not estimated by the cameras being refined, weigh more (they hold the world frame).
+  std::vector<double> weights;
 };
 
 struct ResectionOptions {
@@ -38,6 +41,12 @@ struct ResectionOptions {
   double inlier_px = 2.0;
   int rounds = 3;
   int iterations = 15;
+  // > 0: a prior that the camera's centre stays where the old pose has it, with this 1-sigma (mm),
+  // weighed against residuals of prior_pixel_sigma_px. A camera on a truss mostly turns; from a
+  // narrow cloud of tracks a turn across the image and a shift across it look alike, and without
+  // the prior a refined camera's centre wandered (walk8, every camera drifting).
+  double centre_prior_mm = 0.0;
+  double prior_pixel_sigma_px = 0.25;
   // Applied only when well determined: enough pairs, a small residual and a small uncertainty.
   std::size_t min_inliers = 40;
   double max_rms_px = 0.8;

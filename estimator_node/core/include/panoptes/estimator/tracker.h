@@ -121,9 +121,12 @@ struct PredictedWindow2D {
 
 enum class FrameOutcome { kProcessed, kLateReplayed, kTooLate, kUnknownCamera };
 
-// A quarantined camera's pose corrected from the tracks (--continuous-calibration correct,
+// A camera's pose corrected from the tracks (--continuous-calibration correct,
 // docs/continuous_calibration.md): the tracker applied it; the session records and publishes it.
 struct CalibrationCorrection {
+  // kBump: a quarantined camera's pose found again; kDrift: a healthy camera's pose refined.
+  enum class Kind : std::uint8_t { kBump, kDrift };
+  Kind kind = Kind::kBump;
   std::string camera_id;
   TimeNs stamp_ns = 0;    // the monitored frame that completed the evidence
   RigidTransform before;  // T_world_cam
