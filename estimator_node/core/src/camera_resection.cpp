@@ -42,6 +42,7 @@ Eigen::Vector2d vote_shift(const CameraModel& model, const std::vector<Resection
       const auto predicted = model.project(point);
       if (!predicted) continue;
       candidates += model.in_image(*predicted) ? 1 : 0;
+      if (!(o.vote_radius_px > 0.0)) continue;  // no vote (a camera near right): only counted
       for (const Eigen::Vector2d& blob : sample.blobs) {
         const Eigen::Vector2d d = blob - *predicted;
         if (!d.allFinite() || d.norm() > o.vote_radius_px) continue;
@@ -182,7 +183,7 @@ RigidTransform adjust(const CameraIntrinsics& intrinsics, RigidTransform T_cam_w
     const Eigen::Quaterniond dq = exp_rotation(delta.head<3>());
     T_cam_world.q = (dq * T_cam_world.q).normalized();
     T_cam_world.t = dq * T_cam_world.t + delta.tail<3>();
-    if (delta.norm() < 1e-12) break;
+    if (delta.norm() < o.converged) break;
   }
   return T_cam_world;
 }

@@ -167,6 +167,7 @@ struct Tracker::Impl {
   // resection was last tried, and the corrections not yet taken by the session.
   std::vector<std::deque<ResectionSample>> resection_samples;
   std::vector<std::vector<ResectionSample>> refine_samples;  // not quarantined: drift followed
+  std::vector<TimeNs> refine_sampled_ns;                     // ... the last one's stamp
   std::vector<TimeNs> resection_tried_ns;
   std::vector<TimeNs> resection_settle_until_ns;  // after a correction: none before this
   std::vector<CalibrationCorrection> corrections;
@@ -602,7 +603,14 @@ void Tracker::Impl::collect_for_resection(int camera, TimeNs stamp, std::vector<
 void Tracker::Impl::collect_for_refinement(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
                                            const std::vector<Eigen::Vector2d>& pixels) {
   const auto& o = options.calibration;
-  if (refine_samples.size() < models.size()) refine_samples.resize(models.size());
+  if (refine_samples.size() < models.size()) {
+    refine_samples.resize(models.size());
+    refine_sampled_ns.resize(models.size(), 0);
+  }
+  // One sample per refine_sample_interval_ns: the tracks' errors are correlated over longer than
+  // that, so denser samples cost time and add little.
+  if (stamp - refine_sampled_ns[camera] < o.refine_sample_interval_ns) return;
+  refine_sampled_ns[camera] = stamp;
   auto& samples = refine_samples[camera];
   if (!o.anchors.empty()) {
     const double r2 = o.anchor_radius_m * o.anchor_radius_m;
@@ -619,12 +627,14 @@ void Tracker::Impl::collect_for_refinement(int camera, TimeNs stamp, std::vector
     std::fill(samples.back().weights.begin() + static_cast<std::ptrdiff_t>(tracked),
               samples.back().weights.end(), o.anchor_weight);
   }
-  if (samples.size() < o.refine_frames) return;
-  // The camera is near right: no vote for a shift, a narrow association, two rounds.
+  if (samples.size() < (o.anchors.empty() ? o.refine_frames : o.refine_anchored_frames)) return;
+  // The camera is near right: no vote for a shift, one narrow association, a few iterations.
   ResectionOptions refine = o.resection;
   refine.vote_radius_px = 0.0;
   refine.associate_px = std::min(refine.associate_px, 2.0 * refine.inlier_px);
-  refine.rounds = 2;
+  refine.rounds = 1;
+  refine.iterations = 4;
+  refine.converged = 1e-9;  // 1 nrad, 1 nm: far below what a refinement resolves
   refine.centre_prior_mm = o.refine_centre_prior_mm;
   refine.max_rotation_sigma_deg = o.refine_max_rotation_sigma_deg;
   refine.max_translation_sigma_mm = o.refine_max_translation_sigma_mm;

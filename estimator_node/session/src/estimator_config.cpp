@@ -323,8 +323,9 @@ void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
   f.integer("resection_retry_ns", o.resection_retry_ns, 0, kHourNs,
             "correct: not determined: tried again after");
   f.flag("follow_drift", o.follow_drift, "correct: refine the cameras in use too (slow drift)");
-  f.integer("refine_frames", o.refine_frames, 6, 1 << 16,
-            "correct, follow_drift: monitored frames each refinement of a camera in use is made from");
+  f.integer("refine_sample_interval_ns", o.refine_sample_interval_ns, 0, kHourNs,
+            "correct, follow_drift: one monitored frame of a camera in use this often ...");
+  f.integer("refine_frames", o.refine_frames, 6, 1 << 16, "... and a refinement from this many of them");
   f.number("refine_max_rotation_sigma_deg", o.refine_max_rotation_sigma_deg, kPositive,
            "a refinement is applied only when determined this well ...");
   f.number("refine_max_translation_sigma_mm", o.refine_max_translation_sigma_mm, kPositive, "... and this");
@@ -333,6 +334,8 @@ void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
   f.number("refine_min_rotation_deg", o.refine_min_rotation_deg, kNonNegative,
            "... and by more than this rotation ...");
   f.number("refine_min_translation_mm", o.refine_min_translation_mm, kNonNegative, "... or this translation");
+  f.integer("refine_anchored_frames", o.refine_anchored_frames, 6, 1 << 16,
+            "refine_frames when anchors are given");
   f.number("refine_anchored_min_rotation_deg", o.refine_anchored_min_rotation_deg, kNonNegative,
            "the rotation's floor when anchors are given");
   f.number("anchor_weight", o.anchor_weight, kPositive, "an anchor's residual weighs this many tracks'");

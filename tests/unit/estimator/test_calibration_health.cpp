@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -145,6 +146,7 @@ std::vector<FeatureFrame> frames_of(const Scene& scene) {
 struct BumpRun {
   double rmse_before_mm = 0;  // scene time 1-10 s
   double rmse_after_mm = 0;   // 10-end
+  double rmse_last_mm = 0;    // the last 10 s (a 30-s scene: 10 s after the bump's 20 s of motion)
   double rmse_quarantined_mm =
       0;  // from the first quarantine to the end (the acceptance's "while quarantined")
   double coverage_after = 0;
@@ -152,8 +154,9 @@ struct BumpRun {
   std::uint64_t quarantines = 0;
   TimeNs first_quarantine_ns = 0;  // scene time; 0: none
   std::string first_camera;
-  double process_s = 0;                            // time in Tracker::process
-  std::vector<CalibrationCorrection> corrections;  // mode correct
+  double process_s = 0;                               // time in Tracker::process
+  std::vector<CalibrationCorrection> corrections;     // mode correct
+  std::map<std::string, RigidTransform> final_poses;  // the tracker's camera poses at the end
 };
 
 double rmse_mm(const Scene& scene, const std::vector<TrackRecord>& records, double& coverage) {
@@ -166,14 +169,25 @@ double rmse_mm(const Scene& scene, const std::vector<TrackRecord>& records, doub
   return evaluation.rmse_m * 1e3;
 }
 
-BumpRun track(const Scene& scene, const std::string& mode, TimeNs split_ns = 10 * kNsPerSecond) {
+// The scene's landmarks, as anchors for the tracker (mode correct).
+std::vector<Eigen::Vector3d> anchors_of(const Scene& scene) {
+  std::vector<Eigen::Vector3d> anchors;
+  for (const auto& group : scene.landmarks())
+    anchors.insert(anchors.end(), group.points.begin(), group.points.end());
+  return anchors;
+}
+
+BumpRun track(const Scene& scene, const std::string& mode, TimeNs split_ns = 10 * kNsPerSecond,
+              bool anchored = false) {
   TrackerOptions options;
   options.calibration.mode = mode;
+  if (anchored) options.calibration.anchors = anchors_of(scene);
   Tracker tracker(options);
   tracker.set_calibration(scene.calibration());
   std::vector<TrackRecord> before;
   std::vector<TrackRecord> after;
   std::vector<TrackRecord> quarantined;
+  std::vector<TrackRecord> last;
   BumpRun run;
   for (const auto& frame : frames_of(scene)) {
     const auto start = std::chrono::steady_clock::now();
@@ -184,6 +198,7 @@ BumpRun track(const Scene& scene, const std::string& mode, TimeNs split_ns = 10 
     for (const auto& record : tracker.current_tracks()) {
       records.push_back(record);
       if (run.first_quarantine_ns != 0) quarantined.push_back(record);
+      if (frame.stamp_ns - kEpoch >= scene.duration_ns() - 10 * kNsPerSecond) last.push_back(record);
     }
     for (auto& correction : tracker.take_calibration_corrections()) {
       std::printf("%s corrected at %.3f s: turned %.3f deg, moved %.1f mm (%zu pairs, %.3f px)\n",
@@ -205,9 +220,20 @@ BumpRun track(const Scene& scene, const std::string& mode, TimeNs split_ns = 10 
   run.rmse_before_mm = rmse_mm(scene, before, coverage);
   if (!after.empty()) run.rmse_after_mm = rmse_mm(scene, after, run.coverage_after);
   if (!quarantined.empty()) run.rmse_quarantined_mm = rmse_mm(scene, quarantined, coverage);
+  if (!last.empty()) run.rmse_last_mm = rmse_mm(scene, last, coverage);
   run.health = tracker.calibration_health();
   for (const auto& health : run.health) run.quarantines += health.quarantines;
+  for (const auto& camera : scene.cameras())
+    run.final_poses[camera.calibration.id] = tracker.camera_model(camera.calibration.id)->T_world_cam();
   return run;
+}
+
+// Six anchor markers on stands around walk8's walk (x from -1.75 to 1.75 m), in every camera's view.
+std::string walk8_anchors() {
+  return "landmarks:\n"
+         "  - {name: a0, position: [2.6, 1.4, 0.4]}\n  - {name: a1, position: [-2.6, 1.4, 0.6]}\n"
+         "  - {name: a2, position: [2.6, -1.4, 0.6]}\n  - {name: a3, position: [-2.6, -1.4, 0.4]}\n"
+         "  - {name: a4, position: [0.0, 1.9, 1.4]}\n  - {name: a5, position: [0.0, -1.9, 1.6]}\n";
 }
 
 void print(const char* what, const BumpRun& run) {
@@ -290,6 +316,33 @@ TEST(CalibrationHealth, CorrectModeBringsABumpedCameraBack) {
   EXPECT_LE(run.rmse_after_mm, 1.2 * run.rmse_before_mm);
 }
 
+// The acceptance's single bump with anchor markers (six, walk8_anchors()): 0.5° and 5 mm at 10 s,
+// 20 s of motion after it; the camera corrected and refined to within 0.02° and 0.5 mm of its true
+// new pose, and the RMSE of the last 10 s within 5 % of the RMSE before the bump.
+TEST(CalibrationHealth, CorrectModeWithAnchorsReachesTheTruePose) {
+  Scene scene = walk8_scene(30.0, 8, walk8_anchors());
+  scene.set_camera_bump(3, 10 * kNsPerSecond, bump_of(0.5, 5.0));
+  const BumpRun run = track(scene, "correct", 10 * kNsPerSecond, true);
+  const RigidTransform truth = scene.camera_pose_at(3, scene.duration_ns());
+  const RigidTransform& used = run.final_poses.at("cam3");
+  const double angle_deg = Eigen::AngleAxisd(used.q * truth.q.conjugate()).angle() / kDegree;
+  const double moved_mm = 1e3 * (used.t - truth.t).norm();
+  std::size_t bumps = 0;
+  for (const auto& c : run.corrections) bumps += c.kind == CalibrationCorrection::Kind::kBump ? 1 : 0;
+  std::printf(
+      "cam3 at the end: %.4f deg, %.2f mm from its true pose; %zu bump corrections, %zu in all; RMSE "
+      "before %.3f mm, last 10 s %.3f mm (x%.3f)\n",
+      angle_deg, moved_mm, bumps, run.corrections.size(), run.rmse_before_mm, run.rmse_last_mm,
+      run.rmse_last_mm / run.rmse_before_mm);
+  ASSERT_GE(bumps, 1u);
+  EXPECT_GE(run.first_quarantine_ns, 10 * kNsPerSecond);
+  EXPECT_LE(run.first_quarantine_ns, 12 * kNsPerSecond);
+  EXPECT_LT(angle_deg, 0.02);
+  EXPECT_LT(moved_mm, 0.5);
+  EXPECT_NE(run.health.at(3).state, CalibrationState::kQuarantined) << run.health.at(3).reason;
+  EXPECT_LE(run.rmse_last_mm, 1.05 * run.rmse_before_mm);
+}
+
 // The false-alarm measurement: PANOPTES_CALHEALTH_SECONDS of unbumped walk8 per seed (default 60)
 // over PANOPTES_CALHEALTH_SEEDS seeds (default 2).
 TEST(CalibrationHealth, NoFalseAlarmsOnNormalTrackingWithClutter) {
@@ -317,7 +370,8 @@ namespace panoptes::estimator {
 namespace {
 
 // Issue 36's table, measured (printed; only the 0.5° case above is asserted): bumps of 0.1°, 0.5°,
-// 2° and 5° (with 5 mm) of cam3 at 10 s, and cam3 and cam6 bumped at once.
+// 2° and 5° (with 5 mm) of cam3 at 10 s, and cam3 and cam6 bumped at once. With
+// PANOPTES_BUMP_TABLE_CORRECT set, also mode correct over 30 s without and with anchors.
 TEST(CalibrationHealth, BumpTable) {
   struct Case {
     const char* name;
@@ -348,6 +402,34 @@ TEST(CalibrationHealth, BumpTable) {
         quarantined.empty() ? " none" : quarantined.c_str(), detect.rmse_before_mm, detect.rmse_after_mm,
         detect.rmse_after_mm / detect.rmse_before_mm, detect.coverage_after, off.rmse_after_mm,
         off.rmse_after_mm / off.rmse_before_mm, off.coverage_after);
+    // Mode correct over 30 s (20 s of motion after the bump), without and with anchors: when each
+    // bumped camera was first corrected, and its pose in use at the end against its true pose.
+    if (std::getenv("PANOPTES_BUMP_TABLE_CORRECT") == nullptr) continue;  // 50 s more: by hand
+    for (const bool anchored : {false, true}) {
+      Scene longer = walk8_scene(30.0, 8, anchored ? walk8_anchors() : std::string());
+      for (const std::size_t camera : c.cameras)
+        longer.set_camera_bump(camera, 10 * kNsPerSecond, bump_of(c.degrees, 5.0));
+      const BumpRun correct = track(longer, "correct", 10 * kNsPerSecond, anchored);
+      std::string cameras;
+      for (const std::size_t camera : c.cameras) {
+        const std::string id = longer.cameras()[camera].calibration.id;
+        double first_s = -1.0;
+        for (const auto& k : correct.corrections)
+          if (k.camera_id == id && k.kind == CalibrationCorrection::Kind::kBump && first_s < 0.0)
+            first_s = ns_to_seconds(k.stamp_ns - kEpoch) - 10.0;
+        const RigidTransform truth = longer.camera_pose_at(camera, longer.duration_ns());
+        const RigidTransform& used = correct.final_poses.at(id);
+        char text[160];
+        std::snprintf(text, sizeof text, " %s corrected %s, at the end %.4f deg %.2f mm;", id.c_str(),
+                      first_s < 0.0 ? "never" : (std::to_string(first_s) + " s after").c_str(),
+                      Eigen::AngleAxisd(used.q * truth.q.conjugate()).angle() / kDegree,
+                      1e3 * (used.t - truth.t).norm());
+        cameras += text;
+      }
+      std::printf("TABLE %-18s correct%s:%s RMSE after x%.3f (coverage %.3f)\n", c.name,
+                  anchored ? " with anchors" : "", cameras.c_str(),
+                  correct.rmse_after_mm / correct.rmse_before_mm, correct.coverage_after);
+    }
   }
 }
 
@@ -375,10 +457,7 @@ struct DriftRun {
 DriftRun drift_run(const Scene& scene, const std::string& mode, bool anchored = false) {
   TrackerOptions options;
   options.calibration.mode = mode;
-  if (anchored)
-    for (const auto& group : scene.landmarks())
-      options.calibration.anchors.insert(options.calibration.anchors.end(), group.points.begin(),
-                                         group.points.end());
+  if (anchored) options.calibration.anchors = anchors_of(scene);
   Tracker tracker(options);
   tracker.set_calibration(scene.calibration());
   std::vector<TrackRecord> judged;
@@ -414,12 +493,7 @@ TEST(CalibrationHealth, DriftOfEveryCameraIsFollowed) {
   const char* rate_text = std::getenv("PANOPTES_DRIFT_DEG_PER_MIN");
   const double seconds = seconds_text != nullptr ? std::atof(seconds_text) : 60.0;
   const double rate = rate_text != nullptr ? std::atof(rate_text) : 0.15;
-  // Six anchors on stands around the walk (x from -1.75 to 1.75 m), in every camera's view.
-  const std::string anchors =
-      "landmarks:\n"
-      "  - {name: a0, position: [2.6, 1.4, 0.4]}\n  - {name: a1, position: [-2.6, 1.4, 0.6]}\n"
-      "  - {name: a2, position: [2.6, -1.4, 0.6]}\n  - {name: a3, position: [-2.6, -1.4, 0.4]}\n"
-      "  - {name: a4, position: [0.0, 1.9, 1.4]}\n  - {name: a5, position: [0.0, -1.9, 1.6]}\n";
+  const std::string anchors = walk8_anchors();
   const Scene still = walk8_scene(seconds, 8, anchors);
   Scene drifting = walk8_scene(seconds, 8, anchors);
   for (std::size_t i = 0; i < drifting.cameras().size(); ++i)
@@ -443,16 +517,19 @@ TEST(CalibrationHealth, DriftOfEveryCameraIsFollowed) {
   const DriftRun still_anchored = drift_run(still, "correct", true);
   show("no drift, correct, anchors", still_anchored);
   EXPECT_EQ(reference.corrections, 0u) << "an unmoved rig was corrected";
-  EXPECT_EQ(still_anchored.corrections, 0u) << "an unmoved, anchored rig was corrected";
+  // An unmoved, anchored rig may be refined by the noise of a refinement (a few thousandths of a
+  // degree), which must not cost accuracy.
+  EXPECT_LE(still_anchored.worst_rotation_deg, 0.01);
+  EXPECT_LE(still_anchored.rmse_mm, 1.02 * reference.rmse_mm);
   // Without anchors the tracks stay whole while the world frame moves with the cameras' mean.
   EXPECT_GE(followed.coverage, 0.99);
   EXPECT_EQ(followed.quarantines, 0u);
   // With anchors the frame holds and the cameras stay near their drifting truth (measured at 60 s
-  // and 0.15 deg/min: 0.29 mm, 0.019 deg, RMSE x1.71 of the unmoved rig's).
+  // and 0.15 deg/min: 0.16 mm, 0.011 deg, RMSE x1.196 of the unmoved rig's).
   EXPECT_GE(anchored.coverage, 0.99);
   EXPECT_LE(anchored.frame_moved_mm, 1.0);
-  EXPECT_LE(anchored.worst_rotation_deg, 0.04);
-  EXPECT_LE(anchored.rmse_mm, 2.0 * still_anchored.rmse_mm);
+  EXPECT_LE(anchored.worst_rotation_deg, 0.025);
+  EXPECT_LE(anchored.rmse_mm, 1.3 * still_anchored.rmse_mm);
   EXPECT_LT(anchored.rmse_mm, detect.rmse_mm);
 }
 

@@ -47,17 +47,20 @@ struct CalibrationHealthOptions {
   // the pose in use by more than refine_significance sigma and by refine_min_rotation_deg or
   // refine_min_translation_mm: the tracks' own errors are correlated over the window, so the
   // sigma from the residuals understates the noise (unmoved cameras of walk8 came out up to
-  // 0.013 deg and 1.0 mm from where they were, from 150 frames). With anchors the rotation's floor
-  // is refine_anchored_min_rotation_deg (their positions are known; with no floor an unmoved,
-  // anchored walk8 was refined 67 times in 60 s by at most 0.002 deg).
+  // 0.013 deg and 1.0 mm from where they were, from 150 frames). With anchors (their positions
+  // are known) a refinement takes refine_anchored_frames and the rotation's floor is
+  // refine_anchored_min_rotation_deg: less lag behind a drift (with no floor an unmoved, anchored
+  // walk8 was refined 67 times in 60 s by at most 0.002 deg; with 0.004 and 50 frames, never).
   bool follow_drift = true;
-  std::size_t refine_frames = 150;
+  TimeNs refine_sample_interval_ns = 100'000'000;  // one monitored frame per camera this often
+  std::size_t refine_frames = 60;
   double refine_max_rotation_sigma_deg = 0.005;
   double refine_max_translation_sigma_mm = 0.5;
   double refine_significance = 2.0;
   double refine_min_rotation_deg = 0.02;
   double refine_min_translation_mm = 2.0;
-  double refine_anchored_min_rotation_deg = 0.005;
+  std::size_t refine_anchored_frames = 20;
+  double refine_anchored_min_rotation_deg = 0.006;
   double refine_centre_prior_mm = 1.0;  // the centre moves by about this per refinement at most
   // Anchor markers (`estimator_node --anchors`, a landmarks file): fixed markers at known
   // positions. A refinement pairs each camera's blobs with them as well as with the tracks, each

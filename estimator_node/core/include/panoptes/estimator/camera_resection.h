@@ -41,6 +41,7 @@ struct ResectionOptions {
   double inlier_px = 2.0;
   int rounds = 3;
   int iterations = 15;
+  double converged = 1e-12;  // a step (rad, m) this small ends a round's iterations
   // > 0: a prior that the camera's centre stays where the old pose has it, with this 1-sigma (mm),
   // weighed against residuals of prior_pixel_sigma_px. A camera on a truss mostly turns; from a
   // narrow cloud of tracks a turn across the image and a shift across it look alike, and without

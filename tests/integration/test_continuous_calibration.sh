@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# Continuous calibration live over DDS (issue 36, docs/continuous_calibration.md): the walk8 scene
+# with six anchor markers, eight camera_nodes replaying it in real time, cam3 bumped by 0.5 degrees
+# and 5 mm at 4 s. estimator_node --continuous-calibration correct --anchors quarantines cam3,
+# corrects its pose from the tracks the other cameras see, writes the correction as a new version
+# of its calibration file and brings cam3 back. The file's cam3 is then checked against the
+# simulator's true bumped pose, and `calibrate revert` restores the exact earlier file.
+source "$(dirname "$0")/lib.sh"
+en="$bin/estimator_node"
+seconds=13
+
+# walk8 (trc path absolute for the copy), 13 s, cam3 bumped at 4 s (0.5 deg about (1, 2, 0.5), 5 mm
+# along (0.6, -0.8, 0) in its own frame), six anchors on stands around the walk.
+python3 - "$source_dir/deploy/scenes/walk8.yaml" "$work/scene.yaml" "$source_dir/tests/data" "$seconds" <<'PY'
+import math, sys
+text = open(sys.argv[1]).read()
+text = text.replace("file: ../../tests/data/", "file: " + sys.argv[3] + "/")
+text = text.replace("duration: 20.0\n", "duration: %s\n" % sys.argv[4])
+axis = [1.0, 2.0, 0.5]
+norm = math.sqrt(sum(a * a for a in axis))
+angle = math.radians(0.5)
+rv = ", ".join("%.9f" % (a / norm * angle) for a in axis)
+text = text.replace("  - id: cam3\n", "  - id: cam3\n    bump: {at: 4.0, rotation: [%s], translation: [0.003, -0.004, 0.0]}\n" % rv)
+text += """landmarks:
+  - {name: a0, position: [2.6, 1.4, 0.4]}
+  - {name: a1, position: [-2.6, 1.4, 0.6]}
+  - {name: a2, position: [2.6, -1.4, 0.6]}
+  - {name: a3, position: [-2.6, -1.4, 0.4]}
+  - {name: a4, position: [0.0, 1.9, 1.4]}
+  - {name: a5, position: [0.0, -1.9, 1.6]}
+"""
+assert "bump:" in text and sys.argv[3] in text
+open(sys.argv[2], "w").write(text)
+PY
+expect_exit 0 "simulate walk8 with cam3 bumped at 4 s and six anchors" -- "$bin/panoptes_sim" features \
+  --scene "$work/scene.yaml" --out-dir "$work/sim"
+cp "$work/sim/calibration.yaml" "$work/cal.yaml"
+cp "$work/sim/calibration.yaml" "$work/before.yaml"
+expect_exit 0 "calibrate history --start" -- "$en" calibrate history --calibration "$work/cal.yaml" --start
+
+epoch=$(( ($(date +%s) + 3) * 1000000000 ))
+"$en" --calibration "$work/cal.yaml" --continuous-calibration correct --anchors "$work/scene.yaml" \
+  --duration $((seconds + 6)) --status-period 1 >"$work/estimator.log" 2>&1 &
+estimator=$!
+pids+=("$estimator")
+replay_cameras "$epoch" "$seconds" cam0 cam1 cam2 cam3 cam4 cam5 cam6 cam7
+wait_bounded "$estimator" $((seconds + 30)) estimator_node
+grep -E "calibration cam|quarantined" "$work/estimator.log" | head -8
+
+grep -q "cam3 quarantined" "$work/estimator.log" && pass "cam3 quarantined after the bump" ||
+  fail "cam3 never quarantined: $(tail -5 "$work/estimator.log")"
+grep -q "calibration cam3: pose corrected from the tracks" "$work/estimator.log" && pass "cam3's pose corrected live" ||
+  fail "no correction of cam3"
+grep -Eq "calibration cam3: written to .* as version [0-9]+" "$work/estimator.log" &&
+  pass "the correction written as a version of the calibration file" || fail "no version written"
+last_status=$(grep -E "t=[0-9]+s cameras" "$work/estimator.log" | tail -1)
+case "$last_status" in
+  *"cam3 quarantined"*) fail "cam3 still quarantined at the end: $last_status" ;;
+  "") fail "no status line" ;;
+  *) pass "cam3 back in use at the end (${last_status%% cameras*})" ;;
+esac
+if grep -q "calibration cam[0-24-7]: pose corrected" "$work/estimator.log"; then
+  fail "an unbumped camera was corrected as bumped"
+else
+  pass "no other camera corrected as bumped"
+fi
+
+# cam3 in the file against the simulator's true pose after the bump: T_world_cam · bump.
+python3 - "$work/before.yaml" "$work/cal.yaml" "$work/scene.yaml" <<'PY' && pass "cam3 in the file within 0.02 deg and 0.5 mm of its true bumped pose" || fail "cam3 not corrected closely enough"
+import math, re, sys
+def pose(path, camera):
+    text = open(path).read()
+    block = text[text.index('id: "%s"' % camera):]
+    q = [float(v) for v in re.search(r"q: \[([^\]]*)\]", block).group(1).split(",")]
+    t = [float(v) for v in re.search(r"t: \[([^\]]*)\]", block).group(1).split(",")]
+    return q, t
+def mul(a, b):  # [x, y, z, w]
+    ax, ay, az, aw = a; bx, by, bz, bw = b
+    return [aw*bx + ax*bw + ay*bz - az*by, aw*by - ax*bz + ay*bw + az*bx, aw*bz + ax*by - ay*bx + az*bw,
+            aw*bw - ax*bx - ay*by - az*bz]
+def rotate(q, v):
+    x, y, z, w = mul(mul(q, v + [0.0]), [-q[0], -q[1], -q[2], q[3]])
+    return [x, y, z]
+q0, t0 = pose(sys.argv[1], "cam3")
+q1, t1 = pose(sys.argv[2], "cam3")
+rv = [float(v) for v in re.search(r"bump: \{at: 4.0, rotation: \[([^\]]*)\]", open(sys.argv[3]).read()).group(1).split(",")]
+angle = math.sqrt(sum(v * v for v in rv))
+s = math.sin(angle / 2) / angle
+qb = [rv[0] * s, rv[1] * s, rv[2] * s, math.cos(angle / 2)]
+q_true = mul(q0, qb)
+t_true = [a + b for a, b in zip(t0, rotate(q0, [0.003, -0.004, 0.0]))]
+dot = abs(sum(a * b for a, b in zip(q_true, q1)))
+degrees = math.degrees(2 * math.acos(min(1.0, dot)))
+mm = 1e3 * math.sqrt(sum((a - b) ** 2 for a, b in zip(t_true, t1)))
+moved = 1e3 * math.sqrt(sum((a - b) ** 2 for a, b in zip(t0, t1)))
+print("cam3 in the file: %.4f deg and %.2f mm from its true bumped pose (moved %.2f mm from before)" % (degrees, mm, moved))
+sys.exit(0 if degrees < 0.02 and mm < 0.5 else 1)
+PY
+tail -2 "$work/estimator.log"
+
+expect_exit 0 "calibrate history --json" -- "$en" calibrate history --calibration "$work/cal.yaml" --json
+python3 - "$work/last.out" <<'PY' && pass "the history names the bump correction and cam3" || fail "history: $(cat "$work/last.out")"
+import json, sys
+v = [json.loads(line) for line in open(sys.argv[1]) if line.strip()]
+bump = [x for x in v if "corrected after a bump" in x["reason"]]
+sys.exit(0 if v[0]["reason"] == "initial" and bump and bump[0]["cameras"] == ["cam3"] else 1)
+PY
+expect_exit 0 "calibrate revert --version 1" -- "$en" calibrate revert --calibration "$work/cal.yaml" --version 1
+cmp -s "$work/cal.yaml" "$work/before.yaml" && pass "revert restores the exact file from before the bump" ||
+  fail "revert: bytes differ"
+finish
