@@ -8,9 +8,9 @@
 # simulator's true bumped pose, and `calibrate revert` restores the exact earlier file.
 source "$(dirname "$0")/lib.sh"
 en="$bin/estimator_node"
-seconds=13
+seconds=12
 
-# walk8 (trc path absolute for the copy), 13 s, cam3 bumped at 4 s (0.5 deg about (1, 2, 0.5), 5 mm
+# walk8 (trc path absolute for the copy), 12 s, cam3 bumped at 4 s (0.5 deg about (1, 2, 0.5), 5 mm
 # along (0.6, -0.8, 0) in its own frame), six anchors on stands around the walk.
 python3 - "$source_dir/deploy/scenes/walk8.yaml" "$work/scene.yaml" "$source_dir/tests/data" "$seconds" <<'PY'
 import math, sys
@@ -41,7 +41,7 @@ expect_exit 0 "calibrate history --start" -- "$en" calibrate history --calibrati
 
 epoch=$(( ($(date +%s) + 3) * 1000000000 ))
 "$en" --calibration "$work/cal.yaml" --continuous-calibration correct --anchors "$work/scene.yaml" \
-  --duration $((seconds + 6)) --status-period 1 >"$work/estimator.log" 2>&1 &
+  --duration $((seconds + 4)) --status-period 1 >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
 replay_cameras "$epoch" "$seconds" cam0 cam1 cam2 cam3 cam4 cam5 cam6 cam7

@@ -180,6 +180,15 @@ std::string describe(const ResidualStats& s, const char* where) {
 
 }  // namespace
 
+void CalibrationMonitor::note_correction(int camera_index, const std::string& why) {
+  CameraCalibrationHealth& health = cameras_.at(camera_index).health;
+  if (health.state != CalibrationState::kQuarantined) return;
+  static const std::string kNotCorrected = "; not corrected: ";
+  const auto at = health.reason.find(kNotCorrected);
+  if (at != std::string::npos) health.reason.erase(at);
+  health.reason += kNotCorrected + why;
+}
+
 void CalibrationMonitor::restart(int camera_index) {
   PerCamera& camera = cameras_.at(camera_index);
   camera.window.clear();

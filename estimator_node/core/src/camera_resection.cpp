@@ -257,6 +257,14 @@ ResectionResult resect_camera(const CameraModel& old_model, const std::vector<Re
              result.translation_sigma_mm > o.max_translation_sigma_mm) {
     std::snprintf(text, sizeof text, "not determined: rotation 1-sigma %.3f deg, translation %.1f mm",
                   result.rotation_sigma_deg, result.translation_sigma_mm);
+  } else if (result.rotation_change_deg > o.max_rotation_change_deg ||
+             result.translation_change_mm > o.max_translation_change_mm) {
+    std::snprintf(
+        text, sizeof text,
+        "implausible: it would turn the camera by %.2f deg and move it by %.1f mm (bounds %.2f deg, "
+        "%.1f mm)",
+        result.rotation_change_deg, result.translation_change_mm, o.max_rotation_change_deg,
+        o.max_translation_change_mm);
   } else {
     result.ok = true;
     result.T_world_cam = T_world_cam;

@@ -597,7 +597,11 @@ void Tracker::Impl::collect_for_resection(int camera, TimeNs stamp, std::vector<
   resection_tried_ns[camera] = stamp;
   const std::vector<ResectionSample> evidence(samples.begin(), samples.end());
   const ResectionResult result = resect_camera(*models[camera], evidence, o.resection);
-  if (result.ok) apply_correction(camera, stamp, result);
+  if (result.ok) {
+    apply_correction(camera, stamp, result);
+  } else {
+    monitor.note_correction(camera, result.reason);
+  }
 }
 
 void Tracker::Impl::collect_for_refinement(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
@@ -636,6 +640,8 @@ void Tracker::Impl::collect_for_refinement(int camera, TimeNs stamp, std::vector
   refine.iterations = 4;
   refine.converged = 1e-9;  // 1 nrad, 1 nm: far below what a refinement resolves
   refine.centre_prior_mm = o.refine_centre_prior_mm;
+  refine.max_rotation_change_deg = o.refine_max_change_deg;
+  refine.max_translation_change_mm = o.refine_max_change_mm;
   refine.max_rotation_sigma_deg = o.refine_max_rotation_sigma_deg;
   refine.max_translation_sigma_mm = o.refine_max_translation_sigma_mm;
   const ResectionResult result = resect_camera(*models[camera], samples, refine);

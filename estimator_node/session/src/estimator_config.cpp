@@ -322,7 +322,14 @@ void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
             "correct: monitored frames of a quarantined camera its new pose is estimated from");
   f.integer("resection_retry_ns", o.resection_retry_ns, 0, kHourNs,
             "correct: not determined: tried again after");
+  f.number("max_correction_deg", o.resection.max_rotation_change_deg, kPositive,
+           "correct: a bump correction turning the camera more than this is not applied ...");
+  f.number("max_correction_mm", o.resection.max_translation_change_mm, kPositive,
+           "... nor one moving it more");
   f.flag("follow_drift", o.follow_drift, "correct: refine the cameras in use too (slow drift)");
+  f.number("refine_max_change_deg", o.refine_max_change_deg, kPositive,
+           "a refinement turning a camera in use more than this is not applied ...");
+  f.number("refine_max_change_mm", o.refine_max_change_mm, kPositive, "... nor one moving it more");
   f.integer("refine_sample_interval_ns", o.refine_sample_interval_ns, 0, kHourNs,
             "correct, follow_drift: one monitored frame of a camera in use this often ...");
   f.integer("refine_frames", o.refine_frames, 6, 1 << 16, "... and a refinement from this many of them");

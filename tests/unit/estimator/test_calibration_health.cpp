@@ -84,6 +84,13 @@ TEST(CalibrationHealth, MonitorQuarantinesABiasAndReleasesWhenItGoes) {
   ASSERT_TRUE(monitor.quarantined(0));
   EXPECT_LT(monitor.health(0).quarantined_since_ns, kEpoch + 2'500'000'000);
   EXPECT_NE(monitor.health(0).reason.find("quarantined"), std::string::npos);
+  // A correction that was not applied says why, once (the last reason replaces the one before).
+  monitor.note_correction(0, "only 3 blobs could be paired with tracks");
+  monitor.note_correction(0, "only 5 blobs could be paired with tracks");
+  const std::string reason = monitor.health(0).reason;
+  EXPECT_NE(reason.find("quarantined: "), std::string::npos) << reason;
+  EXPECT_NE(reason.find("; not corrected: only 5 blobs"), std::string::npos) << reason;
+  EXPECT_EQ(reason.find("only 3 blobs"), std::string::npos) << reason;
   feed(kEpoch + 3'000'000'000, kEpoch + 6'000'000'000, Eigen::Vector2d::Zero());
   EXPECT_FALSE(monitor.quarantined(0)) << monitor.health(0).reason;
   EXPECT_EQ(monitor.health(0).quarantines, 1u);

@@ -96,6 +96,26 @@ TEST(CameraResection, AnUnmovedCameraStaysWhereItWas) {
   EXPECT_LT(r.shift_px.norm(), 4.0);
 }
 
+// A pose found but implausibly far from the old one (beyond the bounds) is refused, with the reason.
+TEST(CameraResection, AnImplausiblyLargeChangeIsRefused) {
+  const RigidTransform before = look_at(Eigen::Vector3d(4.0, 1.2, 2.5), Eigen::Vector3d(0.0, 0.0, 0.9));
+  const CameraModel old_model(intrinsics(), before);
+  const CameraModel truth(intrinsics(), bumped(before, 5.0, 5.0));
+  ResectionOptions options;
+  options.max_rotation_change_deg = 2.0;
+  const ResectionResult turned = resect_camera(old_model, samples_of(truth, 7), options);
+  EXPECT_FALSE(turned.ok);
+  EXPECT_NE(turned.reason.find("implausible: it would turn the camera by 5.00 deg"), std::string::npos)
+      << turned.reason;
+  EXPECT_LT(rotation_error_deg(turned.T_world_cam, before), 1e-12) << "a refused result keeps the old pose";
+  options = ResectionOptions{};
+  options.max_translation_change_mm = 3.0;
+  const ResectionResult moved = resect_camera(old_model, samples_of(truth, 7), options);
+  EXPECT_FALSE(moved.ok);
+  EXPECT_NE(moved.reason.find("move it by 5."), std::string::npos) << moved.reason;
+  EXPECT_TRUE(resect_camera(old_model, samples_of(truth, 7)).ok) << "within the default bounds";
+}
+
 // Too little to go on: a few markers, or blobs that are all clutter. Never a pose from nothing.
 TEST(CameraResection, TooLittleEvidenceIsRefusedWithTheReason) {
   const RigidTransform before = look_at(Eigen::Vector3d(4.0, 1.2, 2.5), Eigen::Vector3d(0.0, 0.0, 0.9));

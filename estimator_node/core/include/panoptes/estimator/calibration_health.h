@@ -40,6 +40,10 @@ struct CalibrationHealthOptions {
   TimeNs resection_retry_ns = 500'000'000;
   TimeNs resection_settle_ns = 3'000'000'000;
   ResectionOptions resection;
+  // A refinement of a camera in use that would turn it by more than this or move it by more is
+  // not applied (a bump is the monitor's to find); a bump correction's bounds are in `resection`.
+  double refine_max_change_deg = 0.5;
+  double refine_max_change_mm = 20.0;
   // correct: every camera that is not quarantined is refined the same way (no vote, the camera is
   // near right) from each refine_frames monitored frames in turn: a slow drift is followed and a
   // bump correction's remaining error taken out (docs/continuous_calibration.md, "Following
@@ -166,6 +170,10 @@ class CalibrationMonitor {
   // released) on residuals of the new pose only; its state and counters stay.
   void restart(int camera);
   void note_withheld(int camera, std::size_t blobs);
+  // Mode correct: why the last try to correct a quarantined camera was not applied (too few
+  // blobs paired, not determined, implausibly far); appended to its reason while it stays
+  // quarantined, so status and the console say why it is not back.
+  void note_correction(int camera, const std::string& why);
   const CameraCalibrationHealth& health(int camera) const { return cameras_.at(camera).health; }
   std::vector<CameraCalibrationHealth> health() const;
   const CalibrationHealthOptions& options() const { return options_; }

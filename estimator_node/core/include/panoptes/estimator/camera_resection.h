@@ -53,6 +53,10 @@ struct ResectionOptions {
   double max_rms_px = 0.8;
   double max_rotation_sigma_deg = 0.02;
   double max_translation_sigma_mm = 2.0;
+  // ... and plausible: a new pose that turns the camera by more than this or moves it by more is
+  // not applied, and the reason says so (a wrong association, not a bump).
+  double max_rotation_change_deg = 10.0;
+  double max_translation_change_mm = 100.0;
 };
 
 struct ResectionResult {
