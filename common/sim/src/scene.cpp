@@ -200,6 +200,15 @@ Eigen::Vector3d random_axis(std::uint64_t seed, std::size_t camera_index) {
 // `drift: {rate: deg/min, axis: [x, y, z] (camera frame; absent: drawn per camera), translation:
 // [x, y, z] (mm/min, camera frame), from: s}`. The axis is left zero when absent (drawn later,
 // when the seed and the camera's index are known).
+void set_drift(SimCameraConfig& config, TimeNs from_ns, double degrees_per_minute,
+               const Eigen::Vector3d& axis, const Eigen::Vector3d& millimetres_per_minute) {
+  config.drifting = true;
+  config.drift_from_ns = from_ns;
+  config.drift_axis = axis.norm() > 0.0 ? Eigen::Vector3d(axis.normalized()) : Eigen::Vector3d::Zero();
+  config.drift_rate_rad_s = degrees_per_minute * std::numbers::pi / 180.0 / 60.0;
+  config.drift_velocity_m_s = millimetres_per_minute * 1e-3 / 60.0;
+}
+
 void read_drift(const YamlReader& drift, SimCameraConfig& config) {
   reject_unknown_keys(drift, {"rate", "axis", "translation", "from"});
   const double rate = drift.get_double("rate");
@@ -208,11 +217,8 @@ void read_drift(const YamlReader& drift, SimCameraConfig& config) {
   if (!(from_s >= 0.0) || !std::isfinite(from_s)) drift.fail("from", "must be a finite time >= 0 s");
   const Eigen::Vector3d axis = read_vector3(drift, "axis", Eigen::Vector3d::Zero());
   if (drift.has("axis") && !(axis.norm() > 0.0)) drift.fail("axis", "must not be zero");
-  config.drifting = true;
-  config.drift_from_ns = seconds_to_ns(from_s);
-  config.drift_axis = drift.has("axis") ? Eigen::Vector3d(axis.normalized()) : Eigen::Vector3d::Zero();
-  config.drift_rate_rad_s = rate * std::numbers::pi / 180.0 / 60.0;
-  config.drift_velocity_m_s = read_vector3(drift, "translation", Eigen::Vector3d::Zero()) * 1e-3 / 60.0;
+  set_drift(config, seconds_to_ns(from_s), rate, axis,
+            read_vector3(drift, "translation", Eigen::Vector3d::Zero()));
 }
 
 SimCameraConfig read_camera(const YamlReader& camera, const std::optional<YamlReader>& defaults) {
@@ -892,13 +898,8 @@ void Scene::set_camera_bump(std::size_t camera_index, TimeNs at_ns, const RigidT
 
 void Scene::set_camera_drift(std::size_t camera_index, TimeNs from_ns, double degrees_per_minute,
                              const Eigen::Vector3d& axis, const Eigen::Vector3d& millimetres_per_minute) {
-  SimCameraConfig& config = impl_->cameras.at(camera_index);
-  config.drifting = true;
-  config.drift_from_ns = from_ns;
-  config.drift_axis =
-      axis.norm() > 0.0 ? Eigen::Vector3d(axis.normalized()) : random_axis(impl_->seed, camera_index);
-  config.drift_rate_rad_s = degrees_per_minute * std::numbers::pi / 180.0 / 60.0;
-  config.drift_velocity_m_s = millimetres_per_minute * 1e-3 / 60.0;
+  set_drift(impl_->cameras.at(camera_index), from_ns, degrees_per_minute,
+            axis.norm() > 0.0 ? axis : random_axis(impl_->seed, camera_index), millimetres_per_minute);
 }
 
 std::map<std::string, std::vector<Eigen::Vector3d>> Scene::rig_markers() const {

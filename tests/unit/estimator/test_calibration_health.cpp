@@ -208,6 +208,10 @@ BumpRun track(const Scene& scene, const std::string& mode, TimeNs split_ns = 10 
       if (frame.stamp_ns - kEpoch >= scene.duration_ns() - 10 * kNsPerSecond) last.push_back(record);
     }
     for (auto& correction : tracker.take_calibration_corrections()) {
+      if (correction.kind == CalibrationCorrection::Kind::kDrift) {  // counted, not printed (hundreds)
+        run.corrections.push_back(std::move(correction));
+        continue;
+      }
       std::printf("%s corrected at %.3f s: turned %.3f deg, moved %.1f mm (%zu pairs, %.3f px)\n",
                   correction.camera_id.c_str(), ns_to_seconds(correction.stamp_ns - kEpoch),
                   correction.result.rotation_change_deg, correction.result.translation_change_mm,
@@ -462,26 +466,17 @@ struct DriftRun {
 };
 
 DriftRun drift_run(const Scene& scene, const std::string& mode, bool anchored = false) {
-  TrackerOptions options;
-  options.calibration.mode = mode;
-  if (anchored) options.calibration.anchors = anchors_of(scene);
-  Tracker tracker(options);
-  tracker.set_calibration(scene.calibration());
-  std::vector<TrackRecord> judged;
+  const BumpRun bump_run = track(scene, mode, scene.duration_ns() / 2, anchored);
   DriftRun run;
-  for (const auto& frame : frames_of(scene)) {
-    if (tracker.process(frame) != FrameOutcome::kProcessed) continue;
-    run.corrections += tracker.take_calibration_corrections().size();
-    if (frame.stamp_ns - kEpoch < scene.duration_ns() / 2) continue;
-    for (const auto& record : tracker.current_tracks()) judged.push_back(record);
-  }
-  run.rmse_mm = rmse_mm(scene, judged, run.coverage);
-  for (const auto& health : tracker.calibration_health()) run.quarantines += health.quarantines;
+  run.rmse_mm = bump_run.rmse_after_mm;
+  run.coverage = bump_run.coverage_after;
+  run.corrections = bump_run.corrections.size();
+  run.quarantines = bump_run.quarantines;
   Eigen::Matrix3Xd used(3, scene.cameras().size());
   Eigen::Matrix3Xd truth(3, scene.cameras().size());
   for (std::size_t i = 0; i < scene.cameras().size(); ++i) {
     const RigidTransform real = scene.camera_pose_at(i, scene.duration_ns());
-    const RigidTransform in_use = tracker.camera_model(scene.cameras()[i].calibration.id)->T_world_cam();
+    const RigidTransform& in_use = bump_run.final_poses.at(scene.cameras()[i].calibration.id);
     run.worst_rotation_deg =
         std::max(run.worst_rotation_deg, Eigen::AngleAxisd(in_use.q * real.q.conjugate()).angle() / kDegree);
     run.worst_centre_mm = std::max(run.worst_centre_mm, 1e3 * (in_use.t - real.t).norm());
