@@ -15,10 +15,29 @@
 # (counted as id_outside_partition), which never counts cam9.
 # Root only; skips (77) otherwise.
 set -euo pipefail
+# One more attempt, only when every failed check is one that a pair of participants that never
+# matched explains (a reader that received nothing, a command or an impostor nobody matched): with
+# Debian's Fast DDS 2.9.1 such a pair occurs now and then under load (docs/security.md, "Reliability
+# of the handshakes"; CI of stop 57 failed on it once, 0 of 6 loaded runs here before it). Any other
+# failed check (tracking, intruders, capture, bad files) fails at once. Both attempts' checks are
+# printed.
+if [ -z "${PANOPTES_SECURITY_ATTEMPT:-}" ]; then
+  rc=0
+  PANOPTES_SECURITY_ATTEMPT=1 bash "$0" "$@" || rc=$?
+  if [ "$rc" -eq 3 ]; then
+    echo "RETRY: every failed check above is an unmatched participant pair (Fast DDS 2.9); a second attempt"
+    rc=0
+    PANOPTES_SECURITY_ATTEMPT=2 bash "$0" "$@" || rc=$?
+  fi
+  exit "$rc"
+fi
 here="$(cd "$(dirname "$0")" && pwd)"
 source "$here/lib.sh"
 source "$here/netns.sh"
 netns_test_start
+unmatched=0
+# fail_unmatched MESSAGE: a failed check that a participant pair that never matched explains.
+fail_unmatched() { fail "$* (a pair that never matched?)"; unmatched=$((unmatched + 1)); }
 
 tool="$source_dir/deploy/security/panoptes-security"
 secure="$source_dir/deploy/dds/secure.xml"
@@ -242,10 +261,10 @@ else
 fi
 frames() { grep -c '"type":"tracks"' "$work/$1.jsonl" 2>/dev/null || true; }
 [ "$(frames app)" -gt 300 ] && pass "the application host received $(frames app) TrackFrames" ||
-  fail "the application host received $(frames app) TrackFrames"
+  fail_unmatched "the application host received $(frames app) TrackFrames"
 { [ "$(frames mallory)" -gt 100 ] || [ "$(frames mallory2)" -gt 100 ]; } &&
   pass "an application certificate reads poses ($(frames mallory) and $(frames mallory2) TrackFrames)" ||
-  fail "mallory's application identity received $(frames mallory) and $(frames mallory2) TrackFrames"
+  fail_unmatched "mallory's application identity received $(frames mallory) and $(frames mallory2) TrackFrames"
 # system_frames TAG: TrackFrames from the estimator (they name the camera whose frame produced them);
 # forged_frames TAG: those of the intruders' feature flood (no camera).
 count_frames() {
@@ -289,7 +308,7 @@ applied=$(echo $applied)
 n_applied=$(echo $applied | wc -w)
 [ "${matched:-0}" -ge 2 ] && [ "$n_applied" -eq "${matched:-0}" ] && [ "$checked" -ge 1 ] && [ "$operator_set" -eq "$checked" ] &&
   pass "the operator's threshold (61) was applied by the $n_applied cameras its writer matched ($applied); all $checked of them the operator saw report it" ||
-  { fail "the operator's command: ${matched:-no} matched, applied by '$applied', $checked of them seen, $operator_set reporting 61"; cat "$work/ctl_ops.log"; }
+  { fail_unmatched "the operator's command: ${matched:-no} matched, applied by '$applied', $checked of them seen, $operator_set reporting 61"; cat "$work/ctl_ops.log"; }
 [ "$intruder_set" -eq 0 ] && pass "no camera ever took the intruders' threshold (255)" ||
   fail "$intruder_set cameras took the intruders' threshold"
 # The estimator's per-camera counters: the four real cameras, none of the flood's cam4..cam7.
@@ -301,7 +320,8 @@ for line in open(sys.argv[1]):
     if r['type'] == 'status': names |= set(r['cameras'])
 print(' '.join(sorted(names)))" "$work/console.jsonl")"
 case " $cameras " in
-  *" cam4 "* | *" cam5 "* | *" cam6 "* | *" cam7 "* | *" cam9 "* | "  ") fail "the estimator's per-camera counters name: '$cameras'" ;;
+  *" cam4 "* | *" cam5 "* | *" cam6 "* | *" cam7 "* | *" cam9 "*) fail "the estimator's per-camera counters name: '$cameras'" ;;
+  "  ") fail_unmatched "the console's reader saw no estimator status" ;;
   *) pass "the estimator counted frames from the system's cameras only ($cameras)" ;;
 esac
 # The impostors (cam1's certificate writing as cam0 and cam9) ran, and the estimator dropped its
@@ -319,7 +339,7 @@ status_dropped=$(sed -n 's/^panoptes_ctl: dropped \([0-9]*\) status messages (id
 grep -q "FeatureFrames in" "$work/impostor_a.log" "$work/impostor_b.log" && [ "$outside" -gt 100 ] ||
   [ "${status_dropped:-0}" -gt 3 ] &&
   pass "cam1's certificate writing as cam0 and cam9 was dropped (id_outside_partition): estimator $outside, operator ${status_dropped:-0}" ||
-  { fail "impostor: estimator $outside, operator ${status_dropped:-0} samples counted id_outside_partition"; tail -n 3 "$work"/impostor_?.log; }
+  { fail_unmatched "impostor: estimator $outside, operator ${status_dropped:-0} samples counted id_outside_partition"; tail -n 3 "$work"/impostor_?.log; }
 grep -q '"camera_id":"cam9"' "$work/status.jsonl" && fail "the operator was shown the impostor's cam9" ||
   pass "the operator was never shown a status of the impostor's cam9"
 # The intruder's capture: traffic flowed past it, and none of it is readable.
@@ -371,4 +391,8 @@ leaks=$(grep -a -c "panoptes::msg" "$work/intruder.pcap" || true)
 
 netns_check_isolated && pass "namespaces isolated" || fail "namespace isolation"
 netns_cleanup
+if [ "$failures" -gt 0 ] && [ "$failures" -eq "$unmatched" ] && [ "$PANOPTES_SECURITY_ATTEMPT" = 1 ]; then
+  echo "$failures check(s) failed, each explained by a pair that never matched"
+  exit 3
+fi
 finish
