@@ -46,6 +46,13 @@ constexpr double kFastSpeed = 10.0;
 // Longer than any gap between the frames of a rig's cameras at >= 100 Hz: a track not updated for
 // longer has lost its marker.
 constexpr TimeNs kFrameGapNs = 10'000'000;
+// A track with fewer updates is young: a wrong pairing's ghost lives a few updates.
+constexpr std::uint64_t kSettledUpdates = 10;
+constexpr int kFastUpdates = 5;
+// A fast track lends its speed to new tracks near it (nearby_fast_speed) only after this many
+// fast updates: on a ring of four cameras a walk's ghosts (wrong pairings flying off along a ray)
+// reached 5 and their priors made more such ghosts.
+constexpr int kPriorFastUpdates = 30;
 
 struct Track {
   std::int64_t id = 0;
@@ -67,6 +74,15 @@ struct Track {
   // Confirmed and once faster than kFastSpeed, or rejoined to such a track's identity: a swung or
   // thrown object, which may rejoin its identity after a gap (rejoin_fast_tracks).
   bool fast = false;
+  double peak_speed = 0;  // m/s, the fastest it went while confirmed (carried over by a rejoin)
+  int fast_updates = 0;   // updates while confirmed with a speed above kFastSpeed
+  // Where it was at its last update with a second camera's within kFrameGapNs (0: never): a track
+  // that only one camera still updates slides along that camera's ray (a club head leaving the
+  // views), so a rejoin measures from here.
+  Eigen::Vector3d seen_position = Eigen::Vector3d::Zero();
+  TimeNs seen_ns = 0;
+  Eigen::Vector3d last_seen_position() const { return seen_ns != 0 ? seen_position : state.position(); }
+  TimeNs last_seen_ns() const { return seen_ns != 0 ? seen_ns : last_update_ns; }
   std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
   // Whether the last record made of it was published (determined): then it stays published up to
   // kKeepPublishedFactor × publish_max_sigma_m (hysteresis, issue 32 item 9). Set by tracks_at.
@@ -336,6 +352,14 @@ struct Tracker::Impl {
     if (track.camera_last_update.size() < models.size()) track.camera_last_update.resize(models.size(), 0);
     if (track.camera_last_update[camera] == 0) ++track.distinct_cameras;
     track.camera_last_update[camera] = std::max<TimeNs>(track.camera_last_update[camera], stamp_ns);
+    for (std::size_t k = 0; k < track.camera_last_update.size(); ++k) {
+      if (static_cast<int>(k) != camera && stamp_ns - track.camera_last_update[k] <= kFrameGapNs &&
+          track.camera_last_update[k] != 0) {
+        track.seen_position = track.state.position();
+        track.seen_ns = stamp_ns;
+        break;
+      }
+    }
     if (!track.confirmed && (track.distinct_cameras >= required_cameras() ||
                              (track.distinct_cameras >= 2 &&
                               track.updates >= static_cast<std::uint64_t>(options.confirm_updates)))) {
@@ -382,11 +406,18 @@ struct Tracker::Impl {
   void initiate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
                 const std::vector<char>& used);
   // A new track's id: an undone track's within kReuseIdGate of `position` at `stamp` (the nearest),
-  // else a lost fast track's (rejoin_fast_track; sets `fast`), else a new one.
-  std::int64_t id_for(const Eigen::Vector3d& position, TimeNs stamp, bool& fast);
-  // rejoin_fast_tracks: the id of the confirmed fast track that lost its marker within reach of
-  // `position`, clearly the nearest of all that lost theirs; that track is removed. None when ambiguous.
-  std::optional<std::int64_t> rejoin_fast_track(const Eigen::Vector3d& position, TimeNs stamp);
+  // else a lost fast track's (rejoin_fast_track: `rejoined_peak_speed` is then that track's peak
+  // speed, else 0), else a new one.
+  std::int64_t id_for(const Eigen::Vector3d& position, TimeNs stamp, double& rejoined_peak_speed);
+  // rejoin_fast_tracks: the id and peak speed of the confirmed fast track that lost its marker
+  // within reach of `position`, clearly the nearest of all that lost theirs; that track is
+  // removed. None when ambiguous.
+  std::optional<std::pair<std::int64_t, double>> rejoin_fast_track(const Eigen::Vector3d& position,
+                                                                   TimeNs stamp);
+  // The highest peak speed of the confirmed fast tracks that lost their marker (not updated for
+  // kFrameGapNs; a followed one has its blobs) and could be at `position` now (within their peak
+  // speed x max(gap, 50 ms) + 5 cm); 0 when none.
+  double nearby_fast_speed(const Eigen::Vector3d& position, TimeNs stamp) const;
   void prune(TimeNs now_ns);
   std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
   // Inserts `late` (in stamp order, each older than the newest applied frame, none older than the
@@ -774,7 +805,14 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   // confirmed; a ghost, starved of blobs in its own views, still reaches tentative_max_misses.
   if (!track.confirmed && track.misses > 0) --track.misses;
   note_update(track, camera_index, stamp);
-  if (track.confirmed && track.state.velocity().squaredNorm() >= kFastSpeed * kFastSpeed) track.fast = true;
+  // Fast once kFastUpdates updates of a settled track (kSettledUpdates) were above kFastSpeed: a
+  // ghost of a wrong pairing, or a walking marker's track in a moment of confusion, may show such
+  // a speed for an update or two.
+  if (track.confirmed && track.state.velocity().squaredNorm() >= kFastSpeed * kFastSpeed) {
+    ++track.fast_updates;
+    track.peak_speed = std::max(track.peak_speed, track.state.velocity().norm());
+    if (track.fast_updates >= kFastUpdates && track.updates >= kSettledUpdates) track.fast = true;
+  }
   used[blob] = 1;
   ++core.blobs_associated;
   ++core.associated_per_camera[camera_index];
@@ -940,16 +978,34 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
   };
   for (auto& candidate : core.initiator.add_frame(camera_index, stamp, unmatched, occupied)) {
     Track track;
-    track.id = id_for(candidate.position, stamp, track.fast);
+    double rejoined_peak_speed = 0;
+    track.id = id_for(candidate.position, stamp, rejoined_peak_speed);
     track.state.x.head<3>() = candidate.position;
     track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
     const double sp = options.init_position_sigma_m;
     // A measured velocity is as uncertain as it is large (finite differences of pixel positions
     // over ~10 ms, through the marker's acceleration): a club head at 25 m/s is not known to 0.5 m/s.
-    const double sv = candidate.has_velocity
-                          ? std::max(options.init_measured_velocity_sigma_mps,
-                                     options.init_velocity_relative_sigma * candidate.velocity.norm())
-                          : options.init_velocity_sigma_mps;
+    double sv = candidate.has_velocity
+                    ? std::max(options.init_measured_velocity_sigma_mps,
+                               options.init_velocity_relative_sigma * candidate.velocity.norm())
+                    : options.init_velocity_sigma_mps;
+    // A swung or thrown object back from a gap (the top of the swing; rejoined), or a blob without
+    // a measured velocity (no camera saw it a frame before: it just came into view) near one: its
+    // next frames may see it at full speed again, so its velocity is as uncertain as half that
+    // speed and its σ² starts at the manoeuvre maximum (decaying as for any track), as after a
+    // recovered manoeuvre. Walking, running and dancing markers are never fast.
+    if (rejoined_peak_speed > 0) {
+      track.fast = true;
+      track.peak_speed = rejoined_peak_speed;
+    }
+    const double fast_prior = rejoined_peak_speed > 0  ? rejoined_peak_speed
+                              : candidate.has_velocity ? 0.0
+                                                       : nearby_fast_speed(candidate.position, stamp);
+    if (fast_prior > 0) {
+      sv = std::max(sv, 0.5 * fast_prior);
+      track.q_scale = std::max(1.0, options.process_noise_max_scale);
+      track.q_stamp_ns = stamp;
+    }
     Vector6d variances;
     variances << sp * sp, sp * sp, sp * sp, sv * sv, sv * sv, sv * sv;
     track.state.P = FilterCovariance<6>::diagonal(variances);
@@ -1025,7 +1081,8 @@ void Tracker::Impl::prune(TimeNs now_ns) {
   std::erase_if(core.tracks, [&](const Track&) { return remove[k++] != 0; });
 }
 
-std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp, bool& fast) {
+std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp,
+                                   double& rejoined_peak_speed) {
   // Where an undone track was when the replay creates a track again: its newest state moved back
   // by its velocity over at most the rewind horizon (0.5 s), a few millimetres for a walk.
   constexpr double kReuseIdGate = 0.015;
@@ -1040,44 +1097,56 @@ std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp
   }
   if (nearest == undone.end()) {
     const auto rejoined = rejoin_fast_track(position, stamp);
-    fast = rejoined.has_value();
-    return rejoined ? *rejoined : next_track_id++;
+    if (!rejoined) return next_track_id++;
+    rejoined_peak_speed = rejoined->second;
+    return rejoined->first;
   }
   const std::int64_t id = nearest->id;
   undone.erase(nearest);
   return id;
 }
 
-std::optional<std::int64_t> Tracker::Impl::rejoin_fast_track(const Eigen::Vector3d& position, TimeNs stamp) {
+std::optional<std::pair<std::int64_t, double>> Tracker::Impl::rejoin_fast_track(
+    const Eigen::Vector3d& position, TimeNs stamp) {
   if (!options.rejoin_fast_tracks || options.process_noise_max_scale <= 1.0) return std::nullopt;
   // A swung object that leaves every view (a club head above the cameras at the top of the swing)
   // comes back where its path turned, not where constant velocity puts it. Candidates: every
   // confirmed track that lost its marker, fast or not (a slower shaft marker lost beside the head
-  // must not hand the head's id to the shaft), also those deleted as implausible. The nearest
-  // must be fast and within its reach (the distance it could have covered at its last speed, plus a
-  // margin), every other at least twice as far and kClearMargin beyond.
+  // must not hand the head's id to the shaft), also those deleted as implausible. The nearest fast
+  // one must be within its reach (the distance it could have covered at its peak speed, plus a
+  // margin), every other at least twice as far and kClearMargin beyond, except young slow ones
+  // (fewer than kSettledUpdates updates): near the top of a swing, where few cameras see the head
+  // and the shaft, wrong pairings make short-lived tracks that are no other marker's identity.
   constexpr double kReachMargin = 0.05, kClearMargin = 0.05;
   const Track* best = nullptr;
-  double best_d = std::numeric_limits<double>::infinity(), second_d = best_d;
+  double best_d = std::numeric_limits<double>::infinity(), other_d = best_d, followed_d = best_d;
   const auto consider = [&](const Track& track) {
     const TimeNs gap = stamp - track.last_update_ns;
-    if (!track.confirmed || gap <= kFrameGapNs || gap > options.delete_after_ns) return;
-    const double d = (position - track.state.position()).norm();
-    if (d < best_d) {
-      second_d = best_d;
+    if (!track.confirmed || gap > options.delete_after_ns) return;
+    const double d = (position - track.last_seen_position()).norm();
+    if (gap <= kFrameGapNs) {
+      // Still followed: not a candidate, but a settled one nearer the new track than the lost
+      // one is a sign that two markers went out of view together (head and shaft) and that this
+      // one is astray.
+      if (track.updates >= kSettledUpdates)
+        followed_d = std::min(followed_d, (position - track.position_at(stamp)).norm());
+      return;
+    }
+    if (track.fast && d < best_d) {
+      if (best != nullptr) other_d = std::min(other_d, best_d);
       best_d = d;
       best = &track;
-    } else {
-      second_d = std::min(second_d, d);
+    } else if (track.fast || track.updates >= kSettledUpdates) {
+      other_d = std::min(other_d, d);
     }
   };
   for (const Track& track : core.tracks) consider(track);
   for (const Track& track : core.lost) consider(track);
-  if (best == nullptr || !best->fast || second_d < 2.0 * best_d + kClearMargin) return std::nullopt;
-  const double reach =
-      std::max(best->state.velocity().norm(), kFastSpeed) * ns_to_seconds(stamp - best->last_update_ns) +
-      kReachMargin;
+  if (best == nullptr || other_d < 2.0 * best_d + kClearMargin || followed_d < best_d) return std::nullopt;
+  const double speed = std::max({best->peak_speed, best->state.velocity().norm(), kFastSpeed});
+  const double reach = speed * ns_to_seconds(stamp - best->last_seen_ns()) + kReachMargin;
   if (best_d > reach) return std::nullopt;
+  const double peak_speed = std::max(best->peak_speed, kFastSpeed);
   const std::int64_t id = best->id;
   const auto same = [id](const Track& track) { return track.id == id; };
   if (std::erase_if(core.lost, same) == 0) {
@@ -1085,7 +1154,25 @@ std::optional<std::int64_t> Tracker::Impl::rejoin_fast_track(const Eigen::Vector
     ++core.tracks_deleted;
   }
   ++core.fast_tracks_rejoined;
-  return id;
+  return std::make_pair(id, peak_speed);
+}
+
+double Tracker::Impl::nearby_fast_speed(const Eigen::Vector3d& position, TimeNs stamp) const {
+  if (options.process_noise_max_scale <= 1.0) return 0.0;
+  constexpr double kMinGapS = 0.05, kMargin = 0.05;
+  double speed = 0.0;
+  const auto consider = [&](const Track& track) {
+    const TimeNs gap = stamp - track.last_update_ns;
+    if (!track.confirmed || !track.fast || track.fast_updates < kPriorFastUpdates || gap <= kFrameGapNs ||
+        gap > options.delete_after_ns)
+      return;
+    const double reach =
+        track.peak_speed * std::max(ns_to_seconds(stamp - track.last_seen_ns()), kMinGapS) + kMargin;
+    if ((position - track.last_seen_position()).norm() <= reach) speed = std::max(speed, track.peak_speed);
+  };
+  for (const Track& track : core.tracks) consider(track);
+  for (const Track& track : core.lost) consider(track);
+  return speed;
 }
 
 void Tracker::Impl::replay_with(std::vector<Entry> late) {

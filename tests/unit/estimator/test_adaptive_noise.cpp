@@ -38,10 +38,12 @@ struct Result {
   double sum2 = 0;
 };
 
-// `hidden`: where no camera sees the marker (none: everywhere visible).
-template <class Path>
-Result track(Path path, const TrackerOptions& options, double duration_s,
-             const std::function<bool(const Eigen::Vector3d&)>& hidden = nullptr) {
+using Path = std::function<Eigen::Vector3d(double)>;
+using Region = std::function<bool(const Eigen::Vector3d&)>;
+
+// Each marker's result; `hidden`: where no camera sees a marker (none: everywhere visible).
+std::vector<Result> track(const std::vector<Path>& paths, const TrackerOptions& options, double duration_s,
+                          const Region& hidden = nullptr) {
   const auto cameras = make_ring_calibration(6, 4.0, 2.5, true);
   std::vector<CameraModel> models;
   for (const auto& c : cameras) models.push_back(c.model());
@@ -49,7 +51,7 @@ Result track(Path path, const TrackerOptions& options, double duration_s,
   tracker.set_calibration(SystemCalibration{cameras});
   std::mt19937_64 rng(35);
   std::normal_distribution<double> noise(0.0, 0.1);
-  Result result;
+  std::vector<Result> results(paths.size());
   // Six cameras at 110 Hz, phases spread over the frame interval.
   const TimeNs period = 9'090'909;
   for (int k = 0; k < static_cast<int>(duration_s * 110); ++k) {
@@ -59,31 +61,45 @@ Result track(Path path, const TrackerOptions& options, double duration_s,
       frame.camera_id = cameras[c].id;
       frame.frame = k;
       frame.stamp_ns = kEpoch + t;
-      const Eigen::Vector3d p = path(ns_to_seconds(t));
-      const bool seen = !hidden || !hidden(p);
-      const auto pixel = models[c].project(p);
-      if (seen && pixel && models[c].in_image(*pixel)) {
-        Blob blob;
-        blob.x = pixel->x() + noise(rng);
-        blob.y = pixel->y() + noise(rng);
-        blob.area = 12;
-        frame.blobs.push_back(blob);
+      std::vector<Eigen::Vector3d> truth;
+      std::vector<char> seen;
+      for (const Path& path : paths) {
+        truth.push_back(path(ns_to_seconds(t)));
+        seen.push_back(!hidden || !hidden(truth.back()));
+        const auto pixel = models[c].project(truth.back());
+        if (seen.back() && pixel && models[c].in_image(*pixel)) {
+          Blob blob;
+          blob.x = pixel->x() + noise(rng);
+          blob.y = pixel->y() + noise(rng);
+          blob.area = 12;
+          frame.blobs.push_back(blob);
+        }
       }
       EXPECT_EQ(tracker.process(frame), FrameOutcome::kProcessed);
-      if (ns_to_seconds(t) < 0.3 || !seen) continue;
-      ++result.instants;
-      for (const auto& record : tracker.current_tracks()) {
-        const double error = (record.p - p).norm();
-        if (error < 0.02) {
-          result.ids.insert(record.id);
-          ++result.tracked;
-          result.sum2 += error * error;
-          break;
+      if (ns_to_seconds(t) < 0.3) continue;
+      const auto records = tracker.current_tracks();
+      for (std::size_t m = 0; m < paths.size(); ++m) {
+        if (!seen[m]) continue;
+        Result& result = results[m];
+        ++result.instants;
+        for (const auto& record : records) {
+          const double error = (record.p - truth[m]).norm();
+          if (error < 0.02) {
+            result.ids.insert(record.id);
+            ++result.tracked;
+            result.sum2 += error * error;
+            break;
+          }
         }
       }
     }
   }
-  return result;
+  return results;
+}
+
+Result track(const Path& path, const TrackerOptions& options, double duration_s,
+             const Region& hidden = nullptr) {
+  return track(std::vector<Path>{path}, options, duration_s, hidden).front();
 }
 
 TEST(AdaptiveNoise, SwungClubHeadKeepsOneIdentityWithTheDefaults) {
@@ -120,6 +136,35 @@ TEST(AdaptiveNoise, ClubHeadThatLeavesEveryViewRejoinsItsIdentity) {
   const Result without = track(club_head, off, 3.0, above_the_views);
   std::printf("no rejoin: %zu ids\n", without.ids.size());
   EXPECT_GT(without.ids.size(), 3u);
+}
+
+// Head (1.0 m out) and a shaft marker (0.6 m) of one club, both hidden above 2.0 m: the head leaves
+// the views while the shaft is still followed 0.4 m away and comes back at ~17 m/s with no earlier
+// blob to give its new track a velocity. Each must come back under its own identity. A followed
+// track near the return blocks a rejoin only when it is nearer than the lost one (a shaft track
+// astray); blocking at any distance gave the head 9 identities here. The stop-57 tracker passes
+// too (head 897 of 961 instants); the grid's club cells are where the rejoin rules were measured.
+TEST(AdaptiveNoise, HeadAndShaftThatLeaveTheViewsTogetherKeepTheirIdentities) {
+  const auto marker_at = [](double radius) {
+    return [radius](double t) {
+      const Eigen::Vector3d head = club_head(t);
+      const Eigen::Vector3d pivot(0.0, 0.1, 1.7);
+      return Eigen::Vector3d(pivot + radius * (head - pivot));
+    };
+  };
+  const Region above = [](const Eigen::Vector3d& p) { return p.z() > 2.0; };
+  const auto results = track({marker_at(1.0), marker_at(0.6)}, TrackerOptions{}, 3.0, above);
+  const char* names[] = {"head", "shaft"};
+  for (std::size_t m = 0; m < results.size(); ++m) {
+    const Result& r = results[m];
+    std::printf("%s: %zu ids, tracked %d of %d visible instants\n", names[m], r.ids.size(), r.tracked,
+                r.instants);
+    EXPECT_EQ(r.ids.size(), 1u) << names[m] << " came back under another identity";
+    EXPECT_GE(r.tracked, 0.9 * r.instants) << names[m] << ": " << r.tracked << " of " << r.instants;
+  }
+  EXPECT_TRUE(results[0].ids.empty() || results[1].ids.empty() ||
+              *results[0].ids.begin() != *results[1].ids.begin())
+      << "head and shaft share an identity";
 }
 
 TEST(AdaptiveNoise, SlowMarkerAsAccurateAsWithFixedNoise) {
