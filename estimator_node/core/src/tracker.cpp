@@ -71,8 +71,9 @@ struct Track {
   double nis_adapt = 0;
   TimeNs q_stamp_ns = 0;
   int distinct_cameras = 0;  // cameras that ever updated it
-  // Confirmed and once faster than kFastSpeed, or rejoined to such a track's identity: a swung or
-  // thrown object, which may rejoin its identity after a gap (rejoin_fast_tracks).
+  // Confirmed and kFastUpdates updates above kFastSpeed once settled (commit_pair), or rejoined
+  // to such a track's identity: a swung or thrown object, which may rejoin its identity after a
+  // gap (rejoin_fast_tracks).
   bool fast = false;
   double peak_speed = 0;  // m/s, the fastest it went while confirmed (carried over by a rejoin)
   int fast_updates = 0;   // updates while confirmed with a speed above kFastSpeed
