@@ -54,14 +54,16 @@ ResidualStats residual_stats(std::size_t n, const Eigen::Vector2d& sum, const Ei
   return stats;
 }
 
-void CalibrationMonitor::Sums::add(const Eigen::Vector2d& r, double sign) {
-  if (sign > 0) {
-    ++n;
-  } else {
-    --n;
-  }
-  sum += sign * r;
-  outer += sign * r * r.transpose();
+void CalibrationMonitor::Sums::add(const Eigen::Vector2d& r) {
+  ++n;
+  sum += r;
+  outer += r * r.transpose();
+}
+
+void CalibrationMonitor::Sums::remove(const Sums& part) {
+  n -= std::min(n, part.n);
+  sum -= part.sum;
+  outer -= part.outer;
   if (n == 0) {  // no drift of the running sums
     sum.setZero();
     outer.setZero();
@@ -94,24 +96,57 @@ bool CalibrationMonitor::due(int camera_index, TimeNs stamp_ns) {
   return true;
 }
 
-bool CalibrationMonitor::wants(int camera, std::int64_t track_id, TimeNs stamp_ns) const {
-  const auto& last = cameras_.at(camera).last_sample;
-  const auto found = last.find(track_id);
-  return found == last.end() || stamp_ns - found->second >= options_.sample_interval_ns ||
-         stamp_ns < found->second;
+std::size_t CalibrationMonitor::find_sample(const PerCamera& camera, std::int64_t track_id) {
+  const auto& last = camera.last_sample;
+  // The track asked about last (wants(), then add_prediction() and add() of the same track).
+  if (camera.hint < last.size() && last[camera.hint].first == track_id) return camera.hint;
+  const auto found = std::lower_bound(last.begin(), last.end(), track_id,
+                                      [](const auto& entry, std::int64_t id) { return entry.first < id; });
+  camera.hint = static_cast<std::size_t>(found - last.begin());
+  return camera.hint;
+}
+
+bool CalibrationMonitor::wants(int camera_index, std::int64_t track_id, TimeNs stamp_ns) const {
+  const PerCamera& camera = cameras_.at(camera_index);
+  const std::size_t at = find_sample(camera, track_id);
+  if (at == camera.last_sample.size() || camera.last_sample[at].first != track_id) return true;
+  const TimeNs last = camera.last_sample[at].second;
+  return stamp_ns - last >= options_.sample_interval_ns || stamp_ns < last;
+}
+
+void CalibrationMonitor::note_sample(PerCamera& camera, std::int64_t track_id, TimeNs stamp_ns) {
+  auto& last = camera.last_sample;
+  const std::size_t at = find_sample(camera, track_id);
+  if (at < last.size() && last[at].first == track_id) {
+    last[at].second = stamp_ns;
+  } else {  // track ids grow: a new one almost always goes at the end
+    last.emplace(last.begin() + static_cast<std::ptrdiff_t>(at), track_id, stamp_ns);
+  }
+}
+
+CalibrationMonitor::Frame& CalibrationMonitor::frame_at(PerCamera& camera, TimeNs stamp_ns) {
+  if (camera.window.empty() || camera.window.back().stamp_ns != stamp_ns) camera.window.push_back({stamp_ns});
+  return camera.window.back();
 }
 
 void CalibrationMonitor::add_prediction(int camera_index, std::int64_t track_id, TimeNs stamp_ns, bool seen) {
   PerCamera& camera = cameras_.at(camera_index);
-  camera.last_sample[track_id] = stamp_ns;
-  camera.predictions.emplace_back(stamp_ns, seen);
-  if (seen) ++camera.seen;
+  note_sample(camera, track_id, stamp_ns);
+  Frame& frame = frame_at(camera, stamp_ns);
+  ++frame.predicted;
+  ++camera.predicted;
+  if (seen) {
+    ++frame.seen;
+    ++camera.seen;
+  }
 }
 
 void CalibrationMonitor::add_blobs(int camera_index, TimeNs stamp_ns, std::size_t blobs,
                                    std::size_t explained) {
   PerCamera& camera = cameras_.at(camera_index);
-  camera.blob_counts.push_back({stamp_ns, blobs, explained});
+  Frame& frame = frame_at(camera, stamp_ns);
+  frame.blobs += blobs;
+  frame.explained += explained;
   camera.blobs += blobs;
   camera.explained += explained;
 }
@@ -119,33 +154,30 @@ void CalibrationMonitor::add_blobs(int camera_index, TimeNs stamp_ns, std::size_
 void CalibrationMonitor::add(int camera_index, std::int64_t track_id, TimeNs stamp_ns,
                              const Eigen::Vector2d& at, const Eigen::Vector2d& residual) {
   PerCamera& camera = cameras_.at(camera_index);
-  camera.last_sample[track_id] = stamp_ns;
+  note_sample(camera, track_id, stamp_ns);
   const int column = std::clamp(static_cast<int>(kCalibrationRegionsX * at.x() / camera.image_size.x()), 0,
                                 kCalibrationRegionsX - 1);
   const int row = std::clamp(static_cast<int>(kCalibrationRegionsY * at.y() / camera.image_size.y()), 0,
                              kCalibrationRegionsY - 1);
   const int region = row * kCalibrationRegionsX + column;
-  camera.window.push_back({stamp_ns, region, residual});
-  camera.whole.add(residual, 1.0);
-  camera.regions[region].add(residual, 1.0);
+  frame_at(camera, stamp_ns).regions[region].add(residual);
+  camera.whole.add(residual);
+  camera.regions[region].add(residual);
   ++camera.health.residuals;
 }
 
 void CalibrationMonitor::expire(PerCamera& camera, TimeNs stamp_ns) {
   while (!camera.window.empty() && stamp_ns - camera.window.front().stamp_ns > options_.window_ns) {
-    const Sample& old = camera.window.front();
-    camera.whole.add(old.r, -1.0);
-    camera.regions[old.region].add(old.r, -1.0);
+    const Frame& old = camera.window.front();
+    for (int r = 0; r < kCalibrationRegions; ++r) {
+      camera.whole.remove(old.regions[r]);
+      camera.regions[r].remove(old.regions[r]);
+    }
+    camera.predicted -= old.predicted;
+    camera.seen -= old.seen;
+    camera.blobs -= old.blobs;
+    camera.explained -= old.explained;
     camera.window.pop_front();
-  }
-  while (!camera.predictions.empty() && stamp_ns - camera.predictions.front().first > options_.window_ns) {
-    if (camera.predictions.front().second) --camera.seen;
-    camera.predictions.pop_front();
-  }
-  while (!camera.blob_counts.empty() && stamp_ns - camera.blob_counts.front().stamp_ns > options_.window_ns) {
-    camera.blobs -= camera.blob_counts.front().blobs;
-    camera.explained -= camera.blob_counts.front().explained;
-    camera.blob_counts.pop_front();
   }
   // Tracks not sampled for a window are forgotten (ids are never reused).
   std::erase_if(camera.last_sample,
@@ -154,7 +186,7 @@ void CalibrationMonitor::expire(PerCamera& camera, TimeNs stamp_ns) {
 
 void CalibrationMonitor::update_stats(PerCamera& camera) const {
   auto& health = camera.health;
-  health.predicted = camera.predictions.size();
+  health.predicted = camera.predicted;
   health.seen = camera.seen;
   health.blobs = camera.blobs;
   health.explained = camera.explained;
@@ -191,16 +223,11 @@ void CalibrationMonitor::note_correction(int camera_index, const std::string& wh
 
 void CalibrationMonitor::restart(int camera_index) {
   PerCamera& camera = cameras_.at(camera_index);
-  camera.window.clear();
-  camera.whole = Sums{};
-  for (auto& region : camera.regions) region = Sums{};
-  camera.last_sample.clear();
-  camera.predictions.clear();
-  camera.seen = 0;
-  camera.blob_counts.clear();
-  camera.blobs = 0;
-  camera.explained = 0;
-  camera.calm_since_ns = 0;
+  PerCamera fresh;
+  fresh.image_size = camera.image_size;
+  fresh.last_monitored_ns = camera.last_monitored_ns;
+  fresh.health = std::move(camera.health);
+  camera = std::move(fresh);
 }
 
 bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {

@@ -16,6 +16,7 @@
 #include "blob_grid.h"
 #include "panoptes/errors.h"
 #include "panoptes/estimator/assignment.h"
+#include "points_by_x.h"
 
 namespace panoptes::estimator {
 
@@ -375,6 +376,9 @@ struct Tracker::Impl {
   // calibration monitor (docs/continuous_calibration.md, "Residuals").
   // `gating`: the frame's gating, which association then uses (its projections are shared).
   void monitor_frame(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels, const Gating& gating);
+  // Whether this monitored frame of `camera` is sampled for a correction (quarantined) or a
+  // refinement (following drift, one per refine_sample_interval_ns): `correct` mode only.
+  bool wants_positions(int camera, TimeNs stamp) const;
   // Mode correct, a quarantined camera's monitored frame: collected; with enough, its pose is
   // estimated again and, when well determined, applied (docs/continuous_calibration.md).
   void collect_for_resection(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
@@ -478,38 +482,18 @@ double largest_eigenvalue(const Eigen::Matrix2d& S) {
   return half_trace + std::sqrt(half_difference * half_difference + S(0, 1) * S(1, 0));
 }
 
-// The blob nearest `at` and the distances of the nearest two (infinite when absent).
-struct Nearest {
-  std::size_t index = 0;
-  double d1 = std::numeric_limits<double>::infinity();
-  double d2 = std::numeric_limits<double>::infinity();
-};
-
-// Looks only at the grid's cells within `radius` of `at`: exact for every distance up to `radius`;
-// a blob farther than that may come out infinite (callers judge only nearer ones).
-Nearest nearest_two(const std::vector<Eigen::Vector2d>& pixels, const BlobGrid& grid,
-                    const Eigen::Vector2d& at, double radius) {
-  Nearest n;
-  grid.for_each_near(at, radius, [&](std::size_t j) {
-    const double d = (pixels[j] - at).norm();
-    if (!(d < n.d2)) return;  // also skips NaN
-    if (d < n.d1) {
-      n.d2 = n.d1;
-      n.d1 = d;
-      n.index = j;
-    } else {
-      n.d2 = d;
-    }
-  });
-  return n;
-}
-
 }  // namespace
+
+// A monitored track's blob is usually this near its prediction: the nearest-two search looks
+// within unique_ratio times this first (PointsByX::nearest_two).
+constexpr double kUsuallyNearPx = 4.0;
 
 // Residuals are taken with the fusion path's own prediction and projection (predicted(),
 // project_point()), but associated by a wider, unambiguous nearest-blob rule instead of the gate:
 // a bumped camera's blobs fall outside the gate (0.5° is ~9 px at f = 1000 px, the gate of a
 // well-tracked marker ~3 px), and gated innovations alone would hide the bias by censoring it.
+// Issue 36's cost (32 cameras x 120 Hz): every monitored frame walks every track, so the walk
+// does only what the residuals need (docs/continuous_calibration.md, "Cost").
 void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::Vector2d>& pixels,
                                   const Gating& gating) {
   constexpr std::size_t kMaxBlobs = 1024;  // a frame of garbage is not worth monitoring
@@ -517,61 +501,57 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
   const auto& o = options.calibration;
   const CameraModel& camera = *models[entry.camera];
   const TimeNs stamp = entry.frame.stamp_ns;
+  // Positions are collected only for a frame that a correction or a refinement will sample.
+  const bool collect = wants_positions(entry.camera, stamp);
   std::vector<Eigen::Vector2d> predicted_pixels;  // every live track in view, for isolation
   std::vector<std::size_t> candidates;            // indices into core.tracks
   std::vector<std::size_t> candidate_pixel;       // ... and into predicted_pixels
   std::vector<Eigen::Vector3d> determined;        // their positions, for a correction
+  predicted_pixels.reserve(core.tracks.size());
+  candidates.reserve(core.tracks.size());
+  candidate_pixel.reserve(core.tracks.size());
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
     const auto& pixel = gating.pixel[i];  // gate(): the same position_at(stamp), depth and projection
     if (!pixel) continue;
     predicted_pixels.push_back(*pixel);
     if (!track.confirmed || stamp - track.last_update_ns > options.coast_after_ns) continue;
-    if (!camera.in_image(*pixel, 0.0) || !monitor.wants(entry.camera, track.id, stamp)) continue;
+    if (!camera.in_image(*pixel, 0.0)) continue;
+    // Another camera's recent update is the cheaper test (the monitor's is a lookup).
     int others = 0;
-    for (std::size_t k = 0; k < track.camera_last_update.size(); ++k) {
+    for (std::size_t k = 0; k < track.camera_last_update.size() && others < o.min_other_cameras; ++k) {
       const TimeNs last = track.camera_last_update[k];
       if (static_cast<int>(k) != entry.camera && last != 0 && stamp - last <= o.other_camera_window_ns)
         ++others;
     }
     if (others < o.min_other_cameras) continue;
-    determined.push_back(track.position_at(stamp));
+    if (!monitor.wants(entry.camera, track.id, stamp)) continue;
+    if (collect) determined.push_back(track.position_at(stamp));
     candidates.push_back(i);
     candidate_pixel.push_back(predicted_pixels.size() - 1);
   }
-  if (calibration_mode == CalibrationMode::kCorrect) {
+  if (collect) {
     if (monitor.quarantined(entry.camera)) {
       collect_for_resection(entry.camera, stamp, std::move(determined), pixels);
-    } else if (o.follow_drift) {
+    } else {
       collect_for_refinement(entry.camera, stamp, std::move(determined), pixels);
     }
   }
-  // The predictions in a grid: each blob and each candidate looks only at the cells around it
-  // (issue 36's cost at 32 cameras: all pairs took most of the monitor's time).
-  const auto& intrinsics = camera.intrinsics();
-  const BlobGrid near_predictions(predicted_pixels, intrinsics.width, intrinsics.height,
-                                  std::max(o.search_px, o.isolation_px));
-  // The frame's blobs near some live track's prediction (a bumped camera's are near none).
-  std::size_t explained = 0;
+  // The frame's blobs near some live track's prediction (a bumped camera's are near none). Most
+  // blobs are in the gate of a track whose prediction is that near; the others are searched.
   const double search2 = o.search_px * o.search_px;
-  for (const Eigen::Vector2d& blob : pixels) {
-    bool near = false;
-    near_predictions.for_each_near(blob, o.search_px, [&](std::size_t k) {
-      near = near || (predicted_pixels[k] - blob).squaredNorm() <= search2;
-    });
-    explained += near ? 1 : 0;
-  }
+  std::vector<char> near(pixels.size(), 0);
+  for (const GatedPair& pair : gating.gated)
+    if ((pixels[pair.col] - *gating.pixel[pair.row]).squaredNorm() <= search2) near[pair.col] = 1;
+  const PointsByX predictions(predicted_pixels);
+  for (std::size_t j = 0; j < pixels.size(); ++j)
+    if (!near[j]) near[j] = predictions.any_within(pixels[j], o.search_px) ? 1 : 0;
+  const auto explained = static_cast<std::size_t>(std::count(near.begin(), near.end(), 1));
   monitor.add_blobs(entry.camera, stamp, pixels.size(), explained);
-  const double isolation2 = o.isolation_px * o.isolation_px;
-  const BlobGrid blob_grid(pixels, intrinsics.width, intrinsics.height, o.search_px);
+  const std::vector<char> crowded = predictions.crowded(o.isolation_px);
+  const PointsByX blobs(pixels);
   for (std::size_t c = 0; c < candidates.size(); ++c) {
-    const Eigen::Vector2d& rough = predicted_pixels[candidate_pixel[c]];
-    bool isolated = true;
-    near_predictions.for_each_near(rough, o.isolation_px, [&](std::size_t k) {
-      isolated =
-          isolated && (k == candidate_pixel[c] || (predicted_pixels[k] - rough).squaredNorm() > isolation2);
-    });
-    if (!isolated) continue;
+    if (crowded[candidate_pixel[c]]) continue;
     const Track& track = core.tracks[candidates[c]];
     // The gating's projection when it made one with the same process noise (not adapted).
     std::optional<PointProjection> projection;
@@ -587,7 +567,8 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
       continue;
     // Within unique_ratio x search_px: the blob taken (<= search_px) and the next one it is
     // compared with; the gate of `seen` (<= max_predicted_sigma_px wide) is far inside.
-    const Nearest nearest = nearest_two(pixels, blob_grid, projection->pixel, o.unique_ratio * o.search_px);
+    const NearestTwo nearest =
+        blobs.nearest_two(projection->pixel, kUsuallyNearPx, o.search_px, o.unique_ratio);
     const bool seen = std::isfinite(nearest.d1) &&
                       inside_gate(mahalanobis2(*projection, pixels[nearest.index]), options.gate_chi2);
     monitor.add_prediction(entry.camera, track.id, stamp, seen);
@@ -597,6 +578,14 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
                   pixels[nearest.index] - projection->pixel);
     }
   }
+}
+
+bool Tracker::Impl::wants_positions(int camera, TimeNs stamp) const {
+  if (calibration_mode != CalibrationMode::kCorrect) return false;
+  if (monitor.quarantined(camera)) return true;
+  if (!options.calibration.follow_drift) return false;
+  return camera >= static_cast<int>(refine_sampled_ns.size()) ||
+         stamp - refine_sampled_ns[camera] >= options.calibration.refine_sample_interval_ns;
 }
 
 namespace {
@@ -670,7 +659,9 @@ void Tracker::Impl::collect_for_refinement(int camera, TimeNs stamp, std::vector
   refine.associate_px = std::min(refine.associate_px, 2.0 * refine.inlier_px);
   refine.rounds = 1;
   refine.iterations = 4;
-  refine.converged = 1e-9;  // 1 nrad, 1 nm: far below what a refinement resolves
+  // 0.1 µrad, 0.1 µm: far below what a refinement resolves (0.005°, 0.5 mm); the second step of
+  // a refinement is ~1e-9, the first ~1e-4 (a third step cost 1/6 of the refinement).
+  refine.converged = 1e-7;
   refine.centre_prior_mm = o.refine_centre_prior_mm;
   refine.max_rotation_change_deg = o.refine_max_change_deg;
   refine.max_translation_change_mm = o.refine_max_change_mm;

@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
-// The assignment solver against brute force, and the blob grid against a linear scan.
+// The assignment solver against brute force, and the blob grid and the x-sorted points against a
+// linear scan.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <random>
 
 #include "../../../estimator_node/core/src/blob_grid.h"
+#include "../../../estimator_node/core/src/points_by_x.h"
 #include "panoptes/estimator/assignment.h"
 
 #include <Eigen/LU>
@@ -162,6 +165,80 @@ TEST(BlobGrid, FindsEveryBlobWithinTheRadiusIncludingOutsideTheImage) {
     std::sort(found.begin(), found.end());
     EXPECT_EQ(found, expected);
   }
+}
+
+// Clustered points (the blobs of a few bodies), duplicates and a NaN, as a monitored frame has.
+std::vector<Eigen::Vector2d> clustered_points(std::mt19937& random) {
+  std::uniform_real_distribution<double> centre(0.0, 1280.0), offset(-30.0, 30.0);
+  std::vector<Eigen::Vector2d> points;
+  for (int cluster = 0; cluster < 6; ++cluster) {
+    const Eigen::Vector2d c(centre(random), centre(random) * 0.8);
+    for (int k = 0; k < 12; ++k) points.push_back(c + Eigen::Vector2d(offset(random), offset(random)));
+  }
+  points.push_back(points[5]);  // a duplicate: equal distances, the lower index first
+  points.push_back({std::nan(""), 3.0});
+  return points;
+}
+
+NearestTwo nearest_two_by_scan(const std::vector<Eigen::Vector2d>& points, const Eigen::Vector2d& at,
+                               double reach) {
+  NearestTwo n;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double d = (points[i] - at).norm();
+    if (!(d <= reach)) continue;
+    if (d < n.d1) {
+      n.d2 = n.d1;
+      n.d1 = d;
+      n.index = i;
+    } else if (d < n.d2) {
+      n.d2 = d;
+    }
+  }
+  return n;
+}
+
+TEST(PointsByX, NearestTwoAnyWithinAndCrowdedMatchALinearScan) {
+  std::mt19937 random(4);
+  const std::vector<Eigen::Vector2d> points = clustered_points(random);
+  const PointsByX by_x(points);
+  std::uniform_real_distribution<double> x(-20.0, 1300.0), y(-20.0, 1044.0), jitter(-3.0, 3.0);
+  for (int q = 0; q < 400; ++q) {
+    // A third of the queries near a point (a track's prediction near its blob), a third a few
+    // pixels off (the nearest beyond the first step's reach), a third anywhere.
+    const double off = q % 3 == 0 ? 1.0 : 4.0;
+    const Eigen::Vector2d at =
+        q % 3 == 2 ? Eigen::Vector2d(x(random), y(random))
+                   : Eigen::Vector2d(points[q % 72] + off * Eigen::Vector2d(jitter(random), jitter(random)));
+    const double reach = 2.0 + 0.2 * q;
+    const NearestTwo expected = nearest_two_by_scan(points, at, reach);
+    const NearestTwo found = by_x.nearest_two(at, reach);
+    EXPECT_EQ(found.d1, expected.d1) << "query " << q;
+    EXPECT_EQ(found.d2, expected.d2) << "query " << q;
+    if (std::isfinite(expected.d1)) EXPECT_EQ(found.index, expected.index) << "query " << q;
+    bool any = false;
+    for (const auto& p : points) any = any || (p - at).squaredNorm() <= reach * reach;
+    EXPECT_EQ(by_x.any_within(at, reach), any) << "query " << q;
+    // The two-step search decides as the wide one: the nearest within 25 px, and whether the next
+    // is twice as far.
+    const NearestTwo wide = nearest_two_by_scan(points, at, 50.0);
+    const NearestTwo stepped = by_x.nearest_two(at, 4.0, 25.0, 2.0);
+    const auto taken = [](const NearestTwo& n) { return n.d1 <= 25.0 && n.d2 >= 2.0 * n.d1; };
+    EXPECT_EQ(taken(stepped), taken(wide)) << "query " << q;
+    EXPECT_EQ(stepped.d1, wide.d1) << "query " << q;
+    if (std::isfinite(wide.d1)) EXPECT_EQ(stepped.index, wide.index) << "query " << q;
+  }
+  for (const double radius : {0.5, 5.0, 25.0}) {
+    const std::vector<char> crowded = by_x.crowded(radius);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      bool expected = false;
+      for (std::size_t k = 0; k < points.size(); ++k)
+        expected = expected || (k != i && (points[k] - points[i]).squaredNorm() <= radius * radius);
+      EXPECT_EQ(crowded[i] != 0, expected) << "point " << i << " radius " << radius;
+    }
+  }
+  // The duplicate pair is crowded at any radius; the NaN never is.
+  EXPECT_TRUE(by_x.crowded(0.0)[5]);
+  EXPECT_FALSE(by_x.crowded(1e9).back());
 }
 
 }  // namespace

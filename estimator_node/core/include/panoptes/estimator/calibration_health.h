@@ -179,37 +179,46 @@ class CalibrationMonitor {
   const CalibrationHealthOptions& options() const { return options_; }
 
  private:
-  struct Sample {
-    TimeNs stamp_ns;
-    int region;
-    Eigen::Vector2d r;
-  };
   struct Sums {
     std::size_t n = 0;
     Eigen::Vector2d sum = Eigen::Vector2d::Zero();
     Eigen::Matrix2d outer = Eigen::Matrix2d::Zero();
-    void add(const Eigen::Vector2d& r, double sign);
+    void add(const Eigen::Vector2d& r);
+    void remove(const Sums& part);  // a part that was added before
+  };
+  // What one monitored frame added to the window (its residuals all carry the frame's stamp, so
+  // a frame leaves the window at once: one entry per frame instead of one per residual, as the
+  // window's expiry walked a second's residuals of every camera through the cache).
+  struct Frame {
+    TimeNs stamp_ns = 0;
+    std::array<Sums, kCalibrationRegions> regions{};
+    std::size_t predicted = 0;
+    std::size_t seen = 0;
+    std::size_t blobs = 0;
+    std::size_t explained = 0;
   };
   struct PerCamera {
     Eigen::Vector2d image_size{1, 1};
-    std::deque<Sample> window;
+    std::deque<Frame> window;  // by monitored frame, oldest first
     Sums whole;
     std::array<Sums, kCalibrationRegions> regions{};
-    std::unordered_map<std::int64_t, TimeNs> last_sample;  // by track id
-    std::deque<std::pair<TimeNs, bool>> predictions;       // (stamp, seen) over the window
+    // (track id, stamp of its last sample), sorted by id: a flat table, since a camera's entries
+    // are visited once per sample_interval_ns and a node per track was a cache miss per track.
+    std::vector<std::pair<std::int64_t, TimeNs>> last_sample;
+    mutable std::size_t hint = 0;  // where the last lookup in last_sample ended (find_sample)
+    std::size_t predicted = 0;     // over the window
     std::size_t seen = 0;
-    struct BlobCount {
-      TimeNs stamp_ns;
-      std::size_t blobs;
-      std::size_t explained;
-    };
-    std::deque<BlobCount> blob_counts;  // over the window
     std::size_t blobs = 0;
     std::size_t explained = 0;
     TimeNs calm_since_ns = 0;  // quarantined: residuals unbiased since (0: not calm)
     TimeNs last_monitored_ns = 0;
     CameraCalibrationHealth health;
   };
+  // The window's entry of the frame at `stamp_ns` (the newest, or a new one).
+  static Frame& frame_at(PerCamera& camera, TimeNs stamp_ns);
+  // Where `track_id` is, or would go, in camera.last_sample.
+  static std::size_t find_sample(const PerCamera& camera, std::int64_t track_id);
+  static void note_sample(PerCamera& camera, std::int64_t track_id, TimeNs stamp_ns);
   void expire(PerCamera& camera, TimeNs stamp_ns);
   // The judgement of the window: biased (quarantine), calm (release) and the reason.
   void update_stats(PerCamera& camera) const;
