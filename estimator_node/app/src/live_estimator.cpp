@@ -346,14 +346,18 @@ void LiveEstimator::apply_corrections() {
   const TimeNs now = wall_now_ns();
   bool bumped = false;
   for (const auto& c : corrections) {
-    const bool drift = c.kind == estimator::CalibrationCorrection::Kind::kDrift;
+    using Kind = estimator::CalibrationCorrection::Kind;
+    const bool drift = c.kind == Kind::kDrift;
+    const bool settle = c.kind == Kind::kSettle;
     char text[240];
-    std::snprintf(
-        text, sizeof text,
-        "calibration %s: %s: turned %.3f deg, moved %.1f mm (%zu blobs on tracks, %.2f px RMS)",
-        c.camera_id.c_str(),
-        drift ? "drift followed from the tracks" : "pose corrected from the tracks the other cameras see",
-        c.result.rotation_change_deg, c.result.translation_change_mm, c.result.inliers, c.result.rms_px);
+    std::snprintf(text, sizeof text,
+                  "calibration %s: %s: turned %.3f deg, moved %.1f mm (%zu blobs on tracks, %.2f px RMS)",
+                  c.camera_id.c_str(),
+                  drift    ? "drift followed from the tracks"
+                  : settle ? "pose after its bump refined over the tracks since"
+                           : "pose corrected from the tracks the other cameras see",
+                  c.result.rotation_change_deg, c.result.translation_change_mm, c.result.inliers,
+                  c.result.rms_px);
     log(text);
     for (auto& camera : in_use_.cameras)
       if (camera.id == c.camera_id) camera.T_world_cam = c.after;
@@ -363,8 +367,9 @@ void LiveEstimator::apply_corrections() {
       continue;
     }
     bumped = true;
-    write_version(c.camera_id + " corrected after a bump (continuous calibration)", {c.camera_id},
-                  c.result.rms_px);
+    write_version(c.camera_id + (settle ? " refined after its bump correction (continuous calibration)"
+                                        : " corrected after a bump (continuous calibration)"),
+                  {c.camera_id}, c.result.rms_px);
   }
   const bool drift_due = !drift_pending_.empty() && now - drift_written_ns_ >= kDriftVersionIntervalNs;
   if (drift_due) {

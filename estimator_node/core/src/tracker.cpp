@@ -186,6 +186,7 @@ struct Tracker::Impl {
   std::vector<std::deque<ResectionSample>> resection_samples;
   std::vector<std::vector<ResectionSample>> refine_samples;  // not quarantined: drift followed
   std::vector<TimeNs> refine_sampled_ns;                     // ... the last one's stamp
+  std::vector<TimeNs> settle_since_ns;  // after a bump's correction: its stamp, until the settling refinement
   std::vector<TimeNs> resection_tried_ns;
   std::vector<TimeNs> resection_settle_until_ns;  // after a correction: none before this
   std::vector<CalibrationCorrection> corrections;
@@ -379,6 +380,10 @@ struct Tracker::Impl {
   // Whether this monitored frame of `camera` is sampled for a correction (quarantined) or a
   // refinement (following drift, one per refine_sample_interval_ns): `correct` mode only.
   bool wants_positions(int camera, TimeNs stamp) const;
+  // The stamp of the bump correction whose settling refinement is pending (0: none).
+  TimeNs settling_since(int camera) const {
+    return camera < static_cast<int>(settle_since_ns.size()) ? settle_since_ns[camera] : 0;
+  }
   // Mode correct, a quarantined camera's monitored frame: collected; with enough, its pose is
   // estimated again and, when well determined, applied (docs/continuous_calibration.md).
   void collect_for_resection(int camera, TimeNs stamp, std::vector<Eigen::Vector3d> points,
@@ -531,11 +536,11 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     candidate_pixel.push_back(predicted_pixels.size() - 1);
   }
   if (collect) {
-    if (monitor.quarantined(entry.camera)) {
-      collect_for_resection(entry.camera, stamp, std::move(determined), pixels);
-    } else {
+    const bool settling = settling_since(entry.camera) != 0;
+    if (monitor.quarantined(entry.camera))
+      collect_for_resection(entry.camera, stamp, settling ? determined : std::move(determined), pixels);
+    if (!monitor.quarantined(entry.camera) || settling)
       collect_for_refinement(entry.camera, stamp, std::move(determined), pixels);
-    }
   }
   // The frame's blobs near some live track's prediction (a bumped camera's are near none). Most
   // blobs are in the gate of a track whose prediction is that near; the others are searched.
@@ -582,7 +587,7 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
 
 bool Tracker::Impl::wants_positions(int camera, TimeNs stamp) const {
   if (calibration_mode != CalibrationMode::kCorrect) return false;
-  if (monitor.quarantined(camera)) return true;
+  if (monitor.quarantined(camera) || settling_since(camera) != 0) return true;
   if (!options.calibration.follow_drift) return false;
   return camera >= static_cast<int>(refine_sampled_ns.size()) ||
          stamp - refine_sampled_ns[camera] >= options.calibration.refine_sample_interval_ns;
@@ -608,7 +613,9 @@ void Tracker::Impl::collect_for_resection(int camera, TimeNs stamp, std::vector<
     resection_tried_ns.resize(models.size(), 0);
     resection_settle_until_ns.resize(models.size(), 0);
   }
-  if (camera < static_cast<int>(refine_samples.size())) refine_samples[camera].clear();
+  // Gathered for drift before the bump: not of this pose. Gathered since its correction: kept.
+  if (settling_since(camera) == 0 && camera < static_cast<int>(refine_samples.size()))
+    refine_samples[camera].clear();
   auto& samples = resection_samples[camera];
   samples.push_back(make_sample(std::move(points), pixels));
   while (samples.size() > o.resection_frames) samples.pop_front();
@@ -634,7 +641,9 @@ void Tracker::Impl::collect_for_refinement(int camera, TimeNs stamp, std::vector
   }
   // One sample per refine_sample_interval_ns: the tracks' errors are correlated over longer than
   // that, so denser samples cost time and add little.
-  if (stamp - refine_sampled_ns[camera] < o.refine_sample_interval_ns) return;
+  // Settling after a bump: every monitored frame, for one long window.
+  const TimeNs settling = settling_since(camera);
+  if (settling == 0 && stamp - refine_sampled_ns[camera] < o.refine_sample_interval_ns) return;
   refine_sampled_ns[camera] = stamp;
   auto& samples = refine_samples[camera];
   if (!o.anchors.empty()) {
@@ -652,7 +661,9 @@ void Tracker::Impl::collect_for_refinement(int camera, TimeNs stamp, std::vector
     std::fill(samples.back().weights.begin() + static_cast<std::ptrdiff_t>(tracked),
               samples.back().weights.end(), o.anchor_weight);
   }
-  if (samples.size() < (o.anchors.empty() ? o.refine_frames : o.refine_anchored_frames)) return;
+  if (settling != 0 ? stamp - settling < o.settle_refine_ns
+                    : samples.size() < (o.anchors.empty() ? o.refine_frames : o.refine_anchored_frames))
+    return;
   // The camera is near right: no vote for a shift, one narrow association, a few iterations.
   ResectionOptions refine = o.resection;
   refine.vote_radius_px = 0.0;
@@ -662,24 +673,30 @@ void Tracker::Impl::collect_for_refinement(int camera, TimeNs stamp, std::vector
   // 0.1 µrad, 0.1 µm: far below what a refinement resolves (0.005°, 0.5 mm); the second step of
   // a refinement is ~1e-9, the first ~1e-4 (a third step cost 1/6 of the refinement).
   refine.converged = 1e-7;
-  refine.centre_prior_mm = o.refine_centre_prior_mm;
+  refine.centre_prior_mm = settling != 0 ? 0.0 : o.refine_centre_prior_mm;
   refine.max_rotation_change_deg = o.refine_max_change_deg;
   refine.max_translation_change_mm = o.refine_max_change_mm;
   refine.max_rotation_sigma_deg = o.refine_max_rotation_sigma_deg;
   refine.max_translation_sigma_mm = o.refine_max_translation_sigma_mm;
   const ResectionResult result = resect_camera(*models[camera], samples, refine);
   samples.clear();
+  if (settling != 0) settle_since_ns[camera] = 0;
   if (!result.ok) return;
   // Significant: the change in rotation, or in the camera's centre, beyond k sigma (the
   // translation's sigma bounds the centre's, camera_resection.cpp) and beyond the floor.
   // With anchors (known positions, not the tracks' correlated errors) the rotation's floor is lower.
   const double k = o.refine_significance;
-  const double floor_deg = o.anchors.empty() ? o.refine_min_rotation_deg : o.refine_anchored_min_rotation_deg;
-  const double floor_mm = o.refine_min_translation_mm;
+  // Settling: the window is long, the σ honest enough; no floor.
+  const double floor_deg = settling != 0       ? 0.0
+                           : o.anchors.empty() ? o.refine_min_rotation_deg
+                                               : o.refine_anchored_min_rotation_deg;
+  const double floor_mm = settling != 0 ? 0.0 : o.refine_min_translation_mm;
   const bool turned = result.rotation_change_deg > std::max(k * result.rotation_sigma_deg, floor_deg);
   const bool moved = result.translation_change_mm > std::max(k * result.translation_sigma_mm, floor_mm);
   if (!turned && !moved) return;
-  apply_correction(camera, stamp, result, CalibrationCorrection::Kind::kDrift);
+  apply_correction(
+      camera, stamp, result,
+      settling != 0 ? CalibrationCorrection::Kind::kSettle : CalibrationCorrection::Kind::kDrift);
 }
 
 void Tracker::Impl::apply_correction(int camera, TimeNs stamp, const ResectionResult& result,
@@ -700,9 +717,20 @@ void Tracker::Impl::apply_correction(int camera, TimeNs stamp, const ResectionRe
   for (const auto& model : models) pointers.push_back(model.get());
   core.initiator.set_cameras(pointers);
   corrections.push_back(std::move(correction));
-  if (kind == CalibrationCorrection::Kind::kDrift) return;  // small: its residual window stays
+  if (kind != CalibrationCorrection::Kind::kBump) return;  // small: its residual window stays
   monitor.restart(camera);
   resection_samples[camera].clear();
+  // The settling refinement's window starts at the newest correction of a bump (a second one may
+  // be another bump: what was gathered before it is not of this pose).
+  if (options.calibration.settle_refine_ns > 0) {
+    if (refine_samples.size() < models.size()) {
+      refine_samples.resize(models.size());
+      refine_sampled_ns.resize(models.size(), 0);
+    }
+    settle_since_ns.resize(models.size(), 0);
+    settle_since_ns[camera] = stamp;
+    refine_samples[camera].clear();
+  }
   resection_settle_until_ns[camera] = stamp + options.calibration.resection_settle_ns;
 }
 

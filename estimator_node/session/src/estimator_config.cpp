@@ -333,6 +333,8 @@ void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
   f.integer("refine_sample_interval_ns", o.refine_sample_interval_ns, 0, kHourNs,
             "correct, follow_drift: one monitored frame of a camera in use this often ...");
   f.integer("refine_frames", o.refine_frames, 6, 1 << 16, "... and a refinement from this many of them");
+  f.integer("settle_refine_ns", o.settle_refine_ns, 0, kHourNs,
+            "after a bump's correction, one more refinement from every monitored frame this long (0: none)");
   f.number("refine_max_rotation_sigma_deg", o.refine_max_rotation_sigma_deg, kPositive,
            "a refinement is applied only when determined this well ...");
   f.number("refine_max_translation_sigma_mm", o.refine_max_translation_sigma_mm, kPositive, "... and this");

@@ -124,8 +124,9 @@ enum class FrameOutcome { kProcessed, kLateReplayed, kTooLate, kUnknownCamera };
 // A camera's pose corrected from the tracks (--continuous-calibration correct,
 // docs/continuous_calibration.md): the tracker applied it; the session records and publishes it.
 struct CalibrationCorrection {
-  // kBump: a quarantined camera's pose found again; kDrift: a healthy camera's pose refined.
-  enum class Kind : std::uint8_t { kBump, kDrift };
+  // kBump: a quarantined camera's pose found again; kDrift: a healthy camera's pose refined;
+  // kSettle: a bump's correction refined once more over a long window (settle_refine_ns).
+  enum class Kind : std::uint8_t { kBump, kDrift, kSettle };
   Kind kind = Kind::kBump;
   std::string camera_id;
   TimeNs stamp_ns = 0;    // the monitored frame that completed the evidence
