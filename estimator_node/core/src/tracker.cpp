@@ -536,11 +536,17 @@ void Tracker::Impl::monitor_frame(const Entry& entry, const std::vector<Eigen::V
     candidate_pixel.push_back(predicted_pixels.size() - 1);
   }
   if (collect) {
-    const bool settling = settling_since(entry.camera) != 0;
-    if (monitor.quarantined(entry.camera))
-      collect_for_resection(entry.camera, stamp, settling ? determined : std::move(determined), pixels);
-    if (!monitor.quarantined(entry.camera) || settling)
+    // Quarantined and settling after a bump's correction: both (a new try at the bump, and the
+    // settling refinement's window, gathered through the quarantine).
+    const bool quarantined = monitor.quarantined(entry.camera);
+    if (quarantined && settling_since(entry.camera) != 0) {
+      collect_for_resection(entry.camera, stamp, determined, pixels);
       collect_for_refinement(entry.camera, stamp, std::move(determined), pixels);
+    } else if (quarantined) {
+      collect_for_resection(entry.camera, stamp, std::move(determined), pixels);
+    } else {
+      collect_for_refinement(entry.camera, stamp, std::move(determined), pixels);
+    }
   }
   // The frame's blobs near some live track's prediction (a bumped camera's are near none). Most
   // blobs are in the gate of a track whose prediction is that near; the others are searched.
@@ -721,7 +727,7 @@ void Tracker::Impl::apply_correction(int camera, TimeNs stamp, const ResectionRe
   monitor.restart(camera);
   resection_samples[camera].clear();
   // The settling refinement's window starts at the newest correction of a bump (a second one may
-  // be another bump: what was gathered before it is not of this pose).
+  // follow another bump: blobs gathered before it may be of the camera before that bump).
   if (options.calibration.settle_refine_ns > 0) {
     if (refine_samples.size() < models.size()) {
       refine_samples.resize(models.size());
