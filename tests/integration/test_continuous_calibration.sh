@@ -4,8 +4,10 @@
 # with six anchor markers, eight camera_nodes replaying it in real time, cam3 bumped by 0.5 degrees
 # and 5 mm at 4 s. estimator_node --continuous-calibration correct --anchors quarantines cam3,
 # corrects its pose from the tracks the other cameras see, writes the correction as a new version
-# of its calibration file and brings cam3 back. The file's cam3 is then checked against the
-# simulator's true bumped pose, and `calibrate revert` restores the exact earlier file.
+# of its calibration file and brings cam3 back; its settling refinement (shortened to 2 s by the
+# configuration, so that it falls within the run) is logged and written as a version too. The
+# file's cam3 is then checked against the simulator's true bumped pose, and `calibrate revert`
+# restores the exact earlier file.
 source "$(dirname "$0")/lib.sh"
 en="$bin/estimator_node"
 seconds=12
@@ -39,8 +41,11 @@ cp "$work/sim/calibration.yaml" "$work/cal.yaml"
 cp "$work/sim/calibration.yaml" "$work/before.yaml"
 expect_exit 0 "calibrate history --start" -- "$en" calibrate history --calibration "$work/cal.yaml" --start
 
+# The cameras replay about 9 s of the scene (camera_node --duration from their start, the epoch 3 s
+# after it): cam3 is corrected about 1.2 s after the bump, its settling refinement 2 s later.
+printf 'tracker:\n  calibration:\n    settle_refine_ns: 2000000000\n' >"$work/settle.yaml"
 epoch=$(( ($(date +%s) + 3) * 1000000000 ))
-"$en" --calibration "$work/cal.yaml" --continuous-calibration correct --anchors "$work/scene.yaml" \
+"$en" --calibration "$work/cal.yaml" --config "$work/settle.yaml" --continuous-calibration correct --anchors "$work/scene.yaml" \
   --duration $((seconds + 4)) --status-period 1 >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
@@ -52,6 +57,8 @@ grep -q "cam3 quarantined" "$work/estimator.log" && pass "cam3 quarantined after
   fail "cam3 never quarantined: $(tail -5 "$work/estimator.log")"
 grep -q "calibration cam3: pose corrected from the tracks" "$work/estimator.log" && pass "cam3's pose corrected live" ||
   fail "no correction of cam3"
+grep -q "calibration cam3: pose after its bump refined over the tracks since" "$work/estimator.log" &&
+  pass "cam3's settling refinement applied live" || fail "no settling refinement of cam3"
 grep -Eq "calibration cam3: written to .* as version [0-9]+" "$work/estimator.log" &&
   pass "the correction written as a version of the calibration file" || fail "no version written"
 last_status=$(grep -E "t=[0-9]+s cameras" "$work/estimator.log" | tail -1)
@@ -100,11 +107,13 @@ PY
 tail -2 "$work/estimator.log"
 
 expect_exit 0 "calibrate history --json" -- "$en" calibrate history --calibration "$work/cal.yaml" --json
-python3 - "$work/last.out" <<'PY' && pass "the history names the bump correction and cam3" || fail "history: $(cat "$work/last.out")"
+python3 - "$work/last.out" <<'PY' && pass "the history names the bump correction, then its settling refinement, and cam3" || fail "history: $(cat "$work/last.out")"
 import json, sys
 v = [json.loads(line) for line in open(sys.argv[1]) if line.strip()]
 bump = [x for x in v if "corrected after a bump" in x["reason"]]
-sys.exit(0 if v[0]["reason"] == "initial" and bump and bump[0]["cameras"] == ["cam3"] else 1)
+settle = [x for x in v if "refined after its bump correction" in x["reason"]]
+sys.exit(0 if v[0]["reason"] == "initial" and bump and bump[0]["cameras"] == ["cam3"] and settle
+         and settle[0]["cameras"] == ["cam3"] and settle[0]["version"] > bump[0]["version"] else 1)
 PY
 expect_exit 0 "calibrate revert --version 1" -- "$en" calibrate revert --calibration "$work/cal.yaml" --version 1
 cmp -s "$work/cal.yaml" "$work/before.yaml" && pass "revert restores the exact file from before the bump" ||
