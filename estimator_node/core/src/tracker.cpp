@@ -32,6 +32,7 @@ void TrackerOptions::print(std::ostream& out) const {
       << "  coast_after              " << ns_to_seconds(coast_after_ns) * 1e3 << " ms\n"
       << "  delete_after             " << ns_to_seconds(delete_after_ns) * 1e3 << " ms\n"
       << "  publish_max_sigma        " << publish_max_sigma_m * 1e3 << " mm\n"
+      << "  reacquire_sigma          " << reacquire_sigma_m * 1e3 << " mm\n"
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
       << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n"
       << "  continuous calibration   " << calibration.mode << " (window "
@@ -86,6 +87,10 @@ struct Track {
   Eigen::Vector3d last_seen_position() const { return seen_ns != 0 ? seen_position : state.position(); }
   TimeNs last_seen_ns() const { return seen_ns != 0 ? seen_ns : last_update_ns; }
   std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
+  // reacquire_sigma_m: made by initiation under a new id (not an undone or a rejoined one), and
+  // confirmed in the frame just applied: it may take a held-back track's id (reacquire_confirmed).
+  bool fresh = false;
+  bool pending_reacquire = false;
   // Whether the last record made of it was published (determined): then it stays published up to
   // kKeepPublishedFactor × publish_max_sigma_m (hysteresis, issue 32 item 9). Set by tracks_at.
   mutable bool published = false;
@@ -108,6 +113,7 @@ struct Core {
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
+  std::uint64_t tracks_reacquired = 0;     // confirmed new tracks that took a held-back track's id
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
                 ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
@@ -367,6 +373,7 @@ struct Tracker::Impl {
                              (track.distinct_cameras >= 2 &&
                               track.updates >= static_cast<std::uint64_t>(options.confirm_updates)))) {
       track.confirmed = true;
+      track.pending_reacquire = track.fresh && options.reacquire_sigma_m > 0;
       ++core.tracks_confirmed;
     }
   }
@@ -417,8 +424,9 @@ struct Tracker::Impl {
                 const std::vector<char>& used);
   // A new track's id: an undone track's within kReuseIdGate of `position` at `stamp` (the nearest),
   // else a lost fast track's (rejoin_fast_track: `rejoined_peak_speed` is then that track's peak
-  // speed, else 0), else a new one.
-  std::int64_t id_for(const Eigen::Vector3d& position, TimeNs stamp, double& rejoined_peak_speed);
+  // speed, else 0), else a new one (`fresh` is then set).
+  std::int64_t id_for(const Eigen::Vector3d& position, TimeNs stamp, double& rejoined_peak_speed,
+                      bool& fresh);
   // rejoin_fast_tracks: the id and peak speed of the confirmed fast track that lost its marker
   // within reach of `position`, clearly the nearest of all that lost theirs; that track is
   // removed. None when ambiguous.
@@ -428,6 +436,19 @@ struct Tracker::Impl {
   // kFrameGapNs; a followed one has its blobs) and could be at `position` now (within their peak
   // speed x max(gap, 50 ms) + 5 cm); 0 when none.
   double nearby_fast_speed(const Eigen::Vector3d& position, TimeNs stamp) const;
+  // The trace of a track's predicted position covariance at `stamp` (a bound: the process
+  // noise's share taken as σ² dt³).
+  double predicted_position_trace(const Track& track, TimeNs stamp) const;
+  // reacquire_sigma_m: a confirmed track lost for longer than kFrameGapNs whose predicted position
+  // is less certain than that (`trace`: predicted_position_trace, if known) takes no blob of its
+  // own; initiation finds its marker again (reacquire).
+  bool held_back(const Track& track, TimeNs stamp, std::optional<double> trace = std::nullopt) const;
+  // The id of the one held-back track whose prediction gates `position` (χ²₃), every other
+  // held-back track that gates it at least kClearRatio times farther (d²). None when ambiguous.
+  std::optional<std::int64_t> reacquire(const Eigen::Vector3d& position, TimeNs stamp) const;
+  // Tracks confirmed in this frame take the id of the held-back track whose marker they are
+  // (reacquire); tracks stay in id order.
+  void reacquire_confirmed(TimeNs now_ns);
   void prune(TimeNs now_ns);
   std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
   // Inserts `late` (in stamp order, each older than the newest applied frame, none older than the
@@ -777,10 +798,8 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
     const auto pixel = camera.project_camera_point(p_cam);
     if (!pixel) continue;
     gating.pixel[i] = pixel;
-    const auto& P = track.state.P.matrix();
-    const double trace = P.block<3, 3>(0, 0).trace() + 2.0 * dt * P.block<3, 3>(0, 3).trace() +
-                         dt * dt * P.block<3, 3>(3, 3).trace() +
-                         track.sigma2(options.process_noise) * std::abs(dt * dt * dt);
+    const double trace = predicted_position_trace(track, stamp);
+    if (held_back(track, stamp, trace)) continue;
     const double lateral = (p_cam.x() * p_cam.x() + p_cam.y() * p_cam.y()) / (p_cam.z() * p_cam.z());
     const double gain = 1.3 * focal / p_cam.z() * std::sqrt(1.0 + lateral);  // 1.3: distortion slack
     const double radius =
@@ -804,6 +823,45 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
     });
   }
   return gating;
+}
+
+double Tracker::Impl::predicted_position_trace(const Track& track, TimeNs stamp) const {
+  const double dt = ns_to_seconds(stamp - track.state.stamp_ns);
+  const auto& P = track.state.P.matrix();
+  return P.block<3, 3>(0, 0).trace() + 2.0 * dt * P.block<3, 3>(0, 3).trace() +
+         dt * dt * P.block<3, 3>(3, 3).trace() + track.sigma2(options.process_noise) * std::abs(dt * dt * dt);
+}
+
+bool Tracker::Impl::held_back(const Track& track, TimeNs stamp, std::optional<double> trace) const {
+  const double limit = options.reacquire_sigma_m;
+  if (limit <= 0 || !track.confirmed || stamp - track.last_update_ns <= kFrameGapNs) return false;
+  return trace.value_or(predicted_position_trace(track, stamp)) > 3.0 * limit * limit;
+}
+
+std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& position, TimeNs stamp) const {
+  constexpr double kGateChi2 = 16.27;  // χ²₃ at p = 0.999
+  constexpr double kClearRatio = 4.0;  // another candidate inside the gate must be this much farther (d²)
+  const double sp2 = options.init_position_sigma_m * options.init_position_sigma_m;
+  const Track* best = nullptr;
+  double best_d2 = std::numeric_limits<double>::infinity(), other_d2 = best_d2;
+  const auto consider = [&](const Track& track) {
+    const PointState state = predicted(track.state, stamp, track.sigma2(options.process_noise));
+    const Eigen::Matrix3d S = state.P.matrix().block<3, 3>(0, 0) + sp2 * Eigen::Matrix3d::Identity();
+    const Eigen::Vector3d e = position - state.position();
+    const double d2 = e.dot(S.ldlt().solve(e));
+    if (d2 < best_d2) {
+      other_d2 = best_d2;
+      best_d2 = d2;
+      best = &track;
+    } else {
+      other_d2 = std::min(other_d2, d2);
+    }
+  };
+  for (const Track& track : core.tracks)
+    if (held_back(track, stamp)) consider(track);
+  if (best == nullptr || best_d2 > kGateChi2 || (other_d2 <= kGateChi2 && other_d2 < kClearRatio * best_d2))
+    return std::nullopt;
+  return best->id;
 }
 
 std::uint64_t Tracker::Impl::tracks_digest() const {
@@ -999,13 +1057,14 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
   const TimeNs stamp = frame.stamp_ns;
   const double near = 4.0 * options.merge_distance_m;
   const auto occupied = [&](const Eigen::Vector3d& point) {
-    return std::any_of(core.tracks.begin(), core.tracks.end(),
-                       [&](const Track& track) { return (track.position_at(stamp) - point).norm() < near; });
+    return std::any_of(core.tracks.begin(), core.tracks.end(), [&](const Track& track) {
+      return (track.position_at(stamp) - point).norm() < near && !held_back(track, stamp);
+    });
   };
   for (auto& candidate : core.initiator.add_frame(camera_index, stamp, unmatched, occupied)) {
     Track track;
     double rejoined_peak_speed = 0;
-    track.id = id_for(candidate.position, stamp, rejoined_peak_speed);
+    track.id = id_for(candidate.position, stamp, rejoined_peak_speed, track.fresh);
     track.state.x.head<3>() = candidate.position;
     track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
     const double sp = options.init_position_sigma_m;
@@ -1048,7 +1107,34 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
   }
 }
 
+void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
+  std::vector<std::pair<std::int64_t, std::int64_t>> renames;  // (new id, held-back id)
+  for (Track& track : core.tracks) {
+    if (!track.pending_reacquire) continue;
+    track.pending_reacquire = false;
+    const auto id = reacquire(track.position_at(now_ns), now_ns);
+    if (!id || std::any_of(renames.begin(), renames.end(), [&](const auto& r) { return r.second == *id; }))
+      continue;
+    renames.emplace_back(track.id, *id);
+  }
+  if (renames.empty()) return;
+  std::erase_if(core.tracks, [&](const Track& track) {
+    return std::any_of(renames.begin(), renames.end(), [&](const auto& r) { return r.second == track.id; });
+  });
+  for (Track& track : core.tracks) {
+    for (const auto& [from, to] : renames) {
+      if (track.id != from) continue;
+      track.id = to;
+      track.resumed_ns = now_ns;
+      ++core.tracks_reacquired;
+    }
+  }
+  std::sort(core.tracks.begin(), core.tracks.end(),
+            [](const Track& a, const Track& b) { return a.id < b.id; });
+}
+
 void Tracker::Impl::prune(TimeNs now_ns) {
+  reacquire_confirmed(now_ns);
   std::erase_if(core.lost,
                 [&](const Track& track) { return now_ns - track.last_update_ns > options.delete_after_ns; });
   std::erase_if(core.tracks, [&](const Track& track) {
@@ -1107,8 +1193,8 @@ void Tracker::Impl::prune(TimeNs now_ns) {
   std::erase_if(core.tracks, [&](const Track&) { return remove[k++] != 0; });
 }
 
-std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp,
-                                   double& rejoined_peak_speed) {
+std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp, double& rejoined_peak_speed,
+                                   bool& fresh) {
   // Where an undone track was when the replay creates a track again: its newest state moved back
   // by its velocity over at most the rewind horizon (0.5 s), a few millimetres for a walk.
   constexpr double kReuseIdGate = 0.015;
@@ -1123,12 +1209,18 @@ std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp
   }
   if (nearest == undone.end()) {
     const auto rejoined = rejoin_fast_track(position, stamp);
-    if (!rejoined) return next_track_id++;
+    if (!rejoined) {
+      fresh = true;
+      return next_track_id++;
+    }
     rejoined_peak_speed = rejoined->second;
     return rejoined->first;
   }
   const std::int64_t id = nearest->id;
   undone.erase(nearest);
+  // A replay from before a reacquisition renamed the track: the held-back track of that id is
+  // in the restored state again.
+  std::erase_if(core.tracks, [id](const Track& track) { return track.id == id; });
   return id;
 }
 
@@ -1462,6 +1554,7 @@ const TrackerStats& Tracker::stats() const {
   s.tracks_merged = core.tracks_merged;
   s.manoeuvres_recovered = core.manoeuvres_recovered;
   s.fast_tracks_rejoined = core.fast_tracks_rejoined;
+  s.tracks_reacquired = core.tracks_reacquired;
   s.ghosts_deleted = core.ghosts_deleted;
   s.blobs_not_initiated = core.blobs_not_initiated;
   return s;

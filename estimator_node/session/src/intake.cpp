@@ -90,7 +90,8 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
       std::to_string(s.frames_unknown_camera) + " from uncalibrated cameras, " + std::to_string(rejected) +
       " rejected, " + std::to_string(bad_lines) + " malformed lines); tracks created " +
       std::to_string(s.tracks_created) + ", confirmed " + std::to_string(s.tracks_confirmed) +
-      ", ghosts removed " + std::to_string(s.ghosts_deleted) +
+      ", ghosts removed " + std::to_string(s.ghosts_deleted) + ", reacquired " +
+      std::to_string(s.tracks_reacquired) +
       (s.manoeuvres_recovered + s.fast_tracks_rejoined > 0
            ? "; fast tracks: manoeuvres recovered " + std::to_string(s.manoeuvres_recovered) + ", rejoined " +
                  std::to_string(s.fast_tracks_rejoined)

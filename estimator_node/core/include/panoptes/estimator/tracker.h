@@ -65,7 +65,14 @@ struct TrackerOptions {
   // no depth, and one no camera sees is only predicted: either kind is kept (same id when seen
   // again) but not reported once the filter's own uncertainty passes this.
   double publish_max_sigma_m = 0.02;
-  double merge_distance_m = 0.005;                // two tracks closer than this are one marker
+  double merge_distance_m = 0.005;  // two tracks closer than this are one marker
+  // A confirmed track not updated for 10 ms whose predicted position is less certain than this
+  // (1σ per axis, m) takes no blob of its own: its gate would take a neighbour's, or pair a ghost
+  // of two markers' blobs. It waits, held back, until delete_after_ns; a new track that initiation
+  // makes from ≥ 2 views and that is confirmed near it takes its id then, when that track's
+  // prediction gates it (χ²₃, 0.999) and no other held-back track's does nearly as well
+  // (docs/estimator.md, "Reacquisition"). 0: off (coasting tracks take blobs in their gates).
+  double reacquire_sigma_m = 0.05;
   TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
   TimeNs checkpoint_interval_ns = 10'000'000;     // state snapshots for rewinding ...
@@ -97,6 +104,7 @@ struct TrackerStats {
   std::uint64_t tracks_merged = 0;
   std::uint64_t manoeuvres_recovered = 0;  // blobs a fast track took in its manoeuvre gate
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id
+  std::uint64_t tracks_reacquired = 0;     // confirmed new tracks that took a held-back track's id
   std::uint64_t ghosts_deleted = 0;        // tentative tracks that cameras did not see
   std::uint64_t blobs_not_initiated = 0;   // unmatched blobs beyond max_unmatched_per_frame
 };
