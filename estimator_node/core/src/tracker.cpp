@@ -91,6 +91,7 @@ struct Track {
   // confirmed in the frame just applied: it may take a held-back track's id (reacquire_confirmed).
   bool fresh = false;
   bool pending_reacquire = false;
+  std::uint64_t frames_at_update = 0;  // Core::frames_applied at its last update (held_back)
   // Whether the last record made of it was published (determined): then it stays published up to
   // kKeepPublishedFactor × publish_max_sigma_m (hysteresis, issue 32 item 9). Set by tracks_at.
   mutable bool published = false;
@@ -114,6 +115,7 @@ struct Core {
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
   std::uint64_t tracks_reacquired = 0;     // confirmed new tracks that took a held-back track's id
+  std::uint64_t frames_applied = 0;        // frames apply() has applied (held_back)
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
                 ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
@@ -357,6 +359,7 @@ struct Tracker::Impl {
   void note_update(Track& track, int camera, TimeNs stamp_ns) {
     if (stamp_ns - track.last_update_ns > options.coast_after_ns) track.resumed_ns = stamp_ns;
     track.last_update_ns = std::max(track.last_update_ns, stamp_ns);
+    track.frames_at_update = core.frames_applied;
     ++track.updates;
     if (track.camera_last_update.size() < models.size()) track.camera_last_update.resize(models.size(), 0);
     if (track.camera_last_update[camera] == 0) ++track.distinct_cameras;
@@ -439,9 +442,10 @@ struct Tracker::Impl {
   // The trace of a track's predicted position covariance at `stamp` (a bound: the process
   // noise's share taken as σ² dt³).
   double predicted_position_trace(const Track& track, TimeNs stamp) const;
-  // reacquire_sigma_m: a confirmed track lost for longer than kFrameGapNs whose predicted position
-  // is less certain than that (`trace`: predicted_position_trace, if known) takes no blob of its
-  // own; initiation finds its marker again (reacquire).
+  // reacquire_sigma_m: a confirmed track lost for longer than kFrameGapNs, through at least
+  // kFramesWithoutIt applied frames, whose predicted position is less certain than that (`trace`:
+  // predicted_position_trace, if known) takes no blob of its own; initiation finds its marker
+  // again (reacquire).
   bool held_back(const Track& track, TimeNs stamp, std::optional<double> trace = std::nullopt) const;
   // The id of the one held-back track whose prediction gates `position` (χ²₃), every other
   // held-back track that gates it at least kClearRatio times farther (d²). None when ambiguous.
@@ -464,6 +468,7 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
   const FeatureFrame& frame = entry.frame;
   const int camera_index = entry.camera;
   core.last_stamp_ns = std::max(core.last_stamp_ns, frame.stamp_ns);
+  ++core.frames_applied;
   std::vector<Eigen::Vector2d> pixels;
   pixels.reserve(frame.blobs.size());
   std::vector<char> used(frame.blobs.size(), 0);
@@ -833,8 +838,13 @@ double Tracker::Impl::predicted_position_trace(const Track& track, TimeNs stamp)
 }
 
 bool Tracker::Impl::held_back(const Track& track, TimeNs stamp, std::optional<double> trace) const {
+  // Frames applied since its last update: a marker out of sight, not a pause in the input (after
+  // every camera stalled, the first frames find every track uncertain but nothing contradicts it).
+  constexpr std::uint64_t kFramesWithoutIt = 4;
   const double limit = options.reacquire_sigma_m;
-  if (limit <= 0 || !track.confirmed || stamp - track.last_update_ns <= kFrameGapNs) return false;
+  if (limit <= 0 || !track.confirmed || stamp - track.last_update_ns <= kFrameGapNs ||
+      core.frames_applied - track.frames_at_update < kFramesWithoutIt)
+    return false;
   return trace.value_or(predicted_position_trace(track, stamp)) > 3.0 * limit * limit;
 }
 
