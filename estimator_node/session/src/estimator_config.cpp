@@ -415,10 +415,10 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
            "confirmed tracks are published while their position 1-sigma is within this, m (0: always)");
   f.number("merge_distance_m", o.merge_distance_m, kNonNegative,
            "two tracks closer than this are one marker");
-  f.number(
-      "reacquire_sigma_m", o.reacquire_sigma_m, kNonNegative,
-      "a confirmed track lost for 10 ms and predicted less certain than this (1-sigma, m) takes no blob; "
-      "a new track confirmed near it takes its id (0: off)");
+  f.number("reacquire_sigma_m", o.reacquire_sigma_m, kNonNegative,
+           "a confirmed track lost for 10 ms and 4 frames, predicted less certain than this (1-sigma, m), "
+           "takes no blob; "
+           "a new track confirmed near it takes its id (0: off)");
   f.integer("recent_camera_window_ns", o.recent_camera_window_ns, 0, kHourNs, "for a track record's cameras");
   f.integer("rewind_horizon_ns", o.rewind_horizon_ns, 0, 60 * 1'000'000'000LL,
             "late frames up to this much older than the newest are replayed");

@@ -66,12 +66,13 @@ struct TrackerOptions {
   // again) but not reported once the filter's own uncertainty passes this.
   double publish_max_sigma_m = 0.02;
   double merge_distance_m = 0.005;  // two tracks closer than this are one marker
-  // A confirmed track not updated for 10 ms whose predicted position is less certain than this
-  // (1σ per axis, m) takes no blob of its own: its gate would take a neighbour's, or pair a ghost
-  // of two markers' blobs. It waits, held back, until delete_after_ns; a new track that initiation
-  // makes from ≥ 2 views and that is confirmed near it takes its id then, when that track's
-  // prediction gates it (χ²₃, 0.999) and no other held-back track's does nearly as well
-  // (docs/estimator.md, "Reacquisition"). 0: off (coasting tracks take blobs in their gates).
+  // A confirmed track not updated for 10 ms and four applied frames (a marker out of sight, not a
+  // pause of the input) whose predicted position is less certain than this (1σ per axis, m) takes
+  // no blob of its own: its gate would take a neighbour's, or pair a ghost of two markers' blobs. It waits,
+  // held back, until delete_after_ns; a new track that initiation makes from ≥ 2 views and that is confirmed
+  // near it takes its id then, when that track's prediction gates it (χ²₃, 0.999) and no other held-back
+  // track's does nearly as well (docs/estimator.md, "Reacquisition"). 0: off (coasting tracks take blobs in
+  // their gates).
   double reacquire_sigma_m = 0.05;
   TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
