@@ -16,4 +16,9 @@ if [ ! -s Testing/Temporary/CTestCostData.txt ] && [ -s "$root/tests/ctest_costs
   grep -v '^#' "$root/tests/ctest_costs.txt" >Testing/Temporary/CTestCostData.txt
   echo "---" >>Testing/Temporary/CTestCostData.txt
 fi
-ctest --output-on-failure -j "$(nproc)" "$@"
+# On a failure the digest repeats, last, what failed inside each failed test: CI shows only the tail.
+ctest --output-on-failure -j "$(nproc)" "$@" || {
+  rc=$?
+  python3 "$root/tests/tools/failure_digest.py" . || true
+  exit "$rc"
+}

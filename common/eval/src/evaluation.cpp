@@ -92,7 +92,7 @@ std::vector<Instant> judged_instants(const std::vector<const TrackRecord*>& sort
     std::size_t end = begin;
     while (end < sorted.size() && sorted[end]->stamp_ns == sorted[begin]->stamp_ns) ++end;
     const TimeNs scene_time = sorted[begin]->stamp_ns - options.epoch_ns;
-    if (scene_time >= options.warmup_ns && scene_time <= scene.duration_ns())
+    if (scene_time >= options.warmup_ns && scene_time <= std::min(scene.duration_ns(), options.until_ns))
       instants.emplace_back(begin, end);
     begin = end;
   }
@@ -322,6 +322,9 @@ std::string Evaluation::to_json() const {
 
   j["options"] = {{"epoch_ns", options.epoch_ns},
                   {"warmup_s", ns_to_seconds(options.warmup_ns)},
+                  {"until_s", options.until_ns == std::numeric_limits<TimeNs>::max()
+                                  ? Json(nullptr)
+                                  : Json(ns_to_seconds(options.until_ns))},
                   {"match_distance_mm", options.match_distance_m * 1e3},
                   {"trackable_window_ms", static_cast<double>(options.trackable_window_ns) * 1e-6},
                   {"trackable_min_cameras", options.trackable_min_cameras}};
@@ -404,7 +407,7 @@ PoseEvaluation evaluate_poses(const Scene& scene, const std::vector<PoseRecord>&
   std::vector<std::string> names;
   for (const auto& definition : scene.body_definitions()) names.push_back(definition.name);
   for (const auto& rig : scene.rig_names()) names.push_back(rig);
-  const TimeNs first = options.warmup_ns, last = scene.duration_ns();
+  const TimeNs first = options.warmup_ns, last = std::min(scene.duration_ns(), options.until_ns);
   const std::size_t bins = last > first ? static_cast<std::size_t>((last - first) / kBin) + 1 : 0;
   struct Sums {
     double p2 = 0, a2 = 0;

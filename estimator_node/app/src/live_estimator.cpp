@@ -203,6 +203,9 @@ class LiveEstimator {
   double drift_pending_rms_px_ = 0.0;
   TimeNs drift_written_ns_ = 0;
   void write_version(const std::string& reason, const std::vector<std::string>& cameras, double rms_px);
+  // Quarantines logged so far (camera: the capture stamp it began), to log each start and end once.
+  std::map<std::string, TimeNs> quarantines_logged_;
+  void log_quarantine_changes(const est::EstimatorUsage& usage);
   std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;     // with options_.chains
   std::unique_ptr<dds::Writer<msg::MarkerLabels>> labels_writer_;  // with options_.labels
   std::uint64_t labels_generation_ = 0;                            // the map last written
@@ -601,6 +604,24 @@ void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
   if (extras.bodies > 0) extras.bodies_tracked = tracker_.current_poses().size();
   extras.time_sync_answered = time_service_.answered();
   log(status_line(usage, extras));
+  log_quarantine_changes(usage);
+}
+
+// A quarantine's start with its capture stamp (the detection's time, which the status line gives
+// only as "quarantined 0.4 s"), and its end by the stamp of the status that no longer shows it.
+void LiveEstimator::log_quarantine_changes(const est::EstimatorUsage& usage) {
+  for (const auto& h : usage.calibration) {
+    const auto logged = quarantines_logged_.find(h.camera_id);
+    if (h.state == est::CalibrationState::kQuarantined) {
+      if (logged != quarantines_logged_.end() && logged->second == h.quarantined_since_ns) continue;
+      log("calibration " + h.camera_id + ": quarantined from capture stamp " +
+          std::to_string(h.quarantined_since_ns) + " (" + h.reason + ")");
+      quarantines_logged_[h.camera_id] = h.quarantined_since_ns;
+    } else if (logged != quarantines_logged_.end()) {
+      log("calibration " + h.camera_id + ": back in use by capture stamp " + std::to_string(usage.stamp_ns));
+      quarantines_logged_.erase(logged);
+    }
+  }
 }
 
 void LiveEstimator::expire_idle_tracks(TimeNs now) {

@@ -99,6 +99,24 @@ TEST(Evaluation, WarmupAndInstantsAfterTheSceneAreNotJudged) {
   EXPECT_EQ(result.max_instant_gap_ns, 10'000'000);
 }
 
+// --warmup and --until (until_ns) judge a window of the scene: errors outside it do not count.
+TEST(Evaluation, UntilEndsTheJudgedWindow) {
+  const Scene scene = Scene::from_yaml_string(kScene);
+  EvaluationOptions options;
+  options.warmup_ns = 1'000'000'000;
+  options.until_ns = 2'000'000'000;
+  std::vector<TrackRecord> tracks;
+  for (int k = 0; k < 300; ++k) {  // 1 mm off in [1, 2] s, 10 mm off elsewhere
+    const bool inside = k >= 100 && k <= 200;
+    tracks.push_back(record(k * 10'000'000LL, 1, {inside ? 0.001 : 0.01, 0, 1}));
+  }
+  const auto result = evaluate(scene, tracks, options);
+  EXPECT_EQ(result.instants, 101u);  // 1.00 s to 2.00 s, both ends judged
+  EXPECT_NEAR(result.markers[0].rmse_m, 0.001, 1e-12);
+  options.until_ns = std::numeric_limits<TimeNs>::max();  // the default: to the scene's end
+  EXPECT_EQ(evaluate(scene, tracks, options).instants, 200u);
+}
+
 TEST(Evaluation, DuplicateTracksOnOneMarkerAreFalseRecords) {
   const Scene scene = Scene::from_yaml_string(kScene);
   EvaluationOptions options;

@@ -37,6 +37,10 @@ void add_options(CLI::App& app, EvalOptions& args) {
   app.add_option("--epoch-ns", args.epoch_ns, "absolute stamp of scene time 0 (panoptes_sim's default)");
   app.add_option("--warmup", args.warmup_s, "seconds at the start that are not judged")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--until", args.until_s,
+                 "judge scene time up to this many seconds (with --warmup: a window of the scene)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_str("the scene's end");
   app.add_option("--match-distance", args.match_distance_m, "metres within which a track observes a marker")
       ->check(CLI::PositiveNumber);
   app.add_option("--trackable-window", args.trackable_window_s,

@@ -40,6 +40,7 @@ EvaluationOptions base_options(const EvalOptions& options) {
   EvaluationOptions evaluation;
   evaluation.epoch_ns = options.epoch_ns;
   evaluation.warmup_ns = seconds_to_ns(options.warmup_s);
+  if (options.until_s) evaluation.until_ns = seconds_to_ns(*options.until_s);
   return evaluation;
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -18,8 +19,10 @@ class Scene;
 namespace panoptes::estimator {
 
 struct EvaluationOptions {
-  TimeNs epoch_ns = 0;               // absolute stamp of scene time 0
-  TimeNs warmup_ns = kNsPerSecond;   // ignore the first second (acquisition)
+  TimeNs epoch_ns = 0;              // absolute stamp of scene time 0
+  TimeNs warmup_ns = kNsPerSecond;  // ignore the first second (acquisition)
+  // Judge scene time up to this (and up to the scene's end); a window [warmup, until] of the scene.
+  TimeNs until_ns = std::numeric_limits<TimeNs>::max();
   double match_distance_m = 0.02;    // a track within this of a marker observes it
   int false_track_min_samples = 10;  // tracks with fewer samples are not judged as false tracks
   // A marker is trackable at an instant when at least trackable_min_cameras cameras showed it

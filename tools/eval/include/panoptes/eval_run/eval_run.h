@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,7 @@ struct EvalOptions {
   std::size_t plot_markers = 6;
   long long epoch_ns = 1'700'000'000'000'000'000LL;
   double warmup_s = 1.0;
+  std::optional<double> until_s;  // judge up to this scene time (none: the scene's end)
   double match_distance_m = 0.02;
   double trackable_window_s = 0.1;
   // Requirements on poses; 0 (or false) = not required.
