@@ -229,6 +229,17 @@ netns_exec "$intruder_host" "$bin/camera_node" --source "sim:$scene#cam1" --came
   { grep -q "not granted" "$work/cam1_as_cam0.log" &&
     pass "cam1's certificate cannot publish as cam0 (camera_node refused: not granted)" ||
     { fail "camera_node as cam0 with cam1's certificate"; tail -n 3 "$work/cam1_as_cam0.log"; }; }
+# rt/panoptes/calibration (issue 36): only the estimator role publishes it; a camera's, an operator's
+# or an application's certificate may not, so no forged calibration reaches the cameras or consoles.
+for identity in cam1 ops mallory; do
+  netns_exec "$intruder_host" env PANOPTES_SECURITY_DIR="$studio" PANOPTES_SECURITY_IDENTITY="$identity" \
+    "$bin/panoptes_rogue" --dds-profile "$secure" --topics rt/panoptes/calibration --duration 1 \
+    >"$work/calibration_$identity.log" 2>&1 &&
+    fail "$identity's certificate published on rt/panoptes/calibration" ||
+    { grep -q "not granted" "$work/calibration_$identity.log" &&
+      pass "$identity's certificate may not publish the calibration (not granted)" ||
+      { fail "calibration writer with $identity's certificate"; tail -n 3 "$work/calibration_$identity.log"; }; }
+done
 # ... and the second tampered program.
 impostor impostor_b
 # A second reader with mallory's application certificate, started apart from the first: in one

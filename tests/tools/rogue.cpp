@@ -20,6 +20,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -288,6 +289,7 @@ struct Options {
   std::vector<std::string> cameras;
   std::string report_json;
   std::string dds_profile;
+  std::vector<std::string> topics;  // only these topics (empty: every one)
 };
 
 std::uint64_t write_all(std::vector<Attack>& attacks, std::map<std::string, std::uint64_t>& sent) {
@@ -317,6 +319,11 @@ int run(int argc, char** argv) {
       ->delimiter(',');
   app.add_option("--report-json", options.report_json, "write the nodes' last status counters here");
   app.add_option("--dds-profile", options.dds_profile, "Fast DDS XML profile");
+  app.add_option("--topics", options.topics,
+                 "attack only these topics (e.g. rt/panoptes/calibration: with a DDS Security identity "
+                 "not granted it, the writer is refused and the program exits 1)")
+      ->delimiter(',')
+      ->default_str("every Panoptes topic");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
 
@@ -333,16 +340,25 @@ int run(int argc, char** argv) {
     report.emplace(*report_bus, options.cameras);
   }
 
+  const auto attacked = [&options](const std::string& topic) {
+    return options.topics.empty() ||
+           std::find(options.topics.begin(), options.topics.end(), topic) != options.topics.end();
+  };
   std::vector<Attack> attacks;
   for (auto& [topic, samples] : hostile_samples(options.cameras, panoptes::wall_now_ns())) {
-    attacks.push_back({topic, bus.make_raw_writer(topic), std::move(samples)});
+    if (attacked(topic)) attacks.push_back({topic, bus.make_raw_writer(topic), std::move(samples)});
   }
-  auto flood_writer = bus.make_raw_writer("rt/panoptes/camera_command");
+  if (attacks.empty() && !options.topics.empty())
+    throw std::runtime_error("--topics: no Panoptes topic among the ones given");
+  if (!attacked("rt/panoptes/camera_command")) options.flood = 0;
+  if (!attacked("rt/panoptes/features")) options.million_blob_frames = 0;
+  auto flood_writer = options.flood > 0 ? bus.make_raw_writer("rt/panoptes/camera_command") : nullptr;
   msg::CameraCommand flood_command;
   flood_command.target("*");
   flood_command.command("rogue_flood");
   const Bytes flood_cdr = panoptes::dds::encode_sample(flood_command);
-  auto million_writer = bus.make_raw_writer("rt/panoptes/features");
+  auto million_writer =
+      options.million_blob_frames > 0 ? bus.make_raw_writer("rt/panoptes/features") : nullptr;
   std::this_thread::sleep_for(std::chrono::seconds(1));  // discovery
 
   std::map<std::string, std::uint64_t> sent;
