@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
@@ -55,6 +56,14 @@ std::unique_ptr<dds::Bus> open_bus(const LiveOptions& options) {
   return bus;
 }
 
+// A file's modification time; none when it cannot be read (missing, no permission).
+std::optional<std::filesystem::file_time_type> file_time(const std::string& path) {
+  std::error_code error;
+  const auto time = std::filesystem::last_write_time(path, error);
+  if (error) return std::nullopt;
+  return time;
+}
+
 // The DDS entities and the estimator thread's loop. Members are declared in the order they are
 // created: the readers, whose listeners use what precedes them, go before the rest.
 class LiveEstimator {
@@ -101,6 +110,7 @@ class LiveEstimator {
         log("rt/panoptes/frames at a fixed " + std::to_string(node_.frame_rate_hz) + " Hz (docs/frames.md)");
     }
     if (!options_.calibration_file.empty()) {
+      calibration_file_time_ = file_time(options_.calibration_file);
       in_use_ = load_calibration(options_.calibration_file);
       for (const auto& camera : in_use_.cameras) from_file_.insert(camera.id);
     }
@@ -203,9 +213,10 @@ class LiveEstimator {
   double drift_pending_rms_px_ = 0.0;
   TimeNs drift_written_ns_ = 0;
   void write_version(const std::string& reason, const std::vector<std::string>& cameras, double rms_px);
-  // Quarantines logged so far (camera: the capture stamp it began), to log each start and end once.
-  std::map<std::string, TimeNs> quarantines_logged_;
-  void log_quarantine_changes(const est::EstimatorUsage& usage);
+  // The calibration file's modification time when last read or written by this estimator; a
+  // different one means someone else changed it (reload_calibration_if_changed).
+  std::optional<std::filesystem::file_time_type> calibration_file_time_;
+  void reload_calibration_if_changed();
   std::unique_ptr<dds::Writer<msg::ChainFrame>> chain_writer_;     // with options_.chains
   std::unique_ptr<dds::Writer<msg::MarkerLabels>> labels_writer_;  // with options_.labels
   std::uint64_t labels_generation_ = 0;                            // the map last written
@@ -345,6 +356,14 @@ bool LiveEstimator::near_instant(TimeNs work_ns) const {
 }
 
 void LiveEstimator::apply_corrections() {
+  // Each quarantine's start and end with its capture stamp (the detection's time, which the status
+  // line gives only as "quarantined 0.4 s", once a second).
+  for (const auto& t : tracker_.take_calibration_transitions()) {
+    if (options_.quiet) continue;
+    log("calibration " + t.camera_id +
+        (t.quarantined ? ": quarantined at capture stamp " : ": released at capture stamp ") +
+        std::to_string(t.stamp_ns) + (t.quarantined ? " (" + t.reason + ")" : ""));
+  }
   const auto corrections = tracker_.take_calibration_corrections();
   const TimeNs now = wall_now_ns();
   bool bumped = false;
@@ -395,6 +414,7 @@ void LiveEstimator::write_version(const std::string& reason, const std::vector<s
     CalibrationHistory history(options_.calibration_file);
     const CalibrationVersion version = history.record(
         in_use_, change_because(reason, cameras, std::numeric_limits<double>::quiet_NaN(), rms_px));
+    calibration_file_time_ = file_time(options_.calibration_file);  // our own change: no reload
     log("calibration " + who + ": written to " + options_.calibration_file + " as version " +
         std::to_string(version.version) + " (estimator_node calibrate revert --calibration " +
         options_.calibration_file + " --version " + std::to_string(version.version - 1) + " undoes it)");
@@ -604,24 +624,56 @@ void LiveEstimator::publish_status(TimeNs now, TimeNs start) {
   if (extras.bodies > 0) extras.bodies_tracked = tracker_.current_poses().size();
   extras.time_sync_answered = time_service_.answered();
   log(status_line(usage, extras));
-  log_quarantine_changes(usage);
 }
 
-// A quarantine's start with its capture stamp (the detection's time, which the status line gives
-// only as "quarantined 0.4 s"), and its end by the stamp of the status that no longer shows it.
-void LiveEstimator::log_quarantine_changes(const est::EstimatorUsage& usage) {
-  for (const auto& h : usage.calibration) {
-    const auto logged = quarantines_logged_.find(h.camera_id);
-    if (h.state == est::CalibrationState::kQuarantined) {
-      if (logged != quarantines_logged_.end() && logged->second == h.quarantined_since_ns) continue;
-      log("calibration " + h.camera_id + ": quarantined from capture stamp " +
-          std::to_string(h.quarantined_since_ns) + " (" + h.reason + ")");
-      quarantines_logged_[h.camera_id] = h.quarantined_since_ns;
-    } else if (logged != quarantines_logged_.end()) {
-      log("calibration " + h.camera_id + ": back in use by capture stamp " + std::to_string(usage.stamp_ns));
-      quarantines_logged_.erase(logged);
-    }
+// The calibration file changed by someone else while tracking: `estimator_node calibrate revert`
+// (or accept, which leaves the cameras as they are), a new solve written onto it, a hand edit. Its
+// fixed cameras that differ from those in use replace them in the tracker (their calibration
+// monitoring starts again) and the calibration in use is published; a file that cannot be read is
+// reported once and the calibration in use kept.
+void LiveEstimator::reload_calibration_if_changed() {
+  if (options_.calibration_file.empty()) return;
+  const auto time = file_time(options_.calibration_file);
+  if (!time || time == calibration_file_time_) return;
+  calibration_file_time_ = time;
+  SystemCalibration file;
+  try {
+    file = load_calibration(options_.calibration_file);
+  } catch (const std::exception& e) {
+    log(std::string("calibration: the file changed but cannot be used (keeping the calibration in use): ") +
+        e.what());
+    return;
   }
+  std::string applied;
+  for (const auto& camera : file.cameras) {
+    if (camera.moving || !camera.T_world_cam) continue;  // rig mounts and unposed cameras: read at start only
+    auto in_use = std::find_if(in_use_.cameras.begin(), in_use_.cameras.end(),
+                               [&camera](const CameraCalibration& c) { return c.id == camera.id; });
+    SystemCalibration before, after;
+    if (in_use != in_use_.cameras.end()) before.cameras.push_back(*in_use);
+    after.cameras.push_back(camera);
+    if (changed_cameras(before, after).empty()) continue;
+    tracker_.replace_camera(camera);
+    if (in_use != in_use_.cameras.end()) {
+      *in_use = camera;
+    } else {
+      in_use_.cameras.push_back(camera);
+      from_file_.insert(camera.id);
+    }
+    applied += (applied.empty() ? "" : ", ") + camera.id;
+  }
+  if (applied.empty()) return;
+  std::string version;
+  try {
+    const auto versions = CalibrationHistory(options_.calibration_file).versions();
+    if (!versions.empty())
+      version =
+          " (version " + std::to_string(versions.back().version) + ": " + versions.back().change.reason + ")";
+  } catch (const std::exception&) {  // a damaged history does not stop the file's use
+  }
+  log("calibration: " + options_.calibration_file + " changed" + version + ": " + applied +
+      " now as in the file");
+  publish_calibration();
 }
 
 void LiveEstimator::expire_idle_tracks(TimeNs now) {
@@ -668,6 +720,7 @@ void LiveEstimator::do_chores(Chores& chores, TimeNs now, TimeNs start) {
   if (now >= chores.next_body_poll) {
     chores.next_body_poll = now + seconds_to_ns(node_.bodies_poll_s);
     body_file_.reload_if_changed(tracker_);
+    reload_calibration_if_changed();
   }
   publish_descriptions_if_changed();
   expire_idle_tracks(now);

@@ -230,6 +230,18 @@ void CalibrationMonitor::restart(int camera_index) {
   camera = std::move(fresh);
 }
 
+void CalibrationMonitor::note_transition(const CameraCalibrationHealth& health, bool quarantined,
+                                         TimeNs stamp_ns) {
+  if (transitions_.size() < kMaxTransitions)
+    transitions_.push_back({health.camera_id, quarantined, stamp_ns, quarantined ? health.reason : ""});
+}
+
+std::vector<CalibrationTransition> CalibrationMonitor::take_transitions() {
+  std::vector<CalibrationTransition> out = std::move(transitions_);
+  transitions_.clear();
+  return out;
+}
+
 bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
   PerCamera& camera = cameras_.at(camera_index);
   expire(camera, stamp_ns);
@@ -290,6 +302,7 @@ bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
     if (camera.calm_since_ns == 0 || stamp_ns - camera.calm_since_ns < options_.window_ns) return false;
     camera.calm_since_ns = 0;
     ++health.releases;
+    note_transition(health, false, stamp_ns);
   } else if ((any_biased || blind) && last_quarantine_ns_ != 0 &&
              stamp_ns - last_quarantine_ns_ < options_.window_ns && stamp_ns >= last_quarantine_ns_) {
     // Held: one camera at a time, the most biased first.
@@ -305,6 +318,7 @@ bool CalibrationMonitor::judge(int camera_index, TimeNs stamp_ns) {
     health.reason = "quarantined: " + (any_biased ? describe(*worst, where) : blind_reason);
     health.quarantined_since_ns = stamp_ns;
     ++health.quarantines;
+    note_transition(health, true, stamp_ns);
     return true;
   }
   health.quarantined_since_ns = 0;

@@ -1398,6 +1398,19 @@ void Tracker::set_camera(const CameraCalibration& camera) {
   impl.cameras_changed();
 }
 
+void Tracker::replace_camera(const CameraCalibration& camera) {
+  set_camera(camera);
+  if (!camera.T_world_cam) return;
+  auto& impl = *impl_;
+  const auto index = static_cast<std::size_t>(impl.camera_index.at(camera.id));
+  impl.monitor.restart(static_cast<int>(index));
+  if (index < impl.resection_samples.size()) impl.resection_samples[index].clear();
+  if (index < impl.refine_samples.size()) impl.refine_samples[index].clear();
+  if (index < impl.refine_sampled_ns.size()) impl.refine_sampled_ns[index] = 0;
+  if (index < impl.settle_since_ns.size()) impl.settle_since_ns[index] = 0;
+  if (index < impl.resection_settle_until_ns.size()) impl.resection_settle_until_ns[index] = 0;
+}
+
 void Tracker::set_bodies(const std::vector<BodyDefinition>& bodies, const std::string& file_for_errors) {
   std::set<std::string> names;
   for (const auto& body : bodies) {
@@ -1540,6 +1553,10 @@ std::vector<CalibrationCorrection> Tracker::take_calibration_corrections() {
   std::vector<CalibrationCorrection> out = std::move(impl_->corrections);
   impl_->corrections.clear();
   return out;
+}
+
+std::vector<CalibrationTransition> Tracker::take_calibration_transitions() {
+  return impl_->monitor.take_transitions();
 }
 
 const CameraModel* Tracker::camera_model(const std::string& camera_id) const {

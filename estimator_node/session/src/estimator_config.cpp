@@ -214,7 +214,8 @@ void visit_node(Fields& f, NodeSettings& o) {
   f.number("prediction_horizon_ms", o.prediction_horizon_ms, between(0, 1000),
            "body poses are published this far ahead of the newest frame (seed 000 Ch. 5)");
   f.number("status_period_s", o.status_period_s, kPositive, "live: seconds between status messages");
-  f.number("bodies_poll_s", o.bodies_poll_s, kPositive, "live: how often the bodies file is checked");
+  f.number("bodies_poll_s", o.bodies_poll_s, kPositive,
+           "live: how often the bodies and calibration files are checked for changes");
   f.text("frames", o.frames, check_frames_mode,
          "per-camera: a frame per camera frame; fixed: frame_rate_hz; auto: fixed live, per-camera records "
          "offline (docs/frames.md)");

@@ -140,6 +140,31 @@ TEST(BodyGate, RejectsBadNamesTooFewTracksAndBadIds) {
   EXPECT_EQ(reason({{"name", "x"}, {"tracks", std::vector<int>(65, 1)}}).counter, "bad_arguments");
 }
 
+// Accepting or reverting a version of the estimator's calibration file (docs/console.md, "Versions
+// of the calibration").
+TEST(CalibrationGate, ForwardsAcceptAndRevertWithAVersion) {
+  const CalibrationGateResult revert =
+      check_calibration_request({{"id", 7}, {"action", "revert"}, {"version", 3}});
+  ASSERT_TRUE(std::holds_alternative<CalibrationRequest>(revert));
+  EXPECT_EQ(std::get<CalibrationRequest>(revert).request, 7);
+  EXPECT_EQ(std::get<CalibrationRequest>(revert).action, "revert");
+  EXPECT_EQ(std::get<CalibrationRequest>(revert).version, 3);
+  const CalibrationGateResult accept = check_calibration_request({{"action", "accept"}, {"version", 1}});
+  ASSERT_TRUE(std::holds_alternative<CalibrationRequest>(accept));
+  EXPECT_EQ(std::get<CalibrationRequest>(accept).version, 1);
+  const auto counter = [](const json& message) {
+    const CalibrationGateResult result = check_calibration_request(message);
+    EXPECT_TRUE(std::holds_alternative<Rejection>(result)) << message.dump();
+    return std::holds_alternative<Rejection>(result) ? std::get<Rejection>(result).counter : "";
+  };
+  EXPECT_EQ(counter({{"action", "revert"}}), "bad_arguments");
+  EXPECT_EQ(counter({{"action", "revert"}, {"version", "3"}}), "bad_arguments");
+  EXPECT_EQ(counter({{"action", "revert"}, {"version", 2.5}}), "bad_arguments");
+  EXPECT_EQ(counter({{"action", "accept"}, {"version", 0}}), "out_of_range");
+  EXPECT_EQ(counter({{"action", "accept"}, {"version", 1000001}}), "out_of_range");
+  EXPECT_EQ(counter({{"action", "delete"}, {"version", 1}}), "unknown_command");
+}
+
 TEST(RateLimiter, AllowsTheBurstThenTheRate) {
   RateLimiter limiter(10, 20);
   const TimeNs start = 1'000'000'000;

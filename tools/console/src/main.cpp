@@ -88,6 +88,10 @@ void add_options(CLI::App& app, ConsoleArgs& args) {
       ->default_str("none: the page cannot solve");
   app.add_option("--estimator-node", args.calibration.estimator_node,
                  "the estimator_node program the calibration page runs");
+  app.add_option("--calibration", args.calibration.calibration_file,
+                 "the estimator's calibration file: the calibration page lists its versions and accepts or "
+                 "reverts them (a running estimator_node reloads it; docs/continuous_calibration.md)")
+      ->default_str("none: the page shows no versions");
   app.add_option("--bodies", args.bodies.bodies_file,
                  "the estimator's bodies file: bodies made from markers in the 3D view are appended to it "
                  "(the estimator reloads it; docs/bodies.md)")
@@ -115,6 +119,8 @@ std::optional<int> resolve(ConsoleArgs& args) {
   args.options.calibration_dir = args.calibration.directory;
   args.bodies.dds_profile = args.dds_profile;
   args.bodies.work_dir = args.calibration.directory;
+  if (!args.calibration.calibration_file.empty())
+    args.calibration.calibration_file = std::filesystem::absolute(args.calibration.calibration_file);
   if (!args.bodies.bodies_file.empty())
     args.bodies.bodies_file = std::filesystem::absolute(args.bodies.bodies_file);
   try {

@@ -852,6 +852,51 @@ document.getElementById('cal-solve').addEventListener('click', () => sendCalibra
 document.getElementById('cal-world').addEventListener('click', () => sendCalibration('world', {
   wand: document.getElementById('cal-wand').value.trim(), floor_offset: Number(document.getElementById('cal-floor-offset').value) }));
 if (params.get('view') === 'calibration') document.getElementById('calibration').open = true;
+// Versions of the estimator's calibration file (panoptes_console --calibration): accept marks an
+// automatic change reviewed, revert restores a version's exact file (the estimator reloads it).
+document.getElementById('cal-versions').addEventListener('click', (event) => {
+  const button = event.target.closest('button[data-version]');
+  if (button) sendCalibration(button.dataset.action, { version: Number(button.dataset.version) });
+});
+let shownVersions = null;
+function updateVersions(job) {
+  const key = JSON.stringify([job.calibration_file, job.versions]);
+  if (key === shownVersions) return;
+  shownVersions = key;
+  const versions = Array.isArray(job.versions) ? job.versions : [];
+  document.getElementById('cal-versions-file').textContent = !job.calibration_file
+    ? 'no calibration file: start panoptes_console with --calibration <the estimator\'s calibration.yaml>'
+    : job.versions && job.versions.error ? `${job.calibration_file}: ${job.versions.error}`
+      : versions.length === 0 ? `${job.calibration_file}: no versions yet (estimator_node calibrate history --start)`
+        : `${job.calibration_file}: the last ${versions.length} versions, the newest last`;
+  const body = document.querySelector('#cal-versions tbody');
+  body.textContent = '';
+  const px = (value) => (value === null || value === undefined ? '–' : value.toFixed(2));
+  versions.forEach((v, i) => {
+    const row = document.createElement('tr');
+    row.dataset.version = String(v.version);
+    row.dataset.state = v.state;
+    for (const text of [`v${v.version}`, v.time_utc, v.state, v.reason, v.cameras.join(', ') || '–',
+      `${px(v.residual_before_px)} → ${px(v.residual_after_px)}`]) {
+      const cell = document.createElement('td');
+      cell.textContent = text;
+      row.append(cell);
+    }
+    const actions = document.createElement('td');
+    const button = (action, title) => {
+      const b = document.createElement('button');
+      b.dataset.action = action;
+      b.dataset.version = String(v.version);
+      b.textContent = action;
+      b.title = title;
+      actions.append(b);
+    };
+    if (v.state === 'applied') button('accept', 'mark this change as reviewed');
+    if (i < versions.length - 1) button('revert', `restore v${v.version}'s exact file (a new version; the estimator reloads it)`);
+    row.append(actions);
+    body.append(row);
+  });
+}
 
 function drawCoverage(canvas, cells) {
   canvas.width = 96; canvas.height = 72;
@@ -886,6 +931,7 @@ function updateCalibration(calibration) {
   const status = job.step === 'idle' ? '' : `${job.step}: ${job.result}${running && calibration.capturing ? ` (${calibration.seconds.toFixed(0)} s)` : ''}` +
     (job.result === 'failed' ? ` (exit ${job.exit_code})` : '');
   document.getElementById('cal-log').textContent = status ? `${status}\n${job.log}` : '';
+  updateVersions(job);
   // The report and the world frame's summary come once per finished step (they can be large).
   if (job.generation !== shownGeneration) {
     shownGeneration = job.generation;

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <deque>
 #include <fstream>
@@ -18,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "panoptes/calibration_history.h"
 #include "panoptes/jsonl.h"
 
 namespace panoptes::console {
@@ -90,6 +92,9 @@ struct CalibrationWorkflow::Impl {
   std::streamoff capture_offset = 0;
   std::string capture_partial;
   std::uint64_t capture_bad_lines = 0;
+  // versions(): the history index's time and size when last read, and what was read.
+  std::string versions_stamp;
+  json versions_cache;
 
   Impl(CalibrationWorkflowOptions options_in, ConsoleState& state_in)
       : options(std::move(options_in)), state(state_in) {}
@@ -113,8 +118,63 @@ struct CalibrationWorkflow::Impl {
     return {};
   }
 
+  // accept | revert of a version of the estimator's calibration file: done here, at once.
+  std::string change_version(const CalibrationRequest& request) {
+    if (options.calibration_file.empty())
+      return "no calibration file: start panoptes_console with --calibration <the estimator's "
+             "calibration.yaml>";
+    try {
+      CalibrationHistory history(options.calibration_file);
+      if (request.action == "accept") {
+        history.accept(request.version);
+      } else {
+        history.revert(request.version);
+      }
+    } catch (const std::exception& error) {
+      return error.what();
+    }
+    publish();
+    return {};
+  }
+
+  // The newest versions of the estimator's calibration file, oldest first (null: no file given),
+  // read again when its history's index changed.
+  json versions() {
+    constexpr std::size_t kShown = 20;
+    if (options.calibration_file.empty()) return nullptr;
+    const CalibrationHistory history(options.calibration_file);
+    std::error_code error;
+    const fs::path index = history.directory() / "history.jsonl";
+    const auto time = fs::last_write_time(index, error);
+    const auto stamp = error ? std::string()
+                             : std::to_string(time.time_since_epoch().count()) + "/" +
+                                   std::to_string(fs::file_size(index, error));
+    if (!stamp.empty() && stamp == versions_stamp) return versions_cache;
+    json list = json::array();
+    try {
+      const auto all = history.versions();
+      const auto residual = [](double px) { return std::isfinite(px) ? json(px) : json(nullptr); };
+      for (std::size_t i = all.size() > kShown ? all.size() - kShown : 0; i < all.size(); ++i) {
+        const CalibrationVersion& v = all[i];
+        list.push_back({{"version", v.version},
+                        {"time_utc", v.time_utc},
+                        {"reason", v.change.reason},
+                        {"cameras", v.change.cameras},
+                        {"residual_before_px", residual(v.change.residual_before_px)},
+                        {"residual_after_px", residual(v.change.residual_after_px)},
+                        {"state", to_string(v.state)}});
+      }
+    } catch (const std::exception& failure) {
+      list = {{"error", failure.what()}};
+    }
+    versions_stamp = stamp;
+    versions_cache = list;
+    return list;
+  }
+
   std::string handle(const CalibrationRequest& request) {
     std::lock_guard lock(mutex);
+    if (request.action == "accept" || request.action == "revert") return change_version(request);
     if (request.action == "stop") {
       if (child < 0 || (step != "capture" && step != "floor_capture")) return "no capture is running";
       stop_requested = true;
@@ -230,7 +290,9 @@ struct CalibrationWorkflow::Impl {
                       {"wand", wand},
                       {"plots", plots},
                       {"generation", generation},
-                      {"capture_bad_lines", capture_bad_lines}};
+                      {"capture_bad_lines", capture_bad_lines},
+                      {"calibration_file", options.calibration_file.string()},
+                      {"versions", versions()}};
     json full = job;
     full["report"] = report;
     full["report_text"] = report_text;

@@ -245,11 +245,23 @@ CalibrationGateResult check_calibration_request(const json& message) {
   if (action == message.end() || !action->is_string())
     return reject("bad_message", "a calibration message needs a string field 'action'");
   const std::string& name = action->get_ref<const std::string&>();
-  static const std::vector<std::string> actions = {"capture", "floor_capture", "stop", "solve", "world"};
+  static const std::vector<std::string> actions = {"capture", "floor_capture", "stop",  "solve",
+                                                   "world",   "accept",        "revert"};
   if (std::find(actions.begin(), actions.end(), name) == actions.end())
-    return reject("unknown_command", "unknown calibration action '" + name.substr(0, 64) +
-                                         "' (capture | floor_capture | stop | solve | world)");
-  CalibrationRequest out{request, name, {}, 0, false};
+    return reject("unknown_command",
+                  "unknown calibration action '" + name.substr(0, 64) +
+                      "' (capture | floor_capture | stop | solve | world | accept | revert)");
+  CalibrationRequest out{request, name, {}, 0, false, 0};
+  if (name == "accept" || name == "revert") {  // a version of the estimator's calibration file
+    constexpr std::int64_t kMaxVersion = 1'000'000;
+    const auto version = message.find("version");
+    if (version == message.end() || !version->is_number_integer())
+      return reject("bad_arguments", name + ": needs 'version', the calibration file's version (an integer)");
+    const auto number = version->get<std::int64_t>();
+    if (number < 1 || number > kMaxVersion) return reject("out_of_range", name + ": version 1 to 1000000");
+    out.version = static_cast<int>(number);
+    return out;
+  }
   if (const auto flag = message.find("time_service"); flag != message.end()) {
     if (!flag->is_boolean()) return reject("bad_message", "'time_service' must be true or false");
     out.time_service = flag->get<bool>();

@@ -150,6 +150,15 @@ struct CameraCalibrationHealth {
 ResidualStats residual_stats(std::size_t n, const Eigen::Vector2d& sum, const Eigen::Matrix2d& sum_outer,
                              double floor_px);
 
+// A camera's quarantine began or ended (Tracker::take_calibration_transitions): the live estimator
+// logs each with its capture stamp, which the once-a-second status line cannot give.
+struct CalibrationTransition {
+  std::string camera_id;
+  bool quarantined = false;  // true: quarantined at stamp_ns; false: released
+  TimeNs stamp_ns = 0;
+  std::string reason;  // the quarantine's
+};
+
 class CalibrationMonitor {
  public:
   explicit CalibrationMonitor(CalibrationHealthOptions options = {}, double centroid_sigma_px = 0.5);
@@ -183,6 +192,9 @@ class CalibrationMonitor {
   const CameraCalibrationHealth& health(int camera) const { return cameras_.at(camera).health; }
   std::vector<CameraCalibrationHealth> health() const;
   const CalibrationHealthOptions& options() const { return options_; }
+  // The quarantines begun and ended since the last call (at most kMaxTransitions kept).
+  std::vector<CalibrationTransition> take_transitions();
+  static constexpr std::size_t kMaxTransitions = 1024;
 
  private:
   struct Sums {
@@ -236,6 +248,8 @@ class CalibrationMonitor {
   TimeNs last_quarantine_ns_ = 0;
   std::string last_quarantined_;
   std::vector<PerCamera> cameras_;
+  std::vector<CalibrationTransition> transitions_;
+  void note_transition(const CameraCalibrationHealth& health, bool quarantined, TimeNs stamp_ns);
 };
 
 }  // namespace panoptes::estimator

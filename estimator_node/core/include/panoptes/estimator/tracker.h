@@ -155,6 +155,11 @@ class Tracker {
   // clears the rewind history.
   void set_calibration(const SystemCalibration& calibration);
   void set_camera(const CameraCalibration& camera);
+  // A camera changed by an operator (a calibration file reverted or written while tracking,
+  // docs/continuous_calibration.md "A changed file"): set_camera, and its calibration monitoring
+  // starts again from the new model (residual window, resection and refinement samples, settling);
+  // a quarantine stays until the new window is calm.
+  void replace_camera(const CameraCalibration& camera);
   bool has_camera(const std::string& camera_id) const;
 
   // Rigid bodies to identify and track (docs/bodies.md). Throws ConfigError naming the body (and
@@ -207,6 +212,8 @@ class Tracker {
   bool camera_quarantined(const std::string& camera_id) const;
   // The corrections applied since the last call (mode correct), oldest first.
   std::vector<CalibrationCorrection> take_calibration_corrections();
+  // The quarantines begun and ended since the last call (CalibrationMonitor::take_transitions).
+  std::vector<CalibrationTransition> take_calibration_transitions();
   // The camera's model as the tracker uses it now (a correction changes it); nullptr if unknown.
   const CameraModel* camera_model(const std::string& camera_id) const;
   const std::map<std::string, CameraCounters>& camera_counters() const { return camera_counters_; }

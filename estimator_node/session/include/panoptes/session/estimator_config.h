@@ -51,7 +51,7 @@ struct NodeSettings {
   double prediction_margin_px = 3.0;   // live: pixels added around each predicted gate
   double prediction_horizon_ms = 0.0;  // body poses are published this far ahead (seed 000 Ch. 5)
   double status_period_s = 1.0;        // live: seconds between status messages and progress lines
-  double bodies_poll_s = 1.0;          // live: how often the bodies file is checked for changes
+  double bodies_poll_s = 1.0;          // live: how often the bodies and calibration files are checked
   // rt/panoptes/frames, the ROS 2 outputs and offline --out-tracks/--out-poses (docs/frames.md):
   // "per-camera" (one per processed camera frame), "fixed" (frame_rate_hz, on a grid) or "auto"
   // (the default: fixed live, per-camera records offline).

@@ -5,7 +5,9 @@
 // step's log, the solve's report (report.json, report.txt, the plots) and the world frame's
 // summary. Live coverage comes from the features the console already receives (ConsoleState).
 // Only fixed argument lists are run: the page chooses an action, a wand definition and a floor
-// offset, all checked by the gate; file names are the workflow's own.
+// offset, all checked by the gate; file names are the workflow's own. With the estimator's
+// calibration file (panoptes_console --calibration) it also lists that file's versions and accepts
+// or reverts one (docs/continuous_calibration.md, "A changed file").
 #pragma once
 
 #include <filesystem>
@@ -22,6 +24,9 @@ struct CalibrationWorkflowOptions {
   std::filesystem::path directory;       // wand.jsonl, floor.jsonl, calibration.yaml and its report
   std::string cameras_file;              // intrinsics for the solve ("" refuses the solve, naming the option)
   std::string dds_profile;               // passed to the captures
+  // The estimator's calibration file ("": none): the page lists its versions and accepts or reverts
+  // them (panoptes/calibration_history.h); a running estimator_node reloads the file.
+  std::filesystem::path calibration_file;
 };
 
 class CalibrationWorkflow {
@@ -31,8 +36,9 @@ class CalibrationWorkflow {
   CalibrationWorkflow(const CalibrationWorkflow&) = delete;
   CalibrationWorkflow& operator=(const CalibrationWorkflow&) = delete;
 
-  // Starts the step; "" when it started, else why not (another step running, no wand capture yet,
-  // no cameras file). Thread-safe.
+  // Starts the step, or accepts or reverts a version at once; "" when it started or was applied,
+  // else why not (another step running, no wand capture yet, no cameras file, no such version).
+  // Thread-safe.
   std::string handle(const CalibrationRequest& request);
   // Reaps a finished step and publishes the job to the state; call a few times a second.
   void poll();

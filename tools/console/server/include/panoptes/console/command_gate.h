@@ -65,6 +65,7 @@ struct CalibrationRequest {
   std::string wand;  // canonical: numbers in metres joined by ','
   double floor_offset_m = 0;
   bool time_service = false;
+  int version = 0;  // accept | revert: the calibration file's version (1 and up)
 };
 using CalibrationGateResult = std::variant<CalibrationRequest, Rejection>;
 CalibrationGateResult check_calibration_request(const nlohmann::json& message);
