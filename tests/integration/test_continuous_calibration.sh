@@ -57,7 +57,7 @@ expect_exit 0 "calibrate history --start" -- "$en" calibrate history --calibrati
 printf 'tracker:\n  calibration:\n    settle_refine_ns: 2000000000\n' >"$work/settle.yaml"
 epoch=$(( ($(date +%s) + 3) * 1000000000 ))
 "$en" --calibration "$work/cal.yaml" --config "$work/settle.yaml" --continuous-calibration correct --anchors "$work/scene.yaml" \
-  --out-tracks "$work/tracks.jsonl" --duration $((seconds + 4)) --status-period 1 >"$work/estimator.log" 2>&1 &
+  --out-tracks "$work/tracks.jsonl" --duration $((seconds + 2)) --status-period 1 >"$work/estimator.log" 2>&1 &
 estimator=$!
 pids+=("$estimator")
 replay_cameras "$epoch" "$seconds" cam0 cam1 cam2 cam3 cam4 cam5 cam6 cam7
@@ -96,21 +96,29 @@ esac
 # Timings and RMSE windows of the scene (seconds): before the bump [1, 4]; quarantined from the
 # detection's stamp to the release's (both logged with their capture stamps); after, from 0.5 s
 # after the release to the end of the replayed scene.
-window_rmse() {  # window_rmse FROM UNTIL [static]: the live (or unbumped offline) tracks' RMSE in mm over that window
-  if [ "${3:-}" = static ]; then set -- "$1" "$2" "$work/static.yaml" "$work/static.tracks.jsonl" 1700000000000000000
-  else set -- "$1" "$2" "$work/scene.yaml" "$work/tracks.jsonl" "$epoch"; fi
-  "$bin/panoptes_eval" --scene "$3" --tracks "$4" --epoch-ns "$5" \
-    --warmup "$1" --until "$2" --summary-json "$work/window.json" >/dev/null 2>&1 &&
-    python3 -c 'import json, sys; print("%.4f" % json.load(open(sys.argv[1]))["rmse_mm"])' "$work/window.json"
+# The four windows are evaluated side by side (two cores; each panoptes_eval reads the whole file).
+window_eval() {  # window_eval NAME FROM UNTIL [static]: the live (or unbumped offline) tracks over that window
+  if [ "${4:-}" = static ]; then set -- "$1" "$2" "$3" "$work/static.yaml" "$work/static.tracks.jsonl" 1700000000000000000
+  else set -- "$1" "$2" "$3" "$work/scene.yaml" "$work/tracks.jsonl" "$epoch"; fi
+  "$bin/panoptes_eval" --scene "$4" --tracks "$5" --epoch-ns "$6" \
+    --warmup "$2" --until "$3" --summary-json "$work/window_$1.json" >/dev/null 2>&1
+}
+window_rmse() {  # window_rmse NAME: that window's RMSE in mm (empty when its evaluation failed)
+  python3 -c 'import json, sys; print("%.4f" % json.load(open(sys.argv[1]))["rmse_mm"])' "$work/window_$1.json" 2>/dev/null
 }
 detected=$(sed -n 's/.*calibration cam3: quarantined at capture stamp \([0-9]*\).*/\1/p' "$work/estimator.log" | head -1)
 rejoined=$(sed -n 's/.*calibration cam3: released at capture stamp \([0-9]*\).*/\1/p' "$work/estimator.log" | head -1)
 if [ -n "$detected" ] && [ -n "$rejoined" ]; then
   read -r t_detect t_rejoin end <<<"$(python3 -c "import sys; e, d, r, s = map(int, sys.argv[1:5])
 print('%.3f %.3f %.3f' % ((d - e) * 1e-9, (r - e) * 1e-9, s - 3.2))" "$epoch" "$detected" "$rejoined" "$seconds")"
-  before=$(window_rmse 1 4) quarantined=$(window_rmse "$t_detect" "$t_rejoin")
   t_after=$(python3 -c "print($t_rejoin + 0.5)")
-  after=$(window_rmse "$t_after" "$end") unbumped=$(window_rmse "$t_after" "$end" static)
+  window_eval before 1 4 &
+  window_eval quarantined "$t_detect" "$t_rejoin" &
+  window_eval after "$t_after" "$end" &
+  window_eval unbumped "$t_after" "$end" static &
+  wait $(jobs -p | tail -4)
+  before=$(window_rmse before) quarantined=$(window_rmse quarantined)
+  after=$(window_rmse after) unbumped=$(window_rmse unbumped)
   echo "cam3 bumped at 4 s, quarantined at ${t_detect} s, back in use by ${t_rejoin} s; marker RMSE before" \
     "${before} mm (1-4 s), quarantined ${quarantined} mm, after ${after} mm (${t_after}-${end} s; unbumped" \
     "${unbumped} mm)"
