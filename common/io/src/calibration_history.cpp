@@ -104,6 +104,10 @@ std::string camera_yaml(const CameraCalibration& camera) {
 
 }  // namespace
 
+std::string version_json(const CalibrationVersion& version) {
+  return to_json(version).dump();
+}
+
 CalibrationChange change_because(std::string reason, std::vector<std::string> cameras,
                                  double residual_before_px, double residual_after_px) {
   CalibrationChange change;

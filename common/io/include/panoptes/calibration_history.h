@@ -47,6 +47,11 @@ struct CalibrationVersion {
   std::string file;                             // its bytes, relative to the history directory
 };
 
+// A version as the JSON object of its history.jsonl line (version, time_ns, time_utc, reason,
+// cameras, state, file relative to the history directory, residual_before_px and
+// residual_after_px, null when not known): for readers that show versions (the console).
+std::string version_json(const CalibrationVersion& version);
+
 class CalibrationHistory {
  public:
   explicit CalibrationHistory(std::filesystem::path calibration_file);

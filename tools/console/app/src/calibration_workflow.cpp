@@ -8,7 +8,6 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <deque>
 #include <fstream>
@@ -153,17 +152,8 @@ struct CalibrationWorkflow::Impl {
     json list = json::array();
     try {
       const auto all = history.versions();
-      const auto residual = [](double px) { return std::isfinite(px) ? json(px) : json(nullptr); };
-      for (std::size_t i = all.size() > kShown ? all.size() - kShown : 0; i < all.size(); ++i) {
-        const CalibrationVersion& v = all[i];
-        list.push_back({{"version", v.version},
-                        {"time_utc", v.time_utc},
-                        {"reason", v.change.reason},
-                        {"cameras", v.change.cameras},
-                        {"residual_before_px", residual(v.change.residual_before_px)},
-                        {"residual_after_px", residual(v.change.residual_after_px)},
-                        {"state", to_string(v.state)}});
-      }
+      for (std::size_t i = all.size() > kShown ? all.size() - kShown : 0; i < all.size(); ++i)
+        list.push_back(json::parse(version_json(all[i])));
     } catch (const std::exception& failure) {
       list = {{"error", failure.what()}};
     }
