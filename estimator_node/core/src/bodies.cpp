@@ -111,7 +111,7 @@ struct BodySet::Body {
   // Keeps the step of a camera frame for smoothing, and the steps back to the first one at least
   // `lag_ns` older than it.
   void record_step(BodyFilterStep step, TimeNs lag_ns) {
-    history.push_back(std::move(step));
+    append_step(history, std::move(step));
     const TimeNs oldest = history.back().filtered.stamp_ns - lag_ns;
     std::size_t keep_from = 0;
     while (keep_from + 1 < history.size() && history[keep_from + 1].filtered.stamp_ns <= oldest) ++keep_from;

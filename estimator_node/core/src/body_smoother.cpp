@@ -5,14 +5,31 @@
 
 namespace panoptes::estimator {
 
+namespace {
+
+// C_kᵀ = P_{k+1|k}⁻¹ A_{k+1} P_k|k (P_{k+1|k} symmetric positive definite).
+BodyMatrix gain_t(const BodyFilterStep& step, const BodyFilterStep& next) {
+  const BodyMatrix AP = next.A * step.filtered.P.matrix();
+  return next.predicted.P.matrix().ldlt().solve(AP);
+}
+
+}  // namespace
+
+void append_step(std::vector<BodyFilterStep>& steps, BodyFilterStep step) {
+  if (!steps.empty()) {
+    step.previous_gain_t = gain_t(steps.back(), step);
+    step.has_previous_gain = true;
+  }
+  steps.push_back(std::move(step));
+}
+
 BodyState smoothed_state(const std::vector<BodyFilterStep>& steps, std::size_t index) {
   BodyState smoothed = steps.back().filtered;
   for (std::size_t k = steps.size() - 1; k-- > index;) {
     const BodyFilterStep& next = steps[k + 1];
-    // C_kᵀ = P_{k+1|k}⁻¹ A_{k+1} P_k|k (P_{k+1|k} symmetric positive definite).
-    const BodyMatrix AP = next.A * steps[k].filtered.P.matrix();
-    const BodyMatrix Ct = next.predicted.P.matrix().ldlt().solve(AP);
-    const BodyVector correction = Ct.transpose() * body_difference(smoothed, next.predicted);
+    const BodyVector correction =
+        (next.has_previous_gain ? next.previous_gain_t : gain_t(steps[k], next)).transpose() *
+        body_difference(smoothed, next.predicted);
     BodyState previous = steps[k].filtered;
     inject(previous, correction);
     smoothed = std::move(previous);

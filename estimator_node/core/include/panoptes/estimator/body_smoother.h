@@ -18,11 +18,19 @@ struct BodyFilterStep {
   BodyState predicted;  // before the frame's marker updates (P: A P Aᵀ + Q from the previous step)
   BodyState filtered;   // after them
   BodyMatrix A;         // error-state transition from the previous step's `filtered` to `predicted`
+  // The previous step's RTS gain, transposed (C_{k-1}ᵀ below), set by append_step: it depends only
+  // on the two steps, so it is computed once, not at every query of a smoothed state.
+  BodyMatrix previous_gain_t = BodyMatrix::Zero();
+  bool has_previous_gain = false;
 };
+
+// Appends `step` to `steps` (stamp order) and sets its previous_gain_t from the step before it.
+void append_step(std::vector<BodyFilterStep>& steps, BodyFilterStep step);
 
 // The RTS backward pass from the newest step down to `index`:
 //   C_k = P_k|k A_{k+1}ᵀ P_{k+1|k}⁻¹,  x_k|n = x_k|k ⊕ C_k (x_{k+1|n} ⊖ x_{k+1|k}).
-// Returns the filtered state of `index` with the smoothed mean. `steps` is in stamp order.
+// Returns the filtered state of `index` with the smoothed mean. `steps` is in stamp order; a step
+// without its previous gain (not appended by append_step) has it computed here.
 BodyState smoothed_state(const std::vector<BodyFilterStep>& steps, std::size_t index);
 
 }  // namespace panoptes::estimator
