@@ -33,6 +33,8 @@ void TrackerOptions::print(std::ostream& out) const {
       << "  delete_after             " << ns_to_seconds(delete_after_ns) * 1e3 << " ms\n"
       << "  publish_max_sigma        " << publish_max_sigma_m * 1e3 << " mm\n"
       << "  reacquire_sigma          " << reacquire_sigma_m * 1e3 << " mm\n"
+      << "  fast tracks              sigma^2 x " << fast_process_noise_scale << " for "
+      << ns_to_seconds(fast_hold_ns) * 1e3 << " ms\n"
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
       << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n"
       << "  continuous calibration   " << calibration.mode << " (window "
@@ -77,8 +79,9 @@ struct Track {
   // to such a track's identity: a swung or thrown object, which may rejoin its identity after a
   // gap (rejoin_fast_tracks).
   bool fast = false;
-  double peak_speed = 0;  // m/s, the fastest it went while confirmed (carried over by a rejoin)
-  int fast_updates = 0;   // updates while confirmed with a speed above kFastSpeed
+  double peak_speed = 0;    // m/s, the fastest it went while confirmed (carried over by a rejoin)
+  int fast_updates = 0;     // updates while confirmed with a speed above kFastSpeed
+  TimeNs last_fast_ns = 0;  // its last update above kFastSpeed while confirmed (or its rejoin)
   // Where it was at its last update with a second camera's within kFrameGapNs (0: never): a track
   // that only one camera still updates slides along that camera's ray (a club head leaving the
   // views), so a rejoin measures from here.
@@ -354,6 +357,18 @@ struct Tracker::Impl {
     if (track.nis_adapt > target) {
       track.q_scale = std::min(max_scale, track.q_scale * std::min(track.nis_adapt / target, 4.0));
     }
+  }
+
+  // A fast track (a swung or thrown object) keeps σ² × fast_process_noise_scale while it moves
+  // fast and for fast_hold_ns after (a ball's catch, a club's turn at the top): its next
+  // manoeuvre comes without the few updates of evidence the adaptive factor waits for
+  // (docs/estimator.md, "Fast tracks").
+  void hold_fast_process_noise(Track& track, TimeNs stamp_ns) const {
+    // Part of the adaptive process noise: off with it (process_noise_max_scale 1).
+    if (options.fast_process_noise_scale <= 0 || options.process_noise_max_scale <= 1.0 || !track.fast ||
+        stamp_ns - track.last_fast_ns > options.fast_hold_ns)
+      return;
+    track.q_scale = std::max(track.q_scale, options.fast_process_noise_scale);
   }
 
   void note_update(Track& track, int camera, TimeNs stamp_ns) {
@@ -892,6 +907,7 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   track.nis_average = track.nis_updates == 0 ? d2 : 0.8 * track.nis_average + 0.2 * d2;
   ++track.nis_updates;
   adapt_process_noise(track, d2, stamp);
+  hold_fast_process_noise(track, stamp);
   track.state = projected.state;
   update(track.state, projected.projection, pixel, options.measurement_noise_px);
   // A tentative track that a camera sees again cancels one miss: a marker that the body hides
@@ -904,6 +920,7 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   // a speed for an update or two.
   if (track.confirmed && track.state.velocity().squaredNorm() >= kFastSpeed * kFastSpeed) {
     ++track.fast_updates;
+    track.last_fast_ns = stamp;
     track.peak_speed = std::max(track.peak_speed, track.state.velocity().norm());
     if (track.fast_updates >= kFastUpdates && track.updates >= kSettledUpdates) track.fast = true;
   }
@@ -1044,7 +1061,8 @@ void Tracker::Impl::recover_manoeuvres(Entry& entry, const std::vector<Eigen::Ve
     if (claimed[claim.blob] != 1) continue;
     commit_pair(claim.track, claim.projected, pixels[claim.blob], claim.blob, entry.camera, stamp, used);
     Track& track = core.tracks[claim.track];
-    track.q_scale = max_scale;  // a manoeuvre: the blob was beyond the track's own gate
+    track.q_scale =
+        std::max(track.q_scale, max_scale);  // a manoeuvre: the blob was beyond the track's own gate
     track_done[claim.track] = 1;
     entry.associations.emplace_back(track.id, claim.blob);
     ++core.manoeuvres_recovered;
@@ -1092,6 +1110,7 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     if (rejoined_peak_speed > 0) {
       track.fast = true;
       track.peak_speed = rejoined_peak_speed;
+      track.last_fast_ns = stamp;
     }
     const double fast_prior = rejoined_peak_speed > 0  ? rejoined_peak_speed
                               : candidate.has_velocity ? 0.0

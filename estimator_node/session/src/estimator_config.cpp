@@ -392,6 +392,11 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
       "adaptive process noise: a confirmed track that missed takes the one blob left in its manoeuvre gate");
   f.flag("rejoin_fast_tracks", o.rejoin_fast_tracks,
          "adaptive process noise: a new track takes the id of the one fast track lost nearby moments ago");
+  f.number("fast_process_noise_scale", o.fast_process_noise_scale, kNonNegative,
+           "adaptive process noise: a fast track (above 10 m/s: a swung or thrown object) keeps this times "
+           "process_noise (0: off)");
+  f.integer("fast_hold_ns", o.fast_hold_ns, 0, kHourNs,
+            "... until this long after its last update above 10 m/s");
   f.number("measurement_noise_px", o.measurement_noise_px, kPositive, "sigma of a centroid, px");
   f.number("gate_chi2", o.gate_chi2, kPositive, "verify region (seed 003 2.2.3.2)");
   f.section("init", "pairing of unmatched blobs into new points",
