@@ -16,7 +16,7 @@ import sys
 
 
 def test_outputs(log_text):
-    """Yields (test name, output lines, passed) per test block of a LastTest.log."""
+    """Yields (test name, output lines) per test block of a LastTest.log."""
     blocks = re.split(r"^(?=\d+/\d+ Testing: )", log_text, flags=re.M)
     for block in blocks:
         name = re.search(r"^\d+/\d+ Test: (\S+)", block, flags=re.M)
@@ -25,7 +25,7 @@ def test_outputs(log_text):
         body = block.split("Output:\n", 1)[-1]
         body = re.sub(r"^-{20,}\n", "", body, count=1, flags=re.M)
         body = body.split("<end of output>", 1)[0]
-        yield name.group(1), body.splitlines(), "Test Passed." in block
+        yield name.group(1), body.splitlines()
 
 
 def main():
@@ -47,7 +47,7 @@ def main():
         names = {line.split(":", 1)[1].strip() for line in listed.read_text().splitlines() if ":" in line}
     except OSError:
         names = set()
-    failed = [(name, lines) for name, lines, _ in test_outputs(text) if name in names]
+    failed = [(name, lines) for name, lines in test_outputs(text) if name in names]
     if not failed:
         return 0
     print(f"failure digest ({len(failed)} failed test(s); full output above and in {log}):")

@@ -1061,8 +1061,8 @@ void Tracker::Impl::recover_manoeuvres(Entry& entry, const std::vector<Eigen::Ve
     if (claimed[claim.blob] != 1) continue;
     commit_pair(claim.track, claim.projected, pixels[claim.blob], claim.blob, entry.camera, stamp, used);
     Track& track = core.tracks[claim.track];
-    track.q_scale =
-        std::max(track.q_scale, max_scale);  // a manoeuvre: the blob was beyond the track's own gate
+    // A manoeuvre: the blob was beyond the track's own gate (a fast track's held factor may be larger).
+    track.q_scale = std::max(track.q_scale, max_scale);
     track_done[claim.track] = 1;
     entry.associations.emplace_back(track.id, claim.blob);
     ++core.manoeuvres_recovered;
