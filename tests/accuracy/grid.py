@@ -290,6 +290,7 @@ def main():
     p.add_argument("--require-fast-id-switches", type=int, default=None,
                    help="club and ball cells: at most this many ID switches each")
     p.add_argument("--require-fast-coverage", type=float, default=None, help="club and ball cells: coverage at least")
+    p.add_argument("--require-ball-coverage", type=float, default=None, help="ball cells: coverage at least")
     p.add_argument("--require-coverage", type=float, default=None, help="every cell: coverage at least")
     p.add_argument("--require-body-coverage", type=float, default=None,
                    help="walk, run and dance cells: coverage at least")
@@ -327,6 +328,9 @@ def main():
             bad.append(f"{r['cell']}: {r['id_switches']} ID switches > {args.require_fast_id_switches}")
         if fast and args.require_fast_coverage is not None and r["coverage"] < args.require_fast_coverage:
             bad.append(f"{r['cell']}: coverage {r['coverage']:.4f} < {args.require_fast_coverage}")
+        if (r["motion"] == "ball" and args.require_ball_coverage is not None and
+                r["coverage"] < args.require_ball_coverage):
+            bad.append(f"{r['cell']}: coverage {r['coverage']:.4f} < {args.require_ball_coverage}")
         if (not fast and args.require_body_coverage is not None and
                 r["coverage"] < args.require_body_coverage):
             bad.append(f"{r['cell']}: coverage {r['coverage']:.4f} < {args.require_body_coverage}")

@@ -34,7 +34,8 @@ void TrackerOptions::print(std::ostream& out) const {
       << "  publish_max_sigma        " << publish_max_sigma_m * 1e3 << " mm\n"
       << "  reacquire_sigma          " << reacquire_sigma_m * 1e3 << " mm\n"
       << "  fast tracks              sigma^2 x " << fast_process_noise_scale << " for "
-      << ns_to_seconds(fast_hold_ns) * 1e3 << " ms\n"
+      << ns_to_seconds(fast_hold_ns) * 1e3 << " ms (x " << fast_isolated_process_noise_scale
+      << " with no confirmed track within " << fast_isolation_m << " m)\n"
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
       << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n"
       << "  continuous calibration   " << calibration.mode << " (window "
@@ -53,6 +54,7 @@ constexpr TimeNs kFrameGapNs = 10'000'000;
 // A track with fewer updates is young: a wrong pairing's ghost lives a few updates.
 constexpr std::uint64_t kSettledUpdates = 10;
 constexpr int kFastUpdates = 5;
+constexpr int kIsolatedFastUpdates = 20;
 // A fast track lends its speed to new tracks near it (nearby_fast_speed) only after this many
 // fast updates: on a ring of four cameras a walk's ghosts (wrong pairings flying off along a ray)
 // reached 5 and their priors made more such ghosts.
@@ -368,7 +370,23 @@ struct Tracker::Impl {
     if (options.fast_process_noise_scale <= 0 || options.process_noise_max_scale <= 1.0 || !track.fast ||
         stamp_ns - track.last_fast_ns > options.fast_hold_ns)
       return;
-    track.q_scale = std::max(track.q_scale, options.fast_process_noise_scale);
+    double scale = options.fast_process_noise_scale;
+    if (options.fast_isolated_process_noise_scale > scale && track.fast_updates >= kIsolatedFastUpdates &&
+        isolated(track))
+      scale = options.fast_isolated_process_noise_scale;
+    track.q_scale = std::max(track.q_scale, scale);
+  }
+  // No other confirmed track within fast_isolation_m: a gate as wide as the larger σ² gives has
+  // no neighbour's blob to take (a thrown ball; not a club's marker, 0.4 m from the next). Only a
+  // track fast by its own updates (not yet a rejoined one: a ghost of clutter that took a lost
+  // club head's id would spread its gate over more clutter).
+  bool isolated(const Track& track) const {
+    const double r2 = options.fast_isolation_m * options.fast_isolation_m;
+    const Eigen::Vector3d p = track.state.position();
+    for (const Track& other : core.tracks)
+      if (other.confirmed && other.id != track.id && (other.state.position() - p).squaredNorm() < r2)
+        return false;
+    return true;
   }
 
   void note_update(Track& track, int camera, TimeNs stamp_ns) {

@@ -397,6 +397,10 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
            "process_noise (0: off)");
   f.integer("fast_hold_ns", o.fast_hold_ns, 0, kHourNs,
             "... until this long after its last update above 10 m/s");
+  f.number("fast_isolated_process_noise_scale", o.fast_isolated_process_noise_scale, kNonNegative,
+           "... or this times process_noise while no other confirmed track is within fast_isolation_m "
+           "(at most fast_process_noise_scale: off)");
+  f.number("fast_isolation_m", o.fast_isolation_m, kNonNegative, "... that distance, m");
   f.number("measurement_noise_px", o.measurement_noise_px, kPositive, "sigma of a centroid, px");
   f.number("gate_chi2", o.gate_chi2, kPositive, "verify region (seed 003 2.2.3.2)");
   f.section("init", "pairing of unmatched blobs into new points",
