@@ -96,6 +96,8 @@ struct Track {
   // confirmed in the frame just applied: it may take a held-back track's id (reacquire_confirmed).
   bool fresh = false;
   bool pending_reacquire = false;
+  // rejoin_fast_tracks: the lost fast track whose id this track takes once confirmed (0: none).
+  std::int64_t rejoin_id = 0;
   std::uint64_t frames_at_update = 0;  // Core::frames_applied at its last update (held_back)
   // Whether the last record made of it was published (determined): then it stays published up to
   // kKeepPublishedFactor × publish_max_sigma_m (hysteresis, issue 32 item 9). Set by tracks_at.
@@ -458,14 +460,14 @@ struct Tracker::Impl {
               const std::vector<char>& used) const;
   void initiate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
                 const std::vector<char>& used);
-  // A new track's id: an undone track's within kReuseIdGate of `position` at `stamp` (the nearest),
-  // else a lost fast track's (rejoin_fast_track: `rejoined_peak_speed` is then that track's peak
-  // speed, else 0), else a new one (`fresh` is then set).
+  // A new track's id: an undone track's within kReuseIdGate of `position` at `stamp` (the nearest,
+  // with its pending rejoin), else a new one. Near a lost fast track (rejoin_fast_track) the new
+  // one takes that track's id once confirmed (`rejoin_id`; `rejoined_peak_speed` is then that
+  // track's peak speed, else 0); otherwise `fresh` is set.
   std::int64_t id_for(const Eigen::Vector3d& position, TimeNs stamp, double& rejoined_peak_speed,
-                      bool& fresh);
+                      std::int64_t& rejoin_id, bool& fresh);
   // rejoin_fast_tracks: the id and peak speed of the confirmed fast track that lost its marker
-  // within reach of `position`, clearly the nearest of all that lost theirs; that track is
-  // removed. None when ambiguous.
+  // within reach of `position`, clearly the nearest of all that lost theirs. None when ambiguous.
   std::optional<std::pair<std::int64_t, double>> rejoin_fast_track(const Eigen::Vector3d& position,
                                                                    TimeNs stamp);
   // The highest peak speed of the confirmed fast tracks that lost their marker (not updated for
@@ -486,6 +488,9 @@ struct Tracker::Impl {
   // Tracks confirmed in this frame take the id of the held-back track whose marker they are
   // (reacquire); tracks stay in id order.
   void reacquire_confirmed(TimeNs now_ns);
+  // Tracks confirmed with a pending rejoin take the lost fast track's id, which is removed, unless
+  // its marker was found again or another track took it first.
+  void rejoin_confirmed(TimeNs now_ns);
   void prune(TimeNs now_ns);
   std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
   // Inserts `late` (in stamp order, each older than the newest applied frame, none older than the
@@ -1110,7 +1115,7 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
   for (auto& candidate : core.initiator.add_frame(camera_index, stamp, unmatched, occupied)) {
     Track track;
     double rejoined_peak_speed = 0;
-    track.id = id_for(candidate.position, stamp, rejoined_peak_speed, track.fresh);
+    track.id = id_for(candidate.position, stamp, rejoined_peak_speed, track.rejoin_id, track.fresh);
     track.state.x.head<3>() = candidate.position;
     track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
     const double sp = options.init_position_sigma_m;
@@ -1182,6 +1187,7 @@ void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
 
 void Tracker::Impl::prune(TimeNs now_ns) {
   reacquire_confirmed(now_ns);
+  rejoin_confirmed(now_ns);
   std::erase_if(core.lost,
                 [&](const Track& track) { return now_ns - track.last_update_ns > options.delete_after_ns; });
   std::erase_if(core.tracks, [&](const Track& track) {
@@ -1241,7 +1247,7 @@ void Tracker::Impl::prune(TimeNs now_ns) {
 }
 
 std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp, double& rejoined_peak_speed,
-                                   bool& fresh) {
+                                   std::int64_t& rejoin_id, bool& fresh) {
   // Where an undone track was when the replay creates a track again: its newest state moved back
   // by its velocity over at most the rewind horizon (0.5 s), a few millimetres for a walk.
   constexpr double kReuseIdGate = 0.015;
@@ -1255,15 +1261,20 @@ std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp
     }
   }
   if (nearest == undone.end()) {
+    // A rejoin waits for the new track's confirmation: a two-view ghost near the top of a swing,
+    // born before the club head's own track, took the head's identity and left the head a new one
+    // (corridor6/club, docs/estimator.md "Rejoin at confirmation").
     const auto rejoined = rejoin_fast_track(position, stamp);
-    if (!rejoined) {
+    if (rejoined) {
+      rejoin_id = rejoined->first;
+      rejoined_peak_speed = rejoined->second;
+    } else {
       fresh = true;
-      return next_track_id++;
     }
-    rejoined_peak_speed = rejoined->second;
-    return rejoined->first;
+    return next_track_id++;
   }
   const std::int64_t id = nearest->id;
+  rejoin_id = nearest->rejoin_id;
   undone.erase(nearest);
   // A replay from before a reacquisition renamed the track: the held-back track of that id is
   // in the restored state again.
@@ -1311,15 +1322,38 @@ std::optional<std::pair<std::int64_t, double>> Tracker::Impl::rejoin_fast_track(
   const double speed = std::max({best->peak_speed, best->state.velocity().norm(), kFastSpeed});
   const double reach = speed * ns_to_seconds(stamp - best->last_seen_ns()) + kReachMargin;
   if (best_d > reach) return std::nullopt;
-  const double peak_speed = std::max(best->peak_speed, kFastSpeed);
-  const std::int64_t id = best->id;
-  const auto same = [id](const Track& track) { return track.id == id; };
-  if (std::erase_if(core.lost, same) == 0) {
-    std::erase_if(core.tracks, same);
-    ++core.tracks_deleted;
+  return std::make_pair(best->id, std::max(best->peak_speed, kFastSpeed));
+}
+
+void Tracker::Impl::rejoin_confirmed(TimeNs now_ns) {
+  std::vector<std::pair<std::int64_t, std::int64_t>> renames;  // (the new track's id, the lost one's)
+  for (Track& track : core.tracks) {
+    if (!track.confirmed || track.rejoin_id == 0) continue;
+    const std::int64_t id = std::exchange(track.rejoin_id, 0);
+    const auto same = [id](const Track& other) { return other.id == id; };
+    const auto held = std::find_if(core.tracks.begin(), core.tracks.end(), same);
+    const bool lost = std::any_of(core.lost.begin(), core.lost.end(), same);
+    const bool found_again = held != core.tracks.end() && now_ns - held->last_update_ns <= kFrameGapNs;
+    const bool taken =
+        std::any_of(renames.begin(), renames.end(), [id](const auto& r) { return r.second == id; });
+    if ((held == core.tracks.end() && !lost) || found_again || taken) continue;
+    renames.emplace_back(track.id, id);
   }
-  ++core.fast_tracks_rejoined;
-  return std::make_pair(id, peak_speed);
+  if (renames.empty()) return;
+  for (const auto& rename : renames) {
+    const auto same = [id = rename.second](const Track& track) { return track.id == id; };
+    if (std::erase_if(core.lost, same) == 0) {
+      std::erase_if(core.tracks, same);
+      ++core.tracks_deleted;
+    }
+    ++core.fast_tracks_rejoined;
+  }
+  for (Track& track : core.tracks) {
+    for (const auto& [from, to] : renames)
+      if (track.id == from) track.id = to;
+  }
+  std::sort(core.tracks.begin(), core.tracks.end(),
+            [](const Track& a, const Track& b) { return a.id < b.id; });
 }
 
 double Tracker::Impl::nearby_fast_speed(const Eigen::Vector3d& position, TimeNs stamp) const {

@@ -40,10 +40,11 @@ struct TrackerOptions {
   // that sees it, updated within 10 ms, takes the one blob left in its gate widened to the largest
   // σ², unless another such track claims it too (docs/estimator.md, "Manoeuvres").
   bool recover_manoeuvres = true;
-  // With adaptive process noise: a new track takes the id of a confirmed fast track (once faster
-  // than 10 m/s) that lost its marker 10 ms to delete_after_ns ago, when that track is within reach
-  // (its speed x the gap) and clearly the nearest of every confirmed track that lost its marker: a
-  // club head that left every view at the top of the swing (docs/estimator.md, "Manoeuvres").
+  // With adaptive process noise: a new track, once confirmed, takes the id of a confirmed fast
+  // track (once faster than 10 m/s) that lost its marker 10 ms to delete_after_ns before the new
+  // one was born, when that track was within reach (its speed x the gap) and clearly the nearest
+  // of every confirmed track that lost its marker: a club head that left every view at the top of
+  // the swing (docs/estimator.md, "Manoeuvres", "Rejoin at confirmation").
   bool rejoin_fast_tracks = true;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
