@@ -54,6 +54,8 @@ constexpr TimeNs kFrameGapNs = 10'000'000;
 // A track with fewer updates is young: a wrong pairing's ghost lives a few updates.
 constexpr std::uint64_t kSettledUpdates = 10;
 constexpr int kFastUpdates = 5;
+// An isolated fast track takes the larger factor (isolated) only after this many fast updates of
+// its own: with kFastUpdates, ghosts of clutter or of a walk's wrong pairings took it too.
 constexpr int kIsolatedFastUpdates = 20;
 // A fast track lends its speed to new tracks near it (nearby_fast_speed) only after this many
 // fast updates: on a ring of four cameras a walk's ghosts (wrong pairings flying off along a ray)
