@@ -8,8 +8,11 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <iterator>
 #include <map>
 #include <mutex>
+#include <set>
+#include <string>
 #include <vector>
 
 #include <fastdds/rtps/attributes/PropertyPolicy.h>
@@ -165,6 +168,16 @@ void keep_off_killed_participants_ports(fdds::DomainParticipantQos& qos, std::ui
   }
 }
 
+constexpr const char* kProcSelfFdDir = "/proc/self/fd";
+
+// The segment a participant created: the one segment lock this process holds after creating it and
+// did not before (participant_creation_mutex() held); empty when there is none or more than one.
+std::string created_segment(const std::set<std::string>& before, const std::set<std::string>& after) {
+  std::vector<std::string> added;
+  std::set_difference(after.begin(), after.end(), before.begin(), before.end(), std::back_inserter(added));
+  return added.size() == 1 ? added.front() : std::string();
+}
+
 // Held from choosing a participant id until its ports exist: two buses of one process never take
 // the same id.
 std::mutex& participant_creation_mutex() {
@@ -195,8 +208,10 @@ void BusCore::create_entities(int domain, fdds::DomainParticipantQos& qos) {
   {
     std::lock_guard<std::mutex> lock(participant_creation_mutex());
     keep_off_killed_participants_ports(qos, static_cast<std::uint32_t>(domain));
+    const std::set<std::string> segments_before = shm_segments_held(kProcSelfFdDir);
     participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
-        static_cast<fdds::DomainId_t>(domain), qos, &writer_partitions_, fdds::StatusMask::none());
+        static_cast<fdds::DomainId_t>(domain), qos, &listener_, fdds::StatusMask::none());
+    shm_segment_ = created_segment(segments_before, shm_segments_held(kProcSelfFdDir));
   }
   if (participant_ == nullptr && security_files_) {
     fdds::Log::Flush();  // Fast DDS's own reason, logged asynchronously, goes out before ours
@@ -226,8 +241,14 @@ void BusCore::create_entities(int domain, fdds::DomainParticipantQos& qos) {
 void BusCore::teardown() {
   if (participant_ == nullptr) return;
   participant_->delete_contained_entities();
+  // Its samples other processes on this host have not read yet stay readable (shm_ports.h).
+  // Only processes of this host read them, and only those that found it may hold one.
+  const bool kept = !shm_segment_.empty() &&
+                    listener_.discovered_another_process_on_host_of(participant_->guid().guidPrefix) &&
+                    keep_shm_segment_name(kShmDir, shm_segment_);
   fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
   participant_ = nullptr;
+  if (kept) restore_shm_segment_name(kShmDir, shm_segment_);
 }
 
 fdds::Topic* BusCore::topic_of_type(const std::string& name,
@@ -247,6 +268,25 @@ fdds::Topic* BusCore::topic_of_type(const std::string& name,
 void BusCore::delete_filtered_topic(fdds::ContentFilteredTopic* topic) {
   std::lock_guard<std::mutex> lock(mutex_);
   participant_->delete_contentfilteredtopic(topic);
+}
+
+void ParticipantListener::on_participant_discovery(
+    fdds::DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) {
+  if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT) return;
+  ProcessKey key{};
+  std::copy_n(info.info.m_guid.guidPrefix.value, key.size(), key.begin());
+  std::lock_guard<std::mutex> lock(mutex_);
+  processes_.insert(key);
+}
+
+bool ParticipantListener::discovered_another_process_on_host_of(
+    const eprosima::fastrtps::rtps::GuidPrefix_t& own) const {
+  constexpr std::size_t kHostEnd = 4;  // vendor and host
+  std::lock_guard<std::mutex> lock(mutex_);
+  return std::any_of(processes_.begin(), processes_.end(), [&](const ProcessKey& process) {
+    return std::equal(process.begin(), process.begin() + kHostEnd, own.value) &&
+           !std::equal(process.begin() + kHostEnd, process.end(), own.value + kHostEnd);
+  });
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -3,12 +3,14 @@
 // shared-memory ports resolved when it is made), with its publisher, subscriber and topics.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
@@ -29,6 +31,22 @@ namespace panoptes::dds {
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 ReturnCode return_code_ok();
+
+// The participant's listener: the writers' partitions (WriterPartitions), and the processes of the
+// participants it discovered (its shared memory reaches those of this host: BusCore::teardown).
+class ParticipantListener final : public WriterPartitions {
+ public:
+  void on_participant_discovery(fdds::DomainParticipant*,
+                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override;
+  // Whether a participant of another process on the host of `own` was discovered. Fast DDS 2.9's
+  // GUID prefixes start with the vendor (2 octets), the host (2) and the process (4).
+  bool discovered_another_process_on_host_of(const eprosima::fastrtps::rtps::GuidPrefix_t& own) const;
+
+ private:
+  using ProcessKey = std::array<eprosima::fastrtps::rtps::octet, 8>;
+  mutable std::mutex mutex_;
+  std::set<ProcessKey> processes_;
+};
 
 class BusCore {
  public:
@@ -64,7 +82,7 @@ class BusCore {
   fdds::Subscriber* subscriber() const { return subscriber_; }
   const std::filesystem::path& profile_file() const { return profile_file_; }
   ReceiveCounters& receive_counters() { return receive_counters_; }
-  WriterPartitions& writer_partitions() { return writer_partitions_; }
+  WriterPartitions& writer_partitions() { return listener_; }
   bool secured() const { return security_files_.has_value(); }
   // Appended to a refused writer, reader or topic: with DDS Security, the likely reason.
   std::string refusal_hint() const {
@@ -77,10 +95,13 @@ class BusCore {
   void teardown();
 
   std::filesystem::path profile_file_;
-  ReceiveCounters receive_counters_;    // outlives the participant: its types refer to it
-  WriterPartitions writer_partitions_;  // the participant's listener
+  ReceiveCounters receive_counters_;  // outlives the participant: its types refer to it
+  ParticipantListener listener_;
   std::optional<SecurityFiles> security_files_;
   fdds::DomainParticipant* participant_ = nullptr;
+  // The participant's shared-memory data segment ("fastrtps_<id>"), kept reachable after it closes
+  // (shm_ports.h, keep_shm_segment_name); empty when it has none or it was not found.
+  std::string shm_segment_;
   fdds::Publisher* publisher_ = nullptr;
   fdds::Subscriber* subscriber_ = nullptr;
   std::mutex mutex_;

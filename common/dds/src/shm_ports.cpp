@@ -17,6 +17,17 @@ bool file_exists(const std::filesystem::path& path) {
   return std::filesystem::exists(path, error);
 }
 
+constexpr std::string_view kSegmentPrefix = "fastrtps_";
+constexpr std::string_view kLockSuffix = "_el";
+constexpr std::string_view kKeepSuffix = "_keep";
+
+// "fastrtps_<16 hex digits>": a participant's data segment (not a port, "fastrtps_port<N>").
+bool is_segment_name(std::string_view name) {
+  if (!name.starts_with(kSegmentPrefix)) return false;
+  const std::string_view id = name.substr(kSegmentPrefix.size());
+  return id.size() == 16 && id.find_first_not_of("0123456789abcdef") == std::string_view::npos;
+}
+
 }  // namespace
 
 std::filesystem::path shm_port_file(const std::filesystem::path& shm_dir, std::uint32_t port) {
@@ -81,6 +92,43 @@ std::optional<int> participant_id_clear_of_owned_shm_ports(const ParticipantPort
     }
   }
   return oldest;
+}
+
+std::set<std::string> shm_segments_held(const std::filesystem::path& fd_dir) {
+  std::set<std::string> segments;
+  std::error_code error;
+  for (std::filesystem::directory_iterator it(fd_dir, error), end; !error && it != end; it.increment(error)) {
+    std::error_code link_error;
+    const std::filesystem::path target = std::filesystem::read_symlink(it->path(), link_error);
+    if (link_error) continue;  // closed since listed, or not a link
+    const std::string name = target.filename().string();
+    if (!name.ends_with(kLockSuffix)) continue;
+    const std::string segment = name.substr(0, name.size() - kLockSuffix.size());
+    if (is_segment_name(segment)) segments.insert(segment);
+  }
+  return segments;
+}
+
+bool keep_shm_segment_name(const std::filesystem::path& shm_dir, const std::string& segment) {
+  if (!is_segment_name(segment)) return false;
+  const std::filesystem::path keep = shm_dir / (segment + std::string(kKeepSuffix));
+  std::error_code error;
+  std::filesystem::remove(keep, error);  // left by a process killed while closing
+  std::filesystem::create_hard_link(shm_dir / segment, keep, error);
+  return !error;
+}
+
+bool restore_shm_segment_name(const std::filesystem::path& shm_dir, const std::string& segment) {
+  const std::filesystem::path keep = shm_dir / (segment + std::string(kKeepSuffix));
+  std::error_code error;
+  if (file_exists(shm_dir / segment)) {  // not removed (or created again): the second name goes
+    std::filesystem::remove(keep, error);
+    return false;
+  }
+  std::filesystem::rename(keep, shm_dir / segment, error);
+  if (!error) return true;
+  std::filesystem::remove(keep, error);  // nothing kept (keep_shm_segment_name failed)
+  return false;
 }
 
 }  // namespace panoptes::dds

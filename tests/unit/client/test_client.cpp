@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +17,7 @@
 #include <iterator>
 #include <limits>
 #include <memory>
+#include <set>
 #include <string>
 #include <thread>
 #include <utility>
@@ -26,6 +28,7 @@
 #include "../dds_test_support.h"
 #include "panoptes/client/client.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/shm_ports.h"
 #include "panoptes/process.h"
 #include "panoptes_msgs/chains.h"
 #include "panoptes_msgs/panoptes.h"
@@ -562,7 +565,12 @@ TEST(ClientEstimatorProcess, WritesDescriptionsThenFrames) {
   writer->write(descriptions(1, "head"));
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(std::stod(seconds));
   const pid_t parent = ::getppid();  // the test: stop with it, not write for minutes without it
-  for (std::uint64_t n = 1; std::chrono::steady_clock::now() < end && ::getppid() == parent; ++n) {
+  // Stopped with SIGINT (ChildProcess::stop): it closes its participant, as an estimator does, rather
+  // than leave its shared-memory files to every later run of the test.
+  static volatile std::sig_atomic_t interrupted = 0;
+  std::signal(SIGINT, [](int) { interrupted = 1; });
+  for (std::uint64_t n = 1;
+       std::chrono::steady_clock::now() < end && ::getppid() == parent && interrupted == 0; ++n) {
     frames->write(frame(n));
     std::this_thread::sleep_for(2ms);
   }
@@ -629,8 +637,11 @@ std::unique_ptr<ChildProcess> start_fake_estimator(const std::filesystem::path& 
 TEST(Client, LateJoinerGetsDescriptionsWithItsFirstFrames) {
   // 20 clients opened one after another in this process (12 until the participant ids: from the 15th
   // or 16th on, clients that took id 0 again with the GUID of every one before found no estimator for
-  // 10 s, in two of seven fresh-clone suites; shm_ports.h). In a later suite every joiner from the 6th
-  // on found no data, with new ids: the estimator's log and whether it still ran are printed now.
+  // 10 s, in two of seven fresh-clone suites; shm_ports.h). Two later failures were defects of Fast
+  // DDS 2.9.1 in the estimator (docs/protocol.md, "Closing a participant"): its shared-memory port
+  // wedged by a client that closed (every later joiner got frames, no descriptions), or its frames
+  // writer deadlocked as a client left (every later joiner found no estimator). Both worked around
+  // in the Bus; the estimator's log and whether it still ran are printed on a failure.
   constexpr int kJoiners = 20;
   const std::filesystem::path log = std::filesystem::temp_directory_path() /
                                     ("client_tests_estimator_" + std::to_string(::getpid()) + ".log");
@@ -689,6 +700,66 @@ TEST(Client, LateJoinerGetsDescriptionsWithItsFirstFrames) {
   const auto slow =
       std::count_if(first_frames.begin(), first_frames.end(), [](double ms) { return ms > 600.0; });
   EXPECT_LE(slow, 2) << "late joiners whose first frame came > 600 ms after opening, of " << kJoiners;
+}
+
+// The frames of a panoptes_client_probe output (JSON lines) whose number is at least `first`.
+int frames_from(const std::filesystem::path& jsonl, std::uint64_t first) {
+  std::ifstream in(jsonl);
+  int count = 0;
+  for (std::string line; std::getline(in, line);) {
+    const std::size_t at = line.find("\"frame\":");
+    if (at != std::string::npos && std::stoull(line.substr(at + 8)) >= first) ++count;
+  }
+  return count;
+}
+
+// Fast DDS 2.9.1 hands a receiver a reference into the sender's shared-memory segment, which the
+// receiver opens by name; if the sender closed first (the name removed), the receiver retries that
+// reference for good and never receives another sample through shared memory, from anyone
+// (shm_ports.h, docs/protocol.md "Closing a participant"). The late-joiner test met it as 20 clients
+// came and went: the estimator never again heard a client's acknowledgement, so no client got the
+// descriptions. A Bus that closes while a participant of another process on this host knows it
+// leaves its segment under its name (the receivers' Fast DDS removes it once they see the owner
+// gone); one that knows none removes it (dds.Bus.AParticipantHoldsOneSharedMemorySegmentOfItsOwn).
+TEST(Client, AWriterThatClosesLeavesItsSegmentToTheApplicationsReadingIt) {
+  const std::filesystem::path bin = std::filesystem::read_symlink("/proc/self/exe").parent_path();
+  const std::string tag = std::to_string(::getpid());
+  const std::filesystem::path tmp = std::filesystem::temp_directory_path();
+  const std::filesystem::path out = tmp / ("client_tests_receiver_" + tag + ".jsonl");
+  const std::filesystem::path log = tmp / ("client_tests_receiver_" + tag + ".log");
+  ChildProcess receiver("panoptes_client_probe",
+                        {(bin / "panoptes_client_probe").string(), "--out", out.string(), "--duration", "60",
+                         "--domain", std::to_string(test_domain())},
+                        log);
+  const std::set<std::string> before = dds::shm_segments_held("/proc/self/fd");
+  std::vector<std::string> segment;
+  {
+    dds::BusOptions options;
+    options.domain_id = test_domain();
+    options.participant_name = "first_writer";
+    dds::Bus bus(options);
+    const std::set<std::string> held = dds::shm_segments_held("/proc/self/fd");
+    std::set_difference(held.begin(), held.end(), before.begin(), before.end(), std::back_inserter(segment));
+    ASSERT_EQ(segment.size(), 1U);
+    auto frames = bus.make_writer<msg::MocapFrame>();
+    ASSERT_TRUE(frames->wait_for_readers(1, 20s)) << log_tail(log);
+    for (std::uint64_t n = 1; n <= 5; ++n) frames->write(frame(n));
+  }
+  const std::filesystem::path name = std::filesystem::path("/dev/shm") / segment.front();
+  EXPECT_TRUE(std::filesystem::exists(name)) << name << " went with its participant";
+  EXPECT_FALSE(std::filesystem::exists(name.string() + "_keep"));
+  // The application reads on, from the next writer.
+  FakeEstimator next;
+  ASSERT_TRUE(next.frames->wait_for_readers(1, 20s)) << log_tail(log);
+  for (std::uint64_t n = 1000; n < 1200; ++n) {
+    next.frames->write(frame(n));
+    std::this_thread::sleep_for(2ms);
+  }
+  receiver.stop();
+  EXPECT_GT(frames_from(out, 1000), 100) << "frames of the next writer, of 200; the application's log:\n"
+                                         << log_tail(log);
+  std::filesystem::remove(out);
+  std::filesystem::remove(log);
 }
 
 TEST(Client, VersionIsTheProjectsAndThePackagesVersion) {

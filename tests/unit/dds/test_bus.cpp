@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // The DDS bus over the loopback profile: per-camera content filters (Bus::make_reader's `only_id`)
 // and the reliability a feature writer offers to a calibration capture.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <filesystem>
+#include <iterator>
 #include <mutex>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -12,6 +16,7 @@
 
 #include "../dds_test_support.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/shm_ports.h"
 #include "panoptes/dds/time_sync.h"
 #include "panoptes_msgs/panoptes.h"
 
@@ -37,6 +42,25 @@ msg::Predictions predictions_for(const std::string& camera, long long stamp) {
   p.camera_id(camera);
   p.stamp_ns(stamp);
   return p;
+}
+
+// What keeping a closed participant's segment reachable relies on (shm_ports.h): Fast DDS names a
+// participant's segment fastrtps_<16 hex digits>, creates it with the participant, and holds its
+// lock file open until the participant closes.
+TEST(Bus, AParticipantHoldsOneSharedMemorySegmentOfItsOwn) {
+  const std::set<std::string> before = shm_segments_held("/proc/self/fd");
+  std::set<std::string> added;
+  {
+    Bus bus(options("segment_owner"));
+    const std::set<std::string> during = shm_segments_held("/proc/self/fd");
+    std::set_difference(during.begin(), during.end(), before.begin(), before.end(),
+                        std::inserter(added, added.end()));
+    ASSERT_EQ(added.size(), 1U);
+    EXPECT_TRUE(std::filesystem::exists("/dev/shm/" + *added.begin()));
+  }
+  EXPECT_EQ(shm_segments_held("/proc/self/fd"), before);
+  // No process of another host or process was discovered: the name went with the participant.
+  EXPECT_FALSE(std::filesystem::exists("/dev/shm/" + *added.begin()));
 }
 
 TEST(Bus, OnlyIdReaderGetsOnlyItsCamerasSamples) {

@@ -113,5 +113,55 @@ TEST_F(ShmPortsTest, AnIdThisProcessUsedBeforeIsTakenLastTheOldestFirst) {
   EXPECT_EQ(participant_id_clear_of_owned_shm_ports(rule_, 3, 80, dir_, {}, used), std::optional<int>(3));
 }
 
+// The segments a process created, from its open file descriptors: the lock files of segments,
+// not of ports, nor any other file.
+TEST_F(ShmPortsTest, SegmentsHeldAreTheSegmentLockFilesOpen) {
+  const std::filesystem::path fds = dir_ / "fd";
+  std::filesystem::create_directories(fds);
+  std::filesystem::create_symlink("/dev/shm/fastrtps_0123456789abcdef_el", fds / "3");
+  std::filesystem::create_symlink("/dev/shm/fastrtps_fedcba9876543210_el", fds / "4");
+  std::filesystem::create_symlink("/dev/shm/fastrtps_port7411_el", fds / "5");       // a port's
+  std::filesystem::create_symlink("/dev/shm/fastrtps_0123456789abcdef", fds / "6");  // mapped, not locked
+  std::filesystem::create_symlink("/dev/shm/fastrtps_0123_el", fds / "7");           // not a segment id
+  std::filesystem::create_symlink("socket:[12345]", fds / "8");
+  touch(fds / "9");  // not a link
+  EXPECT_EQ(shm_segments_held(fds),
+            (std::set<std::string>{"fastrtps_0123456789abcdef", "fastrtps_fedcba9876543210"}));
+  EXPECT_TRUE(shm_segments_held(dir_ / "absent").empty());
+}
+
+// Closing a participant removes its segment's name while receivers may hold references into it
+// (shm_ports.h): the name comes back, with the same contents, and the second name goes.
+TEST_F(ShmPortsTest, AClosedParticipantsSegmentNameIsRestored) {
+  const std::string segment = "fastrtps_00112233445566aa";
+  std::ofstream(dir_ / segment) << "samples";
+  ASSERT_TRUE(keep_shm_segment_name(dir_, segment));
+  EXPECT_TRUE(std::filesystem::exists(dir_ / (segment + "_keep")));
+  std::filesystem::remove(dir_ / segment);  // what Fast DDS does as the participant closes
+  EXPECT_TRUE(restore_shm_segment_name(dir_, segment));
+  std::ifstream restored(dir_ / segment);
+  std::string contents;
+  restored >> contents;
+  EXPECT_EQ(contents, "samples");
+  EXPECT_FALSE(std::filesystem::exists(dir_ / (segment + "_keep")));
+}
+
+TEST_F(ShmPortsTest, ASegmentNameStillThereIsLeftAndTheSecondNameGoes) {
+  const std::string segment = "fastrtps_00112233445566bb";
+  std::ofstream(dir_ / segment) << "samples";
+  ASSERT_TRUE(keep_shm_segment_name(dir_, segment));
+  EXPECT_FALSE(restore_shm_segment_name(dir_, segment));
+  EXPECT_TRUE(std::filesystem::exists(dir_ / segment));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / (segment + "_keep")));
+}
+
+TEST_F(ShmPortsTest, NothingIsKeptOfAMissingSegmentOrAPort) {
+  EXPECT_FALSE(keep_shm_segment_name(dir_, "fastrtps_00112233445566cc"));  // no such file
+  leave_port(7411, true);
+  EXPECT_FALSE(keep_shm_segment_name(dir_, "fastrtps_port7411"));
+  EXPECT_FALSE(restore_shm_segment_name(dir_, "fastrtps_00112233445566cc"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "fastrtps_00112233445566cc"));
+}
+
 }  // namespace
 }  // namespace panoptes::dds

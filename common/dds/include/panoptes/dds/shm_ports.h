@@ -57,4 +57,24 @@ std::optional<int> participant_id_clear_of_owned_shm_ports(
     const std::set<std::uint32_t>& removed_but_mapped = {},
     const std::map<int, std::uint64_t>& used_before = {});
 
+// The shared-memory segments whose lock file the process of `fd_dir` (/proc/self/fd) holds open:
+// the data segments of the participants it created. Fast DDS 2.9 names a participant's segment
+// "fastrtps_<16 hex digits>" and holds "<segment>_el" open (locked) while the participant lives.
+std::set<std::string> shm_segments_held(const std::filesystem::path& fd_dir);
+
+// Keeping a closed participant's segment reachable (docs/protocol.md, "Closing a participant"):
+// Fast DDS 2.9.1 hands a receiver a reference to a sample in the sender's segment and the receiver
+// opens that segment by name. A receiver that reaches such a reference after the sender closed
+// (which removes the name) retries the same reference forever: every later sample to that
+// receiver's port, from any participant, is lost (fixed in Fast DDS 2.12, eProsima/Fast-DDS#3992).
+//
+// keep_shm_segment_name: before the participant is deleted, a second name for its segment
+// ("<segment>_keep" in `shm_dir`); false when there is nothing to keep.
+bool keep_shm_segment_name(const std::filesystem::path& shm_dir, const std::string& segment);
+// restore_shm_segment_name: after the deletion, the segment under its own name again (if the
+// deletion removed it) and the second name gone. A receiver with a pending reference then reads
+// it; Fast DDS removes the name once every receiver that opened it sees the owner gone (its lock
+// file released, within 5 s), deploy/dds-shm-clean.sh otherwise. True when the name was restored.
+bool restore_shm_segment_name(const std::filesystem::path& shm_dir, const std::string& segment);
+
 }  // namespace panoptes::dds
