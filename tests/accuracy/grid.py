@@ -239,19 +239,41 @@ def run_cell(args, rig, n, motion, clutter, seed):
     if trackable == 0 or e.get("coverage") is None:
         raise CellError(f"cell {name}: no marker was ever trackable (seen by >= 2 cameras): the rig sees nothing")
     return {"cell": name, "rig": f"{rig}{n}", "motion": motion, "clutter": clutter, "seed": seed,
-            "rmse_mm": e.get("rmse_mm"), "id_switches": e.get("id_switches", 0), "coverage": e["coverage"],
+            "rmse_mm": e.get("rmse_mm"), "id_switches": e.get("id_switches", 0), "id_swaps": e.get("id_swaps", 0),
+            "coverage": e["coverage"],
             "false_records": e.get("false_records", 0), "false_fraction": e.get("false_record_fraction", 0.0)}
 
 
 def fmt(r):
     rmse = "-" if r["rmse_mm"] is None else f"{r['rmse_mm']:.3f}"
-    return (f"| {r['cell']} | {rmse} | {r['id_switches']} | {100 * r['coverage']:.2f} | "
+    return (f"| {r['cell']} | {rmse} | {r['id_switches']} | {r.get('id_swaps', 0)} | {100 * r['coverage']:.2f} | "
             f"{r['false_records']} ({100 * r['false_fraction']:.2f}%) |")
 
 
+def swap_table(rows, motion, out):
+    """ID switches and swaps (a marker taking another marker's track) per rig and clutter level,
+    summed over seeds (issue 35 item 3: the swap rate per rig and clutter level)."""
+    sel = [r for r in rows if r["motion"] == motion]
+    rigs = sorted({r["rig"] for r in sel})
+    clutters = sorted({r["clutter"] for r in sel}, key=float)
+    if not sel:
+        return
+    print(f"{motion}: ID switches / swaps per rig (rows) and clutter blobs per frame (columns), seeds summed",
+          file=out)
+    print("| rig | " + " | ".join(f"c{c}" for c in clutters) + " |", file=out)
+    print("| --- |" + " --- |" * len(clutters), file=out)
+    for rig in rigs:
+        cells = []
+        for c in clutters:
+            group = [r for r in sel if r["rig"] == rig and r["clutter"] == c]
+            cells.append(f"{sum(r['id_switches'] for r in group)} / {sum(r.get('id_swaps', 0) for r in group)}"
+                         if group else "-")
+        print(f"| {rig} | " + " | ".join(cells) + " |", file=out)
+
+
 def report(rows, out):
-    print("| cell | RMSE mm | ID switches | coverage % | false records |", file=out)
-    print("| --- | --- | --- | --- | --- |", file=out)
+    print("| cell | RMSE mm | ID switches | of them swaps | coverage % | false records |", file=out)
+    print("| --- | --- | --- | --- | --- | --- |", file=out)
     for r in rows:
         print(fmt(r), file=out)
     by = {
@@ -272,8 +294,11 @@ def report(rows, out):
         if sel:
             rm = [r["rmse_mm"] for r in sel if r["rmse_mm"] is not None]
             print(f"{motion}: cells {len(sel)}, mean RMSE {statistics.mean(rm):.4f} mm, ID switches "
-                  f"{sum(r['id_switches'] for r in sel)}, min coverage {100 * min(r['coverage'] for r in sel):.2f} %",
+                  f"{sum(r['id_switches'] for r in sel)} (swaps {sum(r.get('id_swaps', 0) for r in sel)}), "
+                  f"min coverage {100 * min(r['coverage'] for r in sel):.2f} %",
                   file=out)
+    for motion in MOTIONS:
+        swap_table(rows, motion, out)
 
 
 def main():

@@ -119,6 +119,7 @@ struct Totals {
   explicit Totals(std::size_t markers) : sum2(markers, 0.0), last_id(markers, 0) {}
   std::vector<double> sum2;                                   // per marker: matched errors squared
   std::vector<std::int64_t> last_id;                          // per marker: track last matched (0: none)
+  std::map<std::int64_t, std::size_t> last_marker;            // track id -> marker it last matched
   std::map<std::int64_t, std::pair<int, int>> track_matches;  // id -> (samples, matched)
   double total_sum2 = 0;
   std::size_t total_matched = 0;
@@ -161,10 +162,13 @@ InstantMatch match_instant(const std::vector<const TrackRecord*>& sorted, Instan
     marker.max_error_m = std::max(marker.max_error_m, d);
     const std::int64_t id = sorted[k]->id;
     if (totals.last_id[m] != 0 && totals.last_id[m] != id) {
+      const auto before = totals.last_marker.find(id);
       marker.id_switches.push_back({sorted[k]->stamp_ns, totals.last_id[m], id,
-                                    seconds_since_start(sorted[k]->stamp_ns, options.epoch_ns)});
+                                    seconds_since_start(sorted[k]->stamp_ns, options.epoch_ns),
+                                    before != totals.last_marker.end() && before->second != m});
     }
     totals.last_id[m] = id;
+    totals.last_marker[id] = m;
     if (options.keep_series) result.series.error_m[m][instant] = static_cast<float>(d);
   }
   return match;
@@ -224,6 +228,8 @@ void summarise(const Totals& totals, const EvaluationOptions& options, Evaluatio
     result.max_error_m = std::max(result.max_error_m, marker.max_error_m);
     result.min_tracked_fraction = std::min(result.min_tracked_fraction, marker.tracked_fraction());
     result.id_switch_count += marker.id_switches.size();
+    result.id_swap_count += static_cast<std::size_t>(std::count_if(
+        marker.id_switches.begin(), marker.id_switches.end(), [](const IdSwitch& s) { return s.swap; }));
     result.trackable += marker.trackable;
     result.tracked_trackable += marker.tracked_trackable;
     if (marker.trackable > 0) result.min_coverage = std::min(result.min_coverage, marker.coverage());
@@ -299,6 +305,7 @@ std::string Evaluation::to_json() const {
   j["edge_tracked"] = edge_tracked;
   j["edge_coverage"] = coverage_or_null(edge_trackable, edge_coverage());
   j["id_switches"] = id_switch_count;
+  j["id_swaps"] = id_swap_count;
   j["records"] = records;
   j["false_records"] = false_records;
   j["false_record_fraction"] = false_record_fraction();
@@ -317,7 +324,8 @@ std::string Evaluation::to_json() const {
                                      {"stamp_ns", s->stamp_ns},
                                      {"t_s", s->t_s},
                                      {"from", s->from_id},
-                                     {"to", s->to_id}});
+                                     {"to", s->to_id},
+                                     {"swap", s->swap}});
   }
 
   j["options"] = {{"epoch_ns", options.epoch_ns},
@@ -344,7 +352,7 @@ std::string Evaluation::to_json() const {
     m["id_switches"] = Json::array();
     for (const auto& s : marker.id_switches) {
       m["id_switches"].push_back(
-          {{"stamp_ns", s.stamp_ns}, {"t_s", s.t_s}, {"from", s.from_id}, {"to", s.to_id}});
+          {{"stamp_ns", s.stamp_ns}, {"t_s", s.t_s}, {"from", s.from_id}, {"to", s.to_id}, {"swap", s.swap}});
     }
     j["markers"].push_back(m);
   }
@@ -371,8 +379,9 @@ std::string Evaluation::summary() const {
   const auto switches = switches_in_time_order(markers);
   for (std::size_t i = 0; i < switches.size() && i < kListedSwitches; ++i) {
     const auto& [s, name] = switches[i];
-    std::snprintf(line, sizeof line, "  ID switch at %.3f s: %s %lld -> %lld\n", s->t_s, name->c_str(),
-                  static_cast<long long>(s->from_id), static_cast<long long>(s->to_id));
+    std::snprintf(line, sizeof line, "  ID switch at %.3f s: %s %lld -> %lld%s\n", s->t_s, name->c_str(),
+                  static_cast<long long>(s->from_id), static_cast<long long>(s->to_id),
+                  s->swap ? " (another marker's track)" : "");
     out << line;
   }
   if (switches.size() > kListedSwitches)
@@ -392,10 +401,10 @@ std::string Evaluation::summary() const {
   }
   std::snprintf(line, sizeof line,
                 "all: RMSE %.3f mm, max %.3f mm, worst marker %.3f mm, min tracked %.1f%%, coverage %s, "
-                "ID switches %zu, false records %.2f%%, false tracks %zu, instants %zu\n",
+                "ID switches %zu (swaps %zu), false records %.2f%%, false tracks %zu, instants %zu\n",
                 rmse_m * 1e3, max_error_m * 1e3, worst_marker_rmse_m * 1e3, 100.0 * min_tracked_fraction,
-                coverage_text, id_switch_count, 100.0 * false_record_fraction(), false_tracks.size(),
-                instants);
+                coverage_text, id_switch_count, id_swap_count, 100.0 * false_record_fraction(),
+                false_tracks.size(), instants);
   out << line;
   return out.str();
 }

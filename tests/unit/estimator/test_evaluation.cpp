@@ -37,14 +37,51 @@ TrackRecord record(TimeNs stamp, std::int64_t id, const Eigen::Vector3d& p) {
   return track;
 }
 
-TEST(Evaluation, MeasuresErrorCoverageAndIdSwitches) {
-  const Scene scene = Scene::from_yaml_string(kScene);
+// Judged from the first record (epoch 1000 ns, no warm-up); instant k is 10 ms after k - 1.
+EvaluationOptions from_the_start() {
   EvaluationOptions options;
   options.epoch_ns = 1000;
   options.warmup_ns = 0;
+  return options;
+}
+TimeNs instant(const EvaluationOptions& options, int k) {
+  return options.epoch_ns + k * 10'000'000LL;
+}
+
+// A switch to a track that was another marker's is a swap; a switch to a new track (the marker's
+// own was lost) is not. Here a's and b's tracks exchange markers at k = 40, and a takes a new track
+// at k = 70.
+TEST(Evaluation, TellsSwapsFromNewTracks) {
+  const Scene scene = Scene::from_yaml_string(kScene);
+  const EvaluationOptions options = from_the_start();
   std::vector<TrackRecord> tracks;
   for (int k = 0; k < 100; ++k) {
-    const TimeNs stamp = options.epoch_ns + k * 10'000'000LL;
+    const TimeNs stamp = instant(options, k);
+    const bool exchanged = k >= 40;
+    const std::int64_t on_a = k >= 70 ? 9 : (exchanged ? 2 : 1);
+    tracks.push_back(record(stamp, on_a, Eigen::Vector3d(0, 0, 1)));
+    tracks.push_back(record(stamp, exchanged ? 1 : 2, Eigen::Vector3d(0.5, 0, 1)));
+  }
+  const auto result = evaluate(scene, tracks, options);
+  ASSERT_EQ(result.markers[0].id_switches.size(), 2u);
+  EXPECT_TRUE(result.markers[0].id_switches[0].swap);   // 1 -> 2, b's track
+  EXPECT_FALSE(result.markers[0].id_switches[1].swap);  // 2 -> 9, a new track
+  ASSERT_EQ(result.markers[1].id_switches.size(), 1u);
+  EXPECT_TRUE(result.markers[1].id_switches[0].swap);  // 2 -> 1, a's track
+  EXPECT_EQ(result.id_switch_count, 3u);
+  EXPECT_EQ(result.id_swap_count, 2u);
+  const auto json = nlohmann::json::parse(result.to_json());
+  EXPECT_EQ(json["id_swaps"], 2);
+  EXPECT_EQ(json["id_switch_events"][0]["swap"], true);
+  EXPECT_NE(result.summary().find("ID switches 3 (swaps 2)"), std::string::npos) << result.summary();
+}
+
+TEST(Evaluation, MeasuresErrorCoverageAndIdSwitches) {
+  const Scene scene = Scene::from_yaml_string(kScene);
+  const EvaluationOptions options = from_the_start();
+  std::vector<TrackRecord> tracks;
+  for (int k = 0; k < 100; ++k) {
+    const TimeNs stamp = instant(options, k);
     // One identity switch at k = 50; 1 mm off.
     tracks.push_back(record(stamp, k < 50 ? 1 : 7, Eigen::Vector3d(0.001, 0, 1)));
     if (k % 2 == 0) tracks.push_back(record(stamp, 2, Eigen::Vector3d(0.5, 0, 1)));  // b half of the time
@@ -64,6 +101,7 @@ TEST(Evaluation, MeasuresErrorCoverageAndIdSwitches) {
   ASSERT_EQ(result.false_tracks.size(), 1u);
   EXPECT_EQ(result.false_tracks[0], 3);
   EXPECT_EQ(result.id_switch_count, 1u);
+  EXPECT_EQ(result.id_swap_count, 0u);  // 7 is a new track
   EXPECT_NE(result.to_json().find("\"id_switches\""), std::string::npos);
   // Overall: 100 samples of 1 mm and 50 of 0 mm.
   EXPECT_NEAR(result.rmse_m, 0.001 * std::sqrt(100.0 / 150.0), 1e-12);
@@ -277,6 +315,7 @@ TEST(Evaluation, JsonHoldsEveryMetric) {
                           "coverage",
                           "min_coverage",
                           "id_switches",
+                          "id_swaps",
                           "records",
                           "false_records",
                           "false_record_fraction",

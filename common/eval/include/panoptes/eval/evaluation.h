@@ -37,6 +37,10 @@ struct IdSwitch {
   std::int64_t from_id = 0;
   std::int64_t to_id = 0;
   double t_s = 0.0;  // seconds from the scene start
+  // The new track had been matched to another marker before: an identity that moved between
+  // markers (a swap, or a track that left its marker for this one), not a new track for a marker
+  // whose own was lost.
+  bool swap = false;
 };
 
 struct MarkerEvaluation {
@@ -80,6 +84,7 @@ struct Evaluation {
   double worst_marker_rmse_m = 0;
   double min_tracked_fraction = 0;
   std::size_t id_switch_count = 0;
+  std::size_t id_swap_count = 0;  // of those, IdSwitch::swap
 
   // Coverage of trackable marker-time, summed over markers.
   std::size_t trackable = 0;
