@@ -34,12 +34,12 @@ TEST(TopicQos, VolatileTopicsKeepFastDdsTimers) {
 }
 
 // Fast DDS 2.9.1 can deadlock a volatile reliable writer as a reader leaves (docs/protocol.md,
-// "Closing a participant"): such writers offer transient-local durability; their readers, and
-// best-effort writers, stay volatile.
-TEST(TopicQos, ReliableWritersOfVolatileTopicsOfferTransientLocal) {
-  for (const TopicSpec& spec :
-       {TopicTraits<msg::MocapFrame>::spec(), TopicTraits<msg::FeatureFrame>::spec(),
-        TopicTraits<msg::CameraCommand>::spec(), TopicTraits<msg::TimeSync>::spec()}) {
+// "Closing a participant"): the writers that offer reliability on best-effort topics offer
+// transient-local durability; their readers, reliable topics' writers (where it cost best-effort
+// readers samples) and best-effort writers stay volatile.
+TEST(TopicQos, WritersOfferingReliabilityOfferTransientLocal) {
+  for (const TopicSpec& spec : {TopicTraits<msg::MocapFrame>::spec(), TopicTraits<msg::FeatureFrame>::spec(),
+                                TopicTraits<msg::TrackFrame>::spec(), TopicTraits<msg::BodyPose>::spec()}) {
     SCOPED_TRACE(spec.name);
     for (const Qos qos : {Qos::kDefault, Qos::kReliable}) {
       const fdds::DataWriterQos writer = writer_qos_for(spec, qos);
@@ -47,12 +47,17 @@ TEST(TopicQos, ReliableWritersOfVolatileTopicsOfferTransientLocal) {
       EXPECT_EQ(writer.durability().kind, fdds::TRANSIENT_LOCAL_DURABILITY_QOS);
       EXPECT_EQ(reader_qos_for(spec, qos).durability().kind, fdds::VOLATILE_DURABILITY_QOS);
     }
+    EXPECT_EQ(writer_qos_for(spec, Qos::kBestEffort).durability().kind, fdds::VOLATILE_DURABILITY_QOS);
+  }
+  for (const TopicSpec& spec : {TopicTraits<msg::CameraCommand>::spec(), TopicTraits<msg::TimeSync>::spec(),
+                                TopicTraits<tf2_msgs::msg::dds_::TFMessage_>::spec()}) {
+    SCOPED_TRACE(spec.name);
+    EXPECT_EQ(writer_qos_for(spec, Qos::kDefault).reliability().kind, fdds::RELIABLE_RELIABILITY_QOS);
+    EXPECT_EQ(writer_qos_for(spec, Qos::kDefault).durability().kind, fdds::VOLATILE_DURABILITY_QOS);
   }
   const TopicSpec status = TopicTraits<msg::CameraStatus>::spec();  // best effort, not offered reliable
   EXPECT_EQ(writer_qos_for(status, Qos::kDefault).reliability().kind, fdds::BEST_EFFORT_RELIABILITY_QOS);
   EXPECT_EQ(writer_qos_for(status, Qos::kDefault).durability().kind, fdds::VOLATILE_DURABILITY_QOS);
-  const TopicSpec frames = TopicTraits<msg::MocapFrame>::spec();
-  EXPECT_EQ(writer_qos_for(frames, Qos::kBestEffort).durability().kind, fdds::VOLATILE_DURABILITY_QOS);
 }
 
 }  // namespace
