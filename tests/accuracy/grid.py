@@ -254,10 +254,10 @@ def swap_table(rows, motion, out):
     """ID switches and swaps (a marker taking another marker's track) per rig and clutter level,
     summed over seeds (issue 35 item 3: the swap rate per rig and clutter level)."""
     sel = [r for r in rows if r["motion"] == motion]
-    rigs = sorted({r["rig"] for r in sel})
-    clutters = sorted({r["clutter"] for r in sel}, key=float)
     if not sel:
         return
+    rigs = sorted({r["rig"] for r in sel})
+    clutters = sorted({r["clutter"] for r in sel}, key=float)
     print(f"{motion}: ID switches / swaps per rig (rows) and clutter blobs per frame (columns), seeds summed",
           file=out)
     print("| rig | " + " | ".join(f"c{c}" for c in clutters) + " |", file=out)
