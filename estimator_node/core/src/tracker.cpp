@@ -124,7 +124,12 @@ struct Core {
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
   std::uint64_t tracks_reacquired = 0;     // confirmed new tracks that took a held-back track's id
+  std::uint64_t input_pauses = 0;          // pauses of the input (note_interval)
   std::uint64_t frames_applied = 0;        // frames apply() has applied (held_back)
+  // Input pauses (every camera stalled at once): the usual interval between applied frames' stamps
+  // (a moving average) and the stamp of the frame that ended the last pause (paused()).
+  double frame_interval_ns = 0;
+  TimeNs pause_end_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
                 ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
@@ -480,12 +485,20 @@ struct Tracker::Impl {
   // noise's share taken as σ² dt³).
   double predicted_position_trace(const Track& track, TimeNs stamp) const;
   // reacquire_sigma_m: a confirmed track lost for longer than kFrameGapNs, through at least
-  // kFramesWithoutIt applied frames, whose predicted position is less certain than that (`trace`:
-  // predicted_position_trace, if known) takes no blob of its own; initiation finds its marker
-  // again (reacquire).
+  // kFramesWithoutIt applied frames (or through a pause of the input, paused()), whose predicted
+  // position is less certain than that (`trace`: predicted_position_trace, if known) takes no blob
+  // of its own; initiation finds its marker again (reacquire).
   bool held_back(const Track& track, TimeNs stamp, std::optional<double> trace = std::nullopt) const;
+  // The interval since the previous applied frame: a pause of the input ends here when it is far
+  // longer than usual (pause_end_ns).
+  void note_interval(TimeNs stamp_ns);
+  // Confirmed and last updated before the input's last pause: it coasted through it.
+  bool paused(const Track& track) const {
+    return track.confirmed && track.last_update_ns < core.pause_end_ns;
+  }
   // The id of the one held-back track whose prediction gates `position` (χ²₃), every other
-  // held-back track that gates it at least kClearRatio times farther (d²). None when ambiguous.
+  // held-back track that gates it at least kClearRatio times farther (d²) and lies
+  // reacquire_distance_ratio times farther (m). None when ambiguous.
   std::optional<std::int64_t> reacquire(const Eigen::Vector3d& position, TimeNs stamp) const;
   // Tracks confirmed in this frame take the id of the held-back track whose marker they are
   // (reacquire); tracks stay in id order.
@@ -507,6 +520,7 @@ struct Tracker::Impl {
 void Tracker::Impl::apply(Entry& entry, bool replaying) {
   const FeatureFrame& frame = entry.frame;
   const int camera_index = entry.camera;
+  note_interval(frame.stamp_ns);
   core.last_stamp_ns = std::max(core.last_stamp_ns, frame.stamp_ns);
   ++core.frames_applied;
   std::vector<Eigen::Vector2d> pixels;
@@ -878,40 +892,72 @@ double Tracker::Impl::predicted_position_trace(const Track& track, TimeNs stamp)
 }
 
 bool Tracker::Impl::held_back(const Track& track, TimeNs stamp, std::optional<double> trace) const {
-  // Frames applied since its last update: a marker out of sight, not a pause in the input (after
-  // every camera stalled, the first frames find every track uncertain but nothing contradicts it).
+  // Frames applied since its last update: a marker out of sight, not a pause in the input.
   constexpr std::uint64_t kFramesWithoutIt = 4;
   const double limit = options.reacquire_sigma_m;
-  if (limit <= 0 || !track.confirmed || stamp - track.last_update_ns <= kFrameGapNs ||
-      core.frames_applied - track.frames_at_update < kFramesWithoutIt)
-    return false;
-  return trace.value_or(predicted_position_trace(track, stamp)) > 3.0 * limit * limit;
+  if (limit <= 0 || !track.confirmed || stamp - track.last_update_ns <= kFrameGapNs) return false;
+  const auto uncertain = [&](double factor) {
+    return trace.value_or(predicted_position_trace(track, stamp)) > factor * limit * limit;
+  };
+  // Coasted through a pause of the input (every camera stalled): every track near it is as
+  // uncertain, and the first frames after the pause would pair tracks and blobs almost at will
+  // (an id moving along a leg's markers). Held back from a third of the σ² (docs/estimator.md,
+  // "After every camera stalled").
+  if (paused(track)) return uncertain(1.0);
+  if (core.frames_applied - track.frames_at_update < kFramesWithoutIt) return false;
+  return uncertain(3.0);
+}
+
+void Tracker::Impl::note_interval(TimeNs stamp_ns) {
+  // A pause: longer than 25 ms and 8 usual intervals (a rig of one 30 Hz camera is not paused).
+  constexpr double kMinPauseNs = 25e6;
+  constexpr double kPauseIntervals = 8.0;
+  if (core.last_stamp_ns == std::numeric_limits<TimeNs>::min() || stamp_ns <= core.last_stamp_ns) return;
+  const auto interval = static_cast<double>(stamp_ns - core.last_stamp_ns);
+  if (core.frame_interval_ns > 0 &&
+      interval > std::max(kMinPauseNs, kPauseIntervals * core.frame_interval_ns)) {
+    core.pause_end_ns = stamp_ns;
+    ++core.input_pauses;
+    return;  // not part of the usual interval
+  }
+  core.frame_interval_ns =
+      core.frame_interval_ns > 0 ? 0.95 * core.frame_interval_ns + 0.05 * interval : interval;
 }
 
 std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& position, TimeNs stamp) const {
   constexpr double kGateChi2 = 16.27;  // χ²₃ at p = 0.999
   constexpr double kClearRatio = 4.0;  // another candidate inside the gate must be this much farther (d²)
   const double sp2 = options.init_position_sigma_m * options.init_position_sigma_m;
-  const Track* best = nullptr;
-  double best_d2 = std::numeric_limits<double>::infinity(), other_d2 = best_d2;
-  const auto consider = [&](const Track& track) {
+  struct Candidate {
+    const Track* track = nullptr;
+    double d2 = std::numeric_limits<double>::infinity();
+    double distance_m = std::numeric_limits<double>::infinity();
+  };
+  Candidate best;
+  double other_d2 = best.d2, other_m = best.distance_m;
+  for (const Track& track : core.tracks) {
+    if (!held_back(track, stamp)) continue;
     const PointState state = predicted(track.state, stamp, track.sigma2(options.process_noise));
     const Eigen::Matrix3d S = state.P.matrix().block<3, 3>(0, 0) + sp2 * Eigen::Matrix3d::Identity();
     const Eigen::Vector3d e = position - state.position();
-    const double d2 = e.dot(S.ldlt().solve(e));
-    if (d2 < best_d2) {
-      other_d2 = best_d2;
-      best_d2 = d2;
-      best = &track;
+    const Candidate candidate{&track, e.dot(S.ldlt().solve(e)), e.norm()};
+    if (candidate.d2 < best.d2) {
+      other_d2 = best.d2;
+      other_m = std::min(other_m, best.distance_m);
+      best = candidate;
     } else {
-      other_d2 = std::min(other_d2, d2);
+      other_d2 = std::min(other_d2, candidate.d2);
+      other_m = std::min(other_m, candidate.distance_m);
     }
-  };
-  for (const Track& track : core.tracks)
-    if (held_back(track, stamp)) consider(track);
-  if (best == nullptr || best_d2 > kGateChi2 || (other_d2 <= kGateChi2 && other_d2 < kClearRatio * best_d2))
+  }
+  if (best.track == nullptr || best.d2 > kGateChi2 ||
+      (other_d2 <= kGateChi2 && other_d2 < kClearRatio * best.d2))
     return std::nullopt;
-  return best->id;
+  // In metres too: a held-back track's σ grows to decimetres (after a pause of 150 ms, 0.26 m),
+  // where d² no longer tells a marker's prediction from its neighbour's 5 cm farther.
+  if (options.reacquire_distance_ratio > 1.0 && other_m < options.reacquire_distance_ratio * best.distance_m)
+    return std::nullopt;
+  return best.track->id;
 }
 
 std::uint64_t Tracker::Impl::tracks_digest() const {
@@ -1655,6 +1701,7 @@ const TrackerStats& Tracker::stats() const {
   s.manoeuvres_recovered = core.manoeuvres_recovered;
   s.fast_tracks_rejoined = core.fast_tracks_rejoined;
   s.tracks_reacquired = core.tracks_reacquired;
+  s.input_pauses = core.input_pauses;
   s.ghosts_deleted = core.ghosts_deleted;
   s.blobs_not_initiated = core.blobs_not_initiated;
   return s;

@@ -92,6 +92,9 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
       std::to_string(s.tracks_created) + ", confirmed " + std::to_string(s.tracks_confirmed) +
       ", ghosts removed " + std::to_string(s.ghosts_deleted) + ", reacquired " +
       std::to_string(s.tracks_reacquired) +
+      (s.input_pauses > 0
+           ? "; input paused " + std::to_string(s.input_pauses) + " times (every camera at once)"
+           : std::string()) +
       (s.manoeuvres_recovered + s.fast_tracks_rejoined > 0
            ? "; fast tracks: manoeuvres recovered " + std::to_string(s.manoeuvres_recovered) + ", rejoined " +
                  std::to_string(s.fast_tracks_rejoined)

@@ -321,10 +321,10 @@ TEST(LateData, TrackIdsStayOnTheirMarkersWhenReplaysCreateTracksAgain) {
 
 TEST(LateData, IdsStayOnTheirMarkersAfterEveryCameraStalled) {
   // A loaded machine stalls every camera at once (test_live_labels: the camera_nodes dropped their
-  // frames in the queue for ~150 ms): the walk's 41 tracks coast, then take blobs again.
+  // frames in the queue for 46-150 ms): the walk's 41 tracks coast, then take blobs again.
   const Scene scene = walk8_scene(2.0, 8);
-  std::size_t moved = 0, records = 0, moved_without_stall = 0;
-  for (const double gap_ms : {0.0, 100.0, 150.0, 250.0}) {
+  std::size_t moved = 0, records = 0, moved_without_stall = 0, new_ids = 0, ids_without_stall = 0;
+  for (const double gap_ms : {0.0, 50.0, 100.0, 150.0, 250.0}) {
     for (const double at_s : {0.8, 1.2, 1.6}) {
       auto frames = simulate(scene, 0.0, 1);
       std::stable_sort(frames.begin(), frames.end(),
@@ -338,17 +338,29 @@ TEST(LateData, IdsStayOnTheirMarkersAfterEveryCameraStalled) {
         if (tracker.process(delivered.frame) != FrameOutcome::kProcessed) continue;
         follower.observe(tracker, scene);
       }
-      std::printf("every camera stalled %.0f ms at %.1f s: an id moved to another marker %zu times\n", gap_ms,
-                  at_s, follower.moved);
+      std::printf(
+          "every camera stalled %.0f ms at %.1f s: an id moved to another marker %zu times; %zu ids on "
+          "markers; %llu input pause(s), %llu track(s) reacquired\n",
+          gap_ms, at_s, follower.moved, follower.marker_of.size(),
+          static_cast<unsigned long long>(tracker.stats().input_pauses),
+          static_cast<unsigned long long>(tracker.stats().tracks_reacquired));
+      // The pause is seen (no frame of any camera for 25 ms and 8 usual intervals), only there.
+      EXPECT_EQ(tracker.stats().input_pauses, gap_ms > 0 ? 1u : 0u) << gap_ms << " ms at " << at_s << " s";
       records += follower.records;
       (gap_ms > 0 ? moved : moved_without_stall) += follower.moved;
+      if (gap_ms == 0) ids_without_stall = follower.marker_of.size();
+      if (gap_ms > 0 && follower.marker_of.size() > ids_without_stall)
+        new_ids += follower.marker_of.size() - ids_without_stall;
     }
   }
-  EXPECT_GT(records, 50000u);
-  // Measured (2026-11-29): 131 moves over the nine stalls (100 ms: 4-9 each, 250 ms: 18-28), 0
-  // without a stall. The goal is as few as without a stall (docs/estimator.md, "After every camera
-  // stalled"); until then this bound keeps it from getting worse.
-  EXPECT_LE(moved, moved_without_stall + 140);
+  std::printf("over the 12 stalls: %zu moves, %zu new ids\n", moved, new_ids);
+  EXPECT_GT(records, 60000u);
+  // Measured (2026-12-01): tracks that coasted through the pause are held back and initiation
+  // finds their markers again (docs/estimator.md, "After every camera stalled"): 10 moves over
+  // the 12 stalls (the nine of 100-250 ms: 117 before, when the first frames after the pause
+  // paired tracks and blobs; now 7), 0 without a stall, at the price of new ids (258) for the
+  // markers whose reacquisition was ambiguous.
+  EXPECT_LE(moved, moved_without_stall + 14);
 }
 
 }  // namespace

@@ -91,6 +91,10 @@ struct TrackerOptions {
   // track's does nearly as well (docs/estimator.md, "Reacquisition"). 0: off (coasting tracks take blobs in
   // their gates).
   double reacquire_sigma_m = 0.05;
+  // ... and only when the next held-back track's prediction is this many times farther (metres; 1: no
+  // test). A track that coasted through a pause of the input (every camera stalled: no frame for
+  // 25 ms and 8 usual intervals) is held back from σ² one third of reacquire_sigma_m's.
+  double reacquire_distance_ratio = 3.0;
   TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
   TimeNs checkpoint_interval_ns = 10'000'000;     // state snapshots for rewinding ...
@@ -123,6 +127,7 @@ struct TrackerStats {
   std::uint64_t manoeuvres_recovered = 0;  // blobs a fast track took in its manoeuvre gate
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id
   std::uint64_t tracks_reacquired = 0;     // confirmed new tracks that took a held-back track's id
+  std::uint64_t input_pauses = 0;          // no frame of any camera for 25 ms and 8 usual intervals
   std::uint64_t ghosts_deleted = 0;        // tentative tracks that cameras did not see
   std::uint64_t blobs_not_initiated = 0;   // unmatched blobs beyond max_unmatched_per_frame
 };
