@@ -503,8 +503,9 @@ struct Tracker::Impl {
   // Tracks confirmed in this frame take the id of the held-back track whose marker they are
   // (reacquire); tracks stay in id order.
   void reacquire_confirmed(TimeNs now_ns);
-  // Tracks confirmed with a pending rejoin take the lost fast track's id, which is removed, unless
-  // its marker was found again or another track took it first.
+  // Tracks confirmed with a pending rejoin take the lost fast track's id, which is removed, once
+  // they would be published (determined), unless its marker was found again or another track
+  // took it first.
   void rejoin_confirmed(TimeNs now_ns);
   void prune(TimeNs now_ns);
   std::vector<TrackedPoint> confirmed_points(TimeNs stamp_ns) const;
@@ -935,8 +936,13 @@ std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& posi
   };
   Candidate best;
   double other_d2 = best.d2, other_m = best.distance_m;
+  // A lost fast track that a new track waits to rejoin (rejoin_confirmed) is that track's.
+  const auto rejoin_pending = [this](std::int64_t id) {
+    return std::any_of(core.tracks.begin(), core.tracks.end(),
+                       [id](const Track& t) { return t.rejoin_id == id; });
+  };
   for (const Track& track : core.tracks) {
-    if (!held_back(track, stamp)) continue;
+    if (!held_back(track, stamp) || rejoin_pending(track.id)) continue;
     const PointState state = predicted(track.state, stamp, track.sigma2(options.process_noise));
     const Eigen::Matrix3d S = state.P.matrix().block<3, 3>(0, 0) + sp2 * Eigen::Matrix3d::Identity();
     const Eigen::Vector3d e = position - state.position();
@@ -1377,6 +1383,10 @@ void Tracker::Impl::rejoin_confirmed(TimeNs now_ns) {
   std::vector<std::pair<std::int64_t, std::int64_t>> renames;  // (the new track's id, the lost one's)
   for (Track& track : core.tracks) {
     if (!track.confirmed || track.rejoin_id == 0) continue;
+    // It waits until the track would be published: a two-view ghost that a third camera's blob
+    // confirmed near the top of a swing never settles, and the marker's own track, born moments
+    // later under the same pending id, takes it (docs/estimator.md, "Rejoin when determined").
+    if (!determined(to_record(track, now_ns), false)) continue;
     const std::int64_t id = std::exchange(track.rejoin_id, 0);
     const auto same = [id](const Track& other) { return other.id == id; };
     const auto held = std::find_if(core.tracks.begin(), core.tracks.end(), same);
