@@ -1383,9 +1383,9 @@ void Tracker::Impl::rejoin_confirmed(TimeNs now_ns) {
   std::vector<std::pair<std::int64_t, std::int64_t>> renames;  // (the new track's id, the lost one's)
   for (Track& track : core.tracks) {
     if (!track.confirmed || track.rejoin_id == 0) continue;
-    // It waits until the track would be published: a two-view ghost that a third camera's blob
-    // confirmed near the top of a swing never settles, and the marker's own track, born moments
-    // later under the same pending id, takes it (docs/estimator.md, "Rejoin when determined").
+    // It waits until the track would be published: a two-view ghost confirmed near the top of a
+    // swing never settles, and the marker's own track, born moments later under the same pending
+    // id, takes it (docs/estimator.md, "Rejoin when determined").
     if (!determined(to_record(track, now_ns), false)) continue;
     const std::int64_t id = std::exchange(track.rejoin_id, 0);
     const auto same = [id](const Track& other) { return other.id == id; };
