@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""Checks shared by integration.test_client (C++ client) and integration.test_python_client.
+"""Checks of integration.test_client's two probes (the C++ client and the Python client) on one live run.
 
 Both tests run the clients scene through an estimator that is killed (-9) and restarted mid-run,
 with a client probe writing one JSON line per frame ("frame"), per description ("descriptions")
@@ -25,8 +25,8 @@ class ClientRun:
     """The probe's output: every line, the frames, the last statistics, and the frames split into
     estimator runs (a run ends where the frame number stops increasing)."""
 
-    def __init__(self, work):
-        self.lines = [json.loads(line) for line in open(f"{work}/client.jsonl")]
+    def __init__(self, work, name="client.jsonl"):
+        self.lines = [json.loads(line) for line in open(f"{work}/{name}")]
         self.frames = [line for line in self.lines if line["type"] == "frame"]
         self.stats = [line for line in self.lines if line["type"] == "stats"][-1]
         self.runs = [[]]

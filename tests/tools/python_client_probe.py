@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
 """Records what a panoptes.Client (the Python package) receives as JSON lines, for
-tests/integration/test_python_client.sh: one line per frame (floats as float.hex(), exact), one per
+tests/integration/test_client.sh: one line per frame (floats as float.hex(), exact), one per
 change of the body descriptions, the Stats at the end. The client is never restarted."""
 import argparse
 import json
