@@ -54,6 +54,13 @@ constexpr TimeNs kFrameGapNs = 10'000'000;
 // A track with fewer updates is young: a wrong pairing's ghost lives a few updates.
 constexpr std::uint64_t kSettledUpdates = 10;
 constexpr int kFastUpdates = 5;
+// A fast track's rigid partner (Track::partner_id): the settled track nearest it, kept while their
+// distance stays within kRigidToleranceM of what it was when chosen; rigid once kept for
+// kRigidMinNs (a club's head and shaft markers; a thrown ball leaves its hand's markers at once).
+// A new track takes the fast track's identity only within rejoin_rigid_margin_m of that distance
+// from the partner, if the partner is still followed (keeps_partner_distance).
+constexpr double kRigidToleranceM = 0.03;
+constexpr TimeNs kRigidMinNs = 100'000'000;
 // An isolated fast track takes the larger factor (isolated) only after this many fast updates of
 // its own: with kFastUpdates, ghosts of clutter or of a walk's wrong pairings took it too.
 constexpr int kIsolatedFastUpdates = 20;
@@ -91,6 +98,11 @@ struct Track {
   // views), so a rejoin measures from here.
   Eigen::Vector3d seen_position = Eigen::Vector3d::Zero();
   TimeNs seen_ns = 0;
+  // A fast track's rigid partner (kRigidToleranceM): its id (0: none), their distance when it was
+  // chosen and since when it held (note_partner).
+  std::int64_t partner_id = 0;
+  double partner_distance_m = 0;
+  TimeNs partner_since_ns = 0;
   Eigen::Vector3d last_seen_position() const { return seen_ns != 0 ? seen_position : state.position(); }
   TimeNs last_seen_ns() const { return seen_ns != 0 ? seen_ns : last_update_ns; }
   std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
@@ -398,6 +410,38 @@ struct Tracker::Impl {
     return true;
   }
 
+  // The confirmed, settled track with this id that was updated within kFrameGapNs (nullptr: none).
+  const Track* followed_track(std::int64_t id, TimeNs stamp_ns) const {
+    const auto found = std::lower_bound(core.tracks.begin(), core.tracks.end(), id,
+                                        [](const Track& track, std::int64_t key) { return track.id < key; });
+    if (found == core.tracks.end() || found->id != id || !found->confirmed ||
+        found->updates < kSettledUpdates || stamp_ns - found->last_update_ns > kFrameGapNs)
+      return nullptr;
+    return &*found;
+  }
+
+  // Keeps a fast track's rigid partner while their distance holds; otherwise chooses the nearest
+  // followed, settled track again (Track::partner_id).
+  void note_partner(Track& track, TimeNs stamp_ns) {
+    const Eigen::Vector3d p = track.state.position();
+    if (const Track* partner = track.partner_id != 0 ? followed_track(track.partner_id, stamp_ns) : nullptr;
+        partner != nullptr &&
+        std::abs((partner->position_at(stamp_ns) - p).norm() - track.partner_distance_m) <= kRigidToleranceM)
+      return;
+    track.partner_id = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (const Track& other : core.tracks) {
+      if (other.id == track.id || followed_track(other.id, stamp_ns) == nullptr) continue;
+      const double d = (other.position_at(stamp_ns) - p).norm();
+      if (d < best) {
+        best = d;
+        track.partner_id = other.id;
+      }
+    }
+    track.partner_distance_m = best;
+    track.partner_since_ns = stamp_ns;
+  }
+
   void note_update(Track& track, int camera, TimeNs stamp_ns) {
     if (stamp_ns - track.last_update_ns > options.coast_after_ns) track.resumed_ns = stamp_ns;
     track.last_update_ns = std::max(track.last_update_ns, stamp_ns);
@@ -411,6 +455,7 @@ struct Tracker::Impl {
           track.camera_last_update[k] != 0) {
         track.seen_position = track.state.position();
         track.seen_ns = stamp_ns;
+        if (track.fast) note_partner(track, stamp_ns);
         break;
       }
     }
@@ -500,6 +545,9 @@ struct Tracker::Impl {
   // held-back track that gates it at least kClearRatio times farther (d²) and lies
   // reacquire_distance_ratio times farther (m). None when ambiguous.
   std::optional<std::int64_t> reacquire(const Eigen::Vector3d& position, TimeNs stamp) const;
+  // Whether a new track at `position` is as far from `lost`'s rigid partner (Track::partner_id) as
+  // `lost` was, within rejoin_rigid_margin_m; true when it has none or the partner is not followed.
+  bool keeps_partner_distance(const Track& lost, const Eigen::Vector3d& position, TimeNs stamp) const;
   // Tracks confirmed in this frame take the id of the held-back track whose marker they are
   // (reacquire); tracks stay in id order.
   void reacquire_confirmed(TimeNs now_ns);
@@ -925,6 +973,18 @@ void Tracker::Impl::note_interval(TimeNs stamp_ns) {
       core.frame_interval_ns > 0 ? 0.95 * core.frame_interval_ns + 0.05 * interval : interval;
 }
 
+bool Tracker::Impl::keeps_partner_distance(const Track& lost, const Eigen::Vector3d& position,
+                                           TimeNs stamp) const {
+  // Markers of one rigid object keep their distance: a club head comes back as far from its
+  // shaft's marker as it went; a clutter ghost within the head's reach, elsewhere, does not.
+  if (options.rejoin_rigid_margin_m <= 0) return true;
+  const Track* partner = lost.partner_id != 0 && lost.seen_ns - lost.partner_since_ns >= kRigidMinNs
+                             ? followed_track(lost.partner_id, stamp)
+                             : nullptr;
+  return partner == nullptr || std::abs((position - partner->position_at(stamp)).norm() -
+                                        lost.partner_distance_m) <= options.rejoin_rigid_margin_m;
+}
+
 std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& position, TimeNs stamp) const {
   constexpr double kGateChi2 = 16.27;  // χ²₃ at p = 0.999
   constexpr double kClearRatio = 4.0;  // another candidate inside the gate must be this much farther (d²)
@@ -963,6 +1023,7 @@ std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& posi
   // where d² no longer tells a marker's prediction from its neighbour's 5 cm farther.
   if (options.reacquire_distance_ratio > 1.0 && other_m < options.reacquire_distance_ratio * best.distance_m)
     return std::nullopt;
+  if (!keeps_partner_distance(*best.track, position, stamp)) return std::nullopt;
   return best.track->id;
 }
 
@@ -1376,6 +1437,7 @@ std::optional<std::pair<std::int64_t, double>> Tracker::Impl::rejoin_fast_track(
   const double speed = std::max({best->peak_speed, best->state.velocity().norm(), kFastSpeed});
   const double reach = speed * ns_to_seconds(stamp - best->last_seen_ns()) + kReachMargin;
   if (best_d > reach) return std::nullopt;
+  if (!keeps_partner_distance(*best, position, stamp)) return std::nullopt;
   return std::make_pair(best->id, std::max(best->peak_speed, kFastSpeed));
 }
 

@@ -46,6 +46,12 @@ struct TrackerOptions {
   // of every confirmed track that lost its marker: a club head that left every view at the top of
   // the swing (docs/estimator.md, "Manoeuvres", "Rejoin at confirmation").
   bool rejoin_fast_tracks = true;
+  // ... and that new track (or a reacquisition of the fast track's id) is within this of the fast
+  // track's distance from its rigid partner, the settled track whose distance from it held within
+  // 3 cm for the last 100 ms it was seen, when that partner is still followed: a club head comes
+  // back as far from the shaft's marker as it went, a clutter ghost within the head's reach does
+  // not (docs/estimator.md, "Rigid partners"). 0: no such test.
+  double rejoin_rigid_margin_m = 0.1;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
   // fast_hold_ns after its last update above 10 m/s, whatever its innovations (0: the adaptive
