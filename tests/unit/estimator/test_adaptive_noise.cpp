@@ -219,7 +219,7 @@ TEST(AdaptiveNoise, AClutterPointWithinTheHeadsReachDoesNotTakeItsIdentity) {
   };
   const Region above = [](const Eigen::Vector3d& p) { return p.z() > 2.2; };
   const auto run = [&](const TrackerOptions& options, const char* label) {
-    const auto results = track({marker_at(1.0), marker_at(0.6), clutter}, options, 3.0, above);
+    auto results = track({marker_at(1.0), marker_at(0.6), clutter}, options, 3.0, above);
     std::printf("%s: head %zu ids, tracked %d of %d visible instants; shaft %zu ids\n", label,
                 results[0].ids.size(), results[0].tracked, results[0].instants, results[1].ids.size());
     return results;
