@@ -410,14 +410,16 @@ struct Tracker::Impl {
     return true;
   }
 
-  // The confirmed, settled track with this id that was updated within kFrameGapNs (nullptr: none).
+  // Confirmed, settled and updated within kFrameGapNs: its marker is followed.
+  static bool followed(const Track& track, TimeNs stamp_ns) {
+    return track.confirmed && track.updates >= kSettledUpdates &&
+           stamp_ns - track.last_update_ns <= kFrameGapNs;
+  }
+  // The followed track with this id (nullptr: none).
   const Track* followed_track(std::int64_t id, TimeNs stamp_ns) const {
     const auto found = std::lower_bound(core.tracks.begin(), core.tracks.end(), id,
                                         [](const Track& track, std::int64_t key) { return track.id < key; });
-    if (found == core.tracks.end() || found->id != id || !found->confirmed ||
-        found->updates < kSettledUpdates || stamp_ns - found->last_update_ns > kFrameGapNs)
-      return nullptr;
-    return &*found;
+    return found != core.tracks.end() && found->id == id && followed(*found, stamp_ns) ? &*found : nullptr;
   }
 
   // Keeps a fast track's rigid partner while their distance holds; otherwise chooses the nearest
@@ -431,7 +433,7 @@ struct Tracker::Impl {
     track.partner_id = 0;
     double best = std::numeric_limits<double>::infinity();
     for (const Track& other : core.tracks) {
-      if (other.id == track.id || followed_track(other.id, stamp_ns) == nullptr) continue;
+      if (other.id == track.id || !followed(other, stamp_ns)) continue;
       const double d = (other.position_at(stamp_ns) - p).norm();
       if (d < best) {
         best = d;
