@@ -18,6 +18,7 @@ for tool in panoptes_client_probe sample_client estimator_node camera_node panop
 done
 python=$(cat "$build_dir/python/INTERPRETER" 2>/dev/null)
 [ -n "$python" ] && [ -f "$build_dir/python/panoptes/__init__.py" ] || { fail "the Python package is not built ($build_dir/python)"; finish; }
+export PYTHONPATH="$build_dir/python"
 
 # --- a client on an empty domain ----------------------------------------------------------------
 start=$(date +%s%N)
@@ -34,14 +35,14 @@ expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --sce
 "$bin/panoptes_client_probe" --out "$work/client.jsonl" --duration 20 >"$work/probe.log" 2>&1 &
 probe=$!
 pids+=("$probe")
-PYTHONPATH="$build_dir/python" "$python" "$source_dir/tests/tools/python_client_probe.py" --out "$work/python_client.jsonl" \
+"$python" "$source_dir/tests/tools/python_client_probe.py" --out "$work/python_client.jsonl" \
   --duration 20 >"$work/python_probe.log" 2>&1 &
 python_probe=$!
 pids+=("$python_probe")
 # plot_body.py starts with the run and waits for it (--timeout 20: also across the restart's gap).
 # Started 3 s into the run, its interpreter and matplotlib took so long on a loaded machine (a
 # fresh clone's suite) that its window began after the restarted run had ended.
-PYTHONPATH="$build_dir/python" "$python" "$source_dir/examples/plot_body.py" --body tool --duration 3 --timeout 20 \
+"$python" "$source_dir/examples/plot_body.py" --body tool --duration 3 --timeout 20 \
   --save "$work/tool.png" >"$work/plot.out" 2>"$work/plot.err" &
 plot=$!
 pids+=("$plot")
@@ -49,7 +50,7 @@ replay_clients_scene_with_restart
 sleep 3
 # On the restarted run: log_poses_csv.py (3 s) beside sample_client (300 frames) and, from 1 s in,
 # ptz_guide (PTZ guidance on the same live frames, docs/ptz.md: it follows the body "head").
-PYTHONPATH="$build_dir/python" "$python" "$source_dir/examples/log_poses_csv.py" --duration 3 --out "$work/poses.csv" \
+"$python" "$source_dir/examples/log_poses_csv.py" --duration 3 --out "$work/poses.csv" \
   >"$work/csv.out" 2>"$work/csv.err" &
 csv=$!
 pids+=("$csv")

@@ -1421,7 +1421,7 @@ std::optional<std::pair<std::int64_t, double>> Tracker::Impl::rejoin_fast_track(
       // Still followed: not a candidate, but a settled one nearer the new track than the lost
       // one is a sign that two markers went out of view together (head and shaft) and that this
       // one is astray.
-      if (track.updates >= kSettledUpdates)
+      if (followed(track, stamp))
         followed_d = std::min(followed_d, (position - track.position_at(stamp)).norm());
       return;
     }
