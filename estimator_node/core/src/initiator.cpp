@@ -222,6 +222,19 @@ std::vector<InitiationCandidate> Initiator::add_frame(
         candidate.velocity = (candidate.position - before->point) / kBack;
         candidate.has_velocity = true;
       }
+    } else if (earlier.size() == 1 && options_.partial_velocity) {
+      // One view only: its earlier ray met on the plane through the marker square to the line of
+      // sight gives the velocity across the line of sight; along it nothing is known.
+      const CameraModel& view = *earlier.front().camera;
+      const Eigen::Vector3d centre = view.center_world();
+      const Eigen::Vector3d sight = (candidate.position - centre).normalized();
+      const Eigen::Vector3d ray = view.pixel_to_world_ray(earlier.front().pixel);
+      if (const double along = ray.dot(sight); along > 0.5) {
+        const Eigen::Vector3d before = centre + ray * ((candidate.position - centre).dot(sight) / along);
+        candidate.velocity = (candidate.position - before) / kBack;
+        candidate.has_partial_velocity = true;
+        candidate.unknown_direction = sight;
+      }
     }
     for (const auto& view : best.views) {
       candidate.cameras.push_back(view.camera);

@@ -1260,9 +1260,23 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
       track.q_scale = std::max(1.0, options.process_noise_max_scale);
       track.q_stamp_ns = stamp;
     }
-    Vector6d variances;
-    variances << sp * sp, sp * sp, sp * sp, sv * sv, sv * sv, sv * sv;
-    track.state.P = FilterCovariance<6>::diagonal(variances);
+    Eigen::Matrix<double, 6, 6> prior = Eigen::Matrix<double, 6, 6>::Zero();
+    prior.topLeftCorner<3, 3>() = sp * sp * Eigen::Matrix3d::Identity();
+    prior.bottomRightCorner<3, 3>() = sv * sv * Eigen::Matrix3d::Identity();
+    // Near a fast track, a birth that one view saw a frame before (a club head just come into the
+    // other views) takes that view's velocity across its line of sight, as uncertain as a measured
+    // one; along the line of sight it stays unknown (sv). Elsewhere the velocity stays zero: a
+    // walking or running marker's one view is often linked to a neighbour's blob, and a confident
+    // wrong velocity costs more than none (docs/estimator.md, "One view's velocity").
+    if (candidate.has_partial_velocity && fast_prior > 0) {
+      const Eigen::Matrix3d along = candidate.unknown_direction * candidate.unknown_direction.transpose();
+      const double across = std::max(options.init_measured_velocity_sigma_mps,
+                                     options.init_velocity_relative_sigma * candidate.velocity.norm());
+      track.state.x.tail<3>() = candidate.velocity;
+      prior.bottomRightCorner<3, 3>() =
+          across * across * (Eigen::Matrix3d::Identity() - along) + sv * sv * along;
+    }
+    track.state.P = FilterCovariance<6>(prior);
     track.state.stamp_ns = stamp;
     track.created_ns = stamp;
     track.last_update_ns = stamp;

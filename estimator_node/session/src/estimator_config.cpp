@@ -249,6 +249,9 @@ void visit_initiator(Fields& f, estimator::InitiatorOptions& o) {
   f.integer("unaligned_max_dt_ns", o.unaligned_max_dt_ns, 0, kHourNs,
             "... which pairs only this close in time");
   f.number("min_depth_m", o.min_depth_m, kNonNegative, "points closer to a camera are rejected");
+  f.flag("partial_velocity", o.partial_velocity,
+         "near a fast track, a birth seen a frame before by one view only takes that view's velocity across "
+         "its line of sight");
 }
 
 template <class Fields>

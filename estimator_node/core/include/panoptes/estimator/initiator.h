@@ -33,6 +33,7 @@ struct InitiatorOptions {
   double max_image_speed_px_s = 800;  // allowance for a partner without a pixel velocity yet ...
   TimeNs unaligned_max_dt_ns = 3'000'000;  // ... which pairs only this close in time
   double min_depth_m = 0.05;               // points closer to a camera are rejected
+  bool partial_velocity = true;            // one view's pixel velocity: the velocity across its line of sight
 };
 
 struct InitiationCandidate {
@@ -40,6 +41,11 @@ struct InitiationCandidate {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
   bool has_velocity = false;
+  // Only one view saw the marker a frame before (it has just come into the others): `velocity` is
+  // its part across that camera's line of sight, `unknown_direction` (unit) the line of sight,
+  // along which the velocity is unknown. has_velocity is false then.
+  bool has_partial_velocity = false;
+  Eigen::Vector3d unknown_direction = Eigen::Vector3d::Zero();
   std::vector<int> cameras;           // indices of the cameras whose blobs made it (first: newest)
   std::vector<TimeNs> camera_stamps;  // stamp of each of those blobs
   double max_reprojection_px = 0;
