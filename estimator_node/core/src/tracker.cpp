@@ -415,11 +415,17 @@ struct Tracker::Impl {
     return track.confirmed && track.updates >= kSettledUpdates &&
            stamp_ns - track.last_update_ns <= kFrameGapNs;
   }
-  // The followed track with this id (nullptr: none).
-  const Track* followed_track(std::int64_t id, TimeNs stamp_ns) const {
+  // The track with this id (nullptr: none). Tracks stay in id order: created with increasing ids,
+  // removed in place, a reused id inserted before the newer ones.
+  const Track* find_track(std::int64_t id) const {
     const auto found = std::lower_bound(core.tracks.begin(), core.tracks.end(), id,
                                         [](const Track& track, std::int64_t key) { return track.id < key; });
-    return found != core.tracks.end() && found->id == id && followed(*found, stamp_ns) ? &*found : nullptr;
+    return found != core.tracks.end() && found->id == id ? &*found : nullptr;
+  }
+  // The followed track with this id (nullptr: none).
+  const Track* followed_track(std::int64_t id, TimeNs stamp_ns) const {
+    const Track* track = find_track(id);
+    return track != nullptr && followed(*track, stamp_ns) ? track : nullptr;
   }
 
   // Keeps a fast track's rigid partner while their distance holds; otherwise chooses the nearest
@@ -1093,14 +1099,12 @@ bool Tracker::Impl::reassociate(const Entry& entry, const std::vector<Eigen::Vec
   std::vector<ProjectedPair> chosen;
   chosen.reserve(entry.associations.size());
   for (const auto& [id, blob] : entry.associations) {
-    // Tracks stay in id order: created with increasing ids, removed in place.
-    const auto found = std::lower_bound(core.tracks.begin(), core.tracks.end(), id,
-                                        [](const Track& track, std::int64_t key) { return track.id < key; });
-    if (found == core.tracks.end() || found->id != id || blob >= pixels.size() || used[blob]) return false;
+    const Track* found = find_track(id);
+    if (found == nullptr || blob >= pixels.size() || used[blob]) return false;
     auto full = project_prediction(found->state, stamp, found->sigma2(options.process_noise), camera,
                                    options.init.min_depth_m, options.measurement_noise_px);
     if (!full || !inside_gate(mahalanobis2(full->projection, pixels[blob]), options.gate_chi2)) return false;
-    chosen.push_back({static_cast<std::size_t>(found - core.tracks.begin()), blob, std::move(*full)});
+    chosen.push_back({static_cast<std::size_t>(found - core.tracks.data()), blob, std::move(*full)});
   }
   std::vector<char> track_done(core.tracks.size(), 0);
   for (const ProjectedPair& pair : chosen) {
