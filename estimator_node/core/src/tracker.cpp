@@ -97,6 +97,7 @@ struct Track {
   // that only one camera still updates slides along that camera's ray (a club head leaving the
   // views), so a rejoin measures from here.
   Eigen::Vector3d seen_position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d seen_velocity = Eigen::Vector3d::Zero();  // its velocity then
   TimeNs seen_ns = 0;
   // A fast track's rigid partner (kRigidToleranceM): its id (0: none), their distance when it was
   // chosen and since when it held (note_partner).
@@ -104,6 +105,12 @@ struct Track {
   double partner_distance_m = 0;
   TimeNs partner_since_ns = 0;
   Eigen::Vector3d last_seen_position() const { return seen_ns != 0 ? seen_position : state.position(); }
+  // Where its last two-camera state puts it at `stamp` (constant velocity since), not where one
+  // camera's updates dragged it along that camera's ray since.
+  Eigen::Vector3d seen_position_at(TimeNs stamp) const {
+    return seen_ns != 0 ? Eigen::Vector3d(seen_position + ns_to_seconds(stamp - seen_ns) * seen_velocity)
+                        : position_at(stamp);
+  }
   TimeNs last_seen_ns() const { return seen_ns != 0 ? seen_ns : last_update_ns; }
   std::vector<TimeNs> camera_last_update;  // by camera index; 0 = never
   // reacquire_sigma_m: made by initiation under a new id (not an undone or a rejoined one), and
@@ -462,6 +469,7 @@ struct Tracker::Impl {
       if (static_cast<int>(k) != camera && stamp_ns - track.camera_last_update[k] <= kFrameGapNs &&
           track.camera_last_update[k] != 0) {
         track.seen_position = track.state.position();
+        track.seen_velocity = track.state.velocity();
         track.seen_ns = stamp_ns;
         if (track.fast) note_partner(track, stamp_ns);
         break;
@@ -551,7 +559,8 @@ struct Tracker::Impl {
   }
   // The id of the one held-back track whose prediction gates `position` (χ²₃), every other
   // held-back track that gates it at least kClearRatio times farther (d²) and lies
-  // reacquire_distance_ratio times farther (m). None when ambiguous.
+  // reacquire_distance_ratio times farther (m), and (unless fast) within reacquire_max_seen_distance_m
+  // of its last two-camera position. None when ambiguous.
   std::optional<std::int64_t> reacquire(const Eigen::Vector3d& position, TimeNs stamp) const;
   // Whether a new track at `position` is as far from `lost`'s rigid partner (Track::partner_id) as
   // `lost` was, within rejoin_rigid_margin_m; true when it has none or the partner is not followed.
@@ -1032,6 +1041,14 @@ std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& posi
   if (options.reacquire_distance_ratio > 1.0 && other_m < options.reacquire_distance_ratio * best.distance_m)
     return std::nullopt;
   if (!keeps_partner_distance(*best.track, position, stamp)) return std::nullopt;
+  // Where two cameras last placed it: a held-back track that one camera alone kept updating slid
+  // along that camera's ray, and its prediction (1-9 m off at 8-65 m/s on the walk grid's
+  // four-camera rigs) gated markers it never was (an elbow's id given to the sacrum).
+  if (options.reacquire_max_seen_distance_m > 0 && !best.track->fast &&
+      std::min((position - best.track->last_seen_position()).norm(),
+               (position - best.track->seen_position_at(stamp)).norm()) >
+          options.reacquire_max_seen_distance_m)
+    return std::nullopt;
   return best.track->id;
 }
 

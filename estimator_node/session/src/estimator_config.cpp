@@ -436,6 +436,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
            "a new track confirmed near it takes its id (0: off)");
   f.number("reacquire_distance_ratio", o.reacquire_distance_ratio, kNonNegative,
            "... and only when the next held-back track is this many times farther (m; 1 or less: no test)");
+  f.number("reacquire_max_seen_distance_m", o.reacquire_max_seen_distance_m, kNonNegative,
+           "... and within this of the held-back marker's last two-camera position, or of where its "
+           "velocity then carries it, m (0: no test; fast tracks exempt)");
   f.integer("recent_camera_window_ns", o.recent_camera_window_ns, 0, kHourNs, "for a track record's cameras");
   f.integer("rewind_horizon_ns", o.rewind_horizon_ns, 0, 60 * 1'000'000'000LL,
             "late frames up to this much older than the newest are replayed");

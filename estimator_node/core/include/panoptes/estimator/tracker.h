@@ -101,6 +101,12 @@ struct TrackerOptions {
   // test). A track that coasted through a pause of the input (every camera stalled: no frame for
   // 25 ms and 8 usual intervals) is held back from σ² one third of reacquire_sigma_m's.
   double reacquire_distance_ratio = 3.0;
+  // ... and only when it lies within this of where two cameras last placed the held-back marker, or
+  // of where its velocity then carries it (metres; 0: no test). A track that one camera alone kept
+  // updating slides along that camera's ray and its velocity runs away (walking markers' held-back
+  // tracks predicted 1-9 m off at 8-65 m/s): its prediction gates markers it never was. A swung or
+  // thrown object's track (fast) reaches farther and is exempt (docs/estimator.md, "Reacquisition").
+  double reacquire_max_seen_distance_m = 0.2;
   TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
   TimeNs checkpoint_interval_ns = 10'000'000;     // state snapshots for rewinding ...
