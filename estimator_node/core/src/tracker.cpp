@@ -560,7 +560,7 @@ struct Tracker::Impl {
   // The id of the one held-back track whose prediction gates `position` (χ²₃), every other
   // held-back track that gates it at least kClearRatio times farther (d²) and lies
   // reacquire_distance_ratio times farther (m), and (unless fast) within reacquire_max_seen_distance_m
-  // of its last two-camera position. None when ambiguous.
+  // of its last two-camera position or of where its velocity then carries it. None when ambiguous.
   std::optional<std::int64_t> reacquire(const Eigen::Vector3d& position, TimeNs stamp) const;
   // Whether a new track at `position` is as far from `lost`'s rigid partner (Track::partner_id) as
   // `lost` was, within rejoin_rigid_margin_m; true when it has none or the partner is not followed.

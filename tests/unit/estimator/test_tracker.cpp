@@ -335,6 +335,7 @@ TEST(Tracker, AHeldBackTrackThatOneCameraDraggedAwayGivesItsIdToNoOtherMarker) {
   TrackerOptions without;
   without.reacquire_max_seen_distance_m = 0;
   const auto [on_a0, on_c0] = ids(without);
+  ASSERT_EQ(on_a0.size(), 1u);
   ASSERT_EQ(on_c0.size(), 1u);
   std::printf("C's id: %lld (A's %lld); without the test %lld (A's %lld)\n",
               static_cast<long long>(*on_c.begin()), static_cast<long long>(*on_a.begin()),
