@@ -90,9 +90,11 @@ struct Track {
   // to such a track's identity: a swung or thrown object, which may rejoin its identity after a
   // gap (rejoin_fast_tracks).
   bool fast = false;
-  double peak_speed = 0;    // m/s, the fastest it went while confirmed (carried over by a rejoin)
-  int fast_updates = 0;     // updates while confirmed with a speed above kFastSpeed
-  TimeNs last_fast_ns = 0;  // its last update above kFastSpeed while confirmed (or its rejoin)
+  double peak_speed = 0;      // m/s, the fastest it went while confirmed (carried over by a rejoin)
+  int fast_updates = 0;       // updates while confirmed with a speed above kFastSpeed
+  int seen_fast_updates = 0;  // of those, updates made while a second camera's was within kFrameGapNs
+  bool runaway = false;       // fast by one camera's updates (delete_runaway_tracks): deleted by prune
+  TimeNs last_fast_ns = 0;    // its last update above kFastSpeed while confirmed (or its rejoin)
   // Where it was at its last update with a second camera's within kFrameGapNs (0: never): a track
   // that only one camera still updates slides along that camera's ray (a club head leaving the
   // views), so a rejoin measures from here.
@@ -142,9 +144,10 @@ struct Core {
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
-  std::uint64_t tracks_reacquired = 0;     // confirmed new tracks that took a held-back track's id
-  std::uint64_t input_pauses = 0;          // pauses of the input (note_interval)
-  std::uint64_t frames_applied = 0;        // frames apply() has applied (held_back)
+  std::uint64_t runaway_tracks_deleted = 0;  // delete_runaway_tracks
+  std::uint64_t tracks_reacquired = 0;       // confirmed new tracks that took a held-back track's id
+  std::uint64_t input_pauses = 0;            // pauses of the input (note_interval)
+  std::uint64_t frames_applied = 0;          // frames apply() has applied (held_back)
   // Input pauses (every camera stalled at once): the usual interval between applied frames' stamps
   // (a moving average) and the stamp of the frame that ended the last pause (paused()).
   double frame_interval_ns = 0;
@@ -1080,12 +1083,18 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   note_update(track, camera_index, stamp);
   // Fast once kFastUpdates updates of a settled track (kSettledUpdates) were above kFastSpeed: a
   // ghost of a wrong pairing, or a walking marker's track in a moment of confusion, may show such
-  // a speed for an update or two.
+  // a speed for an update or two. A runaway if fewer than kFastUpdates of them were made while a
+  // second camera updated it (note_update's seen_ns): one camera alone dragged it along its ray,
+  // where its own updates cannot tell depth (docs/estimator.md, "Runaway tracks").
   if (track.confirmed && track.state.velocity().squaredNorm() >= kFastSpeed * kFastSpeed) {
     ++track.fast_updates;
+    if (track.seen_ns == stamp) ++track.seen_fast_updates;
     track.last_fast_ns = stamp;
     track.peak_speed = std::max(track.peak_speed, track.state.velocity().norm());
-    if (track.fast_updates >= kFastUpdates && track.updates >= kSettledUpdates) track.fast = true;
+    if (!track.fast && track.fast_updates >= kFastUpdates && track.updates >= kSettledUpdates) {
+      track.fast = true;
+      track.runaway = options.delete_runaway_tracks && track.seen_fast_updates < kFastUpdates;
+    }
   }
   used[blob] = 1;
   ++core.blobs_associated;
@@ -1346,6 +1355,13 @@ void Tracker::Impl::prune(TimeNs now_ns) {
     const bool implausible =
         track.nis_updates >= 4 &&
         track.nis_average > (track.confirmed ? options.confirmed_max_nis : options.tentative_max_nis);
+    if (track.runaway) {  // among the lost fast tracks: a club head one view followed out of the others
+                          // rejoins
+      core.lost.push_back(track);
+      ++core.runaway_tracks_deleted;
+      ++core.tracks_deleted;
+      return true;
+    }
     if (implausible || (!track.confirmed && track.misses >= options.tentative_max_misses)) {
       if (track.confirmed) core.lost.push_back(track);
       ++core.ghosts_deleted;
@@ -1809,6 +1825,7 @@ const TrackerStats& Tracker::stats() const {
   s.tracks_merged = core.tracks_merged;
   s.manoeuvres_recovered = core.manoeuvres_recovered;
   s.fast_tracks_rejoined = core.fast_tracks_rejoined;
+  s.runaway_tracks_deleted = core.runaway_tracks_deleted;
   s.tracks_reacquired = core.tracks_reacquired;
   s.input_pauses = core.input_pauses;
   s.ghosts_deleted = core.ghosts_deleted;

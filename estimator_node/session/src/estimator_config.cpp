@@ -397,6 +397,8 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
          "adaptive process noise: a new track takes the id of the one fast track lost nearby moments ago");
   f.number("rejoin_rigid_margin_m", o.rejoin_rigid_margin_m, kNonNegative,
            "a fast track's id returns only this close to its distance from its rigid partner (0: off)");
+  f.flag("delete_runaway_tracks", o.delete_runaway_tracks,
+         "a track made fast by one camera's updates (dragged along its ray) is deleted");
   f.number("fast_process_noise_scale", o.fast_process_noise_scale, kNonNegative,
            "adaptive process noise: a fast track (above 10 m/s: a swung or thrown object) keeps this times "
            "process_noise (0: off)");

@@ -95,9 +95,10 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
       (s.input_pauses > 0
            ? "; input paused " + std::to_string(s.input_pauses) + " times (every camera at once)"
            : std::string()) +
-      (s.manoeuvres_recovered + s.fast_tracks_rejoined > 0
+      (s.manoeuvres_recovered + s.fast_tracks_rejoined + s.runaway_tracks_deleted > 0
            ? "; fast tracks: manoeuvres recovered " + std::to_string(s.manoeuvres_recovered) + ", rejoined " +
-                 std::to_string(s.fast_tracks_rejoined)
+                 std::to_string(s.fast_tracks_rejoined) + ", runaways deleted " +
+                 std::to_string(s.runaway_tracks_deleted)
            : std::string()));
   for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops, other_cameras).lines()) log(line);
   if (tracker_.body_count() > 0) {

@@ -88,6 +88,20 @@ TimeNs scene_time(TimeNs stamp) {
   return stamp - 1'700'000'000'000'000'000LL;
 }
 
+// Feeds `run` to a tracker with `options`, calling visit(scene time s, track) for each current track
+// after every frame; returns the tracker's counters.
+template <class Visit>
+TrackerStats replay(const SyntheticRun& run, const TrackerOptions& options, Visit visit) {
+  Tracker tracker(options);
+  tracker.set_calibration(SystemCalibration{run.cameras});
+  for (const auto& frame : run.frames) {
+    tracker.process(frame);
+    const double t = ns_to_seconds(scene_time(frame.stamp_ns));
+    for (const auto& track : tracker.current_tracks()) visit(t, track);
+  }
+  return tracker.stats();
+}
+
 // For each marker, the ids of the tracks nearest to it (within 5 mm) over the run, and the worst error.
 struct Followed {
   std::map<int, std::set<std::int64_t>> ids;
@@ -206,18 +220,11 @@ CoastIntoNeighbour coast_into_neighbour(const TrackerOptions& options) {
         return seen;
       },
       4);
-  Tracker tracker(options);
-  tracker.set_calibration(SystemCalibration{run.cameras});
   CoastIntoNeighbour result;
-  for (const auto& frame : run.frames) {
-    tracker.process(frame);
-    const double t = ns_to_seconds(scene_time(frame.stamp_ns));
-    for (const auto& track : tracker.current_tracks()) {
-      if (t > 0.7 && (track.p - b).norm() < 0.005) result.ids_on_b.insert(track.id);
-      if (t > 0.9 && t < hidden_from && (track.p - a(t)).norm() < 0.005) result.id_of_a = track.id;
-    }
-  }
-  result.stats = tracker.stats();
+  result.stats = replay(run, options, [&](double t, const TrackRecord& track) {
+    if (t > 0.7 && (track.p - b).norm() < 0.005) result.ids_on_b.insert(track.id);
+    if (t > 0.9 && t < hidden_from && (track.p - a(t)).norm() < 0.005) result.id_of_a = track.id;
+  });
   return result;
 }
 
@@ -315,17 +322,11 @@ TEST(Tracker, AHeldBackTrackThatOneCameraDraggedAwayGivesItsIdToNoOtherMarker) {
       },
       7);
   const auto ids = [&](const TrackerOptions& options) {
-    Tracker tracker(options);
-    tracker.set_calibration(SystemCalibration{run.cameras});
     std::set<std::int64_t> on_a, on_c;
-    for (const auto& frame : run.frames) {
-      tracker.process(frame);
-      const double t = ns_to_seconds(scene_time(frame.stamp_ns));
-      for (const auto& track : tracker.current_tracks()) {
-        if (t > 0.5 && t < 1.0 && (track.p - a).norm() < 0.005) on_a.insert(track.id);
-        if (t > 1.45 && (track.p - c_position(t)).norm() < 0.005) on_c.insert(track.id);
-      }
-    }
+    replay(run, options, [&](double t, const TrackRecord& track) {
+      if (t > 0.5 && t < 1.0 && (track.p - a).norm() < 0.005) on_a.insert(track.id);
+      if (t > 1.45 && (track.p - c_position(t)).norm() < 0.005) on_c.insert(track.id);
+    });
     return std::make_pair(on_a, on_c);
   };
   const auto [on_a, on_c] = ids(TrackerOptions{});
@@ -341,6 +342,62 @@ TEST(Tracker, AHeldBackTrackThatOneCameraDraggedAwayGivesItsIdToNoOtherMarker) {
               static_cast<long long>(*on_c.begin()), static_cast<long long>(*on_a.begin()),
               static_cast<long long>(*on_c0.begin()), static_cast<long long>(*on_a0.begin()));
   EXPECT_EQ(*on_c0.begin(), *on_a0.begin()) << "the scene no longer exercises the test";
+}
+
+// delete_runaway_tracks (issue 35 item 3, stop 70): marker B rests 1 s in every view, then sweeps
+// 1.5 m across camera 0's view (150 m/s² for 0.1 s, then 15 m/s for 0.05 s) seen by the first
+// `cameras` cameras only, then rests again in every view. Seen by camera 0 alone, its track
+// becomes fast by one camera's updates, which cannot tell where along camera 0's rays it is (as
+// the runaway tracks of walking markers that one camera dragged at 12-65 m/s): it is deleted, and
+// B at rest is a new track. Seen by cameras 0 and 1, the sweep is a fast marker like a club head:
+// kept, under its id. With the option off, camera 0's track is kept too.
+TEST(Tracker, ATrackMadeFastByOneCameraAloneIsDeleted) {
+  const Eigen::Vector3d across(-std::sin(0.3), std::cos(0.3), 0.0);  // square to camera 0's axis
+  const Eigen::Vector3d start = Eigen::Vector3d(0.1, 0.0, 1.0) - 0.9 * across;
+  const auto b_position = [&](double t) -> Eigen::Vector3d {
+    const double s = std::clamp(t - 1.0, 0.0, 0.1), u = std::clamp(t - 1.1, 0.0, 0.05);
+    return start + (75.0 * s * s + 15.0 * u) * across;  // 150 m/s² for 0.1 s, 15 m/s for 0.05 s
+  };
+  struct Outcome {
+    std::uint64_t runaways = 0;
+    std::set<std::int64_t> before, after;  // ids on B at rest before and after the sweep
+  };
+  const auto sweep = [&](int cameras, const TrackerOptions& options) {
+    const auto run = make_frames(
+        1.6,
+        [&](double t, int camera) {
+          std::vector<Eigen::Vector3d> seen{marker_position(2, t)};  // another marker, far off, all along
+          if (t < 1.0 || t >= 1.15 || camera < cameras) seen.push_back(b_position(t));
+          return seen;
+        },
+        11);
+    Outcome outcome;
+    outcome.runaways = replay(run, options, [&](double t, const TrackRecord& track) {
+                         if (t > 0.5 && t < 1.0 && (track.p - b_position(t)).norm() < 0.005)
+                           outcome.before.insert(track.id);
+                         if (t > 1.45 && (track.p - b_position(t)).norm() < 0.005)
+                           outcome.after.insert(track.id);
+                       }).runaway_tracks_deleted;
+    return outcome;
+  };
+  const Outcome one = sweep(1, TrackerOptions{});
+  const Outcome two = sweep(2, TrackerOptions{});
+  TrackerOptions off;
+  off.delete_runaway_tracks = false;
+  const Outcome one_off = sweep(1, off);
+  std::printf("runaways deleted: camera 0 alone %llu, cameras 0 and 1 %llu, option off %llu\n",
+              static_cast<unsigned long long>(one.runaways), static_cast<unsigned long long>(two.runaways),
+              static_cast<unsigned long long>(one_off.runaways));
+  for (const Outcome* o : {&one, &two, &one_off}) {
+    ASSERT_EQ(o->before.size(), 1u);
+    ASSERT_EQ(o->after.size(), 1u);
+  }
+  EXPECT_EQ(one.runaways, 1u);
+  EXPECT_NE(*one.after.begin(), *one.before.begin()) << "the runaway's id came back";
+  EXPECT_EQ(two.runaways, 0u) << "a fast marker two cameras see is no runaway";
+  EXPECT_EQ(*two.after.begin(), *two.before.begin());
+  EXPECT_EQ(one_off.runaways, 0u);
+  EXPECT_EQ(*one_off.after.begin(), *one_off.before.begin()) << "the scene no longer exercises the option";
 }
 
 // A pause of the input is no frame of any camera for 25 ms and 8 usual intervals: four cameras

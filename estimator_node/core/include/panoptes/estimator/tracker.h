@@ -52,6 +52,12 @@ struct TrackerOptions {
   // back as far from the shaft's marker as it went, a clutter ghost within the head's reach does
   // not (docs/estimator.md, "Rigid partners"). 0: no such test.
   double rejoin_rigid_margin_m = 0.1;
+  // A settled confirmed track that became fast (5 updates above 10 m/s) with fewer than 5 of those
+  // updates made while a second camera updated it within 10 ms is a runaway: one camera alone
+  // dragged it along its ray (a walking marker's track at 12-65 m/s). It is deleted like an
+  // implausible track and stays among the lost fast tracks for rejoin_fast_tracks
+  // (docs/estimator.md, "Runaway tracks").
+  bool delete_runaway_tracks = true;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
   // fast_hold_ns after its last update above 10 m/s, whatever its innovations (0: the adaptive
@@ -136,12 +142,13 @@ struct TrackerStats {
   std::uint64_t tracks_confirmed = 0;
   std::uint64_t tracks_deleted = 0;
   std::uint64_t tracks_merged = 0;
-  std::uint64_t manoeuvres_recovered = 0;  // blobs a fast track took in its manoeuvre gate
-  std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id
-  std::uint64_t tracks_reacquired = 0;     // confirmed new tracks that took a held-back track's id
-  std::uint64_t input_pauses = 0;          // no frame of any camera for 25 ms and 8 usual intervals
-  std::uint64_t ghosts_deleted = 0;        // tentative tracks that cameras did not see
-  std::uint64_t blobs_not_initiated = 0;   // unmatched blobs beyond max_unmatched_per_frame
+  std::uint64_t manoeuvres_recovered = 0;    // blobs a fast track took in its manoeuvre gate
+  std::uint64_t fast_tracks_rejoined = 0;    // new tracks that took a lost fast track's id
+  std::uint64_t runaway_tracks_deleted = 0;  // fast by one camera's updates (delete_runaway_tracks)
+  std::uint64_t tracks_reacquired = 0;       // confirmed new tracks that took a held-back track's id
+  std::uint64_t input_pauses = 0;            // no frame of any camera for 25 ms and 8 usual intervals
+  std::uint64_t ghosts_deleted = 0;          // tentative tracks that cameras did not see
+  std::uint64_t blobs_not_initiated = 0;     // unmatched blobs beyond max_unmatched_per_frame
 };
 
 // What became of each camera's frames (a camera's utilisation is used / frames).
