@@ -1355,8 +1355,9 @@ void Tracker::Impl::prune(TimeNs now_ns) {
     const bool implausible =
         track.nis_updates >= 4 &&
         track.nis_average > (track.confirmed ? options.confirmed_max_nis : options.tentative_max_nis);
-    if (track.runaway) {  // among the lost fast tracks: a club head one view followed out of the others
-                          // rejoins
+    // A runaway stays among the lost fast tracks: a club head that one view followed out of the
+    // others rejoins its id (rejoin_fast_track).
+    if (track.runaway) {
       core.lost.push_back(track);
       ++core.runaway_tracks_deleted;
       ++core.tracks_deleted;
