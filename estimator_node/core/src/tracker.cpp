@@ -54,6 +54,9 @@ constexpr TimeNs kFrameGapNs = 10'000'000;
 // A track with fewer updates is young: a wrong pairing's ghost lives a few updates.
 constexpr std::uint64_t kSettledUpdates = 10;
 constexpr int kFastUpdates = 5;
+// A second camera's update this long after the last update two cameras made together ends a
+// stretch of one camera's updates (return_velocity_cap_mps).
+constexpr TimeNs kReturnGapNs = 30'000'000;
 // A fast track's rigid partner (Track::partner_id): the settled track nearest it, kept while their
 // distance stays within kRigidToleranceM of what it was when chosen; rigid once kept for
 // kRigidMinNs (a club's head and shaft markers; a thrown ball leaves its hand's markers at once).
@@ -144,10 +147,11 @@ struct Core {
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
-  std::uint64_t runaway_tracks_deleted = 0;  // delete_runaway_tracks
-  std::uint64_t tracks_reacquired = 0;       // confirmed new tracks that took a held-back track's id
-  std::uint64_t input_pauses = 0;            // pauses of the input (note_interval)
-  std::uint64_t frames_applied = 0;          // frames apply() has applied (held_back)
+  std::uint64_t runaway_tracks_deleted = 0;    // delete_runaway_tracks
+  std::uint64_t return_velocities_capped = 0;  // return_velocity_cap_mps
+  std::uint64_t tracks_reacquired = 0;         // confirmed new tracks that took a held-back track's id
+  std::uint64_t input_pauses = 0;              // pauses of the input (note_interval)
+  std::uint64_t frames_applied = 0;            // frames apply() has applied (held_back)
   // Input pauses (every camera stalled at once): the usual interval between applied frames' stamps
   // (a moving average) and the stamp of the frame that ended the last pause (paused()).
   double frame_interval_ns = 0;
@@ -519,6 +523,8 @@ struct Tracker::Impl {
   // Updates track `t` with blob `blob` through its prediction to the frame's stamp.
   void commit_pair(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel, std::size_t blob,
                    int camera_index, TimeNs stamp, std::vector<char>& used);
+  // At a second camera's update that ends a stretch of one camera's: caps the velocity's change.
+  void cap_return_velocity(Track& track, const Eigen::Vector3d& predicted_velocity);
   // Tentative tracks inside the image that took no blob were not seen.
   void count_misses(const std::vector<char>& track_done, const std::vector<char>& in_view);
   // Adaptive process noise on: a fast confirmed track in view that took no blob although it was
@@ -1074,6 +1080,7 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   ++track.nis_updates;
   adapt_process_noise(track, d2, stamp);
   hold_fast_process_noise(track, stamp);
+  const TimeNs seen_before_ns = track.seen_ns;
   track.state = projected.state;
   update(track.state, projected.projection, pixel, options.measurement_noise_px);
   // A tentative track that a camera sees again cancels one miss: a marker that the body hides
@@ -1081,6 +1088,8 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   // confirmed; a ghost, starved of blobs in its own views, still reaches tentative_max_misses.
   if (!track.confirmed && track.misses > 0) --track.misses;
   note_update(track, camera_index, stamp);
+  if (track.seen_ns == stamp && seen_before_ns != 0 && stamp - seen_before_ns > kReturnGapNs)
+    cap_return_velocity(track, projected.state.velocity());
   // Fast once kFastUpdates updates of a settled track (kSettledUpdates) were above kFastSpeed: a
   // ghost of a wrong pairing, or a walking marker's track in a moment of confusion, may show such
   // a speed for an update or two. A runaway if fewer than kFastUpdates of them were made while a
@@ -1099,6 +1108,23 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   used[blob] = 1;
   ++core.blobs_associated;
   ++core.associated_per_camera[camera_index];
+}
+
+// One camera alone cannot see an error along its ray, and its updates let the track slide there
+// (d² ~ 0). The second camera's update that ends such a stretch pulls the position back, and the
+// gain's position-velocity terms turn that pull into velocity: an elbow at 1.5 m/s left at 8-9 m/s,
+// its prediction in a neighbour's gate at the next frames (docs/estimator.md, "Runaway tracks").
+// The change of the velocity vector that update makes is capped; a fast track (a club head, a
+// ball) and one predicted faster than kFastSpeed keep theirs: they do change speed that fast.
+void Tracker::Impl::cap_return_velocity(Track& track, const Eigen::Vector3d& predicted_velocity) {
+  const double cap = options.return_velocity_cap_mps;
+  if (cap <= 0 || track.fast || predicted_velocity.squaredNorm() > kFastSpeed * kFastSpeed) return;
+  const Eigen::Vector3d change = track.state.velocity() - predicted_velocity;
+  const double size = change.norm();
+  if (size <= cap) return;
+  track.state.x.tail<3>() = predicted_velocity + change * (cap / size);
+  track.seen_velocity = track.state.velocity();
+  ++core.return_velocities_capped;
 }
 
 void Tracker::Impl::count_misses(const std::vector<char>& track_done, const std::vector<char>& in_view) {
@@ -1827,6 +1853,7 @@ const TrackerStats& Tracker::stats() const {
   s.manoeuvres_recovered = core.manoeuvres_recovered;
   s.fast_tracks_rejoined = core.fast_tracks_rejoined;
   s.runaway_tracks_deleted = core.runaway_tracks_deleted;
+  s.return_velocities_capped = core.return_velocities_capped;
   s.tracks_reacquired = core.tracks_reacquired;
   s.input_pauses = core.input_pauses;
   s.ghosts_deleted = core.ghosts_deleted;

@@ -399,6 +399,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
            "a fast track's id returns only this close to its distance from its rigid partner (0: off)");
   f.flag("delete_runaway_tracks", o.delete_runaway_tracks,
          "a track made fast by one camera's updates (dragged along its ray) is deleted");
+  f.number("return_velocity_cap_mps", o.return_velocity_cap_mps, kNonNegative,
+           "a second camera's update after 30 ms of one camera's changes a track's velocity by at most "
+           "this, m/s, unless fast (0: off)");
   f.number("fast_process_noise_scale", o.fast_process_noise_scale, kNonNegative,
            "adaptive process noise: a fast track (above 10 m/s: a swung or thrown object) keeps this times "
            "process_noise (0: off)");

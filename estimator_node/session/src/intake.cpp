@@ -99,6 +99,9 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
            ? "; fast tracks: manoeuvres recovered " + std::to_string(s.manoeuvres_recovered) + ", rejoined " +
                  std::to_string(s.fast_tracks_rejoined) + ", runaways deleted " +
                  std::to_string(s.runaway_tracks_deleted)
+           : std::string()) +
+      (s.return_velocities_capped > 0
+           ? "; velocities capped at a return to two views " + std::to_string(s.return_velocities_capped)
            : std::string()));
   for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops, other_cameras).lines()) log(line);
   if (tracker_.body_count() > 0) {

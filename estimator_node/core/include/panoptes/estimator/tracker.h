@@ -58,6 +58,12 @@ struct TrackerOptions {
   // implausible track and stays among the lost fast tracks for rejoin_fast_tracks
   // (docs/estimator.md, "Runaway tracks").
   bool delete_runaway_tracks = true;
+  // A second camera's update more than 30 ms after the last update two cameras made together
+  // (within 10 ms) changes the track's velocity by at most this, m/s, unless the track is fast or
+  // was predicted faster than 10 m/s: one camera alone let it slide along its ray and the update
+  // that pulls it back would turn the pull into velocity (docs/estimator.md, "Runaway tracks").
+  // 0: no cap.
+  double return_velocity_cap_mps = 3.0;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
   // fast_hold_ns after its last update above 10 m/s, whatever its innovations (0: the adaptive
@@ -145,10 +151,12 @@ struct TrackerStats {
   std::uint64_t manoeuvres_recovered = 0;    // blobs a fast track took in its manoeuvre gate
   std::uint64_t fast_tracks_rejoined = 0;    // new tracks that took a lost fast track's id
   std::uint64_t runaway_tracks_deleted = 0;  // fast by one camera's updates (delete_runaway_tracks)
-  std::uint64_t tracks_reacquired = 0;       // confirmed new tracks that took a held-back track's id
-  std::uint64_t input_pauses = 0;            // no frame of any camera for 25 ms and 8 usual intervals
-  std::uint64_t ghosts_deleted = 0;          // tentative tracks that cameras did not see
-  std::uint64_t blobs_not_initiated = 0;     // unmatched blobs beyond max_unmatched_per_frame
+  std::uint64_t return_velocities_capped =
+      0;                                  // velocity changes capped at a return (return_velocity_cap_mps)
+  std::uint64_t tracks_reacquired = 0;    // confirmed new tracks that took a held-back track's id
+  std::uint64_t input_pauses = 0;         // no frame of any camera for 25 ms and 8 usual intervals
+  std::uint64_t ghosts_deleted = 0;       // tentative tracks that cameras did not see
+  std::uint64_t blobs_not_initiated = 0;  // unmatched blobs beyond max_unmatched_per_frame
 };
 
 // What became of each camera's frames (a camera's utilisation is used / frames).
