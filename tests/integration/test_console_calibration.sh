@@ -28,10 +28,11 @@ url="$(cat "$work/url" 2>/dev/null)"
 [ -n "$url" ] && pass "console serving at ${url%%\?*}" || { fail "console did not start: $(cat "$work/console.log")"; finish; }
 
 # The cameras start once the page's capture runs; they replay a recording (wand/ or floor/) from a
-# common epoch 4 s ahead. With 2 s, six camera_nodes starting on a loaded 2-core machine began up
-# to 1.7 s after the epoch and missed the floor recording's first placement (issue 37).
+# common epoch 3 s ahead (a whole second 3-4 s ahead until stop 71). With 2 s, six camera_nodes
+# starting on a loaded 2-core machine began up to 1.7 s after the epoch and missed the floor
+# recording's first placement (issue 37).
 cat >"$work/cameras.sh" <<SH
-epoch=\$(( (\$(date +%s) + 4) * 1000000000 ))
+epoch=\$(( \$(date +%s%N) + 3000000000 ))
 for camera in cam0 cam1 cam2 cam3 cam4 cam5; do
   '$bin/camera_node' --source "features:$work/\$1/\$camera.jsonl" --sim-epoch-ns "\$epoch" --duration "\$2" --quiet \
     >'$work/'\$1_\$camera.log 2>&1 &

@@ -36,12 +36,13 @@ port_rx_bytes() {
 }
 declare -A port_bytes=()
 
-# run_phase TAG PROFILE: one tracking run of the 6 s scene across the hosts (the estimator and the
-# application outlast the cameras, which end 9-10 s after they start, by 3 s).
+# run_phase TAG PROFILE: one tracking run of the 6 s scene across the hosts, 3 s from now. The
+# cameras end with the scene; the estimator and the application (given 13 s) are stopped by SIGINT
+# 0.5 s after them, which ends them as their --duration would (until stop 71 they ran out the 13 s).
 run_phase() {
   local tag="$1" profile="$2" dir="$work/$1" epoch i
   mkdir -p "$dir"
-  epoch=$((($(date +%s) + 4) * 1000000000))
+  epoch=$(($(date +%s%N) + 3000000000))
   netns_spawn "$estimator_host" "$bin/estimator_node" --calibration "$work/calibration.yaml" \
     --dds-profile "$profile" --out-tracks "$dir/tracks.jsonl" --duration 13 >"$dir/estimator.log" 2>&1 &
   pids+=("$!")
@@ -66,7 +67,11 @@ run_phase() {
   done >"$dir/sockets.txt" 2>&1
   cp /proc/net/igmp "$dir/root_igmp.txt"
   for pid in "${camera_pids[@]}"; do timeout 20 tail --pid="$pid" -f /dev/null || true; done
+  sleep 0.5
+  kill -INT "$estimator" 2>/dev/null || true
   timeout 20 tail --pid="$estimator" -f /dev/null || true
+  sleep 0.3
+  kill -INT "$probe" 2>/dev/null || true
   timeout 20 tail --pid="$probe" -f /dev/null || true
   wait "$estimator" && pass "$tag: estimator_node exited cleanly" || { fail "$tag: estimator_node"; tail "$dir/estimator.log"; }
 

@@ -30,7 +30,7 @@ sed 's/^duration: .*/duration: 25.0/' "$source_dir/deploy/scenes/demo.yaml" >"$s
 "$bin/panoptes_sim" calibration --scene "$scene" --out "$work/calibration.yaml" >/dev/null
 
 now_ns() { date +%s%N; }
-epoch=$((($(date +%s) + 4) * 1000000000))
+epoch=$(($(date +%s%N) + 3000000000))  # 3 s ahead (a whole second 3-4 s ahead until stop 71)
 # sleep_until T: until scene time T seconds.
 sleep_until() { sleep "$(python3 -c "import time; print(max(0.0, ($epoch + $1 * 1e9 - time.time_ns()) / 1e9))")"; }
 
@@ -111,8 +111,14 @@ for i in 0 1 2 3; do
     fail "camera_node cam$i did not end cleanly"; tail -5 "$work"/cam${i}_*.log
   fi
 done
+# The scene is over: SIGINT ends the estimator and then the probe as their --duration would (the
+# same summaries), ~3 s sooner, once the last frames have had 0.5 s to arrive.
+sleep 0.5
+kill -INT "$estimator" 2>/dev/null || true
 timeout 20 tail --pid="$estimator" -f /dev/null || true
 wait "$estimator" && pass "the restarted estimator_node exited cleanly" || fail "restarted estimator_node"
+sleep 0.3
+kill -INT "$probe" 2>/dev/null || true
 timeout 20 tail --pid="$probe" -f /dev/null || true
 
 python3 - "$work/probe.jsonl" "$t_kill_camera" "$t_restart_camera" "$t_link_down" "$t_link_up" \

@@ -345,15 +345,25 @@ try {
     }
     return best;
   });
+  // Aimed, as the body above, at the track's newest position, three times at most: a loaded run
+  // (stop 71's loaded check, the test at 60 s) missed it once with a single click at the position
+  // read before, and the body's figures stayed.
   let trackShown = false;
-  if (track) {
-    await clickWorld(track.p);
+  const trackAttempts = [];
+  for (let attempt = 0; track && attempt < 3 && !trackShown; ++attempt) {
+    const p = await page.evaluate((id) => {
+      const found = window.panoptes.state.tracks.find((t) => t[0] === id);
+      return found ? found.slice(1, 4) : null;
+    }, track.id);
+    if (!p) { trackAttempts.push('gone'); break; }
+    await clickWorld(p);
     trackShown = await waitFor(page, () => window.panoptes.details && window.panoptes.details.kind === 'track', null, 3000);
+    trackAttempts.push(trackShown ? 'shown' : `selected ${JSON.stringify(await page.evaluate(() => window.panoptes.selected))}`);
   }
   const trackFigures = await page.evaluate(() => window.panoptes.details);
   // Tracks close together on screen: the nearest to the click is shown, which may be a neighbour.
   check(trackShown && trackFigures.cameras >= 2 && trackFigures.sigma_mm.length === 3 && trackFigures.age_s >= 0,
-        `clicking near track ${track ? track.id : '(none)'} shows track ${trackFigures && trackFigures.id}'s figures: ${JSON.stringify(trackFigures)}`);
+        `clicking near track ${track ? track.id : '(none)'} shows track ${trackFigures && trackFigures.id}'s figures (clicks: ${trackAttempts.join('; ')}): ${JSON.stringify(trackFigures)}`);
   await page.locator('#details .close').click();
 
   // --- recording: start, stop, listed --------------------------------------------------------
@@ -383,10 +393,17 @@ try {
   await card2.locator('input.gain').fill('6');
   const rejected = await waitFor(page, () => document.querySelector('.card[data-camera="cam2"] .result').classList.contains('rejected'), null, 6000);
   check(rejected, `a gain the simulated camera lacks is shown rejected: "${await card2.locator('.result').textContent()}"`);
-  // The slider goes back to what the camera reports once the user leaves it (3 s).
+  // The slider goes back to what the camera reports once the user leaves it (3 s). That wait, and
+  // the page's 3 s before it marks a killed estimator stale (below), run while the bad input is sent:
+  // the three checks touch different things (cam2's slider, cam0/cam3's commands, the estimator).
   await card2.locator('input.gain').blur();
-  const gainBack = await waitFor(page, () => document.querySelector('.card[data-camera="cam2"] input.gain').value === '0', null, 8000);
-  check(gainBack, `the rejected gain's slider shows the camera's gain again: ${await card2.locator('input.gain').inputValue()}`);
+  const gainBackWait = waitFor(page, () => document.querySelector('.card[data-camera="cam2"] input.gain').value === '0', null, 8000);
+  let staleWait = null;
+  if (args['estimator-pid']) {
+    process.kill(Number(args['estimator-pid']), 'SIGKILL');
+    staleWait = waitFor(page, () => document.getElementById('estimator').classList.contains('stale') &&
+      window.panoptes.state.tracks.length === 0, null, 8000);
+  }
 
   // --- bad input over a second WebSocket -----------------------------------------------------
   const bad = await page.evaluate(async (wsUrl) => {
@@ -440,11 +457,12 @@ try {
   check(header && !header.json && header.height < 40 && header.badgeVisible,
         `header after rejections: one line (${header && header.height} px), no JSON: "${header && header.stats}"`);
 
-  // --- the estimator killed and started again: the page shows it gone, then its tracks again -----
-  if (args['estimator-pid']) {
-    process.kill(Number(args['estimator-pid']), 'SIGKILL');
-    const stale = await waitFor(page, () => document.getElementById('estimator').classList.contains('stale') &&
-      window.panoptes.state.tracks.length === 0, null, 8000);
+  const gainBack = await gainBackWait;
+  check(gainBack, `the rejected gain's slider shows the camera's gain again: ${await card2.locator('input.gain').inputValue()}`);
+
+  // --- the estimator killed (above) and started again: the page shows it gone, then its tracks again
+  if (staleWait) {
+    const stale = await staleWait;
     check(stale, `the page shows the estimator gone: "${await page.locator('#estimator').textContent()}"`);
     const t0 = Date.now();
     spawn('bash', ['-c', args['estimator-restart']], { stdio: 'ignore' }).unref();
