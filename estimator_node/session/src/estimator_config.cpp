@@ -401,7 +401,7 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
          "a track made fast by one camera's updates (dragged along its ray) is deleted");
   f.number("return_velocity_cap_mps", o.return_velocity_cap_mps, kNonNegative,
            "a second camera's update after 30 ms of one camera's changes a track's velocity by at most "
-           "this, m/s, unless fast (0: off)");
+           "this, m/s, unless fast (0: off, the default; 3 on the accuracy grid)");
   f.number("fast_process_noise_scale", o.fast_process_noise_scale, kNonNegative,
            "adaptive process noise: a fast track (above 10 m/s: a swung or thrown object) keeps this times "
            "process_noise (0: off)");
