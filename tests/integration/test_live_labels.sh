@@ -7,10 +7,11 @@
 # rt/panoptes/labels and its view is scored against the simulator's truth: >= 99.5 % of the
 # visible marker-frames named right and <= 0.1 % wrong after the first 0.5 s (outside the 500 ms
 # after a gap in the estimator's input: a loaded machine, bounded apart), no left/right swap, two
-# markers hidden for 0.6-0.8 s named again within 100 ms of their new tracks; a
-# client started late has the names with its first frames (transient-local map); the console's 3D
-# view draws the names and the marker set's sticks (console_labels.png for docs/marker_sets.md); the
-# run's recording exported to C3D names its points after the markers (read by tests/c3d/read_c3d.js).
+# markers hidden for 0.6-0.8 s named again within 100 ms of their new tracks; a client started late
+# has the names with its first frames (transient-local map); the run's recording exported to C3D
+# names its points after the markers (read by tests/c3d/read_c3d.js); on a second, unscored replay
+# the console's 3D view draws the names and the marker set's sticks (console_labels.png for
+# docs/marker_sets.md).
 # By hand: PANOPTES_LABELS_WALK=rajagopal runs the same with the Rajagopal walk (walk8's own) and its
 # static trial and marker set; PANOPTES_LABELS_SEED=N sets the scene's seed (default walk8's, 8);
 # PANOPTES_LABELS_SUBJECTS=2 plays walk1 twice (1.5 m apart, the second 0.7 s later, as
@@ -71,20 +72,6 @@ fi
 expect_exit 0 "simulate walk1 through eight cameras" -- "$bin/panoptes_sim" features --scene "$scene" \
   --out-dir "$work/sim"
 
-# The console's 3D view with the names and sticks (tools/console/web/test/console_labels_test.mjs),
-# when a browser is installed (required under CI, like every browser test). Started before the
-# cameras, and the walk lasts 10 s: beside a CPU-heavy test under -j2 the page saw the names only
-# 4-7 s into an 8 s walk and reached its last check after the walk had ended (no tracks to draw).
-browser=""
-if have_browser "console part"; then
-  shots="${PANOPTES_CONSOLE_SHOTS:-$work/shots}"
-  mkdir -p "$shots"
-  start_console labels
-  timeout 40 node "$web/test/console_labels_test.mjs" --url "$url" --out "$work/browser.json" --shots "$shots" \
-    >"$work/browser.out" 2>&1 &
-  browser=$!
-  pids+=("$browser")
-fi
 epoch=$(($(date +%s%N) + 3000000000))  # 3 s ahead (a whole second 3-4 s ahead until stop 71)
 echo "$epoch" >"$work/epoch"  # for the scoring of a kept run by hand
 "$probe" --out "$work/client.jsonl" --out-labels "$work/client_labels.jsonl" --duration 16 \
@@ -110,12 +97,9 @@ late_start_ns=$(date +%s%N)
 late=$!
 pids+=("$late")
 # The replay ends with the scene's features: SIGINT then ends the estimator and the client as
-# their --duration would (the same summaries), ~3 s sooner, once the last frames had 0.5 s and the
-# browser is done with the page (at most the 3 s the estimator's --duration would have given it:
-# under load the page lost its tracks, and its stick check failed, when the estimator went first).
+# their --duration would (the same summaries), ~3 s sooner, once the last frames had 0.5 s.
 for pid in "${camera_pids[@]}"; do timeout 30 tail --pid="$pid" -f /dev/null; done
 sleep 0.5
-[ -n "$browser" ] && { timeout 3 tail --pid="$browser" -f /dev/null || true; }
 kill -INT "$estimator" 2>/dev/null
 timeout 30 tail --pid="$estimator" -f /dev/null
 wait "$estimator" && pass "estimator_node exited cleanly" || { fail "estimator_node"; tail "$work/estimator.log"; }
@@ -124,7 +108,7 @@ kill -INT "$client" 2>/dev/null
 timeout 20 tail --pid="$client" -f /dev/null
 timeout 20 tail --pid="$late" -f /dev/null
 # The scoring below (CPU-bound, ~10 s one after another) starts now, in the background, while the
-# recording is exported and the browser finishes: this test holds both cores (docs/testing.md).
+# recording is exported and the console is checked: this test holds both cores (docs/testing.md).
 declare -A scoring
 for who in client estimator; do
   /usr/bin/python3 "$score" "$work/${who}_labels.jsonl" "$work/sim/truth.jsonl" --skip-s 0.5 \
@@ -154,11 +138,38 @@ named = {(t["subject"] + ":" if several else "") + t["marker"] for r in records 
 print(f"C3D points named after markers: {len(named & labels)} of the {len(named)} names the estimator gave")
 sys.exit(0 if len(named) >= 41 and named <= labels else 1)
 PY
-if [ -n "$browser" ]; then
+# The console's 3D view with the names and sticks (tools/console/web/test/console_labels_test.mjs),
+# when a browser is installed (required under CI, like every browser test), on a second replay of
+# the walk's first seconds by a second estimator (its names in console_labels.jsonl), once the
+# page has loaded (--ready-file). Not during the scored walk: with the page live beside the eight
+# cameras, the camera_nodes' frames reached the estimator up to 0.3-1 s late (p99; 4-8 ms without
+# it) and 250-2700 of 8000 were dropped, even with chromium at SCHED_IDLE, drawing at 5 Hz and the
+# console's snapshots at 5 Hz; and started with the walk, the page took 6-13 s to load (stop 72).
+if have_browser "console part"; then
+  shots="${PANOPTES_CONSOLE_SHOTS:-$work/shots}"
+  mkdir -p "$shots"
+  start_console labels --update-rate 10
+  timeout 45 node "$web/test/console_labels_test.mjs" --url "$url&fps=10" --out "$work/browser.json" --shots "$shots" \
+    --ready-file "$work/page_loaded" >"$work/browser.out" 2>&1 &
+  browser=$!
+  pids+=("$browser")
+  for _ in $(seq 300); do [ -s "$work/page_loaded" ] || ! kill -0 "$browser" 2>/dev/null && break; sleep 0.1; done
+  [ -s "$work/page_loaded" ] && pass "console page loaded in chromium" || fail "console page not loaded within 30 s"
+  epoch=$(($(date +%s%N) + 3000000000))
+  "$bin/estimator_node" --calibration "$work/sim/calibration.yaml" --config "$work/settings.yaml" \
+    --out-labels "$work/console_labels.jsonl" --duration 20 >"$work/console_estimator.log" 2>&1 &
+  console_estimator=$!
+  pids+=("$console_estimator")
+  replay_cameras "$epoch" 10 cam0 cam1 cam2 cam3 cam4 cam5 cam6 cam7
+  camera_pids=("${pids[@]: -8}")
   wait "$browser" && pass "console: names and sticks drawn" || fail "console: names and sticks (exit $?)"
   cat "$work/browser.out"
-  # Every (track, name) the page drew is one the estimator wrote (--out-labels).
-  /usr/bin/python3 - "$work/browser.json" "$work/estimator_labels.jsonl" <<'PY' &&
+  kill -INT "${camera_pids[@]}" 2>/dev/null
+  for pid in "${camera_pids[@]}"; do timeout 10 tail --pid="$pid" -f /dev/null; done
+  kill -INT "$console_estimator" 2>/dev/null
+  wait_bounded "$console_estimator" 20 "the console phase's estimator_node" >/dev/null
+  # Every (track, name) the page drew is one that estimator wrote (--out-labels).
+  /usr/bin/python3 - "$work/browser.json" "$work/console_labels.jsonl" <<'PY' &&
 import json, sys
 shown = {tuple(pair) for pair in json.load(open(sys.argv[1])).get("names", [])}
 written = set()
@@ -242,7 +253,10 @@ for s in common:
         pairs += 1
         same += client[s].get(track) == marker
 print(f"{len(common)} frames in both, {same} of {pairs} named markers named alike")
-waited = named and named[0] - min(client) < 250_000_000
+# From the estimator's first names: the labeller's own start, which a loaded machine delays, is not
+# the wire's (stop 72: both named first 456 ms after their first frame, on the same frame).
+first = min((s for s in estimator if estimator[s]), default=None)
+waited = named and first is not None and named[0] - first < 250_000_000
 sys.exit(0 if waited and len(common) > 100 and pairs > 0 and same >= 0.99 * pairs else 1)
 PY
 

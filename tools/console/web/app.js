@@ -1042,7 +1042,17 @@ function syntheticTracks(time) {
 let syntheticAt = 0;
 let fpsFrames = 0;
 let fpsStart = performance.now();
+// `?fps=N`: at most N renders per second (the default, 0: every animation frame, 60 Hz). Software
+// WebGL at 60 Hz takes most of a core; a console beside the cameras on a small machine can draw
+// at the snapshot rate (30 Hz) or less. The canvas keeps its last frame (preserveDrawingBuffer).
+const maxFps = Math.max(0, Number(params.get('fps')) || 0);
+let renderedAt = -Infinity;
 function render(now) {
+  if (maxFps > 0 && now - renderedAt < 1000 / maxFps - 2) {
+    requestAnimationFrame(render);
+    return;
+  }
+  renderedAt = now;
   const width = canvas3d.clientWidth, height = canvas3d.clientHeight;
   if (canvas3d.width !== width || canvas3d.height !== height) {
     renderer.setSize(width, height, false);

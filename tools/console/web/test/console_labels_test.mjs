@@ -5,8 +5,11 @@
 // that the page receives the subject with its names and sticks, that each named track is drawn with
 // its name, and that the sticks are drawn (their light blue in the view). Writes the names the page
 // showed to --out for the shell to compare with the estimator's own --out-labels, and a
-// screenshot of the view (console_labels.png) to --shots.
-//   node console_labels_test.mjs --url <console URL with token> --out <results.json> --shots <dir>
+// screenshot of the view (console_labels.png) to --shots. With --ready-file, writes that file once
+// the page has loaded: the shell starts the walk then (a browser started beside eight cameras took
+// 6-13 s to load the page, and missed most of the walk).
+//   node console_labels_test.mjs --url <console URL with token> --out <results.json> --shots <dir> [--ready-file F]
+import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { parseArgs, runBrowserChecks, sleep } from './browser.mjs';
 
@@ -33,6 +36,7 @@ function stickPixels() {
 
 await runBrowserChecks({ width: 1400, height: 900 }, results, args.out, async (page, errors, check) => {
   await page.goto(`${args.url}&view=3d`);
+  if (args['ready-file']) writeFileSync(args['ready-file'], `${Date.now()}\n`);
   const t0 = Date.now();
   // One loop while the walk lasts: under load a page saw the names only 9 s after loading, and
   // checks made one after the other found the walk over (no track, no stick, no label). Each pass,

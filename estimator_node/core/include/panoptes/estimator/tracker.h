@@ -150,15 +150,14 @@ struct TrackerStats {
   std::uint64_t tracks_confirmed = 0;
   std::uint64_t tracks_deleted = 0;
   std::uint64_t tracks_merged = 0;
-  std::uint64_t manoeuvres_recovered = 0;    // blobs a fast track took in its manoeuvre gate
-  std::uint64_t fast_tracks_rejoined = 0;    // new tracks that took a lost fast track's id
-  std::uint64_t runaway_tracks_deleted = 0;  // fast by one camera's updates (delete_runaway_tracks)
-  std::uint64_t return_velocities_capped =
-      0;                                  // velocity changes capped at a return (return_velocity_cap_mps)
-  std::uint64_t tracks_reacquired = 0;    // confirmed new tracks that took a held-back track's id
-  std::uint64_t input_pauses = 0;         // no frame of any camera for 25 ms and 8 usual intervals
-  std::uint64_t ghosts_deleted = 0;       // tentative tracks that cameras did not see
-  std::uint64_t blobs_not_initiated = 0;  // unmatched blobs beyond max_unmatched_per_frame
+  std::uint64_t manoeuvres_recovered = 0;      // blobs a fast track took in its manoeuvre gate
+  std::uint64_t fast_tracks_rejoined = 0;      // new tracks that took a lost fast track's id
+  std::uint64_t runaway_tracks_deleted = 0;    // fast by one camera's updates (delete_runaway_tracks)
+  std::uint64_t return_velocities_capped = 0;  // at a return to two views (return_velocity_cap_mps)
+  std::uint64_t tracks_reacquired = 0;         // confirmed new tracks that took a held-back track's id
+  std::uint64_t input_pauses = 0;              // no frame of any camera for 25 ms and 8 usual intervals
+  std::uint64_t ghosts_deleted = 0;            // tentative tracks that cameras did not see
+  std::uint64_t blobs_not_initiated = 0;       // unmatched blobs beyond max_unmatched_per_frame
 };
 
 // What became of each camera's frames (a camera's utilisation is used / frames).
