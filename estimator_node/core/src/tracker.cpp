@@ -153,8 +153,10 @@ struct Core {
   std::uint64_t input_pauses = 0;              // pauses of the input (note_interval)
   std::uint64_t frames_applied = 0;            // frames apply() has applied (held_back)
   // Input pauses (every camera stalled at once): the usual interval between applied frames' stamps
-  // (a moving average) and the stamp of the frame that ended the last pause (paused()).
+  // (a moving average), the stamp of the frame that ended the last pause (paused()) and of the
+  // applied frame before it (its start: silence()).
   double frame_interval_ns = 0;
+  TimeNs pause_start_ns = std::numeric_limits<TimeNs>::min();
   TimeNs pause_end_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
                 ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
@@ -566,11 +568,21 @@ struct Tracker::Impl {
   bool paused(const Track& track) const {
     return track.confirmed && track.last_update_ns < core.pause_end_ns;
   }
+  // How long `track` has gone without an update at `now_ns`, less the input's last pause when it
+  // coasted through it: a pause says nothing of its marker (a loaded machine held every camera's
+  // frames for 0.44-0.6 s, and every track of the demo came back under a new id: test_hostile).
+  TimeNs silence(const Track& track, TimeNs now_ns) const {
+    const TimeNs since = now_ns - track.last_update_ns;
+    if (track.last_update_ns > core.pause_start_ns || now_ns < core.pause_end_ns) return since;
+    return since - (core.pause_end_ns - core.pause_start_ns);
+  }
   // The id of the one held-back track whose prediction gates `position` (χ²₃), every other
   // held-back track that gates it at least kClearRatio times farther (d²) and lies
   // reacquire_distance_ratio times farther (m), and (unless fast) within reacquire_max_seen_distance_m
   // of its last two-camera position or of where its velocity then carries it. None when ambiguous.
-  std::optional<std::int64_t> reacquire(const Eigen::Vector3d& position, TimeNs stamp) const;
+  // Held-back tracks in `claimed` (ids other new tracks took at this instant) are no candidates.
+  std::optional<std::int64_t> reacquire(const Eigen::Vector3d& position, TimeNs stamp,
+                                        const std::vector<std::int64_t>& claimed = {}) const;
   // Whether a new track at `position` is as far from `lost`'s rigid partner (Track::partner_id) as
   // `lost` was, within rejoin_rigid_margin_m; true when it has none or the partner is not followed.
   bool keeps_partner_distance(const Track& lost, const Eigen::Vector3d& position, TimeNs stamp) const;
@@ -991,6 +1003,7 @@ void Tracker::Impl::note_interval(TimeNs stamp_ns) {
   const auto interval = static_cast<double>(stamp_ns - core.last_stamp_ns);
   if (core.frame_interval_ns > 0 &&
       interval > std::max(kMinPauseNs, kPauseIntervals * core.frame_interval_ns)) {
+    core.pause_start_ns = core.last_stamp_ns;
     core.pause_end_ns = stamp_ns;
     ++core.input_pauses;
     return;  // not part of the usual interval
@@ -1011,7 +1024,8 @@ bool Tracker::Impl::keeps_partner_distance(const Track& lost, const Eigen::Vecto
                                         lost.partner_distance_m) <= options.rejoin_rigid_margin_m;
 }
 
-std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& position, TimeNs stamp) const {
+std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& position, TimeNs stamp,
+                                                     const std::vector<std::int64_t>& claimed) const {
   constexpr double kGateChi2 = 16.27;  // χ²₃ at p = 0.999
   constexpr double kClearRatio = 4.0;  // another candidate inside the gate must be this much farther (d²)
   const double sp2 = options.init_position_sigma_m * options.init_position_sigma_m;
@@ -1028,7 +1042,9 @@ std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& posi
                        [id](const Track& t) { return t.rejoin_id == id; });
   };
   for (const Track& track : core.tracks) {
-    if (!held_back(track, stamp) || rejoin_pending(track.id)) continue;
+    if (!held_back(track, stamp) || rejoin_pending(track.id) ||
+        std::find(claimed.begin(), claimed.end(), track.id) != claimed.end())
+      continue;
     const PointState state = predicted(track.state, stamp, track.sigma2(options.process_noise));
     const Eigen::Matrix3d S = state.P.matrix().block<3, 3>(0, 0) + sp2 * Eigen::Matrix3d::Identity();
     const Eigen::Vector3d e = position - state.position();
@@ -1052,11 +1068,18 @@ std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& posi
   if (!keeps_partner_distance(*best.track, position, stamp)) return std::nullopt;
   // Where two cameras last placed it: a held-back track that one camera alone kept updating slid
   // along that camera's ray, and its prediction (1-9 m off at 8-65 m/s on the walk grid's
-  // four-camera rigs) gated markers it never was (an elbow's id given to the sacrum).
+  // four-camera rigs) gated markers it never was (an elbow's id given to the sacrum). One that
+  // coasted through a pause of the input was seen by two cameras until the pause, and its marker
+  // went on along a path its velocity does not follow for that long (the demo's markers, 1.3 m/s
+  // on curves, were 0.37-0.46 m from both after a 0.54 s pause): the allowance grows by its
+  // speed times the pause.
+  const double pause_reach = paused(*best.track) ? best.track->state.velocity().norm() *
+                                                       ns_to_seconds(core.pause_end_ns - core.pause_start_ns)
+                                                 : 0.0;
   if (options.reacquire_max_seen_distance_m > 0 && !best.track->fast &&
       std::min((position - best.track->last_seen_position()).norm(),
                (position - best.track->seen_position_at(stamp)).norm()) >
-          options.reacquire_max_seen_distance_m)
+          options.reacquire_max_seen_distance_m + pause_reach)
     return std::nullopt;
   return best.track->id;
 }
@@ -1347,14 +1370,28 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
 }
 
 void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
-  std::vector<std::pair<std::int64_t, std::int64_t>> renames;  // (new id, held-back id)
+  // New tracks confirmed at one instant (after a pause of the input, every marker's) are matched
+  // in rounds: a held-back track that one of them takes is no candidate for the others, whose
+  // choice it may have made ambiguous (the demo after a 0.54 s pause: a marker 0.28 m from its
+  // own track's prediction and 0.64 m from another's, which a second marker took 0.10 m away).
+  std::vector<Track*> pending;
   for (Track& track : core.tracks) {
     if (!track.pending_reacquire) continue;
     track.pending_reacquire = false;
-    const auto id = reacquire(track.position_at(now_ns), now_ns);
-    if (!id || std::any_of(renames.begin(), renames.end(), [&](const auto& r) { return r.second == *id; }))
-      continue;
-    renames.emplace_back(track.id, *id);
+    pending.push_back(&track);
+  }
+  std::vector<std::pair<std::int64_t, std::int64_t>> renames;  // (new id, held-back id)
+  std::vector<std::int64_t> claimed;
+  for (bool progress = true; progress && !pending.empty();) {
+    progress = false;
+    std::erase_if(pending, [&](Track* track) {
+      const auto id = reacquire(track->position_at(now_ns), now_ns, claimed);
+      if (!id) return false;
+      renames.emplace_back(track->id, *id);
+      claimed.push_back(*id);
+      progress = true;
+      return true;
+    });
   }
   if (renames.empty()) return;
   std::erase_if(core.tracks, [&](const Track& track) {
@@ -1376,7 +1413,7 @@ void Tracker::Impl::prune(TimeNs now_ns) {
   reacquire_confirmed(now_ns);
   rejoin_confirmed(now_ns);
   std::erase_if(core.lost,
-                [&](const Track& track) { return now_ns - track.last_update_ns > options.delete_after_ns; });
+                [&](const Track& track) { return silence(track, now_ns) > options.delete_after_ns; });
   std::erase_if(core.tracks, [&](const Track& track) {
     const bool implausible =
         track.nis_updates >= 4 &&
@@ -1396,7 +1433,7 @@ void Tracker::Impl::prune(TimeNs now_ns) {
       return true;
     }
     const TimeNs limit = track.confirmed ? options.delete_after_ns : options.tentative_delete_after_ns;
-    if (now_ns - track.last_update_ns > limit) {
+    if (silence(track, now_ns) > limit) {
       ++core.tracks_deleted;
       return true;
     }
@@ -1493,7 +1530,7 @@ std::optional<std::pair<std::int64_t, double>> Tracker::Impl::rejoin_fast_track(
   double best_d = std::numeric_limits<double>::infinity(), other_d = best_d, followed_d = best_d;
   const auto consider = [&](const Track& track) {
     const TimeNs gap = stamp - track.last_update_ns;
-    if (!track.confirmed || gap > options.delete_after_ns) return;
+    if (!track.confirmed || silence(track, stamp) > options.delete_after_ns) return;
     const double d = (position - track.last_seen_position()).norm();
     if (gap <= kFrameGapNs) {
       // Still followed: not a candidate, but a settled one nearer the new track than the lost
@@ -1563,7 +1600,7 @@ double Tracker::Impl::nearby_fast_speed(const Eigen::Vector3d& position, TimeNs 
   const auto consider = [&](const Track& track) {
     const TimeNs gap = stamp - track.last_update_ns;
     if (!track.confirmed || !track.fast || track.fast_updates < kPriorFastUpdates || gap <= kFrameGapNs ||
-        gap > options.delete_after_ns)
+        silence(track, stamp) > options.delete_after_ns)
       return;
     const double reach =
         track.peak_speed * std::max(ns_to_seconds(stamp - track.last_seen_ns()), kMinGapS) + kMargin;
