@@ -375,12 +375,12 @@ double rate_from_stamps(std::vector<std::int64_t> stamps, bool fixed) {
   if (!fixed) {
     return static_cast<double>(stamps.size() - 1) * 1e9 / static_cast<double>(stamps.back() - stamps.front());
   }
-  std::vector<std::int64_t> intervals;
-  intervals.reserve(stamps.size() - 1);
-  for (std::size_t i = 1; i < stamps.size(); ++i) intervals.push_back(stamps[i] - stamps[i - 1]);
-  const auto middle = intervals.begin() + static_cast<std::ptrdiff_t>(intervals.size() / 2);
-  std::nth_element(intervals.begin(), middle, intervals.end());
-  return 1e9 / static_cast<double>(*middle);
+  // A skipped or lost frame only lengthens an interval (to whole periods): the shortest one is the
+  // period. The median was not (the third frame of a run whose second period was skipped: 2P and P,
+  // the upper of the two taken: half the rate, and that frame got no timecode; test_fixed_rate).
+  std::int64_t shortest = stamps[1] - stamps[0];
+  for (std::size_t i = 2; i < stamps.size(); ++i) shortest = std::min(shortest, stamps[i] - stamps[i - 1]);
+  return 1e9 / static_cast<double>(shortest);
 }
 
 std::optional<Timecode> timecode_of(std::int64_t stamp_ns, const FrameRate& rate) {

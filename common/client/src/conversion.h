@@ -53,8 +53,8 @@ std::optional<ChainUpdate> to_chain_update(const msg::ChainFrame& message, std::
                                            std::string& error);
 
 // The frame rate from frame stamps (any order; 0 with fewer than two distinct ones): `fixed`: 1 s
-// over the median interval between consecutive distinct stamps (a fixed-rate grid: exact); else the
-// number of intervals over the span.
+// over the shortest interval between consecutive distinct stamps (a fixed-rate grid: its period,
+// whatever frames were skipped or lost); else the number of intervals over the span.
 double rate_from_stamps(std::vector<std::int64_t> stamps, bool fixed);
 
 // The timecode of a frame stamped `stamp_ns` in a stream of `rate` (panoptes/frame_grid.h): nullopt

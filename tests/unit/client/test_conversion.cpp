@@ -304,6 +304,10 @@ TEST(Conversion, FrameRateFromStamps) {
     if (k != 20) grid.push_back(1'700'000'000'000'000'000 + k * 8'333'333 + (k % 3 == 0 ? 1 : 0));
   std::swap(grid[3], grid[40]);
   EXPECT_NEAR(rate_from_stamps(grid, true), 120.0, 0.00002);
+  // The third frame of a stream whose second period was skipped (the estimator behind): the
+  // period still, not twice it; and with most of a window's periods skipped.
+  EXPECT_NEAR(rate_from_stamps({0, 16'666'667, 25'000'000}, true), 120.0, 0.00002);
+  EXPECT_NEAR(rate_from_stamps({0, 16'666'667, 33'333'333, 41'666'667}, true), 120.0, 0.00002);
   EXPECT_EQ(rate_from_stamps({}, true), 0.0);
   EXPECT_EQ(rate_from_stamps({5, 5}, true), 0.0);
   const std::vector<std::int64_t> per_camera = {0, 1'000'000, 1'500'000, 4'000'000, 10'000'000};
