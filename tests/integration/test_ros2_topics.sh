@@ -123,10 +123,11 @@ for topic in topics:
         least = 500 if topic == "rt/tf" else 1000  # /tf: 120 a second by default (ros2.tf_rate_hz)
         # rt/tf is reliable (ROS 2's /tf): what the transport drops on the way to the probe, its
         # reliable reader gets again and its best-effort reader does not. On a starved two-core
-        # machine that reader had 87.8 % (CI, stop 72) and 91.3 % (loaded run, stop 73) of the
-        # reliable one's; idle 100 %. The others are best-effort topics that offer reliability:
-        # both readers lose alike, and the best-effort one keeps 95 %.
-        share = 0.85 if topic == "rt/tf" else 0.95
+        # machine that reader had 87.8 % (CI, stop 72), 91.3 % and 78.7 % (loaded runs, stop 73)
+        # of the reliable one's; idle 100 %. The bound catches a reader that gets none or a
+        # fraction, not what a best-effort reader may lose. The others are best-effort topics
+        # that offer reliability: both readers lose alike, and the best-effort one keeps 95 %.
+        share = 0.7 if topic == "rt/tf" else 0.95
         check(n >= share * len(samples[(topic, "reliable")]) and n > least,
               f"{topic} {qos}: {n} samples (reliable reader: {len(samples[(topic, 'reliable')])})")
 
