@@ -125,9 +125,12 @@ check(stats["frames_malformed"] == 0 and stats["frames_dropped"] == 0 and stats[
       f"nothing malformed or dropped ({stats['frames_malformed']}, {stats['frames_dropped']})")
 check_restart_delivery(checks, run, restart_ns, published2)
 if len(run.runs) == 2:
+    # From its own first frame: a Python process slow to start on a loaded machine joined at frame
+    # 58 of 3509 and then missed none (stop 73's check E), which counting from frame 1 called a loss.
     first = run.runs[0]
-    check(len(first) >= 0.99 * first[-1]["frame"],
-          f"first run: {len(first)} of {first[-1]['frame']} frames ({100.0 * len(first) / first[-1]['frame']:.2f}%)")
+    span = first[-1]["frame"] - first[0]["frame"] + 1
+    check(len(first) >= 0.99 * span,
+          f"first run: {len(first)} of frames {first[0]['frame']}-{first[-1]['frame']} ({100.0 * len(first) / span:.2f}%)")
 estimator = read_estimator_poses(work)
 check_poses_exact(checks, run, estimator, float.fromhex)
 frames = run.frames
