@@ -88,10 +88,10 @@ json to_json(const mocap::Markers_& m) {
   return {{"header", header_json(m.header())}, {"frame_number", m.frame_number()}, {"markers", markers}};
 }
 
-// The readers' callbacks only queue the sample; the main loop formats and writes them. Formatting
-// in the callback held the participant's receive thread for as long as the JSON took: on a loaded
-// two-core machine the best-effort reader of rt/tf then lost 12 % of its samples (the reliable one
-// had them resent), and the test counted that against the estimator.
+// The readers' callbacks only queue the sample; the main loop formats and writes them, so the JSON
+// does not hold the participant's receive thread. On a loaded two-core machine the best-effort
+// reader of rt/tf still lost 9-21 % of its samples with this (the reliable one had them resent):
+// the loss is not only the probe's (test_ros2_topics' bound for it).
 class Recorder {
  public:
   explicit Recorder(std::ofstream& out) : out_(out) {}
