@@ -68,8 +68,8 @@ std::unique_ptr<dds::Reader<msg::Predictions>> make_prediction_reader(dds::Bus& 
                                                                       camera::PredictionBox& predictions,
                                                                       dds::ReceiveCounters& rejections,
                                                                       const std::string& camera_id) {
-  // Only this camera's predictions: the estimator's writer filters, so per-camera traffic does not
-  // grow with the number of cameras.
+  // Only this camera's predictions: the estimator writes them through a writer in this camera's
+  // partition, so per-camera traffic does not grow with the number of cameras.
   return bus.make_reader<msg::Predictions>(
       [&predictions, &rejections, &camera_id](msg::Predictions&& message) {
         if (message.camera_id() != camera_id) return;

@@ -82,9 +82,8 @@ class WriterPartitions : public fdds::DomainParticipantListener {
 // ---------------------------------------------------------------------------------------------
 // The `only_id` content filter. A custom filter class (not the SQL one, which needs the type's
 // TypeObject) that reads the first member, a CDR string, straight from the serialised payload.
-// Every participant registers it, so writers evaluate it for each matched reader and skip the
-// readers a sample is not for (Fast DDS writer-side filtering, up to reader_filters_allocation
-// readers per writer).
+// Every participant registers it. The readers evaluate it (writer-side filtering is off:
+// writer_qos_for).
 
 constexpr const char* kIdFilterClass = "PANOPTES_LEADING_ID";
 constexpr const char* kIdFilterExpression = "leading_id = %0";

@@ -240,10 +240,11 @@ TimeSyncClient::TimeSyncClient(Bus& bus, TimeSyncClientOptions options)
     : impl_(std::make_unique<Impl>(std::move(options))) {
   impl_->writer = bus.make_writer<msg::TimeSync>(Qos::kDefault, {}, impl_->options.client_id);
   Impl* impl = impl_.get();
-  // Only the exchanges of this client: writers filter, so the replies to the other cameras never
-  // reach this one. Best effort: a repaired reply arrives too late to time anything (it would be
-  // rejected), and a reliable reader costs every writer on the topic heartbeats and gaps for it,
-  // which with N cameras is N² control messages (32 cameras lost half their frames to it).
+  // Only the exchanges of this client: the server replies through a writer in this client's
+  // partition, and the filter drops what its writer for every client sends to the others. Best effort: a
+  // repaired reply arrives too late to time anything (it would be rejected), and a reliable reader costs
+  // every writer on the topic heartbeats and gaps for it, which with N cameras is N² control messages (32
+  // cameras lost half their frames to it).
   impl_->reader =
       bus.make_reader<msg::TimeSync>([impl](msg::TimeSync&& message) { impl->on_sample(std::move(message)); },
                                      Qos::kBestEffort, impl_->options.client_id);

@@ -54,9 +54,16 @@ fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos) {
     writer_qos.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
   writer_qos.reliable_writer_qos().times.nackSupressionDuration =
       eprosima::fastrtps::Duration_t(0, static_cast<std::uint32_t>(spec.nack_suppression_ms) * 1'000'000U);
-  // Evaluate the content filter of every matched reader (default: at most 32 readers per writer).
+  // No writer-side filtering: a filtered reader (`only_id`) evaluates its filter itself. Fast DDS
+  // 2.9.1 changes a writer's list of reader filters as readers come and go without the writer's
+  // lock, while a write walks that list (ReaderFilterCollection): panoptes_rogue died there
+  // (SIGSEGV in ContentFilterInfo::cdr_serialize under DataWriter::write, in 1 of 6 test_hostile
+  // runs, as the demo's nodes ended; eProsima/Fast-DDS#4878 reports the same stack), and the
+  // estimator writes predictions and time-sync replies while cameras come and go. Since those
+  // go through a writer per camera in its partition (docs/protocol.md), the filter on the writer
+  // saved little: only what the writers for every camera ("*") send reaches each camera.
   writer_qos.writer_resource_limits().reader_filters_allocation =
-      eprosima::fastrtps::ResourceLimitedContainerConfig(0, kMaxInstances, 1);
+      eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
   return writer_qos;
 }
 
