@@ -4,6 +4,7 @@
 // table of topics panoptes_record and panoptes_replay see as raw CDR.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -72,6 +73,17 @@ template <>
 inline constexpr bool kCameraScoped<msg::Predictions> = true;
 template <>
 inline constexpr bool kCameraScoped<msg::TimeSync> = true;
+
+// The largest serialised sample a reader of the type decodes (bytes; 0: no limit). A larger one is
+// counted as "sample_too_large" and dropped before decoding: decoding runs on Fast DDS's receive
+// thread, which every reader of the participant shares, and panoptes_rogue's FeatureFrame of 10^6
+// blobs (40 MB) held the estimator's features from every camera for 0.5-0.9 s (test_hostile: the
+// live estimator then deleted every track). 2 MiB is about 52 000 blobs, 12 times the
+// estimator's own per-frame limit (FrameScreenOptions::max_blobs, 4096).
+template <class T>
+inline constexpr std::size_t kMaxSampleBytes = 0;
+template <>
+inline constexpr std::size_t kMaxSampleBytes<msg::FeatureFrame> = std::size_t{2} << 20;
 
 #define PANOPTES_TOPIC(Type, topic_name, reliable, durability, depth, offer_reliable, leading_id) \
   template <>                                                                                     \
@@ -175,6 +187,12 @@ class GuardedPubSubType final : public fdds::TopicDataType {
   // Also decodes the samples whose key Fast DDS must compute on receipt.
   bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
     T& message = *static_cast<T*>(data);
+    if (kMaxSampleBytes<T> != 0 && payload->length > kMaxSampleBytes<T>) {
+      t_last_decode_failed = true;
+      counters_.note("sample_too_large");
+      message = T();
+      return false;
+    }
     const DecodeError error = decode_sample(payload->data, payload->length, message);
     t_last_decode_failed = error != DecodeError::kNone;
     if (t_last_decode_failed) {

@@ -17,6 +17,7 @@
 
 #include "../dds_test_support.h"
 #include "panoptes/dds/bus.h"
+#include "panoptes/dds/decode.h"
 #include "panoptes/dds/shm_ports.h"
 #include "panoptes/dds/time_sync.h"
 #include "panoptes_msgs/panoptes.h"
@@ -151,6 +152,30 @@ TEST(Bus, FilteredReadersComeAndGoWhileAWriterWrites) {
   EXPECT_GT(written.load(), 1000);
   EXPECT_GT(delivered.load(), 0);  // the readers matched and their filter passed their own samples
   EXPECT_EQ(wrong.load(), 0);
+}
+
+// A FeatureFrame larger than kMaxSampleBytes (2 MiB) is counted and dropped before it is decoded:
+// decoding runs on the participant's receive thread (docs/hostile_input.md). The frame written
+// after it arrives, so the big one was received and refused, not lost on the way.
+TEST(Bus, AFeatureFrameOverTheSizeLimitIsCountedNotDecoded) {
+  Bus writer_bus(options("writer")), reader_bus(options("reader"));
+  std::atomic<int> small{0}, big{0};
+  auto reader = reader_bus.make_reader<msg::FeatureFrame>(
+      [&](msg::FeatureFrame&& frame) { (frame.blobs().size() > 10 ? big : small).fetch_add(1); },
+      Qos::kReliable);
+  auto writer = writer_bus.make_raw_writer("rt/panoptes/features");
+  ASSERT_TRUE(wait_until([&] { return reader->matched_writers() == 1; }));
+  msg::FeatureFrame frame;
+  frame.camera_id("cam0");
+  frame.blobs(std::vector<msg::Blob>(60'000));  // 40 bytes each: 2.4 MB
+  const auto too_big = encode_sample(frame);
+  ASSERT_GT(too_big.size(), std::size_t{2} << 20);
+  ASSERT_TRUE(writer->write(too_big));
+  frame.blobs(std::vector<msg::Blob>(3));
+  ASSERT_TRUE(writer->write(encode_sample(frame)));
+  ASSERT_TRUE(wait_until([&] { return small.load() == 1; }));
+  EXPECT_EQ(big.load(), 0);
+  EXPECT_EQ(reader_bus.receive_rejections()["sample_too_large"], 1u);
 }
 
 TEST(Bus, UnfilteredReaderStillGetsEverything) {

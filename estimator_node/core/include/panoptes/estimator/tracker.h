@@ -245,7 +245,10 @@ class Tracker {
   // tentative_delete_after) at `stamp_ns`, a time after the newest frame's. When frames stop
   // arriving, the live estimator calls it with the newest stamp plus the time since the last frame,
   // so that tracks do not outlive their cameras (issue 32). The rewind history is kept: a late frame
-  // still replays from it. Returns the number deleted.
+  // still replays from it. The confirmed ones deleted are kept aside: if frames come back within
+  // 3 s of the newest stamp, they return as tracks that coasted through a pause of the input, and
+  // new tracks of their markers take their ids when unambiguous (a stall, not cameras stopped).
+  // Returns the number deleted.
   std::size_t expire(TimeNs stamp_ns);
   // Live tracks by status at `stamp_ns`: {tentative, confirmed, coasting}.
   std::array<std::size_t, 3> track_counts(TimeNs stamp_ns) const;
