@@ -656,8 +656,10 @@ class V4l2Source final : public FrameSource {
     const double waited_ms = static_cast<double>(now - waiting_since_ns_) / kNsPerMillisecond;
     if (waited_ms < wanted_timeout_ms()) return;
     waiting_since_ns_ = now;
-    count("timeout");
+    // The error before the count: a reader that sees the timeout counted sees its error too (a
+    // test read the error between the two and found it empty, once in a fresh check).
     set_last_error("no frame within " + format_number(wanted_timeout_ms()) + " ms");
+    count("timeout");
   }
 
   double wanted_timeout_ms() const { return wanted_.timeout_ms; }
