@@ -231,7 +231,8 @@ def run_cell(args, rig, n, motion, clutter, seed):
         raise CellError(f"cell {name}: estimator_node failed (see {work}/estimator.log)")
     summary = os.path.join(work, "eval.json")
     rc = run([f"{b}/panoptes_eval", "--scene", path, "--tracks", os.path.join(work, "tracks.jsonl"),
-              "--warmup", str(args.warmup), "--summary-json", summary], name, os.path.join(work, "eval.log"))
+              "--warmup", str(args.warmup), "--summary-json", summary] + ([] if args.records_only else ["--every-frame"]),
+             name, os.path.join(work, "eval.log"))
     if not os.path.exists(summary):
         raise CellError(f"cell {name}: panoptes_eval exit {rc}, no summary (see {work}/eval.log)")
     e = json.load(open(summary))
@@ -309,6 +310,10 @@ def main():
     p.add_argument("--cells", default=None, help="glob over rig/motion/clutter/seed names")
     p.add_argument("--duration", type=float, default=None)
     p.add_argument("--warmup", type=float, default=0.3)
+    p.add_argument("--records-only", action="store_true",
+                   help="judge only the instants the tracks file has records for (before stop 75); by default "
+                        "every camera frame is judged, also those at which no track was published "
+                        "(panoptes_eval --every-frame)")
     p.add_argument("--config", default=None, help="estimator configuration (default: none, the defaults)")
     p.add_argument("--json", default=None, help="write the rows here")
     p.add_argument("--blind", action="store_true", help="every camera looks away (checks the loud failure)")

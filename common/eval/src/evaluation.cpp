@@ -82,20 +82,51 @@ std::vector<const TrackRecord*> sorted_by_stamp(const std::vector<TrackRecord>& 
 }
 
 // [begin, end) of the records sharing a stamp.
-using Instant = std::pair<std::size_t, std::size_t>;
+using Records = std::pair<std::size_t, std::size_t>;
+// A judged instant: its absolute stamp and its records (none: a camera frame at which no track
+// was published).
+using Instant = std::pair<TimeNs, Records>;
 
-// The judged instants: those after the warm-up and within the scene.
+// Scene times (mid-exposure) of the frames every camera of the scene makes in [from, to]: the
+// simulator's own range (CameraSimulator::frames_in), which ends before the scene's duration.
+std::vector<TimeNs> frame_times(const Scene& scene, TimeNs from_ns, TimeNs to_ns) {
+  const TimeNs end_ns = to_ns < scene.duration_ns() ? to_ns + 1 : scene.duration_ns();
+  std::vector<TimeNs> times;
+  for (const auto& camera_config : scene.cameras()) {
+    const CameraSimulator camera(scene, camera_config.calibration.id);
+    const CameraSimulator::FrameRange range = camera.frames_in(from_ns, end_ns);
+    for (std::int64_t k = range.first; k < range.end; ++k) times.push_back(camera.frame_time_ns(k));
+  }
+  std::sort(times.begin(), times.end());
+  times.erase(std::unique(times.begin(), times.end()), times.end());
+  return times;
+}
+
+// The judged instants: those after the warm-up and within the scene, in time order.
 std::vector<Instant> judged_instants(const std::vector<const TrackRecord*>& sorted, const Scene& scene,
                                      const EvaluationOptions& options) {
+  const TimeNs to_ns = std::min(scene.duration_ns(), options.until_ns);
   std::vector<Instant> instants;
   for (std::size_t begin = 0; begin < sorted.size();) {
     std::size_t end = begin;
     while (end < sorted.size() && sorted[end]->stamp_ns == sorted[begin]->stamp_ns) ++end;
     const TimeNs scene_time = sorted[begin]->stamp_ns - options.epoch_ns;
-    if (scene_time >= options.warmup_ns && scene_time <= std::min(scene.duration_ns(), options.until_ns))
-      instants.emplace_back(begin, end);
+    if (scene_time >= options.warmup_ns && scene_time <= to_ns)
+      instants.emplace_back(sorted[begin]->stamp_ns, Records{begin, end});
     begin = end;
   }
+  if (!options.judge_every_frame || sorted.empty()) return instants;
+  const std::size_t with_records = instants.size();
+  for (const TimeNs t : frame_times(scene, std::max<TimeNs>(options.warmup_ns, 0), to_ns)) {
+    const TimeNs stamp = options.epoch_ns + t;
+    const auto at =
+        std::lower_bound(instants.begin(), instants.begin() + static_cast<std::ptrdiff_t>(with_records),
+                         stamp, [](const Instant& i, TimeNs s) { return i.first < s; });
+    if (at != instants.begin() + static_cast<std::ptrdiff_t>(with_records) && at->first == stamp) continue;
+    instants.emplace_back(stamp, Records{0, 0});
+  }
+  std::stable_sort(instants.begin(), instants.end(),
+                   [](const Instant& a, const Instant& b) { return a.first < b.first; });
   return instants;
 }
 
@@ -134,7 +165,7 @@ struct InstantMatch {
 
 // Greedy nearest pairs within the match distance, each marker and track used once; every pair's
 // error and id switch is counted.
-InstantMatch match_instant(const std::vector<const TrackRecord*>& sorted, Instant records,
+InstantMatch match_instant(const std::vector<const TrackRecord*>& sorted, Records records,
                            const std::vector<MarkerTruth>& truth, std::size_t instant,
                            const EvaluationOptions& options, Evaluation& result, Totals& totals) {
   const auto [begin, end] = records;
@@ -201,7 +232,7 @@ void count_markers(const std::vector<MarkerTruth>& truth, const InstantMatch& ma
 }
 
 // Every record at this instant: matched, false, or a duplicate near a marker.
-void count_records(const std::vector<const TrackRecord*>& sorted, Instant records, const InstantMatch& match,
+void count_records(const std::vector<const TrackRecord*>& sorted, Records records, const InstantMatch& match,
                    Evaluation& result, Totals& totals) {
   const auto [begin, end] = records;
   for (std::size_t k = begin; k < end; ++k) {
@@ -264,22 +295,22 @@ Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
     return result;
   }
 
-  const TimeNs first_time = sorted[instants.front().first]->stamp_ns - options.epoch_ns;
-  const TimeNs last_time = sorted[instants.back().first]->stamp_ns - options.epoch_ns;
+  const TimeNs first_time = instants.front().first - options.epoch_ns;
+  const TimeNs last_time = instants.back().first - options.epoch_ns;
   const Visibility visibility(scene, first_time - options.trackable_window_ns, last_time);
   Totals totals(result.markers.size());
   TimeNs previous_time = first_time;
   for (std::size_t instant = 0; instant < instants.size(); ++instant) {
-    const TimeNs scene_time = sorted[instants[instant].first]->stamp_ns - options.epoch_ns;
+    const TimeNs scene_time = instants[instant].first - options.epoch_ns;
     result.max_instant_gap_ns = std::max(result.max_instant_gap_ns, scene_time - previous_time);
     previous_time = scene_time;
     ++result.instants;
     if (options.keep_series) result.series.scene_time_ns.push_back(scene_time);
     const auto truth = scene.markers_at(scene_time);
     const InstantMatch match =
-        match_instant(sorted, instants[instant], truth, instant, options, result, totals);
+        match_instant(sorted, instants[instant].second, truth, instant, options, result, totals);
     count_markers(truth, match, visibility, scene_time, instant, options, result);
-    count_records(sorted, instants[instant], match, result, totals);
+    count_records(sorted, instants[instant].second, match, result, totals);
   }
   summarise(totals, options, result);
   return result;

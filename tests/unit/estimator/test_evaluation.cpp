@@ -155,6 +155,31 @@ TEST(Evaluation, UntilEndsTheJudgedWindow) {
   EXPECT_EQ(evaluate(scene, tracks, options).instants, 200u);
 }
 
+// A tracks file has no line for a frame at which no track was published. With judge_every_frame
+// every camera frame is an instant: such frames count as untracked (a single thrown ball whose
+// track was unpublished at each catch was never judged there, and its coverage read 100 %).
+TEST(Evaluation, EveryFrameJudgesFramesWithoutRecords) {
+  const Scene scene = Scene::from_yaml_string(kScene);
+  EvaluationOptions options = from_the_start();
+  options.until_ns = kNsPerSecond;  // cam0's frames at 0, 10, ..., 1000 ms: 101
+  std::vector<TrackRecord> tracks;
+  for (int k = 0; k < 100; k += 2) tracks.push_back(record(instant(options, k), 1, {0, 0, 1}));
+  const auto records_only = evaluate(scene, tracks, options);
+  EXPECT_EQ(records_only.instants, 50u);
+  EXPECT_DOUBLE_EQ(records_only.markers[0].tracked_fraction(), 1.0);
+  options.judge_every_frame = true;
+  const auto every_frame = evaluate(scene, tracks, options);
+  EXPECT_EQ(every_frame.instants, 101u);
+  EXPECT_EQ(every_frame.markers[0].steps, 101u);
+  EXPECT_EQ(every_frame.markers[0].tracked, 50u);
+  EXPECT_EQ(every_frame.records, 50u);
+  EXPECT_EQ(every_frame.false_records, 0u);
+  EXPECT_EQ(every_frame.id_switch_count, 0u);
+  // A record between two frames is judged as well, once.
+  tracks.push_back(record(instant(options, 3) + 5'000'000, 1, {0, 0, 1}));
+  EXPECT_EQ(evaluate(scene, tracks, options).instants, 102u);
+}
+
 TEST(Evaluation, DuplicateTracksOnOneMarkerAreFalseRecords) {
   const Scene scene = Scene::from_yaml_string(kScene);
   EvaluationOptions options;

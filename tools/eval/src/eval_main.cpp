@@ -46,6 +46,9 @@ void add_options(CLI::App& app, EvalOptions& args) {
   app.add_option("--trackable-window", args.trackable_window_s,
                  "seconds: a marker shown by 2 cameras within this is trackable")
       ->check(CLI::PositiveNumber);
+  app.add_flag("--every-frame", args.every_frame,
+               "judge every camera frame of the scene, also those at which no track was published (the "
+               "tracks file has no line for them); default: only the records' stamps");
   app.add_option("--summary-json", args.summary_json, "write the evaluation as JSON to this file");
   app.add_option("--plot", args.plot_file,
                  "write a PNG of the error over time (worst markers, ID switches, gaps)");

@@ -60,6 +60,7 @@ void judge_tracks(const EvalOptions& options, const Scene& scene, std::vector<st
   auto evaluation_options = base_options(options);
   evaluation_options.match_distance_m = options.match_distance_m;
   evaluation_options.trackable_window_ns = seconds_to_ns(options.trackable_window_s);
+  evaluation_options.judge_every_frame = options.every_frame;
   evaluation_options.keep_series = !options.plot_file.empty();
   const Evaluation evaluation = estimator::evaluate(scene, tracks, evaluation_options);
   std::cout << evaluation.summary();

@@ -30,6 +30,11 @@ struct EvaluationOptions {
   TimeNs trackable_window_ns = 100 * kNsPerMillisecond;
   int trackable_min_cameras = 2;
   bool keep_series = false;  // fill Evaluation::series (plots)
+  // Judge every frame time of the scene's cameras too, not only the stamps the tracks carry: the
+  // estimator publishes a TrackFrame at each frame it applies, and a tracks file lists records,
+  // so a frame at which no track was published leaves no line (a thrown ball's single track
+  // unpublished at a catch was never judged). Off (the default): only the records' stamps.
+  bool judge_every_frame = false;
 };
 
 struct IdSwitch {

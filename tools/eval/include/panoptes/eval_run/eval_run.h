@@ -26,6 +26,7 @@ struct EvalOptions {
   std::optional<double> until_s;  // judge up to this scene time (none: the scene's end)
   double match_distance_m = 0.02;
   double trackable_window_s = 0.1;
+  bool every_frame = false;  // judge every camera frame, not only the records' stamps
   // Requirements on poses; 0 (or false) = not required.
   double require_pose_rmse_mm = 0, require_pose_rmse_deg = 0, require_pose_tracked = 0;
   bool require_no_wrong_poses = false;
