@@ -66,9 +66,10 @@ struct Result {
 using Path = std::function<Eigen::Vector3d(double)>;
 using Region = std::function<bool(const Eigen::Vector3d&)>;
 
-// Each marker's result; `hidden`: where no camera sees a marker (none: everywhere visible).
+// Each marker's result; `hidden`: where no camera sees a marker (none: everywhere visible);
+// `seeing`: how many of the six cameras see the markers at all (the others see nothing).
 std::vector<Result> track(const std::vector<Path>& paths, const TrackerOptions& options, double duration_s,
-                          const Region& hidden = nullptr) {
+                          const Region& hidden = nullptr, std::size_t seeing = 6) {
   const auto cameras = make_ring_calibration(6, 4.0, 2.5, true);
   std::vector<CameraModel> models;
   for (const auto& c : cameras) models.push_back(c.model());
@@ -92,7 +93,7 @@ std::vector<Result> track(const std::vector<Path>& paths, const TrackerOptions& 
         truth.push_back(path(ns_to_seconds(t)));
         seen.push_back(!hidden || !hidden(truth.back()));
         const auto pixel = models[c].project(truth.back());
-        if (seen.back() && pixel && models[c].in_image(*pixel)) {
+        if (c < seeing && seen.back() && pixel && models[c].in_image(*pixel)) {
           Blob blob;
           blob.x = pixel->x() + noise(rng);
           blob.y = pixel->y() + noise(rng);
@@ -124,8 +125,8 @@ std::vector<Result> track(const std::vector<Path>& paths, const TrackerOptions& 
 }
 
 Result track(const Path& path, const TrackerOptions& options, double duration_s,
-             const Region& hidden = nullptr) {
-  return track(std::vector<Path>{path}, options, duration_s, hidden).front();
+             const Region& hidden = nullptr, std::size_t seeing = 6) {
+  return track(std::vector<Path>{path}, options, duration_s, hidden, seeing).front();
 }
 
 TEST(AdaptiveNoise, SwungClubHeadKeepsOneIdentityWithTheDefaults) {
@@ -296,6 +297,28 @@ TEST(AdaptiveNoise, OnlyAnIsolatedFastTrackTakesTheLargerFactor) {
     EXPECT_EQ(with_rule[m].sum2, without_rule[m].sum2) << "marker " << m;
     EXPECT_EQ(with_rule[m].ids.size(), 1u) << "marker " << m;
   }
+}
+
+// A fast track is also published while its cameras confirm its predictions
+// (fast_publish_innovation_px): seen by three of the six cameras (6 ms between their frames), the
+// lone ball's σ (×300) passes the publication limit between their frames though they find it where
+// the track predicted. Judged at every frame, as here, it is tracked at more of them (1226
+// against 1118 of 1781 when written), on no more identities (3 either way: with three views some
+// catches lose it) and as accurately (5.03 against 5.19 mm).
+TEST(AdaptiveNoise, AFastTrackTheCamerasConfirmIsPublishedBetweenTheirFrames) {
+  TrackerOptions sigma_only;
+  sigma_only.fast_publish_innovation_px = 0;
+  const Result confirmed = track(thrown_ball, TrackerOptions{}, 3.0, nullptr, 3);
+  const Result by_sigma = track(thrown_ball, sigma_only, 3.0, nullptr, 3);
+  std::printf(
+      "thrown ball: %zu ids, tracked %d of %d, RMSE %.3f mm, max %.3f mm; sigma only: %zu ids, tracked %d, "
+      "RMSE "
+      "%.3f mm\n",
+      confirmed.ids.size(), confirmed.tracked, confirmed.instants, confirmed.rmse_m() * 1e3,
+      confirmed.max_error * 1e3, by_sigma.ids.size(), by_sigma.tracked, by_sigma.rmse_m() * 1e3);
+  EXPECT_LE(confirmed.ids.size(), by_sigma.ids.size());
+  EXPECT_GT(confirmed.tracked, by_sigma.tracked);
+  EXPECT_LT(confirmed.rmse_m(), 1.1 * by_sigma.rmse_m());
 }
 
 TEST(AdaptiveNoise, SlowMarkerAsAccurateAsWithFixedNoise) {

@@ -102,6 +102,12 @@ struct TrackerOptions {
   // no depth, and one no camera sees is only predicted: either kind is kept (same id when seen
   // again) but not reported once the filter's own uncertainty passes this.
   double publish_max_sigma_m = 0.02;
+  // ... or, a fast track (its σ carries fast_process_noise_scale's allowance for a manoeuvre),
+  // while the cameras confirm its predictions: its last update had a second camera's within 10 ms,
+  // every camera that updated it within 10 ms before found its blob within this of the
+  // prediction (px), and the record is at most 2.5 ms after that update (docs/estimator.md, "Fast
+  // tracks seen by few cameras"). 0: off.
+  double fast_publish_innovation_px = 1.5;
   double merge_distance_m = 0.005;  // two tracks closer than this are one marker
   // A confirmed track not updated for 10 ms and four applied frames (a marker out of sight, not a
   // pause of the input) whose predicted position is less certain than this (1σ per axis, m) takes
