@@ -125,6 +125,7 @@ Initiator::Pairing Initiator::best_pairing(int camera, TimeNs stamp_ns, const Tr
     if (static_cast<int>(other) == camera) continue;
     const auto& partners = per_camera_[other];
     for (std::size_t k = 0; k < partners.size(); ++k) {
+      if (stamp_ns - partners[k].stamp_ns > options_.window_ns) continue;  // probe() runs before the pruning
       double allowance = 0;
       const Eigen::Vector2d partner_pixel = aligned(partners[k], stamp_ns, &allowance);
       if (!std::isfinite(allowance)) continue;
@@ -149,6 +150,7 @@ Initiator::Pairing Initiator::best_pairing(int camera, TimeNs stamp_ns, const Tr
         std::size_t best_index = 0;
         Eigen::Vector2d best_pixel = Eigen::Vector2d::Zero();  // set whenever best_error is finite
         for (std::size_t m = 0; m < per_camera_[third].size(); ++m) {
+          if (stamp_ns - per_camera_[third][m].stamp_ns > options_.window_ns) continue;
           double third_allowance = 0;
           const Eigen::Vector2d pixel = aligned(per_camera_[third][m], stamp_ns, &third_allowance);
           if (!std::isfinite(third_allowance)) continue;
@@ -172,6 +174,76 @@ Initiator::Pairing Initiator::best_pairing(int camera, TimeNs stamp_ns, const Tr
     }
   }
   return best;
+}
+
+InitiationCandidate Initiator::candidate_of(TimeNs stamp_ns, const Pairing& best) const {
+  const auto& cameras = geometry_->cameras;
+  std::vector<PixelObservation> observations;
+  for (const auto& view : best.views) observations.push_back({cameras[view.camera], view.pixel});
+  InitiationCandidate candidate;
+  candidate.stamp_ns = stamp_ns;
+  candidate.position = best.point;
+  candidate.max_reprojection_px = best.error;
+  if (const auto all = triangulate(observations, 5);
+      all && all->max_reprojection_px <= options_.reprojection_px + 1.0) {
+    candidate.position = all->point;
+    candidate.max_reprojection_px = all->max_reprojection_px;
+  }
+  // Velocity: the views with a pixel velocity, 10 ms earlier.
+  std::vector<PixelObservation> earlier;
+  constexpr double kBack = 0.01;
+  for (const auto& view : best.views) {
+    if (view.has_velocity) earlier.push_back({cameras[view.camera], view.pixel - kBack * view.velocity});
+  }
+  if (earlier.size() >= 2) {
+    if (const auto before = triangulate(earlier, 3); before) {
+      candidate.velocity = (candidate.position - before->point) / kBack;
+      candidate.has_velocity = true;
+    }
+  } else if (earlier.size() == 1 && options_.partial_velocity) {
+    // One view only: its earlier ray met on the plane through the marker square to the line of
+    // sight gives the velocity across the line of sight; along it nothing is known.
+    const CameraModel& view = *earlier.front().camera;
+    const Eigen::Vector3d centre = view.center_world();
+    const Eigen::Vector3d sight = (candidate.position - centre).normalized();
+    const Eigen::Vector3d ray = view.pixel_to_world_ray(earlier.front().pixel);
+    if (const double along = ray.dot(sight); along > 0.5) {
+      const Eigen::Vector3d before = centre + ray * ((candidate.position - centre).dot(sight) / along);
+      candidate.velocity = (candidate.position - before) / kBack;
+      candidate.has_partial_velocity = true;
+      candidate.unknown_direction = sight;
+    }
+  }
+  for (const auto& view : best.views) {
+    candidate.cameras.push_back(view.camera);
+    candidate.camera_stamps.push_back(view.stamp_ns);
+  }
+  return candidate;
+}
+
+void Initiator::consume_partners(const Pairing& best) {
+  std::vector<std::pair<int, std::size_t>> remove;
+  for (std::size_t v = 1; v < best.views.size(); ++v)
+    remove.emplace_back(best.views[v].camera, best.views[v].index);
+  std::sort(remove.begin(), remove.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+  for (const auto& [cam, index] : remove)
+    per_camera_[cam].erase(per_camera_[cam].begin() + static_cast<std::ptrdiff_t>(index));
+}
+
+std::size_t Initiator::probe(int camera, TimeNs stamp_ns, const std::vector<Eigen::Vector2d>& blobs,
+                             const std::function<bool(const InitiationCandidate&, std::size_t)>& take) {
+  if (camera < 0 || static_cast<std::size_t>(camera) >= geometry_->cameras.size() || blobs.empty()) return 0;
+  // Linked to this camera's tracklets for a pixel velocity (the pool is only read).
+  const std::vector<Tracklet> mine = continue_tracklets(camera, stamp_ns, blobs);
+  std::size_t taken = 0;
+  for (std::size_t j = 0; j < blobs.size(); ++j) {
+    if (!finite(blobs[j])) continue;
+    const Pairing best = best_pairing(camera, stamp_ns, mine[j], j);
+    if (best.support < 0 || !take(candidate_of(stamp_ns, best), j)) continue;
+    consume_partners(best);
+    ++taken;
+  }
+  return taken;
 }
 
 std::vector<InitiationCandidate> Initiator::add_frame(
@@ -200,54 +272,9 @@ std::vector<InitiationCandidate> Initiator::add_frame(
     const Pairing best = best_pairing(camera, stamp_ns, next[j], j);
     if (best.support < 0) continue;
 
-    std::vector<PixelObservation> observations;
-    for (const auto& view : best.views) observations.push_back({cameras[view.camera], view.pixel});
-    InitiationCandidate candidate;
-    candidate.stamp_ns = stamp_ns;
-    candidate.position = best.point;
-    candidate.max_reprojection_px = best.error;
-    if (const auto all = triangulate(observations, 5);
-        all && all->max_reprojection_px <= options_.reprojection_px + 1.0) {
-      candidate.position = all->point;
-      candidate.max_reprojection_px = all->max_reprojection_px;
-    }
-    // Velocity: the views with a pixel velocity, 10 ms earlier.
-    std::vector<PixelObservation> earlier;
-    constexpr double kBack = 0.01;
-    for (const auto& view : best.views) {
-      if (view.has_velocity) earlier.push_back({cameras[view.camera], view.pixel - kBack * view.velocity});
-    }
-    if (earlier.size() >= 2) {
-      if (const auto before = triangulate(earlier, 3); before) {
-        candidate.velocity = (candidate.position - before->point) / kBack;
-        candidate.has_velocity = true;
-      }
-    } else if (earlier.size() == 1 && options_.partial_velocity) {
-      // One view only: its earlier ray met on the plane through the marker square to the line of
-      // sight gives the velocity across the line of sight; along it nothing is known.
-      const CameraModel& view = *earlier.front().camera;
-      const Eigen::Vector3d centre = view.center_world();
-      const Eigen::Vector3d sight = (candidate.position - centre).normalized();
-      const Eigen::Vector3d ray = view.pixel_to_world_ray(earlier.front().pixel);
-      if (const double along = ray.dot(sight); along > 0.5) {
-        const Eigen::Vector3d before = centre + ray * ((candidate.position - centre).dot(sight) / along);
-        candidate.velocity = (candidate.position - before) / kBack;
-        candidate.has_partial_velocity = true;
-        candidate.unknown_direction = sight;
-      }
-    }
-    for (const auto& view : best.views) {
-      candidate.cameras.push_back(view.camera);
-      candidate.camera_stamps.push_back(view.stamp_ns);
-    }
-    // Consume the partners (other cameras' pools) and this blob.
+    InitiationCandidate candidate = candidate_of(stamp_ns, best);
     consumed_new[j] = 1;
-    std::vector<std::pair<int, std::size_t>> remove;
-    for (std::size_t v = 1; v < best.views.size(); ++v)
-      remove.emplace_back(best.views[v].camera, best.views[v].index);
-    std::sort(remove.begin(), remove.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
-    for (const auto& [cam, index] : remove)
-      per_camera_[cam].erase(per_camera_[cam].begin() + static_cast<std::ptrdiff_t>(index));
+    consume_partners(best);
     if (!occupied || !occupied(candidate.position)) found.push_back(std::move(candidate));
   }
   for (std::size_t j = 0; j < blobs.size(); ++j) {

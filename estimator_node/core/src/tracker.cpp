@@ -58,6 +58,13 @@ constexpr int kFastUpdates = 5;
 // A second camera's update this long after the last update two cameras made together ends a
 // stretch of one camera's updates (return_velocity_cap_mps).
 constexpr TimeNs kReturnGapNs = 30'000'000;
+// A track that no second camera has updated for longer than this is held by one camera's blobs
+// alone: its depth along that camera's ray is its prediction's (one_view, initiate).
+constexpr TimeNs kOneViewNs = 30'000'000;
+// A one-view track moves to a candidate only if no other track is this near it: between two
+// neighbours a few centimetres apart (clavicles, heel and ankle) a two-view point may be a pairing
+// of one's blob with the other's.
+constexpr double kOneViewClearM = 0.1;
 constexpr double kReacquireGateChi2 = 16.27;  // χ²₃ at p = 0.999
 // The speed a marker is allowed during a pause of the input at least, whatever its track's
 // velocity before (within_seen_reach): a person's marker slow at the pause's start (a turning
@@ -166,6 +173,7 @@ struct Core {
   std::uint64_t runaway_tracks_deleted = 0;    // delete_runaway_tracks
   std::uint64_t return_velocities_capped = 0;  // return_velocity_cap_mps
   std::uint64_t tracks_reacquired = 0;         // confirmed new tracks that took a held-back track's id
+  std::uint64_t tracks_reanchored = 0;         // one-view tracks moved to where two views put their marker
   std::uint64_t input_pauses = 0;              // pauses of the input (note_interval)
   std::uint64_t frames_applied = 0;            // frames apply() has applied (held_back)
   // Input pauses (every camera stalled at once): the usual interval between applied frames' stamps
@@ -554,7 +562,31 @@ struct Tracker::Impl {
   Gating gate(const CameraModel& camera, TimeNs stamp, const std::vector<Eigen::Vector2d>& pixels,
               const std::vector<char>& used) const;
   void initiate(const FeatureFrame& frame, int camera_index, const std::vector<Eigen::Vector2d>& pixels,
-                const std::vector<char>& used);
+                const std::vector<char>& used,
+                const std::vector<std::pair<std::int64_t, std::size_t>>& associations);
+  // Whether only one camera has updated `track` for kOneViewNs (or ever).
+  static bool one_view(const Track& track, TimeNs stamp) {
+    return !track.fast && (track.seen_ns == 0 || stamp - track.seen_ns > kOneViewNs);
+  }
+  // Moves the one-view `track` to `candidate` (made with its blob and another camera's) under its
+  // id, unless it is already there or may_reanchor refuses: whether it did.
+  bool reanchor(Track& track, const InitiationCandidate& candidate, TimeNs stamp);
+  // The σ of a new track's velocity measured by its candidate (init_measured_velocity_sigma_mps,
+  // or init_velocity_relative_sigma of its speed), or init_velocity_sigma_mps without one.
+  double candidate_velocity_sigma(const InitiationCandidate& candidate) const {
+    return candidate.has_velocity ? std::max(options.init_measured_velocity_sigma_mps,
+                                             options.init_velocity_relative_sigma * candidate.velocity.norm())
+                                  : options.init_velocity_sigma_mps;
+  }
+  // Whether the one-view `track` may move to `position`: within its reach from where two cameras
+  // last placed it (within_seen_reach: else the point is another marker's), and no other track
+  // within kOneViewClearM of it.
+  bool may_reanchor(const Track& track, const Eigen::Vector3d& position, TimeNs stamp) const {
+    if (!within_seen_reach(track, position, stamp)) return false;
+    return std::none_of(core.tracks.begin(), core.tracks.end(), [&](const Track& other) {
+      return &other != &track && (other.position_at(stamp) - position).norm() < kOneViewClearM;
+    });
+  }
   // A new track's id: an undone track's within kReuseIdGate of `position` at `stamp` (the nearest,
   // with its pending rejoin), else a new one. Near a lost fast track (rejoin_fast_track) the new
   // one takes that track's id once confirmed (`rejoin_id`; `rejoined_peak_speed` is then that
@@ -674,7 +706,7 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
     }
   }
   associate(entry, pixels, used, replaying, std::move(early));
-  initiate(frame, camera_index, pixels, used);
+  initiate(frame, camera_index, pixels, used, entry.associations);
   prune(frame.stamp_ns);
   if (!core.bodies.empty()) {
     std::vector<char> taken(pixels.size(), 0);
@@ -1356,8 +1388,52 @@ void Tracker::Impl::recover_manoeuvres(Entry& entry, const std::vector<Eigen::Ve
   }
 }
 
+// A track that one camera alone has updated for kOneViewNs slides along that camera's ray: its
+// depth is its prediction's. One that took its blob from a marker it does not belong to (a track
+// whose own marker left the other views, sliding on to a neighbour's ray), or one whose depth ran
+// off, keeps that blob from the initiator while a second camera sees the marker, and the marker
+// goes untracked for as long (ring4/walk/c0/s1: L.Elbow seen by two cameras 81 deg apart for
+// 450 ms, untracked, then a new id). initiate() offers its blobs to the initiator as probes (paired
+// like new blobs, never pooled): a point made with one of them moves the track there under its id
+// if may_reanchor allows. docs/estimator.md, "One-view tracks".
+bool Tracker::Impl::reanchor(Track& track, const InitiationCandidate& candidate, TimeNs stamp) {
+  if ((track.position_at(stamp) - candidate.position).norm() < 4.0 * options.merge_distance_m ||
+      !may_reanchor(track, candidate.position, stamp))
+    return false;
+  const double sp = options.init_position_sigma_m, sv = candidate_velocity_sigma(candidate);
+  Eigen::Matrix<double, 6, 6> prior = Eigen::Matrix<double, 6, 6>::Zero();
+  prior.topLeftCorner<3, 3>() = sp * sp * Eigen::Matrix3d::Identity();
+  prior.bottomRightCorner<3, 3>() = sv * sv * Eigen::Matrix3d::Identity();
+  track.state.x.head<3>() = candidate.position;
+  track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
+  track.state.P = FilterCovariance<6>(prior);
+  track.state.stamp_ns = stamp;
+  for (std::size_t k = 0; k < candidate.cameras.size(); ++k)
+    note_update(track, candidate.cameras[k], candidate.camera_stamps[k]);
+  ++core.tracks_reanchored;
+  return true;
+}
+
 void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
-                             const std::vector<Eigen::Vector2d>& pixels, const std::vector<char>& used) {
+                             const std::vector<Eigen::Vector2d>& pixels, const std::vector<char>& used,
+                             const std::vector<std::pair<std::int64_t, std::size_t>>& associations) {
+  const TimeNs stamp = frame.stamp_ns;
+  if (options.reanchor_one_view_tracks) {
+    std::vector<Eigen::Vector2d> probes;
+    std::vector<std::size_t> owners;  // indices into core.tracks, which the probes do not reorder
+    for (const auto& [id, blob] : associations) {
+      const Track* owner = find_track(id);
+      if (owner == nullptr || blob >= pixels.size() || !one_view(*owner, stamp)) continue;
+      probes.push_back(pixels[blob]);
+      owners.push_back(static_cast<std::size_t>(owner - core.tracks.data()));
+    }
+    if (!probes.empty()) {
+      core.initiator.probe(camera_index, stamp, probes,
+                           [&](const InitiationCandidate& candidate, std::size_t j) {
+                             return reanchor(core.tracks[owners[j]], candidate, stamp);
+                           });
+    }
+  }
   std::vector<Eigen::Vector2d> unmatched;
   for (std::size_t j = 0; j < pixels.size(); ++j) {
     if (used[j]) continue;
@@ -1369,7 +1445,6 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     }
     unmatched.push_back(pixels[j]);
   }
-  const TimeNs stamp = frame.stamp_ns;
   const double near = 4.0 * options.merge_distance_m;
   const auto occupied = [&](const Eigen::Vector3d& point) {
     return std::any_of(core.tracks.begin(), core.tracks.end(), [&](const Track& track) {
@@ -1385,10 +1460,7 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     const double sp = options.init_position_sigma_m;
     // A measured velocity is as uncertain as it is large (finite differences of pixel positions
     // over ~10 ms, through the marker's acceleration): a club head at 25 m/s is not known to 0.5 m/s.
-    double sv = candidate.has_velocity
-                    ? std::max(options.init_measured_velocity_sigma_mps,
-                               options.init_velocity_relative_sigma * candidate.velocity.norm())
-                    : options.init_velocity_sigma_mps;
+    double sv = candidate_velocity_sigma(candidate);
     // A swung or thrown object back from a gap (the top of the swing; rejoined), or a blob without
     // a measured velocity (no camera saw it a frame before: it just came into view) near one: its
     // next frames may see it at full speed again, so its velocity is as uncertain as half that
@@ -2049,6 +2121,7 @@ const TrackerStats& Tracker::stats() const {
   s.runaway_tracks_deleted = core.runaway_tracks_deleted;
   s.return_velocities_capped = core.return_velocities_capped;
   s.tracks_reacquired = core.tracks_reacquired;
+  s.tracks_reanchored = core.tracks_reanchored;
   s.input_pauses = core.input_pauses;
   s.ghosts_deleted = core.ghosts_deleted;
   s.blobs_not_initiated = core.blobs_not_initiated;

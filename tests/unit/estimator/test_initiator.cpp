@@ -93,5 +93,38 @@ TEST(Initiator, TwoViewsWithPixelVelocitiesGiveTheWholeVelocity) {
   EXPECT_LT((c.velocity - run.truth_velocity).norm(), 0.03 * run.truth_velocity.norm());  // 1.2 % measured
 }
 
+// Probes (stop 76): a blob that a track holds is paired with the other cameras' tracklets but never
+// pooled. Declined, the pool is as it was (camera 1's blob still makes a point with camera 2's);
+// taken, its partner is consumed (camera 2's blob then pairs with nothing).
+TEST(Initiator, AProbeConsumesItsPartnerOnlyWhenTaken) {
+  const auto models = make_ring_cameras(4, 3.0, 2.0);
+  std::vector<const CameraModel*> cameras;
+  for (const auto& model : models) cameras.push_back(&model);
+  const Eigen::Vector3d point(0.1, 0.2, 1.0);
+  const auto pixel = [&](int camera) { return *models[camera].project(point); };
+  const auto none = [](const Eigen::Vector3d&) { return false; };
+  for (const bool take : {false, true}) {
+    Initiator initiator;
+    initiator.set_cameras(cameras);
+    ASSERT_TRUE(initiator.add_frame(1, kStart, {pixel(1)}, none).empty());
+    std::vector<InitiationCandidate> probed;
+    const std::size_t taken = initiator.probe(0, kStart + 1'000'000, {pixel(0)},
+                                              [&](const InitiationCandidate& candidate, std::size_t index) {
+                                                EXPECT_EQ(index, 0u);
+                                                probed.push_back(candidate);
+                                                return take;
+                                              });
+    ASSERT_EQ(probed.size(), 1u);
+    EXPECT_LT((probed[0].position - point).norm(), 1e-3);
+    ASSERT_EQ(probed[0].cameras.size(), 2u);
+    EXPECT_EQ(probed[0].cameras[0], 0);
+    EXPECT_EQ(probed[0].cameras[1], 1);
+    EXPECT_EQ(taken, take ? 1u : 0u);
+    EXPECT_EQ(initiator.pending(), take ? 0u : 1u) << "a probe never enters the pool";
+    const auto after = initiator.add_frame(2, kStart + 2'000'000, {pixel(2)}, none);
+    EXPECT_EQ(after.size(), take ? 0u : 1u) << (take ? "taken" : "declined");
+  }
+}
+
 }  // namespace
 }  // namespace panoptes::estimator

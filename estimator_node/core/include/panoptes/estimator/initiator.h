@@ -68,6 +68,14 @@ class Initiator {
                                              const std::vector<Eigen::Vector2d>& blobs,
                                              const std::function<bool(const Eigen::Vector3d&)>& occupied);
 
+  // Blobs of `camera`'s frame at `stamp_ns` that tracks took but may not explain (a track that one
+  // camera alone updates: its depth along that camera's ray is its prediction's). Each is paired
+  // with the other cameras' tracklets as a new blob would be, but never enters the pool, and the
+  // pool is left as it was unless `take(candidate, index of the blob)` accepts the candidate: then
+  // its partners are consumed. Call before add_frame for the same frame. Returns how many were taken.
+  std::size_t probe(int camera, TimeNs stamp_ns, const std::vector<Eigen::Vector2d>& blobs,
+                    const std::function<bool(const InitiationCandidate&, std::size_t)>& take);
+
   std::size_t pending() const;
   void clear();
 
@@ -105,6 +113,10 @@ class Initiator {
                                            const std::vector<Eigen::Vector2d>& blobs) const;
   // Pairs the new tracklet `mine` (blob `blob` of `camera`) with the other cameras' tracklets.
   Pairing best_pairing(int camera, TimeNs stamp_ns, const Tracklet& mine, std::size_t blob) const;
+  // The candidate a pairing makes: refined from every view, with the velocity its views give.
+  InitiationCandidate candidate_of(TimeNs stamp_ns, const Pairing& best) const;
+  // Removes a pairing's partners (its views but the first) from their cameras' pools.
+  void consume_partners(const Pairing& best);
 
   // Shared and immutable, so that copying an initiator (tracker checkpoints) copies only the pool.
   struct Geometry {

@@ -58,6 +58,13 @@ struct TrackerOptions {
   // implausible track and stays among the lost fast tracks for rejoin_fast_tracks
   // (docs/estimator.md, "Runaway tracks").
   bool delete_runaway_tracks = true;
+  // A track that one camera alone has updated for 30 ms (its depth along that camera's ray is its
+  // prediction's) holds that camera's blob, which the initiator would otherwise pair with a second
+  // camera's: its blobs are offered to the initiator as probes (Initiator::probe), and a point made
+  // with one of them moves the track there under its id when that is within
+  // reacquire_max_seen_distance_m of where two cameras last placed it and no other track is within
+  // 0.1 m (docs/estimator.md, "One-view tracks"). Fast tracks are left to rejoin_fast_tracks.
+  bool reanchor_one_view_tracks = true;
   // A second camera's update more than 30 ms after the last update two cameras made together
   // (within 10 ms) changes the track's velocity by at most this, m/s, unless the track is fast or
   // was predicted faster than 10 m/s: one camera alone let it slide along its ray and the update
@@ -161,6 +168,7 @@ struct TrackerStats {
   std::uint64_t runaway_tracks_deleted = 0;    // fast by one camera's updates (delete_runaway_tracks)
   std::uint64_t return_velocities_capped = 0;  // at a return to two views (return_velocity_cap_mps)
   std::uint64_t tracks_reacquired = 0;         // confirmed new tracks that took a held-back track's id
+  std::uint64_t tracks_reanchored = 0;         // one-view tracks moved where two views put their blob
   std::uint64_t input_pauses = 0;              // no frame of any camera for 25 ms and 8 usual intervals
   std::uint64_t ghosts_deleted = 0;            // tentative tracks that cameras did not see
   std::uint64_t blobs_not_initiated = 0;       // unmatched blobs beyond max_unmatched_per_frame
