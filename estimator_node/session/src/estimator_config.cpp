@@ -401,7 +401,8 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
          "a track made fast by one camera's updates (dragged along its ray) is deleted");
   f.flag("reanchor_one_view_tracks", o.reanchor_one_view_tracks,
          "a track only one camera updated for 30 ms moves where that camera's blob and a second camera's "
-         "put its marker (within reacquire_max_seen_distance_m of its last two-camera position)");
+         "put its marker (within reacquire_max_seen_distance_m of its last two-camera position); off: the "
+         "default (it cost the live labelling test loaded runs)");
   f.number("return_velocity_cap_mps", o.return_velocity_cap_mps, kNonNegative,
            "a second camera's update after 30 ms of one camera's changes a track's velocity by at most "
            "this, m/s, unless fast (0: off, the default; 3 on the accuracy grid)");
