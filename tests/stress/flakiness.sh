@@ -21,7 +21,9 @@
 # Exit status: 0 when every test that ran passed in every run, 1 otherwise.
 # Skipped tests (exit 77: no root, no browser, ...) are counted apart and do not lower the rate.
 set -uo pipefail
-build_dir="$(cd "${1:?usage: flakiness.sh BUILD_DIR [--runs N] [--load] [-R REGEX] ...}" && pwd)"
+case "${1:-}" in -h | --help) sed -n '3,22p' "$0"; exit 0 ;; esac
+build_dir="$(cd "${1:?usage: flakiness.sh BUILD_DIR [--runs N] [--load] [-R REGEX] ...}" && pwd)" ||
+  { echo "flakiness.sh: no build directory '$1' (--help)" >&2; exit 2; }
 shift
 source_dir="$(cd "$(dirname "$0")/../.." && pwd)"
 runs=10 load=0 load_cmd="" jobs=2 resume=0
