@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/estimator/point_ekf.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <Eigen/LU>
 
 namespace panoptes::estimator {
@@ -29,10 +32,26 @@ Matrix6d process_noise(double dt_s, double sigma2) {
   return Q;
 }
 
+namespace {
+// How long of `dt_s` the acceleration input acts, signed like dt_s.
+double accelerated_for(const PointState& state, double dt_s) {
+  const double h = std::min(std::abs(dt_s), state.acceleration_horizon_s);
+  return dt_s < 0 ? -h : h;
+}
+}  // namespace
+
+Eigen::Vector3d position_after(const PointState& state, double dt_s) {
+  const double h = accelerated_for(state, dt_s);
+  return state.position() + dt_s * state.velocity() + (h * dt_s - 0.5 * h * h) * state.acceleration;
+}
+
 void predict(PointState& state, TimeNs stamp_ns, double sigma2) {
   const double dt = ns_to_seconds(stamp_ns - state.stamp_ns);
   if (dt != 0.0) {
-    state.x.head<3>() += dt * state.x.tail<3>();                         // eq. A.31
+    const double h = accelerated_for(state, dt);
+    state.x.head<3>() = position_after(state, dt);  // eq. A.31, with the known input
+    state.x.tail<3>() += h * state.acceleration;
+    state.acceleration_horizon_s -= std::abs(h);
     state.P.propagate_constant_velocity(dt, process_noise(dt, sigma2));  // eq. A.32
   }
   state.stamp_ns = stamp_ns;

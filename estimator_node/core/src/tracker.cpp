@@ -36,7 +36,8 @@ void TrackerOptions::print(std::ostream& out) const {
       << "  reacquire_sigma          " << reacquire_sigma_m * 1e3 << " mm\n"
       << "  fast tracks              sigma^2 x " << fast_process_noise_scale << " for "
       << ns_to_seconds(fast_hold_ns) * 1e3 << " ms (x " << fast_isolated_process_noise_scale
-      << " with no confirmed track within " << fast_isolation_m << " m)\n"
+      << " with no confirmed track within " << fast_isolation_m << " m), acceleration input "
+      << ns_to_seconds(fast_acceleration_time_constant_ns) * 1e3 << " ms\n"
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
       << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n"
       << "  continuous calibration   " << calibration.mode << " (window "
@@ -55,6 +56,11 @@ constexpr TimeNs kFrameGapNs = 10'000'000;
 // A track with fewer updates is young: a wrong pairing's ghost lives a few updates.
 constexpr std::uint64_t kSettledUpdates = 10;
 constexpr int kFastUpdates = 5;
+// An update that moves a track's projection further than this is a reacquisition (a club head
+// back in view after the top of the swing: 30-335 px), not a step of a manoeuvre followed frame by
+// frame (a ball's catch with the acceleration input: at most 5.3 px on the grid): its change of
+// velocity is no acceleration sample (estimate_acceleration).
+constexpr double kSteadyInnovationPx = 10.0;
 // A second camera's update this long after the last update two cameras made together ends a
 // stretch of one camera's updates (return_velocity_cap_mps).
 constexpr TimeNs kReturnGapNs = 30'000'000;
@@ -149,8 +155,11 @@ struct Track {
   double sigma2(double process_noise) const { return process_noise * q_scale; }
 
   Eigen::Vector3d position_at(TimeNs stamp_ns) const {
-    return state.position() + ns_to_seconds(stamp_ns - state.stamp_ns) * state.velocity();
+    return position_after(state, ns_to_seconds(stamp_ns - state.stamp_ns));
   }
+  // fast_acceleration_time_constant_ns: the stamp and velocity of its last update (0: none).
+  TimeNs acceleration_sample_ns = 0;
+  Eigen::Vector3d acceleration_sample_velocity = Eigen::Vector3d::Zero();
 };
 
 // Everything a rewind restores.
@@ -422,6 +431,11 @@ struct Tracker::Impl {
     }
   }
 
+  // fast_acceleration_time_constant_ns: an isolated fast track's acceleration input follows the
+  // rate of change of its velocity between consecutive updates (within kFrameGapNs), low-passed;
+  // any other track, or one after a gap, predicts with constant velocity.
+  void estimate_acceleration(Track& track, TimeNs stamp, double innovation_px) const;
+
   // A fast track (a swung or thrown object) keeps σ² × fast_process_noise_scale while it moves
   // fast and for fast_hold_ns after (a ball's catch, a club's turn at the top): its next
   // manoeuvre comes without the few updates of evidence the adaptive factor waits for
@@ -432,7 +446,7 @@ struct Tracker::Impl {
         stamp_ns - track.last_fast_ns > options.fast_hold_ns)
       return;
     double scale = options.fast_process_noise_scale;
-    if (options.fast_isolated_process_noise_scale > scale && track.fast_updates >= kIsolatedFastUpdates &&
+    if (options.fast_isolated_process_noise_scale > 0 && track.fast_updates >= kIsolatedFastUpdates &&
         isolated(track))
       scale = options.fast_isolated_process_noise_scale;
     track.q_scale = std::max(track.q_scale, scale);
@@ -1008,8 +1022,7 @@ Gating Tracker::Impl::gate(const CameraModel& camera, TimeNs stamp,
   gating.pixel.assign(core.tracks.size(), std::nullopt);
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
-    const double dt = ns_to_seconds(stamp - track.state.stamp_ns);
-    const Eigen::Vector3d p = track.state.position() + dt * track.state.velocity();
+    const Eigen::Vector3d p = track.position_at(stamp);
     const Eigen::Vector3d p_cam = camera.T_cam_world().apply(p);
     if (p_cam.z() < options.init.min_depth_m) continue;
     const auto pixel = camera.project_camera_point(p_cam);
@@ -1228,9 +1241,41 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
       track.runaway = options.delete_runaway_tracks && track.seen_fast_updates < kFastUpdates;
     }
   }
+  estimate_acceleration(track, stamp, (pixel - projected.projection.pixel).norm());
   used[blob] = 1;
   ++core.blobs_associated;
   ++core.associated_per_camera[camera_index];
+}
+
+// The separate-bias idea (Friedland's two-stage filter): the constant-velocity filter stays as it
+// is, and the acceleration it does not model is estimated beside it from what it does estimate, the
+// velocity's change from update to update (its own prediction by the current input included, so the
+// estimate converges to the true acceleration, not to the part the filter missed). A first-order
+// low-pass: weight 1 - exp(-Δt/τ) per update, τ = fast_acceleration_time_constant_ns. Only for
+// isolated fast tracks (a lone ball): at a walker's few m/s² the velocity's update noise (±0.1-1
+// m/s per update at 1-3 ms apart) would make the input noise, not signal, and a club's markers,
+// whose head leaves the views at the top of the swing, lost identities with it (docs/estimator.md,
+// "Acceleration input").
+void Tracker::Impl::estimate_acceleration(Track& track, TimeNs stamp, double innovation_px) const {
+  const TimeNs tau_ns = options.fast_acceleration_time_constant_ns;
+  if (tau_ns <= 0 || !track.fast || track.fast_updates < kIsolatedFastUpdates || !isolated(track)) {
+    track.state.acceleration.setZero();
+    track.acceleration_sample_ns = 0;
+    return;
+  }
+  const TimeNs since = stamp - track.acceleration_sample_ns;
+  if (track.acceleration_sample_ns == 0 || since < 0 || since > kFrameGapNs ||
+      innovation_px > kSteadyInnovationPx || track.seen_ns != stamp) {
+    track.state.acceleration.setZero();
+  } else if (since > 0) {  // a second camera at the same stamp: its update refines the velocity only
+    const double dt = ns_to_seconds(since);
+    const Eigen::Vector3d sample = (track.state.velocity() - track.acceleration_sample_velocity) / dt;
+    const double weight = 1.0 - std::exp(-dt / ns_to_seconds(tau_ns));
+    track.state.acceleration += weight * (sample - track.state.acceleration);
+  }
+  track.state.acceleration_horizon_s = ns_to_seconds(kFrameGapNs);
+  track.acceleration_sample_ns = stamp;
+  track.acceleration_sample_velocity = track.state.velocity();
 }
 
 // One camera alone cannot see an error along its ray, and its updates let the track slide there
@@ -1408,6 +1453,9 @@ bool Tracker::Impl::reanchor(Track& track, const InitiationCandidate& candidate,
   track.state.x.tail<3>() = candidate.has_velocity ? candidate.velocity : Eigen::Vector3d::Zero();
   track.state.P = FilterCovariance<6>(prior);
   track.state.stamp_ns = stamp;
+  track.state.acceleration.setZero();
+  track.state.acceleration_horizon_s = 0;
+  track.acceleration_sample_ns = 0;
   for (std::size_t k = 0; k < candidate.cameras.size(); ++k)
     note_update(track, candidate.cameras[k], candidate.camera_stamps[k]);
   ++core.tracks_reanchored;

@@ -413,8 +413,11 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
             "... until this long after its last update above 10 m/s");
   f.number("fast_isolated_process_noise_scale", o.fast_isolated_process_noise_scale, kNonNegative,
            "... or this times process_noise while no other confirmed track is within fast_isolation_m "
-           "(at most fast_process_noise_scale: off)");
+           "(0: off)");
   f.number("fast_isolation_m", o.fast_isolation_m, kNonNegative, "... that distance, m");
+  f.integer("fast_acceleration_time_constant_ns", o.fast_acceleration_time_constant_ns, 0, kHourNs,
+            "an isolated fast track predicts with its acceleration: its velocity's change per update, "
+            "low-passed with this time constant (0: off, constant velocity)");
   f.number("measurement_noise_px", o.measurement_noise_px, kPositive, "sigma of a centroid, px");
   f.number("gate_chi2", o.gate_chi2, kPositive, "verify region (seed 003 2.2.3.2)");
   f.section("init", "pairing of unmatched blobs into new points",

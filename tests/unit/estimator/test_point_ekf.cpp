@@ -30,6 +30,39 @@ TEST(PointEkf, ProcessNoiseMatchesSeedFormula) {
   EXPECT_DOUBLE_EQ(Q(0, 1), 0.0);
 }
 
+// The acceleration input moves the mean for its horizon and then lets the velocity be, and leaves
+// the covariance to the constant-velocity model: predicting in two steps equals one step.
+TEST(PointEkf, AccelerationInputActsForItsHorizonOnly) {
+  PointState state;
+  state.x << 1.0, 2.0, 3.0, 10.0, 0.0, -1.0;
+  state.P = FilterCovariance<6>::diagonal((Vector6d() << 1e-4, 1e-4, 1e-4, 1.0, 1.0, 1.0).finished());
+  state.acceleration = Eigen::Vector3d(-400.0, 0.0, 50.0);
+  state.acceleration_horizon_s = 0.01;
+  PointState no_input = state;
+  no_input.acceleration.setZero();
+
+  // Within the horizon: p + v t + a t²/2, v + a t.
+  const PointState at5 = predicted(state, 5'000'000, 30.0);
+  const Eigen::Vector3d expected5 = Eigen::Vector3d(1.0, 2.0, 3.0) +
+                                    0.005 * Eigen::Vector3d(10.0, 0.0, -1.0) +
+                                    0.5 * 0.005 * 0.005 * state.acceleration;
+  EXPECT_LT((at5.position() - expected5).norm(), 1e-12);
+  EXPECT_LT((at5.velocity() - (Eigen::Vector3d(10.0, 0.0, -1.0) + 0.005 * state.acceleration)).norm(), 1e-12);
+  EXPECT_NEAR(at5.acceleration_horizon_s, 0.005, 1e-15);
+  EXPECT_EQ(at5.P.matrix(), predicted(no_input, 5'000'000, 30.0).P.matrix());
+
+  // Beyond it: accelerated for 10 ms, then constant velocity; two steps equal one.
+  const PointState at25 = predicted(state, 25'000'000, 30.0);
+  const Eigen::Vector3d v10 = Eigen::Vector3d(10.0, 0.0, -1.0) + 0.01 * state.acceleration;
+  const Eigen::Vector3d expected25 = Eigen::Vector3d(1.0, 2.0, 3.0) +
+                                     0.01 * Eigen::Vector3d(10.0, 0.0, -1.0) +
+                                     0.5 * 0.01 * 0.01 * state.acceleration + 0.015 * v10;
+  EXPECT_LT((at25.position() - expected25).norm(), 1e-12);
+  EXPECT_LT((at25.velocity() - v10).norm(), 1e-12);
+  EXPECT_LT((predicted(at5, 25'000'000, 30.0).position() - expected25).norm(), 1e-12);
+  EXPECT_LT((position_after(state, 0.025) - expected25).norm(), 1e-12);
+}
+
 TEST(PointEkf, TracksConstantVelocityTargetWithAsynchronousCameras) {
   const auto cameras = make_ring_cameras(4, 3.0, 1.2);
   std::mt19937_64 rng(7);

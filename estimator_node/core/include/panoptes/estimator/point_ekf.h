@@ -20,6 +20,13 @@ struct PointState {
   Vector6d x = Vector6d::Zero();  // p (m), v (m/s), world frame
   FilterCovariance<6> P;
   TimeNs stamp_ns = 0;
+  // A known acceleration input (m/s², world frame; zero unless the owner sets it), acting for the
+  // first `acceleration_horizon_s` after stamp_ns, constant velocity after: prediction moves the mean
+  // by it, the covariance stays the constant-velocity model's, whose white acceleration covers the
+  // input's error (the tracker's fast tracks, docs/estimator.md "Acceleration input"). A coasting
+  // track is not extrapolated on a parabola.
+  Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();
+  double acceleration_horizon_s = 0;
 
   Eigen::Vector3d position() const { return x.head<3>(); }
   Eigen::Vector3d velocity() const { return x.tail<3>(); }
@@ -29,6 +36,10 @@ struct PointState {
 Matrix6d transition_matrix(double dt_s);
 // Q(Δt) for white acceleration noise of spectral density `sigma2` (m²/s³), eq. A.28 / A.48.
 Matrix6d process_noise(double dt_s, double sigma2);
+
+// The mean of `state` `dt_s` from its stamp: p + v Δt + a (h Δt - h²/2), h = min(|Δt|,
+// acceleration_horizon_s) (Δt ≥ 0; a Δt < 0 look-up mirrors it).
+Eigen::Vector3d position_after(const PointState& state, double dt_s);
 
 // Predicts `state` to `stamp_ns` (which may be earlier: Δt < 0 is used only for look-ups, see
 // predicted()). Eq. A.31–A.32.
