@@ -295,7 +295,7 @@ TEST(AdaptiveNoise, AFastTrackPredictsWithItsAcceleration) {
 // fast_isolated_process_noise_scale, instead of the club's fast_process_noise_scale (100). Stop 63
 // made it larger (300: the lone ball followed its catches closer with a constant-velocity
 // prediction); since stop 77, with the acceleration input, the ball is best with a smaller one (20:
-// 0.98 against 1.05 mm here; on the accuracy grid the ball's worst coverage 72.4 -> 88.0 %, see
+// 0.98 against 1.05 mm here; on the accuracy grid the ball's worst coverage 72.4 -> 87.7 %, see
 // docs/estimator.md "Acceleration input"), while a club's markers, 0.4 m apart, keep 100 (with 20
 // the corridors' 12 s club cells had 22 switches instead of 0). They never take the factor: their
 // tracks are the same to the last bit with the rule off.

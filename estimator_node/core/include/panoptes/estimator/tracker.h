@@ -90,14 +90,14 @@ struct TrackerOptions {
   // factor). Ball on the full grid: worst coverage 95.39 -> 99.42 %, still 0 switches; club, walk,
   // run and dance unchanged (docs/estimator.md, "Isolated fast tracks"). 0: off. 20 since stop 77:
   // with the acceleration input the lone ball is best with a factor smaller than the club's (ball
-  // worst coverage 72.4 -> 88.0 % on the grid; docs/estimator.md, "Acceleration input").
+  // worst coverage 72.4 -> 87.7 % on the grid; docs/estimator.md, "Acceleration input").
   double fast_isolated_process_noise_scale = 20.0;
   double fast_isolation_m = 1.0;
   // An isolated fast track's prediction (as above: a lone thrown ball, not a club's markers) carries
   // its acceleration as a known input (PointState::acceleration): the rate of change of its velocity
   // from update to update, low-passed with this time constant (0: off, constant velocity). A ball's
   // catch (785 m/s² for 0.1 s) is then predicted, not only allowed for by a wide σ²: ball worst
-  // coverage 72.4 -> 88.0 %, 99 % or more on every rig but the four-camera ceiling
+  // coverage 72.4 -> 87.7 %, 99 % or more on every rig but the four-camera ceiling
   // (docs/estimator.md, "Acceleration input").
   TimeNs fast_acceleration_time_constant_ns = 6'000'000;
   double measurement_noise_px = 0.5;  // σ of a centroid, px (seed 003 A.30)
