@@ -446,16 +446,17 @@ struct Tracker::Impl {
         stamp_ns - track.last_fast_ns > options.fast_hold_ns)
       return;
     double scale = options.fast_process_noise_scale;
-    if (options.fast_isolated_process_noise_scale > 0 && track.fast_updates >= kIsolatedFastUpdates &&
-        isolated(track))
+    if (options.fast_isolated_process_noise_scale > 0 && lone_fast(track))
       scale = options.fast_isolated_process_noise_scale;
     track.q_scale = std::max(track.q_scale, scale);
   }
-  // No other confirmed track within fast_isolation_m: a gate as wide as the larger σ² gives has
-  // no neighbour's blob to take (a thrown ball; not a club's marker, 0.4 m from the next). Only a
-  // track fast by its own updates (not yet a rejoined one: a ghost of clutter that took a lost
-  // club head's id would spread its gate over more clutter).
-  bool isolated(const Track& track) const {
+  // Fast by kIsolatedFastUpdates updates of its own (not yet a rejoined track: a ghost of clutter
+  // that took a lost club head's id would spread its gate over more clutter) and no other confirmed
+  // track within fast_isolation_m: a gate as wide as its own factor gives has no neighbour's blob
+  // to take, and its acceleration input no neighbour to be confused with (a thrown ball; not a
+  // club's marker, 0.4 m from the next).
+  bool lone_fast(const Track& track) const {
+    if (!track.fast || track.fast_updates < kIsolatedFastUpdates) return false;
     const double r2 = options.fast_isolation_m * options.fast_isolation_m;
     const Eigen::Vector3d p = track.state.position();
     for (const Track& other : core.tracks)
@@ -1258,7 +1259,7 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
 // "Acceleration input").
 void Tracker::Impl::estimate_acceleration(Track& track, TimeNs stamp, double innovation_px) const {
   const TimeNs tau_ns = options.fast_acceleration_time_constant_ns;
-  if (tau_ns <= 0 || !track.fast || track.fast_updates < kIsolatedFastUpdates || !isolated(track)) {
+  if (tau_ns <= 0 || !lone_fast(track)) {
     track.state.acceleration.setZero();
     track.acceleration_sample_ns = 0;
     return;
