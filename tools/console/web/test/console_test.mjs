@@ -196,26 +196,45 @@ try {
         `preview on request drawn under cam0's blobs (${previewImage.width}x${previewImage.height} P5, ${previewImage.bright} bright pixels)`);
 
   // --- mask: drag a rectangle over the left half of cam1's image ------------------------------
-  // A second attempt when the first gesture sent nothing: in one full-suite run (a CPU-heavy unit
-  // test beside it) no add_mask followed the drag; alone and under a busy loop it always did. A
-  // page that never sends the mask still fails both.
+  // The drag starts where cam1's canvas is at that moment: the pointer is put there, and the page's
+  // own hit test (elementFromPoint) must name the canvas before the button goes down, or the canvas
+  // is measured again (a card re-wrapping its text moves it; stop 77's check: both gestures sent
+  // nothing). Up to three gestures; each failed one says what was under the pointer, whether the
+  // mask mode was on and whether the page was connected. A page that never sends the mask still
+  // fails all three.
   const card1 = page.locator('.card[data-camera="cam1"]');
   let maskArgs = null;
   let attempts = 0;
-  while (!maskArgs && attempts < 2) {
+  while (!maskArgs && attempts < 3) {
     attempts += 1;
     // The button toggles the mask mode: press it only while it is off.
     if (await card1.locator('button.mask.active').count() === 0) await card1.locator('button.mask').click();
-    await sleep(200);  // the mask mode's layout settled before the canvas is measured
-    const box = await card1.locator('canvas').boundingBox();
-    await page.mouse.move(box.x + 1, box.y + 1);
+    let box = null;
+    let onCanvas = false;
+    for (let aim = 0; aim < 10 && !onCanvas; ++aim) {
+      await sleep(aim === 0 ? 200 : 100);  // the mask mode's layout settled before the canvas is measured
+      box = await card1.locator('canvas').boundingBox();
+      await page.mouse.move(box.x + 4, box.y + 4);
+      onCanvas = await page.evaluate(([x, y]) => document.elementFromPoint(x, y) ===
+        document.querySelector('.card[data-camera="cam1"] canvas'), [box.x + 4, box.y + 4]);
+    }
+    const before = await page.evaluate(() => ({
+      active: document.querySelector('.card[data-camera="cam1"] button.mask').classList.contains('active'),
+      connected: window.panoptes.connected,
+    }));
     await page.mouse.down();
     await page.mouse.move(box.x + box.width * 0.4, box.y + box.height * 0.6, { steps: 5 });
     await page.mouse.move(box.x + box.width / 2, box.y + box.height - 1, { steps: 5 });
+    const dragging = await page.evaluate(() => Boolean(document.querySelector('.card[data-camera="cam1"]').drag));
     await card1.screenshot({ path: join(args.shots, 'console_mask.png') });
     await page.mouse.up();
     maskArgs = await waitFor(page, () => window.panoptes.results.some((r) => r.command === 'add_mask'), null, 5000)
       ? await page.evaluate(() => window.panoptes.results.find((r) => r.command === 'add_mask').args) : null;
+    if (!maskArgs) {
+      console.log(`mask gesture ${attempts}: no add_mask result within 5 s (pointer on the canvas: ${onCanvas}, ` +
+        `mask mode on: ${before.active}, drag followed by the page: ${dragging}, connected: ${before.connected}, ` +
+        `card says "${await card1.locator('.result').textContent()}")`);
+    }
   }
   results.commands.mask_attempts = attempts;
   results.commands.mask_args = maskArgs;
@@ -223,7 +242,7 @@ try {
   // Which half failed, when one did: the page never sent the command, or no result came back.
   const maskSent = await page.evaluate(() => window.panoptes.sent.filter((s) => s.command === 'add_mask').length);
   check(maskArgs && maskArgs[0] === 'rect',
-        `mask sent as add_mask ${maskArgs ? maskArgs.join(' ') : '(none)'} (gesture ${attempts} of at most 2; ${maskSent} sent by the page)`);
+        `mask sent as add_mask ${maskArgs ? maskArgs.join(' ') : '(none)'} (gesture ${attempts} of at most 3; ${maskSent} sent by the page)`);
   await sleep(600);
   // The page has centroids only: a spot on the mask's edge keeps its outside pixels and its
   // centroid may lie a pixel or two inside; count those deeper than 3 px.
