@@ -38,6 +38,8 @@ void TrackerOptions::print(std::ostream& out) const {
       << ns_to_seconds(fast_hold_ns) * 1e3 << " ms (x " << fast_isolated_process_noise_scale
       << " with no confirmed track within " << fast_isolation_m << " m), acceleration input "
       << ns_to_seconds(fast_acceleration_time_constant_ns) * 1e3 << " ms\n"
+      << "  one-view velocity        decays along the ray with "
+      << ns_to_seconds(one_view_velocity_time_constant_ns) * 1e3 << " ms\n"
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
       << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n"
       << "  continuous calibration   " << calibration.mode << " (window "
@@ -194,6 +196,7 @@ struct Core {
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
                 ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
+  std::vector<TimeNs> frame_per_camera_ns;  // the stamp of each camera's latest frame applied (0: none)
   BodySet bodies;
 };
 
@@ -305,6 +308,7 @@ struct Tracker::Impl {
     for (const auto& model : models) pointers.push_back(model.get());
     core.initiator.set_cameras(pointers);
     core.associated_per_camera.resize(models.size(), 0);
+    core.frame_per_camera_ns.resize(models.size(), 0);
     std::vector<Eigen::Vector2d> sizes;
     for (const auto& model : models)
       sizes.emplace_back(model->intrinsics().width, model->intrinsics().height);
@@ -435,6 +439,7 @@ struct Tracker::Impl {
   // rate of change of its velocity between consecutive updates (within kFrameGapNs), low-passed;
   // any other track, or one after a gap, predicts with constant velocity.
   void estimate_acceleration(Track& track, TimeNs stamp, double innovation_px) const;
+  void damp_one_view_velocity(Track& track, int camera_index, TimeNs stamp, TimeNs previous_update_ns) const;
 
   // A fast track (a swung or thrown object) keeps σ² × fast_process_noise_scale while it moves
   // fast and for fast_hold_ns after (a ball's catch, a club's turn at the top): its next
@@ -695,6 +700,8 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
   note_interval(frame.stamp_ns);
   if (!core.suspended.empty() && frame.stamp_ns > core.suspended_at_ns) resume_suspended(frame.stamp_ns);
   core.last_stamp_ns = std::max(core.last_stamp_ns, frame.stamp_ns);
+  auto& camera_frame_ns = core.frame_per_camera_ns[static_cast<std::size_t>(camera_index)];
+  camera_frame_ns = std::max(camera_frame_ns, frame.stamp_ns);
   ++core.frames_applied;
   std::vector<Eigen::Vector2d> pixels;
   pixels.reserve(frame.blobs.size());
@@ -1221,7 +1228,9 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   // from the other cameras is seen by two as often as it is missed by two and survives to be
   // confirmed; a ghost, starved of blobs in its own views, still reaches tentative_max_misses.
   if (!track.confirmed && track.misses > 0) --track.misses;
+  const TimeNs previous_update_ns = track.last_update_ns;
   note_update(track, camera_index, stamp);
+  damp_one_view_velocity(track, camera_index, stamp, previous_update_ns);
   track.camera_innovation_px.resize(track.camera_last_update.size(), 0.0F);
   track.camera_innovation_px[static_cast<std::size_t>(camera_index)] =
       static_cast<float>((pixel - projected.projection.pixel).norm());
@@ -1298,6 +1307,38 @@ void Tracker::Impl::cap_return_velocity(Track& track, const Eigen::Vector3d& pre
   track.state.x.tail<3>() = predicted_velocity + change * (cap / size);
   track.seen_velocity = track.state.velocity();
   ++core.return_velocities_capped;
+}
+
+// One camera alone observes a track's motion across its ray, not along it: the velocity there is
+// what it was when the second view was lost, and constant velocity carries the depth on with it. A
+// marker seen by one camera for a while has often slowed (a foot landing, a hand reaching the end
+// of a movement): the component along the ray decays with one_view_velocity_time_constant_ns at
+// each update of such a track (docs/estimator.md, "One-view velocity"). A fast track keeps its
+// velocity (a club head, a ball: its own rules), and so does any track a second camera updated
+// within kFrameGapNs.
+void Tracker::Impl::damp_one_view_velocity(Track& track, int camera_index, TimeNs stamp,
+                                           TimeNs previous_update_ns) const {
+  const TimeNs tau_ns = options.one_view_velocity_time_constant_ns;
+  if (tau_ns <= 0 || track.fast || track.seen_ns == 0 || stamp - track.seen_ns <= kFrameGapNs ||
+      previous_update_ns == 0 || stamp <= previous_update_ns ||
+      track.state.velocity().squaredNorm() >= kFastSpeed * kFastSpeed) {
+    return;
+  }
+  // Only while another camera delivers frames that do not show the marker: with one camera left
+  // for the whole system (the others stopped), its rays are all there is, and constant velocity is
+  // what the body filter's identification relies on (BodyScenes.OneOfFourMarkersHidden...: a
+  // single camera for 2 s, a tool re-identified wrongly for 10 frames with the decay).
+  bool others_deliver = false;
+  for (std::size_t c = 0; c < core.frame_per_camera_ns.size() && !others_deliver; ++c) {
+    others_deliver = static_cast<int>(c) != camera_index && core.frame_per_camera_ns[c] != 0 &&
+                     stamp - core.frame_per_camera_ns[c] <= kFrameGapNs;
+  }
+  if (!others_deliver) return;
+  const Eigen::Vector3d ray =
+      (track.state.position() - models[static_cast<std::size_t>(camera_index)]->center_world()).normalized();
+  const double along = track.state.velocity().dot(ray);
+  const double decay = 1.0 - std::exp(-ns_to_seconds(stamp - previous_update_ns) / ns_to_seconds(tau_ns));
+  track.state.x.tail<3>() -= decay * along * ray;
 }
 
 void Tracker::Impl::count_misses(const std::vector<char>& track_done, const std::vector<char>& in_view) {

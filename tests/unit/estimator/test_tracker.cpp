@@ -518,6 +518,59 @@ TEST(Tracker, AOneViewTrackIsReanchoredWhereTwoViewsPutItsBlob) {
   EXPECT_LE(off.tracked, off.instants * 6 / 10) << "the scene no longer exercises the option";
 }
 
+// A marker that stops while one camera alone sees it (a foot landing): camera 0's updates do not
+// observe its motion along camera 0's ray, and constant velocity carries the track's depth on at the
+// speed it had (one_view_velocity_time_constant_ns: docs/estimator.md, "One-view velocity"). B moves
+// along that ray towards the camera at 1.2 m/s, seen by every camera, and stops at 1.0 s, from when
+// only camera 0 sees it. With the velocity decaying the track stays nearer; while two cameras saw
+// B, nothing changed (the records before 1.0 s are identical).
+TEST(Tracker, AOneViewTrackThatStopsIsNotCarriedOnAlongTheRay) {
+  const Eigen::Vector3d eye(3.0 * std::cos(0.3), 3.0 * std::sin(0.3), 2.0);  // camera 0's centre
+  const Eigen::Vector3d ray = (Eigen::Vector3d(0.0, 0.0, 1.0) - eye).normalized();
+  const auto b_position = [&](double t) -> Eigen::Vector3d {
+    return eye + (2.6 + 1.2 * (1.0 - std::min(t, 1.0))) * ray;
+  };
+  const auto run = make_frames(
+      1.2,
+      [&](double t, int camera) {
+        std::vector<Eigen::Vector3d> seen{marker_position(2, t)};  // another marker, far off, all along
+        if (t < 1.0 || camera == 0) seen.push_back(b_position(t));
+        return seen;
+      },
+      29);
+  struct Outcome {
+    std::vector<Eigen::Vector3d> before;  // every record before 1.0 s, in order
+    std::set<std::int64_t> ids;           // ids on B in its last 0.2 s of two views
+    double error_m = 0.0;                 // B's track from 1.08 to 1.12 s: its largest distance from B
+  };
+  const auto outcome = [&](TimeNs tau_ns) {
+    TrackerOptions options;
+    options.one_view_velocity_time_constant_ns = tau_ns;
+    options.publish_max_sigma_m = 1.0;  // every record, however uncertain: the track is followed, not judged
+    Outcome o;
+    replay(run, options, [&](double t, const TrackRecord& track) {
+      if (t < 1.0) {
+        o.before.push_back(track.p);
+        if (t > 0.8 && (track.p - b_position(t)).norm() < 0.005) o.ids.insert(track.id);
+      } else if (t >= 1.08 && t <= 1.12 && o.ids.count(track.id) != 0) {
+        o.error_m = std::max(o.error_m, (track.p - b_position(t)).norm());
+      }
+    });
+    return o;
+  };
+  const Outcome damped = outcome(120'000'000);  // the grid's figure (off by default)
+  const Outcome constant = outcome(0);
+  std::printf(
+      "B's track 80-120 ms after it stopped, seen by one camera: %.1f mm (velocity decaying), %.1f mm "
+      "(constant velocity)\n",
+      1e3 * damped.error_m, 1e3 * constant.error_m);
+  ASSERT_EQ(damped.ids.size(), 1u);
+  ASSERT_EQ(constant.ids.size(), 1u);
+  EXPECT_EQ(damped.before, constant.before) << "two views: nothing changes";
+  EXPECT_GT(constant.error_m, 0.05) << "the scene no longer exercises the option";
+  EXPECT_LT(damped.error_m, 0.8 * constant.error_m);
+}
+
 // A pause of the input is no frame of any camera for 25 ms and 8 usual intervals: four cameras
 // at 100 Hz missing 60 ms are one; one camera at 33 Hz is not paused at every frame. The three
 // markers (0.3-0.6 m apart) come back from the pause under their ids.
