@@ -38,48 +38,70 @@ const answerTo = (page, id) => page.evaluate((wanted) =>
 
 await runBrowserChecks({ width: 1400, height: 900 }, results, args.out, async (page, errors, check) => {
   await page.goto(`${args.url}&view=3d`);
-  const found = await waitFor(page, ([c, r]) => (window.panoptes.state ? window.panoptes.state.tracks : [])
-    .filter((t) => t[4] === 1 && Math.hypot(t[1] - c[0], t[2] - c[1], t[3] - c[2]) < r).length >= 4, [near, radius], 20000);
-  const tracks = (await nearTracks(page)).map((t) => t[0]).sort((a, b) => a - b);
+  // Picks the fixture's four confirmed tracks by shift+click; returns [tracks, picked, found].
+  const pickFixture = async () => {
+    const found = await waitFor(page, ([c, r]) => (window.panoptes.state ? window.panoptes.state.tracks : [])
+      .filter((t) => t[4] === 1 && Math.hypot(t[1] - c[0], t[2] - c[1], t[3] - c[2]) < r).length >= 4, [near, radius], 20000);
+    const tracks = (await nearTracks(page)).map((t) => t[0]).sort((a, b) => a - b);
+    if (tracks.length !== 4) return [tracks, [], found];
+    // From 1 m the markers (5-13 cm apart) are 60+ px apart on screen: a click finds its own.
+    await page.evaluate(([c]) => window.panoptes.focusOn(c, 1.0), [near]);
+    // The view has settled when the fixture stays put on screen (a loaded machine draws late).
+    let last = null;
+    for (let i = 0; i < 30; i += 1) {
+      await sleep(100);
+      const now = await page.evaluate(([c]) => window.panoptes.project(c), [near]);
+      if (last && Math.hypot(now[0] - last[0], now[1] - last[1]) < 0.5) break;
+      last = now;
+    }
+    // A click the page missed (seen once in the suite: three of four picked) is made again where the
+    // track is drawn now, up to five rounds; a click that toggled another pick off is undone the same way.
+    const pickedNow = () => page.evaluate(() => [...window.panoptes.bodyTracks].sort((a, b) => a - b));
+    await page.keyboard.down('Shift');
+    for (let round = 0; round < 5; round += 1) {
+      const have = await pickedNow();
+      const missing = tracks.filter((id) => !have.includes(id));
+      if (missing.length === 0 && have.length === tracks.length) break;
+      results.click_rounds += 1;
+      for (const id of missing) {
+        const at = await screenOf(page, id);
+        if (at) await page.mouse.click(at[0], at[1]);
+      }
+      for (const id of have.filter((id) => !tracks.includes(id))) {
+        const at = await screenOf(page, id);
+        if (at) await page.mouse.click(at[0], at[1]);
+      }
+      await sleep(100);
+    }
+    await page.keyboard.up('Shift');
+    return [tracks, await pickedNow(), found];
+  };
+  results.click_rounds = 0;
+  let [tracks, picked, found] = await pickFixture();
+  const bodiesBefore = await page.evaluate(() => (window.panoptes.state ? window.panoptes.state.bodies : []).length);
+  const shellDoneBefore = existsSync(args['after-file']);
+  for (let i = 0; i < 300 && !existsSync(args['after-file']); i += 1) await sleep(100);
+  // The shell's creation makes the estimator reload the bodies file; a loaded machine can miss
+  // frames then, and tracks that coasted come back under new ids (seen once in a fresh-clone suite:
+  // two of the four picked gone, the console's create rejected). The picks are checked against the
+  // bus once the reload shows in the page, and made again if any is gone.
+  if (!shellDoneBefore) {
+    await waitFor(page, (n) => (window.panoptes.state ? window.panoptes.state.bodies : []).length > n, bodiesBefore, 10000);
+  }
+  await sleep(1000);
+  const onBus = (await nearTracks(page)).map((t) => t[0]);
+  results.picks_before_reload = picked;
+  if (picked.length !== 4 || picked.some((id) => !onBus.includes(id))) {
+    await page.click('#newbody-clear');
+    [tracks, picked, found] = await pickFixture();
+    results.picked_again = true;
+  }
   results.tracks = tracks;
+  results.picked = picked;
   check(found && tracks.length === 4, `four confirmed tracks near ${near.join(', ')}: ${tracks.join(', ')}`);
   if (tracks.length !== 4) return;
-  // From 1 m the markers (5-13 cm apart) are 60+ px apart on screen: a click finds its own.
-  await page.evaluate(([c]) => window.panoptes.focusOn(c, 1.0), [near]);
-  // The view has settled when the fixture stays put on screen (a loaded machine draws late).
-  let last = null;
-  for (let i = 0; i < 30; i += 1) {
-    await sleep(100);
-    const now = await page.evaluate(([c]) => window.panoptes.project(c), [near]);
-    if (last && Math.hypot(now[0] - last[0], now[1] - last[1]) < 0.5) break;
-    last = now;
-  }
-  // A click the page missed (seen once in the suite: three of four picked) is made again where the
-  // track is drawn now, up to five rounds; a click that toggled another pick off is undone the same way.
-  const pickedNow = () => page.evaluate(() => [...window.panoptes.bodyTracks].sort((a, b) => a - b));
-  await page.keyboard.down('Shift');
-  results.click_rounds = 0;
-  for (let round = 0; round < 5; round += 1) {
-    const have = await pickedNow();
-    const missing = tracks.filter((id) => !have.includes(id));
-    if (missing.length === 0 && have.length === tracks.length) break;
-    results.click_rounds += 1;
-    for (const id of missing) {
-      const at = await screenOf(page, id);
-      if (at) await page.mouse.click(at[0], at[1]);
-    }
-    for (const id of have.filter((id) => !tracks.includes(id))) {
-      const at = await screenOf(page, id);
-      if (at) await page.mouse.click(at[0], at[1]);
-    }
-    await sleep(100);
-  }
-  await page.keyboard.up('Shift');
-  const picked = await pickedNow();
-  results.picked = picked;
   check(JSON.stringify(picked) === JSON.stringify(tracks), `shift+click picked the tracks clicked (${picked.join(', ')})`);
   check(await page.locator('#newbody').isVisible(), 'the new-body panel shows the picks');
-  for (let i = 0; i < 300 && !existsSync(args['after-file']); i += 1) await sleep(100);
   await page.fill('#newbody-name', args.name);
   const request = await page.evaluate(() => window.panoptes.sent.length);
   const created = Date.now();
