@@ -14,9 +14,9 @@ scene="$source_dir/deploy/scenes/clients.yaml"
 expect_exit 0 "simulate the clients scene" -- "$bin/panoptes_sim" features --scene "$scene" --out-dir "$work/sim"
 
 # run_live NAME SECONDS ESTIMATOR-ARGS...: six cameras for SECONDS (camera_node --duration, from their
-# start; the scene's epoch is 2-3 s after it), estimator_node and the probe for 3 s more (5 s until
-# issue 31; the checks below judge what was published while the cameras ran, which reaches the
-# probe within milliseconds), the recorder for 2 s more.
+# start; the scene's epoch is 2-3 s after it), estimator_node, the probe and the recorder until 0.5 s
+# after the last camera ended (they ran 2-3 s more until stop 79, 5 s until issue 31; the checks
+# below judge what was published while the cameras ran, which reaches the probe within milliseconds).
 run_live() {
   local name="$1" seconds="$2"
   shift 2
@@ -38,11 +38,18 @@ run_live() {
     recorder=$!
     pids+=("$recorder")
   fi
+  local cameras=()
   for camera in c0 c1 c2 c3 c4 c5; do
     "$bin/camera_node" --source "features:$work/sim/$camera.jsonl" --sim-epoch-ns "$epoch" --duration "$seconds" \
       --quiet >"$work/$name.$camera.log" 2>&1 &
     pids+=("$!")
+    cameras+=("$!")
   done
+  # The estimator, the probe and the recorder end 0.5 s after the last camera (SIGINT: the same
+  # summary and files as at the end of their --duration, which stays as a bound).
+  for camera in "${cameras[@]}"; do timeout $((seconds + 30)) tail --pid="$camera" -f /dev/null; done
+  sleep 0.5
+  kill -INT "$estimator" "$probe" ${recorder:+"$recorder"} 2>/dev/null
   timeout $((seconds + 30)) tail --pid="$estimator" -f /dev/null
   wait "$estimator"
   local rc=$?

@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "jsonl_fast.h"
+
 namespace panoptes {
 
 namespace {
@@ -159,7 +161,18 @@ std::vector<T> read_records(const std::filesystem::path& path, std::vector<std::
 
 }  // namespace
 
-std::string to_json_line(const FeatureFrame& frame) {
+namespace {
+
+// True if `text` goes into a JSON string as it is (no escape needed, ASCII): what the fast paths
+// write and read; anything else goes through the JSON library.
+bool plain_text(std::string_view text) {
+  return std::all_of(text.begin(), text.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u >= 0x20 && u < 0x80 && c != '"' && c != '\\';
+  });
+}
+
+std::string feature_frame_line_full(const FeatureFrame& frame) {
   Json blobs = Json::array();
   for (const Blob& blob : frame.blobs) {
     blobs.push_back({{"x", blob.x},
@@ -183,16 +196,77 @@ std::string to_json_line(const FeatureFrame& frame) {
   return dump(json);
 }
 
+}  // namespace
+
+// The same keys in the same order as the full writer; a camera id that needs escaping goes
+// through the JSON library.
+std::string to_json_line(const FeatureFrame& frame) {
+  if (!plain_text(frame.camera_id)) return feature_frame_line_full(frame);
+  using jsonl_fast::append_field;
+  using jsonl_fast::append_number;
+  std::string line;
+  line.reserve(96 + 160 * frame.blobs.size());
+  line += "{\"camera_id\":\"";
+  line += frame.camera_id;
+  line += "\",\"frame\":";
+  append_number(line, std::int64_t{frame.frame});
+  append_field(line, ",\"stamp_ns\":", std::int64_t{frame.stamp_ns});
+  append_field(line, ",\"arrival_ns\":", std::int64_t{frame.arrival_ns});
+  append_field(line, ",\"processing_ns\":", std::int64_t{frame.processing_ns});
+  if (frame.received_ns != 0) {
+    append_field(line, ",\"received_ns\":", std::int64_t{frame.received_ns});
+  }
+  line += ",\"blobs\":[";
+  for (std::size_t i = 0; i < frame.blobs.size(); ++i) {
+    const Blob& blob = frame.blobs[i];
+    line += i == 0 ? "{\"x\":" : ",{\"x\":";
+    append_number(line, blob.x);
+    append_field(line, ",\"y\":", blob.y);
+    append_field(line, ",\"area\":", blob.area);
+    append_field(line, ",\"sum\":", blob.sum);
+    append_field(line, ",\"peak\":", std::int64_t{blob.peak});
+    append_field(line, ",\"m20\":", blob.m20);
+    append_field(line, ",\"m11\":", blob.m11);
+    append_field(line, ",\"m02\":", blob.m02);
+    line += ",\"bbox\":";
+    const int box[4] = {blob.x0, blob.y0, blob.x1, blob.y1};
+    for (int k = 0; k < 4; ++k) {
+      line += k == 0 ? '[' : ',';
+      append_number(line, std::int64_t{box[k]});
+    }
+    line += "]}";
+  }
+  line += "]}";
+  return line;
+}
+
+// Written without a JSON document (jsonl_fast.h): the estimator writes one line per track and
+// camera frame, and readers (panoptes_eval, the grid) read hundreds of thousands of them.
 std::string to_json_line(const TrackRecord& track) {
-  const auto& c = track.position_covariance;
-  Json json = {{"stamp_ns", track.stamp_ns},
-               {"id", track.id},
-               {"p", {track.p.x(), track.p.y(), track.p.z()}},
-               {"v", {track.v.x(), track.v.y(), track.v.z()}},
-               {"cov", {c[0], c[1], c[2], c[3], c[4], c[5]}},
-               {"status", std::string(to_string(track.status))},
-               {"cameras", track.cameras}};
-  return dump(json);
+  using jsonl_fast::append_field;
+  using jsonl_fast::append_number;
+  std::string line;
+  line.reserve(320);
+  line += "{\"stamp_ns\":";
+  append_number(line, std::int64_t{track.stamp_ns});
+  append_field(line, ",\"id\":", std::int64_t{track.id});
+  const auto list = [&](const char* key, const double* values, int count) {
+    line += key;
+    for (int i = 0; i < count; ++i) {
+      line += i == 0 ? '[' : ',';
+      append_number(line, values[i]);
+    }
+    line += ']';
+  };
+  list(",\"p\":", track.p.data(), 3);
+  list(",\"v\":", track.v.data(), 3);
+  list(",\"cov\":", track.position_covariance.data(), 6);
+  line += ",\"status\":\"";
+  line += to_string(track.status);
+  line += "\",\"cameras\":";
+  append_number(line, std::int64_t{track.cameras});
+  line += '}';
+  return line;
 }
 
 std::string to_json_line(const PoseRecord& pose) {
@@ -209,7 +283,54 @@ std::string to_json_line(const PoseRecord& pose) {
   return dump(json);
 }
 
+namespace {
+
+bool parse_blob_fast(jsonl_fast::Cursor& in, Blob& blob) {
+  int box[4] = {0, 0, 0, 0};
+  const bool read =
+      in.literal("{\"x\":") && in.number(blob.x) && in.literal(",\"y\":") && in.number(blob.y) &&
+      in.literal(",\"area\":") && in.number(blob.area) && in.literal(",\"sum\":") && in.number(blob.sum) &&
+      in.literal(",\"peak\":") && in.integer(blob.peak) && in.literal(",\"m20\":") && in.number(blob.m20) &&
+      in.literal(",\"m11\":") && in.number(blob.m11) && in.literal(",\"m02\":") && in.number(blob.m02) &&
+      in.literal(",\"bbox\":[") && in.integer(box[0]) && in.literal(",") && in.integer(box[1]) &&
+      in.literal(",") && in.integer(box[2]) && in.literal(",") && in.integer(box[3]) && in.literal("]}");
+  blob.x0 = box[0];
+  blob.y0 = box[1];
+  blob.x1 = box[2];
+  blob.y1 = box[3];
+  return read;
+}
+
+// A line exactly as to_json_line writes it, or nothing (the full parser then reads it).
+std::optional<FeatureFrame> parse_feature_frame_fast(std::string_view line) {
+  jsonl_fast::Cursor in(line);
+  FeatureFrame frame;
+  std::string_view camera_id;
+  if (!(in.literal("{\"camera_id\":") && in.plain_string(camera_id) && in.literal(",\"frame\":") &&
+        in.integer(frame.frame) && in.literal(",\"stamp_ns\":") && in.integer(frame.stamp_ns) &&
+        in.literal(",\"arrival_ns\":") && in.integer(frame.arrival_ns) && in.literal(",\"processing_ns\":") &&
+        in.integer(frame.processing_ns))) {
+    return std::nullopt;
+  }
+  if (in.literal(",\"received_ns\":") && !in.integer(frame.received_ns)) return std::nullopt;
+  if (!in.literal(",\"blobs\":[")) return std::nullopt;
+  while (!in.peek(']')) {
+    if (!frame.blobs.empty() && !in.literal(",")) return std::nullopt;
+    if (!parse_blob_fast(in, frame.blobs.emplace_back())) return std::nullopt;
+  }
+  if (!(in.literal("]}") && in.at_end())) return std::nullopt;
+  frame.camera_id = camera_id;
+  return frame;
+}
+
+}  // namespace
+
 Parsed<FeatureFrame> parse_feature_frame(std::string_view line) {
+  if (auto frame = parse_feature_frame_fast(line)) {
+    Parsed<FeatureFrame> result;
+    result.value = std::move(*frame);
+    return result;
+  }
   return parse_record<FeatureFrame>(line, [](const Json& json) {
     FeatureFrame frame;
     frame.camera_id = get_string(json, "camera_id", true);
@@ -250,7 +371,33 @@ Parsed<FeatureFrame> parse_feature_frame(std::string_view line) {
   });
 }
 
+namespace {
+
+// A line exactly as to_json_line writes it, or nothing (the full parser then reads it).
+std::optional<TrackRecord> parse_track_fast(std::string_view line) {
+  jsonl_fast::Cursor in(line);
+  TrackRecord track;
+  std::string_view status;
+  const bool read = in.literal("{\"stamp_ns\":") && in.integer(track.stamp_ns) && in.literal(",\"id\":") &&
+                    in.integer(track.id) && in.literal(",\"p\":") && in.numbers(track.p, 3) &&
+                    in.literal(",\"v\":") && in.numbers(track.v, 3) && in.literal(",\"cov\":") &&
+                    in.numbers(track.position_covariance, 6) && in.literal(",\"status\":") &&
+                    in.plain_string(status) && in.literal(",\"cameras\":") && in.integer(track.cameras) &&
+                    in.literal("}") && in.at_end();
+  const auto known = read ? status_from_string(status) : std::nullopt;
+  if (!known) return std::nullopt;
+  track.status = *known;
+  return track;
+}
+
+}  // namespace
+
 Parsed<TrackRecord> parse_track(std::string_view line) {
+  if (auto track = parse_track_fast(line)) {
+    Parsed<TrackRecord> result;
+    result.value = std::move(*track);
+    return result;
+  }
   return parse_record<TrackRecord>(line, [](const Json& json) {
     TrackRecord track;
     track.stamp_ns = get_int64(json, "stamp_ns", "", true);

@@ -3,6 +3,7 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -45,7 +46,29 @@ void expect_same(const FeatureFrame& a, const FeatureFrame& b) {
     EXPECT_EQ(a.blobs[i].m20, b.blobs[i].m20);
     EXPECT_EQ(a.blobs[i].m11, b.blobs[i].m11);
     EXPECT_EQ(a.blobs[i].m02, b.blobs[i].m02);
+    EXPECT_EQ(a.blobs[i].x0, b.blobs[i].x0);
+    EXPECT_EQ(a.blobs[i].y0, b.blobs[i].y0);
+    EXPECT_EQ(a.blobs[i].x1, b.blobs[i].x1);
+    EXPECT_EQ(a.blobs[i].y1, b.blobs[i].y1);
   }
+}
+
+struct BadLine {
+  std::string line;
+  std::string expected_error;  // a substring of the error
+};
+
+// The same line with a space after every ':' and ',' outside strings: valid JSON of the same values
+// that the compact reader (jsonl_fast.h) does not take, so the full parser reads it.
+std::string spaced(const std::string& line) {
+  std::string out;
+  bool in_string = false;
+  for (char c : line) {
+    out += c;
+    if (c == '"') in_string = !in_string;
+    if (!in_string && (c == ':' || c == ',')) out += ' ';
+  }
+  return out;
 }
 
 TEST(Records, FeatureFrameRoundTripIsExact) {
@@ -78,6 +101,108 @@ TEST(Records, FeatureFrameReceivedStampIsOptional) {
       R"({"camera_id": "cam0", "frame": 3, "stamp_ns": 1, "received_ns": "soon", "blobs": []})");
   EXPECT_FALSE(bad.value.has_value());
   EXPECT_NE(bad.error.find("received_ns"), std::string::npos) << bad.error;
+}
+
+// Lines as this library writes them are read by a fast path, anything else by the JSON library:
+// both must read the same values, extreme doubles included.
+TEST(Records, CompactAndSpacedLinesReadTheSame) {
+  FeatureFrame frame = sample_frame();
+  frame.camera_id = "cam7";  // no escapes: the compact writer and reader
+  frame.received_ns = kStamp + 5;
+  frame.blobs.push_back({5e-324, 1.7976931348623157e308, -0.0, 1e21, -2147483647, 1e-7, 123456.0, 0.1, -3, 0,
+                         2147483647, -2147483647});
+  const std::string line = to_json_line(frame);
+  EXPECT_NE(line.find("\"camera_id\":\"cam7\",\"frame\":123456789012,"), std::string::npos) << line;
+  const auto fast = parse_feature_frame(line);
+  const auto full = parse_feature_frame(spaced(line));
+  ASSERT_TRUE(fast.value.has_value()) << fast.error;
+  ASSERT_TRUE(full.value.has_value()) << full.error << "\n" << spaced(line);
+  expect_same(frame, *fast.value);
+  expect_same(*full.value, *fast.value);
+  EXPECT_TRUE(std::signbit(fast.value->blobs[2].area));
+
+  TrackRecord track;
+  track.stamp_ns = kStamp;
+  track.id = -7;
+  track.p = Eigen::Vector3d(0.5999594280639859, -1e-320, 4.0);
+  track.v = Eigen::Vector3d(1e300, -0.0, 2.0 / 3.0);
+  track.position_covariance = {7.103717836190519e-05, 0, 1, 1e16, 1e-5, 123.25};
+  track.status = TrackStatus::kTentative;
+  track.cameras = 11;
+  const std::string track_line = to_json_line(track);
+  // The shortest text that reads back to the double (the JSON library wrote 0.5999594280639859 for
+  // it); integral doubles keep a fraction, as the JSON library writes them.
+  EXPECT_NE(track_line.find("\"p\":[0.599959428063986,-1e-320,4.0]"), std::string::npos) << track_line;
+  const auto fast_track = parse_track(track_line);
+  const auto full_track = parse_track(spaced(track_line));
+  ASSERT_TRUE(fast_track.value.has_value()) << fast_track.error;
+  ASSERT_TRUE(full_track.value.has_value()) << full_track.error;
+  for (const TrackRecord* read : {&*fast_track.value, &*full_track.value}) {
+    EXPECT_EQ(read->stamp_ns, track.stamp_ns);
+    EXPECT_EQ(read->id, track.id);
+    EXPECT_EQ(read->p, track.p);
+    EXPECT_EQ(read->v, track.v);
+    EXPECT_EQ(read->position_covariance, track.position_covariance);
+    EXPECT_EQ(read->status, track.status);
+    EXPECT_EQ(read->cameras, track.cameras);
+  }
+}
+
+// Lines one character away from the compact shape are refused with the JSON library's reasons,
+// never read by the fast path with another meaning.
+TEST(Records, NearlyCompactBadLinesGetTheFullParsersErrors) {
+  TrackRecord track;
+  track.stamp_ns = 5;
+  track.id = 1;
+  track.cameras = 2;
+  const std::string good = to_json_line(track);
+  ASSERT_TRUE(parse_track(good).value.has_value());
+  const auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string line = good;
+    const auto at = line.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return at == std::string::npos ? line : line.replace(at, from.size(), to);
+  };
+  const std::vector<BadLine> cases = {
+      {replaced("\"cameras\":2", "\"cameras\":2.5"), "cameras: expected an integer"},
+      {replaced("\"cameras\":2", "\"cameras\":99999999999"), "cameras: integer out of range"},
+      {replaced("\"id\":1", "\"id\":01"), "not valid JSON"},
+      {replaced("\"stamp_ns\":5", "\"stamp_ns\":5e0"), "stamp_ns: expected an integer"},
+      {replaced("\"stamp_ns\":5", "\"stamp_ns\":99999999999999999999"), "stamp_ns: "},
+      {replaced("\"p\":[0.0", "\"p\":[0."), "not valid JSON"},
+      {replaced("\"p\":[0.0", "\"p\":[.5"), "not valid JSON"},
+      {replaced("\"p\":[0.0", "\"p\":[inf"), "not valid JSON"},
+      {replaced("\"p\":[0.0", "\"p\":[null"), "p[0]: expected a number"},
+      {replaced("\"confirmed\"", "\"lost\""), "status: expected tentative, confirmed or coasting"},
+      {good + "x", "not valid JSON"},
+  };
+  for (const BadLine& bad : cases) {
+    const auto parsed = parse_track(bad.line);
+    EXPECT_FALSE(parsed.value.has_value()) << bad.line;
+    EXPECT_NE(parsed.error.find(bad.expected_error), std::string::npos) << bad.line << "\n" << parsed.error;
+  }
+  FeatureFrame frame;
+  frame.camera_id = "c";
+  frame.blobs.push_back({1, 2, 3, 4, 5, 6, 7, 8, 0, 0, 2, 2});
+  const std::string frame_line = to_json_line(frame);
+  std::string bad_peak = frame_line;
+  bad_peak.replace(bad_peak.find("\"peak\":5"), 8, "\"peak\":5.5");
+  const auto parsed = parse_feature_frame(bad_peak);
+  EXPECT_FALSE(parsed.value.has_value()) << bad_peak;
+  EXPECT_NE(parsed.error.find("blobs[0].peak: expected an integer"), std::string::npos) << parsed.error;
+}
+
+// NaN and infinities have no JSON number: written as null (as the JSON library writes them) and
+// refused when read, naming the field.
+TEST(Records, NonFiniteNumbersAreWrittenAsNullAndRefusedOnReading) {
+  TrackRecord track;
+  track.v =
+      Eigen::Vector3d(0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity());
+  const std::string line = to_json_line(track);
+  EXPECT_NE(line.find("\"v\":[0.0,null,null]"), std::string::npos) << line;
+  const auto parsed = parse_track(line);
+  EXPECT_FALSE(parsed.value.has_value());
+  EXPECT_NE(parsed.error.find("v[1]: expected a number"), std::string::npos) << parsed.error;
 }
 
 TEST(Records, TrackRoundTripIsExact) {
@@ -153,11 +278,6 @@ TEST(Records, ContractExamplesParseWithDefaultsAndExtraKeys) {
   ASSERT_TRUE(pose.value.has_value()) << pose.error;
   EXPECT_EQ(pose.value->q, Eigen::Vector4d(0, 0, 0, 1));
 }
-
-struct BadLine {
-  std::string line;
-  std::string expected_error;  // a substring of the error
-};
 
 TEST(Records, MalformedFeatureFramesGiveErrorsNotExceptions) {
   const std::vector<BadLine> cases = {
