@@ -37,6 +37,7 @@ struct Options {
   std::string out_features;
   std::string clock_skew;  // "<offset_ms>,<drift_ppm>", parsed into live.clock_skew
   long long sim_epoch_ns = 0;
+  std::string sim_epoch_file;
   long long max_frames = -1;
   bool unpaced = false;
   double rate_scale = 1.0;
@@ -100,6 +101,11 @@ void add_options(CLI::App& app, Options& options) {
                  "sim: wall-clock ns of scene time 0 (default: now, rounded up to a whole second); features: "
                  "wall-clock ns of the recording's epoch (its first stamp rounded down to a second), so "
                  "several replaying nodes stay aligned (default: the replay starts now)");
+  app.add_option("--sim-epoch-file", options.sim_epoch_file,
+                 "features: wait for this file to hold the recording's epoch (wall-clock ns, decimal) and "
+                 "replay from it: a start gate for nodes that should synchronise their clocks first (write "
+                 "the file whole, e.g. by rename)")
+      ->excludes("--sim-epoch-ns");
   app.add_option("--duration", live.duration_s, "stop after this many seconds (0 = until the source ends)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--max-frames", options.max_frames,
@@ -151,6 +157,9 @@ void validate(Options& options) {
   }
   if (options.no_dds && !options.clock_skew.empty())
     throw CLI::ValidationError("--clock-skew tests the clock synchronisation over DDS; not with --no-dds");
+  if (!options.sim_epoch_file.empty() && options.source.rfind("features:", 0) != 0)
+    throw CLI::ValidationError("--sim-epoch-file is for a features: source (a replay), not " +
+                               options.source);
   options.live.source_spec = options.source;
   options.live.out_features = options.out_features;
 }
@@ -170,6 +179,7 @@ std::unique_ptr<cam::FrameSource> open_source(const Options& options, cam::Detec
     apply_timing_flags(options, source_options.settings);
     source_options.camera_id = options.camera_id;
     source_options.sim_epoch_ns = options.sim_epoch_ns;
+    source_options.sim_epoch_file = options.sim_epoch_file;
     source_options.paced = !options.unpaced;
     source_options.max_frames = options.max_frames;
     source_options.rate_scale = options.rate_scale;

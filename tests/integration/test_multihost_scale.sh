@@ -28,10 +28,15 @@ seconds=${PANOPTES_SCALE_SECONDS:-15}
 # What one 2-core box simulates (docs/deployment.md, "How many cameras one box simulates"): 32
 # cameras at 60 Hz by default (1 920 frames/s); PANOPTES_SCALE_RATE_HZ=120 is the benchmark's load.
 rate_hz=${PANOPTES_SCALE_RATE_HZ:-60}
-# Seconds from launching the 33 processes to the replay's first frame. Every camera must have
-# started and synchronised its clock by then: a camera that starts after it holds its frames for
-# the clock (--clock-sync-wait, up to 2 s) and then sends them at once, older than the estimator's
-# 500 ms rewind horizon (issue 37: 6 s was too short for 33 processes starting on 2 cores).
+# The start gate (the full configuration): the cameras wait for $work/epoch (camera_node
+# --sim-epoch-file); it is written once every camera has logged its synchronised clock, with the
+# replay's first frame 1 s later (gate_lead_s), so no camera starts sending before its clock is
+# synchronised whatever start-up takes (a fixed lead of 15 s until stop 79: issue 37 found 6 s too
+# short for 33 processes starting on 2 cores; docs/deployment.md). The gate gives up after
+# gate_wait_s (the test then fails on the cameras that never synchronised). The light configuration
+# (no clock synchronisation) keeps the fixed lead: lead_s from launching to the first frame.
+gate_lead_s=1
+gate_wait_s=30
 lead_s=${PANOPTES_SCALE_LEAD_S:-15}
 scene="$work/scale32.yaml"
 sed "s/^  rate: 120$/  rate: $rate_hz/" "$source_dir/deploy/scenes/scale32.yaml" >"$scene"
@@ -53,7 +58,15 @@ echo "profile: $profile"
 
 light_estimator="" light_camera=""
 if [ "${PANOPTES_SCALE_LIGHT:-0}" = 1 ]; then light_estimator="--no-predictions" light_camera="--no-clock-sync"; fi
-epoch=$((($(date +%s) + lead_s) * 1000000000))
+epoch_file="$work/epoch"
+if [ -n "$light_camera" ]; then
+  epoch=$((($(date +%s) + lead_s) * 1000000000))
+  epoch_args=(--sim-epoch-ns "$epoch")
+else
+  epoch_args=(--sim-epoch-file "$epoch_file")
+  lead_s=$((gate_wait_s + gate_lead_s))  # the estimator's --duration bound below
+fi
+launched_ns=$(date +%s%N)
 netns_spawn "$estimator_host" "$bin/estimator_node" --calibration "$work/features/calibration.yaml" \
   --dds-profile "$profile" --out-tracks "$work/tracks.jsonl" --duration $((seconds + lead_s + 3)) \
   --status-period 5 $light_estimator >"$work/estimator.log" 2>&1 &
@@ -62,10 +75,22 @@ pids+=("$estimator")
 camera_pids=()
 for c in $(seq 0 $((cameras - 1))); do
   netns_spawn $((c % camera_hosts + 1)) "$bin/camera_node" --source "features:$work/features/cam$c.jsonl" \
-    --sim-epoch-ns "$epoch" --dds-profile "$profile" --quiet $light_camera >"$work/cam$c.log" 2>&1 &
+    "${epoch_args[@]}" --dds-profile "$profile" --quiet $light_camera >"$work/cam$c.log" 2>&1 &
   camera_pids+=("$!")
   pids+=("$!")
 done
+
+if [ -z "$light_camera" ]; then
+  for _ in $(seq $((gate_wait_s * 10))); do
+    ready=$( (grep -l "clock synchronised after" "$work"/cam*.log 2>/dev/null || true) | wc -l)
+    [ "$ready" -ge "$cameras" ] && break
+    sleep 0.1
+  done
+  epoch=$(($(date +%s%N) + gate_lead_s * 1000000000))
+  echo "$epoch" >"$epoch_file.tmp" && mv "$epoch_file.tmp" "$epoch_file"
+  echo "start gate: $ready of $cameras camera clocks synchronised $(( (epoch - launched_ns) / 1000000 - gate_lead_s * 1000 )) ms" \
+    "after the launch; the replay starts ${gate_lead_s} s later"
+fi
 
 # CPU (utime + stime) and peak resident memory of the estimator over the replay.
 cpu_ticks() { awk '{print $14 + $15}' "/proc/$estimator/stat"; }
@@ -134,7 +159,7 @@ summary = {
     "estimator_cpu_percent": round(100.0 * (int(ticks1) - int(ticks0)) / int(hz) / ((int(t1) - int(t0)) / 1e9), 1),
     "estimator_rss_peak_mb": round(int(peak_kb) / 1024, 1), "estimator_rss_mb": round(int(rss_kb) / 1024, 1),
     "estimator_threads": int(threads),
-    # Frames the cameras held for their clock (started after the replay began; see lead_s).
+    # Frames the cameras held for their clock (started after the replay began; see the start gate).
     "frames_held_for_clock_sync": int(held),
     # Arrival minus stamp at the estimator: the worst camera's p99 and the median camera's.
     "latency_p99_ms_worst_camera": max(latency_p99.values(), default=0.0),

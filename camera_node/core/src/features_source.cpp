@@ -4,6 +4,7 @@
 #include "features_source.h"
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -97,7 +99,8 @@ class FeaturesSource final : public FrameSource {
         paced_(options.paced),
         rate_scale_(options.rate_scale),
         max_frames_(options.max_frames),
-        anchor_ns_(options.sim_epoch_ns) {
+        anchor_ns_(options.sim_epoch_ns),
+        epoch_file_(options.sim_epoch_file) {
     if (!malformed.empty()) {
       counters_["malformed"] = malformed.size();
       // The first line that failed says most about a wrong file; the count says how much.
@@ -114,6 +117,11 @@ class FeaturesSource final : public FrameSource {
     if (stop_.stopped()) return std::nullopt;
     if (next_index_ >= frames_.size()) return std::nullopt;
     if (max_frames_ >= 0 && static_cast<std::int64_t>(next_index_) >= max_frames_) return std::nullopt;
+    if (!epoch_file_.empty() && !epoch_file_read_) {  // once: a rewound replay starts from now
+      anchor_ns_ = wait_for_epoch_file();
+      if (anchor_ns_ == 0) return std::nullopt;  // stopped while waiting
+      epoch_file_read_ = true;
+    }
     const FeatureFrame& recorded = frames_[next_index_];
     // Anchored (--sim-epoch-ns), the recording's epoch (its first stamp rounded down to a whole
     // second, as panoptes_sim writes it) maps to the anchor, so nodes replaying the cameras of one
@@ -157,6 +165,25 @@ class FeaturesSource final : public FrameSource {
   }
 
  private:
+  // The epoch from --sim-epoch-file, once the file holds it (polled every 10 ms); 0 if stopped
+  // first. Throws (the source fails, naming the file) if it holds anything but a positive integer.
+  TimeNs wait_for_epoch_file() {
+    while (!stop_.stopped()) {
+      std::ifstream in(epoch_file_);
+      std::string text;
+      if (in && std::getline(in, text) && !text.empty()) {
+        TimeNs epoch_ns = 0;
+        const auto result = std::from_chars(text.data(), text.data() + text.size(), epoch_ns);
+        if (result.ec != std::errc() || result.ptr != text.data() + text.size() || epoch_ns <= 0)
+          throw std::runtime_error(
+              epoch_file_ + ": expected the epoch as a positive integer of nanoseconds, got '" + text + "'");
+        return epoch_ns;
+      }
+      if (!stop_.sleep_until_wall(wall_now_ns() + 10'000'000)) break;
+    }
+    return 0;
+  }
+
   void apply_rewind() {
     std::lock_guard lock(mutex_);
     if (rewind_requested_) {
@@ -171,7 +198,9 @@ class FeaturesSource final : public FrameSource {
   const bool paced_;
   const double rate_scale_;
   const std::int64_t max_frames_;
-  TimeNs anchor_ns_;            // wall time of the recording's epoch; 0: the replay starts when it starts
+  TimeNs anchor_ns_;              // wall time of the recording's epoch; 0: the replay starts when it starts
+  const std::string epoch_file_;  // --sim-epoch-file ("" = none)
+  bool epoch_file_read_ = false;
   std::size_t next_index_ = 0;  // capture thread (and restart(), under mutex_, applied by next())
   TimeNs replay_start_ns_ = 0;
 

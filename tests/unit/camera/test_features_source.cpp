@@ -320,5 +320,52 @@ TEST(FeaturesSource, RestartRewinds) {
   EXPECT_EQ(frame->sequence, 100);
 }
 
+// --sim-epoch-file: the replay waits for the file, then its frames are stamped from the epoch it
+// holds (the recording's epoch, its first stamp rounded down to a second, maps to it).
+TEST(FeaturesSource, EpochFileGatesTheReplayAndAnchorsItsStamps) {
+  TempFile file;
+  TempFile epoch_file;
+  write_frames(file.path(), make_frames("cam0", 3, 10 * kNsPerMillisecond));
+  SourceOptions options = unpaced();
+  options.sim_epoch_file = epoch_file.path().string();
+  auto source = open_source(file.spec(), options);
+  auto first = std::async(std::launch::async, [&] { return source->next(); });
+  EXPECT_EQ(first.wait_for(std::chrono::milliseconds(100)), std::future_status::timeout);  // no file yet
+  const TimeNs epoch_ns = 1'800'000'000'123'456'789;
+  std::ofstream(epoch_file.path()) << epoch_ns << "\n";
+  ASSERT_EQ(first.wait_for(kGenerousWait), std::future_status::ready);
+  const auto frame = first.get();
+  ASSERT_TRUE(frame);
+  const TimeNs recorded_epoch = kRecordedStart / kNsPerSecond * kNsPerSecond;
+  EXPECT_EQ(frame->stamp_ns, epoch_ns + (kRecordedStart - recorded_epoch));
+  const auto second = source->next();
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->stamp_ns - frame->stamp_ns, 10 * kNsPerMillisecond);
+}
+
+TEST(FeaturesSource, EpochFileWaitEndsOnStopAndABadFileIsNamed) {
+  TempFile file;
+  TempFile epoch_file;
+  write_frames(file.path(), make_frames("cam0", 2, kNsPerMillisecond));
+  SourceOptions options = unpaced();
+  options.sim_epoch_file = epoch_file.path().string();
+  auto waiting = open_source(file.spec(), options);
+  auto pending = std::async(std::launch::async, [&] { return waiting->next(); });
+  EXPECT_EQ(pending.wait_for(std::chrono::milliseconds(50)), std::future_status::timeout);
+  waiting->stop();
+  ASSERT_EQ(pending.wait_for(kGenerousWait), std::future_status::ready);
+  EXPECT_FALSE(pending.get());
+
+  std::ofstream(epoch_file.path()) << "soon\n";
+  auto bad = open_source(file.spec(), options);
+  try {
+    bad->next();
+    ADD_FAILURE() << "a file holding 'soon' was taken as an epoch";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find(epoch_file.path().string()), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("'soon'"), std::string::npos) << error.what();
+  }
+}
+
 }  // namespace
 }  // namespace panoptes::camera

@@ -120,8 +120,11 @@ class FrameSource {
 };
 
 struct SourceOptions {
-  std::string camera_id;         // overrides the id the source would choose
-  TimeNs sim_epoch_ns = 0;       // sim: wall time of scene time 0 (0 = now, rounded up to 1 s)
+  std::string camera_id;    // overrides the id the source would choose
+  TimeNs sim_epoch_ns = 0;  // sim: wall time of scene time 0 (0 = now, rounded up to 1 s)
+  // features: a file that will hold sim_epoch_ns (decimal); the replay waits for it to appear
+  // (a start gate: nodes start, synchronise their clocks, then one file starts them all).
+  std::string sim_epoch_file;
   bool paced = true;             // sim/features: real time; false = as fast as possible
   double rate_scale = 1.0;       // features: replay speed (2 = twice the recorded pace)
   std::int64_t max_frames = -1;  // stop after this many frames (-1 = the source's own end)
