@@ -110,7 +110,7 @@ run_unit() {
 if [ -d /run/systemd/system ] && [ "$(cat /proc/1/comm)" = systemd ]; then
   echo "systemd is PID 1: starting the units with systemctl"
   systemctl start estimator_node.service camera_node@cam{0,1,2,3}.service
-  sleep 10
+  sleep 7  # 4-5 s of frames after the epoch (7-8 s until stop 79): utilisation and 3 tracks are judged
   systemctl stop camera_node@cam{0,1,2,3}.service estimator_node.service
   journalctl -u estimator_node.service --no-pager >"$work/estimator.log"
 else
@@ -118,7 +118,7 @@ else
   run_unit estimator_node.service "" "$work/estimator.log"
   estimator=${unit_pids[-1]}
   for i in 0 1 2 3; do run_unit camera_node@.service "cam$i" "$work/cam$i.log"; done
-  sleep 10
+  sleep 7  # 4-5 s of frames after the epoch (7-8 s until stop 79): utilisation and 3 tracks are judged
   for pid in "${unit_pids[@]:1}"; do kill -INT "$pid" 2>/dev/null || true; done
   sleep 1
   kill -INT "$estimator" 2>/dev/null || true
