@@ -106,6 +106,18 @@ wait_bounded() {  # PID SECONDS NAME
   wait "$1"
 }
 
+# expect_clean_exit PID NAME LOG: waits for background process PID (a child of this shell) and
+# passes when it exited 0; otherwise the failure names the exit status (128 + N: killed by signal N)
+# and the last lines of LOG in one line (CI's failure digest shows only FAIL lines), then the log's tail.
+expect_clean_exit() {
+  local rc=0
+  wait "$1" || rc=$?
+  if [ "$rc" -eq 0 ]; then pass "$2 exited cleanly"; return 0; fi
+  fail "$2: exit $rc; last lines of its log: $(tail -n 3 "$3" 2>/dev/null | tr '\n' '|')"
+  tail -n 20 "$3" 2>/dev/null
+  return 1
+}
+
 finish() {
   if [ "$failures" -eq 0 ]; then echo "all checks passed"; exit 0; fi
   echo "$failures check(s) failed"

@@ -83,7 +83,7 @@ else
 fi
 kill -INT "${cameras[@]}" "$estimator" 2>/dev/null
 timeout 30 tail --pid="$estimator" -f /dev/null
-wait "$estimator" && pass "estimator exited cleanly" || { fail "estimator failed"; tail -20 "$work/estimator.log"; }
+expect_clean_exit "$estimator" estimator_node "$work/estimator.log"
 # Each created body: tracked within 1 s of its creation returning, its mean position at its
 # object's true centroid within 0.1 mm, pose RMS within 0.3 mm.
 check_body() {  # NAME OBJECT CREATED_JSON CREATED_NS_OR_MS PLACE

@@ -69,7 +69,7 @@ cat "$work/cyclone_summary.json"
 [ "$rc" -eq 0 ] && pass "the Cyclone DDS probe decoded every topic and its checks held" ||
   { fail "panoptes_cyclone_probe exit $rc"; tail -20 "$work/cyclone.log"; }
 timeout 30 tail --pid="$estimator" -f /dev/null
-wait "$estimator" && pass "live estimator exited cleanly" || { fail "live estimator failed"; tail -20 "$work/estimator.log"; }
+expect_clean_exit "$estimator" "the live estimator" "$work/estimator.log"
 
 summary="$work/cyclone_summary.json"
 jq -e . "$summary" >/dev/null 2>&1 || { fail "the probe's summary is not JSON"; finish; }

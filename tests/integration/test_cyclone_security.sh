@@ -105,7 +105,7 @@ wait "$plain_pid"
 plain_rc=$?
 wait "$robot"
 timeout 30 tail --pid="$estimator" -f /dev/null
-wait "$estimator" && pass "the secured estimator exited cleanly" || { fail "estimator_node failed"; tail -20 "$work/estimator.log"; }
+expect_clean_exit "$estimator" "the secured estimator" "$work/estimator.log"
 for camera in c0 c1 c2 c3 c4 c5; do
   grep -q "not granted\|refused" "$work/$camera.log" && fail "$camera: $(grep -m1 "not granted\|refused" "$work/$camera.log")"
 done

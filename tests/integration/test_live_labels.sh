@@ -102,7 +102,7 @@ for pid in "${camera_pids[@]}"; do timeout 30 tail --pid="$pid" -f /dev/null; do
 sleep 0.5
 kill -INT "$estimator" 2>/dev/null
 timeout 30 tail --pid="$estimator" -f /dev/null
-wait "$estimator" && pass "estimator_node exited cleanly" || { fail "estimator_node"; tail "$work/estimator.log"; }
+expect_clean_exit "$estimator" estimator_node "$work/estimator.log"
 sleep 0.3
 kill -INT "$client" 2>/dev/null
 timeout 20 tail --pid="$client" -f /dev/null

@@ -73,7 +73,7 @@ run_phase() {
   sleep 0.3
   kill -INT "$probe" 2>/dev/null || true
   timeout 20 tail --pid="$probe" -f /dev/null || true
-  wait "$estimator" && pass "$tag: estimator_node exited cleanly" || { fail "$tag: estimator_node"; tail "$dir/estimator.log"; }
+  expect_clean_exit "$estimator" "$tag: estimator_node" "$dir/estimator.log"
 
   if "$bin/panoptes_eval" --scene "$scene" --tracks "$dir/tracks.jsonl" --epoch-ns "$epoch" \
     --require-rmse-mm 2 --require-tracked 0.95 --require-no-id-switches >"$dir/eval.txt" 2>&1; then

@@ -115,7 +115,7 @@ for pid in "${camera_pids[@]}"; do timeout 20 tail --pid="$pid" -f /dev/null || 
 sleep 0.5
 kill -INT "$estimator" 2>/dev/null || true
 timeout 20 tail --pid="$estimator" -f /dev/null || true
-wait "$estimator" && pass "estimator_node exited cleanly" || { fail "estimator_node"; tail "$work/estimator.log"; }
+expect_clean_exit "$estimator" estimator_node "$work/estimator.log"
 
 sent=0 synchronised=0
 held=$(grep -ho "frames held [0-9]*" "$work"/cam*.log | awk '{s += $3} END {print s + 0}')

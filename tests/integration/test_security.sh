@@ -256,7 +256,7 @@ pids+=("$!")
 wait "$ops_command" && pass "the operator's command was sent" || { fail "operator command"; cat "$work/ctl_ops.log"; }
 timeout 20 tail --pid="$status_reader" -f /dev/null || true
 timeout 30 tail --pid="$estimator" -f /dev/null || true
-wait "$estimator" && pass "estimator_node exited cleanly" || { fail "estimator_node"; tail "$work/estimator.log"; }
+expect_clean_exit "$estimator" estimator_node "$work/estimator.log"
 sleep 1
 kill -INT "${pids[0]}" 2>/dev/null || true
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "panoptes/process.h"
 
+#include <execinfo.h>
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -103,6 +104,51 @@ int ChildProcess::exit_code() const {
 
 void detail::report_program_error(const char* program, const char* what) {
   std::fprintf(stderr, "%s: %s\n", program, what);
+}
+
+namespace {
+const char* g_crash_program = "panoptes";  // set once, before the handlers exist
+
+void write_text(const char* text) {
+  ssize_t left = static_cast<ssize_t>(std::strlen(text));
+  while (left > 0) {
+    const ssize_t written = ::write(STDERR_FILENO, text, static_cast<std::size_t>(left));
+    if (written <= 0) return;
+    text += written;
+    left -= written;
+  }
+}
+
+// Only async-signal-safe calls: write, backtrace (loaded beforehand), backtrace_symbols_fd, raise.
+extern "C" void on_fatal_signal(int signal) {
+  write_text(g_crash_program);
+  write_text(": fatal signal ");
+  write_text("SIG");
+  write_text(sigabbrev_np(signal) != nullptr ? sigabbrev_np(signal) : "?");
+  write_text("; call stack (a frame in the program itself: addr2line -e <program> <+offset>):\n");
+  void* frames[64];
+  const int count = backtrace(frames, 64);
+  backtrace_symbols_fd(frames, count, STDERR_FILENO);
+  // The handler was installed with SA_RESETHAND: the signal raised again ends the process as before.
+  raise(signal);
+}
+}  // namespace
+
+void detail::install_crash_report(const char* program) {
+  g_crash_program = program;
+  void* warm_up[1];
+  backtrace(warm_up, 1);  // its first call loads libgcc_s (malloc): not in a signal handler
+  // A stack overflow has no stack left for the handler: it runs on one of its own (main thread).
+  static char alternate_stack[64 * 1024];
+  stack_t stack{};
+  stack.ss_sp = alternate_stack;
+  stack.ss_size = sizeof(alternate_stack);
+  sigaltstack(&stack, nullptr);
+  struct sigaction action {};
+  action.sa_handler = on_fatal_signal;
+  action.sa_flags = SA_RESETHAND | SA_ONSTACK;
+  sigemptyset(&action.sa_mask);
+  for (const int signal : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) sigaction(signal, &action, nullptr);
 }
 
 }  // namespace panoptes

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // run_program: the exit code a main() returns is chosen by the type of the exception that escapes
 // it (panoptes/errors.h), with one line "<program>: <what>" on stderr.
+#include <csignal>
+#include <cstdlib>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -93,6 +95,22 @@ TEST(AsInputError, TurnsAStepsFailuresIntoInputErrorsAndKeepsItsResult) {
   }
   const Outcome outcome = run([] { return as_input_error([]() -> int { throw std::runtime_error("x"); }); });
   EXPECT_EQ(outcome.exit_code, kExitBadInput);
+}
+
+// A crash under run_program names the program and the signal and prints the call stack (frames as
+// "binary(+offset) [address]"), then still ends the process by that signal: the exit status a test
+// script sees (128 + 11) is unchanged.
+TEST(RunProgramDeathTest, ACrashIsReportedWithItsCallStackAndEndsByItsSignal) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(run_program("panoptes_crash",
+                          []() -> int {
+                            std::raise(SIGSEGV);
+                            return 0;
+                          }),
+              testing::KilledBySignal(SIGSEGV),
+              "panoptes_crash: fatal signal SIGSEGV; call stack[^\n]*\n(.|\n)*\\[0x[0-9a-f]+\\]");
+  EXPECT_EXIT(run_program("panoptes_abort", []() -> int { std::abort(); }), testing::KilledBySignal(SIGABRT),
+              "panoptes_abort: fatal signal SIGABRT");
 }
 
 }  // namespace

@@ -52,6 +52,10 @@ inline constexpr int kExitBadInput = 2;  // bad arguments, config, calibration o
 
 namespace detail {
 void report_program_error(const char* program, const char* what);
+// A fatal signal (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT) prints "<program>: fatal signal <name>"
+// and the thread's call stack to stderr, then ends the process by that signal as before (its exit
+// status and core dump unchanged): a crash in a test under CI leaves more than an exit status.
+void install_crash_report(const char* program);
 
 template <typename Body, typename BadInput, typename... More>
 int run_catching_bad_input(const char* program, Body& body) {
@@ -76,10 +80,12 @@ int run_catching_bad_input(const char* program, Body& body) {
 // and turns an exception that escapes it into one line "<program>: <what>" on stderr and an exit
 // code chosen by its type (panoptes/errors.h): kExitBadInput for an InputError (ConfigError among
 // them), a std::invalid_argument and the `BadInput` types given, kExitFailure for any other
-// exception, never an abort. `BadInput` is for a library's error type that, in this program, can
+// exception, never an abort. A crash (a fatal signal) is reported with its call stack
+// (install_crash_report). `BadInput` is for a library's error type that, in this program, can
 // only mean bad input (panoptes_replay only reads, so every RecordingError is its input's).
 template <typename... BadInput, typename Body>
 int run_program(const char* program, Body&& body) {
+  detail::install_crash_report(program);
   try {
     return detail::run_catching_bad_input<Body, InputError, std::invalid_argument, BadInput...>(program,
                                                                                                 body);
