@@ -166,10 +166,7 @@ namespace {
 // True if `text` goes into a JSON string as it is (no escape needed, ASCII): what the fast paths
 // write and read; anything else goes through the JSON library.
 bool plain_text(std::string_view text) {
-  return std::all_of(text.begin(), text.end(), [](char c) {
-    const auto u = static_cast<unsigned char>(c);
-    return u >= 0x20 && u < 0x80 && c != '"' && c != '\\';
-  });
+  return std::all_of(text.begin(), text.end(), jsonl_fast::plain_char);
 }
 
 std::string feature_frame_line_full(const FeatureFrame& frame) {
@@ -228,13 +225,9 @@ std::string to_json_line(const FeatureFrame& frame) {
     append_field(line, ",\"m20\":", blob.m20);
     append_field(line, ",\"m11\":", blob.m11);
     append_field(line, ",\"m02\":", blob.m02);
-    line += ",\"bbox\":";
-    const int box[4] = {blob.x0, blob.y0, blob.x1, blob.y1};
-    for (int k = 0; k < 4; ++k) {
-      line += k == 0 ? '[' : ',';
-      append_number(line, std::int64_t{box[k]});
-    }
-    line += "]}";
+    const std::int64_t box[4] = {blob.x0, blob.y0, blob.x1, blob.y1};
+    jsonl_fast::append_list(line, ",\"bbox\":", box, 4);
+    line += '}';
   }
   line += "]}";
   return line;
@@ -250,17 +243,9 @@ std::string to_json_line(const TrackRecord& track) {
   line += "{\"stamp_ns\":";
   append_number(line, std::int64_t{track.stamp_ns});
   append_field(line, ",\"id\":", std::int64_t{track.id});
-  const auto list = [&](const char* key, const double* values, int count) {
-    line += key;
-    for (int i = 0; i < count; ++i) {
-      line += i == 0 ? '[' : ',';
-      append_number(line, values[i]);
-    }
-    line += ']';
-  };
-  list(",\"p\":", track.p.data(), 3);
-  list(",\"v\":", track.v.data(), 3);
-  list(",\"cov\":", track.position_covariance.data(), 6);
+  jsonl_fast::append_list(line, ",\"p\":", track.p.data(), 3);
+  jsonl_fast::append_list(line, ",\"v\":", track.v.data(), 3);
+  jsonl_fast::append_list(line, ",\"cov\":", track.position_covariance.data(), 6);
   line += ",\"status\":\"";
   line += to_string(track.status);
   line += "\",\"cameras\":";

@@ -42,6 +42,24 @@ void append_field(std::string& out, std::string_view key, Number value) {
   append_number(out, value);
 }
 
+// `key` as it is written (as append_field), then `count` (> 0) numbers as a JSON array.
+template <typename Number>
+void append_list(std::string& out, const char* key, const Number* values, int count) {
+  out += key;
+  for (int i = 0; i < count; ++i) {
+    out += i == 0 ? '[' : ',';
+    append_number(out, values[i]);
+  }
+  out += ']';
+}
+
+// A character a string may hold as it is, both ways: printable ASCII other than the quote and the
+// backslash (any other string is written and read by the full JSON library, with its escapes).
+inline bool plain_char(char c) {
+  const auto u = static_cast<unsigned char>(c);
+  return u >= 0x20 && u < 0x80 && c != '"' && c != '\\';
+}
+
 // Reads one line left to right; every method returns false (and the caller gives up) at the
 // first character it does not expect.
 class Cursor {
@@ -90,8 +108,7 @@ class Cursor {
     if (!literal("\"")) return false;
     const std::size_t start = at_;
     while (at_ < text_.size() && text_[at_] != '"') {
-      const auto c = static_cast<unsigned char>(text_[at_]);
-      if (c == '\\' || c < 0x20 || c >= 0x80) return false;
+      if (!plain_char(text_[at_])) return false;
       ++at_;
     }
     if (at_ == text_.size()) return false;

@@ -271,10 +271,26 @@ RigidTransform bump_of(double degrees, double millimetres) {
           millimetres * 1e-3 * Eigen::Vector3d(0.6, -0.8, 0.0)};
 }
 
+// One row of issue 36's bump table (docs/continuous_calibration.md, "Measurements"): a bump at 10 s
+// tracked with the monitor (detect) and without it (off).
+void print_table_row(const char* name, const BumpRun& detect, const BumpRun& off) {
+  std::string quarantined;
+  for (const auto& h : detect.health)
+    if (h.quarantines > 0) quarantined += " " + h.camera_id;
+  std::printf(
+      "TABLE %-18s detection %s s, quarantined:%s | RMSE before %.3f mm, after: detect %.3f mm "
+      "(x%.3f, coverage %.3f), off %.3f mm (x%.3f, coverage %.3f)\n",
+      name,
+      detect.first_quarantine_ns == 0
+          ? "never"
+          : std::to_string(ns_to_seconds(detect.first_quarantine_ns - 10 * kNsPerSecond)).c_str(),
+      quarantined.empty() ? " none" : quarantined.c_str(), detect.rmse_before_mm, detect.rmse_after_mm,
+      detect.rmse_after_mm / detect.rmse_before_mm, detect.coverage_after, off.rmse_after_mm,
+      off.rmse_after_mm / off.rmse_before_mm, off.coverage_after);
+}
+
 TEST(CalibrationHealth, BumpedCameraIsQuarantinedWithinTwoSecondsAndTrackingHolds) {
   Scene scene = walk8_scene(20.0, 8);
-  const BumpRun clean_off = track(scene, "off");
-  print("walk8 unbumped, off", clean_off);
   const BumpRun clean = track(scene, "detect");
   print("walk8 unbumped, detect", clean);
   EXPECT_EQ(clean.quarantines, 0u);
@@ -294,9 +310,7 @@ TEST(CalibrationHealth, BumpedCameraIsQuarantinedWithinTwoSecondsAndTrackingHold
   EXPECT_LE(detect.rmse_after_mm, 1.4 * detect.rmse_before_mm);
   std::printf("RMSE while quarantined %.3f mm (%.3fx the RMSE before the bump)\n", detect.rmse_quarantined_mm,
               detect.rmse_quarantined_mm / detect.rmse_before_mm);
-  std::printf("detection %.3f s after the bump; RMSE ratio after/before %.3f (off: %.3f)\n",
-              ns_to_seconds(detect.first_quarantine_ns - 10 * kNsPerSecond),
-              detect.rmse_after_mm / detect.rmse_before_mm, off.rmse_after_mm / off.rmse_before_mm);
+  print_table_row("0.5 deg cam3", detect, off);  // the table's row (BumpTable has the others)
 }
 
 // Mode correct (issue 36 item 3): cam3 bumped by 2 degrees and 5 mm at 10 s is quarantined, its
@@ -420,42 +434,47 @@ TEST(CalibrationHealth, NoFalseAlarmsOnNormalTrackingWithClutter) {
 namespace panoptes::estimator {
 namespace {
 
-// Issue 36's table, measured (printed; only the 0.5° case above is asserted): bumps of 0.1°, 0.5°,
-// 2° and 5° (with 5 mm) of cam3 at 10 s, and cam3 and cam6 bumped at once. With
-// PANOPTES_BUMP_TABLE_CORRECT set, also mode correct over 30 s without and with anchors.
+// Issue 36's table (docs/continuous_calibration.md): bumps of 0.1°, 2° and 5° (with 5 mm) of cam3
+// at 10 s, and cam3 and cam6 bumped by 0.5° at once; the 0.5° row of cam3 alone is
+// BumpedCameraIsQuarantinedWithinTwoSecondsAndTrackingHolds's. Each row asserts what the table
+// shows: the bumped cameras and no other quarantined within 1.5 s of the bump (measured 0.42-0.96
+// s), the monitor's tracks more accurate after the bump than without it (x1.07-1.59 against
+// x1.19-5.56 of the RMSE before) and coverage >= 0.99 (0.996-1.000). With
+// PANOPTES_BUMP_TABLE_CORRECT set, also the 0.5° row of cam3 and mode correct over 30 s without
+// and with anchors for every row (printed).
 TEST(CalibrationHealth, BumpTable) {
   struct Case {
     const char* name;
     double degrees;
     std::vector<std::size_t> cameras;
   };
-  const std::vector<Case> cases = {{"0.1 deg cam3", 0.1, {3}},
-                                   {"0.5 deg cam3", 0.5, {3}},
-                                   {"2 deg cam3", 2.0, {3}},
-                                   {"5 deg cam3", 5.0, {3}},
-                                   {"0.5 deg cam3+cam6", 0.5, {3, 6}}};
+  const bool correct_too = std::getenv("PANOPTES_BUMP_TABLE_CORRECT") != nullptr;  // 50 s more: by hand
+  std::vector<Case> cases = {{"0.1 deg cam3", 0.1, {3}},
+                             {"2 deg cam3", 2.0, {3}},
+                             {"5 deg cam3", 5.0, {3}},
+                             {"0.5 deg cam3+cam6", 0.5, {3, 6}}};
+  if (correct_too) cases.insert(cases.begin() + 1, {"0.5 deg cam3", 0.5, {3}});  // its correct rows
   for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
     Scene scene = walk8_scene(20.0, 8);
     for (const std::size_t camera : c.cameras)
       scene.set_camera_bump(camera, 10 * kNsPerSecond, bump_of(c.degrees, 5.0));
     const BumpRun off = track(scene, "off");
     const BumpRun detect = track(scene, "detect");
-    std::string quarantined;
+    print_table_row(c.name, detect, off);
+    std::vector<std::string> bumped;
+    for (const std::size_t camera : c.cameras) bumped.push_back(scene.cameras()[camera].calibration.id);
+    std::vector<std::string> quarantined;
     for (const auto& h : detect.health)
-      if (h.quarantines > 0) quarantined += " " + h.camera_id;
-    std::printf(
-        "TABLE %-18s detection %s s, quarantined:%s | RMSE before %.3f mm, after: detect %.3f mm "
-        "(x%.3f, coverage %.3f), off %.3f mm (x%.3f, coverage %.3f)\n",
-        c.name,
-        detect.first_quarantine_ns == 0
-            ? "never"
-            : std::to_string(ns_to_seconds(detect.first_quarantine_ns - 10 * kNsPerSecond)).c_str(),
-        quarantined.empty() ? " none" : quarantined.c_str(), detect.rmse_before_mm, detect.rmse_after_mm,
-        detect.rmse_after_mm / detect.rmse_before_mm, detect.coverage_after, off.rmse_after_mm,
-        off.rmse_after_mm / off.rmse_before_mm, off.coverage_after);
+      if (h.quarantines > 0) quarantined.push_back(h.camera_id);
+    EXPECT_EQ(quarantined, bumped);
+    EXPECT_GE(detect.first_quarantine_ns, 10 * kNsPerSecond);
+    EXPECT_LE(detect.first_quarantine_ns, 10 * kNsPerSecond + kNsPerSecond * 3 / 2);
+    EXPECT_LT(detect.rmse_after_mm, off.rmse_after_mm);
+    EXPECT_GE(detect.coverage_after, 0.99);
     // Mode correct over 30 s (20 s of motion after the bump), without and with anchors: when each
     // bumped camera was first corrected, and its pose in use at the end against its true pose.
-    if (std::getenv("PANOPTES_BUMP_TABLE_CORRECT") == nullptr) continue;  // 50 s more: by hand
+    if (!correct_too) continue;
     for (const bool anchored : {false, true}) {
       Scene longer = walk8_scene(30.0, 8, anchored ? walk8_anchors() : std::string());
       for (const std::size_t camera : c.cameras)
