@@ -85,7 +85,12 @@ kill -INT "${cameras[@]}" "$estimator" 2>/dev/null
 timeout 30 tail --pid="$estimator" -f /dev/null
 expect_clean_exit "$estimator" estimator_node "$work/estimator.log"
 # Each created body: tracked within 1 s of its creation returning, its mean position at its
-# object's true centroid within 0.1 mm, pose RMS within 0.3 mm.
+# object's true centroid within 0.1 mm, pose RMS within 0.3 mm where the estimator reports itself
+# sure (position sigma <= 1 mm), and every pose within 4 sigma of the truth on each axis. On a
+# loaded machine some cameras' frames can arrive late together for a while (once 5 of 6 for 150 ms:
+# the body then rode on one camera along x, its x sigma grew to 40 mm and its position strayed
+# 20 mm, all within 1.3 sigma; the late frames replayed it back); those poses say so in their sigma
+# and are at most 5 % of the poses.
 check_body() {  # NAME OBJECT CREATED_JSON CREATED_NS_OR_MS PLACE
   python3 - "$1" "$2" "$3" "$4" "$5" "$work/poses.jsonl" "$work/sim/bodies.yaml" <<'PY' &&
 import json, math, sys, yaml
@@ -104,12 +109,17 @@ delay = (first - created_ns) / 1e9
 # The layout's error shows in the mean pose (the same for every frame of a static object); the
 # estimator's own pose noise, which a body defined by hand has too, in the spread.
 errors = [math.dist(p["p"], centroid) for p in poses]
+sure = [e for p, e in zip(poses, errors) if max(p["sigma"][:3]) <= 1e-3]
+unsure = len(poses) - len(sure)
 mean = [sum(p["p"][i] for p in poses) / len(poses) for i in range(3)]
 offset = math.dist(mean, centroid)
-rms = math.sqrt(sum(e * e for e in errors) / len(errors))
+rms = math.sqrt(sum(e * e for e in sure) / max(len(sure), 1))
+# The largest error on one axis in units of the reported sigma on that axis.
+z = max(abs(p["p"][i] - centroid[i]) / max(p["sigma"][i], 1e-9) for p in poses for i in range(3))
 angles = sorted(2 * math.degrees(math.acos(min(1.0, abs(p["q"][3])))) for p in poses)
 print(f"{name}: {len(poses)} poses, first {delay * 1000:.0f} ms after its creation returned; mean position "
-      f"{offset * 1000:.4f} mm from the true centroid, RMS {rms * 1000:.3f} mm, largest {max(errors) * 1000:.3f} mm; "
+      f"{offset * 1000:.4f} mm from the true centroid, RMS {rms * 1000:.3f} mm over the {len(sure)} with sigma <= 1 mm, "
+      f"largest {max(errors) * 1000:.3f} mm, largest error/sigma on an axis {z:.2f}, {unsure} with sigma > 1 mm; "
       f"rotation from the identity median {angles[len(angles) // 2]:.3f} deg")
 # Where it strays, for the log of a failed run: the poses more than 1 mm off, with their times.
 far = [(p["stamp_ns"], e) for p, e in zip(poses, errors) if e > 1e-3]
@@ -119,8 +129,10 @@ if far:
 assert delay <= 1.0, delay
 assert offset <= 1e-4, offset
 assert rms <= 3e-4, rms
+assert z <= 4.0, z
+assert unsure <= 0.05 * len(poses), unsure
 PY
-    pass "$1 tracked within 1 s, its mean position at the true centroid (<= 0.1 mm), RMS <= 0.3 mm" ||
+    pass "$1 tracked within 1 s, its mean position at the true centroid (<= 0.1 mm), RMS <= 0.3 mm where sure, every pose within 4 sigma" ||
     fail "$1 not tracked as expected"
 }
 check_body fixture2 fixture "$(tail -n 1 "$work/created.json")" "$created_ns" 0.8,-0.6,0.9

@@ -67,7 +67,12 @@ else
   lead_s=$((gate_wait_s + gate_lead_s))  # the estimator's --duration bound below
 fi
 launched_ns=$(date +%s%N)
-netns_spawn "$estimator_host" "$bin/estimator_node" --calibration "$work/features/calibration.yaml" \
+# The estimator runs at nice -5, as deploy/systemd/estimator_node.service runs it: the 32 camera
+# processes stand for 32 PCs and must not take its share of the cores (docs/deployment.md, "How
+# many cameras one box simulates"). At nice 0, beside a unit test and another 1.2-core load, it
+# once got 22-25 % of a core for 5 s where it needs 33 %, fell 2.1 s behind and its inbox dropped
+# 975 frames (0.5 s of every camera).
+netns_spawn "$estimator_host" nice -n -5 "$bin/estimator_node" --calibration "$work/features/calibration.yaml" \
   --dds-profile "$profile" --out-tracks "$work/tracks.jsonl" --duration $((seconds + lead_s + 3)) \
   --status-period 5 $light_estimator >"$work/estimator.log" 2>&1 &
 estimator=$!

@@ -122,8 +122,7 @@ void write_text(const char* text) {
 // Only async-signal-safe calls: write, backtrace (loaded beforehand), backtrace_symbols_fd, raise.
 extern "C" void on_fatal_signal(int signal) {
   write_text(g_crash_program);
-  write_text(": fatal signal ");
-  write_text("SIG");
+  write_text(": fatal signal SIG");
   write_text(sigabbrev_np(signal) != nullptr ? sigabbrev_np(signal) : "?");
   write_text("; call stack (a frame in the program itself: addr2line -e <program> <+offset>):\n");
   void* frames[64];
