@@ -143,8 +143,9 @@ struct Track {
   TimeNs last_seen_ns() const { return seen_ns != 0 ? seen_ns : last_update_ns; }
   std::vector<TimeNs> camera_last_update;   // by camera index; 0 = never
   std::vector<float> camera_innovation_px;  // by camera index: its last update's innovation, px (publishable)
-  // reacquire_sigma_m: made by initiation under a new id (not an undone or a rejoined one), and
-  // confirmed in the frame just applied: it may take a held-back track's id (reacquire_confirmed).
+  // reacquire_sigma_m: made by initiation under a new id (not a rejoined one, nor one that took a
+  // held-back track's id; a replay that makes an undone one again keeps its flag), and confirmed
+  // in the frame just applied: it may take a held-back track's id (reacquire_confirmed).
   bool fresh = false;
   bool pending_reacquire = false;
   // rejoin_fast_tracks: the lost fast track whose id this track takes once confirmed (0: none).
@@ -1699,6 +1700,7 @@ void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
     for (const auto& [from, to] : renames) {
       if (track.id != from) continue;
       track.id = to;
+      track.fresh = false;  // the held-back track's identity: a replay that creates it again keeps it
       track.resumed_ns = now_ns;
       ++core.tracks_reacquired;
     }
@@ -1805,6 +1807,9 @@ std::int64_t Tracker::Impl::id_for(const Eigen::Vector3d& position, TimeNs stamp
   }
   const std::int64_t id = nearest->id;
   rejoin_id = nearest->rejoin_id;
+  // A new id the rewind undid may still take a held-back track's id when the replay confirms it
+  // again: the replay brings the late frames its first confirmation did not have.
+  fresh = nearest->fresh;
   undone.erase(nearest);
   // A replay from before a reacquisition renamed the track: the held-back track of that id is
   // in the restored state again.
