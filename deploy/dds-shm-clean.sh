@@ -16,13 +16,20 @@ set -uo pipefail
 shm="${PANOPTES_SHM_DIR:-/dev/shm}"
 min_age_s="${PANOPTES_SHM_CLEAN_MIN_AGE_S:-10}"
 now=$(date +%s)
-in_use="$(cat /proc/[0-9]*/maps 2>/dev/null | grep -o "$shm/fastrtps_[^ ]*" | sort -u)"
+# One read of every process's maps and one stat of every file: the test suite runs this at the end
+# of every integration test, with hundreds of files present while other tests run; a grep and a stat
+# per file took 2.4 s at the end of test_console (4.3 s for 460 files), now 0.1 s (docs/testing.md).
+declare -A in_use=() mtime=()
+while read -r file; do in_use[$file]=1; done < <(cat /proc/[0-9]*/maps 2>/dev/null | grep -o "$shm/fastrtps_[^ ]*" | sort -u)
+files=("$shm"/fastrtps_*)
+[ -e "${files[0]}" ] || exit 0
+while read -r modified file; do mtime[$file]=$modified; done < <(stat -c '%Y %n' -- "${files[@]}" 2>/dev/null)
 
 old_enough() {  # FILE...: every one that exists is older than min_age_s
-  local file modified
+  local file
   for file in "$@"; do
-    modified=$(stat -c %Y "$file" 2>/dev/null) || continue
-    [ $((now - modified)) -ge "$min_age_s" ] || return 1
+    [ -n "${mtime[$file]+set}" ] || continue
+    [ $((now - mtime[$file])) -ge "$min_age_s" ] || return 1
   done
   return 0
 }
@@ -31,13 +38,13 @@ unlocked() {  # LOCK_FILE: not locked by any process (a missing file is not lock
   [ ! -e "$1" ] || flock --nonblock --exclusive "$1" true 2>/dev/null
 }
 
-for file in "$shm"/fastrtps_*; do
+for file in "${files[@]}"; do
   [ -e "$file" ] || continue
   case "$file" in *_el | *_sl) continue ;; esac
-  grep -qxF "$file" <<<"$in_use" && continue
+  [ -n "${in_use[$file]+set}" ] && continue
   old_enough "$file" "${file}_el" "${file}_sl" || continue
   unlocked "${file}_el" && unlocked "${file}_sl" || continue
-  rm -f "$file" "${file}_el" "${file}_sl" "$shm/sem.$(basename "$file")_mutex"
+  rm -f "$file" "${file}_el" "${file}_sl" "$shm/sem.${file##*/}_mutex"
 done
 # Lock files whose segment or port is gone.
 for lock in "$shm"/fastrtps_*_el "$shm"/fastrtps_*_sl; do
