@@ -96,8 +96,8 @@ label_offline() {
 # process that hangs on its way out (seen once: a recorder after closing its file, in Fast DDS's
 # teardown) fails the test instead of holding it until ctest's timeout. Returns PID's exit status,
 # or 124 when it had to be killed (and says so).
-wait_bounded() {  # PID SECONDS NAME
-  if ! timeout "$2" tail --pid="$1" -f /dev/null; then
+wait_bounded() {  # PID SECONDS NAME (tail -s 0.05: it looks at PID every 50 ms, not every second)
+  if ! timeout "$2" tail -s 0.05 --pid="$1" -f /dev/null; then
     echo "$3 (pid $1) still running after $2 s: killed"
     kill -KILL "$1" 2>/dev/null
     wait "$1" 2>/dev/null

@@ -65,7 +65,7 @@ sleep 7
 printf 'bodies:\n  - name: head\n    markers: [[0,0,0],[0.1,0,0]]\n' >"$work/live_bodies.yaml"
 sleep 2
 sed 's/name: "*tool"*/name: tool2/' "$work/sim/bodies.yaml" >"$work/live_bodies.yaml"
-timeout 30 tail --pid="$estimator" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$estimator" -f /dev/null
 wait "$estimator"
 rc=$?
 [ "$rc" -eq 0 ] && pass "live estimator exited cleanly" || { fail "live estimator exit $rc"; tail -20 "$work/estimator.log"; }

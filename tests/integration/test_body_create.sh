@@ -82,7 +82,7 @@ else
   sleep 2  # fixture2's first second of poses (checked below)
 fi
 kill -INT "${cameras[@]}" "$estimator" 2>/dev/null
-timeout 30 tail --pid="$estimator" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$estimator" -f /dev/null
 expect_clean_exit "$estimator" estimator_node "$work/estimator.log"
 # Each created body: tracked within 1 s of its creation returning, its mean position at its
 # object's true centroid within 0.1 mm, pose RMS within 0.3 mm where the estimator reports itself

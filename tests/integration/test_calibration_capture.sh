@@ -33,7 +33,7 @@ capture() {
       --quiet >"$work/${camera}_$tag.log" 2>&1 &
     pids+=("$!")
   done
-  timeout 30 tail --pid="$capture" -f /dev/null
+  timeout 30 tail -s 0.05 --pid="$capture" -f /dev/null
   wait "$capture"
   local rc=$?
   [ "$rc" -eq 0 ] && pass "$tag: calibrate capture exited cleanly" ||

@@ -100,7 +100,7 @@ kill -KILL "$cam3"
 killed_ns=$(date +%s%N)
 echo "$killed_ns" >"$work/killed"
 wait "$watcher" || fail "watcher: $(cat "$work/watch.log")"
-timeout 40 tail --pid="$estimator" -f /dev/null
+timeout 40 tail -s 0.05 --pid="$estimator" -f /dev/null
 
 "$python" - "$work" "$killed_ns" <<'PY' && pass "cam3 reported lost within 1 s by the status line, estimator_status, the console and the client" || fail "cam3 not reported lost in time"
 import json, re, sys
@@ -153,7 +153,7 @@ while [ "$(date +%s%N)" -lt $((epoch + 1000000000)) ]; do sleep 0.05; done
 "$bin/camera_node" --source "features:$work/sim/impostor.jsonl" --sim-epoch-ns "$epoch" \
   --duration "$seconds" --quiet >"$work/impostor.log" 2>&1 &
 pids+=("$!")
-timeout 40 tail --pid="$estimator" -f /dev/null
+timeout 40 tail -s 0.05 --pid="$estimator" -f /dev/null
 
 grep -qE "camera 'cam0': refusing the frames of a second writer [0-9a-f]{24}\.[0-9a-f]{8}: the id belongs to writer [0-9a-f]{24}\.[0-9a-f]{8}" "$work/part2.log" &&
   pass "the second writer for cam0 is refused and logged, naming both writers" ||

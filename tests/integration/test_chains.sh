@@ -64,12 +64,12 @@ pids+=("$estimator")
 sleep 1.5
 epoch=$(( ($(date +%s) + 3) * 1000000000 ))
 replay_cameras "$epoch" 16 c0 c1 c2 c3
-timeout 30 tail --pid="$estimator" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$estimator" -f /dev/null
 wait "$estimator"
 rc=$?
 [ "$rc" -eq 0 ] && pass "live estimator_node with the chain exited cleanly" || { fail "estimator exit $rc"; tail -5 "$work/estimator.log"; }
 grep "chains (camera frames by status)" "$work/estimator.log"
-timeout 15 tail --pid="$grabber" -f /dev/null
+timeout 15 tail -s 0.05 --pid="$grabber" -f /dev/null
 wait "$grabber" && pass "grab_objects received chain updates" || { fail "grab_objects exit $?"; }
 cat "$work/grab.log"
 python3 - "$work" "$(cat "$work/python.txt" 2>/dev/null)" "${python_reader:+yes}" <<'PY' || failures=$((failures + 1))

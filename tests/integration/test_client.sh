@@ -75,7 +75,7 @@ wait "$plot" && [ -s "$work/tool.png" ] && grep -q "positions of 'tool' plotted"
   { fail "plot_body.py"; cat "$work/plot.err"; }
 "$python" -c "import sys, matplotlib.image as i; a = i.imread(sys.argv[1]); sys.exit(0 if a.shape[0] > 100 and a.std() > 0 else 1)" \
   "$work/tool.png" 2>/dev/null && pass "the PNG is an image with content" || fail "the PNG is not a plot"
-timeout 10 tail --pid="$ptz_guide" -f /dev/null
+timeout 10 tail -s 0.05 --pid="$ptz_guide" -f /dev/null
 python3 - "$work/ptz.jsonl" <<'PY' && pass "ptz_guide steered at the live body 'head' ($(wc -l <"$work/ptz.jsonl") commands)" ||
 import json, math, sys
 lines = [json.loads(l) for l in open(sys.argv[1])]
@@ -85,14 +85,14 @@ ok = ok and max(c["pan"] for c in lines) - min(c["pan"] for c in lines) > 1e-4  
 sys.exit(0 if ok else 1)
 PY
   { fail "ptz_guide live commands"; tail -3 "$work/ptz.log"; head -3 "$work/ptz.jsonl"; }
-timeout 30 tail --pid="$estimator" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$estimator" -f /dev/null
 wait "$estimator"
 rc=$?
 [ "$rc" -eq 0 ] && pass "the restarted estimator exited cleanly" || { fail "estimator exit $rc"; tail -5 "$work/estimator2.log"; }
-timeout 30 tail --pid="$probe" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$probe" -f /dev/null
 wait "$probe" || fail "panoptes_client_probe exit $?"
 cat "$work/probe.log"
-timeout 30 tail --pid="$python_probe" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$python_probe" -f /dev/null
 wait "$python_probe" || fail "python_client_probe exit $?"
 cat "$work/python_probe.log"
 published2=$(frames_published "$work/estimator2.log")

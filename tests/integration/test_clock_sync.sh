@@ -49,10 +49,10 @@ for camera, counters in seen.items():
 PY
 
 for pid in "${camera_pids[@]}"; do
-  timeout 30 tail --pid="$pid" -f /dev/null
+  timeout 30 tail -s 0.05 --pid="$pid" -f /dev/null
   wait "$pid" || fail "camera_node (pid $pid) exit $?"
 done
-timeout 30 tail --pid="$estimator" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$estimator" -f /dev/null
 wait "$estimator" && pass "estimator_node stopped cleanly" || fail "estimator_node exit $?"
 # Issue 32: once every camera has stopped, the estimator deletes the tracks no frame keeps alive
 # (they stayed confirmed in its status for as long as it ran). It runs 3 s past the cameras.

@@ -32,7 +32,7 @@ rc=${PIPESTATUS[0]}
 [ "$rc" -eq 0 ] && pass "browser checks ($(( $(date +%s) - start )) s)" || fail "browser checks (exit $rc)"
 
 kill -INT "$estimator" 2>/dev/null
-timeout 10 tail --pid="$estimator" -f /dev/null
+timeout 10 tail -s 0.05 --pid="$estimator" -f /dev/null
 /usr/bin/python3 - "$work" <<'PY' || failures=$((failures + 1))
 import bisect, json, sys
 work = sys.argv[1]

@@ -62,13 +62,13 @@ else
   fail "UDP sockets outside loopback (or none seen):"
   echo "$sockets"
 fi
-timeout 40 tail --pid="$probe_pid" -f /dev/null
+timeout 40 tail -s 0.05 --pid="$probe_pid" -f /dev/null
 wait "$probe_pid"
 rc=$?
 cat "$work/cyclone_summary.json"
 [ "$rc" -eq 0 ] && pass "the Cyclone DDS probe decoded every topic and its checks held" ||
   { fail "panoptes_cyclone_probe exit $rc"; tail -20 "$work/cyclone.log"; }
-timeout 30 tail --pid="$estimator" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$estimator" -f /dev/null
 expect_clean_exit "$estimator" "the live estimator" "$work/estimator.log"
 
 summary="$work/cyclone_summary.json"

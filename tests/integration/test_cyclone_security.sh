@@ -100,11 +100,11 @@ for camera in c0 c1 c2 c3 c4 c5; do
   sleep 1
   PANOPTES_SECURITY_IDENTITY="$camera" replay_cameras "$epoch" 10 "$camera"
 done
-timeout 40 tail --pid="$robot" -f /dev/null
+timeout 40 tail -s 0.05 --pid="$robot" -f /dev/null
 wait "$plain_pid"
 plain_rc=$?
 wait "$robot"
-timeout 30 tail --pid="$estimator" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$estimator" -f /dev/null
 expect_clean_exit "$estimator" "the secured estimator" "$work/estimator.log"
 for camera in c0 c1 c2 c3 c4 c5; do
   grep -q "not granted\|refused" "$work/$camera.log" && fail "$camera: $(grep -m1 "not granted\|refused" "$work/$camera.log")"

@@ -16,7 +16,7 @@ for exe in camera_node estimator_node panoptes_demo; do
   for pid in $(pgrep -x "$exe"); do ss -H -uanp 2>/dev/null | grep "pid=$pid," ; done
 done >"$work/sockets.txt"
 cp /proc/net/igmp "$work/igmp.txt" 2>/dev/null || true
-timeout 60 tail --pid="$demo" -f /dev/null
+timeout 60 tail -s 0.05 --pid="$demo" -f /dev/null
 wait "$demo"
 rc=$?
 cat "$work/demo.out"

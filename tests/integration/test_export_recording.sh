@@ -21,7 +21,7 @@ sleep 1
 "$bin/panoptes_demo" --scene "$work/scene.yaml" --duration 8 --log-dir "$work/logs" --frames per-camera >"$work/demo.out" 2>&1 &
 demo=$!
 pids+=("$demo")
-timeout 90 tail --pid="$demo" -f /dev/null
+timeout 90 tail -s 0.05 --pid="$demo" -f /dev/null
 wait "$demo" || { fail "demo exit $?"; tail -5 "$work/demo.out"; }
 sleep 1
 kill -INT "$a"

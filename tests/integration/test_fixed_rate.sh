@@ -37,10 +37,10 @@ live_run() {
   local estimator=$!
   pids+=("$estimator")
   replay_cameras "$epoch" "$seconds" c0 c1 c2 c3 c4 c5
-  timeout 40 tail --pid="$estimator" -f /dev/null
+  timeout 40 tail -s 0.05 --pid="$estimator" -f /dev/null
   wait "$estimator" && pass "$name: the estimator exited cleanly" ||
     { fail "$name: estimator exit"; tail -5 "$work/$name.estimator.log"; }
-  timeout 20 tail --pid="$probe" -f /dev/null
+  timeout 20 tail -s 0.05 --pid="$probe" -f /dev/null
   wait "$probe" || fail "$name: panoptes_client_probe exit"
 }
 

@@ -24,10 +24,10 @@ sleep 2  # the nodes start; scene time 0 is 3 s after the demo starts
   >"$work/rogue.out" 2>&1 &
 rogue=$!
 pids+=("$rogue")
-timeout 60 tail --pid="$demo" -f /dev/null
+timeout 60 tail -s 0.05 --pid="$demo" -f /dev/null
 wait "$demo"
 rc=$?
-timeout 20 tail --pid="$rogue" -f /dev/null
+timeout 20 tail -s 0.05 --pid="$rogue" -f /dev/null
 wait "$rogue"
 rogue_rc=$?
 cat "$work/rogue.out"

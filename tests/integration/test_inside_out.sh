@@ -103,7 +103,7 @@ PYTHON
 fi
 "$bin/camera_node" --source "sim:$scene#head" --sim-epoch-ns "$epoch" --duration 8 --quiet >"$work/camera.log" 2>&1 &
 pids+=("$!")
-timeout 40 tail --pid="$estimator" -f /dev/null
+timeout 40 tail -s 0.05 --pid="$estimator" -f /dev/null
 wait "$estimator"
 rc=$?
 [ "$rc" -eq 0 ] && pass "live estimator exited cleanly" || { fail "live estimator exit $rc"; tail -20 "$work/estimator.log"; }

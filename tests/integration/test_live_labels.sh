@@ -98,15 +98,15 @@ late=$!
 pids+=("$late")
 # The replay ends with the scene's features: SIGINT then ends the estimator and the client as
 # their --duration would (the same summaries), ~3 s sooner, once the last frames had 0.5 s.
-for pid in "${camera_pids[@]}"; do timeout 30 tail --pid="$pid" -f /dev/null; done
+for pid in "${camera_pids[@]}"; do timeout 30 tail -s 0.05 --pid="$pid" -f /dev/null; done
 sleep 0.5
 kill -INT "$estimator" 2>/dev/null
-timeout 30 tail --pid="$estimator" -f /dev/null
+timeout 30 tail -s 0.05 --pid="$estimator" -f /dev/null
 expect_clean_exit "$estimator" estimator_node "$work/estimator.log"
 sleep 0.3
 kill -INT "$client" 2>/dev/null
-timeout 20 tail --pid="$client" -f /dev/null
-timeout 20 tail --pid="$late" -f /dev/null
+timeout 20 tail -s 0.05 --pid="$client" -f /dev/null
+timeout 20 tail -s 0.05 --pid="$late" -f /dev/null
 # The scoring below (CPU-bound, ~10 s one after another) starts now, in the background, while the
 # recording is exported and the console is checked: this test holds both cores (docs/testing.md).
 declare -A scoring
@@ -165,7 +165,7 @@ if have_browser "console part"; then
   wait "$browser" && pass "console: names and sticks drawn" || fail "console: names and sticks (exit $?)"
   cat "$work/browser.out"
   kill -INT "${camera_pids[@]}" 2>/dev/null
-  for pid in "${camera_pids[@]}"; do timeout 10 tail --pid="$pid" -f /dev/null; done
+  for pid in "${camera_pids[@]}"; do timeout 10 tail -s 0.05 --pid="$pid" -f /dev/null; done
   kill -INT "$console_estimator" 2>/dev/null
   wait_bounded "$console_estimator" 20 "the console phase's estimator_node" >/dev/null
   # Every (track, name) the page drew is one that estimator wrote (--out-labels).

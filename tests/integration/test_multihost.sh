@@ -66,13 +66,13 @@ run_phase() {
     netns_exec "$i" cat /proc/net/igmp
   done >"$dir/sockets.txt" 2>&1
   cp /proc/net/igmp "$dir/root_igmp.txt"
-  for pid in "${camera_pids[@]}"; do timeout 20 tail --pid="$pid" -f /dev/null || true; done
+  for pid in "${camera_pids[@]}"; do timeout 20 tail -s 0.05 --pid="$pid" -f /dev/null || true; done
   sleep 0.5
   kill -INT "$estimator" 2>/dev/null || true
-  timeout 20 tail --pid="$estimator" -f /dev/null || true
+  timeout 20 tail -s 0.05 --pid="$estimator" -f /dev/null || true
   sleep 0.3
   kill -INT "$probe" 2>/dev/null || true
-  timeout 20 tail --pid="$probe" -f /dev/null || true
+  timeout 20 tail -s 0.05 --pid="$probe" -f /dev/null || true
   expect_clean_exit "$estimator" "$tag: estimator_node" "$dir/estimator.log"
 
   if "$bin/panoptes_eval" --scene "$scene" --tracks "$dir/tracks.jsonl" --epoch-ns "$epoch" \

@@ -105,7 +105,7 @@ t_restart_estimator=$(now_ns)
 start_estimator 2 11  # until 3 s after the scene ends
 
 for i in 0 1 2 3; do
-  if timeout 25 tail --pid="${camera_pid[$i]}" -f /dev/null && wait "${camera_pid[$i]}"; then
+  if timeout 25 tail -s 0.05 --pid="${camera_pid[$i]}" -f /dev/null && wait "${camera_pid[$i]}"; then
     pass "camera_node cam$i ran through to the end of the scene and exited cleanly"
   else
     fail "camera_node cam$i did not end cleanly"; tail -5 "$work"/cam${i}_*.log
@@ -115,11 +115,11 @@ done
 # same summaries), ~3 s sooner, once the last frames have had 0.5 s to arrive.
 sleep 0.5
 kill -INT "$estimator" 2>/dev/null || true
-timeout 20 tail --pid="$estimator" -f /dev/null || true
+timeout 20 tail -s 0.05 --pid="$estimator" -f /dev/null || true
 wait "$estimator" && pass "the restarted estimator_node exited cleanly" || fail "restarted estimator_node"
 sleep 0.3
 kill -INT "$probe" 2>/dev/null || true
-timeout 20 tail --pid="$probe" -f /dev/null || true
+timeout 20 tail -s 0.05 --pid="$probe" -f /dev/null || true
 
 python3 - "$work/probe.jsonl" "$t_kill_camera" "$t_restart_camera" "$t_link_down" "$t_link_up" \
   "$t_kill_estimator" "$t_restart_estimator" >"$work/recovery.txt" <<'PY'

@@ -114,12 +114,12 @@ t1=$(date +%s%N)
 rss_peak_kb=$(awk '/VmHWM/ {print $2}' "/proc/$estimator/status")
 rss_kb=$(awk '/VmRSS/ {print $2}' "/proc/$estimator/status")
 threads=$(awk '/Threads/ {print $2}' "/proc/$estimator/status")
-for pid in "${camera_pids[@]}"; do timeout 20 tail --pid="$pid" -f /dev/null || true; done
+for pid in "${camera_pids[@]}"; do timeout 20 tail -s 0.05 --pid="$pid" -f /dev/null || true; done
 # The replay is over: the estimator's last frames are processed within 0.5 s, and SIGINT ends it
 # as its --duration would (the same summary), 2-3 s sooner.
 sleep 0.5
 kill -INT "$estimator" 2>/dev/null || true
-timeout 20 tail --pid="$estimator" -f /dev/null || true
+timeout 20 tail -s 0.05 --pid="$estimator" -f /dev/null || true
 expect_clean_exit "$estimator" estimator_node "$work/estimator.log"
 
 sent=0 synchronised=0

@@ -122,7 +122,7 @@ else
   for pid in "${unit_pids[@]:1}"; do kill -INT "$pid" 2>/dev/null || true; done
   sleep 1
   kill -INT "$estimator" 2>/dev/null || true
-  for pid in "${unit_pids[@]}"; do timeout 10 tail --pid="$pid" -f /dev/null || true; done
+  for pid in "${unit_pids[@]}"; do timeout 10 tail -s 0.05 --pid="$pid" -f /dev/null || true; done
 fi
 grep -q "DDS profile /usr/share/panoptes/dds/loopback.xml" "$work/estimator.log" &&
   pass "the installed estimator uses the installed loopback profile" || fail "estimator profile: $(head -3 "$work/estimator.log")"

@@ -46,7 +46,7 @@ sleep 3
 kill -KILL "$b"
 "$rec" --command stop --target rec_c 2>"$work/cmd_stop.log" && pass "DDS command stopped recorder C" ||
   { fail "stop command"; cat "$work/cmd_stop.log"; }
-timeout 60 tail --pid="$demo" -f /dev/null
+timeout 60 tail -s 0.05 --pid="$demo" -f /dev/null
 wait "$demo" || { fail "demo exit $?"; tail -5 "$work/demo.out"; }
 sleep 1
 kill -INT "$a"
@@ -55,7 +55,7 @@ wait_bounded "$a" 30 "recorder A" && pass "recorder A stopped cleanly on SIGINT"
 wait_bounded "$c" 30 "recorder C" && pass "recorder C quit on its DDS command" || fail "recorder C exit $?"
 # D stops by itself when its file reaches the size limit; under heavy load the demo may not have
 # produced 300 kB by now: bounded wait, then a clear failure rather than a hang.
-timeout 30 tail --pid="$d" -f /dev/null ||
+timeout 30 tail -s 0.05 --pid="$d" -f /dev/null ||
   { echo "recorder D still running 30 s after the demo (the demo produced too little data?)"; kill -INT "$d"; }
 wait_bounded "$d" 10 "recorder D"
 rc_d=$?

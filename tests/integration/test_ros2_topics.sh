@@ -47,14 +47,14 @@ run_live() {
   done
   # The estimator, the probe and the recorder end 0.5 s after the last camera (SIGINT: the same
   # summary and files as at the end of their --duration, which stays as a bound).
-  for camera in "${cameras[@]}"; do timeout $((seconds + 30)) tail --pid="$camera" -f /dev/null; done
+  for camera in "${cameras[@]}"; do timeout $((seconds + 30)) tail -s 0.05 --pid="$camera" -f /dev/null; done
   sleep 0.5
   kill -INT "$estimator" "$probe" ${recorder:+"$recorder"} 2>/dev/null
-  timeout $((seconds + 30)) tail --pid="$estimator" -f /dev/null
+  timeout $((seconds + 30)) tail -s 0.05 --pid="$estimator" -f /dev/null
   wait "$estimator"
   local rc=$?
-  timeout 30 tail --pid="$probe" -f /dev/null
-  [ -z "$recorder" ] || timeout 30 tail --pid="$recorder" -f /dev/null
+  timeout 30 tail -s 0.05 --pid="$probe" -f /dev/null
+  [ -z "$recorder" ] || timeout 30 tail -s 0.05 --pid="$recorder" -f /dev/null
   [ "$rc" -eq 0 ] && pass "$name: estimator exited cleanly" || { fail "$name: estimator exit $rc"; tail "$work/$name.log"; }
 }
 

@@ -254,8 +254,8 @@ netns_spawn "$intruder_host" env PANOPTES_SECURITY_DIR="$forged" PANOPTES_SECURI
 pids+=("$!")
 # The operator may command: a threshold of 61 on every camera is the positive control.
 wait "$ops_command" && pass "the operator's command was sent" || { fail "operator command"; cat "$work/ctl_ops.log"; }
-timeout 20 tail --pid="$status_reader" -f /dev/null || true
-timeout 30 tail --pid="$estimator" -f /dev/null || true
+timeout 20 tail -s 0.05 --pid="$status_reader" -f /dev/null || true
+timeout 30 tail -s 0.05 --pid="$estimator" -f /dev/null || true
 expect_clean_exit "$estimator" estimator_node "$work/estimator.log"
 sleep 1
 kill -INT "${pids[0]}" 2>/dev/null || true

@@ -107,15 +107,15 @@ pids+=("$estimator")
 # alone covers the estimator's start) and ends 2-3 s before the estimator.
 epoch=$(( ($(date +%s) + 4) * 1000000000 ))
 replay_cameras "$epoch" 11 w0 w1 w2
-timeout 20 tail --pid="$estimator" -f /dev/null
+timeout 20 tail -s 0.05 --pid="$estimator" -f /dev/null
 wait "$estimator"
 rc=$?
 [ "$rc" -eq 0 ] && pass "estimator_node --surface exited cleanly" || { fail "estimator exit $rc"; tail -5 "$work/estimator.log"; }
-timeout 20 tail --pid="$board" -f /dev/null
+timeout 20 tail -s 0.05 --pid="$board" -f /dev/null
 wait "$board" && pass "lumipoint_board wrote its board" || { fail "lumipoint_board exit $?"; cat "$work/board.log"; }
 cat "$work/board.log"
 if [ -n "${python_reader:-}" ]; then
-  timeout 20 tail --pid="$python_reader" -f /dev/null
+  timeout 20 tail -s 0.05 --pid="$python_reader" -f /dev/null
   expected="$(python3 -c "
 import collections, json, sys
 c = collections.Counter(json.loads(l)['phase'] for l in open('$work/live.jsonl'))
