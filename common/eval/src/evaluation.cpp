@@ -18,8 +18,10 @@ namespace panoptes::estimator {
 namespace {
 
 // For every marker and camera, the mid-exposure times of the frames that showed the marker, so
-// "how many cameras saw marker m in (t - window, t]" is one binary search per camera. Only frames
-// the scene produces count: those with mid-exposure at or after its start.
+// "how many cameras saw marker m in (t - window, t]" is one look per camera at the newest time at
+// or before t. evaluate() asks in time order, so each (marker, camera) keeps a cursor that only
+// moves forward (a binary search per question was 30 % of evaluate's time, in cache misses). Only
+// frames the scene produces count: those with mid-exposure at or after its start.
 class Visibility {
  public:
   Visibility(const Scene& scene, TimeNs from_ns, TimeNs to_ns) {
@@ -40,19 +42,26 @@ class Visibility {
         for (int m : camera.visible_markers(k)) times_[static_cast<std::size_t>(m)][c].push_back(t);
       }
     }
+    after_.assign(times_.size(), std::vector<std::size_t>(cameras, 0));
   }
 
-  int cameras_showing(std::size_t marker, TimeNs t, TimeNs window) const {
+  int cameras_showing(std::size_t marker, TimeNs t, TimeNs window) {
     int count = 0;
-    for (const std::vector<TimeNs>& times : times_[marker]) {
-      const auto after = std::upper_bound(times.begin(), times.end(), t);
-      if (after != times.begin() && *std::prev(after) > t - window) ++count;
+    for (std::size_t c = 0; c < times_[marker].size(); ++c) {
+      const std::vector<TimeNs>& times = times_[marker][c];
+      std::size_t& after = after_[marker][c];   // the first time after the last question's t
+      if (after > 0 && times[after - 1] > t) {  // asked out of order: search
+        after = static_cast<std::size_t>(std::upper_bound(times.begin(), times.end(), t) - times.begin());
+      }
+      while (after < times.size() && times[after] <= t) ++after;
+      if (after > 0 && times[after - 1] > t - window) ++count;
     }
     return count;
   }
 
  private:
   std::vector<std::vector<std::vector<TimeNs>>> times_;  // [marker][camera]
+  std::vector<std::vector<std::size_t>> after_;          // [marker][camera]: see cameras_showing
 };
 
 double seconds_since_start(TimeNs stamp_ns, TimeNs epoch_ns) {
@@ -170,11 +179,12 @@ InstantMatch match_instant(const std::vector<const TrackRecord*>& sorted, Record
                            const EvaluationOptions& options, Evaluation& result, Totals& totals) {
   const auto [begin, end] = records;
   std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
+  const double max_d2 = options.match_distance_m * options.match_distance_m;
   for (std::size_t m = 0; m < truth.size(); ++m) {
     if (!truth[m].valid) continue;
     for (std::size_t k = begin; k < end; ++k) {
-      const double d = (sorted[k]->p - truth[m].p).norm();
-      if (d < options.match_distance_m) pairs.emplace_back(d, m, k);
+      const double d2 = (sorted[k]->p - truth[m].p).squaredNorm();
+      if (d2 < max_d2) pairs.emplace_back(std::sqrt(d2), m, k);
     }
   }
   std::sort(pairs.begin(), pairs.end());
@@ -206,9 +216,9 @@ InstantMatch match_instant(const std::vector<const TrackRecord*>& sorted, Record
 }
 
 // Every marker with truth at this instant: a step, trackable or not, tracked or not.
-void count_markers(const std::vector<MarkerTruth>& truth, const InstantMatch& match,
-                   const Visibility& visibility, TimeNs scene_time, std::size_t instant,
-                   const EvaluationOptions& options, Evaluation& result) {
+void count_markers(const std::vector<MarkerTruth>& truth, const InstantMatch& match, Visibility& visibility,
+                   TimeNs scene_time, std::size_t instant, const EvaluationOptions& options,
+                   Evaluation& result) {
   for (std::size_t m = 0; m < truth.size(); ++m) {
     if (!truth[m].valid) continue;
     auto& marker = result.markers[m];
@@ -297,7 +307,7 @@ Evaluation evaluate(const Scene& scene, const std::vector<TrackRecord>& tracks,
 
   const TimeNs first_time = instants.front().first - options.epoch_ns;
   const TimeNs last_time = instants.back().first - options.epoch_ns;
-  const Visibility visibility(scene, first_time - options.trackable_window_ns, last_time);
+  Visibility visibility(scene, first_time - options.trackable_window_ns, last_time);
   Totals totals(result.markers.size());
   TimeNs previous_time = first_time;
   for (std::size_t instant = 0; instant < instants.size(); ++instant) {

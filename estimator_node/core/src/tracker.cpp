@@ -11,9 +11,10 @@
 #include <stdexcept>
 #include <tuple>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 
 #include "blob_grid.h"
+#include "panoptes/covariance_bound.h"
 #include "panoptes/errors.h"
 #include "panoptes/estimator/assignment.h"
 #include "points_by_x.h"
@@ -1976,10 +1977,8 @@ bool Tracker::Impl::determined(const TrackRecord& record, bool published) const 
   const auto& c = record.position_covariance;
   Eigen::Matrix3d P;
   P << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
-  const double largest =
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(P, Eigen::EigenvaluesOnly).eigenvalues()(2);
   const double limit = options.publish_max_sigma_m * (published ? kKeepPublishedFactor : 1.0);
-  return largest <= limit * limit;
+  return largest_eigenvalue_at_most(P, limit * limit);
 }
 
 // A fast track's σ carries fast_process_noise_scale's allowance for a manoeuvre (×100, ×300 when
