@@ -50,7 +50,7 @@ struct BodySet::Body {
   std::uint64_t updates = 0;
   std::vector<TimeNs> marker_last_seen;    // by marker
   std::vector<TimeNs> camera_last_update;  // by camera index
-  std::vector<BodyFilterStep> history;     // the last smoothing_ns of filter steps (when smoothing)
+  BodyFilterHistory history;               // the last smoothing_ns of filter steps (when smoothing)
 
   // (Re)starts tracking from an initial state (identification or a monocular detection) with fresh
   // consistency statistics.
@@ -111,11 +111,8 @@ struct BodySet::Body {
   // Keeps the step of a camera frame for smoothing, and the steps back to the first one at least
   // `lag_ns` older than it.
   void record_step(BodyFilterStep step, TimeNs lag_ns) {
-    append_step(history, std::move(step));
-    const TimeNs oldest = history.back().filtered.stamp_ns - lag_ns;
-    std::size_t keep_from = 0;
-    while (keep_from + 1 < history.size() && history[keep_from + 1].filtered.stamp_ns <= oldest) ++keep_from;
-    history.erase(history.begin(), history.begin() + static_cast<std::ptrdiff_t>(keep_from));
+    history.append(std::move(step));
+    history.keep_from(history.back().filtered.stamp_ns - lag_ns);
   }
 };
 

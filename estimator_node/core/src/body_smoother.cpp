@@ -23,7 +23,25 @@ void append_step(std::vector<BodyFilterStep>& steps, BodyFilterStep step) {
   steps.push_back(std::move(step));
 }
 
-BodyState smoothed_state(const std::vector<BodyFilterStep>& steps, std::size_t index) {
+void BodyFilterHistory::append(BodyFilterStep step) {
+  if (!steps_.empty()) {
+    step.previous_gain_t = gain_t(*steps_.back(), step);
+    step.has_previous_gain = true;
+  }
+  steps_.push_back(std::make_shared<const BodyFilterStep>(std::move(step)));
+}
+
+void BodyFilterHistory::keep_from(TimeNs oldest_ns) {
+  std::size_t first = 0;
+  while (first + 1 < steps_.size() && steps_[first + 1]->filtered.stamp_ns <= oldest_ns) ++first;
+  steps_.erase(steps_.begin(), steps_.begin() + static_cast<std::ptrdiff_t>(first));
+}
+
+namespace {
+
+// smoothed_state's pass over either container of steps (size(), operator[], back()).
+template <typename Steps>
+BodyState smoothed(const Steps& steps, std::size_t index) {
   BodyState smoothed = steps.back().filtered;
   for (std::size_t k = steps.size() - 1; k-- > index;) {
     const BodyFilterStep& next = steps[k + 1];
@@ -35,6 +53,16 @@ BodyState smoothed_state(const std::vector<BodyFilterStep>& steps, std::size_t i
     smoothed = std::move(previous);
   }
   return smoothed;
+}
+
+}  // namespace
+
+BodyState smoothed_state(const std::vector<BodyFilterStep>& steps, std::size_t index) {
+  return smoothed(steps, index);
+}
+
+BodyState smoothed_state(const BodyFilterHistory& steps, std::size_t index) {
+  return smoothed(steps, index);
 }
 
 }  // namespace panoptes::estimator

@@ -155,6 +155,25 @@ TEST(BodySmoother, TheSmoothedPoseUsesLaterFramesAndTheNewestStepIsTheFilters) {
   std::printf("first 20 steps: filtered RMSE %.3f mm, smoothed %.3f mm\n", std::sqrt(filtered2 / 20) * 1e3,
               std::sqrt(smoothed2 / 20) * 1e3);
   EXPECT_LT(smoothed2, 0.5 * filtered2);
+
+  // The tracker's window (BodyFilterHistory) gives the same states, also in a copy taken before
+  // later steps were appended to the original and older ones dropped (a checkpoint's copy).
+  BodyFilterHistory history;
+  BodyFilterHistory checkpoint;
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    BodyFilterStep step = steps[k];
+    step.has_previous_gain = false;
+    history.append(std::move(step));
+    if (k == 29) checkpoint = history;
+  }
+  history.keep_from(steps[9].filtered.stamp_ns);
+  ASSERT_EQ(history.size(), 31u);
+  ASSERT_EQ(checkpoint.size(), 30u);
+  for (std::size_t k = 0; k < 20; ++k) {
+    EXPECT_EQ(smoothed_state(history, k).p, smoothed_state(steps, k + 9).p) << k;
+    std::vector<BodyFilterStep> first30(steps.begin(), steps.begin() + 30);
+    EXPECT_EQ(smoothed_state(checkpoint, k).p, smoothed_state(first30, k).p) << k;
+  }
 }
 
 // ---------------------------------------------------------------------------------------------

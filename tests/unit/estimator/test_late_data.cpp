@@ -472,10 +472,13 @@ TEST(LateData, IdsOutliveAStallLongerThanTheLiveDeletion) {
           "%llu reacquired\n",
           gap_ms, at_s, result.evaluation.id_switch_count, result.evaluation.id_swap_count,
           static_cast<unsigned long long>(result.stats.tracks_reacquired));
-      if (at_s + 1e-3 * gap_ms < 8.0)  // frames came back before the end
+      if (at_s + 1e-3 * gap_ms < 8.0) {  // frames came back before the end
         EXPECT_EQ(result.stats.input_pauses, 1u) << gap_ms << " ms at " << at_s << " s";
+      }
       EXPECT_EQ(result.evaluation.id_swap_count, 0u) << gap_ms << " ms at " << at_s << " s";
-      if (gap_ms == 900.0) EXPECT_EQ(result.evaluation.id_switch_count, 0u) << "900 ms at " << at_s << " s";
+      if (gap_ms == 900.0) {
+        EXPECT_EQ(result.evaluation.id_switch_count, 0u) << "900 ms at " << at_s << " s";
+      }
       if (gap_ms < 3000.0) switches += result.evaluation.id_switch_count;
     }
   }
