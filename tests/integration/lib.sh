@@ -109,9 +109,25 @@ wait_bounded() {  # PID SECONDS NAME (tail -s 0.05: it looks at PID every 50 ms,
 # expect_clean_exit PID NAME LOG: waits for background process PID (a child of this shell) and
 # passes when it exited 0; otherwise the failure names the exit status (128 + N: killed by signal N)
 # and the last lines of LOG in one line (CI's failure digest shows only FAIL lines), then the log's tail.
+# Callers wait for PID first (bounded); one still running 10 s later gets SIGABRT, whose crash report
+# puts its call stack in LOG, and fails (a hung process fails the check, not the test's time limit).
 expect_clean_exit() {
   local rc=0
+  if ! timeout 10 tail -s 0.05 --pid="$1" -f /dev/null; then
+    fail "$2 has not exited: SIGABRT for its call stack (in $3)"
+    kill -ABRT "$1" 2>/dev/null
+    timeout 10 tail -s 0.05 --pid="$1" -f /dev/null || kill -KILL "$1" 2>/dev/null
+    wait "$1" 2>/dev/null
+    tail -n 60 "$3" 2>/dev/null
+    return 1
+  fi
   wait "$1" || rc=$?
+  # Its teardown stalled and its watchdog ended it (end_within, docs/architecture.md): not a failure
+  # (the run's outputs were complete), but the log keeps where it stalled.
+  if grep -q "after the work ended; ending now" "$3" 2>/dev/null; then
+    echo "NOTE: $2 stalled in its teardown and its watchdog ended it:"
+    grep -A 40 "after the work ended; ending now" "$3"
+  fi
   if [ "$rc" -eq 0 ]; then pass "$2 exited cleanly"; return 0; fi
   fail "$2: exit $rc; last lines of its log: $(tail -n 3 "$3" 2>/dev/null | tr '\n' '|')"
   tail -n 20 "$3" 2>/dev/null

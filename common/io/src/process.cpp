@@ -3,6 +3,7 @@
 
 #include <execinfo.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -13,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <utility>
 
@@ -132,6 +134,47 @@ extern "C" void on_fatal_signal(int signal) {
   raise(signal);
 }
 }  // namespace
+
+namespace {
+std::atomic<bool> g_stall_stack_written{false};
+
+// The armed thread's call stack, asked for by end_within's watchdog (async-signal-safe calls only).
+extern "C" void on_stall_stack_request(int /*signal*/) {
+  void* frames[64];
+  const int count = backtrace(frames, 64);
+  backtrace_symbols_fd(frames, count, STDERR_FILENO);
+  g_stall_stack_written.store(true);
+}
+}  // namespace
+
+void end_within(std::chrono::milliseconds limit, int exit_code, const std::string& what) {
+  static std::atomic<bool> armed{false};
+  if (armed.exchange(true)) return;
+  void* warm_up[1];
+  backtrace(warm_up, 1);  // loads libgcc_s now, not in the handler
+  const int stack_signal = SIGRTMIN + 4;
+  struct sigaction action {};
+  action.sa_handler = on_stall_stack_request;
+  action.sa_flags = SA_RESTART;
+  sigemptyset(&action.sa_mask);
+  sigaction(stack_signal, &action, nullptr);
+  char seconds[32];
+  std::snprintf(seconds, sizeof(seconds), "%g", static_cast<double>(limit.count()) / 1000.0);
+  const std::string message = std::string(g_crash_program) + ": " + what + " has not finished " + seconds +
+                              " s after the work ended; ending now with exit code " +
+                              std::to_string(exit_code) +
+                              "; where it stalled (addr2line -f -C -e <program> <+offset>):\n";
+  const pthread_t armed_thread = pthread_self();
+  std::thread([limit, exit_code, armed_thread, stack_signal, message] {
+    std::this_thread::sleep_for(limit);
+    write_text(message.c_str());
+    if (pthread_kill(armed_thread, stack_signal) == 0) {
+      for (int i = 0; i < 200 && !g_stall_stack_written.load(); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    _exit(exit_code);
+  }).detach();
+}
 
 void detail::install_crash_report(const char* program) {
   g_crash_program = program;

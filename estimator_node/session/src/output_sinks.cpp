@@ -20,6 +20,11 @@ void JsonlOutputs::write_poses(const std::vector<PoseRecord>& poses) {
   pose_records_ += poses.size();
 }
 
+void JsonlOutputs::flush() {
+  if (tracks_) tracks_->flush();
+  if (poses_) poses_->flush();
+}
+
 std::string JsonlOutputs::summary() const {
   return "wrote " + std::to_string(track_records_) + " track records" +
          (poses_ ? ", " + std::to_string(pose_records_) + " pose records" : "");

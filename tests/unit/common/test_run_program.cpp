@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 // run_program: the exit code a main() returns is chosen by the type of the exception that escapes
 // it (panoptes/errors.h), with one line "<program>: <what>" on stderr.
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <memory>
 #include <stdexcept>
 #include <string>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -111,6 +114,37 @@ TEST(RunProgramDeathTest, ACrashIsReportedWithItsCallStackAndEndsByItsSignal) {
               "panoptes_crash: fatal signal SIGSEGV; call stack[^\n]*\n(.|\n)*\\[0x[0-9a-f]+\\]");
   EXPECT_EXIT(run_program("panoptes_abort", []() -> int { std::abort(); }), testing::KilledBySignal(SIGABRT),
               "panoptes_abort: fatal signal SIGABRT");
+}
+
+// end_within: a process still running past the limit (a stalled teardown) is ended with the code
+// given, after one line naming what stalled and the call stack of the thread that armed it.
+TEST(EndWithinDeathTest, AProcessStillRunningPastTheLimitEndsWithTheCodeGiven) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        end_within(std::chrono::milliseconds(200), kExitOk, "closing the test participant");
+        for (;;) pause();
+      },
+      testing::ExitedWithCode(kExitOk),
+      "panoptes[a-z_]*: closing the test participant has not finished 0.2 s after the work ended; ending "
+      "now with exit code 0; where it stalled[^\n]*\n(.|\n)*\\[0x[0-9a-f]+\\]");
+  EXPECT_EXIT(
+      {
+        end_within(std::chrono::milliseconds(100), 3, "the teardown");
+        end_within(std::chrono::seconds(60), 4, "a second arming");  // does nothing
+        for (;;) pause();
+      },
+      testing::ExitedWithCode(3), "the teardown has not finished 0.1 s");
+}
+
+TEST(EndWithinDeathTest, AProcessThatEndsInTimeKeepsItsOwnExitCode) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        end_within(std::chrono::seconds(30), 3, "the teardown");
+        std::exit(5);
+      },
+      testing::ExitedWithCode(5), "");
 }
 
 }  // namespace

@@ -21,6 +21,16 @@ void request_stop();
 // CPU time this process has used (all threads, user + system), seconds.
 double process_cpu_seconds();
 
+// For a program whose work is done and whose output files are complete, before it tears down
+// what can stall: if the process is still running `limit` later, prints one line "<program>:
+// <what> has not finished <limit> after the work ended; ending now with exit code <exit_code>",
+// the calling thread's call stack (where it stalled), and ends the process with `exit_code`
+// (_exit: no destructor runs). Call it from the main thread; the first call arms it, later calls
+// do nothing. The estimator
+// arms it before closing its DDS participant: Fast DDS 2.9 can deadlock deleting a secured one
+// (CI met one such hang in test_security; docs/architecture.md, "Configuration and errors").
+void end_within(std::chrono::milliseconds limit, int exit_code, const std::string& what);
+
 // A child process started with posix_spawn, stdout and stderr to `log_file`, stdin from
 // /dev/null; stopped (SIGINT, then SIGKILL after 5 s) when destroyed. Used by the demo and the
 // benchmarks that run the nodes.

@@ -23,6 +23,9 @@ class JsonlOutputs {
   void write_tracks(const std::vector<TrackRecord>& tracks);
   void write_poses(const std::vector<PoseRecord>& poses);
 
+  // Writes out what is buffered (the end of a run).
+  void flush();
+
   // "wrote N track records[, M pose records]"
   std::string summary() const;
 
