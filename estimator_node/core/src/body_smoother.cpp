@@ -13,21 +13,22 @@ BodyMatrix gain_t(const BodyFilterStep& step, const BodyFilterStep& next) {
   return next.predicted.P.matrix().ldlt().solve(AP);
 }
 
+// The step's previous gain from the newest step before it (none for the first step).
+void set_previous_gain(const BodyFilterStep* newest, BodyFilterStep& step) {
+  if (newest == nullptr) return;
+  step.previous_gain_t = gain_t(*newest, step);
+  step.has_previous_gain = true;
+}
+
 }  // namespace
 
 void append_step(std::vector<BodyFilterStep>& steps, BodyFilterStep step) {
-  if (!steps.empty()) {
-    step.previous_gain_t = gain_t(steps.back(), step);
-    step.has_previous_gain = true;
-  }
+  set_previous_gain(steps.empty() ? nullptr : &steps.back(), step);
   steps.push_back(std::move(step));
 }
 
 void BodyFilterHistory::append(BodyFilterStep step) {
-  if (!steps_.empty()) {
-    step.previous_gain_t = gain_t(*steps_.back(), step);
-    step.has_previous_gain = true;
-  }
+  set_previous_gain(steps_.empty() ? nullptr : steps_.back().get(), step);
   steps_.push_back(std::make_shared<const BodyFilterStep>(std::move(step)));
 }
 
