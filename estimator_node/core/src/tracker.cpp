@@ -33,7 +33,7 @@ void TrackerOptions::print(std::ostream& out) const {
       << "  coast_after              " << ns_to_seconds(coast_after_ns) * 1e3 << " ms\n"
       << "  delete_after             " << ns_to_seconds(delete_after_ns) * 1e3 << " ms\n"
       << "  publish_max_sigma        " << publish_max_sigma_m * 1e3 << " mm (fast: innovations within "
-      << fast_publish_innovation_px << " px)\n"
+      << fast_publish_innovation_px << " px; views within " << publish_max_innovation_px << " px)\n"
       << "  reacquire_sigma          " << reacquire_sigma_m * 1e3 << " mm\n"
       << "  fast tracks              sigma^2 x " << fast_process_noise_scale << " for "
       << ns_to_seconds(fast_hold_ns) * 1e3 << " ms (x " << fast_isolated_process_noise_scale
@@ -144,6 +144,7 @@ struct Track {
   TimeNs last_seen_ns() const { return seen_ns != 0 ? seen_ns : last_update_ns; }
   std::vector<TimeNs> camera_last_update;   // by camera index; 0 = never
   std::vector<float> camera_innovation_px;  // by camera index: its last update's innovation, px (publishable)
+  std::vector<float> camera_innovation_avg_px;  // by camera index: its innovations' moving average, px
   // reacquire_sigma_m: made by initiation under a new id (not a rejoined one, nor one that took a
   // held-back track's id; a replay that makes an undone one again keeps its flag), and confirmed
   // in the frame just applied: it may take a held-back track's id (reacquire_confirmed).
@@ -200,6 +201,9 @@ struct Core {
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
                 ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
+  // By camera: the innovations' typical length, px, a slow moving average over the updates of
+  // confirmed tracks (views_agree: a noisy camera's own scale).
+  std::vector<double> camera_innovation_level;
   std::vector<TimeNs> frame_per_camera_ns;  // the stamp of each camera's latest frame applied (0: none)
   BodySet bodies;
 };
@@ -312,6 +316,7 @@ struct Tracker::Impl {
     for (const auto& model : models) pointers.push_back(model.get());
     core.initiator.set_cameras(pointers);
     core.associated_per_camera.resize(models.size(), 0);
+    core.camera_innovation_level.resize(models.size(), 0.0);
     core.frame_per_camera_ns.resize(models.size(), 0);
     std::vector<Eigen::Vector2d> sizes;
     for (const auto& model : models)
@@ -696,6 +701,9 @@ struct Tracker::Impl {
   // Whether `track` is published at `stamp_ns`: determined, or a fast track whose cameras confirm
   // its predictions (fast_publish_innovation_px).
   bool publishable(const Track& track, const TrackRecord& record, TimeNs stamp_ns) const;
+  // publish_max_innovation_px: whether the cameras that updated `track` in the last 10 ms find its
+  // blobs near its predictions.
+  bool views_agree(const Track& track) const;
 };
 
 void Tracker::Impl::apply(Entry& entry, bool replaying) {
@@ -1254,6 +1262,14 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   track.camera_innovation_px.resize(track.camera_last_update.size(), 0.0F);
   track.camera_innovation_px[static_cast<std::size_t>(camera_index)] =
       static_cast<float>((pixel - projected.projection.pixel).norm());
+  track.camera_innovation_avg_px.resize(track.camera_last_update.size(), 0.0F);
+  {
+    float& average = track.camera_innovation_avg_px[static_cast<std::size_t>(camera_index)];
+    const float innovation = track.camera_innovation_px[static_cast<std::size_t>(camera_index)];
+    average = average == 0.0F ? innovation : 0.7F * average + 0.3F * innovation;
+    double& level = core.camera_innovation_level[static_cast<std::size_t>(camera_index)];
+    if (track.confirmed) level = level == 0.0 ? innovation : 0.99 * level + 0.01 * innovation;
+  }
   if (track.seen_ns == stamp && seen_before_ns != 0 && stamp - seen_before_ns > kReturnGapNs)
     cap_return_velocity(track, projected.state.velocity());
   // Fast once kFastUpdates updates of a settled track (kSettledUpdates) were above kFastSpeed: a
@@ -1999,6 +2015,32 @@ bool Tracker::Impl::determined(const TrackRecord& record, bool published) const 
   return largest_eigenvalue_at_most(P, limit * limit);
 }
 
+// A track (not fast) that two or more cameras updated in the last 10 ms is published only while
+// each of them finds its blobs, on a moving average (weight 0.3 per update), within
+// publish_max_innovation_px of the predictions, or of four times the camera's typical innovation
+// where that is larger (a noisy camera's centroids, or a measurement_noise_px set too small,
+// must not withhold every track). A track made of two markers' blobs, one in some
+// views and the other in the rest (two clavicles 5 cm apart, each camera seeing one), sits
+// between them with an adaptive σ of a few millimetres and every view's blob several pixels off:
+// 20-50 mm from either marker, false records that σ does not flag (docs/estimator.md, "Views
+// that disagree").
+constexpr double kInnovationLevels = 4.0;  // views_agree: a camera's limit is at least this × its level
+
+bool Tracker::Impl::views_agree(const Track& track) const {
+  if (options.publish_max_innovation_px <= 0 || track.fast) return true;
+  int recent = 0;
+  bool far = false;
+  for (std::size_t k = 0; k < track.camera_innovation_avg_px.size(); ++k) {
+    const TimeNs last = track.camera_last_update[k];
+    if (last == 0 || track.last_update_ns - last > kFrameGapNs) continue;
+    ++recent;
+    const double limit =
+        std::max(options.publish_max_innovation_px, kInnovationLevels * core.camera_innovation_level[k]);
+    far = far || track.camera_innovation_avg_px[k] > limit;
+  }
+  return recent < 2 || !far;
+}
+
 // A fast track's σ carries fast_process_noise_scale's allowance for a manoeuvre (×100, ×300 when
 // isolated): between two frames it passes the publication limit along the ray of the camera that
 // updated it last, though the cameras find its blobs where it predicted them. A thrown ball seen
@@ -2011,6 +2053,7 @@ bool Tracker::Impl::determined(const TrackRecord& record, bool published) const 
 // track waiting to rejoin a lost fast track's id waits until determined (rejoin_confirmed).
 // docs/estimator.md, "Fast tracks seen by few cameras".
 bool Tracker::Impl::publishable(const Track& track, const TrackRecord& record, TimeNs stamp_ns) const {
+  if (!views_agree(track)) return false;
   if (determined(record, track.published)) return true;
   if (options.fast_publish_innovation_px <= 0 || !track.fast || track.rejoin_id != 0 ||
       track.seen_ns != track.last_update_ns || stamp_ns - track.last_update_ns > kFrameGapNs / 4)
