@@ -72,10 +72,13 @@ stop_fake
 # The fake's device clock is the wall clock; the source maps device stamps onto it through the
 # lower envelope of arrival - stamp, so a stamp should be the device's plus the latency floor (the
 # fake's render time, which the truth records) plus half the 10 ms exposure, to within about one
-# frame's transfer.
+# frame's transfer. Over 3 s no drift is fitted, so the envelope is the smallest arrival - stamp so
+# far and the error only shrinks: the stamps are judged over the last 75 frames. (Judged from frame
+# 20, a fresh-clone run beside other tests failed once: every one of its first 20 frames arrived at
+# least 2.7 ms late.)
 if python3 "$checker" --truth "$work/truth.jsonl" --features "$work/features.jsonl" --min-frames 150 \
-  --max-error-px 0.1 --min-detected 0.99 --max-stamp-error-ms 1.5 >"$work/check.out" 2>&1; then
-  pass "every spot found within 0.1 px, stamps within 1.5 ms: $(cat "$work/check.out")"
+  --max-error-px 0.1 --min-detected 0.99 --max-stamp-error-ms 1.5 --stamp-warmup 75 >"$work/check.out" 2>&1; then
+  pass "every spot found within 0.1 px, stamps of the last 75 frames within 1.5 ms: $(cat "$work/check.out")"
 else
   fail "detections against the truth"; cat "$work/check.out"
 fi

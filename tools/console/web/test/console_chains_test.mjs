@@ -45,7 +45,7 @@ await runBrowserChecks({ width: 1400, height: 900 }, results, args.out, async (p
   await page.goto(`${args.url}&view=3d`);  // the 3D view alone, as on a wall screen
   const t0 = Date.now();
   const tracking = await waitFor(page, () => window.panoptes.state &&
-    (window.panoptes.state.chains || []).some((c) => c.name === 'index' && c.status === 'tracking'), null, 20000);
+    (window.panoptes.state.chains || []).some((c) => c.name === 'index' && c.status === 'tracking'), null, 30000);
   check(tracking, `the page receives chain 'index' tracking (${Date.now() - t0} ms after loading)`);
   const listed = await waitFor(page, () => document.querySelector('#chains li[data-chain="index"]') !== null, null, 3000);
   check(listed && !(await page.locator('#chains').isHidden()),
