@@ -704,6 +704,17 @@ struct Tracker::Impl {
   // publish_max_innovation_px: whether the cameras that updated `track` in the last 10 ms find its
   // blobs near its predictions.
   bool views_agree(const Track& track) const;
+  // An update's innovation (px) in `camera`: the track's last and moving average there (views_agree,
+  // publishable), and the camera's typical innovation over confirmed tracks.
+  void note_innovation(Track& track, std::size_t camera, float innovation) {
+    track.camera_innovation_px.resize(track.camera_last_update.size(), 0.0F);
+    track.camera_innovation_avg_px.resize(track.camera_last_update.size(), 0.0F);
+    track.camera_innovation_px[camera] = innovation;
+    float& average = track.camera_innovation_avg_px[camera];
+    average = average == 0.0F ? innovation : 0.7F * average + 0.3F * innovation;
+    double& level = core.camera_innovation_level[camera];
+    if (track.confirmed) level = level == 0.0 ? innovation : 0.99 * level + 0.01 * innovation;
+  }
 };
 
 void Tracker::Impl::apply(Entry& entry, bool replaying) {
@@ -1259,17 +1270,8 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   const TimeNs previous_update_ns = track.last_update_ns;
   note_update(track, camera_index, stamp);
   damp_one_view_velocity(track, camera_index, stamp, previous_update_ns);
-  track.camera_innovation_px.resize(track.camera_last_update.size(), 0.0F);
-  track.camera_innovation_px[static_cast<std::size_t>(camera_index)] =
-      static_cast<float>((pixel - projected.projection.pixel).norm());
-  track.camera_innovation_avg_px.resize(track.camera_last_update.size(), 0.0F);
-  {
-    float& average = track.camera_innovation_avg_px[static_cast<std::size_t>(camera_index)];
-    const float innovation = track.camera_innovation_px[static_cast<std::size_t>(camera_index)];
-    average = average == 0.0F ? innovation : 0.7F * average + 0.3F * innovation;
-    double& level = core.camera_innovation_level[static_cast<std::size_t>(camera_index)];
-    if (track.confirmed) level = level == 0.0 ? innovation : 0.99 * level + 0.01 * innovation;
-  }
+  note_innovation(track, static_cast<std::size_t>(camera_index),
+                  static_cast<float>((pixel - projected.projection.pixel).norm()));
   if (track.seen_ns == stamp && seen_before_ns != 0 && stamp - seen_before_ns > kReturnGapNs)
     cap_return_velocity(track, projected.state.velocity());
   // Fast once kFastUpdates updates of a settled track (kSettledUpdates) were above kFastSpeed: a
