@@ -292,10 +292,14 @@ struct Options {
   std::vector<std::string> topics;  // only these topics (empty: every one)
 };
 
-std::uint64_t write_all(std::vector<Attack>& attacks, std::map<std::string, std::uint64_t>& sent) {
+// Stops at `end`: a reliable writer whose readers are slow blocks in write() (up to its
+// max_blocking_time per sample), and a loaded machine must not stretch --duration without bound.
+std::uint64_t write_all(std::vector<Attack>& attacks, std::map<std::string, std::uint64_t>& sent,
+                        std::chrono::steady_clock::time_point end) {
   std::uint64_t n = 0;
   for (auto& attack : attacks) {
     for (const auto& [kind, cdr] : attack.samples) {
+      if (std::chrono::steady_clock::now() >= end) return n;
       if (attack.writer->write(cdr)) {
         ++sent[attack.topic + " " + kind];
         ++n;
@@ -326,6 +330,8 @@ int run(int argc, char** argv) {
       ->default_str("every Panoptes topic");
   if (const auto exit_code = panoptes::parse_command_line(app, argc, argv)) return *exit_code;
   panoptes::install_stop_handlers();
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // its lines reach a log even if it is killed
+  std::printf("panoptes_rogue: attacking for %g s\n", options.duration_s);
 
   panoptes::dds::BusOptions bus_options;
   bus_options.profile_file = options.dds_profile;
@@ -377,8 +383,8 @@ int run(int argc, char** argv) {
       auto fresh = hostile_samples(options.cameras, panoptes::wall_now_ns());
       for (auto& attack : attacks) attack.samples = std::move(fresh[attack.topic]);
     }
-    total += write_all(attacks, sent);
-    for (int i = 0; i < options.flood; ++i) {
+    total += write_all(attacks, sent, end);
+    for (int i = 0; i < options.flood && std::chrono::steady_clock::now() < end; ++i) {
       if (flood_writer->write(flood_cdr)) ++sent["rt/panoptes/camera_command flood"];
     }
     const bool million_due =
