@@ -446,11 +446,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.number("fast_publish_innovation_px", o.fast_publish_innovation_px, kNonNegative,
            "... or a fast track while every camera that updated it in the last 10 ms found its blob within "
            "this of the prediction, px, up to 2.5 ms after a two-camera update (0: off)");
-  f.number(
-      "publish_max_innovation_px", o.publish_max_innovation_px, kNonNegative,
-      "a track (not fast) that two or more cameras updated in the last 10 ms is published only while "
-      "each finds its blobs within this of the predictions, px, on a moving average (0: off, the default; "
-      "3 on the accuracy grid)");
+  f.number("publish_max_innovation_px", o.publish_max_innovation_px, kNonNegative,
+           "a track (not fast) that two or more cameras updated in the last 10 ms is published only while "
+           "each finds its blobs within this of the predictions, px, on a moving average (0: off)");
   f.number("merge_distance_m", o.merge_distance_m, kNonNegative,
            "two tracks closer than this are one marker");
   f.number("reacquire_sigma_m", o.reacquire_sigma_m, kNonNegative,

