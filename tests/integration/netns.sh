@@ -16,6 +16,23 @@ netns_prefix="pnp$$"
 netns_names=()
 netns_skip_code=77
 
+# netns_reap_stale: deletes the namespaces (and their /dev/shm directories) of an earlier run that
+# was killed before its EXIT trap could (SIGKILL, a machine or session cut off mid-test: seven were
+# found left by a run killed at a session's end). A run's names start pnp<its shell's pid>; only
+# those whose pid is gone are touched, so tests running in parallel keep theirs.
+netns_reap_stale() {
+  local ns owner pid
+  for ns in $(ip netns list 2>/dev/null | awk '{print $1}' | grep -E '^pnp[0-9]+(sw|h[0-9]+|probe)$'); do
+    owner="${ns#pnp}"
+    owner="${owner%%[a-z]*}"
+    [ "$owner" = "$$" ] && continue
+    kill -0 "$owner" 2>/dev/null && continue
+    for pid in $(ip netns pids "$ns" 2>/dev/null); do kill -KILL "$pid" 2>/dev/null || true; done
+    ip netns del "$ns" 2>/dev/null && echo "removed namespace $ns left by a killed run"
+    rm -rf "/dev/shm/pnp$owner"
+  done
+}
+
 # netns_require: exits with the skip code, and a one-line reason, when namespaces cannot be used.
 netns_require() {
   local reason=""
@@ -135,6 +152,7 @@ netns_test_start() {
   set -eE
   trap 'failures=$((failures + 1)); echo "FAIL: unexpected error at line $LINENO"' ERR
   netns_require
+  netns_reap_stale
   trap 'netns_cleanup; cleanup' EXIT
   trap 'exit 143' TERM INT
 }
