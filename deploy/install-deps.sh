@@ -9,6 +9,7 @@ packages=(
   build-essential cmake ninja-build pkg-config ccache git
   libfastrtps-dev fastddsgen fastdds-tools
   libopencv-dev libeigen3-dev libceres-dev
+  libpng-dev libjpeg-dev  # picture files (common/io image_file), not OpenCV's imgcodecs
   opencv-doc
   libaravis-dev aravis-tools libusb-1.0-0-dev
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev

@@ -436,10 +436,11 @@ def parser(root):
     return top
 
 
-def main():
+def main(argv=None):
+    """The command line (argv: the arguments after the program's name; default sys.argv[1:])."""
     root = os.environ.get("PANOPTES_SOURCE_DIR") or os.path.dirname(os.path.dirname(os.path.dirname(
         os.path.abspath(__file__))))
-    args = parser(root).parse_args()
+    args = parser(root).parse_args(argv)
     args.root = root
     try:
         return cmd_report(args) if args.mode == "report" else cmd_record(args)

@@ -68,45 +68,17 @@ PANOPTES_BENCH_RESULTS="$results" PANOPTES_BENCH_DOC="$docs/benchmarks.md" bash 
 check "record_result.sh scales an extracted figure ('websocket_bytes_per_s * 0.001')" \
   grep -q '\*\*210.4 kB/s\*\*.*`abcdef0`' "$docs/benchmarks.md"
 
-# 5. Malformed records are refused with exit 2, naming the file and the field.
-refused() {  # refused <field shown> <python statement on row>: break row 0 of tracking.json
-  local field="$1" change="$2" bad="$work/bad" out rc=0
-  rm -rf "$bad" && cp -r "$results" "$bad"
-  python3 - "$bad/tracking.json" "$change" <<'PY'
-import json, sys
-data = json.load(open(sys.argv[1]))
-row = data["rows"][0]
-exec(sys.argv[2])
-json.dump(data, open(sys.argv[1], "w"), indent=2, ensure_ascii=False)
-PY
-  out="$(bash "$report" --check --results "$bad" --doc "$docs/benchmarks.md" 2>&1)" || rc=$?
-  if [[ $rc -eq 2 && "$out" == *"$bad/tracking.json"* && "$out" == *"field '$field'"* ]]; then
-    echo "ok: refused ($field): $out"
-  else
-    echo "FAIL: expected exit 2 naming tracking.json and field '$field', got exit $rc: $out"
-    failures=$((failures + 1))
-  fi
-}
-refused date 'del row["date"]'
-refused date 'row["date"] = "27.11.2026"'
-refused value 'row["value"] = "1.2 mm"'
-refused commit 'row["commit"] = "HEAD"'
-refused goal.op 'row["goal"]["op"] = "about"'
-refused goal.source 'del row["goal"]["source"]'
-refused details 'row["details"] = "estimator.md#no-such-heading"'
-refused details 'row["details"] = "nowhere.md"'
-refused figure 'row["figure"] = 1'
-refused id 'data["rows"][1]["id"] = row["id"]'
-refused runs 'row["runs"] = []'
-refused date 'row["value"] = None'
-printf '{"capability": "x", "order": 99, "rows": [' >"$work/broken.json"
+# 5. Malformed records are refused with exit 2, naming the file and the field (in one Python process).
+check "malformed records are refused, named" python3 "$src/tests/lint/bench_report_refusals.py" "$results" \
+  "$docs/benchmarks.md" "$work"
+# ... and through report.sh, the command users run: its exit code and message.
+rm -rf "$work/bad" && cp -r "$results" "$work/bad" && printf '{"rows": [' >"$work/bad/broken.json"
 broken_json() {
-  local bad="$work/bad" out rc=0
-  rm -rf "$bad" && cp -r "$results" "$bad" && cp "$work/broken.json" "$bad/broken.json"
-  out="$(bash "$report" --check --results "$bad" --doc "$docs/benchmarks.md" 2>&1)" || rc=$?
-  [[ $rc -eq 2 && "$out" == *"$bad/broken.json: not valid JSON"* ]]
+  local out rc=0
+  out="$(bash "$report" --check --results "$work/bad" --doc "$docs/benchmarks.md" 2>&1)" || rc=$?
+  [[ $rc -eq 2 && "$out" == *"$work/bad/broken.json: not valid JSON"* ]]
 }
-check "a file that is not JSON is refused, named" broken_json
+check "report.sh refuses a file that is not JSON with exit 2, naming it" broken_json
 
 if ((failures)); then
   echo "$failures check(s) failed"

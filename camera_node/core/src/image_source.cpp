@@ -4,18 +4,14 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
-#include <cstring>
-#include <fstream>
 #include <optional>
 #include <stdexcept>
 #include <system_error>
 #include <utility>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include "panoptes/glob.h"
+#include "panoptes/image_file.h"
 
 namespace panoptes::camera {
 namespace {
@@ -56,38 +52,6 @@ std::vector<fs::path> list_files(const std::string& pattern) {
   return files;
 }
 
-// Reads a PNM header's maxval: the only place a 12-bit PGM says it is 12-bit. OpenCV keeps the
-// raw values but reports only "16 bits".
-std::optional<int> pnm_maxval(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return std::nullopt;
-  std::string magic(2, '\0');
-  if (!in.read(magic.data(), 2) || magic[0] != 'P' || !std::strchr("2356", magic[1])) return std::nullopt;
-  long long fields[3] = {0, 0, 0};
-  for (long long& field : fields) {
-    int c = in.get();
-    while (in && (std::isspace(c) || c == '#')) {
-      if (c == '#') {
-        while (in && c != '\n') c = in.get();
-      }
-      c = in.get();
-    }
-    if (!in || !std::isdigit(c)) return std::nullopt;
-    while (in && std::isdigit(c)) {
-      field = field * 10 + (c - '0');
-      if (field > 1'000'000'000) return std::nullopt;
-      c = in.get();
-    }
-  }
-  return static_cast<int>(fields[2]);
-}
-
-int bits_for_maxval(int maxval) {
-  int bits = 1;
-  while (bits < 16 && (1 << bits) - 1 < maxval) ++bits;
-  return bits;
-}
-
 class ImageFileSource final : public FrameSource {
  public:
   ImageFileSource(std::vector<fs::path> files, const SourceOptions& options)
@@ -96,7 +60,7 @@ class ImageFileSource final : public FrameSource {
     // the source cannot start.
     while (!first_ && first_index_ < files_.size()) {
       try {
-        first_ = load_grey_image(files_[first_index_]);
+        first_ = read_grey_image(files_[first_index_]);
       } catch (const std::runtime_error& error) {
         skip(error.what());
         ++first_index_;
@@ -127,7 +91,7 @@ class ImageFileSource final : public FrameSource {
       while (true) {
         if (next_index_ >= files_.size()) return std::nullopt;
         try {
-          frame.image = load_grey_image(files_[next_index_]);
+          frame.image = read_grey_image(files_[next_index_]);
           break;
         } catch (const std::runtime_error& error) {
           skip(error.what());
@@ -174,24 +138,6 @@ class ImageFileSource final : public FrameSource {
 };
 
 }  // namespace
-
-Image load_grey_image(const fs::path& path) {
-  // IMREAD_ANYDEPTH without IMREAD_COLOR has the codec itself convert colour files to grey while
-  // keeping 16-bit samples intact.
-  const cv::Mat mat = cv::imread(path.string(), cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
-  if (mat.empty()) throw std::runtime_error(path.string() + ": cannot read image");
-  if (mat.channels() != 1 || (mat.depth() != CV_8U && mat.depth() != CV_16U)) {
-    throw std::runtime_error(path.string() + ": unsupported pixel format (need 8- or 16-bit grey)");
-  }
-  int bits = mat.depth() == CV_8U ? 8 : 16;
-  if (bits == 16) {
-    if (const auto maxval = pnm_maxval(path); maxval && *maxval > 255) bits = bits_for_maxval(*maxval);
-  }
-  Image image(mat.cols, mat.rows, bits);
-  const std::size_t row_bytes = image.stride();
-  for (int y = 0; y < mat.rows; ++y) std::memcpy(image.row8(y), mat.ptr(y), row_bytes);
-  return image;
-}
 
 std::unique_ptr<FrameSource> open_image_source(const std::string& pattern, const SourceOptions& options) {
   std::vector<fs::path> files = list_files(pattern);

@@ -21,8 +21,7 @@
 #include <utility>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
+#include "panoptes/image_file.h"
 
 #include "v4l2_device.h"
 
@@ -596,22 +595,8 @@ class V4l2Source final : public FrameSource {
         return true;
       }
       case V4L2_PIX_FMT_MJPEG: {
-        const cv::Mat encoded(1, static_cast<int>(used), CV_8UC1, const_cast<std::uint8_t*>(data));
-        cv::Mat grey;
-        try {
-          grey = cv::imdecode(encoded, cv::IMREAD_GRAYSCALE);
-        } catch (const cv::Exception&) {
-          return false;
-        }
-        if (grey.empty() || grey.cols != format.width || grey.rows != format.height ||
-            grey.type() != CV_8UC1) {
-          return false;
-        }
-        *image = Image(format.width, format.height, 8);
-        for (int y = 0; y < format.height; ++y) {
-          std::memcpy(image->row8(y), grey.ptr(y), width);
-        }
-        return true;
+        return decode_jpeg_grey(data, used, *image) && image->width == format.width &&
+               image->height == format.height;
       }
     }
     return false;

@@ -6,10 +6,21 @@
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "panoptes/image_file_cv.h"
+
 namespace panoptes::calib {
+namespace {
+
+// 8-bit grey for the corner detector; deeper images scaled from their significant bits.
+cv::Mat grey8_mat(const Image& image) {
+  cv::Mat mat = to_mat(image);
+  if (image.bits > 8) mat.convertTo(mat, CV_8U, 255.0 / image.max_value());
+  return mat;
+}
+
+}  // namespace
 
 ChessboardResult calibrate_chessboard(const std::vector<std::filesystem::path>& images,
                                       const ChessboardOptions& options) {
@@ -27,9 +38,11 @@ ChessboardResult calibrate_chessboard(const std::vector<std::filesystem::path>& 
   std::vector<std::vector<cv::Point2f>> image_points;
   cv::Size size;
   for (std::size_t i = 0; i < images.size(); ++i) {
-    const cv::Mat image = cv::imread(images[i].string(), cv::IMREAD_GRAYSCALE);
-    if (image.empty()) {
-      result.error = images[i].string() + ": cannot read the image";
+    cv::Mat image;
+    try {
+      image = grey8_mat(read_grey_image(images[i]));
+    } catch (const std::runtime_error& error) {
+      result.error = std::string(error.what()) + " (cannot read the image)";
       return result;
     }
     if (size.width != 0 && image.size() != size) {

@@ -10,12 +10,12 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "panoptes/calibration.h"
 #include "panoptes/calibration_file.h"
 #include "panoptes/image_coverage.h"
+#include "panoptes/image_file_cv.h"
 
 namespace panoptes::calib {
 
@@ -38,8 +38,7 @@ const cv::Scalar kPalette[] = {{230, 159, 0}, {86, 180, 233}, {0, 158, 115},   {
 
 void write_png(const std::filesystem::path& path, const cv::Mat& image,
                std::vector<std::filesystem::path>& written) {
-  if (!cv::imwrite(path.string(), image))
-    throw std::runtime_error(path.string() + ": cannot write the image");
+  panoptes::write_png(path, view_of(image));
   written.push_back(path);
 }
 

@@ -6,9 +6,6 @@
 // adjusted rather than refused, an absolute exposure is refused while auto exposure is on.
 #pragma once
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
@@ -24,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "panoptes/image_file.h"
 #include "panoptes/time.h"
 #include "v4l2_device.h"
 #include "v4l2_source.h"
@@ -247,13 +245,11 @@ class FakeV4l2Camera : public std::enable_shared_from_this<FakeV4l2Camera> {
         }
         break;
       case V4L2_PIX_FMT_MJPEG: {
-        cv::Mat grey(format.height, format.width, CV_8UC1);
-        for (int y = 0; y < format.height; ++y) {
-          for (int x = 0; x < format.width; ++x)
-            grey.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(value(x, y, 8));
+        Image grey(static_cast<int>(format.width), static_cast<int>(format.height), 8);
+        for (int y = 0; y < grey.height; ++y) {
+          for (int x = 0; x < grey.width; ++x) grey.row8(y)[x] = static_cast<std::uint8_t>(value(x, y, 8));
         }
-        std::vector<std::uint8_t> jpeg;
-        cv::imencode(".jpg", grey, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95});
+        const std::vector<std::uint8_t> jpeg = encode_jpeg_grey(grey, 95);
         std::copy(jpeg.begin(), jpeg.end(), buffer.memory.begin());
         bytesused = static_cast<std::uint32_t>(jpeg.size());
         if (fault == FakeFault::kCorruptJpeg) {

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -19,6 +18,7 @@
 
 #include "panoptes/camera/detector.h"
 #include "panoptes/camera/sources.h"
+#include "panoptes/image_file_cv.h"
 #include "panoptes/simulator.h"
 #include "panoptes/time.h"
 
@@ -121,10 +121,10 @@ TEST(ImageSource, ReadsSixteenBitAndColourPng) {
   TempDir dir;
   cv::Mat deep(4, 5, CV_16UC1, cv::Scalar(0));
   deep.at<std::uint16_t>(2, 3) = 50000;
-  ASSERT_TRUE(cv::imwrite((dir.path() / "a_deep.png").string(), deep));
+  write_png(dir.path() / "a_deep.png", view_of(deep));
   cv::Mat colour(4, 5, CV_8UC3, cv::Scalar(0, 0, 0));
   colour.at<cv::Vec3b>(1, 1) = cv::Vec3b(200, 200, 200);  // grey in any colour conversion
-  ASSERT_TRUE(cv::imwrite((dir.path() / "b_colour.png").string(), colour));
+  write_png(dir.path() / "b_colour.png", view_of(colour));
 
   auto source = open_source("images:" + dir.path().string(), {});
   const std::optional<CapturedFrame> first = source->next();

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
+#include "panoptes/image_file_cv.h"
 #include "panoptes/plan_io/plan_report.h"
 #include "panoptes/plan_io/room_file.h"
 
@@ -74,7 +74,7 @@ class PlanReport : public ::testing::Test {
 
   cv::Mat render(const std::string& name) {
     write_report(input_, dir_);
-    cv::Mat image = cv::imread((dir_ / name).string(), cv::IMREAD_COLOR);
+    cv::Mat image = to_mat(read_picture(dir_ / name));
     EXPECT_FALSE(image.empty()) << dir_ / name;
     return image;
   }

@@ -10,8 +10,9 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "panoptes/image_file_cv.h"
 
 namespace panoptes::estimator {
 
@@ -383,13 +384,7 @@ void write_error_plot(const Evaluation& evaluation, const PlotOptions& options,
   draw_title(image, frame, evaluation, options);
   draw_legend(image, frame, evaluation, plotted);
 
-  bool written = false;
-  try {
-    written = cv::imwrite(png.string(), image);
-  } catch (const cv::Exception& error) {
-    throw std::runtime_error(png.string() + ": cannot write the plot: " + error.what());
-  }
-  if (!written) throw std::runtime_error(png.string() + ": cannot write the plot");
+  write_png(png, view_of(image));
 }
 
 }  // namespace panoptes::estimator

@@ -10,8 +10,9 @@
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "panoptes/image_file_cv.h"
 
 #include "panoptes/plan_io/plot_axes.h"
 
@@ -226,8 +227,7 @@ std::string base64(const std::vector<unsigned char>& bytes) {
 }
 
 std::string write_png(const cv::Mat& image, const fs::path& path) {
-  std::vector<unsigned char> bytes;
-  if (!cv::imencode(".png", image, bytes)) throw std::runtime_error(path.string() + ": cannot encode PNG");
+  const std::vector<std::uint8_t> bytes = encode_png(view_of(image));
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   if (!out) throw std::runtime_error(path.string() + ": cannot write");
