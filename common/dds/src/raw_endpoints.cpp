@@ -17,9 +17,12 @@ namespace {
 // real type from the decoded sample.
 class RawPubSubType final : public fdds::TopicDataType {
  public:
-  explicit RawPubSubType(std::unique_ptr<fdds::TopicDataType> real) : real_(std::move(real)) {
+  // transport_cap: the topic's (TopicSpec), which the typed endpoints' type declares too: whichever
+  // registers the type first in a participant, its payloads have the same size.
+  RawPubSubType(std::unique_ptr<fdds::TopicDataType> real, std::size_t transport_cap)
+      : real_(std::move(real)) {
     setName(real_->getName());
-    m_typeSize = real_->m_typeSize;
+    m_typeSize = transport_cap != 0 ? static_cast<std::uint32_t>(transport_cap) : real_->m_typeSize;
     m_isGetKeyDefined = real_->m_isGetKeyDefined;
   }
   bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override {
@@ -139,7 +142,8 @@ namespace {
 
 fdds::Topic* raw_topic(BusCore& core, const RawTopicEntry& entry) {
   return core.topic_of_type(entry.topic.topic, [&entry] {
-    return fdds::TypeSupport(new RawPubSubType(std::unique_ptr<fdds::TopicDataType>(entry.make_real())));
+    return fdds::TypeSupport(
+        new RawPubSubType(std::unique_ptr<fdds::TopicDataType>(entry.make_real()), entry.spec.transport_cap));
   });
 }
 

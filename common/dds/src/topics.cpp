@@ -2,6 +2,7 @@
 // Topics and QoS: the writer and reader QoS of a topic and the table of raw (serialized) topics.
 #include "topics.h"
 
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <utility>
@@ -25,6 +26,7 @@ constexpr std::uint32_t kTransientLocalHeartbeatNs = 100'000'000;
 fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos) {
   fdds::DataWriterQos writer_qos = fdds::DATAWRITER_QOS_DEFAULT;
   apply_spec(writer_qos, spec, qos);
+  apply_transport_cap(writer_qos, spec);
   if (spec.durability == Durability::kTransientLocal) {
     writer_qos.reliable_writer_qos().times.nackResponseDelay = eprosima::fastrtps::Duration_t(0, 0);
     writer_qos.reliable_writer_qos().times.heartbeatPeriod =
@@ -67,9 +69,25 @@ fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos) {
   return writer_qos;
 }
 
+void apply_transport_cap(fdds::DataReaderQos& qos, const TopicSpec& spec) {
+  if (spec.transport_cap == 0) return;
+  // Payloads of the cap's size, so that a larger fragmented sample finds no room and is dropped at
+  // its first fragment; only a few reserved up front (each is the cap's size, and the pool clears
+  // it), more taken as the history needs them.
+  qos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_MEMORY_MODE;
+  qos.resource_limits().allocated_samples = std::min(qos.history().depth, 8);
+}
+
+void apply_transport_cap(fdds::DataWriterQos& qos, const TopicSpec& spec) {
+  // A writer's payloads sized by what it writes, not preallocated at the cap.
+  if (spec.transport_cap != 0)
+    qos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
+}
+
 fdds::DataReaderQos reader_qos_for(const TopicSpec& spec, Qos qos) {
   fdds::DataReaderQos reader_qos = fdds::DATAREADER_QOS_DEFAULT;
   apply_spec(reader_qos, spec, qos);
+  apply_transport_cap(reader_qos, spec);
   if (spec.durability == Durability::kTransientLocal)
     reader_qos.reliable_reader_qos().times.initialAcknackDelay =
         eprosima::fastrtps::Duration_t(0, kLateJoinerAcknackNs);

@@ -51,6 +51,9 @@ struct TopicSpec {
   // A camera-scoped topic: its writers and readers are in DDS partitions named by camera (or
   // time-sync client) id, which a camera's DDS Security permissions restrict to its own id.
   bool camera_scoped = false;
+  // Samples larger than this (bytes, 0: no limit) are refused by a reader's payload pool at their
+  // first fragment, before any of them is copied (transport_sample_cap, reader_qos_for).
+  std::size_t transport_cap = 0;
 };
 
 template <class T>
@@ -84,14 +87,29 @@ template <class T>
 inline constexpr std::size_t kMaxSampleBytes = 0;
 template <>
 inline constexpr std::size_t kMaxSampleBytes<msg::FeatureFrame> = std::size_t{2} << 20;
+// Larger than twice that, a sample is not even received: the reader's payloads are preallocated at
+// this size (PREALLOCATED_MEMORY_MODE), and Fast DDS drops a fragmented sample that does not fit
+// one at its first fragment. Before, the 40 MB frames were reassembled first: a payload grown to
+// 40 MB and cleared on the receive thread every camera's frames wait behind (docs/hostile_input.md,
+// "Where the 40 MB frames cost time"). Between the two limits a sample is counted, above the
+// second it is not (it never arrives whole).
+template <class T>
+inline constexpr std::size_t kTransportCap = 2 * kMaxSampleBytes<T>;
 
 #define PANOPTES_TOPIC(Type, topic_name, reliable, durability, depth, offer_reliable, leading_id) \
   template <>                                                                                     \
   struct TopicTraits<msg::Type> {                                                                 \
     using PubSubType = msg::Type##PubSubType;                                                     \
     static TopicSpec spec() {                                                                     \
-      return {topic_name,     reliable,   durability, depth,                                      \
-              offer_reliable, leading_id, 0,          kCameraScoped<msg::Type>};                  \
+      return {topic_name,                                                                         \
+              reliable,                                                                           \
+              durability,                                                                         \
+              depth,                                                                              \
+              offer_reliable,                                                                     \
+              leading_id,                                                                         \
+              0,                                                                                  \
+              kCameraScoped<msg::Type>,                                                           \
+              kTransportCap<msg::Type>};                                                          \
     }                                                                                             \
   };
 
@@ -178,7 +196,8 @@ class GuardedPubSubType final : public fdds::TopicDataType {
  public:
   explicit GuardedPubSubType(ReceiveCounters& counters) : counters_(counters) {
     setName(real_.getName());
-    m_typeSize = real_.m_typeSize;
+    // The size Fast DDS preallocates payloads at (reader_qos_for, writer_qos_for).
+    m_typeSize = kTransportCap<T> != 0 ? static_cast<std::uint32_t>(kTransportCap<T>) : real_.m_typeSize;
     m_isGetKeyDefined = real_.m_isGetKeyDefined;
   }
   bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override {
@@ -241,6 +260,11 @@ void apply_spec(Qos& qos, const TopicSpec& spec, panoptes::dds::Qos override_qos
   if (spec.durability == Durability::kTransientLocal)
     qos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
 }
+
+// The reader and writer policies of a topic with a transport cap (TopicSpec::transport_cap, whose
+// type's m_typeSize is that cap in every participant: GuardedPubSubType, RawPubSubType).
+void apply_transport_cap(fdds::DataReaderQos& qos, const TopicSpec& spec);
+void apply_transport_cap(fdds::DataWriterQos& qos, const TopicSpec& spec);
 
 // The writer QoS of a topic (docs/protocol.md), for typed and raw writers alike.
 fdds::DataWriterQos writer_qos_for(const TopicSpec& spec, Qos qos);
