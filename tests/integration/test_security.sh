@@ -268,7 +268,18 @@ if "$bin/panoptes_eval" --scene "$scene" --tracks "$work/tracks.jsonl" --epoch-n
   pass "the secured system tracks across hosts (RMSE < 2 mm, >= 95% tracked, <= 3 ID switches)"
   grep -E "^m[0-9]" "$work/eval.txt" || true
 else
-  fail "tracking accuracy with DDS Security"; cat "$work/eval.txt"; tail -n 3 "$work"/cam*.log "$work/estimator.log"
+  # A camera whose clock-sync requests got no reply at all ran on its own clock the whole run: the
+  # estimator's time-sync writer and its reader never matched (seen in stop 87's fresh check: cam3,
+  # 297 requests, 0 replies, 0 predictions received; worst marker 2.29 mm). Its unsynchronised
+  # stamps are what the accuracy check then fails on; the second attempt must pass it.
+  unsynced="$(grep -lE 'clock sync: not synchronised \([0-9]+ requests, 0 replies\)' "$work"/cam[0-3].log 2>/dev/null |
+    xargs -r -n1 basename | sed 's/\.log$//' | tr '\n' ' ')"
+  if [ -n "$unsynced" ]; then
+    fail_unmatched "tracking accuracy with DDS Security, with no clock-sync reply ever reaching ${unsynced% }"
+  else
+    fail "tracking accuracy with DDS Security"
+  fi
+  cat "$work/eval.txt"; tail -n 3 "$work"/cam*.log "$work/estimator.log"
 fi
 frames() { grep -c '"type":"tracks"' "$work/$1.jsonl" 2>/dev/null || true; }
 [ "$(frames app)" -gt 300 ] && pass "the application host received $(frames app) TrackFrames" ||
