@@ -17,12 +17,11 @@ namespace {
 // real type from the decoded sample.
 class RawPubSubType final : public fdds::TopicDataType {
  public:
-  // transport_cap: the topic's (TopicSpec), which the typed endpoints' type declares too: whichever
-  // registers the type first in a participant, its payloads have the same size.
+  // transport_cap: the topic's (TopicSpec::transport_cap; declared_type_size).
   RawPubSubType(std::unique_ptr<fdds::TopicDataType> real, std::size_t transport_cap)
       : real_(std::move(real)) {
     setName(real_->getName());
-    m_typeSize = transport_cap != 0 ? static_cast<std::uint32_t>(transport_cap) : real_->m_typeSize;
+    m_typeSize = declared_type_size(transport_cap, real_->m_typeSize);
     m_isGetKeyDefined = real_->m_isGetKeyDefined;
   }
   bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override {

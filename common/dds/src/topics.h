@@ -52,9 +52,17 @@ struct TopicSpec {
   // time-sync client) id, which a camera's DDS Security permissions restrict to its own id.
   bool camera_scoped = false;
   // Samples larger than this (bytes, 0: no limit) are refused by a reader's payload pool at their
-  // first fragment, before any of them is copied (transport_sample_cap, reader_qos_for).
+  // first fragment, before any of them is copied (apply_transport_cap, reader_qos_for).
   std::size_t transport_cap = 0;
 };
+
+// The size a topic's type declares to Fast DDS (m_typeSize), which its payload pools preallocate:
+// the topic's transport cap if it has one, else the generated type's estimate. One rule for the
+// typed (GuardedPubSubType) and raw (RawPubSubType) types, so that whichever registers the type
+// first in a participant, its payloads have the same size.
+inline std::uint32_t declared_type_size(std::size_t transport_cap, std::uint32_t generated) {
+  return transport_cap != 0 ? static_cast<std::uint32_t>(transport_cap) : generated;
+}
 
 template <class T>
 struct TopicTraits;
@@ -196,8 +204,7 @@ class GuardedPubSubType final : public fdds::TopicDataType {
  public:
   explicit GuardedPubSubType(ReceiveCounters& counters) : counters_(counters) {
     setName(real_.getName());
-    // The size Fast DDS preallocates payloads at (reader_qos_for, writer_qos_for).
-    m_typeSize = kTransportCap<T> != 0 ? static_cast<std::uint32_t>(kTransportCap<T>) : real_.m_typeSize;
+    m_typeSize = declared_type_size(kTransportCap<T>, real_.m_typeSize);
     m_isGetKeyDefined = real_.m_isGetKeyDefined;
   }
   bool serialize(void* data, eprosima::fastrtps::rtps::SerializedPayload_t* payload) override {
