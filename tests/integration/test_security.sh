@@ -314,7 +314,8 @@ done
 # intruders' (255) none.
 matched=$(sed -n 's/^sent set_threshold to \* (seq [0-9]*, \([0-9]*\) node(s) matched, partition \*)$/\1/p' "$work/ctl_ops.log")
 ops_seq=$(sed -n 's/^sent set_threshold to \* (seq \([0-9]*\), .*/\1/p' "$work/ctl_ops.log")
-applied=$(grep -l "command set_threshold #${ops_seq:-none} applied" "$work"/cam[0-9].log 2>/dev/null | sed 's#.*/\(cam[0-9]*\)\.log#\1#' | tr '\n' ' ')
+# (|| true: no camera applied it when the operator's command never went out; the checks below say so.)
+applied=$(grep -l "command set_threshold #${ops_seq:-none} applied" "$work"/cam[0-9].log 2>/dev/null | sed 's#.*/\(cam[0-9]*\)\.log#\1#' | tr '\n' ' ' || true)
 read -r seen checked operator_set intruder_set < <(python3 -c "
 import json, sys
 last, ever = {}, set()
