@@ -155,7 +155,10 @@ compare planned_vs_planned_q_two "a + 0 >= b + 0" "the tracker_rmse plan sees as
 # Against the ring of 4 the plan does NOT reach the goal (RMSE at most the ring's): 1.344 vs
 # 1.061 mm on 2026-11-27: the ring sees 2.5% of the marker-time by fewer than two cameras and is
 # more precise where it sees; the objective takes the coverage (docs/planner.md, "Not yet done").
-# This bound (1.3x the ring's, measured 1.27x) only guards against a regression.
-compare planned_vs_ring4_rmse "a + 0 <= 1.3 * b" \
-  "the planned layout's RMSE (mm) is within 1.3x the ring of 4's (a regression guard; the goal, <= 1x, is not met)"
+# This bound only guards against a regression: 1.3x the ring's, measured 1.27x, until stop 88's
+# publication limits (12 mm, 2 px; docs/estimator.md, "Publication limits for the edges") lowered
+# both RMSEs, the ring's more: 1.380 -> 1.363 mm and 1.065 -> 1.038 mm, 1.296x -> 1.314x (the same
+# binary with and without the new limits in --config, seed 8). Now 1.35x.
+compare planned_vs_ring4_rmse "a + 0 <= 1.35 * b" \
+  "the planned layout's RMSE (mm) is within 1.35x the ring of 4's (a regression guard; the goal, <= 1x, is not met)"
 finish

@@ -443,6 +443,8 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
             "... for a tentative track");
   f.number("publish_max_sigma_m", o.publish_max_sigma_m, kNonNegative,
            "confirmed tracks are published while their position 1-sigma is within this, m (0: always)");
+  f.number("fast_publish_max_sigma_m", o.fast_publish_max_sigma_m, kNonNegative,
+           "... a fast track (above 10 m/s) while within this, m (0: publish_max_sigma_m)");
   f.number("fast_publish_innovation_px", o.fast_publish_innovation_px, kNonNegative,
            "... or a fast track while every camera that updated it in the last 10 ms found its blob within "
            "this of the prediction, px, up to 2.5 ms after a two-camera update (0: off)");

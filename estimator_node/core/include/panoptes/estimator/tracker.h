@@ -128,8 +128,13 @@ struct TrackerOptions {
   // A confirmed track is published only while its predicted position is known this well (1σ
   // along its least determined direction, m; 0: always). A marker that only one camera sees has
   // no depth, and one no camera sees is only predicted: either kind is kept (same id when seen
-  // again) but not reported once the filter's own uncertainty passes this.
-  double publish_max_sigma_m = 0.02;
+  // again) but not reported once the filter's own uncertainty passes this. 12 mm since stop 88
+  // (20 before): the walk grid's four-camera cells reported markers 20-50 mm off with σ 12-20 mm
+  // (docs/estimator.md, "Publication limits for the edges").
+  double publish_max_sigma_m = 0.012;
+  // The same limit for a fast track (above 10 m/s: a club head, a ball), whose σ carries its
+  // manoeuvre allowance between frames; 0: publish_max_sigma_m.
+  double fast_publish_max_sigma_m = 0.02;
   // ... or, a fast track (its σ carries fast_process_noise_scale's allowance for a manoeuvre),
   // while the cameras confirm its predictions: its last update had a second camera's within 10 ms,
   // every camera that updated it within 10 ms before found its blob within this of the
@@ -141,8 +146,9 @@ struct TrackerOptions {
   // 0.3 per update), or within four times the camera's typical innovation where that is larger:
   // views that disagree are two markers' blobs fused into a point between them (docs/estimator.md,
   // "Views that disagree"). 0: off. On the accuracy grid's walk: false records 10639 -> 6567
-  // (worst cell 2.04 -> 1.14 %), switches 56 -> 39, for 0.24 point of mean coverage.
-  double publish_max_innovation_px = 3.0;
+  // (worst cell 2.04 -> 1.14 %), switches 56 -> 39, for 0.24 point of mean coverage (3 px, stop
+  // 85); 2 px with the 12 mm publish_max_sigma_m since stop 88 ("Publication limits for the edges").
+  double publish_max_innovation_px = 2.0;
   double merge_distance_m = 0.005;  // two tracks closer than this are one marker
   // A confirmed track not updated for 10 ms and four applied frames (a marker out of sight, not a
   // pause of the input) whose predicted position is less certain than this (1σ per axis, m) takes
