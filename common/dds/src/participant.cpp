@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <set>
 #include <string>
@@ -122,6 +123,25 @@ bool uses_shared_memory(const fdds::DomainParticipantQos& qos) {
   return false;
 }
 
+// BusOptions::shared_memory false: the profile's transports without shared memory. Fast DDS's
+// builtin transports (UDPv4 and shared memory) become an explicit UDPv4 transport. A profile with
+// no other transport (deploy/dds/shm.xml: one host, no socket) keeps it.
+void leave_out_shared_memory(fdds::DomainParticipantQos& qos) {
+  auto& transport = qos.transport();
+  const auto is_shared_memory = [](const auto& descriptor) {
+    return std::dynamic_pointer_cast<eprosima::fastdds::rtps::SharedMemTransportDescriptor>(descriptor) !=
+           nullptr;
+  };
+  if (transport.use_builtin_transports) {
+    transport.use_builtin_transports = false;
+    transport.user_transports.push_back(
+        std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>());
+  }
+  if (std::all_of(transport.user_transports.begin(), transport.user_transports.end(), is_shared_memory))
+    return;
+  std::erase_if(transport.user_transports, is_shared_memory);
+}
+
 // The ids a participant can take and still be found: with initial peers, those whose ports the
 // UDP transports probe (maxInitialPeersRange).
 int participant_id_limit(const fdds::DomainParticipantQos& qos) {
@@ -201,13 +221,17 @@ BusCore::BusCore(const BusOptions& options) {
   }
   qos.name(options.participant_name);
   security_files_ = apply_security(options, profile_file_, domain, qos);
-  create_entities(domain, qos);
+  create_entities(domain, qos, options.shared_memory);
 }
 
-void BusCore::create_entities(int domain, fdds::DomainParticipantQos& qos) {
+void BusCore::create_entities(int domain, fdds::DomainParticipantQos& qos, bool shared_memory) {
   {
     std::lock_guard<std::mutex> lock(participant_creation_mutex());
+    // Chosen with the profile's transports, shared memory included, and only then without it: a
+    // participant left to Fast DDS's own choice of id could take one this process chooses next
+    // for another ("RTPSParticipant with the same ID already exists").
     keep_off_killed_participants_ports(qos, static_cast<std::uint32_t>(domain));
+    if (!shared_memory) leave_out_shared_memory(qos);
     const std::set<std::string> segments_before = shm_segments_held(kProcSelfFdDir);
     participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
         static_cast<fdds::DomainId_t>(domain), qos, &listener_, fdds::StatusMask::none());

@@ -90,8 +90,9 @@ class BusCore {
   }
 
  private:
-  // The participant in `domain`, its content filter, publisher and subscriber; `qos` from the profile.
-  void create_entities(int domain, fdds::DomainParticipantQos& qos);
+  // The participant in `domain`, its content filter, publisher and subscriber; `qos` from the profile,
+  // its shared-memory transport left out unless `shared_memory` (BusOptions).
+  void create_entities(int domain, fdds::DomainParticipantQos& qos, bool shared_memory);
   void teardown();
 
   std::filesystem::path profile_file_;

@@ -5,9 +5,11 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <iterator>
 #include <memory>
 #include <mutex>
+#include <regex>
 #include <set>
 #include <string>
 #include <thread>
@@ -63,6 +65,57 @@ TEST(Bus, AParticipantHoldsOneSharedMemorySegmentOfItsOwn) {
   EXPECT_EQ(shm_segments_held("/proc/self/fd"), before);
   // No process of another host or process was discovered: the name went with the participant.
   EXPECT_FALSE(std::filesystem::exists("/dev/shm/" + *added.begin()));
+}
+
+// The shared-memory ports this process maps (/proc/self/maps): its participants' own, and those
+// of every participant one of them sends to through shared memory.
+std::set<std::string> shm_ports_mapped() {
+  std::ifstream maps("/proc/self/maps");
+  std::set<std::string> ports;
+  const std::regex port(R"(fastrtps_port[0-9]+)");
+  for (std::string line; std::getline(maps, line);) {
+    std::smatch found;
+    if (std::regex_search(line, found, port)) ports.insert(found.str());
+  }
+  return ports;
+}
+
+// BusOptions::shared_memory false (camera_node's default, docs/protocol.md "A peer that dies"): the
+// participant has no shared-memory segment and no port, so no sender can wait on its port's lock,
+// and a writer offering reliability (which Fast DDS 2.9 sends through shared memory on one host)
+// still reaches it, over UDP. A participant with the profile's shared memory, beside it, adds a
+// port (the control: the check sees ports).
+TEST(Bus, WithoutSharedMemoryNothingGoesThroughIt) {
+  const std::set<std::string> segments_before = shm_segments_held("/proc/self/fd");
+  Bus writer_bus(options("shm_writer"));
+  const std::set<std::string> ports_before = shm_ports_mapped();
+  BusOptions udp_only = options("udp_only_reader");
+  udp_only.shared_memory = false;
+  Bus udp_bus(udp_only);
+  EXPECT_EQ(shm_segments_held("/proc/self/fd").size(), segments_before.size() + 1) << "the writer's only";
+
+  std::atomic<int> received{0};
+  auto writer = writer_bus.make_writer<msg::FeatureFrame>();
+  auto reader = udp_bus.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&&) { ++received; });
+  ASSERT_TRUE(writer->wait_for_readers(1, 5s));
+  msg::FeatureFrame frame;
+  frame.camera_id("cam0");
+  ASSERT_TRUE(wait_until([&] {
+    writer->write(frame);
+    return received.load() >= 3;
+  }));
+  EXPECT_EQ(shm_ports_mapped(), ports_before) << "a shared-memory port of the UDP-only participant";
+
+  // The control: the same exchange with a participant that keeps the profile's shared memory.
+  Bus shm_bus(options("shm_reader"));
+  std::atomic<int> received_shm{0};
+  auto shm_reader = shm_bus.make_reader<msg::FeatureFrame>([&](msg::FeatureFrame&&) { ++received_shm; });
+  ASSERT_TRUE(writer->wait_for_readers(2, 5s));
+  ASSERT_TRUE(wait_until([&] {
+    writer->write(frame);
+    return received_shm.load() >= 3;
+  }));
+  EXPECT_GT(shm_ports_mapped().size(), ports_before.size()) << "the control reader's port not seen";
 }
 
 TEST(Bus, OnlyIdReaderGetsOnlyItsCamerasSamples) {
