@@ -141,6 +141,7 @@ int run(const app::NodeCommandLine& command_line, session::EstimatorSession& est
   app::LiveOptions live;
   live.dds_profile = command_line.dds_profile;
   live.security = command_line.security;
+  live.shared_memory = command_line.shared_memory;
   live.calibration_file = command_line.calibration_file;
   live.out_tracks = command_line.out_tracks;
   live.out_poses = command_line.out_poses;

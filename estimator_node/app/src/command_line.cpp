@@ -181,6 +181,10 @@ void add_modes_and_files(CLI::App& app, NodeCommandLine& c) {
                  "with --subjects: write the labelled tracks of every processed frame as JSONL");
   app.add_option("--dds-profile", c.dds_profile, "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
   dds::add_security_options(app, c.security);
+  app.add_flag("--shared-memory", c.shared_memory,
+               "keep the profile's shared-memory transport (default: off, UDP only unless the profile has "
+               "nothing else: a process on this host that dies while holding its shared-memory port's lock "
+               "would stall the estimator's sends for 1 s; docs/protocol.md, \"A peer that dies\")");
   app.add_flag("--replay-arrival", c.replay_arrival,
                "offline: deliver frames in the order they reached the estimator (received_ns), through the "
                "latency window, as live mode would");

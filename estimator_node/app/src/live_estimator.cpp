@@ -50,6 +50,7 @@ std::unique_ptr<dds::Bus> open_bus(const LiveOptions& options) {
   dds::BusOptions bus_options;
   bus_options.profile_file = options.dds_profile;
   bus_options.security = options.security;
+  bus_options.shared_memory = options.shared_memory;
   bus_options.participant_name = "estimator_node";
   auto bus = std::make_unique<dds::Bus>(bus_options);
   if (!options.quiet) log("DDS profile " + bus->profile_file().string());

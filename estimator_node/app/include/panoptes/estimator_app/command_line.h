@@ -29,6 +29,7 @@ struct NodeCommandLine {
   std::string out_labels;
   std::string dds_profile;
   dds::SecurityOptions security;
+  bool shared_memory = false;  // --shared-memory (docs/protocol.md, "A peer that dies")
   bool replay_arrival = false;
   double duration_s = 0.0;
   bool latency_probe = false;

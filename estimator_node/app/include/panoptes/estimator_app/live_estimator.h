@@ -19,6 +19,7 @@ namespace panoptes::estimator_app {
 struct LiveOptions {
   std::string dds_profile;        // empty: the loopback profile
   dds::SecurityOptions security;  // DDS Security files (docs/security.md)
+  bool shared_memory = false;     // keep the profile's shared-memory transport (BusOptions)
   std::string calibration_file;   // cameras in it are not recalibrated from their CameraInfo
   std::string out_tracks;         // optional Track JSONL
   std::string out_poses;          // optional Pose JSONL
