@@ -130,6 +130,10 @@ struct Track {
   Eigen::Vector3d seen_position = Eigen::Vector3d::Zero();
   Eigen::Vector3d seen_velocity = Eigen::Vector3d::Zero();  // its velocity then
   TimeNs seen_ns = 0;
+  // The newest frame applied that had it in view and did not update it, and its camera (-1: none):
+  // a camera that ran and did not see its marker (damp_one_view_velocity).
+  TimeNs missed_ns = 0;
+  int missed_camera = -1;
   // A fast track's rigid partner (kRigidToleranceM): its id (0: none), their distance when it was
   // chosen and since when it held (note_partner).
   std::int64_t partner_id = 0;
@@ -583,6 +587,9 @@ struct Tracker::Impl {
   void cap_return_velocity(Track& track, const Eigen::Vector3d& predicted_velocity);
   // Tentative tracks inside the image that took no blob were not seen.
   void count_misses(const std::vector<char>& track_done, const std::vector<char>& in_view);
+  // Confirmed tracks in view of `camera_index`'s frame at `stamp` that it did not update: missed_ns.
+  void note_missed(const std::vector<char>& track_done, const std::vector<char>& in_view, int camera_index,
+                   TimeNs stamp);
   // Adaptive process noise on: a fast confirmed track in view that took no blob although it was
   // updated a moment ago takes the one blob left in its manoeuvre gate (σ² ×
   // process_noise_max_scale), if no other such track claims it (docs/estimator.md, "Manoeuvres").
@@ -1363,21 +1370,29 @@ void Tracker::Impl::damp_one_view_velocity(Track& track, int camera_index, TimeN
       track.state.velocity().squaredNorm() >= kFastSpeed * kFastSpeed) {
     return;
   }
-  // Only while another camera delivers frames that do not show the marker: with one camera left
-  // for the whole system (the others stopped), its rays are all there is, and constant velocity is
-  // what the body filter's identification relies on (BodyScenes.OneOfFourMarkersHidden...: a
-  // single camera for 2 s, a tool re-identified wrongly for 10 frames with the decay).
-  bool others_deliver = false;
-  for (std::size_t c = 0; c < core.frame_per_camera_ns.size() && !others_deliver; ++c) {
-    others_deliver = static_cast<int>(c) != camera_index && core.frame_per_camera_ns[c] != 0 &&
-                     stamp - core.frame_per_camera_ns[c] <= kFrameGapNs;
-  }
-  if (!others_deliver) return;
+  // Only while another camera's frames, applied, had it in view and did not show it (missed_ns):
+  // with one camera left for the whole system (the others stopped), its rays are all there is, and
+  // constant velocity is what the body filter's identification relies on
+  // (BodyScenes.OneOfFourMarkersHidden...: a single camera for 2 s, a tool re-identified wrongly
+  // for 10 frames with the decay). Live, another camera's frame for this instant may not have
+  // arrived yet: it is no evidence until applied (in order, or by the replay it causes).
+  if (track.missed_camera == camera_index || track.missed_ns == 0 || stamp - track.missed_ns > kFrameGapNs)
+    return;
   const Eigen::Vector3d ray =
       (track.state.position() - models[static_cast<std::size_t>(camera_index)]->center_world()).normalized();
   const double along = track.state.velocity().dot(ray);
   const double decay = 1.0 - std::exp(-ns_to_seconds(stamp - previous_update_ns) / ns_to_seconds(tau_ns));
   track.state.x.tail<3>() -= decay * along * ray;
+}
+
+void Tracker::Impl::note_missed(const std::vector<char>& track_done, const std::vector<char>& in_view,
+                                int camera_index, TimeNs stamp) {
+  for (std::size_t i = 0; i < core.tracks.size(); ++i) {
+    Track& track = core.tracks[i];
+    if (!track.confirmed || track_done[i] || !in_view[i]) continue;
+    track.missed_ns = stamp;
+    track.missed_camera = camera_index;
+  }
 }
 
 void Tracker::Impl::count_misses(const std::vector<char>& track_done, const std::vector<char>& in_view) {
@@ -1419,7 +1434,7 @@ bool Tracker::Impl::reassociate(const Entry& entry, const std::vector<Eigen::Vec
   std::vector<char> in_view(core.tracks.size(), 0);
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
-    if (track.confirmed || track_done[i]) continue;
+    if (track_done[i]) continue;
     // As gate() decides it: in front of the camera and projected inside the image.
     const Eigen::Vector3d p_cam = camera.T_cam_world().apply(track.position_at(stamp));
     if (p_cam.z() < options.init.min_depth_m) continue;
@@ -1427,6 +1442,7 @@ bool Tracker::Impl::reassociate(const Entry& entry, const std::vector<Eigen::Vec
     in_view[i] = pixel && camera.in_image(*pixel, 0.0);
   }
   count_misses(track_done, in_view);
+  note_missed(track_done, in_view, entry.camera, stamp);
   return true;
 }
 
@@ -1468,6 +1484,7 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
   }
   recover_manoeuvres(entry, pixels, used, track_done, in_view);
   count_misses(track_done, in_view);
+  note_missed(track_done, in_view, camera_index, stamp);
   // Kept for replays only when nothing competed: every gated pair was taken and no blob left over
   // came within a track's search radius (a circle well beyond the gate). A replay's small change
   // of the states then cannot bring another pair into play; a contested frame is associated again.

@@ -407,8 +407,8 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
            "a second camera's update after 30 ms of one camera's changes a track's velocity by at most "
            "this, m/s, unless fast (0: off, the default; 3 on the accuracy grid)");
   f.integer("one_view_velocity_time_constant_ns", o.one_view_velocity_time_constant_ns, 0, kHourNs,
-            "a track one camera alone has updated for 10 ms: its velocity along that camera's ray decays "
-            "with this time constant (0: off, constant velocity, the default; 120 ms on the accuracy grid)");
+            "a track one camera alone has updated for 10 ms while another camera's frame missed it: its "
+            "velocity along that camera's ray decays with this time constant (0: off, constant velocity)");
   f.number("fast_process_noise_scale", o.fast_process_noise_scale, kNonNegative,
            "adaptive process noise: a fast track (above 10 m/s: a swung or thrown object) keeps this times "
            "process_noise (0: off)");

@@ -441,8 +441,11 @@ TEST(Tracker, AReturnToTwoViewsChangesVelocityByAtMostTheCap) {
   };
   // The records are the measure of the state here: publish them whatever the views say (with
   // publish_max_innovation_px, the uncapped track's records from the pull-back on are withheld).
+  // Without the one-view decay (on by default since stop 89), which leaves the return little
+  // velocity to pull (docs/estimator.md, "One-view velocity"): the cap's own scene.
   TrackerOptions off;
   off.publish_max_innovation_px = 0;
+  off.one_view_velocity_time_constant_ns = 0;
   TrackerOptions on = off;
   on.return_velocity_cap_mps = 3.0;
   const Outcome capped = outcome(on);

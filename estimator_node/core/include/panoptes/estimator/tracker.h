@@ -76,16 +76,18 @@ struct TrackerOptions {
   // live, with markers hidden and frames late, test_live_labels failed 3 of 5 loaded runs with it
   // (5 of 5 passed without): neighbours' tracks swapped at a hidden marker (docs/estimator.md).
   double return_velocity_cap_mps = 0.0;
-  // A track (not fast) that one camera alone has updated for more than 10 ms, while other cameras
-  // deliver frames: its velocity along that camera's ray, which no update of that camera observes,
-  // decays with this time constant at each of its updates (0: off, constant velocity). A foot that
-  // lands while one camera sees it stops; constant velocity carried its depth on at the speed it
-  // had when the second view was lost (ring4/walk/c0/s1: ankle and heel 30 mm off along one ray in
-  // 30 ms, lost, then swapped). 120 ms on the accuracy grid: walk 56 -> 48 ID switches (swaps 13 ->
-  // 15), run 262 -> 221 (81 -> 62), dance, club and ball unchanged. Off by default: live, with
-  // markers hidden and frames late, test_live_labels failed 2 of 5 loaded runs with it, as with the
-  // two options above (docs/estimator.md, "One-view velocity").
-  TimeNs one_view_velocity_time_constant_ns = 0;
+  // A track (not fast) that one camera alone has updated for more than 10 ms, while another
+  // camera's frame, applied within 10 ms, had it in view and did not update it: its velocity along
+  // the updating camera's ray, which no update of that camera observes, decays with this time
+  // constant at each of its updates (0: off, constant velocity). A foot that lands while one camera
+  // sees it stops; constant velocity carried its depth on at the speed it had when the second view
+  // was lost (ring4/walk/c0/s1: ankle and heel 30 mm off along one ray in 30 ms, lost, then
+  // swapped). On by default since stop 89, when "another camera" became one whose frame was applied
+  // and missed the track (live, a frame not yet arrived is no evidence): walk 39 -> 41 ID switches
+  // (swaps 9 -> 11), run 229 -> 194 (61 -> 40), dance, club and ball unchanged; test_live_labels
+  // passed 5 of 5 loaded runs (2 of 5 failed with the former rule) (docs/estimator.md, "One-view
+  // velocity").
+  TimeNs one_view_velocity_time_constant_ns = 120'000'000;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
   // fast_hold_ns after its last update above 10 m/s, whatever its innovations (0: the adaptive
