@@ -209,7 +209,6 @@ struct Core {
   // By camera: the innovations' typical length, px, a slow moving average over the updates of
   // confirmed tracks (views_agree: a noisy camera's own scale).
   std::vector<double> camera_innovation_level;
-  std::vector<TimeNs> frame_per_camera_ns;  // the stamp of each camera's latest frame applied (0: none)
   BodySet bodies;
 };
 
@@ -322,7 +321,6 @@ struct Tracker::Impl {
     core.initiator.set_cameras(pointers);
     core.associated_per_camera.resize(models.size(), 0);
     core.camera_innovation_level.resize(models.size(), 0.0);
-    core.frame_per_camera_ns.resize(models.size(), 0);
     std::vector<Eigen::Vector2d> sizes;
     for (const auto& model : models)
       sizes.emplace_back(model->intrinsics().width, model->intrinsics().height);
@@ -731,8 +729,6 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
   note_interval(frame.stamp_ns, camera_index);
   if (!core.suspended.empty() && frame.stamp_ns > core.suspended_at_ns) resume_suspended(frame.stamp_ns);
   core.last_stamp_ns = std::max(core.last_stamp_ns, frame.stamp_ns);
-  auto& camera_frame_ns = core.frame_per_camera_ns[static_cast<std::size_t>(camera_index)];
-  camera_frame_ns = std::max(camera_frame_ns, frame.stamp_ns);
   ++core.frames_applied;
   std::vector<Eigen::Vector2d> pixels;
   pixels.reserve(frame.blobs.size());
