@@ -96,10 +96,6 @@ void add_options(CLI::App& app, Options& options) {
   app.add_option("--out-features", options.out_features, "write every FeatureFrame to this JSONL file");
   app.add_option("--dds-profile", live.dds_profile,
                  "Fast DDS XML profile (default: deploy/dds/loopback.xml)");
-  app.add_flag("--shared-memory", live.shared_memory,
-               "keep the profile's shared-memory transport (default: off, UDP only unless the profile has "
-               "nothing else: a camera node that dies while holding its shared-memory port's lock stalls the "
-               "estimator's sends for 1 s; docs/protocol.md, \"A peer that dies\")");
   panoptes::dds::add_security_options(app, live.security);
   app.add_option("--sim-epoch-ns", options.sim_epoch_ns,
                  "sim: wall-clock ns of scene time 0 (default: now, rounded up to a whole second); features: "

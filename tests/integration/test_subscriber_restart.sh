@@ -12,11 +12,8 @@ source "$(dirname "$0")/lib.sh"
 scene="$source_dir/deploy/scenes/console.yaml"
 cameras=(cam0 cam1)
 camera_pids=()
-# --shared-memory: camera nodes talk UDP only by default (docs/protocol.md, "A peer that dies");
-# the writers under test here are those that send through shared memory (the estimator's to the
-# applications on its host, or camera nodes that keep it).
 for camera in "${cameras[@]}"; do
-  "$bin/camera_node" --source "sim:$scene#$camera" --duration 60 --shared-memory --quiet >"$work/$camera.log" 2>&1 &
+  "$bin/camera_node" --source "sim:$scene#$camera" --duration 60 --quiet >"$work/$camera.log" 2>&1 &
   pids+=("$!")
   camera_pids+=("$!")
 done

@@ -76,10 +76,7 @@ if [ "$with_estimator" -eq 1 ]; then
   pids+=("$!")
 fi
 for camera in "${cameras[@]}"; do
-  # --shared-memory: the writers under test send through shared memory (docs/protocol.md, "A peer
-  # that dies": camera nodes talk UDP only by default).
-  "$bin/camera_node" --source "sim:$scene#$camera" --duration "$duration" --shared-memory --quiet \
-    >"$work/$camera.log" 2>&1 &
+  "$bin/camera_node" --source "sim:$scene#$camera" --duration "$duration" --quiet >"$work/$camera.log" 2>&1 &
   pids+=("$!")
   camera_pids+=("$!")
 done

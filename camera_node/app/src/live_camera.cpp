@@ -21,7 +21,6 @@ dds::Bus make_bus(const LiveOptions& options, const std::string& camera_id) {
   dds::BusOptions bus_options;
   bus_options.profile_file = options.dds_profile;
   bus_options.security = options.security;
-  bus_options.shared_memory = options.shared_memory;
   bus_options.participant_name = "camera_node/" + camera_id;
   return dds::Bus(bus_options);
 }

@@ -30,10 +30,7 @@ struct LiveOptions {
   std::string source_spec;  // --source: a sim camera's scene clock offset is part of the node clock
   std::string dds_profile;
   dds::SecurityOptions security;  // DDS Security files (docs/security.md)
-  // --shared-memory: keep the profile's shared-memory transport (off: UDP only, so this node's
-  // death cannot stall the estimator; docs/protocol.md, "A peer that dies").
-  bool shared_memory = false;
-  std::string out_features;  // also write every published frame here ("" = no)
+  std::string out_features;       // also write every published frame here ("" = no)
   std::size_t queue_capacity = 4;
   double prediction_max_age_ms = 50;
   double duration_s = 0;

@@ -54,8 +54,8 @@ struct BusOptions {
   SecurityOptions security;
   // false: the profile's shared-memory transport is left out (its UDP transports kept; a profile on
   // Fast DDS's builtin transports gets plain UDPv4), so this participant exchanges nothing with
-  // others through shared memory; a profile with shared memory only (shm.xml) is kept as it is. camera_node's
-  // and estimator_node's default: a Fast DDS 2.9 process that dies while it holds the lock of its
+  // others through shared memory; a profile with shared memory only (shm.xml) is kept as it is.
+  // estimator_node's default: a Fast DDS 2.9 process that dies while it holds the lock of its
   // shared-memory port stalls every participant sending to it for the lock's 1 s timeout, all of that
   // participant's sends included (docs/protocol.md, "A peer that dies").
   bool shared_memory = true;
