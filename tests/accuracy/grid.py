@@ -326,6 +326,8 @@ def main():
                    help="walk, run and dance cells: coverage at least")
     p.add_argument("--require-max-false-fraction", type=float, default=None,
                    help="walk, run and dance cells: false record fraction at most")
+    p.add_argument("--require-max-id-swaps", type=int, default=None,
+                   help="every cell: at most this many ID swaps (two markers exchanging ids)")
     args = p.parse_args()
     os.makedirs(args.work, exist_ok=True)
     if args.long or args.cells:
@@ -368,6 +370,8 @@ def main():
             bad.append(f"{r['cell']}: coverage {r['coverage']:.4f} < {args.require_coverage}")
         if not fast and args.require_max_false_fraction is not None and r["false_fraction"] > args.require_max_false_fraction:
             bad.append(f"{r['cell']}: false records {r['false_fraction']:.4f} > {args.require_max_false_fraction}")
+        if args.require_max_id_swaps is not None and r["id_swaps"] > args.require_max_id_swaps:
+            bad.append(f"{r['cell']}: {r['id_swaps']} ID swaps > {args.require_max_id_swaps}")
     for b in bad:
         print(f"FAIL: {b}", file=sys.stderr)
     return 1 if bad else 0

@@ -41,7 +41,8 @@ void TrackerOptions::print(std::ostream& out) const {
       << " with no confirmed track within " << fast_isolation_m << " m), acceleration input "
       << ns_to_seconds(fast_acceleration_time_constant_ns) * 1e3 << " ms\n"
       << "  one-view velocity        decays along the ray with "
-      << ns_to_seconds(one_view_velocity_time_constant_ns) * 1e3 << " ms\n"
+      << ns_to_seconds(one_view_velocity_time_constant_ns) * 1e3 << " ms; ray twins wait "
+      << ns_to_seconds(ray_twin_wait_ns) * 1e3 << " ms\n"
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
       << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n"
       << "  continuous calibration   " << calibration.mode << " (window "
@@ -134,6 +135,8 @@ struct Track {
   // a camera that ran and did not see its marker (damp_one_view_velocity).
   TimeNs missed_ns = 0;
   int missed_camera = -1;
+  // Since when a blob it was assigned has been left to neither of it and a ray twin (0: not waiting).
+  TimeNs twin_wait_since_ns = 0;
   // A fast track's rigid partner (kRigidToleranceM): its id (0: none), their distance when it was
   // chosen and since when it held (note_partner).
   std::int64_t partner_id = 0;
@@ -191,6 +194,7 @@ struct Core {
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
   std::uint64_t runaway_tracks_deleted = 0;    // delete_runaway_tracks
   std::uint64_t return_velocities_capped = 0;  // return_velocity_cap_mps
+  std::uint64_t ray_twin_waits = 0;            // ray_twin_wait_ns
   std::uint64_t tracks_reacquired = 0;         // confirmed new tracks that took a held-back track's id
   std::uint64_t tracks_reanchored = 0;         // one-view tracks moved to where two views put their marker
   std::uint64_t input_pauses = 0;              // pauses of the input (note_interval)
@@ -452,6 +456,10 @@ struct Tracker::Impl {
   // any other track, or one after a gap, predicts with constant velocity.
   void estimate_acceleration(Track& track, TimeNs stamp, double innovation_px) const;
   void damp_one_view_velocity(Track& track, int camera_index, TimeNs stamp, TimeNs previous_update_ns) const;
+  int one_view_camera(const Track& track, TimeNs stamp) const;
+  bool twin_waits(std::size_t t, std::size_t b, const std::vector<GatedPair>& pairs,
+                  const std::vector<std::pair<std::size_t, std::size_t>>& assignment, int camera_index,
+                  TimeNs stamp);
 
   // A fast track (a swung or thrown object) keeps σ² × fast_process_noise_scale while it moves
   // fast and for fast_hold_ns after (a ball's catch, a club's turn at the top): its next
@@ -1381,6 +1389,55 @@ void Tracker::Impl::damp_one_view_velocity(Track& track, int camera_index, TimeN
   track.state.x.tail<3>() -= decay * along * ray;
 }
 
+// The camera that alone has updated a track for kOneViewNs (its latest), or -1.
+int Tracker::Impl::one_view_camera(const Track& track, TimeNs stamp) const {
+  if (track.seen_ns == 0 || stamp - track.seen_ns <= kOneViewNs) return -1;
+  int latest = -1;
+  for (std::size_t c = 0; c < track.camera_last_update.size(); ++c) {
+    if (track.camera_last_update[c] != 0 &&
+        (latest < 0 ||
+         track.camera_last_update[c] > track.camera_last_update[static_cast<std::size_t>(latest)]))
+      latest = static_cast<int>(c);
+  }
+  return latest;
+}
+
+// Ray twins (ray_twin_wait_ns, docs/estimator.md "Ray twins"): confirmed track t was assigned blob b,
+// which a confirmed track left without a blob also gated, and one camera alone has updated both for
+// kOneViewNs and sees them within kRayTwinPx. In that camera, the rival is not counted as unseen
+// (held_back). In another, b is left to neither (true) for up to ray_twin_wait_ns: the view's next
+// frame usually shows both markers, and the assignment takes them together.
+bool Tracker::Impl::twin_waits(std::size_t t, std::size_t b, const std::vector<GatedPair>& pairs,
+                               const std::vector<std::pair<std::size_t, std::size_t>>& assignment,
+                               int camera_index, TimeNs stamp) {
+  constexpr double kRayTwinPx = 6.0;  // two blobs of ~4 px merge; a little beyond
+  if (options.ray_twin_wait_ns <= 0) return false;
+  Track& track = core.tracks[t];
+  const int camera = one_view_camera(track, stamp);
+  if (camera < 0) return false;
+  const CameraModel& twin_camera = *models[static_cast<std::size_t>(camera)];
+  const auto pixel = twin_camera.project(track.position_at(stamp));
+  if (!pixel) return false;
+  std::optional<std::size_t> rival;
+  for (const GatedPair& pair : pairs) {
+    if (pair.col != b || pair.row == t) continue;
+    const bool assigned = std::any_of(assignment.begin(), assignment.end(),
+                                      [&](const auto& taken) { return taken.first == pair.row; });
+    if (assigned || one_view_camera(core.tracks[pair.row], stamp) != camera) continue;
+    const auto other = twin_camera.project(core.tracks[pair.row].position_at(stamp));
+    if (other && (*other - *pixel).norm() <= kRayTwinPx) rival = pair.row;
+  }
+  if (!rival) return false;
+  core.tracks[*rival].frames_at_update = core.frames_applied;
+  if (camera == camera_index) return false;
+  if (track.twin_wait_since_ns != 0 && stamp - track.twin_wait_since_ns > options.ray_twin_wait_ns)
+    return false;
+  if (track.twin_wait_since_ns == 0) track.twin_wait_since_ns = stamp;
+  track.frames_at_update = core.frames_applied;
+  ++core.ray_twin_waits;
+  return true;
+}
+
 void Tracker::Impl::note_missed(const std::vector<char>& track_done, const std::vector<char>& in_view,
                                 int camera_index, TimeNs stamp) {
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
@@ -1472,7 +1529,10 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
     }
     if (pairs.empty()) continue;
     // Leaving a track and a blob both unmatched costs the gate: any gated pair is preferred.
-    for (const auto& [t, b] : assign_gated(pairs, 0.5 * options.gate_chi2)) {
+    const auto assignment = assign_gated(pairs, 0.5 * options.gate_chi2);
+    for (const auto& [t, b] : assignment) {
+      if (want_confirmed && twin_waits(t, b, pairs, assignment, camera_index, stamp)) continue;
+      core.tracks[t].twin_wait_since_ns = 0;
       commit_pair(t, *projected[t], pixels[b], b, camera_index, stamp, used);
       track_done[t] = 1;
       entry.associations.emplace_back(core.tracks[t].id, b);
@@ -2304,6 +2364,7 @@ const TrackerStats& Tracker::stats() const {
   s.fast_tracks_rejoined = core.fast_tracks_rejoined;
   s.runaway_tracks_deleted = core.runaway_tracks_deleted;
   s.return_velocities_capped = core.return_velocities_capped;
+  s.ray_twin_waits = core.ray_twin_waits;
   s.tracks_reacquired = core.tracks_reacquired;
   s.tracks_reanchored = core.tracks_reanchored;
   s.input_pauses = core.input_pauses;

@@ -409,6 +409,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.integer("one_view_velocity_time_constant_ns", o.one_view_velocity_time_constant_ns, 0, kHourNs,
             "a track one camera alone has updated for 10 ms while another camera's frame missed it: its "
             "velocity along that camera's ray decays with this time constant (0: off, constant velocity)");
+  f.integer("ray_twin_wait_ns", o.ray_twin_wait_ns, 0, kHourNs,
+            "two tracks one camera alone updates and sees within 6 px of each other: a blob of another "
+            "camera that both gate is left to neither for up to this long (0: off)");
   f.number("fast_process_noise_scale", o.fast_process_noise_scale, kNonNegative,
            "adaptive process noise: a fast track (above 10 m/s: a swung or thrown object) keeps this times "
            "process_noise (0: off)");
