@@ -1391,15 +1391,9 @@ void Tracker::Impl::damp_one_view_velocity(Track& track, int camera_index, TimeN
 
 // The camera that alone has updated a track for kOneViewNs (its latest), or -1.
 int Tracker::Impl::one_view_camera(const Track& track, TimeNs stamp) const {
-  if (track.seen_ns == 0 || stamp - track.seen_ns <= kOneViewNs) return -1;
-  int latest = -1;
-  for (std::size_t c = 0; c < track.camera_last_update.size(); ++c) {
-    if (track.camera_last_update[c] != 0 &&
-        (latest < 0 ||
-         track.camera_last_update[c] > track.camera_last_update[static_cast<std::size_t>(latest)]))
-      latest = static_cast<int>(c);
-  }
-  return latest;
+  const auto& updates = track.camera_last_update;
+  if (track.seen_ns == 0 || stamp - track.seen_ns <= kOneViewNs || updates.empty()) return -1;
+  return static_cast<int>(std::max_element(updates.begin(), updates.end()) - updates.begin());
 }
 
 // Ray twins (ray_twin_wait_ns, docs/estimator.md "Ray twins"): confirmed track t was assigned blob b,
