@@ -42,7 +42,7 @@ void TrackerOptions::print(std::ostream& out) const {
       << ns_to_seconds(fast_acceleration_time_constant_ns) * 1e3 << " ms\n"
       << "  one-view velocity        decays along the ray with "
       << ns_to_seconds(one_view_velocity_time_constant_ns) * 1e3 << " ms; ray twins wait "
-      << ns_to_seconds(ray_twin_wait_ns) * 1e3 << " ms\n"
+      << ns_to_seconds(ray_twin_wait_ns) * 1e3 << " ms; blob owners within " << blob_owner_px << " px\n"
       << "  merge_distance           " << merge_distance_m * 1e3 << " mm\n"
       << "  rewind horizon           " << ns_to_seconds(rewind_horizon_ns) * 1e3 << " ms\n"
       << "  continuous calibration   " << calibration.mode << " (window "
@@ -76,6 +76,14 @@ constexpr TimeNs kOneViewNs = 30'000'000;
 // neighbours a few centimetres apart (clavicles, heel and ankle) a two-view point may be a pairing
 // of one's blob with the other's.
 constexpr double kOneViewClearM = 0.1;
+// A track whose predicted position's covariance has a trace above this times reacquire_sigma_m²
+// is uncertain: held back once out of sight (held_back); kept off other tracks' blobs in a second
+// camera while one camera alone updates it (owned_elsewhere).
+constexpr double kUncertainFactor = 3.0;
+// Blob owners (blob_owner_px): a camera's previous frame older than this tells nothing of its
+// blobs now; a blob no track took is its last owner's for this long after their last update.
+constexpr TimeNs kOwnerFrameNs = 30'000'000;
+constexpr TimeNs kOwnerMemoryNs = 100'000'000;
 constexpr double kReacquireGateChi2 = 16.27;  // χ²₃ at p = 0.999
 // The speed a marker is allowed during a pause of the input at least, whatever its track's
 // velocity before (within_seen_reach): a person's marker slow at the pause's start (a turning
@@ -213,6 +221,19 @@ struct Core {
   // By camera: the innovations' typical length, px, a slow moving average over the updates of
   // confirmed tracks (views_agree: a noisy camera's own scale).
   std::vector<double> camera_innovation_level;
+  // By camera (blob_owner_px): the stamp of its last applied frame, the blobs tracks took in it, and
+  // the blobs no track has taken since their owner lost them, for up to kOwnerMemoryNs.
+  struct BlobOwner {
+    Eigen::Vector2d pixel;
+    std::int64_t id;
+    TimeNs since_ns;  // the owner's last update with this blob
+  };
+  struct BlobOwners {
+    TimeNs stamp_ns = 0;
+    std::vector<BlobOwner> owners;
+  };
+  std::vector<BlobOwners> blob_owners;
+  std::uint64_t owned_blobs_kept = 0;  // blobs an uncertain one-view track was refused (blob_owner_px)
   BodySet bodies;
 };
 
@@ -457,6 +478,12 @@ struct Tracker::Impl {
   void estimate_acceleration(Track& track, TimeNs stamp, double innovation_px) const;
   void damp_one_view_velocity(Track& track, int camera_index, TimeNs stamp, TimeNs previous_update_ns) const;
   int one_view_camera(const Track& track, TimeNs stamp) const;
+  bool owned_elsewhere(std::size_t t, std::size_t b, const std::vector<Eigen::Vector2d>& pixels,
+                       int camera_index, TimeNs stamp, const Core::BlobOwners& last,
+                       const std::vector<GatedPair>& gated);
+  Core::BlobOwners start_owners(int camera_index, TimeNs stamp);
+  void carry_owners(const Core::BlobOwners& last, int camera_index, TimeNs stamp,
+                    const std::vector<Eigen::Vector2d>& pixels, const std::vector<char>& used);
   bool twin_waits(std::size_t t, std::size_t b, const std::vector<GatedPair>& pairs,
                   const std::vector<std::pair<std::size_t, std::size_t>>& assignment, int camera_index,
                   TimeNs stamp);
@@ -1119,7 +1146,7 @@ bool Tracker::Impl::held_back(const Track& track, TimeNs stamp, std::optional<do
   // "After every camera stalled").
   if (paused(track)) return uncertain(1.0);
   if (core.frames_applied - track.frames_at_update < kFramesWithoutIt) return false;
-  return uncertain(3.0);
+  return uncertain(kUncertainFactor);
 }
 
 void Tracker::Impl::resume_suspended(TimeNs stamp_ns) {
@@ -1272,6 +1299,9 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   ++track.nis_updates;
   adapt_process_noise(track, d2, stamp);
   hold_fast_process_noise(track, stamp);
+  if (static_cast<std::size_t>(camera_index) < core.blob_owners.size() &&
+      core.blob_owners[static_cast<std::size_t>(camera_index)].stamp_ns == stamp)
+    core.blob_owners[static_cast<std::size_t>(camera_index)].owners.push_back({pixel, track.id, stamp});
   const TimeNs seen_before_ns = track.seen_ns;
   track.state = projected.state;
   update(track.state, projected.projection, pixel, options.measurement_noise_px);
@@ -1396,6 +1426,74 @@ int Tracker::Impl::one_view_camera(const Track& track, TimeNs stamp) const {
   return static_cast<int>(std::max_element(updates.begin(), updates.end()) - updates.begin());
 }
 
+// Blob owners (blob_owner_px, docs/estimator.md "Blob owners"): track t, which one other camera
+// alone has updated for kOneViewNs and whose depth along that camera's ray is uncertain, gates blob b.
+// If b continues a blob another track took in this camera's previous frame (or that track's orphan,
+// carried since it lost it), b is that marker's: refused (true), unless the other track, updated
+// within kFrameGapNs, gates b and another blob too (then the assignment decides between them).
+bool Tracker::Impl::owned_elsewhere(std::size_t t, std::size_t b, const std::vector<Eigen::Vector2d>& pixels,
+                                    int camera_index, TimeNs stamp, const Core::BlobOwners& last,
+                                    const std::vector<GatedPair>& gated) {
+  const double radius = options.blob_owner_px;
+  if (radius <= 0 || last.owners.empty() || stamp - last.stamp_ns > kOwnerFrameNs) return false;
+  const Track& track = core.tracks[t];
+  const int camera = one_view_camera(track, stamp);
+  if (camera < 0 || camera == camera_index) return false;
+  // Uncertain as held_back judges it (no track is, with reacquire_sigma_m 0).
+  const double sigma = options.reacquire_sigma_m;
+  if (sigma <= 0 || predicted_position_trace(track, stamp) <= kUncertainFactor * sigma * sigma) return false;
+  const auto gates = [&](std::size_t row, auto&& wanted) {
+    return std::any_of(gated.begin(), gated.end(),
+                       [&](const GatedPair& g) { return g.row == row && wanted(g.col); });
+  };
+  for (const Core::BlobOwner& owner : last.owners) {
+    if (owner.id == track.id || (pixels[b] - owner.pixel).norm() > radius) continue;
+    const double d2 = (pixels[b] - owner.pixel).squaredNorm();
+    bool nearest = true;
+    for (std::size_t j = 0; j < pixels.size() && nearest; ++j)
+      nearest = j == b || (pixels[j] - owner.pixel).squaredNorm() >= d2;
+    if (!nearest) continue;
+    const Track* rival = find_track(owner.id);
+    if (rival != nullptr && stamp - rival->last_update_ns <= kFrameGapNs) {
+      const auto row = static_cast<std::size_t>(rival - core.tracks.data());
+      if (gates(row, [&](std::size_t col) { return col == b; }) &&
+          gates(row, [&](std::size_t col) { return col != b; }))
+        continue;
+    }
+    ++core.owned_blobs_kept;
+    return true;
+  }
+  return false;
+}
+
+// The camera's owners before this frame (blob_owners), its list started afresh for commit_pair.
+Core::BlobOwners Tracker::Impl::start_owners(int camera_index, TimeNs stamp) {
+  const auto camera = static_cast<std::size_t>(camera_index);
+  if (core.blob_owners.size() <= camera) core.blob_owners.resize(camera + 1);
+  Core::BlobOwners last = std::move(core.blob_owners[camera]);
+  core.blob_owners[camera] = {stamp, {}};
+  return last;
+}
+
+// Carries the owners of the camera's previous frame whose blob no track took in this one to the
+// nearest blob within blob_owner_px, for up to kOwnerMemoryNs after the owner's last update with it.
+void Tracker::Impl::carry_owners(const Core::BlobOwners& last, int camera_index, TimeNs stamp,
+                                 const std::vector<Eigen::Vector2d>& pixels, const std::vector<char>& used) {
+  const double radius = options.blob_owner_px;
+  if (radius <= 0 || stamp - last.stamp_ns > kOwnerFrameNs) return;
+  auto& now = core.blob_owners[static_cast<std::size_t>(camera_index)];
+  for (const Core::BlobOwner& owner : last.owners) {
+    if (stamp - owner.since_ns > kOwnerMemoryNs) continue;
+    std::size_t best = pixels.size();
+    double best_distance = radius;
+    for (std::size_t j = 0; j < pixels.size(); ++j) {
+      const double distance = (pixels[j] - owner.pixel).norm();
+      if (distance <= best_distance) best = j, best_distance = distance;
+    }
+    if (best < pixels.size() && !used[best]) now.owners.push_back({pixels[best], owner.id, owner.since_ns});
+  }
+}
+
 // Ray twins (ray_twin_wait_ns, docs/estimator.md "Ray twins"): confirmed track t was assigned blob b,
 // which a confirmed track left without a blob also gated, and one camera alone has updated both for
 // kOneViewNs and sees them within kRayTwinPx. In that camera, the rival is not counted as unseen
@@ -1496,13 +1594,15 @@ bool Tracker::Impl::reassociate(const Entry& entry, const std::vector<Eigen::Vec
 void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& pixels,
                               std::vector<char>& used, bool replaying, std::optional<Gating> early) {
   const std::uint64_t digest = tracks_digest();
+  const int camera_index = entry.camera;
+  const TimeNs stamp = entry.frame.stamp_ns;
+  const Core::BlobOwners last_owners = start_owners(camera_index, stamp);
   if (replaying && options.reuse_replay_associations && entry.associated && entry.tracks_digest == digest &&
       reassociate(entry, pixels, used)) {
     ++stats.replayed_reassociated;
+    carry_owners(last_owners, camera_index, stamp, pixels, used);
     return;
   }
-  const int camera_index = entry.camera;
-  const TimeNs stamp = entry.frame.stamp_ns;
   entry.associations.clear();
   entry.tracks_digest = digest;
   const Gating gating = early ? std::move(*early) : gate(*models[camera_index], stamp, pixels, used);
@@ -1518,7 +1618,8 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
     const bool want_confirmed = stage == 0;
     std::vector<GatedPair> pairs;
     for (const auto& g : gated) {
-      if (core.tracks[g.row].confirmed == want_confirmed && !used[g.col] && !track_done[g.row])
+      if (core.tracks[g.row].confirmed == want_confirmed && !used[g.col] && !track_done[g.row] &&
+          !owned_elsewhere(g.row, g.col, pixels, camera_index, stamp, last_owners, gated))
         pairs.push_back(g);
     }
     if (pairs.empty()) continue;
@@ -1533,6 +1634,7 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
     }
   }
   recover_manoeuvres(entry, pixels, used, track_done, in_view);
+  carry_owners(last_owners, camera_index, stamp, pixels, used);
   count_misses(track_done, in_view);
   note_missed(track_done, in_view, camera_index, stamp);
   // Kept for replays only when nothing competed: every gated pair was taken and no blob left over
@@ -2359,6 +2461,7 @@ const TrackerStats& Tracker::stats() const {
   s.runaway_tracks_deleted = core.runaway_tracks_deleted;
   s.return_velocities_capped = core.return_velocities_capped;
   s.ray_twin_waits = core.ray_twin_waits;
+  s.owned_blobs_kept = core.owned_blobs_kept;
   s.tracks_reacquired = core.tracks_reacquired;
   s.tracks_reanchored = core.tracks_reanchored;
   s.input_pauses = core.input_pauses;

@@ -379,6 +379,28 @@ void visit_calibration(Fields& f, estimator::CalibrationHealthOptions& o) {
   f.integer("other_camera_window_ns", o.other_camera_window_ns, 0, kHourNs, "... within this");
 }
 
+// The tracker's keys for markers that one camera alone sees (docs/estimator.md, issue 35 item 3),
+// in visit_tracker's order.
+template <class Fields>
+void visit_one_view_tracks(Fields& f, estimator::TrackerOptions& o) {
+  f.flag("reanchor_one_view_tracks", o.reanchor_one_view_tracks,
+         "a track only one camera updated for 30 ms moves where that camera's blob and a second camera's "
+         "put its marker (within reacquire_max_seen_distance_m of its last two-camera position); off: the "
+         "default (it cost the live labelling test loaded runs)");
+  f.number("return_velocity_cap_mps", o.return_velocity_cap_mps, kNonNegative,
+           "a second camera's update after 30 ms of one camera's changes a track's velocity by at most "
+           "this, m/s, unless fast (0: off, the default; 3 on the accuracy grid)");
+  f.integer("one_view_velocity_time_constant_ns", o.one_view_velocity_time_constant_ns, 0, kHourNs,
+            "a track one camera alone has updated for 10 ms while another camera's frame missed it: its "
+            "velocity along that camera's ray decays with this time constant (0: off, constant velocity)");
+  f.integer("ray_twin_wait_ns", o.ray_twin_wait_ns, 0, kHourNs,
+            "two tracks one camera alone updates and sees within 6 px of each other: a blob of another "
+            "camera that both gate is left to neither for up to this long (0: off)");
+  f.number("blob_owner_px", o.blob_owner_px, kNonNegative,
+           "a track one camera alone updates, its depth uncertain, takes no blob of another camera that "
+           "continues (within this, px) a blob another track took there (0: off)");
+}
+
 template <class Fields>
 void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.number("process_noise", o.process_noise, kPositive,
@@ -399,19 +421,7 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
            "a fast track's id returns only this close to its distance from its rigid partner (0: off)");
   f.flag("delete_runaway_tracks", o.delete_runaway_tracks,
          "a track made fast by one camera's updates (dragged along its ray) is deleted");
-  f.flag("reanchor_one_view_tracks", o.reanchor_one_view_tracks,
-         "a track only one camera updated for 30 ms moves where that camera's blob and a second camera's "
-         "put its marker (within reacquire_max_seen_distance_m of its last two-camera position); off: the "
-         "default (it cost the live labelling test loaded runs)");
-  f.number("return_velocity_cap_mps", o.return_velocity_cap_mps, kNonNegative,
-           "a second camera's update after 30 ms of one camera's changes a track's velocity by at most "
-           "this, m/s, unless fast (0: off, the default; 3 on the accuracy grid)");
-  f.integer("one_view_velocity_time_constant_ns", o.one_view_velocity_time_constant_ns, 0, kHourNs,
-            "a track one camera alone has updated for 10 ms while another camera's frame missed it: its "
-            "velocity along that camera's ray decays with this time constant (0: off, constant velocity)");
-  f.integer("ray_twin_wait_ns", o.ray_twin_wait_ns, 0, kHourNs,
-            "two tracks one camera alone updates and sees within 6 px of each other: a blob of another "
-            "camera that both gate is left to neither for up to this long (0: off)");
+  visit_one_view_tracks(f, o);
   f.number("fast_process_noise_scale", o.fast_process_noise_scale, kNonNegative,
            "adaptive process noise: a fast track (above 10 m/s: a swung or thrown object) keeps this times "
            "process_noise (0: off)");

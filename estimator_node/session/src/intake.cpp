@@ -104,7 +104,9 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
            ? "; velocities capped at a return to two views " + std::to_string(s.return_velocities_capped)
            : std::string()) +
       (s.ray_twin_waits > 0 ? "; blobs left to ray twins " + std::to_string(s.ray_twin_waits)
-                            : std::string()));
+                            : std::string()) +
+      (s.owned_blobs_kept > 0 ? "; blobs kept for their owners " + std::to_string(s.owned_blobs_kept)
+                              : std::string()));
   for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops, other_cameras).lines()) log(line);
   if (tracker_.body_count() > 0) {
     const auto& b = tracker_.body_stats();

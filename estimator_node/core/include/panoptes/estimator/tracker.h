@@ -97,6 +97,17 @@ struct TrackerOptions {
   // decides at once). Walk grid 41 -> 35 ID switches (swaps 11 -> 5), run 194 -> 178 (40 -> 25);
   // dance, club and ball unchanged (docs/estimator.md, "Ray twins").
   TimeNs ray_twin_wait_ns = 20'000'000;
+  // Blob owners: a track that one camera alone has updated for 30 ms, and whose depth along that
+  // camera's ray is uncertain (its position's covariance trace above 3 reacquire_sigma_m²), takes
+  // no blob in another camera that continues (nearest, within this many pixels) a blob another
+  // track took in that camera's previous frame, or that track's blob left untaken since (for up to
+  // 100 ms): it is that marker's. Two markers each seen by one camera made two-view ghosts 18 cm
+  // from both (ceiling4/walk/c1/s1: two hip markers at the turnaround, 0.70 % false records). The
+  // other track, updated within 10 ms and gating this blob and another, competes for it in the
+  // assignment instead (a blob that splits off a merged one). 0: off. Walk grid: worst cell's false
+  // records 0.70 -> 0.45 %, ID switches 35 -> 33 (swaps 5 -> 1); run 178 -> 179 (swaps 25 -> 34)
+  // (docs/estimator.md, "Blob owners"). Needs reacquire_sigma_m (0: no track is uncertain).
+  double blob_owner_px = 6.0;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
   // fast_hold_ns after its last update above 10 m/s, whatever its innovations (0: the adaptive
@@ -213,6 +224,7 @@ struct TrackerStats {
   std::uint64_t runaway_tracks_deleted = 0;    // fast by one camera's updates (delete_runaway_tracks)
   std::uint64_t return_velocities_capped = 0;  // at a return to two views (return_velocity_cap_mps)
   std::uint64_t ray_twin_waits = 0;            // blobs left to neither of two ray twins (ray_twin_wait_ns)
+  std::uint64_t owned_blobs_kept = 0;          // blobs kept from uncertain one-view tracks (blob_owner_px)
   std::uint64_t tracks_reacquired = 0;         // confirmed new tracks that took a held-back track's id
   std::uint64_t tracks_reanchored = 0;         // one-view tracks moved where two views put their blob
   std::uint64_t input_pauses = 0;              // no frame of any camera for 25 ms and 8 usual intervals
