@@ -24,6 +24,15 @@ BodyMotionNoise scaled(const BodyMotionNoise& noise, double scale) {
   return {noise.jerk * scale, noise.angular_accel * scale, noise.angular_jerk * scale};
 }
 
+// The noise of the filter that feeds the smoother (docs/bodies.md, "The smoother's own filter"):
+// the translation scaled as the causal filter's, the rotation by √scale. The smoother has the
+// frames after the reported instant; at speed it wants less angular process noise than a filter
+// that must extrapolate to the newest frame.
+BodyMotionNoise smoother_scaled(const BodyMotionNoise& noise, double scale) {
+  const double rotation = std::sqrt(scale);
+  return {noise.jerk * scale, noise.angular_accel * rotation, noise.angular_jerk * rotation};
+}
+
 }  // namespace
 
 struct BodySet::Shared {
@@ -50,12 +59,16 @@ struct BodySet::Body {
   std::uint64_t updates = 0;
   std::vector<TimeNs> marker_last_seen;    // by marker
   std::vector<TimeNs> camera_last_update;  // by camera index
-  BodyFilterHistory history;               // the last smoothing_ns of filter steps (when smoothing)
+  // When smoothing: a second filter of the same blobs with the smoother's noise (smoother_scaled),
+  // and its last smoothing_ns of steps. `state` stays the causal filter, the published one.
+  BodyState smoother_state;
+  BodyFilterHistory history;
 
   // (Re)starts tracking from an initial state (identification or a monocular detection) with fresh
   // consistency statistics.
   void start(const BodyState& initial, TimeNs stamp_ns) {
     state = initial;
+    smoother_state = initial;
     tracked = true;
     acquired_ns = stamp_ns;
     last_update_ns = stamp_ns;
@@ -108,13 +121,46 @@ struct BodySet::Body {
     last_innovation_ns[slot] = std::max(previous_ns, stamp_ns);
   }
 
-  // Keeps the step of a camera frame for smoothing, and the steps back to the first one at least
-  // `lag_ns` older than it.
-  void record_step(BodyFilterStep step, TimeNs lag_ns) {
-    history.append(std::move(step));
+  // The smoother's filter over one camera frame: the step being recorded and the state the
+  // frame's marker updates move (from `step.predicted`).
+  struct SmootherFrame {
+    BodyFilterStep step;
+    BodyState state;
+  };
+  SmootherFrame begin_smoother_frame(TimeNs stamp_ns, const BodyMotionNoise& noise) const {
+    SmootherFrame frame;
+    frame.state = predicted(smoother_state, stamp_ns, smoother_scaled(noise, noise_scale));
+    frame.step.predicted = frame.state;
+    frame.step.A = body_transition(smoother_state, ns_to_seconds(stamp_ns - smoother_state.stamp_ns));
+    return frame;
+  }
+  // Keeps the frame's step for smoothing, and the steps back to the first one at least `lag_ns`
+  // older than it.
+  void finish_smoother_frame(SmootherFrame frame, TimeNs lag_ns) {
+    smoother_state = frame.state;
+    frame.step.filtered = smoother_state;
+    history.append(std::move(frame.step));
     history.keep_from(history.back().filtered.stamp_ns - lag_ns);
   }
+
+  void note_camera_update(int camera_index, TimeNs stamp_ns) {
+    const auto c = static_cast<std::size_t>(camera_index);
+    if (camera_last_update.size() <= c) camera_last_update.resize(c + 1, 0);
+    camera_last_update[c] = stamp_ns;
+  }
 };
+
+namespace {
+
+// The smoother's filter takes the blob the causal filter took unless it is outside its own gate.
+void update_smoother(BodyState& state, const Eigen::Vector3d& marker, const CameraModel& camera,
+                     const Eigen::Vector2d& blob, const BodyTrackerOptions& o) {
+  const auto projection = project_marker(state, marker, camera, o.measurement_noise_px);
+  if (projection && inside_gate(mahalanobis2(*projection, blob), o.gate_chi2))
+    update(state, *projection, blob, o.measurement_noise_px);
+}
+
+}  // namespace
 
 BodySet::BodySet() : shared_(std::make_shared<Shared>()) {}
 BodySet::BodySet(const BodySet&) = default;
@@ -188,14 +234,11 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
   std::vector<Row> rows;
   std::vector<GatedPair> gated;  // (row, blob, d²)
   std::vector<BodyState> predicted_states(bodies_.size());
-  std::vector<BodyFilterStep> steps(o.smoothing_ns > 0 ? bodies_.size() : 0);
+  std::vector<Body::SmootherFrame> smoother(o.smoothing_ns > 0 ? bodies_.size() : 0);  // when smoothing
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     if (!bodies_[b].tracked) continue;
     predicted_states[b] = predicted(bodies_[b].state, stamp_ns, scaled(o.noise, bodies_[b].noise_scale));
-    if (!steps.empty()) {
-      steps[b].predicted = predicted_states[b];
-      steps[b].A = body_transition(bodies_[b].state, ns_to_seconds(stamp_ns - bodies_[b].state.stamp_ns));
-    }
+    if (!smoother.empty()) smoother[b] = bodies_[b].begin_smoother_frame(stamp_ns, o.noise);
     const auto& markers = shared_->definitions[b].markers;
     for (std::size_t m = 0; m < markers.size(); ++m) {
       const auto projection = project_marker(predicted_states[b], markers[m], camera, o.measurement_noise_px);
@@ -234,6 +277,8 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
           static_cast<std::size_t>(camera_index) * shared_->definitions[b].markers.size() + m,
           pixels[blob] - projection->pixel, stamp_ns, o);
       update(state, *projection, pixels[blob], o.measurement_noise_px);
+      if (!smoother.empty())
+        update_smoother(smoother[b].state, shared_->definitions[b].markers[m], camera, pixels[blob], o);
       body.marker_last_seen[m] = stamp_ns;
       taken[blob] = 1;
       body_updated[b] = 1;
@@ -244,14 +289,9 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
       if (!body_updated[b]) continue;
       Body& body = bodies_[b];
       body.state = predicted_states[b];
-      if (!steps.empty()) {
-        steps[b].filtered = body.state;
-        body.record_step(std::move(steps[b]), o.smoothing_ns);
-      }
+      if (!smoother.empty()) body.finish_smoother_frame(std::move(smoother[b]), o.smoothing_ns);
       body.last_update_ns = std::max(body.last_update_ns, stamp_ns);
-      if (body.camera_last_update.size() <= static_cast<std::size_t>(camera_index))
-        body.camera_last_update.resize(static_cast<std::size_t>(camera_index) + 1, 0);
-      body.camera_last_update[static_cast<std::size_t>(camera_index)] = stamp_ns;
+      body.note_camera_update(camera_index, stamp_ns);
       if (body.nis_updates >= 20 && body.nis_average > o.max_nis) {
         body.tracked = false;  // the measurements contradict the pose: identify again
         ++stats_.lost;
@@ -309,9 +349,8 @@ void BodySet::acquire_monocular(int camera_index, const CameraModel& camera, Tim
       body.marker_last_seen[m] = stamp_ns;
       taken[blob] = 1;
     }
-    if (body.camera_last_update.size() <= static_cast<std::size_t>(camera_index))
-      body.camera_last_update.resize(static_cast<std::size_t>(camera_index) + 1, 0);
-    body.camera_last_update[static_cast<std::size_t>(camera_index)] = stamp_ns;
+    body.smoother_state = body.state;
+    body.note_camera_update(camera_index, stamp_ns);
     ++stats_.acquired_monocular;
   }
 }

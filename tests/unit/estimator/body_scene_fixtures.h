@@ -136,29 +136,43 @@ struct SceneRun {
   BodyStats stats;
 };
 
-inline SceneRun run_scene(const Scene& scene, double warmup_s, const FrameFilter& filter = {},
-                          TimeNs horizon_ns = 0, double window_start_s = 0, double window_end_s = 1e9,
-                          const TrackerOptions& options = {}) {
-  std::vector<CameraSimulator> simulators;
-  for (const auto& camera : scene.cameras()) simulators.emplace_back(scene, camera.calibration.id);
-  struct Next {
-    TimeNs stamp;
-    std::size_t camera;
-    std::int64_t k;
-    bool operator>(const Next& o) const { return std::tie(stamp, camera) > std::tie(o.stamp, o.camera); }
-  };
-  std::vector<Next> queue;
+// A camera frame of a scene: its stamp, camera (index into the scene's cameras) and frame number.
+struct SceneFrame {
+  TimeNs stamp;
+  std::size_t camera;
+  std::int64_t k;
+  bool operator>(const SceneFrame& o) const { return std::tie(stamp, camera) > std::tie(o.stamp, o.camera); }
+};
+
+// Every camera's frames over the scene, in stamp order (the order the tracker is fed).
+inline std::vector<SceneFrame> frame_order(const Scene& scene,
+                                           const std::vector<CameraSimulator>& simulators) {
+  std::vector<SceneFrame> queue;
   for (std::size_t c = 0; c < simulators.size(); ++c) {
     for (std::int64_t k = 0; simulators[c].frame_time_ns(k) <= scene.duration_ns(); ++k)
       queue.push_back({simulators[c].frame_stamp_ns(k), c, k});
   }
-  std::sort(queue.begin(), queue.end(), [](const Next& a, const Next& b) { return b > a; });
+  std::sort(queue.begin(), queue.end(), [](const SceneFrame& a, const SceneFrame& b) { return b > a; });
+  return queue;
+}
+
+inline std::vector<CameraSimulator> scene_simulators(const Scene& scene) {
+  std::vector<CameraSimulator> simulators;
+  for (const auto& camera : scene.cameras()) simulators.emplace_back(scene, camera.calibration.id);
+  return simulators;
+}
+
+inline SceneRun run_scene(const Scene& scene, double warmup_s, const FrameFilter& filter = {},
+                          TimeNs horizon_ns = 0, double window_start_s = 0, double window_end_s = 1e9,
+                          const TrackerOptions& options = {}) {
+  std::vector<CameraSimulator> simulators = scene_simulators(scene);
+  const std::vector<SceneFrame> queue = frame_order(scene, simulators);
 
   Tracker tracker(options);
   tracker.set_calibration(scene.calibration());
   tracker.set_bodies(scene.body_definitions());
   SceneRun run;
-  for (const Next& next : queue) {
+  for (const SceneFrame& next : queue) {
     FeatureFrame frame = simulators[next.camera].features(next.k);
     if (filter && !filter(next.camera, frame, simulators[next.camera].visible_markers(next.k))) continue;
     const TimeNs scene_time = frame.stamp_ns;

@@ -529,5 +529,41 @@ TEST(BodyScenes, SmallFastBodiesFilterBeatsTheSynchronousSnapshotSolve) {
   }
 }
 
+// With smoothing the smoother reads a second filter of its own noise (docs/bodies.md, "Smoothing"):
+// the causal poses (published at the newest frame, and used for labelling) must be exactly those of
+// a run without smoothing.
+TEST(BodySmoother, TheSmoothersOwnFilterLeavesTheCausalPosesAlone) {
+  Scene scene = Scene::from_yaml_string(small_fast_bodies_scene(false));
+  std::vector<CameraSimulator> simulators = scene_simulators(scene);
+  TrackerOptions plain_options, smoothing_options;
+  smoothing_options.bodies.smoothing_ns = 20 * kNsPerMillisecond;
+  Tracker plain(plain_options), smoothing(smoothing_options);
+  for (Tracker* tracker : {&plain, &smoothing}) {
+    tracker->set_calibration(scene.calibration());
+    tracker->set_bodies(scene.body_definitions());
+  }
+  std::size_t compared = 0;
+  for (const SceneFrame& next : frame_order(scene, simulators)) {
+    if (next.stamp > 3 * kNsPerSecond) break;
+    FeatureFrame frame = simulators[next.camera].features(next.k);
+    frame.stamp_ns += kEpoch;
+    plain.process(frame);
+    smoothing.process(frame);
+    const auto a = plain.poses_at(frame.stamp_ns, 0, false);
+    const auto b = smoothing.poses_at(frame.stamp_ns, 0, false);
+    ASSERT_EQ(a.size(), b.size()) << frame.stamp_ns;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a[i].body, b[i].body);
+      ASSERT_EQ(a[i].p, b[i].p) << a[i].body << " at " << frame.stamp_ns;
+      ASSERT_EQ(a[i].q, b[i].q) << a[i].body << " at " << frame.stamp_ns;
+      ++compared;
+    }
+    // The smoothed poses are the smoother's: stamped 20 ms behind.
+    for (const PoseRecord& pose : smoothing.poses_at(frame.stamp_ns))
+      ASSERT_EQ(pose.stamp_ns, frame.stamp_ns - 20 * kNsPerMillisecond);
+  }
+  EXPECT_GT(compared, 3000u);
+}
+
 }  // namespace
 }  // namespace panoptes::estimator
