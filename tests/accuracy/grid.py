@@ -328,6 +328,8 @@ def main():
                    help="walk, run and dance cells: false record fraction at most")
     p.add_argument("--require-max-id-swaps", type=int, default=None,
                    help="every cell: at most this many ID swaps (two markers exchanging ids)")
+    p.add_argument("--require-max-id-switches", type=int, default=None,
+                   help="every cell: at most this many ID switches (a marker's track id changing)")
     args = p.parse_args()
     os.makedirs(args.work, exist_ok=True)
     if args.long or args.cells:
@@ -372,6 +374,8 @@ def main():
             bad.append(f"{r['cell']}: false records {r['false_fraction']:.4f} > {args.require_max_false_fraction}")
         if args.require_max_id_swaps is not None and r["id_swaps"] > args.require_max_id_swaps:
             bad.append(f"{r['cell']}: {r['id_swaps']} ID swaps > {args.require_max_id_swaps}")
+        if args.require_max_id_switches is not None and r["id_switches"] > args.require_max_id_switches:
+            bad.append(f"{r['cell']}: {r['id_switches']} ID switches > {args.require_max_id_switches}")
     for b in bad:
         print(f"FAIL: {b}", file=sys.stderr)
     return 1 if bad else 0

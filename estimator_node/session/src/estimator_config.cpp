@@ -475,6 +475,10 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.number("reacquire_max_seen_distance_m", o.reacquire_max_seen_distance_m, kNonNegative,
            "... and within this of the held-back marker's last two-camera position, or of where its "
            "velocity then carries it, m (0: no test; fast tracks exempt)");
+  f.number(
+      "reacquire_way_m", o.reacquire_way_m, kNonNegative,
+      "a new track this close to one held-back track's way (from its last two-camera position to "
+      "where its velocity then carries it) takes its id if every other one's is twice as far, m (0: off)");
   f.integer("recent_camera_window_ns", o.recent_camera_window_ns, 0, kHourNs, "for a track record's cameras");
   f.integer("rewind_horizon_ns", o.rewind_horizon_ns, 0, 60 * 1'000'000'000LL,
             "late frames up to this much older than the newest are replayed");

@@ -190,6 +190,13 @@ struct TrackerOptions {
   // tracks predicted 1-9 m off at 8-65 m/s): its prediction gates markers it never was. A swung or
   // thrown object's track (fast) reaches farther and is exempt (docs/estimator.md, "Reacquisition").
   double reacquire_max_seen_distance_m = 0.2;
+  // Before those tests: a new track within this of one held-back track's way (the segment from where
+  // two cameras last placed it to where its velocity then would have carried it: a marker that went
+  // on, slowed down or stopped) takes its id when every other held-back track in the gate is at
+  // least twice as far from its own way (metres; 0: off). A foot that lands while one camera sees it
+  // comes back short of its velocity's reach and beyond 0.2 m of its last two-camera position
+  // (docs/estimator.md, "Reacquisition along the way").
+  double reacquire_way_m = 0.06;
   TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
   TimeNs checkpoint_interval_ns = 10'000'000;     // state snapshots for rewinding ...
