@@ -1275,8 +1275,8 @@ std::optional<std::int64_t> Tracker::Impl::reacquire_on_way(const Eigen::Vector3
   // 0.41 against 0.98 in ceiling4/walk/c0/s1), and it came to rest 0.31 m from where two cameras
   // last placed it. It lies on its own way (0.04 m) and 0.10 m from its neighbour's.
   constexpr double kWayClearRatio = 2.0;
-  constexpr double kWayFloorM =
-      0.01;  // nearer ways count as this near (the ratio of two tiny distances is noise)
+  // Ways nearer than this count as this near: the ratio of two tiny distances is noise.
+  constexpr double kWayFloorM = 0.01;
   if (options.reacquire_way_m <= 0) return std::nullopt;
   struct Nearest {
     const Track* track = nullptr;
@@ -1285,7 +1285,9 @@ std::optional<std::int64_t> Tracker::Impl::reacquire_on_way(const Eigen::Vector3
   Nearest by_way, by_d2;
   double second_way = by_way.value;
   for (const Track& track : core.tracks) {
-    if (track.fast || !reacquire_candidate(track, stamp, claimed)) continue;
+    // A track that coasted through a pause of the input has no way: its marker went on along a
+    // path its velocity does not follow for that long (within_seen_reach, reacquire_by_assignment).
+    if (track.fast || paused(track) || !reacquire_candidate(track, stamp, claimed)) continue;
     const double d2 = reacquire_d2(track, position, stamp);
     if (d2 > kReacquireGateChi2) continue;
     if (d2 < by_d2.value) by_d2 = {&track, d2};
