@@ -20,17 +20,13 @@ double initial_angular_accel_sigma(const BodyTrackerOptions& o) {
   return o.noise.angular_jerk > 0 ? o.init_angular_accel_sigma : 0.0;
 }
 
-BodyMotionNoise scaled(const BodyMotionNoise& noise, double scale) {
-  return {noise.jerk * scale, noise.angular_accel * scale, noise.angular_jerk * scale};
-}
-
-// The noise of the filter that feeds the smoother (docs/bodies.md, "The smoother's own filter"):
-// the translation scaled as the causal filter's, the rotation by √scale. The smoother has the
-// frames after the reported instant; at speed it wants less angular process noise than a filter
-// that must extrapolate to the newest frame.
-BodyMotionNoise smoother_scaled(const BodyMotionNoise& noise, double scale) {
-  const double rotation = std::sqrt(scale);
-  return {noise.jerk * scale, noise.angular_accel * rotation, noise.angular_jerk * rotation};
+// The process noise with its translation terms scaled by `translation` and its rotation terms by
+// `rotation`. The causal filter scales both by the body's adaptive factor s; the filter that feeds
+// the smoother (docs/bodies.md, "Smoothing") the rotation by √s only: the smoother has the frames
+// after the reported instant, and at speed it wants less angular process noise than a filter that
+// must extrapolate to the newest frame.
+BodyMotionNoise scaled(const BodyMotionNoise& noise, double translation, double rotation) {
+  return {noise.jerk * translation, noise.angular_accel * rotation, noise.angular_jerk * rotation};
 }
 
 }  // namespace
@@ -59,7 +55,7 @@ struct BodySet::Body {
   std::uint64_t updates = 0;
   std::vector<TimeNs> marker_last_seen;    // by marker
   std::vector<TimeNs> camera_last_update;  // by camera index
-  // When smoothing: a second filter of the same blobs with the smoother's noise (smoother_scaled),
+  // When smoothing: a second filter of the same blobs with the smoother's noise (scaled),
   // and its last smoothing_ns of steps. `state` stays the causal filter, the published one.
   BodyState smoother_state;
   BodyFilterHistory history;
@@ -129,7 +125,7 @@ struct BodySet::Body {
   };
   SmootherFrame begin_smoother_frame(TimeNs stamp_ns, const BodyMotionNoise& noise) const {
     SmootherFrame frame;
-    frame.state = predicted(smoother_state, stamp_ns, smoother_scaled(noise, noise_scale));
+    frame.state = predicted(smoother_state, stamp_ns, scaled(noise, noise_scale, std::sqrt(noise_scale)));
     frame.step.predicted = frame.state;
     frame.step.A = body_transition(smoother_state, ns_to_seconds(stamp_ns - smoother_state.stamp_ns));
     return frame;
@@ -237,7 +233,8 @@ void BodySet::process_frame(int camera_index, const CameraModel& camera, TimeNs 
   std::vector<Body::SmootherFrame> smoother(o.smoothing_ns > 0 ? bodies_.size() : 0);  // when smoothing
   for (std::size_t b = 0; b < bodies_.size(); ++b) {
     if (!bodies_[b].tracked) continue;
-    predicted_states[b] = predicted(bodies_[b].state, stamp_ns, scaled(o.noise, bodies_[b].noise_scale));
+    predicted_states[b] = predicted(bodies_[b].state, stamp_ns,
+                                    scaled(o.noise, bodies_[b].noise_scale, bodies_[b].noise_scale));
     if (!smoother.empty()) smoother[b] = bodies_[b].begin_smoother_frame(stamp_ns, o.noise);
     const auto& markers = shared_->definitions[b].markers;
     for (std::size_t m = 0; m < markers.size(); ++m) {
