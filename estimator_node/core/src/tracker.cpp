@@ -17,6 +17,7 @@
 #include "panoptes/covariance_bound.h"
 #include "panoptes/errors.h"
 #include "panoptes/estimator/assignment.h"
+#include "panoptes/estimator/neighbour_anchor.h"
 #include "points_by_x.h"
 
 namespace panoptes::estimator {
@@ -106,6 +107,23 @@ constexpr int kIsolatedFastUpdates = 20;
 // fast updates: on a ring of four cameras a walk's ghosts (wrong pairings flying off along a ray)
 // reached 5 and their priors made more such ghosts.
 constexpr int kPriorFastUpdates = 30;
+// Reacquisition by neighbours (reacquire_neighbours_m; docs/estimator.md, "Reacquisition by
+// neighbours"). A track's neighbours are the tracks within kNeighbourRadiusM of it at its last
+// two-camera update, ranked by distance plus kNeighbourHorizonS times their difference in velocity
+// (a limb's markers before the other foot's passing by). A deleted track is remembered for
+// kNeighbourMemoryNs after that update. The rigid fit of the neighbours' motion must leave them
+// within kNeighbourMaxFitRmsM RMS (a knee's bend moves a foot off its thigh's motion). Every other
+// lost track's carried position must be kNeighbourClearRatio times farther (a nearer one than
+// kNeighbourFloorM counts as that far: the ratio of two tiny distances is noise), and no followed
+// track within kNeighbourCrowdM of the new one: the two clavicles 5 cm apart swapped ids in the
+// corridor4 run cells without it (28 -> 39 swaps in 12 s).
+constexpr double kNeighbourRadiusM = 0.5;
+constexpr double kNeighbourHorizonS = 0.2;
+constexpr TimeNs kNeighbourMemoryNs = 2'000'000'000;
+constexpr double kNeighbourMaxFitRmsM = 0.03;
+constexpr double kNeighbourClearRatio = 2.0;
+constexpr double kNeighbourFloorM = 0.01;
+constexpr double kNeighbourCrowdM = 0.06;
 
 struct Track {
   std::int64_t id = 0;
@@ -150,6 +168,9 @@ struct Track {
   std::int64_t partner_id = 0;
   double partner_distance_m = 0;
   TimeNs partner_since_ns = 0;
+  // Its position and its neighbours' at its last two-camera update, taken once no second camera
+  // has updated it for kFrameGapNs (note_anchors; reacquire_by_neighbours). stamp_ns 0: none.
+  NeighbourAnchor anchor;
   Eigen::Vector3d last_seen_position() const { return seen_ns != 0 ? seen_position : state.position(); }
   // Where its last two-camera state puts it at `stamp` (constant velocity since), not where one
   // camera's updates dragged it along that camera's ray since.
@@ -195,18 +216,26 @@ struct Core {
   // input (held back, reacquirable); otherwise they are gone (resume_suspended).
   std::vector<Track> suspended;
   TimeNs suspended_at_ns = std::numeric_limits<TimeNs>::min();
+  // Confirmed tracks deleted after a silence, with their anchors, for kNeighbourMemoryNs after it
+  // (reacquire_by_neighbours): a marker out of every view for longer than delete_after_ns.
+  struct Departed {
+    std::int64_t id = 0;
+    NeighbourAnchor anchor;
+  };
+  std::vector<Departed> departed;
   Initiator initiator;
   TimeNs last_stamp_ns = std::numeric_limits<TimeNs>::min();
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
-  std::uint64_t runaway_tracks_deleted = 0;    // delete_runaway_tracks
-  std::uint64_t return_velocities_capped = 0;  // return_velocity_cap_mps
-  std::uint64_t ray_twin_waits = 0;            // ray_twin_wait_ns
-  std::uint64_t tracks_reacquired = 0;         // confirmed new tracks that took a held-back track's id
-  std::uint64_t tracks_reanchored = 0;         // one-view tracks moved to where two views put their marker
-  std::uint64_t input_pauses = 0;              // pauses of the input (note_interval)
-  std::uint64_t frames_applied = 0;            // frames apply() has applied (held_back)
+  std::uint64_t runaway_tracks_deleted = 0;           // delete_runaway_tracks
+  std::uint64_t return_velocities_capped = 0;         // return_velocity_cap_mps
+  std::uint64_t ray_twin_waits = 0;                   // ray_twin_wait_ns
+  std::uint64_t tracks_reacquired = 0;                // confirmed new tracks that took a held-back track's id
+  std::uint64_t tracks_reacquired_by_neighbours = 0;  // ... by reacquire_by_neighbours
+  std::uint64_t tracks_reanchored = 0;  // one-view tracks moved to where two views put their marker
+  std::uint64_t input_pauses = 0;       // pauses of the input (note_interval)
+  std::uint64_t frames_applied = 0;     // frames apply() has applied (held_back)
   // Input pauses (every camera stalled at once): the usual interval between applied frames' stamps
   // (a moving average), the stamp of the frame that ended the last pause (paused()) and of the
   // applied frame before it (its start: silence()). A pause lasts while fewer cameras than confirm
@@ -737,6 +766,16 @@ struct Tracker::Impl {
   // Tracks confirmed in this frame take the id of the held-back track whose marker they are
   // (reacquire); tracks stay in id order.
   void reacquire_confirmed(TimeNs now_ns);
+  // reacquire_neighbours_m: anchors the confirmed tracks that no second camera updated for
+  // kFrameGapNs since their last anchor (Track::anchor), to the followed tracks near them.
+  void note_anchors(TimeNs now_ns);
+  // After the other tests of reacquire_confirmed: each `pending` new track takes the id of the
+  // held-back or departed track whose neighbours carried its anchor within reacquire_neighbours_m
+  // of it, when every other such track's is kNeighbourClearRatio times farther, no other pending
+  // track is that near it, and no followed track within kNeighbourCrowdM of it (renames).
+  void reacquire_by_neighbours(std::vector<Track*>& pending, TimeNs now_ns,
+                               std::vector<std::int64_t>& claimed,
+                               std::vector<std::pair<std::int64_t, std::int64_t>>& renames) const;
   // Tracks confirmed with a pending rejoin take the lost fast track's id, which is removed, once
   // they would be published (determined), unless its marker was found again or another track
   // took it first.
@@ -1964,7 +2003,14 @@ void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
     });
   }
   reacquire_by_assignment(pending, now_ns, claimed, renames);
+  const std::size_t by_others = renames.size();
+  reacquire_by_neighbours(pending, now_ns, claimed, renames);
+  core.tracks_reacquired_by_neighbours += renames.size() - by_others;
   if (renames.empty()) return;
+  std::erase_if(core.departed, [&](const Core::Departed& departed) {
+    return std::any_of(renames.begin(), renames.end(),
+                       [&](const auto& r) { return r.second == departed.id; });
+  });
   std::erase_if(core.tracks, [&](const Track& track) {
     return std::any_of(renames.begin(), renames.end(), [&](const auto& r) { return r.second == track.id; });
   });
@@ -1981,11 +2027,100 @@ void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
             [](const Track& a, const Track& b) { return a.id < b.id; });
 }
 
+namespace {
+
+// A track another may be anchored to (note_anchors), or found by now (reacquire_by_neighbours):
+// confirmed, settled, not fast, and updated by a second camera within kFrameGapNs.
+bool anchor_neighbour(const Track& track, TimeNs now_ns) {
+  return track.confirmed && !track.fast && track.updates >= kSettledUpdates && track.seen_ns != 0 &&
+         now_ns - track.seen_ns <= kFrameGapNs;
+}
+
+}  // namespace
+
+void Tracker::Impl::note_anchors(TimeNs now_ns) {
+  if (options.reacquire_neighbours_m <= 0) return;
+  std::vector<const Track*> neighbours;
+  bool listed = false;
+  std::vector<AnchorPoint> then;
+  for (Track& track : core.tracks) {
+    if (!track.confirmed || track.fast || track.updates < kSettledUpdates || track.seen_ns == 0 ||
+        track.anchor.stamp_ns == track.seen_ns || now_ns - track.seen_ns <= kFrameGapNs)
+      continue;
+    if (!listed) {
+      for (const Track& other : core.tracks)
+        if (anchor_neighbour(other, now_ns)) neighbours.push_back(&other);
+      listed = true;
+    }
+    then.clear();
+    for (const Track* other : neighbours)
+      if (other != &track)
+        then.push_back({other->id, other->position_at(track.seen_ns), other->state.velocity()});
+    track.anchor = make_anchor(track.seen_ns, track.seen_position, track.seen_velocity, then,
+                               kNeighbourRadiusM, kNeighbourHorizonS);
+  }
+}
+
+void Tracker::Impl::reacquire_by_neighbours(
+    std::vector<Track*>& pending, TimeNs now_ns, std::vector<std::int64_t>& claimed,
+    std::vector<std::pair<std::int64_t, std::int64_t>>& renames) const {
+  if (options.reacquire_neighbours_m <= 0 || pending.empty()) return;
+  std::vector<AnchorPoint> now;
+  for (const Track& track : core.tracks)
+    if (anchor_neighbour(track, now_ns)) now.push_back({track.id, track.position_at(now_ns)});
+  std::vector<AnchorPoint> carried;  // each candidate's id and where its neighbours carried it
+  const auto consider = [&](std::int64_t id, const NeighbourAnchor& anchor) {
+    if (anchor.count < 3 || now_ns - anchor.stamp_ns > kNeighbourMemoryNs ||
+        std::find(claimed.begin(), claimed.end(), id) != claimed.end())
+      return;
+    const auto position = carried_position(anchor, now);
+    if (position && position->fit_rms_m <= kNeighbourMaxFitRmsM) carried.push_back({id, position->position});
+  };
+  for (const Track& track : core.tracks)
+    if (!track.fast && track.anchor.stamp_ns != 0 && reacquire_candidate(track, now_ns, claimed))
+      consider(track.id, track.anchor);
+  for (const Core::Departed& departed : core.departed) consider(departed.id, departed.anchor);
+  if (carried.empty()) return;
+  const auto distance = [&](const Track* track, const AnchorPoint& candidate) {
+    return (track->position_at(now_ns) - candidate.position).norm();
+  };
+  std::vector<Track*> taken;
+  for (Track* track : pending) {
+    const auto best = std::min_element(carried.begin(), carried.end(), [&](const auto& a, const auto& b) {
+      return distance(track, a) < distance(track, b);
+    });
+    const double d = distance(track, *best);
+    const double clear = kNeighbourClearRatio * std::max(d, kNeighbourFloorM);
+    const bool alone =
+        std::none_of(
+            carried.begin(), carried.end(),
+            [&](const AnchorPoint& other) { return &other != &*best && distance(track, other) < clear; }) &&
+        std::none_of(pending.begin(), pending.end(),
+                     [&](const Track* other) { return other != track && distance(other, *best) < clear; });
+    const Eigen::Vector3d here = track->position_at(now_ns);
+    const bool crowded = std::any_of(now.begin(), now.end(), [&](const AnchorPoint& point) {
+      return point.id != track->id && (point.position - here).norm() < kNeighbourCrowdM;
+    });
+    if (d > options.reacquire_neighbours_m || !alone || crowded ||
+        std::find(claimed.begin(), claimed.end(), best->id) != claimed.end())
+      continue;
+    renames.emplace_back(track->id, best->id);
+    claimed.push_back(best->id);
+    taken.push_back(track);
+  }
+  std::erase_if(pending,
+                [&](Track* track) { return std::find(taken.begin(), taken.end(), track) != taken.end(); });
+}
+
 void Tracker::Impl::prune(TimeNs now_ns) {
+  note_anchors(now_ns);
   reacquire_confirmed(now_ns);
   rejoin_confirmed(now_ns);
   std::erase_if(core.lost,
                 [&](const Track& track) { return silence(track, now_ns) > options.delete_after_ns; });
+  std::erase_if(core.departed, [&](const Core::Departed& departed) {
+    return now_ns - departed.anchor.stamp_ns > kNeighbourMemoryNs;
+  });
   std::erase_if(core.tracks, [&](const Track& track) {
     const bool implausible =
         track.nis_updates >= 4 &&
@@ -2006,6 +2141,8 @@ void Tracker::Impl::prune(TimeNs now_ns) {
     }
     const TimeNs limit = track.confirmed ? options.delete_after_ns : options.tentative_delete_after_ns;
     if (silence(track, now_ns) > limit) {
+      if (track.confirmed && track.anchor.count >= 3 && options.reacquire_neighbours_m > 0)
+        core.departed.push_back({track.id, track.anchor});
       ++core.tracks_deleted;
       return true;
     }
@@ -2528,6 +2665,7 @@ const TrackerStats& Tracker::stats() const {
   s.ray_twin_waits = core.ray_twin_waits;
   s.owned_blobs_kept = core.owned_blobs_kept;
   s.tracks_reacquired = core.tracks_reacquired;
+  s.tracks_reacquired_by_neighbours = core.tracks_reacquired_by_neighbours;
   s.tracks_reanchored = core.tracks_reanchored;
   s.input_pauses = core.input_pauses;
   s.ghosts_deleted = core.ghosts_deleted;

@@ -479,6 +479,10 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
       "reacquire_way_m", o.reacquire_way_m, kNonNegative,
       "a new track this close to one held-back track's way (from its last two-camera position to "
       "where its velocity then carries it) takes its id if every other one's is twice as far, m (0: off)");
+  f.number("reacquire_neighbours_m", o.reacquire_neighbours_m, kNonNegative,
+           "then: a new track this close to where a lost track's neighbours (a rigid fit of 3-6 tracks "
+           "near it when two cameras last saw it) carried it takes its id if every other one's is twice "
+           "as far; deleted tracks count for 2 s, m (0: off)");
   f.integer("recent_camera_window_ns", o.recent_camera_window_ns, 0, kHourNs, "for a track record's cameras");
   f.integer("rewind_horizon_ns", o.rewind_horizon_ns, 0, 60 * 1'000'000'000LL,
             "late frames up to this much older than the newest are replayed");

@@ -91,7 +91,8 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
       " rejected, " + std::to_string(bad_lines) + " malformed lines); tracks created " +
       std::to_string(s.tracks_created) + ", confirmed " + std::to_string(s.tracks_confirmed) +
       ", ghosts removed " + std::to_string(s.ghosts_deleted) + ", reacquired " +
-      std::to_string(s.tracks_reacquired) + ", re-anchored " + std::to_string(s.tracks_reanchored) +
+      std::to_string(s.tracks_reacquired) + " (" + std::to_string(s.tracks_reacquired_by_neighbours) +
+      " by neighbours), re-anchored " + std::to_string(s.tracks_reanchored) +
       (s.input_pauses > 0
            ? "; input paused " + std::to_string(s.input_pauses) + " times (every camera at once)"
            : std::string()) +

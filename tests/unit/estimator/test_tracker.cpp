@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "panoptes/estimator/inbox.h"
 #include "panoptes/estimator/tracker.h"
@@ -342,6 +343,81 @@ TEST(Tracker, AHeldBackTrackThatOneCameraDraggedAwayGivesItsIdToNoOtherMarker) {
               static_cast<long long>(*on_c.begin()), static_cast<long long>(*on_a.begin()),
               static_cast<long long>(*on_c0.begin()), static_cast<long long>(*on_a0.begin()));
   EXPECT_EQ(*on_c0.begin(), *on_a0.begin()) << "the scene no longer exercises the test";
+}
+
+// Reacquisition by neighbours (reacquire_neighbours_m, issue 35 item 3, stop 93): five markers of
+// one limb (10-16 cm apart) swing round a circle at 0.75 m/s, turning with it. `hidden` markers
+// leave every view for 0.8 s, longer than delete_after_ns (0.3 s): their tracks are deleted and
+// they come back 0.6 m away. Returns, per marker, the ids on it before and after, and the counters.
+struct LimbRun {
+  std::map<int, std::set<std::int64_t>> before, after;
+  TrackerStats stats;
+};
+
+LimbRun run_limb(const std::set<int>& hidden, const TrackerOptions& options) {
+  const std::array<Eigen::Vector3d, 5> offsets{
+      Eigen::Vector3d(0.10, 0.0, 0.0), Eigen::Vector3d(-0.06, 0.07, 0.0), Eigen::Vector3d(0.0, 0.12, 0.06),
+      Eigen::Vector3d(0.05, -0.10, -0.05), Eigen::Vector3d(-0.04, -0.02, 0.15)};
+  const auto position = [&](int m, double t) -> Eigen::Vector3d {
+    const double angle = 1.5 * t;
+    const Eigen::Vector3d centre(0.5 * std::cos(angle), 0.5 * std::sin(angle), 1.0);
+    return centre + Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()) * offsets[static_cast<std::size_t>(m)];
+  };
+  const auto run = make_frames(
+      2.6,
+      [&](double t, int) {
+        std::vector<Eigen::Vector3d> seen;
+        for (int m = 0; m < 5; ++m)
+          if (!hidden.contains(m) || t < 1.0 || t >= 1.8) seen.push_back(position(m, t));
+        return seen;
+      },
+      11);
+  LimbRun out;
+  out.stats = replay(run, options, [&](double t, const TrackRecord& track) {
+    for (int m = 0; m < 5; ++m) {
+      if ((track.p - position(m, t)).norm() > 0.005) continue;
+      if (t > 0.5 && t < 1.0) out.before[m].insert(track.id);
+      if (t > 2.0) out.after[m].insert(track.id);
+    }
+  });
+  return out;
+}
+
+TEST(Tracker, AMarkerBackAfterItsTrackWasDeletedTakesItsIdWhereItsNeighboursCarriedIt) {
+  const LimbRun on = run_limb({0}, TrackerOptions{});
+  TrackerOptions off_options;
+  off_options.reacquire_neighbours_m = 0;
+  const LimbRun off = run_limb({0}, off_options);
+  for (const LimbRun* r : {&on, &off}) {
+    for (int m = 0; m < 5; ++m) {
+      ASSERT_EQ(r->before.at(m).size(), 1u) << "marker " << m;
+      ASSERT_EQ(r->after.at(m).size(), 1u) << "marker " << m;
+    }
+  }
+  std::printf("marker 0: id %lld before, %lld after (%llu by neighbours); option off: %lld after\n",
+              static_cast<long long>(*on.before.at(0).begin()),
+              static_cast<long long>(*on.after.at(0).begin()),
+              static_cast<unsigned long long>(on.stats.tracks_reacquired_by_neighbours),
+              static_cast<long long>(*off.after.at(0).begin()));
+  EXPECT_EQ(*on.after.at(0).begin(), *on.before.at(0).begin())
+      << "back from 0.8 s out of view under a new id";
+  EXPECT_EQ(on.stats.tracks_reacquired_by_neighbours, 1u);
+  EXPECT_NE(*off.after.at(0).begin(), *off.before.at(0).begin()) << "the scene no longer exercises the rule";
+}
+
+// Two neighbours hidden together come back each under its own id: their carried positions are
+// 17 cm apart, and the three markers left in view carry both.
+TEST(Tracker, TwoMarkersBackTogetherTakeTheirOwnIdsNotEachOthers) {
+  const LimbRun r = run_limb({0, 1}, TrackerOptions{});
+  for (int m = 0; m < 5; ++m) {
+    ASSERT_EQ(r.before.at(m).size(), 1u) << "marker " << m;
+    ASSERT_EQ(r.after.at(m).size(), 1u) << "marker " << m;
+  }
+  std::printf("reacquired by neighbours: %llu\n",
+              static_cast<unsigned long long>(r.stats.tracks_reacquired_by_neighbours));
+  EXPECT_EQ(*r.after.at(0).begin(), *r.before.at(0).begin());
+  EXPECT_EQ(*r.after.at(1).begin(), *r.before.at(1).begin());
+  EXPECT_EQ(r.stats.tracks_reacquired_by_neighbours, 2u);
 }
 
 // delete_runaway_tracks (issue 35 item 3, stop 70): marker B rests 1 s in every view, then sweeps

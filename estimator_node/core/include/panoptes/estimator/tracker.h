@@ -197,6 +197,14 @@ struct TrackerOptions {
   // comes back short of its velocity's reach and beyond 0.2 m of its last two-camera position
   // (docs/estimator.md, "Reacquisition along the way").
   double reacquire_way_m = 0.06;
+  // After those tests, and for confirmed tracks deleted up to 2 s before: a new track within this of
+  // where a lost track's neighbours carried it takes its id, when every other lost track's is at
+  // least twice as far and no followed track is within 6 cm of the new one (metres; 0: off). The
+  // neighbours are the up to six tracks nearest it at its last two-camera update (by distance and
+  // velocity); their rigid motion since, fitted to at least three still followed, carries that
+  // position (neighbour_anchor.h). A foot or a sacrum out of every view for 0.3-1.5 s
+  // comes back 0.2-0.9 m from where it was lost (docs/estimator.md, "Reacquisition by neighbours").
+  double reacquire_neighbours_m = 0.04;
   TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
   TimeNs checkpoint_interval_ns = 10'000'000;     // state snapshots for rewinding ...
@@ -233,10 +241,12 @@ struct TrackerStats {
   std::uint64_t ray_twin_waits = 0;            // blobs left to neither of two ray twins (ray_twin_wait_ns)
   std::uint64_t owned_blobs_kept = 0;          // blobs kept from uncertain one-view tracks (blob_owner_px)
   std::uint64_t tracks_reacquired = 0;         // confirmed new tracks that took a held-back track's id
-  std::uint64_t tracks_reanchored = 0;         // one-view tracks moved where two views put their blob
-  std::uint64_t input_pauses = 0;              // no frame of any camera for 25 ms and 8 usual intervals
-  std::uint64_t ghosts_deleted = 0;            // tentative tracks that cameras did not see
-  std::uint64_t blobs_not_initiated = 0;       // unmatched blobs beyond max_unmatched_per_frame
+  std::uint64_t tracks_reacquired_by_neighbours =
+      0;                                  // ... of which by reacquire_neighbours_m (or a deleted one's)
+  std::uint64_t tracks_reanchored = 0;    // one-view tracks moved where two views put their blob
+  std::uint64_t input_pauses = 0;         // no frame of any camera for 25 ms and 8 usual intervals
+  std::uint64_t ghosts_deleted = 0;       // tentative tracks that cameras did not see
+  std::uint64_t blobs_not_initiated = 0;  // unmatched blobs beyond max_unmatched_per_frame
 };
 
 // What became of each camera's frames (a camera's utilisation is used / frames).
