@@ -738,7 +738,10 @@ struct Tracker::Impl {
                                         const std::vector<std::int64_t>& claimed = {}) const;
   // Whether `track` is a candidate of reacquire: held back, not waited for by a rejoin
   // (rejoin_fast_track), not in `claimed`.
-  bool reacquire_candidate(const Track& track, TimeNs stamp, const std::vector<std::int64_t>& claimed) const;
+  // `one_view_too`: a confirmed track that one camera alone has updated for kOneViewNs qualifies as
+  // well as a held-back one (reacquire_by_neighbours).
+  bool reacquire_candidate(const Track& track, TimeNs stamp, const std::vector<std::int64_t>& claimed,
+                           bool one_view_too = false) const;
   // reacquire's first test (reacquire_way_m): the one candidate whose prediction gates `position`
   // (χ²₃) best and whose way (way_distance) passes within reacquire_way_m of it, every other gating
   // candidate's way kWayClearRatio times farther.
@@ -770,7 +773,7 @@ struct Tracker::Impl {
   // kFrameGapNs since their last anchor (Track::anchor), to the followed tracks near them.
   void note_anchors(TimeNs now_ns);
   // After the other tests of reacquire_confirmed: each `pending` new track takes the id of the
-  // held-back or departed track whose neighbours carried its anchor within reacquire_neighbours_m
+  // held-back, one-view or departed track whose neighbours carried its anchor within reacquire_neighbours_m
   // of it, when every other such track's is kNeighbourClearRatio times farther, no other pending
   // track is that near it, and no followed track within kNeighbourCrowdM of it (renames).
   void reacquire_by_neighbours(std::vector<Track*>& pending, TimeNs now_ns,
@@ -1297,14 +1300,14 @@ std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& posi
 }
 
 bool Tracker::Impl::reacquire_candidate(const Track& track, TimeNs stamp,
-                                        const std::vector<std::int64_t>& claimed) const {
+                                        const std::vector<std::int64_t>& claimed, bool one_view_too) const {
   // A lost fast track that a new track waits to rejoin (rejoin_confirmed) is that track's.
   const auto rejoin_pending = [this](std::int64_t id) {
     return std::any_of(core.tracks.begin(), core.tracks.end(),
                        [id](const Track& t) { return t.rejoin_id == id; });
   };
-  return held_back(track, stamp) && !rejoin_pending(track.id) &&
-         std::find(claimed.begin(), claimed.end(), track.id) == claimed.end();
+  return (held_back(track, stamp) || (one_view_too && track.confirmed && one_view(track, stamp))) &&
+         !rejoin_pending(track.id) && std::find(claimed.begin(), claimed.end(), track.id) == claimed.end();
 }
 
 std::optional<std::int64_t> Tracker::Impl::reacquire_on_way(const Eigen::Vector3d& position, TimeNs stamp,
@@ -2077,7 +2080,7 @@ void Tracker::Impl::reacquire_by_neighbours(
     if (position && position->fit_rms_m <= kNeighbourMaxFitRmsM) carried.push_back({id, position->position});
   };
   for (const Track& track : core.tracks)
-    if (!track.fast && track.anchor.stamp_ns != 0 && reacquire_candidate(track, now_ns, claimed))
+    if (!track.fast && track.anchor.stamp_ns != 0 && reacquire_candidate(track, now_ns, claimed, true))
       consider(track.id, track.anchor);
   for (const Core::Departed& departed : core.departed) consider(departed.id, departed.anchor);
   if (carried.empty()) return;
