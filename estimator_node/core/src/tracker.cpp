@@ -773,9 +773,10 @@ struct Tracker::Impl {
   // kFrameGapNs since their last anchor (Track::anchor), to the followed tracks near them.
   void note_anchors(TimeNs now_ns);
   // After the other tests of reacquire_confirmed: each `pending` new track takes the id of the
-  // held-back, one-view or departed track whose neighbours carried its anchor within reacquire_neighbours_m
-  // of it, when every other such track's is kNeighbourClearRatio times farther, no other pending
-  // track is that near it, and no followed track within kNeighbourCrowdM of it (renames).
+  // held-back, one-view or departed track whose neighbours carried its anchor within
+  // reacquire_neighbours_m of it, when every other such track's is kNeighbourClearRatio times
+  // farther, no other pending track is that near it, and no followed track within kNeighbourCrowdM
+  // of it (renames).
   void reacquire_by_neighbours(std::vector<Track*>& pending, TimeNs now_ns,
                                std::vector<std::int64_t>& claimed,
                                std::vector<std::pair<std::int64_t, std::int64_t>>& renames) const;
@@ -2032,11 +2033,15 @@ void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
 
 namespace {
 
+// A track that anchors belong to (note_anchors): confirmed, settled, not fast, and seen by two cameras.
+bool anchorable(const Track& track) {
+  return track.confirmed && !track.fast && track.updates >= kSettledUpdates && track.seen_ns != 0;
+}
+
 // A track another may be anchored to (note_anchors), or found by now (reacquire_by_neighbours):
-// confirmed, settled, not fast, and updated by a second camera within kFrameGapNs.
+// anchorable, and updated by a second camera within kFrameGapNs.
 bool anchor_neighbour(const Track& track, TimeNs now_ns) {
-  return track.confirmed && !track.fast && track.updates >= kSettledUpdates && track.seen_ns != 0 &&
-         now_ns - track.seen_ns <= kFrameGapNs;
+  return anchorable(track) && now_ns - track.seen_ns <= kFrameGapNs;
 }
 
 }  // namespace
@@ -2047,8 +2052,7 @@ void Tracker::Impl::note_anchors(TimeNs now_ns) {
   bool listed = false;
   std::vector<AnchorPoint> then;
   for (Track& track : core.tracks) {
-    if (!track.confirmed || track.fast || track.updates < kSettledUpdates || track.seen_ns == 0 ||
-        track.anchor.stamp_ns == track.seen_ns || now_ns - track.seen_ns <= kFrameGapNs)
+    if (!anchorable(track) || track.anchor.stamp_ns == track.seen_ns || anchor_neighbour(track, now_ns))
       continue;
     if (!listed) {
       for (const Track& other : core.tracks)
