@@ -84,8 +84,9 @@ walk1_in_walk8() {
   sed -e 's/^  false_blobs: .*/  false_blobs: 0.3/' -e "s#^  file: .*#  file: $static_data/gait2392_subject01_walk1.trc#"     -e 's/^  offset: .*/  offset: [-0.58, 0, 0]/' "${extra[@]}" "$source_dir/deploy/scenes/walk8.yaml" >"$out"
 }
 
-# label_offline SIM_DIR MODELS LABELS [WHAT [ARGS...]]: estimator_node --subjects MODELS [ARGS] offline over the
-# simulator's features in SIM_DIR (Torso soft), names written to LABELS; its labels line echoed.
+# label_offline SIM_DIR MODELS LABELS [WHAT [ARGS...]]: estimator_node --subjects MODELS offline over
+# the simulator's features in SIM_DIR (Torso soft), ARGS added, names written to LABELS; its labels
+# line echoed.
 label_offline() {
   expect_exit 0 "${4:-estimator_node --subjects offline}" -- "$bin/estimator_node" --calibration "$1/calibration.yaml" \
     --in-features "$1"/cam*.jsonl --no-dds --subjects "$2" --soft-segments Torso --out-labels "$3" "${@:5}"

@@ -10,7 +10,7 @@
 # first track after the occlusion, >= 99.5 % of the visible marker-frames right and <= 0.1 % wrong
 # after the first 0.5 s, no left/right swap. Before the fixes this test came with, seed 3 named
 # L.Shank.Upper "L.Shank.Front" for 3.7 s (1.35 % wrong; the coasting track had taken the
-# neighbour's blobs and the merge kept it as the older). Since stop 93 the tracker gives most such
+# neighbour's blobs and the merge kept it as the older). Since stop 93 the tracker gives some such
 # markers their old track back (reacquisition by neighbours, docs/estimator.md): the three seeds run
 # with it off (tracker.reacquire_neighbours_m: 0), so that the markers still come back under new
 # tracks, which is what this test is for; seed 8 runs once more with the default, where the names
@@ -35,8 +35,6 @@ for h in "${hides[@]}"; do
   hidden_args+=(--hidden "$marker:$to")
 done
 
-printf 'tracker:\n  reacquire_neighbours_m: 0\n' >"$work/neighbours_off.yaml"
-
 for seed in 8 3 1; do
   dir="$work/seed$seed"
   mkdir -p "$dir"
@@ -46,7 +44,7 @@ for seed in 8 3 1; do
   expect_exit 0 "seed $seed: simulate walk1 with six markers hidden for a while" -- "$bin/panoptes_sim" features \
     --scene "$dir/scene.yaml" --out-dir "$dir/sim"
   label_offline "$dir/sim" "$work/s1.yaml" "$dir/labels.jsonl" \
-    "seed $seed: estimator_node --subjects offline, reacquisition by neighbours off" --config "$work/neighbours_off.yaml"
+    "seed $seed: estimator_node --subjects offline, reacquisition by neighbours off" --config "$source_dir/tests/accuracy/reacquire_neighbours_off.yaml"
   if /usr/bin/python3 "$source_dir/tests/integration/score_labels.py" "$dir/labels.jsonl" "$dir/sim/truth.jsonl" \
     --skip-s 0.5 --min-right 99.5 --max-wrong 0.1 "${hidden_args[@]}" --max-reappear-ms 100 --explain 3 \
     >"$dir/score.json" 2>"$dir/score.err"; then

@@ -2088,35 +2088,36 @@ void Tracker::Impl::reacquire_by_neighbours(
       consider(track.id, track.anchor);
   for (const Core::Departed& departed : core.departed) consider(departed.id, departed.anchor);
   if (carried.empty()) return;
-  const auto distance = [&](const Track* track, const AnchorPoint& candidate) {
-    return (track->position_at(now_ns) - candidate.position).norm();
-  };
-  std::vector<Track*> taken;
-  for (Track* track : pending) {
+  std::vector<Eigen::Vector3d> at;  // the pending tracks' positions now, in `pending`'s order
+  at.reserve(pending.size());
+  for (const Track* track : pending) at.push_back(track->position_at(now_ns));
+  std::vector<char> taken(pending.size(), 0);
+  for (std::size_t i = 0; i < pending.size(); ++i) {
     const auto best = std::min_element(carried.begin(), carried.end(), [&](const auto& a, const auto& b) {
-      return distance(track, a) < distance(track, b);
+      return (at[i] - a.position).norm() < (at[i] - b.position).norm();
     });
-    const double d = distance(track, *best);
+    const double d = (at[i] - best->position).norm();
     const double clear = kNeighbourClearRatio * std::max(d, kNeighbourFloorM);
-    const bool alone =
-        std::none_of(
-            carried.begin(), carried.end(),
-            [&](const AnchorPoint& other) { return &other != &*best && distance(track, other) < clear; }) &&
-        std::none_of(pending.begin(), pending.end(),
-                     [&](const Track* other) { return other != track && distance(other, *best) < clear; });
-    const Eigen::Vector3d here = track->position_at(now_ns);
+    const auto near = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double limit) {
+      return (a - b).norm() < limit;
+    };
+    bool alone = std::none_of(carried.begin(), carried.end(), [&](const AnchorPoint& other) {
+      return &other != &*best && near(at[i], other.position, clear);
+    });
+    for (std::size_t j = 0; j < pending.size() && alone; ++j)
+      alone = j == i || !near(at[j], best->position, clear);
     const bool crowded = std::any_of(now.begin(), now.end(), [&](const AnchorPoint& point) {
-      return point.id != track->id && (point.position - here).norm() < kNeighbourCrowdM;
+      return point.id != pending[i]->id && near(point.position, at[i], kNeighbourCrowdM);
     });
     if (d > options.reacquire_neighbours_m || !alone || crowded ||
         std::find(claimed.begin(), claimed.end(), best->id) != claimed.end())
       continue;
-    renames.emplace_back(track->id, best->id);
+    renames.emplace_back(pending[i]->id, best->id);
     claimed.push_back(best->id);
-    taken.push_back(track);
+    taken[i] = 1;
   }
-  std::erase_if(pending,
-                [&](Track* track) { return std::find(taken.begin(), taken.end(), track) != taken.end(); });
+  std::size_t k = 0;
+  std::erase_if(pending, [&](Track*) { return taken[k++] != 0; });
 }
 
 void Tracker::Impl::prune(TimeNs now_ns) {
