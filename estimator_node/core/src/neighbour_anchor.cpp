@@ -33,7 +33,7 @@ NeighbourAnchor make_anchor(TimeNs stamp_ns, const Eigen::Vector3d& position, co
 }
 
 std::optional<CarriedPosition> carried_position(const NeighbourAnchor& anchor,
-                                                std::span<const AnchorPoint> now) {
+                                                std::span<const AnchorPoint> now, double trim_above_m) {
   std::vector<Eigen::Vector3d> from, to;
   for (int k = 0; k < anchor.count; ++k) {
     const AnchorPoint& then = anchor.neighbours[k];
@@ -44,7 +44,23 @@ std::optional<CarriedPosition> carried_position(const NeighbourAnchor& anchor,
     to.push_back(found->position);
   }
   CarriedPosition carried;
-  const auto motion = fit_rigid_transform(from, to, &carried.fit_rms_m);
+  auto motion = fit_rigid_transform(from, to, &carried.fit_rms_m);
+  // A neighbour that moved against the others (the other leg's marker beside a foot) leaves the
+  // fit, the worst first, while more than three are left.
+  while (motion && carried.fit_rms_m > trim_above_m && from.size() > 3) {
+    std::size_t worst = 0;
+    double worst_residual = -1.0;
+    for (std::size_t k = 0; k < from.size(); ++k) {
+      const double residual = (motion->apply(from[k]) - to[k]).squaredNorm();
+      if (residual > worst_residual) {
+        worst_residual = residual;
+        worst = k;
+      }
+    }
+    from.erase(from.begin() + static_cast<std::ptrdiff_t>(worst));
+    to.erase(to.begin() + static_cast<std::ptrdiff_t>(worst));
+    motion = fit_rigid_transform(from, to, &carried.fit_rms_m);
+  }
   if (!motion) return std::nullopt;  // fewer than three, or collinear: the rotation is undetermined
   carried.position = motion->apply(anchor.position);
   carried.neighbours = static_cast<int>(from.size());

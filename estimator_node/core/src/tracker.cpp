@@ -81,6 +81,10 @@ constexpr double kOneViewClearM = 0.1;
 // is uncertain: held back once out of sight (held_back); kept off other tracks' blobs in a second
 // camera while one camera alone updates it (owned_elsewhere).
 constexpr double kUncertainFactor = 3.0;
+// return_max_seen_distance_m: how fast the reach of a one-view track's second view grows with the
+// time since its last two-camera update, m/s (a running foot's marker over a stride's fraction), or
+// the track's own top speed if higher (a club head slowed at the top of its swing).
+constexpr double kReturnSpeed = 3.0;
 // Blob owners (blob_owner_px): a camera's previous frame older than this tells nothing of its
 // blobs now; a blob no track took is its last owner's for this long after their last update.
 constexpr TimeNs kOwnerFrameNs = 30'000'000;
@@ -170,7 +174,10 @@ struct Track {
   TimeNs partner_since_ns = 0;
   // Its position and its neighbours' at its last two-camera update, taken once no second camera
   // has updated it for kFrameGapNs (note_anchors; reacquire_by_neighbours). stamp_ns 0: none.
+  // A later two-camera update with fewer than three neighbours around (a one-view track that
+  // took a stray blob in a second camera, far from its limb) leaves the anchor it had.
   NeighbourAnchor anchor;
+  TimeNs anchored_seen_ns = 0;  // the seen_ns note_anchors last looked at
   Eigen::Vector3d last_seen_position() const { return seen_ns != 0 ? seen_position : state.position(); }
   // Where its last two-camera state puts it at `stamp` (constant velocity since), not where one
   // camera's updates dragged it along that camera's ray since.
@@ -262,7 +269,8 @@ struct Core {
     std::vector<BlobOwner> owners;
   };
   std::vector<BlobOwners> blob_owners;
-  std::uint64_t owned_blobs_kept = 0;  // blobs an uncertain one-view track was refused (blob_owner_px)
+  std::uint64_t owned_blobs_kept = 0;      // blobs an uncertain one-view track was refused (blob_owner_px)
+  std::uint64_t returns_beyond_reach = 0;  // ... and second views it was refused (return_max_seen_distance_m)
   BodySet bodies;
 };
 
@@ -507,6 +515,9 @@ struct Tracker::Impl {
   void estimate_acceleration(Track& track, TimeNs stamp, double innovation_px) const;
   void damp_one_view_velocity(Track& track, int camera_index, TimeNs stamp, TimeNs previous_update_ns) const;
   int one_view_camera(const Track& track, TimeNs stamp) const;
+  bool uncertain_elsewhere(const Track& track, int camera_index, TimeNs stamp) const;
+  bool beyond_return_reach(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
+                           int camera_index, TimeNs stamp);
   bool owned_elsewhere(std::size_t t, std::size_t b, const std::vector<Eigen::Vector2d>& pixels,
                        int camera_index, TimeNs stamp, const Core::BlobOwners& last,
                        const std::vector<GatedPair>& gated);
@@ -1534,6 +1545,34 @@ int Tracker::Impl::one_view_camera(const Track& track, TimeNs stamp) const {
   return static_cast<int>(std::max_element(updates.begin(), updates.end()) - updates.begin());
 }
 
+// Whether one camera other than camera_index alone has updated `track` for kOneViewNs and its
+// position is uncertain as held_back judges it (no track is, with reacquire_sigma_m 0).
+bool Tracker::Impl::uncertain_elsewhere(const Track& track, int camera_index, TimeNs stamp) const {
+  const int camera = one_view_camera(track, stamp);
+  if (camera < 0 || camera == camera_index) return false;
+  const double sigma = options.reacquire_sigma_m;
+  return sigma > 0 && predicted_position_trace(track, stamp) > kUncertainFactor * sigma * sigma;
+}
+
+// return_max_seen_distance_m: whether the uncertain one-view track t, if it took `pixel` of
+// another camera, would land beyond reach of where two cameras last placed it (refused: true).
+bool Tracker::Impl::beyond_return_reach(std::size_t t, const Projected& projected,
+                                        const Eigen::Vector2d& pixel, int camera_index, TimeNs stamp) {
+  const double reach_m = options.return_max_seen_distance_m;
+  const Track& track = core.tracks[t];
+  if (reach_m <= 0 || track.fast || track.seen_ns == 0 || !uncertain_elsewhere(track, camera_index, stamp))
+    return false;
+  PointState state = projected.state;
+  update(state, projected.projection, pixel, options.measurement_noise_px);
+  const double reach =
+      reach_m + std::max(kReturnSpeed, track.peak_speed) * ns_to_seconds(stamp - track.seen_ns);
+  if (std::min((state.position() - track.last_seen_position()).norm(),
+               (state.position() - track.seen_position_at(stamp)).norm()) <= reach)
+    return false;
+  ++core.returns_beyond_reach;
+  return true;
+}
+
 // Blob owners (blob_owner_px, docs/estimator.md "Blob owners"): track t, which one other camera
 // alone has updated for kOneViewNs and whose depth along that camera's ray is uncertain, gates blob b.
 // If b continues a blob another track took in this camera's previous frame (or that track's orphan,
@@ -1545,11 +1584,7 @@ bool Tracker::Impl::owned_elsewhere(std::size_t t, std::size_t b, const std::vec
   const double radius = options.blob_owner_px;
   if (radius <= 0 || last.owners.empty() || stamp - last.stamp_ns > kOwnerFrameNs) return false;
   const Track& track = core.tracks[t];
-  const int camera = one_view_camera(track, stamp);
-  if (camera < 0 || camera == camera_index) return false;
-  // Uncertain as held_back judges it (no track is, with reacquire_sigma_m 0).
-  const double sigma = options.reacquire_sigma_m;
-  if (sigma <= 0 || predicted_position_trace(track, stamp) <= kUncertainFactor * sigma * sigma) return false;
+  if (!uncertain_elsewhere(track, camera_index, stamp)) return false;
   const auto gates = [&](std::size_t row, auto&& wanted) {
     return std::any_of(gated.begin(), gated.end(),
                        [&](const GatedPair& g) { return g.row == row && wanted(g.col); });
@@ -1727,7 +1762,8 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
     std::vector<GatedPair> pairs;
     for (const auto& g : gated) {
       if (core.tracks[g.row].confirmed == want_confirmed && !used[g.col] && !track_done[g.row] &&
-          !owned_elsewhere(g.row, g.col, pixels, camera_index, stamp, last_owners, gated))
+          !owned_elsewhere(g.row, g.col, pixels, camera_index, stamp, last_owners, gated) &&
+          !beyond_return_reach(g.row, *projected[g.row], pixels[g.col], camera_index, stamp))
         pairs.push_back(g);
     }
     if (pairs.empty()) continue;
@@ -2015,9 +2051,11 @@ void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
     return std::any_of(renames.begin(), renames.end(),
                        [&](const auto& r) { return r.second == departed.id; });
   });
-  std::erase_if(core.tracks, [&](const Track& track) {
+  const auto renamed = [&](const Track& track) {
     return std::any_of(renames.begin(), renames.end(), [&](const auto& r) { return r.second == track.id; });
-  });
+  };
+  std::erase_if(core.tracks, renamed);
+  std::erase_if(core.lost, renamed);
   for (Track& track : core.tracks) {
     for (const auto& [from, to] : renames) {
       if (track.id != from) continue;
@@ -2052,7 +2090,7 @@ void Tracker::Impl::note_anchors(TimeNs now_ns) {
   bool listed = false;
   std::vector<AnchorPoint> then;
   for (Track& track : core.tracks) {
-    if (!anchorable(track) || track.anchor.stamp_ns == track.seen_ns || anchor_neighbour(track, now_ns))
+    if (!anchorable(track) || track.anchored_seen_ns == track.seen_ns || anchor_neighbour(track, now_ns))
       continue;
     if (!listed) {
       for (const Track& other : core.tracks)
@@ -2063,8 +2101,10 @@ void Tracker::Impl::note_anchors(TimeNs now_ns) {
     for (const Track* other : neighbours)
       if (other != &track)
         then.push_back({other->id, other->position_at(track.seen_ns), other->state.velocity()});
-    track.anchor = make_anchor(track.seen_ns, track.seen_position, track.seen_velocity, then,
-                               kNeighbourRadiusM, kNeighbourHorizonS);
+    auto anchor = make_anchor(track.seen_ns, track.seen_position, track.seen_velocity, then,
+                              kNeighbourRadiusM, kNeighbourHorizonS);
+    track.anchored_seen_ns = track.seen_ns;
+    if (anchor.count >= 3 || track.anchor.count < 3) track.anchor = anchor;
   }
 }
 
@@ -2080,7 +2120,7 @@ void Tracker::Impl::reacquire_by_neighbours(
     if (anchor.count < 3 || now_ns - anchor.stamp_ns > kNeighbourMemoryNs ||
         std::find(claimed.begin(), claimed.end(), id) != claimed.end())
       return;
-    const auto position = carried_position(anchor, now);
+    const auto position = carried_position(anchor, now, kNeighbourMaxFitRmsM);
     if (position && position->fit_rms_m <= kNeighbourMaxFitRmsM) carried.push_back({id, position->position});
   };
   for (const Track& track : core.tracks)
@@ -2135,8 +2175,12 @@ void Tracker::Impl::prune(TimeNs now_ns) {
         track.nis_average > (track.confirmed ? options.confirmed_max_nis : options.tentative_max_nis);
     // A runaway stays among the lost fast tracks: a club head that one view followed out of the
     // others rejoins its id (rejoin_fast_track).
+    // It counts among the departed too: a walking marker's runaway (one camera dragged it along
+    // its ray) comes back where its neighbours carried it (ceiling6/walk/c0.3/s3's heel).
     if (track.runaway) {
       core.lost.push_back(track);
+      if (track.confirmed && track.anchor.count >= 3 && options.reacquire_neighbours_m > 0)
+        core.departed.push_back({track.id, track.anchor});
       ++core.runaway_tracks_deleted;
       ++core.tracks_deleted;
       return true;
@@ -2299,6 +2343,7 @@ void Tracker::Impl::rejoin_confirmed(TimeNs now_ns) {
   if (renames.empty()) return;
   for (const auto& rename : renames) {
     const auto same = [id = rename.second](const Track& track) { return track.id == id; };
+    std::erase_if(core.departed, [id = rename.second](const Core::Departed& d) { return d.id == id; });
     if (std::erase_if(core.lost, same) == 0) {
       std::erase_if(core.tracks, same);
       ++core.tracks_deleted;
@@ -2672,6 +2717,7 @@ const TrackerStats& Tracker::stats() const {
   s.return_velocities_capped = core.return_velocities_capped;
   s.ray_twin_waits = core.ray_twin_waits;
   s.owned_blobs_kept = core.owned_blobs_kept;
+  s.returns_beyond_reach = core.returns_beyond_reach;
   s.tracks_reacquired = core.tracks_reacquired;
   s.tracks_reacquired_by_neighbours = core.tracks_reacquired_by_neighbours;
   s.tracks_reanchored = core.tracks_reanchored;

@@ -399,6 +399,10 @@ void visit_one_view_tracks(Fields& f, estimator::TrackerOptions& o) {
   f.number("blob_owner_px", o.blob_owner_px, kNonNegative,
            "a track one camera alone updates, its depth uncertain, takes no blob of another camera that "
            "continues (within this, px) a blob another track took there (0: off)");
+  f.number("return_max_seen_distance_m", o.return_max_seen_distance_m, kNonNegative,
+           "... and a blob of another camera only if the update puts it within this of its last "
+           "two-camera position, or of where its velocity then carries it, plus 3 m/s (or its top speed) "
+           "since, m (0: off; fast tracks exempt)");
 }
 
 template <class Fields>

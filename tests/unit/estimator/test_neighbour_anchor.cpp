@@ -73,6 +73,34 @@ TEST(NeighbourAnchor, CarriesTheMarkerWithItsNeighboursRigidMotion) {
   EXPECT_GT(bent->fit_rms_m, 0.02);
 }
 
+// With a trim limit, the neighbours that moved against the others (the other leg's markers beside a
+// foot) leave the fit, the worst first, down to three; the rest carry the marker exactly.
+TEST(NeighbourAnchor, LeavesOutNeighboursThatMovedOnTheirOwn) {
+  const NeighbourAnchor anchor = anchor_at_rest(neighbourhood());
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()));
+  const Eigen::Vector3d shift(0.3, 0.2, 0.0);
+  std::vector<AnchorPoint> now;
+  for (int k = 0; k < anchor.count; ++k)
+    now.push_back({anchor.neighbours[k].id, q * anchor.neighbours[k].position + shift});
+  now[1].position += Eigen::Vector3d(0.15, 0.0, 0.0);
+  now[4].position += Eigen::Vector3d(0.0, -0.10, 0.05);
+  const auto all = carried_position(anchor, now);
+  ASSERT_TRUE(all.has_value());
+  EXPECT_EQ(all->neighbours, kAnchorNeighbours);
+  EXPECT_GT(all->fit_rms_m, 0.03);
+  EXPECT_GT((all->position - (q * kMarker + shift)).norm(), 0.01);
+  const auto trimmed = carried_position(anchor, now, 0.01);
+  ASSERT_TRUE(trimmed.has_value());
+  EXPECT_EQ(trimmed->neighbours, kAnchorNeighbours - 2);
+  EXPECT_LT(trimmed->fit_rms_m, 1e-9);
+  EXPECT_LT((trimmed->position - (q * kMarker + shift)).norm(), 1e-9);
+  // Never below three: with every neighbour moved its own way, three are left and the residual shows.
+  for (std::size_t k = 0; k < now.size(); ++k) now[k].position += Eigen::Vector3d(0.0, 0.0, 0.05 * (k % 3));
+  const auto bent = carried_position(anchor, now, 0.001);
+  ASSERT_TRUE(bent.has_value());
+  EXPECT_EQ(bent->neighbours, 3);
+}
+
 TEST(NeighbourAnchor, NeedsThreeNeighboursNotInALine) {
   const NeighbourAnchor anchor = anchor_at_rest(neighbourhood());
   std::vector<AnchorPoint> two{anchor.neighbours[0], anchor.neighbours[1]};

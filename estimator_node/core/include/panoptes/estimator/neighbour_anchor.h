@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 
@@ -49,7 +50,10 @@ struct CarriedPosition {
 
 // Where the anchor's neighbours found in `now` (by id) carry its position: the rigid motion fitted
 // to at least three of them (not collinear), applied to the anchored position. nullopt with fewer.
-std::optional<CarriedPosition> carried_position(const NeighbourAnchor& anchor,
-                                                std::span<const AnchorPoint> now);
+// While the fit's RMS residual is above `trim_above_m` and more than three are left, the neighbour
+// with the largest residual is dropped and the motion fitted again.
+std::optional<CarriedPosition> carried_position(
+    const NeighbourAnchor& anchor, std::span<const AnchorPoint> now,
+    double trim_above_m = std::numeric_limits<double>::infinity());
 
 }  // namespace panoptes::estimator

@@ -108,6 +108,14 @@ struct TrackerOptions {
   // records 0.70 -> 0.45 %, ID switches 35 -> 33 (swaps 5 -> 1); run 178 -> 179 (swaps 25 -> 34)
   // (docs/estimator.md, "Blob owners"). Needs reacquire_sigma_m (0: no track is uncertain).
   double blob_owner_px = 6.0;
+  // Second views within reach: such a track (one camera alone for 30 ms, depth uncertain) takes a
+  // blob of another camera only if the update puts it within this of where two cameras last placed
+  // it, or of where its velocity then carries it, plus 3 m/s (or the track's top speed, if higher)
+  // for every second since (metres; 0: off; fast tracks exempt). A clutter blob 378 px off passed a foot's
+  // one-view gate, 0.25 s long along its camera's ray, and took the track 1.9 m away, below the floor
+  // (ceiling6/walk/c0.3/s3); the foot came back under a new id (docs/estimator.md, "Second views within
+  // reach").
+  double return_max_seen_distance_m = 0.4;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
   // fast_hold_ns after its last update above 10 m/s, whatever its innovations (0: the adaptive
@@ -240,7 +248,8 @@ struct TrackerStats {
   std::uint64_t return_velocities_capped = 0;  // at a return to two views (return_velocity_cap_mps)
   std::uint64_t ray_twin_waits = 0;            // blobs left to neither of two ray twins (ray_twin_wait_ns)
   std::uint64_t owned_blobs_kept = 0;          // blobs kept from uncertain one-view tracks (blob_owner_px)
-  std::uint64_t tracks_reacquired = 0;         // confirmed new tracks that took a held-back track's id
+  std::uint64_t returns_beyond_reach = 0;  // ... and second views out of reach (return_max_seen_distance_m)
+  std::uint64_t tracks_reacquired = 0;     // confirmed new tracks that took a held-back track's id
   std::uint64_t tracks_reacquired_by_neighbours =
       0;                                  // ... of which by reacquire_neighbours_m (or a deleted one's)
   std::uint64_t tracks_reanchored = 0;    // one-view tracks moved where two views put their blob
