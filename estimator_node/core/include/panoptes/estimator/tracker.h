@@ -111,11 +111,13 @@ struct TrackerOptions {
   // Second views within reach: such a track (one camera alone for 30 ms, depth uncertain) takes a
   // blob of another camera only if the update puts it within this of where two cameras last placed
   // it, or of where its velocity then carries it, plus 3 m/s (or the track's top speed, if higher)
-  // for every second since (metres; 0: off; fast tracks exempt). A clutter blob 378 px off passed a foot's
-  // one-view gate, 0.25 s long along its camera's ray, and took the track 1.9 m away, below the floor
-  // (ceiling6/walk/c0.3/s3); the foot came back under a new id (docs/estimator.md, "Second views within
-  // reach").
-  double return_max_seen_distance_m = 0.4;
+  // for every second since (metres; 0: off; fast tracks exempt). A clutter blob 378 px off passed a
+  // foot's one-view gate, 0.25 s long along its camera's ray, and took the track 1.9 m away, below
+  // the floor (ceiling6/walk/c0.3/s3); the foot came back under a new id. Off by default: at 0.4 it
+  // also kept a one-view ghost alive in the planner's 4-camera walk layout, which then held a
+  // marker's blob, and two markers lost 16-20 % of their coverage (docs/estimator.md, "Second
+  // views within reach").
+  double return_max_seen_distance_m = 0.0;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
   // fast_hold_ns after its last update above 10 m/s, whatever its innovations (0: the adaptive
