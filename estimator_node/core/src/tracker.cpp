@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <optional>
@@ -18,6 +19,7 @@
 #include "panoptes/errors.h"
 #include "panoptes/estimator/assignment.h"
 #include "panoptes/estimator/neighbour_anchor.h"
+#include "panoptes/triangulation.h"
 #include "points_by_x.h"
 
 namespace panoptes::estimator {
@@ -35,7 +37,8 @@ void TrackerOptions::print(std::ostream& out) const {
       << "  delete_after             " << ns_to_seconds(delete_after_ns) * 1e3 << " ms\n"
       << "  publish_max_sigma        " << publish_max_sigma_m * 1e3
       << " mm (fast: " << fast_publish_max_sigma_m * 1e3 << " mm, or innovations within "
-      << fast_publish_innovation_px << " px; views within " << publish_max_innovation_px << " px)\n"
+      << fast_publish_innovation_px << " px; views within " << publish_max_innovation_px << " px, odd views "
+      << (dispute_odd_views ? "disputed" : "kept") << ")\n"
       << "  reacquire_sigma          " << reacquire_sigma_m * 1e3 << " mm\n"
       << "  fast tracks              sigma^2 x " << fast_process_noise_scale << " for "
       << ns_to_seconds(fast_hold_ns) * 1e3 << " ms (x " << fast_isolated_process_noise_scale
@@ -85,6 +88,10 @@ constexpr double kUncertainFactor = 3.0;
 // time since its last two-camera update, m/s (a running foot's marker over a stride's fraction), or
 // the track's own top speed if higher (a club head slowed at the top of its swing).
 constexpr double kReturnSpeed = 3.0;
+// dispute_odd_views: how long a track is not offered the blobs of a camera whose view was disputed,
+// and how well (px, worst reprojection) its other views' last blobs must agree for one view to be odd.
+constexpr TimeNs kDisputedViewNs = 100'000'000;
+constexpr double kOddViewAgreePx = 1.0;
 // Blob owners (blob_owner_px): a camera's previous frame older than this tells nothing of its
 // blobs now; a blob no track took is its last owner's for this long after their last update.
 constexpr TimeNs kOwnerFrameNs = 30'000'000;
@@ -178,6 +185,12 @@ struct Track {
   // took a stray blob in a second camera, far from its limb) leaves the anchor it had.
   NeighbourAnchor anchor;
   TimeNs anchored_seen_ns = 0;  // the seen_ns note_anchors last looked at
+  // A camera whose blobs it is not offered until disputed_until_ns (-1: none; dispute_views).
+  int disputed_camera = -1;
+  TimeNs disputed_until_ns = 0;
+  bool disputed_in(int camera_index, TimeNs stamp) const {
+    return camera_index == disputed_camera && stamp < disputed_until_ns;
+  }
   Eigen::Vector3d last_seen_position() const { return seen_ns != 0 ? seen_position : state.position(); }
   // Where its last two-camera state puts it at `stamp` (constant velocity since), not where one
   // camera's updates dragged it along that camera's ray since.
@@ -189,6 +202,11 @@ struct Track {
   std::vector<TimeNs> camera_last_update;   // by camera index; 0 = never
   std::vector<float> camera_innovation_px;  // by camera index: its last update's innovation, px (publishable)
   std::vector<float> camera_innovation_avg_px;  // by camera index: its innovations' moving average, px
+  struct LastBlob {
+    Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
+    TimeNs stamp_ns = 0;  // 0: none
+  };
+  std::vector<LastBlob> camera_last_blob;  // by camera index: the blob of its last update there (odd_view)
   // reacquire_sigma_m: made by initiation under a new id (not a rejoined one, nor one that took a
   // held-back track's id; a replay that makes an undone one again keeps its flag), and confirmed
   // in the frame just applied: it may take a held-back track's id (reacquire_confirmed).
@@ -271,6 +289,7 @@ struct Core {
   std::vector<BlobOwners> blob_owners;
   std::uint64_t owned_blobs_kept = 0;      // blobs an uncertain one-view track was refused (blob_owner_px)
   std::uint64_t returns_beyond_reach = 0;  // ... and second views it was refused (return_max_seen_distance_m)
+  std::uint64_t views_disputed = 0;        // odd views whose blob started another marker (dispute_odd_views)
   BodySet bodies;
 };
 
@@ -810,6 +829,21 @@ struct Tracker::Impl {
   // publish_max_innovation_px: whether the cameras that updated `track` in the last 10 ms find its
   // blobs near its predictions.
   bool views_agree(const Track& track) const;
+  // A camera's limit for views_agree: publish_max_innovation_px, or kInnovationLevels × its level.
+  double innovation_limit(std::size_t camera) const;
+  // Whether the other cameras' last blobs of `track` (each within kOneViewNs, moved to `stamp` along
+  // its motion) triangulate consistently, at least two of them, to a point that `pixel` in
+  // camera_index misses by more than that camera's innovation limit: that view is the odd one.
+  bool odd_view(const Track& track, int camera_index, const Eigen::Vector2d& pixel, TimeNs stamp) const;
+  // dispute_odd_views: a confirmed track whose views disagree (views_agree), whose average
+  // innovation in camera_index is beyond that camera's limit and whose view there is odd
+  // (odd_view) offers the blob it took there to the initiator as a probe. If the blob pairs with
+  // another camera's unmatched tracklet into a point no track explains, it is another marker's:
+  // the track is not offered camera_index's blobs for kDisputedViewNs, and the blob, unmatched from
+  // the next frame on, starts that marker's track (docs/estimator.md, "Odd views").
+  void dispute_views(int camera_index, TimeNs stamp, const std::vector<Eigen::Vector2d>& pixels,
+                     const std::vector<std::pair<std::int64_t, std::size_t>>& associations,
+                     const std::function<bool(const Eigen::Vector3d&)>& occupied);
   // An update's innovation (px) in `camera`: the track's last and moving average there (views_agree,
   // publishable), and the camera's typical innovation over confirmed tracks.
   void note_innovation(Track& track, std::size_t camera, float innovation) {
@@ -1430,6 +1464,8 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   if (!track.confirmed && track.misses > 0) --track.misses;
   const TimeNs previous_update_ns = track.last_update_ns;
   note_update(track, camera_index, stamp);
+  track.camera_last_blob.resize(models.size());
+  track.camera_last_blob[static_cast<std::size_t>(camera_index)] = {pixel, stamp};
   damp_one_view_velocity(track, camera_index, stamp, previous_update_ns);
   note_innovation(track, static_cast<std::size_t>(camera_index),
                   static_cast<float>((pixel - projected.projection.pixel).norm()));
@@ -1708,7 +1744,8 @@ bool Tracker::Impl::reassociate(const Entry& entry, const std::vector<Eigen::Vec
   chosen.reserve(entry.associations.size());
   for (const auto& [id, blob] : entry.associations) {
     const Track* found = find_track(id);
-    if (found == nullptr || blob >= pixels.size() || used[blob]) return false;
+    if (found == nullptr || blob >= pixels.size() || used[blob] || found->disputed_in(entry.camera, stamp))
+      return false;
     auto full = project_prediction(found->state, stamp, found->sigma2(options.process_noise), camera,
                                    options.init.min_depth_m, options.measurement_noise_px);
     if (!full || !inside_gate(mahalanobis2(full->projection, pixels[blob]), options.gate_chi2)) return false;
@@ -1762,6 +1799,7 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
     std::vector<GatedPair> pairs;
     for (const auto& g : gated) {
       if (core.tracks[g.row].confirmed == want_confirmed && !used[g.col] && !track_done[g.row] &&
+          !core.tracks[g.row].disputed_in(camera_index, stamp) &&
           !owned_elsewhere(g.row, g.col, pixels, camera_index, stamp, last_owners, gated) &&
           !beyond_return_reach(g.row, *projected[g.row], pixels[g.col], camera_index, stamp))
         pairs.push_back(g);
@@ -1802,7 +1840,8 @@ void Tracker::Impl::recover_manoeuvres(Entry& entry, const std::vector<Eigen::Ve
   std::vector<int> claimed(pixels.size(), 0);
   for (std::size_t i = 0; i < core.tracks.size(); ++i) {
     const Track& track = core.tracks[i];
-    if (!track.confirmed || track_done[i] || !in_view[i] || stamp - track.last_update_ns > kFrameGapNs)
+    if (!track.confirmed || track_done[i] || !in_view[i] || stamp - track.last_update_ns > kFrameGapNs ||
+        track.disputed_in(entry.camera, stamp))
       continue;
     if (track.state.velocity().squaredNorm() < kFastSpeed * kFastSpeed) continue;
     auto wide = project_prediction(track.state, stamp, options.process_noise * max_scale, camera,
@@ -1860,6 +1899,58 @@ bool Tracker::Impl::reanchor(Track& track, const InitiationCandidate& candidate,
   return true;
 }
 
+bool Tracker::Impl::odd_view(const Track& track, int camera_index, const Eigen::Vector2d& pixel,
+                             TimeNs stamp) const {
+  std::vector<PixelObservation> others;
+  const Eigen::Vector3d now = track.position_at(stamp);
+  for (std::size_t k = 0; k < std::min(track.camera_last_blob.size(), models.size()); ++k) {
+    const Track::LastBlob& last = track.camera_last_blob[k];
+    if (static_cast<int>(k) == camera_index || last.stamp_ns == 0 || stamp - last.stamp_ns > kOneViewNs)
+      continue;
+    // Moved to `stamp` along the track's own motion in that image.
+    const auto then_px = models[k]->project(track.position_at(last.stamp_ns));
+    const auto now_px = models[k]->project(now);
+    if (!then_px || !now_px) continue;
+    others.push_back({models[k].get(), Eigen::Vector2d(last.pixel + (*now_px - *then_px))});
+  }
+  if (others.size() < 2) return false;
+  const auto point = triangulate(others);
+  if (!point || point->max_reprojection_px > kOddViewAgreePx) return false;
+  const auto camera = static_cast<std::size_t>(camera_index);
+  return reprojection_error(*models[camera], point->point, pixel) > innovation_limit(camera);
+}
+
+void Tracker::Impl::dispute_views(int camera_index, TimeNs stamp, const std::vector<Eigen::Vector2d>& pixels,
+                                  const std::vector<std::pair<std::int64_t, std::size_t>>& associations,
+                                  const std::function<bool(const Eigen::Vector3d&)>& occupied) {
+  if (!options.dispute_odd_views) return;
+  std::vector<Eigen::Vector2d> probes;
+  std::vector<std::size_t> owners;  // indices into core.tracks, which the probes do not reorder
+  const auto camera = static_cast<std::size_t>(camera_index);
+  for (const auto& [id, blob] : associations) {
+    const Track* owner = find_track(id);
+    // One disputed view at a time: a track two of whose views are odd is no longer one marker's
+    // track with one wrong view.
+    if (owner == nullptr || blob >= pixels.size() || !owner->confirmed || owner->fast ||
+        one_view(*owner, stamp) || stamp < owner->disputed_until_ns || views_agree(*owner) ||
+        camera >= owner->camera_innovation_avg_px.size() ||
+        owner->camera_innovation_avg_px[camera] <= innovation_limit(camera) ||
+        !odd_view(*owner, camera_index, pixels[blob], stamp))
+      continue;
+    probes.push_back(pixels[blob]);
+    owners.push_back(static_cast<std::size_t>(owner - core.tracks.data()));
+  }
+  if (probes.empty()) return;
+  core.initiator.probe(camera_index, stamp, probes, [&](const InitiationCandidate& candidate, std::size_t j) {
+    if (occupied(candidate.position)) return false;
+    Track& owner = core.tracks[owners[j]];
+    owner.disputed_camera = camera_index;
+    owner.disputed_until_ns = stamp + kDisputedViewNs;
+    ++core.views_disputed;
+    return false;  // its partners stay in the pool: the blob, free from the next frame on, pairs with them
+  });
+}
+
 void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
                              const std::vector<Eigen::Vector2d>& pixels, const std::vector<char>& used,
                              const std::vector<std::pair<std::int64_t, std::size_t>>& associations) {
@@ -1880,6 +1971,13 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
                            });
     }
   }
+  const double near = 4.0 * options.merge_distance_m;
+  const auto occupied = [&](const Eigen::Vector3d& point) {
+    return std::any_of(core.tracks.begin(), core.tracks.end(), [&](const Track& track) {
+      return (track.position_at(stamp) - point).norm() < near && !held_back(track, stamp);
+    });
+  };
+  dispute_views(camera_index, stamp, pixels, associations, occupied);
   std::vector<Eigen::Vector2d> unmatched;
   for (std::size_t j = 0; j < pixels.size(); ++j) {
     if (used[j]) continue;
@@ -1891,12 +1989,6 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     }
     unmatched.push_back(pixels[j]);
   }
-  const double near = 4.0 * options.merge_distance_m;
-  const auto occupied = [&](const Eigen::Vector3d& point) {
-    return std::any_of(core.tracks.begin(), core.tracks.end(), [&](const Track& track) {
-      return (track.position_at(stamp) - point).norm() < near && !held_back(track, stamp);
-    });
-  };
   for (auto& candidate : core.initiator.add_frame(camera_index, stamp, unmatched, occupied)) {
     Track track;
     double rejoined_peak_speed = 0;
@@ -2462,6 +2554,11 @@ bool Tracker::Impl::determined(const TrackRecord& record, bool published, bool f
 // that disagree").
 constexpr double kInnovationLevels = 4.0;  // views_agree: a camera's limit is at least this × its level
 
+double Tracker::Impl::innovation_limit(std::size_t camera) const {
+  return std::max(options.publish_max_innovation_px,
+                  kInnovationLevels * core.camera_innovation_level[camera]);
+}
+
 bool Tracker::Impl::views_agree(const Track& track) const {
   if (options.publish_max_innovation_px <= 0 || track.fast) return true;
   int recent = 0;
@@ -2470,9 +2567,7 @@ bool Tracker::Impl::views_agree(const Track& track) const {
     const TimeNs last = track.camera_last_update[k];
     if (last == 0 || track.last_update_ns - last > kFrameGapNs) continue;
     ++recent;
-    const double limit =
-        std::max(options.publish_max_innovation_px, kInnovationLevels * core.camera_innovation_level[k]);
-    far = far || track.camera_innovation_avg_px[k] > limit;
+    far = far || track.camera_innovation_avg_px[k] > innovation_limit(k);
   }
   return recent < 2 || !far;
 }
@@ -2718,6 +2813,7 @@ const TrackerStats& Tracker::stats() const {
   s.ray_twin_waits = core.ray_twin_waits;
   s.owned_blobs_kept = core.owned_blobs_kept;
   s.returns_beyond_reach = core.returns_beyond_reach;
+  s.views_disputed = core.views_disputed;
   s.tracks_reacquired = core.tracks_reacquired;
   s.tracks_reacquired_by_neighbours = core.tracks_reacquired_by_neighbours;
   s.tracks_reanchored = core.tracks_reanchored;

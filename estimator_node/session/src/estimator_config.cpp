@@ -468,6 +468,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.number("publish_max_innovation_px", o.publish_max_innovation_px, kNonNegative,
            "a track (not fast) that two or more cameras updated in the last 10 ms is published only while "
            "each finds its blobs within this of the predictions, px, on a moving average (0: off)");
+  f.flag("dispute_odd_views", o.dispute_odd_views,
+         "a track whose views disagree gives up for 100 ms the one view that misses the point its other "
+         "views agree on, when that view's blob pairs with another camera's unmatched blob (a neighbour's)");
   f.number("merge_distance_m", o.merge_distance_m, kNonNegative,
            "two tracks closer than this are one marker");
   f.number("reacquire_sigma_m", o.reacquire_sigma_m, kNonNegative,

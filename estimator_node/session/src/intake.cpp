@@ -109,7 +109,8 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
       (s.owned_blobs_kept > 0 ? "; blobs kept for their owners " + std::to_string(s.owned_blobs_kept)
                               : std::string()) +
       (s.returns_beyond_reach > 0 ? "; second views beyond reach " + std::to_string(s.returns_beyond_reach)
-                                  : std::string()));
+                                  : std::string()) +
+      (s.views_disputed > 0 ? "; odd views disputed " + std::to_string(s.views_disputed) : std::string()));
   for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops, other_cameras).lines()) log(line);
   if (tracker_.body_count() > 0) {
     const auto& b = tracker_.body_stats();
