@@ -263,12 +263,14 @@ try {
 
   // --- polygon mask: click three corners on cam2, then the first again ---------------------------
   const card2p = page.locator('.card[data-camera="cam2"]');
-  // Drawn again once if no acknowledgement came (a click lost while the card re-rendered, seen
-  // once in a loaded CI run); the camera's log shows one add_mask poly either way.
+  // Drawn again if no acknowledgement came (a click lost while the card re-rendered, seen once in a
+  // loaded CI run; twice in a row in a loaded fresh-clone run, stop 95); the camera's log shows one
+  // add_mask poly either way. The triangle is placed around cam2's blobs, so it waits for some.
   let polyArgs = null;
-  for (let attempt = 0; attempt < 2 && !polyArgs; ++attempt) {
+  for (let attempt = 0; attempt < 3 && !polyArgs; ++attempt) {
     if (await card2p.locator('button.polygon.active').count()) await card2p.locator('button.polygon').click();  // reset
     await card2p.locator('button.polygon').click();
+    await waitFor(page, () => window.panoptes.state.cameras.find((c) => c.id === 'cam2').blobs.length > 0, null, 2000);
     const box2 = await card2p.locator('canvas').boundingBox();
     // A triangle around where cam2 sees blobs now (so that it had blobs to remove): its top edge on
     // the blobs' top, its sides through their box's bottom corners, in image pixels.
@@ -276,7 +278,9 @@ try {
       const camera = window.panoptes.state.cameras.find((c) => c.id === 'cam2');
       const canvas = document.querySelector('.card[data-camera="cam2"] canvas');  // sized as the image
       const [width, height] = [canvas.width, canvas.height];
-      const xs = camera.blobs.map((b) => b[0]), ys = camera.blobs.map((b) => b[1]);
+      // No blob at this instant: a triangle about the image's centre (its corners would be NaN).
+      const blobs = camera.blobs.length ? camera.blobs : [[width / 2, height / 3]];
+      const xs = blobs.map((b) => b[0]), ys = blobs.map((b) => b[1]);
       const x0 = Math.min(...xs) - 30, x1 = Math.max(...xs) + 30, y0 = Math.min(...ys) - 30, y1 = Math.max(...ys) + 30;
       const cx = (x0 + x1) / 2, w = x1 - x0, h = y1 - y0;
       const clamp = (v, high) => Math.max(1, Math.min(high - 2, v));
@@ -289,7 +293,18 @@ try {
     await page.mouse.click(box2.x + box2.width * corners[0][0] + 2, box2.y + box2.height * corners[0][1] + 2);
     polyArgs = await waitFor(page, () => window.panoptes.results.some((r) => r.command === 'add_mask' && r.args[0] === 'poly'), null, 5000)
       ? await page.evaluate(() => window.panoptes.results.find((r) => r.command === 'add_mask' && r.args[0] === 'poly').args) : null;
-    if (!polyArgs) console.log(`polygon attempt ${attempt + 1}: no acknowledgement within 5 s`);
+    if (!polyArgs) {
+      // Which half failed: the page never sent the command (clicks lost), or no result came back.
+      const state = await page.evaluate(() => ({
+        sent: window.panoptes.sent.filter((s) => s.command === 'add_mask' && s.args[0] === 'poly').length,
+        blobs: window.panoptes.state.cameras.find((c) => c.id === 'cam2').blobs.length,
+        connected: window.panoptes.connected,
+      }));
+      console.log(`polygon attempt ${attempt + 1}: no acknowledgement within 5 s (add_mask poly sent by the page: ` +
+        `${state.sent}, polygon mode on: ${await card2p.locator('button.polygon.active').count() > 0}, cam2 blobs: ` +
+        `${state.blobs}, corners ${JSON.stringify(corners.map(([x, y]) => [x.toFixed(3), y.toFixed(3)]))}, ` +
+        `connected: ${state.connected}, card says "${await card2p.locator('.result').textContent()}")`);
+    }
   }
   results.commands.polygon_args = polyArgs;
   check(polyArgs && polyArgs.length === 7, `polygon sent as add_mask ${polyArgs ? polyArgs.join(' ') : '(none)'}`);
