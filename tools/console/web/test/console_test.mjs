@@ -137,6 +137,16 @@ try {
   // one wall clock): a slow CDP round trip on a loaded machine does not count against the console.
   const sentAt = (command, first) => page.evaluate(([c, a]) =>
     window.panoptes.sent.filter((s) => s.command === c && (a === null || String(s.args[0]) === a)).at(-1).at, [command, first]);
+  // Clicks `button` and returns when the page sent `command` for it. Read at once, the newest send
+  // may still be an earlier one under load: cam2's clear was stamped with cam1's, 8.6 s before the
+  // polygon it cleared, and the cameras' records were judged over an empty window (stop 95).
+  const clickAndSentAt = async (button, command) => {
+    const count = () => page.evaluate((c) => window.panoptes.sent.filter((s) => s.command === c).length, command);
+    const before = await count();
+    await button.click();
+    await waitFor(page, ([c, n]) => window.panoptes.sent.filter((s) => s.command === c).length > n, [command, before], 5000);
+    return (await count()) > before ? sentAt(command, null) : null;
+  };
   const blobsOf = (camera, condition) => waitFor(page, ([id, zero]) => {
     const n = Number(document.querySelector(`.card[data-camera="${id}"]`).dataset.blobs);
     if (zero ? n !== 0 : n === 0) return false;
@@ -258,8 +268,7 @@ try {
   if (maskArgs) check(inside === 0, `no blob of cam1 inside the mask in the page (${inside} seen over 0.5 s)`);
   // The cameras' records are judged from 1 s after the command to the clear: leave them >= 0.8 s.
   if (results.commands.mask_ms) await sleep(Math.max(0, results.commands.mask_ms + 1800 - Date.now()));
-  await card1.locator('button.clear_masks').click();
-  results.commands.clear_masks_ms = await sentAt('clear_masks', null);
+  results.commands.clear_masks_ms = await clickAndSentAt(card1.locator('button.clear_masks'), 'clear_masks');
 
   // --- polygon mask: click three corners on cam2, then the first again ---------------------------
   const card2p = page.locator('.card[data-camera="cam2"]');
@@ -328,8 +337,7 @@ try {
   }
   check(polyArgs && insidePolygon === 0, `no blob of cam2 inside the polygon in the page (${insidePolygon} seen over 0.5 s)`);
   if (results.commands.polygon_ms) await sleep(Math.max(0, results.commands.polygon_ms + 1800 - Date.now()));
-  await card2p.locator('button.clear_masks').click();
-  results.commands.clear_polygon_ms = await sentAt('clear_masks', null);
+  results.commands.clear_polygon_ms = await clickAndSentAt(card2p.locator('button.clear_masks'), 'clear_masks');
 
   // --- click a body, then a track, in the 3D view: their figures -------------------------------
   const canvasBox = await page.locator('#view3d').boundingBox();
