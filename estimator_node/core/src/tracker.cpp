@@ -80,6 +80,8 @@ constexpr TimeNs kOneViewNs = 30'000'000;
 // neighbours a few centimetres apart (clavicles, heel and ankle) a two-view point may be a pairing
 // of one's blob with the other's.
 constexpr double kOneViewClearM = 0.1;
+// A one-view track may also move to a point this near where its neighbours carried it (may_reanchor).
+constexpr double kReanchorCarriedM = 0.1;
 // A track whose predicted position's covariance has a trace above this times reacquire_sigma_m²
 // is uncertain: held back once out of sight (held_back); kept off other tracks' blobs in a second
 // camera while one camera alone updates it (owned_elsewhere).
@@ -537,6 +539,11 @@ struct Tracker::Impl {
   bool uncertain_elsewhere(const Track& track, int camera_index, TimeNs stamp) const;
   bool beyond_return_reach(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
                            int camera_index, TimeNs stamp);
+  // The points of the tracks a second camera updated within kFrameGapNs of `now_ns` (anchor_neighbour).
+  std::vector<AnchorPoint> neighbour_points(TimeNs now_ns) const;
+  // Where `track`'s anchor's neighbours carried it by `now_ns` (a fit within kNeighbourMaxFitRmsM),
+  // if its anchor has three neighbours or more and is within kNeighbourMemoryNs.
+  std::optional<Eigen::Vector3d> carried_by_neighbours(const Track& track, TimeNs now_ns) const;
   bool owned_elsewhere(std::size_t t, std::size_t b, const std::vector<Eigen::Vector2d>& pixels,
                        int camera_index, TimeNs stamp, const Core::BlobOwners& last,
                        const std::vector<GatedPair>& gated);
@@ -697,6 +704,13 @@ struct Tracker::Impl {
   static bool one_view(const Track& track, TimeNs stamp) {
     return !track.fast && (track.seen_ns == 0 || stamp - track.seen_ns > kOneViewNs);
   }
+  // Whether another camera's frame, applied within kFrameGapNs of `stamp`, had `track` in view and
+  // did not update it (missed_ns). Live, a frame of another camera that has not arrived yet is no
+  // evidence that the marker left that view: the one-view rules wait until it is applied.
+  static bool missed_elsewhere(const Track& track, int camera_index, TimeNs stamp) {
+    return track.missed_ns != 0 && track.missed_camera != camera_index &&
+           stamp - track.missed_ns <= kFrameGapNs;
+  }
   // Moves the one-view `track` to `candidate` (made with its blob and another camera's) under its
   // id, unless it is already there or may_reanchor refuses: whether it did.
   bool reanchor(Track& track, const InitiationCandidate& candidate, TimeNs stamp);
@@ -708,10 +722,15 @@ struct Tracker::Impl {
                                   : options.init_velocity_sigma_mps;
   }
   // Whether the one-view `track` may move to `position`: within its reach from where two cameras
-  // last placed it (within_seen_reach: else the point is another marker's), and no other track
-  // within kOneViewClearM of it.
+  // last placed it (within_seen_reach: else the point is another marker's) or within
+  // kReanchorCarriedM of where its neighbours carried it (a track that a stray view took far from
+  // its marker: its last two-camera position is that wrong point), and no other track within
+  // kOneViewClearM of it.
   bool may_reanchor(const Track& track, const Eigen::Vector3d& position, TimeNs stamp) const {
-    if (!within_seen_reach(track, position, stamp)) return false;
+    if (!within_seen_reach(track, position, stamp)) {
+      const auto carried = carried_by_neighbours(track, stamp);
+      if (!carried || (*carried - position).norm() > kReanchorCarriedM) return false;
+    }
     return std::none_of(core.tracks.begin(), core.tracks.end(), [&](const Track& other) {
       return &other != &track && (other.position_at(stamp) - position).norm() < kOneViewClearM;
     });
@@ -1565,8 +1584,7 @@ void Tracker::Impl::damp_one_view_velocity(Track& track, int camera_index, TimeN
   // (BodyScenes.OneOfFourMarkersHidden...: a single camera for 2 s, a tool re-identified wrongly
   // for 10 frames with the decay). Live, another camera's frame for this instant may not have
   // arrived yet: it is no evidence until applied (in order, or by the replay it causes).
-  if (track.missed_camera == camera_index || track.missed_ns == 0 || stamp - track.missed_ns > kFrameGapNs)
-    return;
+  if (!missed_elsewhere(track, camera_index, stamp)) return;
   const Eigen::Vector3d ray =
       (track.state.position() - models[static_cast<std::size_t>(camera_index)]->center_world()).normalized();
   const double along = track.state.velocity().dot(ray);
@@ -1960,7 +1978,9 @@ void Tracker::Impl::initiate(const FeatureFrame& frame, int camera_index,
     std::vector<std::size_t> owners;  // indices into core.tracks, which the probes do not reorder
     for (const auto& [id, blob] : associations) {
       const Track* owner = find_track(id);
-      if (owner == nullptr || blob >= pixels.size() || !one_view(*owner, stamp)) continue;
+      if (owner == nullptr || blob >= pixels.size() || !one_view(*owner, stamp) ||
+          !missed_elsewhere(*owner, camera_index, stamp))
+        continue;
       probes.push_back(pixels[blob]);
       owners.push_back(static_cast<std::size_t>(owner - core.tracks.data()));
     }
@@ -2200,20 +2220,40 @@ void Tracker::Impl::note_anchors(TimeNs now_ns) {
   }
 }
 
+std::vector<AnchorPoint> Tracker::Impl::neighbour_points(TimeNs now_ns) const {
+  std::vector<AnchorPoint> now;
+  for (const Track& track : core.tracks)
+    if (anchor_neighbour(track, now_ns)) now.push_back({track.id, track.position_at(now_ns)});
+  return now;
+}
+
+namespace {
+
+// Where `anchor`'s neighbours found in `now` carried its marker by `now_ns`: a fit within
+// kNeighbourMaxFitRmsM, of an anchor of three neighbours or more within kNeighbourMemoryNs.
+std::optional<Eigen::Vector3d> carried_by(const NeighbourAnchor& anchor, std::span<const AnchorPoint> now,
+                                          TimeNs now_ns) {
+  if (anchor.count < 3 || now_ns - anchor.stamp_ns > kNeighbourMemoryNs) return std::nullopt;
+  const auto position = carried_position(anchor, now, kNeighbourMaxFitRmsM);
+  if (!position || position->fit_rms_m > kNeighbourMaxFitRmsM) return std::nullopt;
+  return position->position;
+}
+
+}  // namespace
+
+std::optional<Eigen::Vector3d> Tracker::Impl::carried_by_neighbours(const Track& track, TimeNs now_ns) const {
+  return carried_by(track.anchor, neighbour_points(now_ns), now_ns);
+}
+
 void Tracker::Impl::reacquire_by_neighbours(
     std::vector<Track*>& pending, TimeNs now_ns, std::vector<std::int64_t>& claimed,
     std::vector<std::pair<std::int64_t, std::int64_t>>& renames) const {
   if (options.reacquire_neighbours_m <= 0 || pending.empty()) return;
-  std::vector<AnchorPoint> now;
-  for (const Track& track : core.tracks)
-    if (anchor_neighbour(track, now_ns)) now.push_back({track.id, track.position_at(now_ns)});
+  const std::vector<AnchorPoint> now = neighbour_points(now_ns);
   std::vector<AnchorPoint> carried;  // each candidate's id and where its neighbours carried it
   const auto consider = [&](std::int64_t id, const NeighbourAnchor& anchor) {
-    if (anchor.count < 3 || now_ns - anchor.stamp_ns > kNeighbourMemoryNs ||
-        std::find(claimed.begin(), claimed.end(), id) != claimed.end())
-      return;
-    const auto position = carried_position(anchor, now, kNeighbourMaxFitRmsM);
-    if (position && position->fit_rms_m <= kNeighbourMaxFitRmsM) carried.push_back({id, position->position});
+    if (std::find(claimed.begin(), claimed.end(), id) != claimed.end()) return;
+    if (const auto position = carried_by(anchor, now, now_ns)) carried.push_back({id, *position});
   };
   for (const Track& track : core.tracks)
     if (!track.fast && track.anchor.stamp_ns != 0 && reacquire_candidate(track, now_ns, claimed, true))
@@ -2261,6 +2301,11 @@ void Tracker::Impl::prune(TimeNs now_ns) {
   std::erase_if(core.departed, [&](const Core::Departed& departed) {
     return now_ns - departed.anchor.stamp_ns > kNeighbourMemoryNs;
   });
+  // A deleted confirmed track with an anchor stays among the departed (reacquire_by_neighbours).
+  const auto depart = [&](const Track& track) {
+    if (track.confirmed && track.anchor.count >= 3 && options.reacquire_neighbours_m > 0)
+      core.departed.push_back({track.id, track.anchor});
+  };
   std::erase_if(core.tracks, [&](const Track& track) {
     const bool implausible =
         track.nis_updates >= 4 &&
@@ -2271,8 +2316,7 @@ void Tracker::Impl::prune(TimeNs now_ns) {
     // its ray) comes back where its neighbours carried it (ceiling6/walk/c0.3/s3's heel).
     if (track.runaway) {
       core.lost.push_back(track);
-      if (track.confirmed && track.anchor.count >= 3 && options.reacquire_neighbours_m > 0)
-        core.departed.push_back({track.id, track.anchor});
+      depart(track);
       ++core.runaway_tracks_deleted;
       ++core.tracks_deleted;
       return true;
@@ -2285,8 +2329,7 @@ void Tracker::Impl::prune(TimeNs now_ns) {
     }
     const TimeNs limit = track.confirmed ? options.delete_after_ns : options.tentative_delete_after_ns;
     if (silence(track, now_ns) > limit) {
-      if (track.confirmed && track.anchor.count >= 3 && options.reacquire_neighbours_m > 0)
-        core.departed.push_back({track.id, track.anchor});
+      depart(track);
       ++core.tracks_deleted;
       return true;
     }

@@ -385,8 +385,8 @@ template <class Fields>
 void visit_one_view_tracks(Fields& f, estimator::TrackerOptions& o) {
   f.flag("reanchor_one_view_tracks", o.reanchor_one_view_tracks,
          "a track only one camera updated for 30 ms moves where that camera's blob and a second camera's "
-         "put its marker (within reacquire_max_seen_distance_m of its last two-camera position); off: the "
-         "default (it cost the live labelling test loaded runs)");
+         "put its marker (within reacquire_max_seen_distance_m of its last two-camera position, or 0.1 m "
+         "of where its neighbours carried it), while another camera's applied frame missed it");
   f.number("return_velocity_cap_mps", o.return_velocity_cap_mps, kNonNegative,
            "a second camera's update after 30 ms of one camera's changes a track's velocity by at most "
            "this, m/s, unless fast (0: off, the default; 3 on the accuracy grid)");

@@ -62,12 +62,12 @@ struct TrackerOptions {
   // prediction's) holds that camera's blob, which the initiator would otherwise pair with a second
   // camera's: its blobs are offered to the initiator as probes (Initiator::probe), and a point made
   // with one of them moves the track there under its id when that is within
-  // reacquire_max_seen_distance_m of where two cameras last placed it and no other track is within
-  // 0.1 m (docs/estimator.md, "One-view tracks"). Fast tracks are left to rejoin_fast_tracks.
-  // Off by default: on the accuracy grid it saves 7 of the walk's 56 switches and 5 of the run's
-  // 262, but live, with markers hidden and frames late, test_live_labels failed 2 of 9 loaded runs
-  // with it (4 of 4 passed without).
-  bool reanchor_one_view_tracks = false;
+  // reacquire_max_seen_distance_m of where two cameras last placed it, or within 0.1 m of where its
+  // neighbours carried it since (a stray view may have made that last position wrong), and no other
+  // track is within 0.1 m (docs/estimator.md, "One-view tracks"). Fast tracks are left to
+  // rejoin_fast_tracks. Only while another camera's applied frame had the track in view and missed
+  // it (within 10 ms): live, a frame that has not arrived yet is no evidence.
+  bool reanchor_one_view_tracks = true;
   // A second camera's update more than 30 ms after the last update two cameras made together
   // (within 10 ms) changes the track's velocity by at most this, m/s, unless the track is fast or
   // was predicted faster than 10 m/s: one camera alone let it slide along its ray and the update
