@@ -389,7 +389,7 @@ void visit_one_view_tracks(Fields& f, estimator::TrackerOptions& o) {
          "of where its neighbours carried it), while another camera's applied frame missed it");
   f.number("return_velocity_cap_mps", o.return_velocity_cap_mps, kNonNegative,
            "a second camera's update after 30 ms of one camera's changes a track's velocity by at most "
-           "this, m/s, unless fast (0: off, the default; 3 on the accuracy grid)");
+           "this, m/s, unless fast (0: off)");
   f.integer("one_view_velocity_time_constant_ns", o.one_view_velocity_time_constant_ns, 0, kHourNs,
             "a track one camera alone has updated for 10 ms while another camera's frame missed it: its "
             "velocity along that camera's ray decays with this time constant (0: off, constant velocity)");

@@ -519,13 +519,14 @@ TEST(Tracker, AReturnToTwoViewsChangesVelocityByAtMostTheCap) {
   // publish_max_innovation_px, the uncapped track's records from the pull-back on are withheld).
   // Without the one-view decay (on by default since stop 89), which leaves the return little
   // velocity to pull (docs/estimator.md, "One-view velocity"): the cap's own scene.
-  TrackerOptions off;
-  off.publish_max_innovation_px = 0;
-  off.one_view_velocity_time_constant_ns = 0;
-  TrackerOptions on = off;
-  on.return_velocity_cap_mps = 3.0;
+  TrackerOptions on;
+  on.publish_max_innovation_px = 0;
+  on.one_view_velocity_time_constant_ns = 0;
+  EXPECT_EQ(on.return_velocity_cap_mps, 3.0);  // the default since stop 97
+  TrackerOptions off = on;
+  off.return_velocity_cap_mps = 0;
   const Outcome capped = outcome(on);
-  const Outcome uncapped = outcome(off);  // off by default (stop 71)
+  const Outcome uncapped = outcome(off);
   std::printf(
       "B's track after camera 1's first frame: capped (%llu updates) speed <= %.2f m/s, error <= %.3f m; "
       "uncapped speed <= %.2f m/s, error <= %.3f m\n",

@@ -72,10 +72,9 @@ struct TrackerOptions {
   // (within 10 ms) changes the track's velocity by at most this, m/s, unless the track is fast or
   // was predicted faster than 10 m/s: one camera alone let it slide along its ray and the update
   // that pulls it back would turn the pull into velocity (docs/estimator.md, "Runaway tracks").
-  // 0: no cap, the default: on the accuracy grid 3 m/s saves a third of the walk's switches, but
-  // live, with markers hidden and frames late, test_live_labels failed 3 of 5 loaded runs with it
-  // (5 of 5 passed without): neighbours' tracks swapped at a hidden marker (docs/estimator.md).
-  double return_velocity_cap_mps = 0.0;
+  // 3 m/s by default (0: no cap). Off from stop 71 to 97: live, test_live_labels then failed 3 of 5
+  // loaded runs with it; on today's tracker it passes (docs/estimator.md, "Velocity at a return").
+  double return_velocity_cap_mps = 3.0;
   // A track (not fast) that one camera alone has updated for more than 10 ms, while another
   // camera's frame, applied within 10 ms, had it in view and did not update it: its velocity along
   // the updating camera's ray, which no update of that camera observes, decays with this time
