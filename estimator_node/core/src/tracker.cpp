@@ -272,7 +272,8 @@ struct Core {
   TimeNs pause_end_ns = std::numeric_limits<TimeNs>::min();
   std::vector<int> pause_cameras;
   std::uint64_t tracks_created = 0, tracks_confirmed = 0, tracks_deleted = 0, tracks_merged = 0,
-                ghosts_deleted = 0, blobs_associated = 0, blobs_not_initiated = 0;
+                ghosts_deleted = 0, one_view_ghosts_deleted = 0, blobs_associated = 0,
+                blobs_not_initiated = 0;
   std::vector<std::uint64_t> associated_per_camera;
   // By camera: the innovations' typical length, px, a slow moving average over the updates of
   // confirmed tracks (views_agree: a noisy camera's own scale).
@@ -382,6 +383,18 @@ struct Tracker::Impl {
   // contention tens of tracks moved to other markers at once, and the names on them with them.
   std::int64_t next_track_id = 1;
   std::vector<Track> undone;
+  // By id: whether a record of that id was published (one_view_ghost_ns). Not part of Core either:
+  // the records are made after the frames are applied, so a rewind's restored state would forget them.
+  mutable std::vector<char> published_ids;
+  void note_published(std::int64_t id) const {
+    const auto index = static_cast<std::size_t>(id);
+    if (index >= published_ids.size()) published_ids.resize(index + 1, 0);
+    published_ids[index] = 1;
+  }
+  bool was_published(std::int64_t id) const {
+    const auto index = static_cast<std::size_t>(id);
+    return index < published_ids.size() && published_ids[index] != 0;
+  }
   std::deque<Entry> history;     // applied frames in stamp order, within the rewind horizon
   std::size_t history_base = 0;  // absolute index of history.front()
   // Rewind points in stamp order: `checkpoints` every checkpoint_interval_ns over the rewind
@@ -710,6 +723,13 @@ struct Tracker::Impl {
   static bool missed_elsewhere(const Track& track, int camera_index, TimeNs stamp) {
     return track.missed_ns != 0 && track.missed_camera != camera_index &&
            stamp - track.missed_ns <= kFrameGapNs;
+  }
+  // one_view_ghost_ns: `track` was never published, no two cameras have updated it together for
+  // that long, and another camera's frame applied within kFrameGapNs had it in view and missed it.
+  bool one_view_ghost(const Track& track, TimeNs now_ns) const {
+    const TimeNs limit = options.one_view_ghost_ns;
+    return limit > 0 && !track.fast && !was_published(track.id) && now_ns - track.last_seen_ns() > limit &&
+           track.missed_ns != 0 && now_ns - track.missed_ns <= kFrameGapNs;
   }
   // Moves the one-view `track` to `candidate` (made with its blob and another camera's) under its
   // id, unless it is already there or may_reanchor refuses: whether it did.
@@ -2321,6 +2341,11 @@ void Tracker::Impl::prune(TimeNs now_ns) {
       ++core.tracks_deleted;
       return true;
     }
+    if (one_view_ghost(track, now_ns)) {
+      ++core.one_view_ghosts_deleted;
+      ++core.tracks_deleted;
+      return true;
+    }
     if (implausible || (!track.confirmed && track.misses >= options.tentative_max_misses)) {
       if (track.confirmed) core.lost.push_back(track);
       ++core.ghosts_deleted;
@@ -2862,6 +2887,7 @@ const TrackerStats& Tracker::stats() const {
   s.tracks_reanchored = core.tracks_reanchored;
   s.input_pauses = core.input_pauses;
   s.ghosts_deleted = core.ghosts_deleted;
+  s.one_view_ghosts_deleted = core.one_view_ghosts_deleted;
   s.blobs_not_initiated = core.blobs_not_initiated;
   return s;
 }
@@ -2905,6 +2931,7 @@ std::vector<TrackRecord> Tracker::tracks_at(TimeNs stamp_ns) const {
     if (!track.confirmed) continue;
     TrackRecord record = impl_->to_record(track, stamp_ns);
     track.published = impl_->publishable(track, record, stamp_ns);
+    if (track.published) impl_->note_published(track.id);
     if (track.published) records.push_back(std::move(record));
   }
   std::sort(records.begin(), records.end(),

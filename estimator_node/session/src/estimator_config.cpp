@@ -405,6 +405,24 @@ void visit_one_view_tracks(Fields& f, estimator::TrackerOptions& o) {
            "since, m (0: off; fast tracks exempt)");
 }
 
+// A track's life: its confirmation, and when it is deleted.
+template <class Fields>
+void visit_track_lifecycle(Fields& f, estimator::TrackerOptions& o) {
+  f.integer("confirm_cameras", o.confirm_cameras, 2, 64, "distinct cameras that confirm a track ...");
+  f.integer("confirm_updates", o.confirm_updates, 1, 1 << 20, "... or this many updates from at least two");
+  f.integer("tentative_max_misses", o.tentative_max_misses, 1, 1 << 20,
+            "tentative track unseen this often: ghost");
+  f.number("tentative_max_nis", o.tentative_max_nis, kPositive, "moving average of d^2 above this: deleted");
+  f.number("confirmed_max_nis", o.confirmed_max_nis, kPositive, "... for a confirmed track");
+  f.integer("coast_after_ns", o.coast_after_ns, 0, kHourNs, "no update for this long: coasting");
+  f.integer("delete_after_ns", o.delete_after_ns, 0, kHourNs, "no update for this long: deleted");
+  f.integer("tentative_delete_after_ns", o.tentative_delete_after_ns, 0, kHourNs,
+            "... for a tentative track");
+  f.integer("one_view_ghost_ns", o.one_view_ghost_ns, 0, kHourNs,
+            "a track never published that no two cameras updated together for this long, while another "
+            "camera's frame had it in view and missed it: deleted as a ghost (0: off)");
+}
+
 template <class Fields>
 void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.number("process_noise", o.process_noise, kPositive,
@@ -448,16 +466,7 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
            "velocity from the tracklets' pixel velocities ...");
   f.number("init_velocity_relative_sigma", o.init_velocity_relative_sigma, kNonNegative,
            "... at least this fraction of the measured speed (fast markers)");
-  f.integer("confirm_cameras", o.confirm_cameras, 2, 64, "distinct cameras that confirm a track ...");
-  f.integer("confirm_updates", o.confirm_updates, 1, 1 << 20, "... or this many updates from at least two");
-  f.integer("tentative_max_misses", o.tentative_max_misses, 1, 1 << 20,
-            "tentative track unseen this often: ghost");
-  f.number("tentative_max_nis", o.tentative_max_nis, kPositive, "moving average of d^2 above this: deleted");
-  f.number("confirmed_max_nis", o.confirmed_max_nis, kPositive, "... for a confirmed track");
-  f.integer("coast_after_ns", o.coast_after_ns, 0, kHourNs, "no update for this long: coasting");
-  f.integer("delete_after_ns", o.delete_after_ns, 0, kHourNs, "no update for this long: deleted");
-  f.integer("tentative_delete_after_ns", o.tentative_delete_after_ns, 0, kHourNs,
-            "... for a tentative track");
+  visit_track_lifecycle(f, o);
   f.number("publish_max_sigma_m", o.publish_max_sigma_m, kNonNegative,
            "confirmed tracks are published while their position 1-sigma is within this, m (0: always)");
   f.number("fast_publish_max_sigma_m", o.fast_publish_max_sigma_m, kNonNegative,

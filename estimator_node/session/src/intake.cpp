@@ -90,9 +90,13 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
       std::to_string(s.frames_unknown_camera) + " from uncalibrated cameras, " + std::to_string(rejected) +
       " rejected, " + std::to_string(bad_lines) + " malformed lines); tracks created " +
       std::to_string(s.tracks_created) + ", confirmed " + std::to_string(s.tracks_confirmed) +
-      ", ghosts removed " + std::to_string(s.ghosts_deleted) + ", reacquired " +
-      std::to_string(s.tracks_reacquired) + " (" + std::to_string(s.tracks_reacquired_by_neighbours) +
-      " by neighbours), re-anchored " + std::to_string(s.tracks_reanchored) +
+      ", ghosts removed " + std::to_string(s.ghosts_deleted) +
+      (s.one_view_ghosts_deleted > 0
+           ? " (and one-view ghosts " + std::to_string(s.one_view_ghosts_deleted) + ")"
+           : std::string()) +
+      ", reacquired " + std::to_string(s.tracks_reacquired) + " (" +
+      std::to_string(s.tracks_reacquired_by_neighbours) + " by neighbours), re-anchored " +
+      std::to_string(s.tracks_reanchored) +
       (s.input_pauses > 0
            ? "; input paused " + std::to_string(s.input_pauses) + " times (every camera at once)"
            : std::string()) +
