@@ -2931,8 +2931,9 @@ std::vector<TrackRecord> Tracker::tracks_at(TimeNs stamp_ns) const {
     if (!track.confirmed) continue;
     TrackRecord record = impl_->to_record(track, stamp_ns);
     track.published = impl_->publishable(track, record, stamp_ns);
-    if (track.published) impl_->note_published(track.id);
-    if (track.published) records.push_back(std::move(record));
+    if (!track.published) continue;
+    impl_->note_published(track.id);
+    records.push_back(std::move(record));
   }
   std::sort(records.begin(), records.end(),
             [](const TrackRecord& a, const TrackRecord& b) { return a.id < b.id; });

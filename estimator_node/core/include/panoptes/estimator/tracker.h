@@ -72,7 +72,7 @@ struct TrackerOptions {
   // (within 10 ms) changes the track's velocity by at most this, m/s, unless the track is fast or
   // was predicted faster than 10 m/s: one camera alone let it slide along its ray and the update
   // that pulls it back would turn the pull into velocity (docs/estimator.md, "Runaway tracks").
-  // 3 m/s by default (0: no cap). Off from stop 71 to 97: live, test_live_labels then failed 3 of 5
+  // 3 m/s by default (0: no cap). Off from stop 71 to 96: live, test_live_labels then failed 3 of 5
   // loaded runs with it; on today's tracker it passes (docs/estimator.md, "Velocity at a return").
   double return_velocity_cap_mps = 3.0;
   // A track (not fast) that one camera alone has updated for more than 10 ms, while another
