@@ -225,10 +225,13 @@ CalibrationVersion CalibrationHistory::record(const SystemCalibration& calibrati
   return record_text(calibration_to_yaml(calibration), change);
 }
 
+// The version is listed before the file changes: a reader that sees the new file (the running
+// estimator's reload names the version it applied) finds it in the history, never the one before.
 CalibrationVersion CalibrationHistory::record_text(const std::string& yaml, const CalibrationChange& change) {
   begin_if_needed();
+  CalibrationVersion version = append(yaml, change);
   write_bytes(file_, yaml);
-  return append(yaml, change);
+  return version;
 }
 
 void write_calibration_text(const fs::path& path, const std::string& yaml, CalibrationChange change) {
@@ -252,13 +255,14 @@ CalibrationVersion CalibrationHistory::revert(int version) {
   change.reason = "revert to " + std::to_string(version);
   const auto& target = versions()[static_cast<std::size_t>(version - 1)];
   change.cameras = changed_cameras(load_calibration(file_), load_calibration(directory() / target.file));
-  write_bytes(file_, bytes);
   auto all = versions();
   for (auto& v : all) {
     if (v.version > version && v.state != VersionState::kReverted) v.state = VersionState::kReverted;
   }
   write_index(all);
-  return append(bytes, change);
+  CalibrationVersion reverted = append(bytes, change);  // listed first, as in record_text
+  write_bytes(file_, bytes);
+  return reverted;
 }
 
 void CalibrationHistory::start() {

@@ -2,10 +2,13 @@
 // Versioned calibration (panoptes/calibration_history.h): versions stored beside the file with
 // their reason, cameras and residuals; a hand edit kept as a version; revert restores the exact
 // bytes; accept marks a version; a damaged index is an error naming the file and line.
+#include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -72,6 +75,44 @@ TEST(CalibrationHistory, RecordsVersionsBesideTheFileAndRevertsToExactBytes) {
   EXPECT_TRUE(std::isnan(all[0].change.residual_after_px));  // "initial": no residuals known
   EXPECT_EQ(history.revert(1).version, 3);                   // already the current file: no new version
   EXPECT_EQ(history.versions().size(), 3U);
+}
+
+// test_continuous_calibration (stop 97): the estimator wrote its version 3 and, in the same second,
+// `calibrate revert` wrote version 4; the estimator's reload read the reverted file but the history's
+// last version was still 3, so it logged the wrong version. A version is now listed before the file
+// changes. Here a reader polls the file while versions are recorded and reverted: whenever it sees
+// new bytes, they must be those of one of the history's versions.
+TEST(CalibrationHistory, AReaderThatSeesTheNewFileFindsItsVersion) {
+  testing::TempDir dir;
+  const auto file = dir.file("calibration.yaml");
+  save_calibration(rig(1.0), file);
+  CalibrationHistory writer(file);
+  writer.start();
+  std::atomic<bool> done{false};
+  int seen = 0, unlisted = 0;
+  std::thread reader([&] {
+    const CalibrationHistory history(file);
+    std::string last;
+    while (!done.load()) {
+      const std::string now = bytes(file);
+      if (now.empty() || now == last) continue;
+      last = now;
+      ++seen;
+      const auto count = static_cast<int>(history.versions().size());
+      bool listed = false;
+      for (int v = count; v >= 1 && v > count - 3 && !listed; --v) listed = history.bytes_of(v) == now;
+      unlisted += !listed;
+    }
+  });
+  for (int i = 1; i <= 150; ++i) {
+    writer.record(rig(1.0 + 0.001 * i), change_because("step " + std::to_string(i), {"cam1"}));
+    if (i % 10 == 0) writer.revert(i);  // back to an earlier version, as an operator would
+  }
+  done = true;
+  reader.join();
+  std::printf("reader saw %d new files, %d of them not yet in the history\n", seen, unlisted);
+  EXPECT_GT(seen, 0);
+  EXPECT_EQ(unlisted, 0);
 }
 
 TEST(CalibrationHistory, AHandEditIsKeptAsAVersionBeforeTheNextChange) {
