@@ -90,6 +90,13 @@ constexpr double kUncertainFactor = 3.0;
 // time since its last two-camera update, m/s (a running foot's marker over a stride's fraction), or
 // the track's own top speed if higher (a club head slowed at the top of its swing).
 constexpr double kReturnSpeed = 3.0;
+// return_max_carried_distance_m: where a track's neighbours carried it says where its marker is only
+// if its anchor was taken this long after its birth or later (a pair made in the first frames may
+// have lost its marker before its own two-camera updates began: its anchor is a ghost's), and if no
+// other track updated within kFrameGapNs is this near that point (the marker has a track there: this
+// one is left over from it).
+constexpr TimeNs kCarriedAnchorAgeNs = 500'000'000;
+constexpr double kCarriedTakenM = 0.05;
 // dispute_odd_views: how long a track is not offered the blobs of a camera whose view was disputed,
 // and how well (px, worst reprojection) its other views' last blobs must agree for one view to be odd.
 constexpr TimeNs kDisputedViewNs = 100'000'000;
@@ -292,7 +299,9 @@ struct Core {
   std::vector<BlobOwners> blob_owners;
   std::uint64_t owned_blobs_kept = 0;      // blobs an uncertain one-view track was refused (blob_owner_px)
   std::uint64_t returns_beyond_reach = 0;  // ... and second views it was refused (return_max_seen_distance_m)
-  std::uint64_t views_disputed = 0;        // odd views whose blob started another marker (dispute_odd_views)
+  // ... and second views far from where its neighbours carried it (return_max_carried_distance_m)
+  std::uint64_t returns_far_from_carried = 0;
+  std::uint64_t views_disputed = 0;  // odd views whose blob started another marker (dispute_odd_views)
   BodySet bodies;
 };
 
@@ -552,6 +561,7 @@ struct Tracker::Impl {
   bool uncertain_elsewhere(const Track& track, int camera_index, TimeNs stamp) const;
   bool beyond_return_reach(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
                            int camera_index, TimeNs stamp);
+  std::optional<Eigen::Vector3d> trusted_carried_position(const Track& track, TimeNs stamp) const;
   // The points of the tracks a second camera updated within kFrameGapNs of `now_ns` (anchor_neighbour).
   std::vector<AnchorPoint> neighbour_points(TimeNs now_ns) const;
   // Where `track`'s anchor's neighbours carried it by `now_ns` (a fit within kNeighbourMaxFitRmsM),
@@ -1628,23 +1638,49 @@ bool Tracker::Impl::uncertain_elsewhere(const Track& track, int camera_index, Ti
   return sigma > 0 && predicted_position_trace(track, stamp) > kUncertainFactor * sigma * sigma;
 }
 
-// return_max_seen_distance_m: whether the uncertain one-view track t, if it took `pixel` of
-// another camera, would land beyond reach of where two cameras last placed it (refused: true).
+// Whether the uncertain one-view track t, if it took `pixel` of another camera, would land beyond
+// reach of where two cameras last placed it (return_max_seen_distance_m) or far from where its
+// neighbours carried it (return_max_carried_distance_m): refused (true).
 bool Tracker::Impl::beyond_return_reach(std::size_t t, const Projected& projected,
                                         const Eigen::Vector2d& pixel, int camera_index, TimeNs stamp) {
   const double reach_m = options.return_max_seen_distance_m;
+  const double carried_m = options.return_max_carried_distance_m;
   const Track& track = core.tracks[t];
-  if (reach_m <= 0 || track.fast || track.seen_ns == 0 || !uncertain_elsewhere(track, camera_index, stamp))
+  if ((reach_m <= 0 && carried_m <= 0) || track.fast || track.seen_ns == 0 ||
+      !uncertain_elsewhere(track, camera_index, stamp))
     return false;
   PointState state = projected.state;
   update(state, projected.projection, pixel, options.measurement_noise_px);
+  const Eigen::Vector3d position = state.position();
+  if (carried_m > 0) {
+    const auto carried = trusted_carried_position(track, stamp);
+    if (carried && (position - *carried).norm() > carried_m) {
+      ++core.returns_far_from_carried;
+      return true;
+    }
+  }
+  if (reach_m <= 0) return false;
   const double reach =
       reach_m + std::max(kReturnSpeed, track.peak_speed) * ns_to_seconds(stamp - track.seen_ns);
-  if (std::min((state.position() - track.last_seen_position()).norm(),
-               (state.position() - track.seen_position_at(stamp)).norm()) <= reach)
+  if (std::min((position - track.last_seen_position()).norm(),
+               (position - track.seen_position_at(stamp)).norm()) <= reach)
     return false;
   ++core.returns_beyond_reach;
   return true;
+}
+
+// Where `track`'s neighbours carried its marker by `stamp` (carried_by_neighbours), if that point
+// says where its marker is (kCarriedAnchorAgeNs, kCarriedTakenM); none otherwise.
+std::optional<Eigen::Vector3d> Tracker::Impl::trusted_carried_position(const Track& track,
+                                                                       TimeNs stamp) const {
+  if (track.anchor.stamp_ns - track.created_ns < kCarriedAnchorAgeNs) return std::nullopt;
+  const auto carried = carried_by_neighbours(track, stamp);
+  if (!carried) return std::nullopt;
+  const bool taken = std::any_of(core.tracks.begin(), core.tracks.end(), [&](const Track& other) {
+    return &other != &track && other.confirmed && stamp - other.last_update_ns <= kFrameGapNs &&
+           (other.position_at(stamp) - *carried).norm() < kCarriedTakenM;
+  });
+  return taken ? std::nullopt : carried;
 }
 
 // Blob owners (blob_owner_px, docs/estimator.md "Blob owners"): track t, which one other camera
@@ -2881,6 +2917,7 @@ const TrackerStats& Tracker::stats() const {
   s.ray_twin_waits = core.ray_twin_waits;
   s.owned_blobs_kept = core.owned_blobs_kept;
   s.returns_beyond_reach = core.returns_beyond_reach;
+  s.returns_far_from_carried = core.returns_far_from_carried;
   s.views_disputed = core.views_disputed;
   s.tracks_reacquired = core.tracks_reacquired;
   s.tracks_reacquired_by_neighbours = core.tracks_reacquired_by_neighbours;

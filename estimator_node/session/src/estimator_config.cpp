@@ -403,6 +403,10 @@ void visit_one_view_tracks(Fields& f, estimator::TrackerOptions& o) {
            "... and a blob of another camera only if the update puts it within this of its last "
            "two-camera position, or of where its velocity then carries it, plus 3 m/s (or its top speed) "
            "since, m (0: off; fast tracks exempt)");
+  f.number("return_max_carried_distance_m", o.return_max_carried_distance_m, kNonNegative,
+           "... and none whose update puts it further than this from where its neighbours carried it "
+           "since its last two-camera update, m (0: off; fast tracks exempt; only an anchor taken 0.5 s "
+           "after its birth or later, its point not within 5 cm of another track)");
 }
 
 // A track's life: its confirmation, and when it is deleted.

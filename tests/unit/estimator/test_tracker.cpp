@@ -354,28 +354,30 @@ struct LimbRun {
   TrackerStats stats;
 };
 
-LimbRun run_limb(const std::set<int>& hidden, const TrackerOptions& options) {
-  const std::array<Eigen::Vector3d, 5> offsets{
+// Five markers of a limb, 10-17 cm apart, turning rigidly at 1.5 rad/s on a circle of 0.5 m.
+Eigen::Vector3d limb_position(int m, double t) {
+  static const std::array<Eigen::Vector3d, 5> offsets{
       Eigen::Vector3d(0.10, 0.0, 0.0), Eigen::Vector3d(-0.06, 0.07, 0.0), Eigen::Vector3d(0.0, 0.12, 0.06),
       Eigen::Vector3d(0.05, -0.10, -0.05), Eigen::Vector3d(-0.04, -0.02, 0.15)};
-  const auto position = [&](int m, double t) -> Eigen::Vector3d {
-    const double angle = 1.5 * t;
-    const Eigen::Vector3d centre(0.5 * std::cos(angle), 0.5 * std::sin(angle), 1.0);
-    return centre + Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()) * offsets[static_cast<std::size_t>(m)];
-  };
+  const double angle = 1.5 * t;
+  const Eigen::Vector3d centre(0.5 * std::cos(angle), 0.5 * std::sin(angle), 1.0);
+  return centre + Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()) * offsets[static_cast<std::size_t>(m)];
+}
+
+LimbRun run_limb(const std::set<int>& hidden, const TrackerOptions& options) {
   const auto run = make_frames(
       2.6,
       [&](double t, int) {
         std::vector<Eigen::Vector3d> seen;
         for (int m = 0; m < 5; ++m)
-          if (!hidden.contains(m) || t < 1.0 || t >= 1.8) seen.push_back(position(m, t));
+          if (!hidden.contains(m) || t < 1.0 || t >= 1.8) seen.push_back(limb_position(m, t));
         return seen;
       },
       11);
   LimbRun out;
   out.stats = replay(run, options, [&](double t, const TrackRecord& track) {
     for (int m = 0; m < 5; ++m) {
-      if ((track.p - position(m, t)).norm() > 0.005) continue;
+      if ((track.p - limb_position(m, t)).norm() > 0.005) continue;
       if (t > 0.5 && t < 1.0) out.before[m].insert(track.id);
       if (t > 2.0) out.after[m].insert(track.id);
     }
@@ -418,6 +420,68 @@ TEST(Tracker, TwoMarkersBackTogetherTakeTheirOwnIdsNotEachOthers) {
   EXPECT_EQ(*r.after.at(0).begin(), *r.before.at(0).begin());
   EXPECT_EQ(*r.after.at(1).begin(), *r.before.at(1).begin());
   EXPECT_EQ(r.stats.tracks_reacquired_by_neighbours, 2u);
+}
+
+// return_max_carried_distance_m (issue 35 item 3, stop 98), after ceiling6/walk/c1/s1's heel: from
+// 1.0 s camera 0 alone sees the limb's marker 0, and from 1.2 s to 1.3 s camera 1 sees a stray
+// blob on camera 0's ray through it, 0.4 m further along (another marker's, as L.SH3's was for the
+// heel); from 1.5 s every camera sees marker 0 again. Marker 0's track, its depth uncertain, gates
+// the stray blob. The update would put it 0.4 m from where the four other markers carried it:
+// refused, and the track stays on marker 0. With the option off it takes the stray blob.
+TEST(Tracker, AOneViewTrackTakesNoSecondViewFarFromWhereItsNeighboursCarriedIt) {
+  const Eigen::Vector3d eye(3.0 * std::cos(0.3), 3.0 * std::sin(0.3), 2.0);  // camera 0's centre
+  const auto stray = [&](double t) -> Eigen::Vector3d {
+    const Eigen::Vector3d marker = limb_position(0, t);
+    return marker + 0.4 * (marker - eye).normalized();
+  };
+  const auto run = make_frames(
+      2.0,
+      [&](double t, int camera) {
+        std::vector<Eigen::Vector3d> seen;
+        for (int m = 1; m < 5; ++m) seen.push_back(limb_position(m, t));
+        if (t < 1.0 || t >= 1.5 || camera == 0) seen.push_back(limb_position(0, t));
+        if (camera == 1 && t >= 1.2 && t < 1.3) seen.push_back(stray(t));
+        return seen;
+      },
+      14);
+  struct Outcome {
+    std::uint64_t refused = 0;
+    std::set<std::int64_t> before, after;  // ids on marker 0 before 1.0 s and from 1.6 s
+    double worst_error = 0;                // of the track that had marker 0's id, 1.0-1.5 s
+  };
+  const auto outcome = [&](const TrackerOptions& options) {
+    Outcome o;
+    std::int64_t id = -1;
+    o.refused = replay(run, options, [&](double t, const TrackRecord& track) {
+                  const bool on_marker = (track.p - limb_position(0, t)).norm() < 0.005;
+                  if (t > 0.5 && t < 1.0 && on_marker) {
+                    o.before.insert(track.id);
+                    id = track.id;
+                  }
+                  if (t >= 1.0 && t < 1.5 && track.id == id)
+                    o.worst_error = std::max(o.worst_error, (track.p - limb_position(0, t)).norm());
+                  if (t > 1.6 && on_marker) o.after.insert(track.id);
+                }).returns_far_from_carried;
+    return o;
+  };
+  EXPECT_EQ(TrackerOptions{}.return_max_carried_distance_m, 0.3);  // the default since stop 98
+  const auto carried = [](double distance_m) {
+    TrackerOptions options;
+    options.return_max_carried_distance_m = distance_m;
+    return options;
+  };
+  const Outcome with = outcome(carried(0.3));
+  const Outcome without = outcome(carried(0));
+  std::printf(
+      "marker 0's track 1.0-1.5 s: refused %llu second views, worst error %.3f m; option off %.3f m\n",
+      static_cast<unsigned long long>(with.refused), with.worst_error, without.worst_error);
+  ASSERT_EQ(with.before.size(), 1u);
+  ASSERT_EQ(without.before.size(), 1u);
+  EXPECT_GE(with.refused, 1u);
+  EXPECT_EQ(without.refused, 0u);
+  EXPECT_LT(with.worst_error, 0.05);
+  EXPECT_EQ(with.after, with.before) << "marker 0 keeps its id";
+  EXPECT_GT(without.worst_error, 0.2) << "the scene no longer exercises the option";
 }
 
 // delete_runaway_tracks (issue 35 item 3, stop 70): marker B rests 1 s in every view, then sweeps

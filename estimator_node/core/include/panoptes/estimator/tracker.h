@@ -117,6 +117,17 @@ struct TrackerOptions {
   // marker's blob, and two markers lost 16-20 % of their coverage (docs/estimator.md, "Second
   // views within reach").
   double return_max_seen_distance_m = 0.0;
+  // Second views near where the neighbours carried it: such a track (the same two conditions) takes
+  // no blob of another camera whose update would put it more than this from where its neighbours
+  // carried it since its last two-camera update (the rigid motion of up to six neighbours; metres;
+  // 0: off; fast tracks exempt). Only where that point says where its marker is: the anchor taken
+  // at least 0.5 s after the track's birth, and no other track updated within 10 ms is within 5 cm
+  // of the point. A heel's one-view track gated other markers' blobs (L.SH3's) in two other cameras;
+  // it took one, and the ankle then took the heel's id (ceiling6/walk/c1/s1). Walk
+  // grid 2 (1) -> 0 switches (swaps), 12 s 287 (72) -> 263 (52), run 111 (29) -> 107 (25)
+  // (docs/estimator.md, "Second views near the carried point"). Needs reacquire_neighbours_m (the
+  // anchors) and reacquire_sigma_m (no track is uncertain without it).
+  double return_max_carried_distance_m = 0.3;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
   // fast_hold_ns after its last update above 10 m/s, whatever its innovations (0: the adaptive
@@ -265,8 +276,10 @@ struct TrackerStats {
   std::uint64_t ray_twin_waits = 0;            // blobs left to neither of two ray twins (ray_twin_wait_ns)
   std::uint64_t owned_blobs_kept = 0;          // blobs kept from uncertain one-view tracks (blob_owner_px)
   std::uint64_t returns_beyond_reach = 0;  // ... and second views out of reach (return_max_seen_distance_m)
-  std::uint64_t views_disputed = 0;        // odd views given up for a neighbour's blob (dispute_odd_views)
-  std::uint64_t tracks_reacquired = 0;     // confirmed new tracks that took a held-back track's id
+  // ... or far from where the neighbours carried the track (return_max_carried_distance_m)
+  std::uint64_t returns_far_from_carried = 0;
+  std::uint64_t views_disputed = 0;     // odd views given up for a neighbour's blob (dispute_odd_views)
+  std::uint64_t tracks_reacquired = 0;  // confirmed new tracks that took a held-back track's id
   std::uint64_t tracks_reacquired_by_neighbours =
       0;                                      // ... of which by reacquire_neighbours_m (or a deleted one's)
   std::uint64_t tracks_reanchored = 0;        // one-view tracks moved where two views put their blob
