@@ -71,7 +71,11 @@ for log in "$work"/logs/cam*.log; do
   published=$((published + ${n:-0}))
 done
 features=$(json "$work/A.json" "d['topics'].get('/panoptes/features', 0)")
-[ "$published" -gt 3000 ] && [ "$features" -eq "$published" ] && pass "features: $features recorded = $published published by the cameras" ||
+# The check is the equality; the floor only says the cameras ran the demo's 8 s. Idle, the four
+# cameras publish about 4400 frames; beside the rest of the suite (ctest -j2) a starved camera drops
+# frames in its queue, and a fresh-clone run published 2919 (cam0 551, 595 dropped), below the
+# former floor of 3000: the floor is 1500.
+[ "$published" -gt 1500 ] && [ "$features" -eq "$published" ] && pass "features: $features recorded = $published published by the cameras" ||
   fail "features: $features recorded, cameras published $published"
 frames=$(frames_published "$work/logs/estimator_node.log")
 for topic in tracks frames; do
