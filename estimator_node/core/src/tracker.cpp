@@ -1649,15 +1649,15 @@ bool Tracker::Impl::beyond_return_reach(std::size_t t, const Projected& projecte
   if ((reach_m <= 0 && carried_m <= 0) || track.fast || track.seen_ns == 0 ||
       !uncertain_elsewhere(track, camera_index, stamp))
     return false;
+  // The point to compare with first: without one (and no seen reach) the update is not needed.
+  const auto carried = carried_m > 0 ? trusted_carried_position(track, stamp) : std::nullopt;
+  if (!carried && reach_m <= 0) return false;
   PointState state = projected.state;
   update(state, projected.projection, pixel, options.measurement_noise_px);
   const Eigen::Vector3d position = state.position();
-  if (carried_m > 0) {
-    const auto carried = trusted_carried_position(track, stamp);
-    if (carried && (position - *carried).norm() > carried_m) {
-      ++core.returns_far_from_carried;
-      return true;
-    }
+  if (carried && (position - *carried).norm() > carried_m) {
+    ++core.returns_far_from_carried;
+    return true;
   }
   if (reach_m <= 0) return false;
   const double reach =
