@@ -97,6 +97,11 @@ constexpr double kReturnSpeed = 3.0;
 // one is left over from it).
 constexpr TimeNs kCarriedAnchorAgeNs = 500'000'000;
 constexpr double kCarriedTakenM = 0.05;
+// return_fresh_max_jump_m: a blob continues a blob of its camera's previous frame if one was within
+// this (px; a walking or running marker moves 2-15 px a frame, a false blob lasts one frame), and an
+// update within this of the trusted carried point is a second view its neighbours confirm (m).
+constexpr double kFreshBlobPx = 20.0;
+constexpr double kFreshCarriedM = 0.15;
 // dispute_odd_views: how long a track is not offered the blobs of a camera whose view was disputed,
 // and how well (px, worst reprojection) its other views' last blobs must agree for one view to be odd.
 constexpr TimeNs kDisputedViewNs = 100'000'000;
@@ -297,11 +302,18 @@ struct Core {
     std::vector<BlobOwner> owners;
   };
   std::vector<BlobOwners> blob_owners;
+  // Each camera's last associated frame: its stamp and finite blobs (return_fresh_max_jump_m).
+  struct LastFrame {
+    TimeNs stamp_ns = 0;
+    std::vector<Eigen::Vector2d> pixels;
+  };
+  std::vector<LastFrame> last_frames;
   std::uint64_t owned_blobs_kept = 0;      // blobs an uncertain one-view track was refused (blob_owner_px)
   std::uint64_t returns_beyond_reach = 0;  // ... and second views it was refused (return_max_seen_distance_m)
   // ... and second views far from where its neighbours carried it (return_max_carried_distance_m)
   std::uint64_t returns_far_from_carried = 0;
-  std::uint64_t views_disputed = 0;  // odd views whose blob started another marker (dispute_odd_views)
+  std::uint64_t returns_fresh_far = 0;  // ... and fresh blobs too far (return_fresh_max_jump_m)
+  std::uint64_t views_disputed = 0;     // odd views whose blob started another marker (dispute_odd_views)
   BodySet bodies;
 };
 
@@ -562,6 +574,13 @@ struct Tracker::Impl {
   bool beyond_return_reach(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
                            int camera_index, TimeNs stamp);
   std::optional<Eigen::Vector3d> trusted_carried_position(const Track& track, TimeNs stamp) const;
+  // return_fresh_max_jump_m: whether the uncertain one-view track t, offered `pixel` of another
+  // camera that continues no blob of that camera's previous frame, would move further than the
+  // option allows and not near where its neighbours carried it: refused (true).
+  bool fresh_and_far(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
+                     int camera_index, TimeNs stamp);
+  // Keeps the camera's blobs for the next frame's fresh_and_far.
+  void note_last_frame(int camera_index, TimeNs stamp, const std::vector<Eigen::Vector2d>& pixels);
   // The points of the tracks a second camera updated within kFrameGapNs of `now_ns` (anchor_neighbour).
   std::vector<AnchorPoint> neighbour_points(TimeNs now_ns) const;
   // Where `track`'s anchor's neighbours carried it by `now_ns` (a fit within kNeighbourMaxFitRmsM),
@@ -938,6 +957,7 @@ void Tracker::Impl::apply(Entry& entry, bool replaying) {
     }
   }
   associate(entry, pixels, used, replaying, std::move(early));
+  note_last_frame(camera_index, frame.stamp_ns, pixels);
   initiate(frame, camera_index, pixels, used, entry.associations);
   prune(frame.stamp_ns);
   if (!core.bodies.empty()) {
@@ -1669,6 +1689,42 @@ bool Tracker::Impl::beyond_return_reach(std::size_t t, const Projected& projecte
   return true;
 }
 
+bool Tracker::Impl::fresh_and_far(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
+                                  int camera_index, TimeNs stamp) {
+  const double jump_m = options.return_fresh_max_jump_m;
+  const auto camera = static_cast<std::size_t>(camera_index);
+  if (jump_m <= 0 || camera >= core.last_frames.size()) return false;
+  const Core::LastFrame& previous = core.last_frames[camera];
+  const Track& track = core.tracks[t];
+  // An established track only: a young one, or a ghost since its birth, has no place to keep.
+  if (previous.stamp_ns == 0 || stamp - previous.stamp_ns > kOwnerFrameNs || track.fast ||
+      track.seen_ns == 0 || track.anchor.stamp_ns - track.created_ns < kCarriedAnchorAgeNs ||
+      !uncertain_elsewhere(track, camera_index, stamp))
+    return false;
+  if (std::any_of(previous.pixels.begin(), previous.pixels.end(),
+                  [&](const Eigen::Vector2d& p) { return (p - pixel).norm() <= kFreshBlobPx; }))
+    return false;
+  PointState state = projected.state;
+  update(state, projected.projection, pixel, options.measurement_noise_px);
+  if ((state.position() - projected.state.position()).norm() <= jump_m) return false;
+  const auto carried = trusted_carried_position(track, stamp);
+  if (carried && (state.position() - *carried).norm() <= kFreshCarriedM) return false;
+  ++core.returns_fresh_far;
+  return true;
+}
+
+void Tracker::Impl::note_last_frame(int camera_index, TimeNs stamp,
+                                    const std::vector<Eigen::Vector2d>& pixels) {
+  if (options.return_fresh_max_jump_m <= 0) return;
+  const auto camera = static_cast<std::size_t>(camera_index);
+  if (core.last_frames.size() <= camera) core.last_frames.resize(camera + 1);
+  Core::LastFrame& last = core.last_frames[camera];
+  last.stamp_ns = stamp;
+  last.pixels.clear();
+  for (const Eigen::Vector2d& pixel : pixels)
+    if (pixel.allFinite()) last.pixels.push_back(pixel);
+}
+
 // Where `track`'s neighbours carried its marker by `stamp` (carried_by_neighbours), if that point
 // says where its marker is (kCarriedAnchorAgeNs, kCarriedTakenM); none otherwise.
 std::optional<Eigen::Vector3d> Tracker::Impl::trusted_carried_position(const Track& track,
@@ -1875,7 +1931,8 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
       if (core.tracks[g.row].confirmed == want_confirmed && !used[g.col] && !track_done[g.row] &&
           !core.tracks[g.row].disputed_in(camera_index, stamp) &&
           !owned_elsewhere(g.row, g.col, pixels, camera_index, stamp, last_owners, gated) &&
-          !beyond_return_reach(g.row, *projected[g.row], pixels[g.col], camera_index, stamp))
+          !beyond_return_reach(g.row, *projected[g.row], pixels[g.col], camera_index, stamp) &&
+          !fresh_and_far(g.row, *projected[g.row], pixels[g.col], camera_index, stamp))
         pairs.push_back(g);
     }
     if (pairs.empty()) continue;
@@ -2918,6 +2975,7 @@ const TrackerStats& Tracker::stats() const {
   s.owned_blobs_kept = core.owned_blobs_kept;
   s.returns_beyond_reach = core.returns_beyond_reach;
   s.returns_far_from_carried = core.returns_far_from_carried;
+  s.returns_fresh_far = core.returns_fresh_far;
   s.views_disputed = core.views_disputed;
   s.tracks_reacquired = core.tracks_reacquired;
   s.tracks_reacquired_by_neighbours = core.tracks_reacquired_by_neighbours;

@@ -407,6 +407,11 @@ void visit_one_view_tracks(Fields& f, estimator::TrackerOptions& o) {
            "... and none whose update puts it further than this from where its neighbours carried it "
            "since its last two-camera update, m (0: off; fast tracks exempt; only an anchor taken 0.5 s "
            "after its birth or later, its point not within 5 cm of another track)");
+  f.number("return_fresh_max_jump_m", o.return_fresh_max_jump_m, kNonNegative,
+           "... and a blob of another camera that continues no blob of that camera's previous frame "
+           "(within 20 px) only if the update moves it at most this far, or to within 0.15 m of where "
+           "its neighbours carried it, m (0: off; fast tracks and tracks younger than 0.5 s at their "
+           "anchor exempt)");
 }
 
 // A track's life: its confirmation, and when it is deleted.

@@ -117,6 +117,8 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
       (s.returns_far_from_carried > 0
            ? "; second views far from the carried point " + std::to_string(s.returns_far_from_carried)
            : std::string()) +
+      (s.returns_fresh_far > 0 ? "; fresh second views too far " + std::to_string(s.returns_fresh_far)
+                               : std::string()) +
       (s.views_disputed > 0 ? "; odd views disputed " + std::to_string(s.views_disputed) : std::string()));
   for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops, other_cameras).lines()) log(line);
   if (tracker_.body_count() > 0) {

@@ -128,6 +128,16 @@ struct TrackerOptions {
   // (docs/estimator.md, "Second views near the carried point"). Needs reacquire_neighbours_m (the
   // anchors) and reacquire_sigma_m (no track is uncertain without it).
   double return_max_carried_distance_m = 0.3;
+  // Fresh second views: such a track (the same two conditions, and its anchor taken at least 0.5 s
+  // after its birth) takes a blob of another camera that continues no blob of that camera's
+  // previous frame (none within 20 px: a marker moves a few px a frame, a false blob lasts one)
+  // only if the update moves it at most this far, or puts it within 0.15 m of where its neighbours
+  // carried it (metres; 0: off; fast tracks exempt). At the walk's turnarounds on the four-camera
+  // ceiling a knee's track, one camera's alone for 0.2 s (its covariance trace 0.17 m²), took a
+  // clutter blob in a second camera and jumped 1.26 m, below the floor (ceiling4/walk/c1/s2, 12 s).
+  // Walk grid 0 (0) switches (swaps) either way, 12 s 263 (52) -> 245 (45), run 107 (25) -> 105 (23)
+  // (docs/estimator.md, "Fresh second views"). Needs reacquire_sigma_m and reacquire_neighbours_m.
+  double return_fresh_max_jump_m = 0.5;
   // A fast track (confirmed, five updates above 10 m/s: a swung or thrown object; walking, running
   // and dancing markers stay below) keeps process_noise × fast_process_noise_scale until
   // fast_hold_ns after its last update above 10 m/s, whatever its innovations (0: the adaptive
@@ -278,6 +288,7 @@ struct TrackerStats {
   std::uint64_t returns_beyond_reach = 0;  // ... and second views out of reach (return_max_seen_distance_m)
   // ... or far from where the neighbours carried the track (return_max_carried_distance_m)
   std::uint64_t returns_far_from_carried = 0;
+  std::uint64_t returns_fresh_far = 0;  // ... or on a fresh blob, too far (return_fresh_max_jump_m)
   std::uint64_t views_disputed = 0;     // odd views given up for a neighbour's blob (dispute_odd_views)
   std::uint64_t tracks_reacquired = 0;  // confirmed new tracks that took a held-back track's id
   std::uint64_t tracks_reacquired_by_neighbours =
