@@ -98,8 +98,10 @@ constexpr double kReturnSpeed = 3.0;
 constexpr TimeNs kCarriedAnchorAgeNs = 500'000'000;
 constexpr double kCarriedTakenM = 0.05;
 // return_fresh_max_jump_m: a blob continues a blob of its camera's previous frame if one was within
-// this (px; a walking or running marker moves 2-15 px a frame, a false blob lasts one frame), and an
-// update within this of the trusted carried point is a second view its neighbours confirm (m).
+// this (px; a false blob lasts one frame, a marker's moves a few px: a running ankle's up to 19 px a
+// frame in ceiling4/run/c0/s2, near this bound; faster markers leave it, which the 0.5 m jump and the
+// carried point's confirmation allow for), and an update within this of the trusted carried point is
+// a second view its neighbours confirm (m).
 constexpr double kFreshBlobPx = 20.0;
 constexpr double kFreshCarriedM = 0.15;
 // dispute_odd_views: how long a track is not offered the blobs of a camera whose view was disputed,
