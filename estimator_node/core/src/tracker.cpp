@@ -576,12 +576,10 @@ struct Tracker::Impl {
   bool beyond_return_reach(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
                            int camera_index, TimeNs stamp);
   std::optional<Eigen::Vector3d> trusted_carried_position(const Track& track, TimeNs stamp) const;
-  // return_fresh_max_jump_m: whether the uncertain one-view track t, offered `pixel` of another
-  // camera that continues no blob of that camera's previous frame, would move further than the
-  // option allows and not near where its neighbours carried it: refused (true).
-  bool fresh_and_far(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
-                     int camera_index, TimeNs stamp);
-  // Keeps the camera's blobs for the next frame's fresh_and_far.
+  // return_fresh_max_jump_m: whether `pixel` of camera_index continues no blob of that camera's
+  // previous frame (within kFreshBlobPx), offered to an established `track` (beyond_return_reach).
+  bool fresh_blob(const Track& track, const Eigen::Vector2d& pixel, int camera_index, TimeNs stamp) const;
+  // Keeps the camera's blobs for the next frame's fresh_blob.
   void note_last_frame(int camera_index, TimeNs stamp, const std::vector<Eigen::Vector2d>& pixels);
   // The points of the tracks a second camera updated within kFrameGapNs of `now_ns` (anchor_neighbour).
   std::vector<AnchorPoint> neighbour_points(TimeNs now_ns) const;
@@ -1660,20 +1658,23 @@ bool Tracker::Impl::uncertain_elsewhere(const Track& track, int camera_index, Ti
   return sigma > 0 && predicted_position_trace(track, stamp) > kUncertainFactor * sigma * sigma;
 }
 
-// Whether the uncertain one-view track t, if it took `pixel` of another camera, would land beyond
-// reach of where two cameras last placed it (return_max_seen_distance_m) or far from where its
-// neighbours carried it (return_max_carried_distance_m): refused (true).
+// Whether the uncertain one-view track t, if it took `pixel` of another camera, would land far from
+// where its neighbours carried it (return_max_carried_distance_m), beyond reach of where two cameras
+// last placed it (return_max_seen_distance_m), or, `pixel` being a fresh blob (fresh_blob), further
+// than return_fresh_max_jump_m from its prediction and not near the carried point: refused (true).
+// One trial update and one carried point serve the three tests.
 bool Tracker::Impl::beyond_return_reach(std::size_t t, const Projected& projected,
                                         const Eigen::Vector2d& pixel, int camera_index, TimeNs stamp) {
   const double reach_m = options.return_max_seen_distance_m;
   const double carried_m = options.return_max_carried_distance_m;
   const Track& track = core.tracks[t];
-  if ((reach_m <= 0 && carried_m <= 0) || track.fast || track.seen_ns == 0 ||
-      !uncertain_elsewhere(track, camera_index, stamp))
+  if (track.fast || track.seen_ns == 0) return false;
+  const bool fresh = fresh_blob(track, pixel, camera_index, stamp);
+  if ((reach_m <= 0 && carried_m <= 0 && !fresh) || !uncertain_elsewhere(track, camera_index, stamp))
     return false;
-  // The point to compare with first: without one (and no seen reach) the update is not needed.
-  const auto carried = carried_m > 0 ? trusted_carried_position(track, stamp) : std::nullopt;
-  if (!carried && reach_m <= 0) return false;
+  // The point to compare with first: without one (and no other test) the update is not needed.
+  auto carried = carried_m > 0 ? trusted_carried_position(track, stamp) : std::nullopt;
+  if (!carried && reach_m <= 0 && !fresh) return false;
   PointState state = projected.state;
   update(state, projected.projection, pixel, options.measurement_noise_px);
   const Eigen::Vector3d position = state.position();
@@ -1681,38 +1682,34 @@ bool Tracker::Impl::beyond_return_reach(std::size_t t, const Projected& projecte
     ++core.returns_far_from_carried;
     return true;
   }
-  if (reach_m <= 0) return false;
-  const double reach =
-      reach_m + std::max(kReturnSpeed, track.peak_speed) * ns_to_seconds(stamp - track.seen_ns);
-  if (std::min((position - track.last_seen_position()).norm(),
-               (position - track.seen_position_at(stamp)).norm()) <= reach)
+  if (reach_m > 0) {
+    const double reach =
+        reach_m + std::max(kReturnSpeed, track.peak_speed) * ns_to_seconds(stamp - track.seen_ns);
+    if (std::min((position - track.last_seen_position()).norm(),
+                 (position - track.seen_position_at(stamp)).norm()) > reach) {
+      ++core.returns_beyond_reach;
+      return true;
+    }
+  }
+  if (!fresh || (position - projected.state.position()).norm() <= options.return_fresh_max_jump_m)
     return false;
-  ++core.returns_beyond_reach;
+  if (carried_m <= 0) carried = trusted_carried_position(track, stamp);
+  if (carried && (position - *carried).norm() <= kFreshCarriedM) return false;  // its neighbours confirm it
+  ++core.returns_fresh_far;
   return true;
 }
 
-bool Tracker::Impl::fresh_and_far(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
-                                  int camera_index, TimeNs stamp) {
-  const double jump_m = options.return_fresh_max_jump_m;
+bool Tracker::Impl::fresh_blob(const Track& track, const Eigen::Vector2d& pixel, int camera_index,
+                               TimeNs stamp) const {
   const auto camera = static_cast<std::size_t>(camera_index);
-  if (jump_m <= 0 || camera >= core.last_frames.size()) return false;
+  if (options.return_fresh_max_jump_m <= 0 || camera >= core.last_frames.size()) return false;
   const Core::LastFrame& previous = core.last_frames[camera];
-  const Track& track = core.tracks[t];
   // An established track only: a young one, or a ghost since its birth, has no place to keep.
-  if (previous.stamp_ns == 0 || stamp - previous.stamp_ns > kOwnerFrameNs || track.fast ||
-      track.seen_ns == 0 || track.anchor.stamp_ns - track.created_ns < kCarriedAnchorAgeNs ||
-      !uncertain_elsewhere(track, camera_index, stamp))
+  if (previous.stamp_ns == 0 || stamp - previous.stamp_ns > kOwnerFrameNs ||
+      track.anchor.stamp_ns - track.created_ns < kCarriedAnchorAgeNs)
     return false;
-  if (std::any_of(previous.pixels.begin(), previous.pixels.end(),
-                  [&](const Eigen::Vector2d& p) { return (p - pixel).norm() <= kFreshBlobPx; }))
-    return false;
-  PointState state = projected.state;
-  update(state, projected.projection, pixel, options.measurement_noise_px);
-  if ((state.position() - projected.state.position()).norm() <= jump_m) return false;
-  const auto carried = trusted_carried_position(track, stamp);
-  if (carried && (state.position() - *carried).norm() <= kFreshCarriedM) return false;
-  ++core.returns_fresh_far;
-  return true;
+  return std::none_of(previous.pixels.begin(), previous.pixels.end(),
+                      [&](const Eigen::Vector2d& p) { return (p - pixel).norm() <= kFreshBlobPx; });
 }
 
 void Tracker::Impl::note_last_frame(int camera_index, TimeNs stamp,
@@ -1933,8 +1930,7 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
       if (core.tracks[g.row].confirmed == want_confirmed && !used[g.col] && !track_done[g.row] &&
           !core.tracks[g.row].disputed_in(camera_index, stamp) &&
           !owned_elsewhere(g.row, g.col, pixels, camera_index, stamp, last_owners, gated) &&
-          !beyond_return_reach(g.row, *projected[g.row], pixels[g.col], camera_index, stamp) &&
-          !fresh_and_far(g.row, *projected[g.row], pixels[g.col], camera_index, stamp))
+          !beyond_return_reach(g.row, *projected[g.row], pixels[g.col], camera_index, stamp))
         pairs.push_back(g);
     }
     if (pairs.empty()) continue;
