@@ -269,6 +269,8 @@ struct Core {
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
+  std::uint64_t fast_off_partner =
+      0;  // blobs refused to fast tracks off their rigid partner (partner_update_margin_m)
   std::uint64_t runaway_tracks_deleted = 0;           // delete_runaway_tracks
   std::uint64_t return_velocities_capped = 0;         // return_velocity_cap_mps
   std::uint64_t ray_twin_waits = 0;                   // ray_twin_wait_ns
@@ -864,6 +866,13 @@ struct Tracker::Impl {
   // Whether a new track at `position` is as far from `lost`'s rigid partner (Track::partner_id) as
   // `lost` was, within rejoin_rigid_margin_m; true when it has none or the partner is not followed.
   bool keeps_partner_distance(const Track& lost, const Eigen::Vector3d& position, TimeNs stamp) const;
+  // `track`'s rigid partner (held kRigidMinNs before its last two-camera update) if it is followed at
+  // `stamp`, else nullptr.
+  const Track* rigid_partner(const Track& track, TimeNs stamp) const;
+  // partner_update_margin_m: whether the fast track t, taking `pixel`, would land further than the
+  // margin from its distance to its rigid partner: refused (true).
+  bool off_rigid_partner(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
+                         TimeNs stamp);
   // Tracks confirmed in this frame take the id of the held-back track whose marker they are
   // (reacquire); tracks stay in id order.
   void reacquire_confirmed(TimeNs now_ns);
@@ -1370,11 +1379,36 @@ bool Tracker::Impl::keeps_partner_distance(const Track& lost, const Eigen::Vecto
   // Markers of one rigid object keep their distance: a club head comes back as far from its
   // shaft's marker as it went; a clutter ghost within the head's reach, elsewhere, does not.
   if (options.rejoin_rigid_margin_m <= 0) return true;
-  const Track* partner = lost.partner_id != 0 && lost.seen_ns - lost.partner_since_ns >= kRigidMinNs
-                             ? followed_track(lost.partner_id, stamp)
-                             : nullptr;
+  const Track* partner = rigid_partner(lost, stamp);
   return partner == nullptr || std::abs((position - partner->position_at(stamp)).norm() -
                                         lost.partner_distance_m) <= options.rejoin_rigid_margin_m;
+}
+
+const Track* Tracker::Impl::rigid_partner(const Track& track, TimeNs stamp) const {
+  return track.partner_id != 0 && track.seen_ns - track.partner_since_ns >= kRigidMinNs
+             ? followed_track(track.partner_id, stamp)
+             : nullptr;
+}
+
+bool Tracker::Impl::off_rigid_partner(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
+                                      TimeNs stamp) {
+  // A club head's track at the top of the swing, followed by one camera with its depth uncertain
+  // to decimetres, gates clutter blobs in the other cameras that would move it a metre; the
+  // marker's own blob keeps it as far from the shaft's marker as the club is long. Only a track
+  // no two cameras placed within kFrameGapNs, against a partner two cameras did: head and shaft
+  // are each other's partners, and the shaft's own blobs must not be refused for a head astray.
+  const double margin = options.partner_update_margin_m;
+  const Track& track = core.tracks[t];
+  if (margin <= 0 || !track.fast || track.partner_id == 0 || stamp - track.seen_ns <= kFrameGapNs)
+    return false;
+  const Track* partner = rigid_partner(track, stamp);
+  if (partner == nullptr || stamp - partner->seen_ns > kFrameGapNs) return false;
+  PointState state = projected.state;
+  update(state, projected.projection, pixel, options.measurement_noise_px);
+  if (std::abs((state.position() - partner->position_at(stamp)).norm() - track.partner_distance_m) <= margin)
+    return false;
+  ++core.fast_off_partner;
+  return true;
 }
 
 std::optional<std::int64_t> Tracker::Impl::reacquire(const Eigen::Vector3d& position, TimeNs stamp,
@@ -1930,7 +1964,8 @@ void Tracker::Impl::associate(Entry& entry, const std::vector<Eigen::Vector2d>& 
       if (core.tracks[g.row].confirmed == want_confirmed && !used[g.col] && !track_done[g.row] &&
           !core.tracks[g.row].disputed_in(camera_index, stamp) &&
           !owned_elsewhere(g.row, g.col, pixels, camera_index, stamp, last_owners, gated) &&
-          !beyond_return_reach(g.row, *projected[g.row], pixels[g.col], camera_index, stamp))
+          !beyond_return_reach(g.row, *projected[g.row], pixels[g.col], camera_index, stamp) &&
+          !off_rigid_partner(g.row, *projected[g.row], pixels[g.col], stamp))
         pairs.push_back(g);
     }
     if (pairs.empty()) continue;
@@ -2974,6 +3009,7 @@ const TrackerStats& Tracker::stats() const {
   s.returns_beyond_reach = core.returns_beyond_reach;
   s.returns_far_from_carried = core.returns_far_from_carried;
   s.returns_fresh_far = core.returns_fresh_far;
+  s.fast_off_partner = core.fast_off_partner;
   s.views_disputed = core.views_disputed;
   s.tracks_reacquired = core.tracks_reacquired;
   s.tracks_reacquired_by_neighbours = core.tracks_reacquired_by_neighbours;

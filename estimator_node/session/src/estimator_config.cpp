@@ -450,6 +450,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
          "adaptive process noise: a new track takes the id of the one fast track lost nearby moments ago");
   f.number("rejoin_rigid_margin_m", o.rejoin_rigid_margin_m, kNonNegative,
            "a fast track's id returns only this close to its distance from its rigid partner (0: off)");
+  f.number("partner_update_margin_m", o.partner_update_margin_m, kNonNegative,
+           "a fast track takes no blob that would put it further than this from its distance to its rigid "
+           "partner (0: off)");
   f.flag("delete_runaway_tracks", o.delete_runaway_tracks,
          "a track made fast by one camera's updates (dragged along its ray) is deleted");
   visit_one_view_tracks(f, o);

@@ -119,6 +119,9 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
            : std::string()) +
       (s.returns_fresh_far > 0 ? "; fresh second views too far " + std::to_string(s.returns_fresh_far)
                                : std::string()) +
+      (s.fast_off_partner > 0
+           ? "; blobs off a fast track's rigid partner " + std::to_string(s.fast_off_partner)
+           : std::string()) +
       (s.views_disputed > 0 ? "; odd views disputed " + std::to_string(s.views_disputed) : std::string()));
   for (const auto& line : usage(tracker_.last_stamp_ns(), inbox_drops, other_cameras).lines()) log(line);
   if (tracker_.body_count() > 0) {
