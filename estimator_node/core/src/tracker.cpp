@@ -269,8 +269,7 @@ struct Core {
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
-  std::uint64_t fast_off_partner =
-      0;  // blobs refused to fast tracks off their rigid partner (partner_update_margin_m)
+  std::uint64_t fast_off_partner = 0;      // blobs refused off the rigid partner (partner_update_margin_m)
   std::uint64_t runaway_tracks_deleted = 0;           // delete_runaway_tracks
   std::uint64_t return_velocities_capped = 0;         // return_velocity_cap_mps
   std::uint64_t ray_twin_waits = 0;                   // ray_twin_wait_ns
