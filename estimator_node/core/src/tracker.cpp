@@ -869,7 +869,7 @@ struct Tracker::Impl {
   // `stamp`, else nullptr.
   const Track* rigid_partner(const Track& track, TimeNs stamp) const;
   // partner_update_margin_m: whether the fast track t, taking `pixel`, would land further than the
-  // margin from its distance to its rigid partner: refused (true).
+  // margin beyond its prediction's distance from its distance to its rigid partner: refused (true).
   bool off_rigid_partner(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
                          TimeNs stamp);
   // Tracks confirmed in this frame take the id of the held-back track whose marker they are
@@ -1402,10 +1402,16 @@ bool Tracker::Impl::off_rigid_partner(std::size_t t, const Projected& projected,
     return false;
   const Track* partner = rigid_partner(track, stamp);
   if (partner == nullptr || stamp - partner->seen_ns > kFrameGapNs) return false;
+  // Only an update that moves it off: a track already off (its partner astray, or a walker's
+  // marker made fast by an old runaway) may take a blob that leaves it where it is.
+  const Eigen::Vector3d at = partner->position_at(stamp);
+  const auto off = [&](const Eigen::Vector3d& p) {
+    return std::abs((p - at).norm() - track.partner_distance_m);
+  };
   PointState state = projected.state;
   update(state, projected.projection, pixel, options.measurement_noise_px);
-  if (std::abs((state.position() - partner->position_at(stamp)).norm() - track.partner_distance_m) <= margin)
-    return false;
+  const double before = off(projected.state.position());
+  if (off(state.position()) <= (before <= margin ? margin : before + margin)) return false;
   ++core.fast_off_partner;
   return true;
 }
