@@ -143,7 +143,9 @@ constexpr int kPriorFastUpdates = 30;
 // lost track's carried position must be kNeighbourClearRatio times farther (a nearer one than
 // kNeighbourFloorM counts as that far: the ratio of two tiny distances is noise), and no followed
 // track within kNeighbourCrowdM of the new one: the two clavicles 5 cm apart swapped ids in the
-// corridor4 run cells without it (28 -> 39 swaps in 12 s).
+// corridor4 run cells without it (28 -> 39 swaps in 12 s). With reacquire_crowd_relative only
+// within kNeighbourClearRatio times the new track's distance from the carried position (at least
+// kNeighbourFloorM), as for the other lost tracks' carried positions.
 constexpr double kNeighbourRadiusM = 0.5;
 constexpr double kNeighbourHorizonS = 0.2;
 constexpr TimeNs kNeighbourMemoryNs = 2'000'000'000;
@@ -2429,8 +2431,10 @@ void Tracker::Impl::reacquire_by_neighbours(
     });
     for (std::size_t j = 0; j < pending.size() && alone; ++j)
       alone = j == i || !near(at[j], best->position, clear);
+    const double crowd =
+        options.reacquire_crowd_relative ? std::min(kNeighbourCrowdM, clear) : kNeighbourCrowdM;
     const bool crowded = std::any_of(now.begin(), now.end(), [&](const AnchorPoint& point) {
-      return point.id != pending[i]->id && near(point.position, at[i], kNeighbourCrowdM);
+      return point.id != pending[i]->id && near(point.position, at[i], crowd);
     });
     if (d > options.reacquire_neighbours_m || !alone || crowded ||
         std::find(claimed.begin(), claimed.end(), best->id) != claimed.end())

@@ -511,6 +511,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
            "then: a new track this close to where a lost track's neighbours (a rigid fit of 3-6 tracks "
            "near it when two cameras last saw it) carried it takes its id if every other one's is twice "
            "as far; deleted tracks count for 2 s, m (0: off)");
+  f.flag("reacquire_crowd_relative", o.reacquire_crowd_relative,
+         "... a followed track crowds the new one out only within twice its distance from the carried point "
+         "(at most 6 cm; false: within 6 cm)");
   f.integer("recent_camera_window_ns", o.recent_camera_window_ns, 0, kHourNs, "for a track record's cameras");
   f.integer("rewind_horizon_ns", o.rewind_horizon_ns, 0, 60 * 1'000'000'000LL,
             "late frames up to this much older than the newest are replayed");

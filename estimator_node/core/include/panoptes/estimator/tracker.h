@@ -256,6 +256,11 @@ struct TrackerOptions {
   // position (neighbour_anchor.h). A foot or a sacrum out of every view for 0.3-1.5 s
   // comes back 0.2-0.9 m from where it was lost (docs/estimator.md, "Reacquisition by neighbours").
   double reacquire_neighbours_m = 0.04;
+  // ... where "no followed track within 6 cm" means within twice the new track's distance from the
+  // carried position (at least 1 cm), at most 6 cm: a sacrum marker back 9 mm from where its
+  // neighbours carried it is not crowded out by the two PSIS markers 5 cm away (docs/estimator.md,
+  // "Crowded returns"). false: within 6 cm.
+  bool reacquire_crowd_relative = true;
   TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
   TimeNs checkpoint_interval_ns = 10'000'000;     // state snapshots for rewinding ...
