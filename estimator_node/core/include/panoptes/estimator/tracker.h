@@ -255,7 +255,7 @@ struct TrackerOptions {
   // velocity); their rigid motion since, fitted to at least three still followed, carries that
   // position (neighbour_anchor.h). A foot or a sacrum out of every view for 0.3-1.5 s
   // comes back 0.2-0.9 m from where it was lost (docs/estimator.md, "Reacquisition by neighbours").
-  double reacquire_neighbours_m = 0.04;
+  double reacquire_neighbours_m = 0.08;
   // ... where "no followed track within 6 cm" means within twice the new track's distance from the
   // carried position (at least 1 cm), at most 6 cm: a sacrum marker back 9 mm from where its
   // neighbours carried it is not crowded out by the two PSIS markers 5 cm away (docs/estimator.md,
