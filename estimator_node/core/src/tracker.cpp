@@ -870,8 +870,9 @@ struct Tracker::Impl {
   // `track`'s rigid partner (held kRigidMinNs before its last two-camera update) if it is followed at
   // `stamp`, else nullptr.
   const Track* rigid_partner(const Track& track, TimeNs stamp) const;
-  // partner_update_margin_m: whether the fast track t, taking `pixel`, would land further than the
-  // margin beyond its prediction's distance from its distance to its rigid partner: refused (true).
+  // partner_update_margin_m: whether the fast track t, taking `pixel`, would land further off its
+  // distance to its rigid partner than the margin (or than its prediction's offset plus the margin,
+  // when the prediction is already further off): refused (true).
   bool off_rigid_partner(std::size_t t, const Projected& projected, const Eigen::Vector2d& pixel,
                          TimeNs stamp);
   // Tracks confirmed in this frame take the id of the held-back track whose marker they are

@@ -56,7 +56,8 @@ struct TrackerOptions {
   // did, takes no blob whose update would put it further than this from its distance to the
   // partner: a club head's track, followed by one camera at the top of the swing with its depth
   // uncertain to decimetres, took a clutter blob in a second camera and jumped a metre off the club
-  // (docs/estimator.md, "Rigid partners at every update"). 0: no such test.
+  // (docs/estimator.md, "Rigid partners at every update"). A track already further off than this
+  // (its prediction) may take a blob that puts it at most this much further off. 0: no such test.
   double partner_update_margin_m = 0.1;
   // A settled confirmed track that became fast (5 updates above 10 m/s) with fewer than 5 of those
   // updates made while a second camera updated it within 10 ms is a runaway: one camera alone
@@ -290,10 +291,9 @@ struct TrackerStats {
   std::uint64_t tracks_confirmed = 0;
   std::uint64_t tracks_deleted = 0;
   std::uint64_t tracks_merged = 0;
-  std::uint64_t manoeuvres_recovered = 0;  // blobs a fast track took in its manoeuvre gate
-  std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id
-  std::uint64_t fast_off_partner =
-      0;  // blobs refused off a fast track's rigid partner (partner_update_margin_m)
+  std::uint64_t manoeuvres_recovered = 0;      // blobs a fast track took in its manoeuvre gate
+  std::uint64_t fast_tracks_rejoined = 0;      // new tracks that took a lost fast track's id
+  std::uint64_t fast_off_partner = 0;          // blobs refused off a rigid partner (partner_update_margin_m)
   std::uint64_t runaway_tracks_deleted = 0;    // fast by one camera's updates (delete_runaway_tracks)
   std::uint64_t return_velocities_capped = 0;  // at a return to two views (return_velocity_cap_mps)
   std::uint64_t ray_twin_waits = 0;            // blobs left to neither of two ray twins (ray_twin_wait_ns)
