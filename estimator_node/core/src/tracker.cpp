@@ -1710,10 +1710,11 @@ bool Tracker::Impl::beyond_return_reach(std::size_t t, const Projected& projecte
   const double reach_m = options.return_max_seen_distance_m;
   const double carried_m = options.return_max_carried_distance_m;
   const Track& track = core.tracks[t];
-  if (track.fast || track.seen_ns == 0) return false;
+  // The one-view test first: the fresh-blob test scans the camera's previous frame, for every gated
+  // pair, and matters only for the few tracks that pass it.
+  if (track.fast || track.seen_ns == 0 || !uncertain_elsewhere(track, camera_index, stamp)) return false;
   const bool fresh = fresh_blob(track, pixel, camera_index, stamp);
-  if ((reach_m <= 0 && carried_m <= 0 && !fresh) || !uncertain_elsewhere(track, camera_index, stamp))
-    return false;
+  if (reach_m <= 0 && carried_m <= 0 && !fresh) return false;
   // The point to compare with first: without one (and no other test) the update is not needed.
   auto carried = carried_m > 0 ? trusted_carried_position(track, stamp) : std::nullopt;
   if (!carried && reach_m <= 0 && !fresh) return false;

@@ -255,8 +255,8 @@ TEST(AdaptiveNoise, AClutterPointWithinTheHeadsReachDoesNotTakeItsIdentity) {
 // each) camera 0 alone shows the head, and camera 2 a false blob 0.7 m further along camera 0's ray:
 // the head's one-view track, its depth along that ray uncertain, gates it (as the grid's clutter
 // did in ceiling6/club/c1/s1, where the head's track jumped a metre and the head came back under a
-// new id). Taking it would put the head 0.24-0.28 m off its distance from the shaft's track, which
-// two cameras follow (partner_update_margin_m). Camera 0 alone does not keep the head at every top
+// new id). Taking it would put the head more than 0.1 m off its distance from the shaft's track,
+// which two cameras follow (partner_update_margin_m). Camera 0 alone does not keep the head at every top
 // here (it loses it either way); the test is that the false blobs cost it fewer identities and fewer
 // instants with the refusal than without, and that the shaft, whose partner is the head, keeps its
 // own blobs.
