@@ -2,6 +2,7 @@
 #include "panoptes/estimator/neighbour_anchor.h"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "panoptes/rigid_fit.h"
@@ -65,6 +66,121 @@ std::optional<CarriedPosition> carried_position(const NeighbourAnchor& anchor,
   carried.position = motion->apply(anchor.position);
   carried.neighbours = static_cast<int>(from.size());
   return carried;
+}
+
+namespace {
+
+// The depth-first search of carried_with_stand_ins: neighbour `missing[depth]` is left out or placed
+// at each stand-in not used yet whose distances agree with every point placed so far.
+class StandInSearch {
+ public:
+  StandInSearch(const NeighbourAnchor& anchor, std::span<const Eigen::Vector3d> stand_ins, double tolerance_m,
+                double max_fit_rms_m, double agree_m)
+      : anchor_(anchor),
+        stand_ins_(stand_ins),
+        tolerance_m_(tolerance_m),
+        max_fit_rms_m_(max_fit_rms_m),
+        agree_m_(agree_m),
+        used_(stand_ins.size(), 0) {}
+
+  void place(const Eigen::Vector3d& then, const Eigen::Vector3d& now) {
+    from_.push_back(then);
+    to_.push_back(now);
+  }
+  void add_missing(int k) { missing_.push_back(k); }
+
+  std::optional<CarriedPosition> run() {
+    search(0, 0);
+    if (overflow_ || !best_ || ambiguous_) return std::nullopt;
+    return best_;
+  }
+
+ private:
+  bool agrees(const Eigen::Vector3d& then, const Eigen::Vector3d& now) const {
+    for (std::size_t k = 0; k < from_.size(); ++k)
+      if (std::abs((then - from_[k]).norm() - (now - to_[k]).norm()) > tolerance_m_) return false;
+    return true;
+  }
+
+  void search(std::size_t depth, int stood_in) {
+    if (overflow_) return;
+    const int reachable = static_cast<int>(from_.size() + missing_.size() - depth);
+    if (best_ && reachable < best_->neighbours) return;  // cannot place as many as the best
+    if (depth == missing_.size()) {
+      evaluate(stood_in);
+      return;
+    }
+    const Eigen::Vector3d& then = anchor_.neighbours[static_cast<std::size_t>(missing_[depth])].position;
+    for (std::size_t s = 0; s < stand_ins_.size(); ++s) {
+      if (used_[s] || !agrees(then, stand_ins_[s])) continue;
+      used_[s] = 1;
+      place(then, stand_ins_[s]);
+      search(depth + 1, stood_in + 1);
+      from_.pop_back();
+      to_.pop_back();
+      used_[s] = 0;
+    }
+    search(depth + 1, stood_in);
+  }
+
+  void evaluate(int stood_in) {
+    if (stood_in == 0 || from_.size() < 3) return;
+    if (++placements_ > kMaxStandInPlacements) {
+      overflow_ = true;
+      return;
+    }
+    double rms = 0.0;
+    const auto motion = fit_rigid_transform(from_, to_, &rms);
+    if (!motion || rms > max_fit_rms_m_) return;
+    CarriedPosition carried;
+    carried.position = motion->apply(anchor_.position);
+    carried.fit_rms_m = rms;
+    carried.neighbours = static_cast<int>(from_.size());
+    carried.stood_in = stood_in;
+    if (best_ && carried.neighbours == best_->neighbours) {
+      // As many placed: another reading of the same group. Ambiguous when it puts the marker
+      // elsewhere, whichever fits better (the ambiguity holds for every smaller placement).
+      if ((carried.position - best_->position).norm() > agree_m_) ambiguous_ = true;
+      if (carried.fit_rms_m < best_->fit_rms_m) best_ = carried;
+      return;
+    }
+    if (!best_ || carried.neighbours > best_->neighbours) {
+      best_ = carried;
+      ambiguous_ = false;
+    }
+  }
+
+  const NeighbourAnchor& anchor_;
+  std::span<const Eigen::Vector3d> stand_ins_;
+  double tolerance_m_, max_fit_rms_m_, agree_m_;
+  std::vector<char> used_;
+  std::vector<int> missing_;
+  std::vector<Eigen::Vector3d> from_, to_;
+  std::optional<CarriedPosition> best_;
+  bool ambiguous_ = false;
+  bool overflow_ = false;
+  int placements_ = 0;
+};
+
+}  // namespace
+
+std::optional<CarriedPosition> carried_with_stand_ins(const NeighbourAnchor& anchor,
+                                                      std::span<const AnchorPoint> now,
+                                                      std::span<const Eigen::Vector3d> stand_ins,
+                                                      double tolerance_m, double max_fit_rms_m,
+                                                      double agree_m) {
+  if (stand_ins.empty()) return std::nullopt;
+  StandInSearch search(anchor, stand_ins, tolerance_m, max_fit_rms_m, agree_m);
+  for (int k = 0; k < anchor.count; ++k) {
+    const AnchorPoint& then = anchor.neighbours[static_cast<std::size_t>(k)];
+    const auto found =
+        std::find_if(now.begin(), now.end(), [&](const AnchorPoint& p) { return p.id == then.id; });
+    if (found != now.end())
+      search.place(then.position, found->position);
+    else
+      search.add_missing(k);
+  }
+  return search.run();
 }
 
 }  // namespace panoptes::estimator

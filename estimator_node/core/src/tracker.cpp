@@ -153,6 +153,18 @@ constexpr double kNeighbourMaxFitRmsM = 0.03;
 constexpr double kNeighbourClearRatio = 2.0;
 constexpr double kNeighbourFloorM = 0.01;
 constexpr double kNeighbourCrowdM = 0.06;
+// Group returns (reacquire_group): a new track stands in for a lost neighbour when its distances
+// from the neighbours placed agree within kStandInToleranceM; the fit must leave them within
+// kStandInMaxFitRmsM RMS, and the new track must lie within kStandInReachM of the carried point
+// (not reacquire_neighbours_m: a fit of new tracks is exact or wrong, and the feet's markers are a
+// few centimetres apart). Chosen on LateData's stalls (docs/estimator.md, "Group returns").
+constexpr double kStandInToleranceM = 0.02;
+constexpr double kStandInMaxFitRmsM = 0.01;
+constexpr double kStandInReachM = 0.02;
+// ... and the carried point must lie within kStandInDriftM plus half kStandInAccelerationMps2 times
+// the time since its own track's last update squared of that track's prediction.
+constexpr double kStandInDriftM = 0.03;
+constexpr double kStandInAccelerationMps2 = 40.0;
 
 struct Track {
   std::int64_t id = 0;
@@ -879,13 +891,15 @@ struct Tracker::Impl {
   // (reacquire); tracks stay in id order.
   void reacquire_confirmed(TimeNs now_ns);
   // reacquire_neighbours_m: anchors the confirmed tracks that no second camera updated for
-  // kFrameGapNs since their last anchor (Track::anchor), to the followed tracks near them.
+  // kFrameGapNs since their last anchor (Track::anchor), to the followed tracks near them (with
+  // reacquire_group, then to those lost with them).
   void note_anchors(TimeNs now_ns);
-  // After the other tests of reacquire_confirmed: each `pending` new track takes the id of the
-  // held-back, one-view or departed track whose neighbours carried its anchor within
-  // reacquire_neighbours_m of it, when every other such track's is kNeighbourClearRatio times
-  // farther, no other pending track is that near it, and no followed track within kNeighbourCrowdM
-  // of it (renames).
+  // After the other tests of reacquire_confirmed (with reacquire_group, before them too): each
+  // `pending` new track takes the id of the held-back, one-view or departed track whose neighbours
+  // carried its anchor within reacquire_neighbours_m of it (with new tracks standing in for some
+  // of them: within kStandInReachM, held-back and one-view tracks only), when every other such
+  // track's is kNeighbourClearRatio times farther, no other pending track is that near it, and no
+  // followed track within kNeighbourCrowdM of it (renames).
   void reacquire_by_neighbours(std::vector<Track*>& pending, TimeNs now_ns,
                                std::vector<std::int64_t>& claimed,
                                std::vector<std::pair<std::int64_t, std::int64_t>>& renames) const;
@@ -2298,6 +2312,12 @@ void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
   }
   std::vector<std::pair<std::int64_t, std::int64_t>> renames;  // (new id, held-back id)
   std::vector<std::int64_t> claimed;
+  // Group returns: where the neighbours (or new tracks standing in for them) carried a marker,
+  // within reach, decides before the predictions do: after every camera stalled a held-back
+  // track's prediction gates its neighbour's new track as well as its own, and the ratio tests
+  // below see no rival once the neighbour's track is claimed (a toe's id on the next toe marker).
+  if (options.reacquire_group) reacquire_by_neighbours(pending, now_ns, claimed, renames);
+  const std::size_t first_by_neighbours = renames.size();
   for (bool progress = true; progress && !pending.empty();) {
     progress = false;
     std::erase_if(pending, [&](Track* track) {
@@ -2312,7 +2332,7 @@ void Tracker::Impl::reacquire_confirmed(TimeNs now_ns) {
   reacquire_by_assignment(pending, now_ns, claimed, renames);
   const std::size_t by_others = renames.size();
   reacquire_by_neighbours(pending, now_ns, claimed, renames);
-  core.tracks_reacquired_by_neighbours += renames.size() - by_others;
+  core.tracks_reacquired_by_neighbours += renames.size() - by_others + first_by_neighbours;
   if (renames.empty()) return;
   std::erase_if(core.departed, [&](const Core::Departed& departed) {
     return std::any_of(renames.begin(), renames.end(),
@@ -2370,6 +2390,21 @@ void Tracker::Impl::note_anchors(TimeNs now_ns) {
         then.push_back({other->id, other->position_at(track.seen_ns), other->state.velocity()});
     auto anchor = make_anchor(track.seen_ns, track.seen_position, track.seen_velocity, then,
                               kNeighbourRadiusM, kNeighbourHorizonS);
+    if (options.reacquire_group && anchor.count < kAnchorNeighbours) {
+      // Group returns: the slots left go to neighbours lost with it (their last two-camera update
+      // within kFrameGapNs of its own; every marker at once after the cameras stalled), placed by
+      // new tracks when they come back (reacquire_by_neighbours).
+      then.clear();
+      for (const Track& other : core.tracks)
+        if (&other != &track && anchorable(other) && !anchor_neighbour(other, now_ns) &&
+            std::abs(other.seen_ns - track.seen_ns) <= kFrameGapNs)
+          then.push_back({other.id, other.seen_position_at(track.seen_ns), other.seen_velocity});
+      const auto lost_with = make_anchor(track.seen_ns, track.seen_position, track.seen_velocity, then,
+                                         kNeighbourRadiusM, kNeighbourHorizonS);
+      for (int k = 0; k < lost_with.count && anchor.count < kAnchorNeighbours; ++k)
+        anchor.neighbours[static_cast<std::size_t>(anchor.count++)] =
+            lost_with.neighbours[static_cast<std::size_t>(k)];
+    }
     track.anchored_seen_ns = track.seen_ns;
     if (anchor.count >= 3 || track.anchor.count < 3) track.anchor = anchor;
   }
@@ -2406,14 +2441,46 @@ void Tracker::Impl::reacquire_by_neighbours(
   if (options.reacquire_neighbours_m <= 0 || pending.empty()) return;
   const std::vector<AnchorPoint> now = neighbour_points(now_ns);
   std::vector<AnchorPoint> carried;  // each candidate's id and where its neighbours carried it
-  const auto consider = [&](std::int64_t id, const NeighbourAnchor& anchor) {
+  std::vector<char> by_stand_ins;    // ... whether new tracks stood in for some of them
+  // Group returns: tracks that two cameras place but are not followed long enough to be anchors,
+  // created after the anchor, may stand in for its neighbours lost with it (carried_with_stand_ins).
+  std::vector<std::pair<TimeNs, Eigen::Vector3d>> newcomers;
+  if (options.reacquire_group)
+    for (const Track& track : core.tracks)
+      if (!track.fast && !anchor_neighbour(track, now_ns) && track.seen_ns != 0 &&
+          now_ns - track.seen_ns <= kFrameGapNs)
+        newcomers.emplace_back(track.created_ns, track.position_at(now_ns));
+  std::vector<Eigen::Vector3d> stand_ins;
+  // `own`: the candidate's track (nullptr: a departed one, which only followed neighbours carry).
+  const auto consider = [&](std::int64_t id, const NeighbourAnchor& anchor, const Track* own) {
     if (std::find(claimed.begin(), claimed.end(), id) != claimed.end()) return;
-    if (const auto position = carried_by(anchor, now, now_ns)) carried.push_back({id, *position});
+    if (const auto position = carried_by(anchor, now, now_ns)) {
+      carried.push_back({id, *position});
+      by_stand_ins.push_back(0);
+      return;
+    }
+    if (own == nullptr || newcomers.empty() || anchor.count < 3 ||
+        now_ns - anchor.stamp_ns > kNeighbourMemoryNs)
+      return;
+    stand_ins.clear();
+    for (const auto& [created_ns, position] : newcomers)
+      if (created_ns > anchor.stamp_ns) stand_ins.push_back(position);
+    const auto group = carried_with_stand_ins(anchor, now, stand_ins, kStandInToleranceM, kStandInMaxFitRmsM,
+                                              kStandInReachM);
+    // Only where its own prediction allows: a foot's markers lie nearly in a plane, so the other
+    // foot's new tracks fit its group turned over (a toe's id on the other toe 20 cm away, after a
+    // 30 ms stall).
+    const double since_s = ns_to_seconds(now_ns - own->last_update_ns);
+    const double allowance = kStandInDriftM + 0.5 * kStandInAccelerationMps2 * since_s * since_s;
+    if (group && (group->position - own->position_at(now_ns)).norm() <= allowance) {
+      carried.push_back({id, group->position});
+      by_stand_ins.push_back(1);
+    }
   };
   for (const Track& track : core.tracks)
     if (!track.fast && track.anchor.stamp_ns != 0 && reacquire_candidate(track, now_ns, claimed, true))
-      consider(track.id, track.anchor);
-  for (const Core::Departed& departed : core.departed) consider(departed.id, departed.anchor);
+      consider(track.id, track.anchor, &track);
+  for (const Core::Departed& departed : core.departed) consider(departed.id, departed.anchor, nullptr);
   if (carried.empty()) return;
   std::vector<Eigen::Vector3d> at;  // the pending tracks' positions now, in `pending`'s order
   at.reserve(pending.size());
@@ -2438,7 +2505,10 @@ void Tracker::Impl::reacquire_by_neighbours(
     const bool crowded = std::any_of(now.begin(), now.end(), [&](const AnchorPoint& point) {
       return point.id != pending[i]->id && near(point.position, at[i], crowd);
     });
-    if (d > options.reacquire_neighbours_m || !alone || crowded ||
+    const double reach = by_stand_ins[static_cast<std::size_t>(best - carried.begin())] != 0
+                             ? std::min(kStandInReachM, options.reacquire_neighbours_m)
+                             : options.reacquire_neighbours_m;
+    if (d > reach || !alone || crowded ||
         std::find(claimed.begin(), claimed.end(), best->id) != claimed.end())
       continue;
     renames.emplace_back(pending[i]->id, best->id);

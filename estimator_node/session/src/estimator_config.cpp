@@ -514,6 +514,9 @@ void visit_tracker(Fields& f, estimator::TrackerOptions& o) {
   f.flag("reacquire_crowd_relative", o.reacquire_crowd_relative,
          "... a followed track crowds the new one out only within twice its distance from the carried point "
          "(at most 6 cm; false: within 6 cm)");
+  f.flag("reacquire_group", o.reacquire_group,
+         "... neighbours lost with it that came back as new tracks stand in for them, placed by their "
+         "distances (false: only followed neighbours)");
   f.integer("recent_camera_window_ns", o.recent_camera_window_ns, 0, kHourNs, "for a track record's cameras");
   f.integer("rewind_horizon_ns", o.rewind_horizon_ns, 0, 60 * 1'000'000'000LL,
             "late frames up to this much older than the newest are replayed");

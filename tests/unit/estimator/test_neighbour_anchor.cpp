@@ -112,5 +112,68 @@ TEST(NeighbourAnchor, NeedsThreeNeighboursNotInALine) {
   EXPECT_FALSE(carried_position(collinear, line).has_value());
 }
 
+// A foot's markers out of every view together: only one of the marker's neighbours is still
+// followed; the others came back as new tracks without names. Placed by their distances, they
+// carry the marker as their own motion would.
+TEST(NeighbourAnchor, StandInsForNeighboursLostWithIt) {
+  const NeighbourAnchor anchor = anchor_at_rest(neighbourhood());
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(0.5, Eigen::Vector3d(0.1, 0.2, 1.0).normalized()));
+  const Eigen::Vector3d shift(0.6, 0.3, -0.1);
+  const auto moved = [&](int k) -> Eigen::Vector3d { return q * anchor.neighbours[k].position + shift; };
+  const std::vector<AnchorPoint> now{{anchor.neighbours[2].id, moved(2)}, {42, Eigen::Vector3d(4, 4, 4)}};
+  EXPECT_FALSE(carried_position(anchor, now).has_value());  // one found: no fit
+  // Stand-ins in another order, one unrelated track 0.5 m off among them.
+  const std::vector<Eigen::Vector3d> stand_ins{moved(4), Eigen::Vector3d(2.5, 2.8, 1.0), moved(0), moved(1)};
+  const auto carried = carried_with_stand_ins(anchor, now, stand_ins, 0.02, 0.03, 0.08);
+  ASSERT_TRUE(carried.has_value());
+  EXPECT_EQ(carried->neighbours, 4);
+  EXPECT_EQ(carried->stood_in, 3);
+  EXPECT_LT(carried->fit_rms_m, 1e-9);
+  EXPECT_LT((carried->position - (q * kMarker + shift)).norm(), 1e-9);
+  // Nothing to stand in: nothing carried (the neighbours found are carried_position's work).
+  EXPECT_FALSE(carried_with_stand_ins(anchor, now, {}, 0.02, 0.03, 0.08).has_value());
+  // With centimetres of noise the distances still agree within the tolerance.
+  std::vector<Eigen::Vector3d> noisy = stand_ins;
+  noisy[0] += Eigen::Vector3d(0.006, -0.004, 0.0);
+  noisy[2] += Eigen::Vector3d(0.0, 0.005, 0.006);
+  const auto near = carried_with_stand_ins(anchor, now, noisy, 0.02, 0.03, 0.08);
+  ASSERT_TRUE(near.has_value());
+  EXPECT_EQ(near->stood_in, 3);
+  EXPECT_LT((near->position - (q * kMarker + shift)).norm(), 0.03);
+  // A tight residual limit refuses the fit.
+  EXPECT_FALSE(carried_with_stand_ins(anchor, now, noisy, 0.02, 0.001, 0.08).has_value());
+}
+
+// Neighbours at the corners of a square around the marker, none followed: any quarter turn of the
+// placement (or half turn about a diagonal) fits as well; which stand-in is which is not known.
+TEST(NeighbourAnchor, StandInsOfASymmetricGroupAreAmbiguous) {
+  const std::vector<AnchorPoint> square{{1, kMarker + Eigen::Vector3d(0.1, 0.1, 0.0)},
+                                        {2, kMarker + Eigen::Vector3d(-0.1, 0.1, 0.0)},
+                                        {3, kMarker + Eigen::Vector3d(-0.1, -0.1, 0.0)},
+                                        {4, kMarker + Eigen::Vector3d(0.1, -0.1, 0.0)}};
+  const NeighbourAnchor anchor = anchor_at_rest(square);
+  const Eigen::Vector3d shift(0.3, 0.0, 0.0);
+  std::vector<Eigen::Vector3d> stand_ins;
+  for (const AnchorPoint& point : square) stand_ins.push_back(point.position + shift);
+  // At the square's centre every reading carries the marker to the same place.
+  const auto centred = carried_with_stand_ins(anchor, {}, stand_ins, 0.01, 0.01, 0.02);
+  ASSERT_TRUE(centred.has_value());
+  EXPECT_LT((centred->position - (kMarker + shift)).norm(), 1e-9);
+  // Off the centre it is ambiguous, even with one corner followed (a half turn about its diagonal).
+  NeighbourAnchor off = anchor;
+  off.position += Eigen::Vector3d(0.06, 0.0, 0.0);
+  EXPECT_FALSE(carried_with_stand_ins(off, {}, stand_ins, 0.01, 0.01, 0.02).has_value());
+  const std::vector<AnchorPoint> one{{1, stand_ins[0]}};
+  const std::vector<Eigen::Vector3d> three(stand_ins.begin() + 1, stand_ins.end());
+  EXPECT_FALSE(carried_with_stand_ins(off, one, three, 0.01, 0.01, 0.02).has_value());
+  // Two corners of one side followed settle which is which.
+  const std::vector<AnchorPoint> side{{1, stand_ins[0]}, {2, stand_ins[1]}};
+  const std::vector<Eigen::Vector3d> two{stand_ins[3], stand_ins[2]};
+  const auto settled = carried_with_stand_ins(off, side, two, 0.01, 0.01, 0.02);
+  ASSERT_TRUE(settled.has_value());
+  EXPECT_EQ(settled->stood_in, 2);
+  EXPECT_LT((settled->position - (off.position + shift)).norm(), 1e-9);
+}
+
 }  // namespace
 }  // namespace panoptes::estimator

@@ -46,6 +46,7 @@ struct CarriedPosition {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   double fit_rms_m = 0.0;  // the neighbours' RMS residual under the fitted motion
   int neighbours = 0;      // how many were found in `now` and used
+  int stood_in = 0;        // of those, how many were unnamed stand-ins (carried_with_stand_ins)
 };
 
 // Where the anchor's neighbours found in `now` (by id) carry its position: the rigid motion fitted
@@ -55,5 +56,21 @@ struct CarriedPosition {
 std::optional<CarriedPosition> carried_position(
     const NeighbourAnchor& anchor, std::span<const AnchorPoint> now,
     double trim_above_m = std::numeric_limits<double>::infinity());
+
+// Where the anchor's neighbours carried its marker when some of them were lost with it and came
+// back as tracks without a name yet (a foot's markers out of every view together): a neighbour
+// missing from `now` may be stood in for by one of `stand_ins`, each used once, whose distances
+// from the neighbours already placed (found or stood in for) agree with the anchor's within
+// `tolerance_m`. The placement with the most neighbours (at least three, one stood in for), then
+// the smallest fit residual, carries the position; nullopt when none fits within `max_fit_rms_m`
+// RMS, or another placement of as many neighbours within that limit carries it more than
+// `agree_m` elsewhere (a symmetric group: which is which is not known), or the search passes
+// kMaxStandInPlacements placements.
+inline constexpr int kMaxStandInPlacements = 4096;
+std::optional<CarriedPosition> carried_with_stand_ins(const NeighbourAnchor& anchor,
+                                                      std::span<const AnchorPoint> now,
+                                                      std::span<const Eigen::Vector3d> stand_ins,
+                                                      double tolerance_m, double max_fit_rms_m,
+                                                      double agree_m);
 
 }  // namespace panoptes::estimator

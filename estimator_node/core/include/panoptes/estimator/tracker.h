@@ -262,6 +262,10 @@ struct TrackerOptions {
   // neighbours carried it is not crowded out by the two PSIS markers 5 cm away (docs/estimator.md,
   // "Crowded returns"). false: within 6 cm.
   bool reacquire_crowd_relative = true;
+  // ... and where its neighbours lost with it came back as new tracks (a foot's markers out of every
+  // view together), those new tracks stand in for them, placed by their distances (neighbour_anchor.h,
+  // carried_with_stand_ins; docs/estimator.md, "Group returns"). false: only followed neighbours.
+  bool reacquire_group = true;
   TimeNs recent_camera_window_ns = 500'000'000;   // for TrackRecord::cameras
   TimeNs rewind_horizon_ns = 500'000'000;         // late frames up to this much older are replayed
   TimeNs checkpoint_interval_ns = 10'000'000;     // state snapshots for rewinding ...
