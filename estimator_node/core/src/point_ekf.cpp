@@ -78,4 +78,12 @@ void update(PointState& state, const PointProjection& projection, const Eigen::V
   state.x += state.P.update(projection, measurement);
 }
 
+void update_along(PointState& state, const Eigen::Vector3d& direction, double measured_m, double sigma_m) {
+  Eigen::Matrix<double, 1, 6> H = Eigen::Matrix<double, 1, 6>::Zero();
+  H.head<3>() = direction.transpose();
+  const Eigen::Matrix<double, 1, 1> R(sigma_m * sigma_m);
+  const Eigen::Matrix<double, 1, 1> residual(measured_m - direction.dot(state.position()));
+  state.x += state.P.update<1>(H, R, residual);
+}
+
 }  // namespace panoptes::estimator

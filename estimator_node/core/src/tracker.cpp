@@ -161,6 +161,8 @@ constexpr double kNeighbourCrowdM = 0.06;
 constexpr double kStandInToleranceM = 0.02;
 constexpr double kStandInMaxFitRmsM = 0.01;
 constexpr double kStandInReachM = 0.02;
+// pin_one_view_depth: the carried point must lie this near the updating camera's ray.
+constexpr double kPinRayM = 0.03;
 // ... and the carried point must lie within kStandInDriftM plus half kStandInAccelerationMps2 times
 // the time since its own track's last update squared of that track's prediction.
 constexpr double kStandInDriftM = 0.03;
@@ -283,8 +285,9 @@ struct Core {
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
-  std::uint64_t fast_off_partner = 0;      // blobs refused off the rigid partner (partner_update_margin_m)
-  std::uint64_t runaway_tracks_deleted = 0;           // delete_runaway_tracks
+  std::uint64_t one_view_depths_pinned = 0;  // one_view_carried_sigma_m (pin_one_view_depth)
+  std::uint64_t fast_off_partner = 0;        // blobs refused off the rigid partner (partner_update_margin_m)
+  std::uint64_t runaway_tracks_deleted = 0;  // delete_runaway_tracks
   std::uint64_t return_velocities_capped = 0;         // return_velocity_cap_mps
   std::uint64_t ray_twin_waits = 0;                   // ray_twin_wait_ns
   std::uint64_t tracks_reacquired = 0;                // confirmed new tracks that took a held-back track's id
@@ -585,6 +588,9 @@ struct Tracker::Impl {
   // rate of change of its velocity between consecutive updates (within kFrameGapNs), low-passed;
   // any other track, or one after a gap, predicts with constant velocity.
   void estimate_acceleration(Track& track, TimeNs stamp, double innovation_px) const;
+  // one_view_carried_sigma_m: the depth along the camera's ray of a one-view update from where the
+  // track's neighbours carried it.
+  void pin_one_view_depth(Track& track, int camera_index, TimeNs stamp);
   void damp_one_view_velocity(Track& track, int camera_index, TimeNs stamp, TimeNs previous_update_ns) const;
   int one_view_camera(const Track& track, TimeNs stamp) const;
   bool uncertain_elsewhere(const Track& track, int camera_index, TimeNs stamp) const;
@@ -1592,6 +1598,7 @@ void Tracker::Impl::commit_pair(std::size_t t, const Projected& projected, const
   track.camera_last_blob.resize(models.size());
   track.camera_last_blob[static_cast<std::size_t>(camera_index)] = {pixel, stamp};
   damp_one_view_velocity(track, camera_index, stamp, previous_update_ns);
+  pin_one_view_depth(track, camera_index, stamp);
   note_innovation(track, static_cast<std::size_t>(camera_index),
                   static_cast<float>((pixel - projected.projection.pixel).norm()));
   if (track.seen_ns == stamp && seen_before_ns != 0 && stamp - seen_before_ns > kReturnGapNs)
@@ -1676,6 +1683,29 @@ void Tracker::Impl::cap_return_velocity(Track& track, const Eigen::Vector3d& pre
 // each update of such a track (docs/estimator.md, "One-view velocity"). A fast track keeps its
 // velocity (a club head, a ball: its own rules), and so does any track a second camera updated
 // within kFrameGapNs.
+// A track that one camera alone updates has no depth but its prediction's: constant velocity (damped
+// along the ray by damp_one_view_velocity) carries it on, and a stray pairing drags it along the ray
+// (the left thigh's markers, seen by one ceiling camera for 0.8 s, 0.4 m off and then each on the
+// other's marker). Its neighbours, still followed by two cameras, carried its anchor to where its
+// marker is (trusted_carried_position); where that point lies on this camera's ray (within
+// kPinRayM: the view agrees with it), it measures the depth along the ray with σ
+// one_view_carried_sigma_m. Across the ray the camera's pixel rules. Fast tracks keep their own
+// rules (docs/estimator.md, "Depth from the neighbours").
+void Tracker::Impl::pin_one_view_depth(Track& track, int camera_index, TimeNs stamp) {
+  const double sigma = options.one_view_carried_sigma_m;
+  if (sigma <= 0 || track.fast || !track.confirmed || track.seen_ns == 0 ||
+      stamp - track.seen_ns <= kFrameGapNs)
+    return;
+  const auto carried = trusted_carried_position(track, stamp);
+  if (!carried) return;
+  const Eigen::Vector3d centre = models[static_cast<std::size_t>(camera_index)]->center_world();
+  const Eigen::Vector3d ray = (track.state.position() - centre).normalized();
+  const Eigen::Vector3d offset = *carried - centre;
+  if ((offset - offset.dot(ray) * ray).norm() > kPinRayM) return;
+  update_along(track.state, ray, ray.dot(*carried), sigma);
+  ++core.one_view_depths_pinned;
+}
+
 void Tracker::Impl::damp_one_view_velocity(Track& track, int camera_index, TimeNs stamp,
                                            TimeNs previous_update_ns) const {
   const TimeNs tau_ns = options.one_view_velocity_time_constant_ns;
@@ -3091,6 +3121,7 @@ const TrackerStats& Tracker::stats() const {
   s.returns_far_from_carried = core.returns_far_from_carried;
   s.returns_fresh_far = core.returns_fresh_far;
   s.fast_off_partner = core.fast_off_partner;
+  s.one_view_depths_pinned = core.one_view_depths_pinned;
   s.views_disputed = core.views_disputed;
   s.tracks_reacquired = core.tracks_reacquired;
   s.tracks_reacquired_by_neighbours = core.tracks_reacquired_by_neighbours;

@@ -393,6 +393,9 @@ void visit_one_view_tracks(Fields& f, estimator::TrackerOptions& o) {
   f.integer("one_view_velocity_time_constant_ns", o.one_view_velocity_time_constant_ns, 0, kHourNs,
             "a track one camera alone has updated for 10 ms while another camera's frame missed it: its "
             "velocity along that camera's ray decays with this time constant (0: off, constant velocity)");
+  f.number("one_view_carried_sigma_m", o.one_view_carried_sigma_m, kNonNegative,
+           "... and its depth along that ray is measured where its neighbours carried it (within 3 cm of "
+           "the ray), with this sigma, m (0: off)");
   f.integer("ray_twin_wait_ns", o.ray_twin_wait_ns, 0, kHourNs,
             "two tracks one camera alone updates and sees within 6 px of each other: a blob of another "
             "camera that both gate is left to neither for up to this long (0: off)");

@@ -119,6 +119,9 @@ void Intake::print_summary(std::uint64_t inbox_drops, std::size_t bad_lines,
            : std::string()) +
       (s.returns_fresh_far > 0 ? "; fresh second views too far " + std::to_string(s.returns_fresh_far)
                                : std::string()) +
+      (s.one_view_depths_pinned > 0
+           ? "; one-view depths from the neighbours " + std::to_string(s.one_view_depths_pinned)
+           : std::string()) +
       (s.fast_off_partner > 0
            ? "; blobs off a fast track's rigid partner " + std::to_string(s.fast_off_partner)
            : std::string()) +

@@ -59,4 +59,8 @@ std::optional<PointProjection> project_point(const PointState& state, const Came
 void update(PointState& state, const PointProjection& projection, const Eigen::Vector2d& measurement,
             double measurement_sigma_px);
 
+// EKF update with a measurement of the position's component along the unit vector `direction`
+// (z = directionᵀ p with noise σ = `sigma_m`): a depth along a camera's ray that its pixels cannot tell.
+void update_along(PointState& state, const Eigen::Vector3d& direction, double measured_m, double sigma_m);
+
 }  // namespace panoptes::estimator
