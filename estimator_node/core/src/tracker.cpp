@@ -285,9 +285,9 @@ struct Core {
   TimeNs last_merge_check_ns = std::numeric_limits<TimeNs>::min();
   std::uint64_t manoeuvres_recovered = 0;  // blobs taken in a manoeuvre gate (recover_manoeuvres)
   std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id (rejoin_fast_tracks)
-  std::uint64_t one_view_depths_pinned = 0;  // one_view_carried_sigma_m (pin_one_view_depth)
-  std::uint64_t fast_off_partner = 0;        // blobs refused off the rigid partner (partner_update_margin_m)
-  std::uint64_t runaway_tracks_deleted = 0;  // delete_runaway_tracks
+  std::uint64_t fast_off_partner = 0;      // blobs refused off the rigid partner (partner_update_margin_m)
+  std::uint64_t runaway_tracks_deleted = 0;           // delete_runaway_tracks
+  std::uint64_t one_view_depths_pinned = 0;           // one_view_carried_sigma_m
   std::uint64_t return_velocities_capped = 0;         // return_velocity_cap_mps
   std::uint64_t ray_twin_waits = 0;                   // ray_twin_wait_ns
   std::uint64_t tracks_reacquired = 0;                // confirmed new tracks that took a held-back track's id
@@ -1676,13 +1676,6 @@ void Tracker::Impl::cap_return_velocity(Track& track, const Eigen::Vector3d& pre
   ++core.return_velocities_capped;
 }
 
-// One camera alone observes a track's motion across its ray, not along it: the velocity there is
-// what it was when the second view was lost, and constant velocity carries the depth on with it. A
-// marker seen by one camera for a while has often slowed (a foot landing, a hand reaching the end
-// of a movement): the component along the ray decays with one_view_velocity_time_constant_ns at
-// each update of such a track (docs/estimator.md, "One-view velocity"). A fast track keeps its
-// velocity (a club head, a ball: its own rules), and so does any track a second camera updated
-// within kFrameGapNs.
 // A track that one camera alone updates has no depth but its prediction's: constant velocity (damped
 // along the ray by damp_one_view_velocity) carries it on, and a stray pairing drags it along the ray
 // (the left thigh's markers, seen by one ceiling camera for 0.8 s, 0.4 m off and then each on the
@@ -1706,6 +1699,13 @@ void Tracker::Impl::pin_one_view_depth(Track& track, int camera_index, TimeNs st
   ++core.one_view_depths_pinned;
 }
 
+// One camera alone observes a track's motion across its ray, not along it: the velocity there is
+// what it was when the second view was lost, and constant velocity carries the depth on with it. A
+// marker seen by one camera for a while has often slowed (a foot landing, a hand reaching the end
+// of a movement): the component along the ray decays with one_view_velocity_time_constant_ns at
+// each update of such a track (docs/estimator.md, "One-view velocity"). A fast track keeps its
+// velocity (a club head, a ball: its own rules), and so does any track a second camera updated
+// within kFrameGapNs.
 void Tracker::Impl::damp_one_view_velocity(Track& track, int camera_index, TimeNs stamp,
                                            TimeNs previous_update_ns) const {
   const TimeNs tau_ns = options.one_view_velocity_time_constant_ns;

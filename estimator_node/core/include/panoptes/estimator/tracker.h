@@ -303,11 +303,10 @@ struct TrackerStats {
   std::uint64_t tracks_confirmed = 0;
   std::uint64_t tracks_deleted = 0;
   std::uint64_t tracks_merged = 0;
-  std::uint64_t manoeuvres_recovered = 0;  // blobs a fast track took in its manoeuvre gate
-  std::uint64_t fast_tracks_rejoined = 0;  // new tracks that took a lost fast track's id
-  std::uint64_t fast_off_partner = 0;      // blobs refused off a rigid partner (partner_update_margin_m)
-  std::uint64_t one_view_depths_pinned =
-      0;  // one-view updates given the carried depth (one_view_carried_sigma_m)
+  std::uint64_t manoeuvres_recovered = 0;      // blobs a fast track took in its manoeuvre gate
+  std::uint64_t fast_tracks_rejoined = 0;      // new tracks that took a lost fast track's id
+  std::uint64_t fast_off_partner = 0;          // blobs refused off a rigid partner (partner_update_margin_m)
+  std::uint64_t one_view_depths_pinned = 0;    // depths from the neighbours (one_view_carried_sigma_m)
   std::uint64_t runaway_tracks_deleted = 0;    // fast by one camera's updates (delete_runaway_tracks)
   std::uint64_t return_velocities_capped = 0;  // at a return to two views (return_velocity_cap_mps)
   std::uint64_t ray_twin_waits = 0;            // blobs left to neither of two ray twins (ray_twin_wait_ns)
