@@ -161,12 +161,12 @@ constexpr double kNeighbourCrowdM = 0.06;
 constexpr double kStandInToleranceM = 0.02;
 constexpr double kStandInMaxFitRmsM = 0.01;
 constexpr double kStandInReachM = 0.02;
-// pin_one_view_depth: the carried point must lie this near the updating camera's ray.
-constexpr double kPinRayM = 0.03;
 // ... and the carried point must lie within kStandInDriftM plus half kStandInAccelerationMps2 times
 // the time since its own track's last update squared of that track's prediction.
 constexpr double kStandInDriftM = 0.03;
 constexpr double kStandInAccelerationMps2 = 40.0;
+// pin_one_view_depth: the carried point must lie this near the updating camera's ray.
+constexpr double kPinRayM = 0.03;
 
 struct Track {
   std::int64_t id = 0;
